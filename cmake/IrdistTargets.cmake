@@ -1,0 +1,65 @@
+# One small function per kind of target. Every target includes from the repository root.
+
+set(IRDIST_WARNINGS -Wall -Wextra -Wno-unused-parameter)
+
+# irdist_library(NAME SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
+function(irdist_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  add_library(${name} STATIC ${ARG_SOURCES})
+  target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR})
+  target_compile_options(${name} PRIVATE ${IRDIST_WARNINGS})
+  target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+endfunction()
+
+# irdist_executable(NAME SOURCES ... [DEPS ...])
+function(irdist_executable name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
+  target_compile_options(${name} PRIVATE ${IRDIST_WARNINGS})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS})
+endfunction()
+
+# irdist_test(module/file SOURCES ... [DEPS ...] [TIMEOUT seconds] [LABELS ...])
+# The CTest name is module/file, mirroring the source tree; the binary is test_module_file.
+function(irdist_test test_name)
+  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
+  string(REPLACE "/" "_" target "test_${test_name}")
+  add_executable(${target} ${ARG_SOURCES})
+  target_include_directories(${target} PRIVATE ${PROJECT_SOURCE_DIR})
+  target_compile_options(${target} PRIVATE ${IRDIST_WARNINGS})
+  target_compile_definitions(${target} PRIVATE
+    IRDIST_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    IRDIST_BINARY_DIR="${PROJECT_BINARY_DIR}")
+  target_link_libraries(${target} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
+  add_test(NAME ${test_name} COMMAND ${target})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 300)
+  endif()
+  set_tests_properties(${test_name} PROPERTIES TIMEOUT ${ARG_TIMEOUT}
+    WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
+  if(ARG_LABELS)
+    set_tests_properties(${test_name} PROPERTIES LABELS "${ARG_LABELS}")
+  endif()
+endfunction()
+
+# irdist_bench(NAME SOURCES ... [DEPS ...]): Google Benchmark binaries, never run by CTest.
+function(irdist_bench name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
+  target_compile_definitions(${name} PRIVATE
+    IRDIST_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    IRDIST_BINARY_DIR="${PROJECT_BINARY_DIR}")
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS} benchmark::benchmark)
+endfunction()
+
+# irdist_subdirs(): add every immediate subfolder that has a CMakeLists.txt.
+macro(irdist_subdirs)
+  file(GLOB _children LIST_DIRECTORIES true RELATIVE ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/*)
+  foreach(_child ${_children})
+    if(IS_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/${_child} AND EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${_child}/CMakeLists.txt)
+      add_subdirectory(${_child})
+    endif()
+  endforeach()
+endmacro()
