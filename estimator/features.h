@@ -1,0 +1,112 @@
+#pragma once
+// Image features of one IRED frame (paper Section 1.1, Table 1): the blob, its ROI, E_rel, F(0,0),
+// Sigma, the centroid and the ellipse that gives a first estimate theta0 of the orientation angle.
+//
+// Conventions (docs/estimator.md):
+//  - M_i = g_i / (2^bit_depth - 1): gray levels normalised by the pixel format's maximum, in [0,1].
+//    Mono8/10/12/14 content sits in the low bits of the CV_16UC1 image.
+//  - E_rel = (1/A) sum_i f(M_i) over the ROI's A pixels, f the inverse response (identity default).
+//  - F(0,0) = sum_i M_i over the ROI: the DC term of the unnormalised 2-D DFT (cv::dft) of the ROI
+//    divided by the maximum gray level.
+//  - Sigma = sqrt((1/A) sum_i (M_i - mean M)^2): population standard deviation of M over the ROI.
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace irdist {
+
+// How the region of interest is chosen. The same policy must be used in calibration and
+// measurement: it is stored in the model file.
+enum class RoiPolicy {
+  kFixedWindow,  // a square of window_side_px centred on the blob's intensity centroid (default)
+  kThreshold,    // the pixels above background + threshold_fraction * (peak - background)
+};
+
+// Which ellipse gives Features::theta0_deg.
+enum class EllipseMethod {
+  kMoments,  // intensity-weighted second moments, background subtracted (default: measured better)
+  kContour,  // cv::fitEllipse on the half-maximum contour
+};
+
+const char* ToString(RoiPolicy policy);
+const char* ToString(EllipseMethod method);
+// Parse the names ToString gives; return false when the name is unknown.
+bool ParseRoiPolicy(const std::string& name, RoiPolicy* policy);
+bool ParseEllipseMethod(const std::string& name, EllipseMethod* method);
+
+// The camera's inverse radiometric response f on normalised gray levels: identity when empty,
+// otherwise the piecewise-linear curve through the knots (m_k, f_k), m strictly increasing in [0,1]
+// and f non-decreasing (monotone).
+struct InverseResponse {
+  std::vector<double> m;  // knot abscissae (normalised gray level)
+  std::vector<double> f;  // knot values f(m_k)
+  bool IsIdentity() const { return m.empty(); }
+  double Apply(double normalised_gray) const;
+  bool IsValid(std::string* why) const;
+};
+
+struct FeatureOptions {
+  RoiPolicy roi_policy = RoiPolicy::kFixedWindow;
+  // Side of the fixed window (and of the search window around the blob for kThreshold), px. Must
+  // hold the whole IRED image at the nearest distance of a recipe.
+  int window_side_px = 64;
+  // kThreshold: ROI = pixels above background + threshold_fraction * (peak - background).
+  double threshold_fraction = 0.05;
+  // Pixels above background + moment_threshold_fraction * (peak - background) enter the second
+  // moments and the centroid (the rest is noise that would bias them).
+  double moment_threshold_fraction = 0.02;
+  // Blur (Gaussian PSF sigma, px) removed from the second moments before the axis ratio; 0 = none.
+  double psf_sigma_px = 0.0;
+  // Blob detection runs on the frame downsampled by this factor (area average).
+  int detection_downsample = 4;
+  // A blob needs a peak at least this fraction of full scale above background (on the coarse pass).
+  double min_contrast_fraction = 0.01;
+  EllipseMethod ellipse_method = EllipseMethod::kMoments;
+  InverseResponse inverse_response;  // identity by default
+  bool IsValid(std::string* why) const;
+};
+
+struct EllipseFit {
+  bool valid = false;
+  cv::Point2d center_px;
+  double major_px = 0.0;  // full axis lengths
+  double minor_px = 0.0;
+  double angle_deg = 0.0;   // direction of the major axis in the image, degrees from +x
+  double theta0_deg = 0.0;  // acos(minor / major)
+};
+
+struct Features {
+  bool blob_found = false;
+  bool touches_border = false;  // ROI clipped by, or blob pixels on, the image border
+  bool blob_clipped_by_roi =
+      false;                 // blob pixels on the edge of the fixed window (window too small)
+  int saturated_pixels = 0;  // pixels at the format's maximum inside the ROI (not averaged away)
+  int bit_depth = 0;
+  cv::Rect roi;             // fixed window, or the bounding box of the threshold mask
+  int roi_area_px = 0;      // A
+  double background = 0.0;  // normalised gray level of the background
+  double peak = 0.0;        // normalised gray level of the brightest blob pixel
+  double e_rel = 0.0;
+  double f00 = 0.0;
+  double sigma = 0.0;
+  cv::Point2d centroid_px;  // background-subtracted intensity centroid
+  double moment_major_var_px2 =
+      0.0;  // eigenvalues of the intensity-weighted covariance (no PSF removal)
+  double moment_minor_var_px2 = 0.0;
+  EllipseFit ellipse_moments;
+  EllipseFit ellipse_contour;
+  double theta0_deg = 0.0;  // from the ellipse chosen by FeatureOptions::ellipse_method
+  // True when the features can be used: a blob, no saturation, not on the border, not clipped.
+  bool Usable() const {
+    return blob_found && !touches_border && !blob_clipped_by_roi && saturated_pixels == 0;
+  }
+  std::string BriefReport() const;
+};
+
+// Computes the features of one frame. image: CV_16UC1 holding Mono8/10/12/14/16 content in its low
+// bit_depth bits. Throws CheckError on a wrong type/bit depth or invalid options. An image without
+// a blob gives blob_found = false (a value, not an error).
+Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options);
+
+}  // namespace irdist

@@ -1,0 +1,211 @@
+#include "estimator/features.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "base/check.h"
+
+namespace irdist {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct Blob {
+  double cx = 640.0, cy = 512.0;
+  double diameter_px = 30.0;  // major axis
+  double theta_deg = 0.0;     // minor = major * cos(theta)
+  double angle_deg = 30.0;    // orientation of the major axis in the image
+  double blur_sigma_px = 1.0;
+  double level = 0.5;  // plateau above background, fraction of full scale
+  double background = 0.02;
+};
+
+// Renders a uniformly bright ellipse (8x supersampled, area-averaged, Gaussian-blurred) into a
+// CV_16UC1 frame with bit_depth content.
+cv::Mat Render(const Blob& b, int bit_depth, cv::Size size = cv::Size(1280, 1024)) {
+  const double max_gray = (1 << bit_depth) - 1;
+  const int ss = 8;
+  const int half = static_cast<int>(b.diameter_px) + 12;
+  const int side = 2 * half;
+  const double ox = std::floor(b.cx) - half, oy = std::floor(b.cy) - half;
+  cv::Mat fine = cv::Mat::zeros(side * ss, side * ss, CV_32F);
+  const int shift = 8;
+  const double scale = ss * (1 << shift);
+  cv::ellipse(
+      fine,
+      cv::Point(static_cast<int>(std::lround((b.cx - ox) * scale + 0.5 * (ss - 1) * (1 << shift))),
+                static_cast<int>(std::lround((b.cy - oy) * scale + 0.5 * (ss - 1) * (1 << shift)))),
+      cv::Size(static_cast<int>(std::lround(0.5 * b.diameter_px * scale)),
+               static_cast<int>(
+                   std::lround(0.5 * b.diameter_px * std::cos(b.theta_deg * kPi / 180.0) * scale))),
+      b.angle_deg, 0, 360, cv::Scalar(1.0), cv::FILLED, cv::LINE_8, shift);
+  cv::Mat patch;
+  cv::resize(fine, patch, cv::Size(side, side), 0, 0, cv::INTER_AREA);
+  if (b.blur_sigma_px > 0) cv::GaussianBlur(patch, patch, cv::Size(0, 0), b.blur_sigma_px);
+  cv::Mat frame(size, CV_32F, cv::Scalar(b.background));
+  cv::Rect target(static_cast<int>(ox), static_cast<int>(oy), side, side);
+  cv::Rect clipped = target & cv::Rect(0, 0, size.width, size.height);
+  cv::Mat dst = frame(clipped);
+  cv::Mat src =
+      patch(cv::Rect(clipped.x - target.x, clipped.y - target.y, clipped.width, clipped.height));
+  dst += src * b.level;
+  cv::Mat out;
+  frame.convertTo(out, CV_16U, max_gray);  // saturates at 65535; clip to the format below
+  cv::min(out, cv::Scalar(max_gray), out);
+  return out;
+}
+
+TEST(FeatureOptions, DefaultsAreValid) {
+  std::string why;
+  EXPECT_TRUE(FeatureOptions().IsValid(&why)) << why;
+  FeatureOptions bad;
+  bad.window_side_px = 2;
+  EXPECT_FALSE(bad.IsValid(&why));
+  bad = FeatureOptions();
+  bad.inverse_response.m = {0.0, 0.5, 0.4};
+  bad.inverse_response.f = {0.0, 0.5, 1.0};
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("increase"), std::string::npos);
+}
+
+TEST(Features, F00EqualsDftDcTermOfRoi) {
+  Blob b;
+  const cv::Mat image = Render(b, 12);
+  const Features f = ComputeFeatures(image, 12, FeatureOptions());
+  ASSERT_TRUE(f.blob_found);
+  cv::Mat roi;
+  image(f.roi).convertTo(roi, CV_64F);
+  cv::Mat spectrum;
+  cv::dft(roi, spectrum, cv::DFT_COMPLEX_OUTPUT);
+  const cv::Vec2d dc = spectrum.at<cv::Vec2d>(0, 0);
+  EXPECT_NEAR(f.f00, dc[0] / 4095.0, 1e-9 * f.f00);
+  EXPECT_NEAR(dc[1], 0.0, 1e-6);
+  // Fixed window and identity response: E_rel = F(0,0) / A (NOTES.md: the E equation degenerates).
+  EXPECT_EQ(f.roi_area_px, 64 * 64);
+  EXPECT_NEAR(f.e_rel, f.f00 / f.roi_area_px, 1e-12);
+  EXPECT_GT(f.sigma, 0.0);
+  EXPECT_NEAR(f.centroid_px.x, b.cx, 0.05);
+  EXPECT_NEAR(f.centroid_px.y, b.cy, 0.05);
+  EXPECT_TRUE(f.Usable()) << f.BriefReport();
+}
+
+TEST(Features, Theta0WithinOneDegreeOnRenderedEllipses) {
+  FeatureOptions options;
+  options.psf_sigma_px = 1.0;  // the rendering blur, known from the optics
+  double worst_moments = 0.0, worst_contour = 0.0, sum_moments = 0.0, sum_contour = 0.0;
+  int n = 0;
+  for (double diameter : {20.0, 30.0, 40.0}) {
+    for (double theta : {20.0, 30.0, 40.0, 50.0}) {
+      for (double angle : {0.0, 35.0, 90.0}) {
+        Blob b;
+        b.diameter_px = diameter;
+        b.theta_deg = theta;
+        b.angle_deg = angle;
+        b.cx = 600.3 + 0.1 * n;
+        b.cy = 400.7;
+        const Features f = ComputeFeatures(Render(b, 12), 12, options);
+        ASSERT_TRUE(f.blob_found);
+        ASSERT_TRUE(f.ellipse_moments.valid && f.ellipse_contour.valid);
+        const double em = std::abs(f.ellipse_moments.theta0_deg - theta);
+        const double ec = std::abs(f.ellipse_contour.theta0_deg - theta);
+        EXPECT_LT(em, 1.0) << "d=" << diameter << " theta=" << theta << " angle=" << angle;
+        EXPECT_EQ(f.theta0_deg, f.ellipse_moments.theta0_deg);
+        worst_moments = std::max(worst_moments, em);
+        worst_contour = std::max(worst_contour, ec);
+        sum_moments += em;
+        sum_contour += ec;
+        ++n;
+      }
+    }
+  }
+  // The default (moments) must be the better of the two on these blobs.
+  EXPECT_LE(sum_moments, sum_contour);
+  RecordProperty("mean_theta_error_moments_deg", std::to_string(sum_moments / n));
+  RecordProperty("mean_theta_error_contour_deg", std::to_string(sum_contour / n));
+  RecordProperty("max_theta_error_moments_deg", std::to_string(worst_moments));
+  RecordProperty("max_theta_error_contour_deg", std::to_string(worst_contour));
+  std::printf("theta0 error (deg) moments: mean %.3f max %.3f; contour: mean %.3f max %.3f\n",
+              sum_moments / n, worst_moments, sum_contour / n, worst_contour);
+}
+
+TEST(Features, SaturationIsCountedNotHidden) {
+  Blob b;
+  b.level = 0.5;
+  EXPECT_EQ(ComputeFeatures(Render(b, 12), 12, FeatureOptions()).saturated_pixels, 0);
+  b.level = 3.0;  // plateau far above full scale: clipped
+  const Features f = ComputeFeatures(Render(b, 12), 12, FeatureOptions());
+  EXPECT_TRUE(f.blob_found);
+  EXPECT_GT(f.saturated_pixels, 100);
+  EXPECT_FALSE(f.Usable());
+  EXPECT_NE(f.BriefReport().find("SATURATED"), std::string::npos);
+}
+
+TEST(Features, BorderAndNoBlobFlags) {
+  Blob b;
+  b.cx = 8.0;
+  b.cy = 300.0;
+  const Features edge = ComputeFeatures(Render(b, 12), 12, FeatureOptions());
+  ASSERT_TRUE(edge.blob_found);
+  EXPECT_TRUE(edge.touches_border);
+  EXPECT_FALSE(edge.Usable());
+
+  Blob big;
+  big.diameter_px = 80.0;  // larger than the 64 px window
+  const Features clipped = ComputeFeatures(Render(big, 12), 12, FeatureOptions());
+  EXPECT_TRUE(clipped.blob_clipped_by_roi);
+
+  cv::Mat flat(1024, 1280, CV_16UC1, cv::Scalar(100));
+  cv::RNG rng(1);
+  cv::Mat noise(flat.size(), CV_16UC1);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 8);
+  flat += noise;
+  const Features none = ComputeFeatures(flat, 12, FeatureOptions());
+  EXPECT_FALSE(none.blob_found);
+  EXPECT_EQ(none.BriefReport(), "no blob found");
+}
+
+TEST(Features, BitDepthNormalisationAndInverseResponse) {
+  Blob b;
+  const Features f12 = ComputeFeatures(Render(b, 12), 12, FeatureOptions());
+  const Features f16 = ComputeFeatures(Render(b, 16), 16, FeatureOptions());
+  const Features f8 = ComputeFeatures(Render(b, 8), 8, FeatureOptions());
+  EXPECT_NEAR(f12.f00, f16.f00, 2e-3 * f16.f00);
+  EXPECT_NEAR(f8.f00, f16.f00, 2e-2 * f16.f00);
+  EXPECT_NEAR(f12.sigma, f16.sigma, 2e-3 * f16.sigma);
+
+  FeatureOptions squared;
+  squared.inverse_response.m = {0.0, 0.5, 1.0};
+  squared.inverse_response.f = {0.0, 0.25, 1.0};
+  const Features fs = ComputeFeatures(Render(b, 12), 12, squared);
+  EXPECT_DOUBLE_EQ(fs.f00, f12.f00);  // F(0,0) is of gray levels, not of f
+  EXPECT_LT(fs.e_rel, f12.e_rel);     // f(m) <= m on this curve
+  EXPECT_DOUBLE_EQ(squared.inverse_response.Apply(0.75), 0.625);
+}
+
+TEST(Features, ThresholdRoiFollowsTheBlob) {
+  FeatureOptions options;
+  options.roi_policy = RoiPolicy::kThreshold;
+  Blob small, large;
+  small.diameter_px = 20.0;
+  large.diameter_px = 40.0;
+  const Features fs = ComputeFeatures(Render(small, 12), 12, options);
+  const Features fl = ComputeFeatures(Render(large, 12), 12, options);
+  ASSERT_TRUE(fs.blob_found && fl.blob_found);
+  const double expected_ratio = 4.0;  // area grows as diameter^2
+  EXPECT_NEAR(static_cast<double>(fl.roi_area_px) / fs.roi_area_px, expected_ratio, 0.6);
+  // Threshold ROI: E_rel is the mean over blob pixels, no longer F / 64^2.
+  EXPECT_NEAR(fl.e_rel, fl.f00 / fl.roi_area_px, 1e-12);
+  EXPECT_GT(fl.e_rel, 0.3);
+}
+
+TEST(Features, RejectsWrongType) {
+  cv::Mat wrong(100, 100, CV_8UC1, cv::Scalar(0));
+  EXPECT_THROW(ComputeFeatures(wrong, 8, FeatureOptions()), CheckError);
+  cv::Mat right(100, 100, CV_16UC1, cv::Scalar(0));
+  EXPECT_THROW(ComputeFeatures(right, 17, FeatureOptions()), CheckError);
+}
+
+}  // namespace
+}  // namespace irdist
