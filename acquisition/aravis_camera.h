@@ -1,0 +1,59 @@
+#pragma once
+// The Aravis (GenICam / GigE Vision) implementation of Camera. The only client code in irdist that
+// includes <arv.h> is in aravis_camera.cc; this header carries no GLib or Aravis type.
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "acquisition/camera.h"
+
+namespace irdist {
+
+// Cameras visible to Aravis now (GigE Vision discovery, USB3 Vision, Aravis's fake interface).
+std::vector<DeviceInfo> ListCameras();
+
+class AravisCamera final : public Camera {
+ public:
+  // Opens the camera named by `id_serial_or_ip`: an IPv4 address (e.g. "127.0.0.1", the only way
+  // to reach a loopback camera), an Aravis device id ("Aravis-Fake-GV01") or a serial number. An id
+  // or serial is resolved through discovery to its address. After opening, the serial number is
+  // checked against `expected_serial` (when not empty) or against a serial given as the name.
+  // Acquisition is stopped right away (a previous client may have left it running).
+  // Throws CameraError when no such camera answers or the serial differs.
+  static std::unique_ptr<AravisCamera> Open(const std::string& id_serial_or_ip,
+                                            const std::string& expected_serial = "");
+  ~AravisCamera() override;
+  AravisCamera(const AravisCamera&) = delete;
+  AravisCamera& operator=(const AravisCamera&) = delete;
+
+  CameraIdentity Identity() const override;
+  void Configure(const CameraSettings& settings) override;
+  std::map<std::string, std::string> ReadBackFeatures() override;
+  double SetExposureUs(double exposure_us) override;
+  double ExposureUs() override;
+  void StartStream() override;
+  void StopStream() override;
+  bool streaming() const override;
+  std::optional<RawFrame> WaitFrame(std::chrono::milliseconds timeout) override;
+  int Flush() override;
+  void SoftwareTrigger() override;
+  bool HasExposureChunks() const override;
+
+  // Stream counters from Aravis (completed buffers, failures, underruns, missing packets, ...).
+  std::map<std::string, std::uint64_t> StreamStatistics() const;
+  // Payload size in bytes of one frame as configured.
+  int PayloadBytes() const;
+  // GigE Vision packet size in use (bytes), 0 for non-GigE cameras.
+  int PacketSizeBytes() const;
+
+ private:
+  struct Impl;
+  explicit AravisCamera(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace irdist

@@ -1,0 +1,139 @@
+#pragma once
+// The camera seen by the rest of irdist: an interface (so tests and app/ can substitute their own)
+// with its settings, identity and per-frame outcome types. The Aravis implementation lives in
+// acquisition/aravis_camera.h; nothing here carries a GLib or Aravis type.
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "base/check.h"
+
+namespace irdist {
+
+// A camera (device) failure: missing or clamped feature, wrong serial, dead link, Aravis error.
+// The message says what, on which camera, and what to do.
+class CameraError : public Error {
+ public:
+  using Error::Error;
+};
+
+// What one camera is, as read from it (goes into recording.yaml).
+struct CameraIdentity {
+  std::string vendor;
+  std::string model;
+  std::string serial;
+  std::string firmware;
+  std::string address;  // IP address for GigE Vision cameras
+  std::string BriefReport() const;
+};
+
+// One camera found by discovery (`irdist devices`).
+struct DeviceInfo {
+  std::string id;        // Aravis device id, e.g. "Aravis-Fake-GV01"
+  std::string vendor;
+  std::string model;
+  std::string serial;
+  std::string address;   // IP address (GigE) or empty
+  std::string protocol;  // "GigEVision", "USB3Vision", ...
+};
+
+// How to configure a camera for irdist (from the rig file's camera: section).
+struct CameraSettings {
+  // GenICam PixelFormat: "Mono8", "Mono12" or "Mono16". Frames are always delivered as CV_16UC1
+  // with the values the camera sent (not rescaled).
+  std::string pixel_format = "Mono12";
+  // FrameStart trigger source: "Line1" (wired to the station) or "Software" (tests).
+  std::string trigger_source = "Line1";
+  // TriggerActivation for hardware lines ("RisingEdge", "FallingEdge"); ignored for Software.
+  std::string trigger_activation = "RisingEdge";
+  // Trigger mode on (the normal case); off = free-running at the camera's frame rate.
+  bool triggered = true;
+  // BlackLevel in the camera's units; negative = leave as is. Skipped if the camera has none.
+  double black_level = 0.0;
+  // Gamma; <= 0 = leave as is. Only set where the camera has a Gamma feature.
+  double gamma = 1.0;
+  // Region of interest; 0 = the camera's maximum (width/height) or 0 (offsets).
+  int width = 0;
+  int height = 0;
+  int offset_x = 0;
+  int offset_y = 0;
+  // Initial exposure (us) set while configuring.
+  double exposure_us = 10000.0;
+  // GigE Vision stream packet size in bytes; 0 = negotiate with the camera.
+  int packet_size = 0;
+  // Kernel socket buffer for the stream (bytes); 0 = sized from the payload (min 4 MB).
+  int socket_buffer_bytes = 0;
+  // Number of frame buffers queued on the stream (at least the longest bracket + 2).
+  int buffer_count = 16;
+  // How long a partially received frame is kept before it is given up (ms). Low values detect a
+  // lost triggered frame quickly (it comes back as a timeout).
+  int frame_retention_ms = 50;
+  // Relative tolerance when a value read back must equal the value set (floats only).
+  double readback_tolerance = 0.005;
+  bool IsValid(std::string* why) const;
+};
+
+// The outcome of one frame, as the grabber saw it. Expected failures are values, not exceptions.
+enum class FrameStatus {
+  kOk,
+  kTimeout,         // nothing (complete) arrived in time
+  kMissingPackets,  // incomplete frame
+  kWrongPacketId,
+  kSizeMismatch,
+  kAborted,
+  kUnderrun,        // the stream had no free buffer
+  kFilling,
+  kWrongExposure,   // delivered, but taken with another exposure than requested
+  kUnknown,         // Aravis reported ARV_BUFFER_STATUS_UNKNOWN (-1) or an unlisted status
+};
+const char* FrameStatusName(FrameStatus status);
+
+// One frame as it left the camera.
+struct RawFrame {
+  FrameStatus status = FrameStatus::kUnknown;
+  cv::Mat image;                  // CV_16UC1 when status == kOk, else empty
+  int bit_depth = 16;             // significant bits of the pixel values
+  std::uint64_t frame_id = 0;     // camera block id (16-bit on GigE Vision 1.x, wraps)
+  std::uint64_t timestamp_ns = 0; // camera timestamp
+  std::int64_t host_time_ns = 0;  // host wall clock at reception (ns since the Unix epoch)
+  std::optional<double> chunk_exposure_us;  // ChunkExposureTime when the camera sends chunks
+};
+
+class Camera {
+ public:
+  virtual ~Camera() = default;
+
+  virtual CameraIdentity Identity() const = 0;
+  // Applies every setting, reading back each value; throws CameraError when the camera lacks a
+  // required feature or does not keep a value (clamping).
+  virtual void Configure(const CameraSettings& settings) = 0;
+  // Every feature value irdist relies on, read back from the camera (for recording.yaml).
+  virtual std::map<std::string, std::string> ReadBackFeatures() = 0;
+
+  // Writes the exposure and returns the value read back (us). Throws CameraError when the camera
+  // clamps it beyond the settings' tolerance.
+  virtual double SetExposureUs(double exposure_us) = 0;
+  virtual double ExposureUs() = 0;
+
+  // Starts streaming (AcquisitionStart) with the stream's buffers queued; StopStream ends it.
+  virtual void StartStream() = 0;
+  virtual void StopStream() = 0;
+  virtual bool streaming() const = 0;
+  // Next frame from the stream, or std::nullopt when none arrived within `timeout`. Frames whose
+  // transfer failed are returned with their status and no image.
+  virtual std::optional<RawFrame> WaitFrame(std::chrono::milliseconds timeout) = 0;
+  // Drops every frame already queued; returns how many.
+  virtual int Flush() = 0;
+  // TriggerSoftware command (works when the trigger source is Software).
+  virtual void SoftwareTrigger() = 0;
+  // Whether frames carry ChunkExposureTime.
+  virtual bool HasExposureChunks() const = 0;
+};
+
+}  // namespace irdist
