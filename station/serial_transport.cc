@@ -1,0 +1,156 @@
+#include "station/serial_transport.h"
+
+#include <termios.h>
+
+#include <boost/asio.hpp>
+
+#include <istream>
+
+namespace irdist {
+
+namespace asio = boost::asio;
+
+bool SerialOptions::IsValid(std::string* why) const {
+  auto fail = [&](const char* m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (baud == 0) return fail("baud must be > 0");
+  if (write_timeout.count() <= 0) return fail("write_timeout must be > 0");
+  if (max_line_bytes < 16) return fail("max_line_bytes must be >= 16");
+  return true;
+}
+
+struct SerialTransport::Impl {
+  std::string port_name;
+  SerialOptions options;
+  LineLog* log = nullptr;
+  asio::io_context io;
+  asio::serial_port port{io};
+  asio::streambuf buffer;
+
+  // Runs the io_context until `done` or the deadline; on a timeout cancels the pending operation
+  // and lets its handler run. Returns whether the operation completed.
+  bool RunUntil(const bool& done, std::chrono::milliseconds deadline) {
+    io.restart();
+    io.run_for(deadline);
+    if (done) return true;
+    boost::system::error_code ignored;
+    port.cancel(ignored);
+    io.restart();
+    io.run();  // the cancelled handler completes with operation_aborted
+    return done;
+  }
+};
+
+SerialTransport::SerialTransport(const std::string& port, SerialOptions options, LineLog* log)
+    : impl_(std::make_unique<Impl>()) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), why);
+  impl_->port_name = port;
+  impl_->options = options;
+  impl_->log = log;
+  boost::system::error_code ec;
+  impl_->port.open(port, ec);
+  if (ec) {
+    throw LinkError("cannot open serial port: " + ec.message(), port,
+                    "check the rig file's station.port, that the device exists and that you may "
+                    "open it (group dialout)");
+  }
+  // A pty rejects some of these; what matters (raw mode) was set by open().
+  impl_->port.set_option(asio::serial_port_base::baud_rate(options.baud), ec);
+  impl_->port.set_option(asio::serial_port_base::character_size(8), ec);
+  impl_->port.set_option(asio::serial_port_base::parity(asio::serial_port_base::parity::none), ec);
+  impl_->port.set_option(
+      asio::serial_port_base::stop_bits(asio::serial_port_base::stop_bits::one), ec);
+  impl_->port.set_option(
+      asio::serial_port_base::flow_control(asio::serial_port_base::flow_control::none), ec);
+}
+
+SerialTransport::~SerialTransport() {
+  boost::system::error_code ignored;
+  impl_->port.close(ignored);
+}
+
+const std::string& SerialTransport::port() const { return impl_->port_name; }
+
+void SerialTransport::WriteLine(std::string_view line) {
+  if (impl_->log) impl_->log->Sent(line);
+  std::string bytes(line);
+  bytes += "\r\n";
+  bool done = false;
+  boost::system::error_code result;
+  asio::async_write(impl_->port, asio::buffer(bytes),
+                    [&](const boost::system::error_code& ec, std::size_t) {
+                      result = ec;
+                      done = true;
+                    });
+  if (!impl_->RunUntil(done, impl_->options.write_timeout)) {
+    throw LinkError("serial write timed out", impl_->port_name,
+                    "check the cable and that the station is powered");
+  }
+  if (result && result != asio::error::operation_aborted) {
+    throw LinkError("serial write failed: " + result.message(), impl_->port_name,
+                    "check the cable and that the station is powered");
+  }
+}
+
+std::string SerialTransport::ReadLine(std::chrono::milliseconds deadline) {
+  const auto until = std::chrono::steady_clock::now() + deadline;
+  while (true) {
+    bool done = false;
+    boost::system::error_code result;
+    std::size_t length = 0;
+    asio::async_read_until(impl_->port, impl_->buffer, '\n',
+                           [&](const boost::system::error_code& ec, std::size_t n) {
+                             result = ec;
+                             length = n;
+                             done = true;
+                           });
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        until - std::chrono::steady_clock::now());
+    const bool completed = impl_->RunUntil(done, std::max(left, std::chrono::milliseconds(0)));
+    if (completed && !result) {
+      std::string line(length, '\0');
+      std::istream in(&impl_->buffer);
+      in.read(line.data(), static_cast<std::streamsize>(length));
+      line.pop_back();  // '\n'
+      std::string clean;
+      clean.reserve(line.size());
+      for (char c : line) {
+        if (c != '\r') clean.push_back(c);
+      }
+      if (impl_->log) impl_->log->Received(clean);
+      return clean;
+    }
+    if (result == asio::error::not_found || impl_->buffer.size() > impl_->options.max_line_bytes) {
+      // No line end within the buffer's limit: hand back what came, the caller rejects it.
+      std::string junk(impl_->buffer.size(), '\0');
+      std::istream in(&impl_->buffer);
+      in.read(junk.data(), static_cast<std::streamsize>(junk.size()));
+      if (impl_->log) impl_->log->Received(junk);
+      return junk;
+    }
+    if (completed && result && result != asio::error::operation_aborted) {
+      throw LinkError("serial read failed: " + result.message(), impl_->port_name,
+                      "check the cable and that the station is powered");
+    }
+    if (std::chrono::steady_clock::now() >= until) {
+      if (impl_->log) {
+        impl_->log->Note("no line within " + std::to_string(deadline.count()) + " ms");
+      }
+      throw LinkError("no reply line within " + std::to_string(deadline.count()) + " ms",
+                      impl_->port_name,
+                      "check that the station is powered and connected, and the baud rate");
+    }
+  }
+}
+
+void SerialTransport::Flush() {
+  // Discard what is buffered here, then whatever the port already holds.
+  impl_->buffer.consume(impl_->buffer.size());
+  const int fd = impl_->port.native_handle();
+  if (fd >= 0) ::tcflush(fd, TCIFLUSH);
+}
+
+}  // namespace irdist

@@ -1,0 +1,43 @@
+#pragma once
+// The serial transport: a Transport over a serial port (a USB-serial adapter on real hardware, the
+// emulator's pseudo-terminal on the virtual rig). Every read and write has a deadline; bytes are
+// logged line by line to an optional LineLog. No Asio types in this header.
+
+#include <chrono>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "station/line_log.h"
+#include "station/transport.h"
+
+namespace irdist {
+
+struct SerialOptions {
+  unsigned int baud = 115200;                        // bits per second, 8N1, no flow control
+  std::chrono::milliseconds write_timeout{1000};     // a write not done by then throws LinkError
+  std::size_t max_line_bytes = 512;                  // a longer "line" is cut and returned as is
+  bool IsValid(std::string* why) const;
+};
+
+class SerialTransport : public Transport {
+ public:
+  // Opens `port` (e.g. /dev/ttyUSB0 or /dev/pts/7) and configures it. Settings a pty rejects
+  // (baud, flow control) are tolerated. `log` (may be null) must outlive the transport.
+  // Throws LinkError if the port cannot be opened.
+  SerialTransport(const std::string& port, SerialOptions options = {}, LineLog* log = nullptr);
+  ~SerialTransport() override;
+  SerialTransport(const SerialTransport&) = delete;
+  SerialTransport& operator=(const SerialTransport&) = delete;
+
+  void WriteLine(std::string_view line) override;
+  std::string ReadLine(std::chrono::milliseconds deadline) override;
+  void Flush() override;
+  const std::string& port() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace irdist

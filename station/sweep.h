@@ -1,0 +1,65 @@
+#pragma once
+// The sweep runner: moves the station through a list of poses and calls back at each settled pose
+// (the app captures frames there; station/ never sees the camera). It recovers from station
+// reboots by retaking the pose, and honours a stop flag (Ctrl-C): the pose in flight is finished,
+// then the station is parked with the IRED off.
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "station/station_client.h"
+
+namespace irdist {
+
+struct SweepPose {
+  std::int64_t index = 0;  // opaque to the sweep: the caller's pose number, handed back as is
+  double slide_mm = 0.0;
+  double pan_deg = 0.0;
+  double tilt_deg = 0.0;
+  double bias_ma = 0.0;    // IRED current at this pose (0 = off)
+};
+
+struct SweepOptions {
+  bool home_first = true;        // home before the first pose (always done if unhomed)
+  int max_retakes = 3;           // retakes of one pose after station reboots, then give up
+  bool park_at_end = true;       // at the end (or on stop): pan = tilt = 0, slide per below
+  double park_slide_mm = -1.0;   // slide position when parking; < 0 leaves the slide where it is
+  bool IsValid(std::string* why) const;
+};
+
+struct SweepResult {
+  std::size_t poses_done = 0;    // poses whose callback completed on a stable station
+  std::size_t retakes = 0;       // poses taken again after a reboot
+  std::size_t reboots = 0;       // station reboots seen
+  bool stopped = false;          // the stop flag ended the sweep early
+  std::int64_t next_index = -1;  // index of the first pose not done (-1 when all are done)
+  std::string BriefReport() const;
+};
+
+// Called at each settled pose with the IRED at pose.bias_ma. `attempt` is 0 the first time; a
+// retake after a station reboot calls again with attempt > 0, and whatever the caller recorded for
+// this pose in earlier attempts must be discarded. Exceptions thrown here end the sweep (after
+// the IRED is switched off) and propagate.
+using PoseCallback = std::function<void(const SweepPose& pose, int attempt)>;
+
+class Sweep {
+ public:
+  // `client` must outlive the sweep.
+  explicit Sweep(StationClient& client, SweepOptions options = {});
+
+  // Runs the poses in order. `stop` (may be null) is polled between poses. On every exit the
+  // IRED is switched off; on normal end or stop the station is parked (options). Throws
+  // StationError, LinkError, StationRebooted (after max_retakes), or what the callback throws.
+  SweepResult Run(const std::vector<SweepPose>& poses, const PoseCallback& at_pose,
+                  const std::atomic<bool>* stop = nullptr);
+
+ private:
+  void Park();
+  StationClient& client_;
+  SweepOptions options_;
+};
+
+}  // namespace irdist
