@@ -1,0 +1,56 @@
+#pragma once
+// The app's typed errors. main.cc maps them to exit codes: RecipeError and every other
+// irdist::Error -> 1 (a failed run), UsageError and NotAvailableError -> 2.
+
+#include <string>
+#include <utility>
+
+#include "base/check.h"
+
+namespace irdist {
+
+// A recipe or rig file that cannot be used: what is wrong, where (file:line:column, 1-based) and
+// what would be valid. Thrown before anything moves.
+class RecipeError : public Error {
+ public:
+  // line and column are 1-based; 0 when unknown (e.g. the file cannot be opened).
+  RecipeError(std::string file, int line, int column, const std::string& message)
+      : Error(Format(file, line, column, message)),
+        file_(std::move(file)),
+        line_(line),
+        column_(column),
+        message_(message) {}
+
+  const std::string& file() const { return file_; }
+  int line() const { return line_; }
+  int column() const { return column_; }
+  const std::string& message() const { return message_; }  // without the file:line:column prefix
+
+ private:
+  static std::string Format(const std::string& file, int line, int column,
+                            const std::string& message) {
+    std::string where = file;
+    if (line > 0) where += ":" + std::to_string(line);
+    if (line > 0 && column > 0) where += ":" + std::to_string(column);
+    return where + ": " + message;
+  }
+
+  std::string file_;
+  int line_;
+  int column_;
+  std::string message_;
+};
+
+// The command line is wrong (unknown command, missing or bad argument). Exit code 2.
+class UsageError : public Error {
+ public:
+  using Error::Error;
+};
+
+// The command exists but its modules are not integrated into this build yet. Exit code 2.
+class NotAvailableError : public Error {
+ public:
+  using Error::Error;
+};
+
+}  // namespace irdist

@@ -1,0 +1,23 @@
+// irdist: turns the library's typed errors into exit codes and one clear message each.
+#include <exception>
+#include <iostream>
+
+#include "app/cli.h"
+
+int main(int argc, char** argv) {
+  try {
+    return irdist::RunIrdist(argc, argv, {std::cout, std::cerr});
+  } catch (const irdist::UsageError& e) {
+    std::cerr << "irdist: " << e.what() << "\n";
+    return 2;
+  } catch (const irdist::NotAvailableError& e) {
+    std::cerr << "irdist: " << e.what() << "\n";
+    return 2;
+  } catch (const irdist::Error& e) {
+    std::cerr << "irdist: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "irdist: unexpected error: " << e.what() << "\n";
+    return 1;
+  }
+}

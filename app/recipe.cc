@@ -1,0 +1,413 @@
+#include "app/recipe.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <vector>
+
+#include "app/yaml_fields.h"
+
+#ifndef IRDIST_SOURCE_DIR
+#define IRDIST_SOURCE_DIR "."
+#endif
+
+namespace irdist {
+namespace {
+
+namespace fs = std::filesystem;
+using yaml_fields::AsInteger;
+using yaml_fields::AsNumber;
+using yaml_fields::AsString;
+using yaml_fields::Fail;
+using yaml_fields::MapReader;
+
+constexpr int kMaxAxisValues = 100000;
+constexpr double kPi = 3.14159265358979323846;
+
+std::string Number(double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.10g", value);
+  return buffer;
+}
+
+std::string RangeText(const AxisRange& range) {
+  return "[" + Number(range.min) + ", " + Number(range.max) + "]";
+}
+
+const char kAxisForms[] =
+    "a number, a list of numbers, a range {start, stop, step} or random draws "
+    "{mean, sd, count, seed}";
+
+// An axis as read from the file: its values and, for each value, where it was written.
+struct ParsedAxis {
+  AxisValues values;
+  std::vector<YAML::Mark> marks;  // one per value (lists and ranges)
+  YAML::Mark mark;                // the axis's node
+  YAML::Mark mean_mark;           // random draws: the mean
+  YAML::Node random_node;         // random draws: the map
+};
+
+std::vector<double> ExpandRange(const MapReader& range, const std::string& what,
+                                std::vector<YAML::Mark>* marks) {
+  const double start = AsNumber(range.Require("start"), range.file(), what + ".start");
+  const double stop = AsNumber(range.Require("stop"), range.file(), what + ".stop");
+  const double step = AsNumber(range.Require("step"), range.file(), what + ".step");
+  const YAML::Mark step_mark = range.Get("step").Mark();
+  const YAML::Mark stop_mark = range.Get("stop").Mark();
+  if (step == 0.0) {
+    Fail(range.file(), step_mark, what + ".step must not be 0; for a single value write " +
+                                      what + ": " + Number(start));
+  }
+  const double steps = (stop - start) / step;
+  if (steps < -1e-9) {
+    Fail(range.file(), step_mark,
+         what + ".step " + Number(step) + " moves away from stop " + Number(stop) +
+             " (start " + Number(start) + "); use step " + Number(-step));
+  }
+  const double whole = std::round(steps);
+  if (std::abs(steps - whole) > 1e-9 * std::max(1.0, std::abs(steps))) {
+    const double below = start + std::floor(steps) * step;
+    const double above = start + std::ceil(steps) * step;
+    Fail(range.file(), stop_mark,
+         what + ".stop " + Number(stop) + " is not reached from start " + Number(start) +
+             " in whole steps of " + Number(step) + " (ranges include their stop); valid stops: " +
+             Number(below) + " or " + Number(above));
+  }
+  if (whole + 1 > kMaxAxisValues) {
+    Fail(range.file(), step_mark,
+         what + " has " + Number(whole + 1) + " values; at most " + std::to_string(kMaxAxisValues));
+  }
+  const int count = static_cast<int>(whole) + 1;
+  std::vector<double> values;
+  for (int i = 0; i < count; ++i) {
+    // start + i*step, never an accumulated sum; the last value is stop exactly.
+    values.push_back(i + 1 == count ? stop : start + i * step);
+    marks->push_back(i == 0 ? range.Get("start").Mark() : stop_mark);
+  }
+  return values;
+}
+
+ParsedAxis ReadAxis(const YAML::Node& node, const std::string& file, const std::string& what,
+                    bool allow_random) {
+  ParsedAxis axis;
+  axis.mark = node.Mark();
+  const std::string forms =
+      allow_random ? kAxisForms : "a number, a list of numbers or a range {start, stop, step}";
+  if (node.IsScalar()) {
+    axis.values.values.push_back(AsNumber(node, file, what));
+    axis.marks.push_back(node.Mark());
+  } else if (node.IsSequence()) {
+    if (node.size() == 0) {
+      Fail(file, node.Mark(), what + " is empty; give at least one value (" + forms + ")");
+    }
+    for (const YAML::Node& element : node) {
+      axis.values.values.push_back(AsNumber(element, file, what + " value"));
+      axis.marks.push_back(element.Mark());
+    }
+  } else if (node.IsMap()) {
+    const bool range = node["start"] || node["stop"] || node["step"];
+    const bool random = node["mean"] || node["sd"] || node["count"] || node["seed"];
+    if (range) {
+      const MapReader map(node, file, what + " (a range)", {"start", "stop", "step"});
+      axis.values.values = ExpandRange(map, what, &axis.marks);
+    } else if (random && allow_random) {
+      const MapReader map(node, file, what + " (random draws)",
+                          {"mean", "sd", "count", "seed", "per_pose", "min", "max"});
+      RandomDraws draws;
+      draws.mean = AsNumber(map.Require("mean"), file, what + ".mean");
+      draws.sd = AsNumber(map.Require("sd"), file, what + ".sd");
+      if (draws.sd < 0.0) Fail(file, map.Get("sd").Mark(), what + ".sd must be >= 0");
+      draws.count = AsInteger(map.Require("count"), file, what + ".count");
+      if (draws.count < 1 || draws.count > kMaxAxisValues) {
+        Fail(file, map.Get("count").Mark(),
+             what + ".count must be between 1 and " + std::to_string(kMaxAxisValues));
+      }
+      const int seed = AsInteger(map.Require("seed"), file, what + ".seed");
+      if (seed < 0) Fail(file, map.Get("seed").Mark(), what + ".seed must be >= 0");
+      draws.seed = static_cast<std::uint64_t>(seed);
+      draws.per_pose = map.Boolean("per_pose", draws.per_pose);
+      draws.min = map.Number("min", draws.min);
+      draws.max = map.Number("max", draws.max);
+      axis.values.random = draws;
+      axis.mean_mark = map.Get("mean").Mark();
+      axis.random_node = node;
+    } else {
+      Fail(file, node.Mark(), what + " must be " + forms + (node.size() == 0 ? " (it is empty)" : ""));
+    }
+  } else {
+    Fail(file, node.Mark(), what + " must be " + forms);
+  }
+  return axis;
+}
+
+// Values against the rig's limits; random draws get their truncation from the limits.
+void CheckLimits(ParsedAxis* axis, const AxisRange& limits, const std::string& file,
+                 const std::string& what, const std::string& rig_file) {
+  const std::string valid = " is outside the rig's limits " + RangeText(limits) +
+                            " (station.limits in " + rig_file + ")";
+  if (axis->values.random.has_value()) {
+    RandomDraws& draws = *axis->values.random;
+    if (!limits.Contains(draws.mean)) {
+      Fail(file, axis->mean_mark, what + ".mean " + Number(draws.mean) + valid);
+    }
+    for (const char* key : {"min", "max"}) {
+      const YAML::Node bound = axis->random_node[key];
+      if (bound && !limits.Contains(AsNumber(bound, file, what + "." + key))) {
+        Fail(file, bound.Mark(), what + "." + key + " " + Number(AsNumber(bound, file, key)) + valid);
+      }
+    }
+    draws.min = std::max(draws.min, limits.min);
+    draws.max = std::min(draws.max, limits.max);
+    if (!(draws.min < draws.max) || draws.mean < draws.min || draws.mean > draws.max) {
+      Fail(file, axis->mark, what + ": need min < mean < max for the random draws");
+    }
+    return;
+  }
+  for (size_t i = 0; i < axis->values.values.size(); ++i) {
+    const double v = axis->values.values[i];
+    if (!limits.Contains(v)) Fail(file, axis->marks[i], what + " " + Number(v) + valid);
+  }
+}
+
+SweepAxis AxisByName(const YAML::Node& node, const std::string& file, const std::string& what,
+                     AngleMode mode) {
+  const std::string name = AsString(node, file, what);
+  const std::vector<std::string> names = {SweepAxisName(SweepAxis::kSlide, mode),
+                                          SweepAxisName(SweepAxis::kAngle, mode),
+                                          SweepAxisName(SweepAxis::kTilt, mode),
+                                          SweepAxisName(SweepAxis::kBias, mode)};
+  for (size_t k = 0; k < names.size(); ++k) {
+    if (names[k] == name) return static_cast<SweepAxis>(k);
+  }
+  Fail(file, node.Mark(), what + ": '" + name + "' is not an axis of this recipe; valid: " +
+                              yaml_fields::JoinNames(names));
+}
+
+std::vector<SweepAxis> ReadAxisList(const YAML::Node& node, const std::string& file,
+                                    const std::string& what, AngleMode mode) {
+  if (!node.IsSequence()) Fail(file, node.Mark(), what + " must be a list of axis names");
+  std::vector<SweepAxis> axes;
+  for (const YAML::Node& element : node) {
+    const SweepAxis axis = AxisByName(element, file, what, mode);
+    if (std::find(axes.begin(), axes.end(), axis) != axes.end()) {
+      Fail(file, element.Mark(), what + " names '" + element.Scalar() + "' twice");
+    }
+    axes.push_back(axis);
+  }
+  return axes;
+}
+
+double Rad(double deg) { return deg * kPi / 180.0; }
+
+}  // namespace
+
+std::string AfterRecordingName(AfterRecording after) {
+  switch (after) {
+    case AfterRecording::kNone:
+      return "none";
+    case AfterRecording::kFit:
+      return "fit";
+    case AfterRecording::kEstimate:
+      return "estimate";
+  }
+  return "?";
+}
+
+std::string FindRigFile(const std::string& spec, const std::string& base_dir) {
+  std::error_code ec;
+  const bool is_path = spec.find('/') != std::string::npos ||
+                       (spec.size() > 5 && spec.compare(spec.size() - 5, 5, ".yaml") == 0);
+  std::vector<fs::path> candidates;
+  if (is_path) {
+    const fs::path path(spec);
+    candidates.push_back(path.is_absolute() ? path : fs::path(base_dir) / path);
+  } else {
+    candidates.push_back(fs::path(base_dir) / "rigs" / (spec + ".yaml"));
+    candidates.push_back(fs::path(IRDIST_SOURCE_DIR) / "recipes" / "rigs" / (spec + ".yaml"));
+  }
+  for (const fs::path& candidate : candidates) {
+    if (fs::is_regular_file(candidate, ec)) return candidate.lexically_normal().string();
+  }
+  return "";
+}
+
+Recipe ParseRecipe(const std::string& text, const std::string& file, const std::string& base_dir) {
+  const YAML::Node root = yaml_fields::Parse(text, file);
+  if (!root || root.IsNull()) {
+    throw RecipeError(file, 1, 1, "the recipe is empty; it needs at least axes: and bracket:");
+  }
+  const MapReader map(root, file, "the recipe",
+                      {"name", "description", "rig", "output", "after", "axes", "order",
+                       "serpentine", "bracket", "settle"});
+  Recipe recipe;
+  recipe.path = file;
+  recipe.name = map.String("name", fs::path(file).stem().string());
+  recipe.description = map.String("description", "");
+  recipe.output_dir = map.String("output", "runs/" + recipe.name);
+  if (recipe.output_dir.empty()) Fail(file, map.Get("output").Mark(), "output must not be empty");
+
+  const std::string after = map.String("after", "none");
+  if (after == "none") {
+    recipe.after = AfterRecording::kNone;
+  } else if (after == "fit") {
+    recipe.after = AfterRecording::kFit;
+  } else if (after == "estimate") {
+    recipe.after = AfterRecording::kEstimate;
+  } else {
+    Fail(file, map.Get("after").Mark(),
+         "after '" + after + "' is not known; valid: fit (calibration), estimate (validation), none");
+  }
+
+  // The rig first: its limits check the axes.
+  const std::string rig_spec = map.String("rig", "virtual");
+  recipe.rig_path = FindRigFile(rig_spec, base_dir);
+  if (recipe.rig_path.empty()) {
+    const YAML::Node rig_node = map.Get("rig");
+    Fail(file, rig_node ? rig_node.Mark() : map.mark(),
+         "rig '" + rig_spec + "' not found; give a rig name from recipes/rigs/ (e.g. virtual) "
+         "or the path of a rig file");
+  }
+  recipe.rig = LoadRig(recipe.rig_path);
+  recipe.motion = recipe.rig.station.motion;
+  const StationLimits& limits = recipe.rig.station.limits;
+
+  // Axes.
+  const MapReader axes(map.Require("axes"), file, "axes",
+                       {"slide_mm", "theta_deg", "pan_deg", "tilt_deg", "bias_ma"});
+  if (axes.Has("theta_deg") && axes.Has("pan_deg")) {
+    Fail(file, axes.Get("pan_deg").Mark(),
+         "give either theta_deg or pan_deg, not both (theta is realised by pan at the given tilt)");
+  }
+  if (!axes.Has("theta_deg") && !axes.Has("pan_deg")) {
+    Fail(file, axes.mark(), "axes is missing the key 'theta_deg' (or 'pan_deg')");
+  }
+  SweepSpec& sweep = recipe.sweep;
+  sweep.angle_mode = axes.Has("theta_deg") ? AngleMode::kTheta : AngleMode::kPan;
+  const std::string angle_key = sweep.angle_mode == AngleMode::kTheta ? "theta_deg" : "pan_deg";
+  ParsedAxis slide = ReadAxis(axes.Require("slide_mm"), file, "axes.slide_mm", true);
+  ParsedAxis angle = ReadAxis(axes.Require(angle_key), file, "axes." + angle_key, true);
+  ParsedAxis bias = ReadAxis(axes.Require("bias_ma"), file, "axes.bias_ma", true);
+  ParsedAxis tilt;
+  tilt.values.values = {0.0};
+  tilt.marks = {axes.mark()};
+  if (axes.Has("tilt_deg")) tilt = ReadAxis(axes.Get("tilt_deg"), file, "axes.tilt_deg", true);
+
+  const std::string& rig_file = recipe.rig_path;
+  CheckLimits(&slide, limits.slide_mm, file, "axes.slide_mm", rig_file);
+  CheckLimits(&tilt, limits.tilt_deg, file, "axes.tilt_deg", rig_file);
+  CheckLimits(&bias, limits.bias_ma, file, "axes.bias_ma", rig_file);
+  if (sweep.angle_mode == AngleMode::kPan) {
+    CheckLimits(&angle, limits.pan_deg, file, "axes.pan_deg", rig_file);
+  } else if (angle.values.random.has_value() || tilt.values.random.has_value()) {
+    const bool tilt_zero = !tilt.values.random.has_value() &&
+                           std::all_of(tilt.values.values.begin(), tilt.values.values.end(),
+                                       [](double t) { return t == 0.0; });
+    if (!tilt_zero) {
+      Fail(file, angle.mark,
+           "random draws of theta_deg or tilt_deg need tilt_deg 0 (theta realised by pan); "
+           "draw pan_deg and tilt_deg instead");
+    }
+    CheckLimits(&angle, limits.pan_deg, file, "axes.theta_deg", rig_file);
+  } else {
+    // theta through pan at each tilt: cos(theta) = cos(pan) cos(tilt).
+    for (size_t i = 0; i < angle.values.values.size(); ++i) {
+      const double theta = angle.values.values[i];
+      if (!(std::abs(theta) < 90.0)) {
+        Fail(file, angle.marks[i], "axes.theta_deg " + Number(theta) + " must lie in (-90, 90)");
+      }
+      for (double tilt_deg : tilt.values.values) {
+        const double c = std::cos(Rad(theta)) / std::cos(Rad(tilt_deg));
+        if (c > 1.0 + 1e-12) {
+          Fail(file, angle.marks[i],
+               "axes.theta_deg " + Number(theta) + " cannot be realised with tilt_deg " +
+                   Number(tilt_deg) + ": cos(theta) = cos(pan) cos(tilt) needs |theta| >= |tilt|");
+        }
+        const double pan = std::acos(std::min(1.0, c)) * 180.0 / kPi;
+        if (!limits.pan_deg.Contains(theta < 0 ? -pan : pan)) {
+          Fail(file, angle.marks[i],
+               "axes.theta_deg " + Number(theta) + " needs pan " + Number(theta < 0 ? -pan : pan) +
+                   " deg at tilt " + Number(tilt_deg) + ", outside the rig's pan limits " +
+                   RangeText(limits.pan_deg) + " (station.limits in " + rig_file + ")");
+        }
+      }
+    }
+  }
+  sweep.slide_mm = slide.values;
+  sweep.angle_deg = angle.values;
+  sweep.tilt_deg = tilt.values;
+  sweep.bias_ma = bias.values;
+
+  // Bracket.
+  const MapReader bracket(map.Require("bracket"), file, "bracket",
+                          {"t_ref_ms", "t_meas_ms", "repeats", "retake_reference"});
+  BracketSpec& spec = sweep.bracket;
+  spec.t_ref_ms = AsNumber(bracket.Require("t_ref_ms"), file, "bracket.t_ref_ms");
+  if (!(spec.t_ref_ms > 0.0)) {
+    Fail(file, bracket.Get("t_ref_ms").Mark(), "bracket.t_ref_ms must be > 0 ms");
+  }
+  const ParsedAxis t_meas = ReadAxis(bracket.Require("t_meas_ms"), file, "bracket.t_meas_ms", false);
+  spec.t_meas_ms = t_meas.values.values;
+  for (size_t i = 0; i < spec.t_meas_ms.size(); ++i) {
+    if (!(spec.t_meas_ms[i] > spec.t_ref_ms)) {
+      Fail(file, t_meas.marks[i],
+           "bracket.t_meas_ms " + Number(spec.t_meas_ms[i]) + " must be longer than t_ref_ms " +
+               Number(spec.t_ref_ms) + " (the method differences t_n - t_r > 0)");
+    }
+  }
+  spec.repeats = bracket.Integer("repeats", 1);
+  if (spec.repeats < 1) Fail(file, bracket.Get("repeats").Mark(), "bracket.repeats must be >= 1");
+  spec.retake_reference = bracket.Boolean("retake_reference", false);
+
+  // Settle.
+  if (map.Has("settle")) {
+    const MapReader settle(map.Get("settle"), file, "settle", {"after_move_ms", "after_current_ms"});
+    sweep.settle.after_move_ms = settle.Number("after_move_ms", sweep.settle.after_move_ms);
+    sweep.settle.after_current_ms = settle.Number("after_current_ms", sweep.settle.after_current_ms);
+    for (const char* key : {"after_move_ms", "after_current_ms"}) {
+      if (settle.Has(key) && settle.Number(key, 0.0) < 0.0) {
+        Fail(file, settle.Get(key).Mark(), std::string("settle.") + key + " must be >= 0 ms");
+      }
+    }
+  }
+
+  // Serpentine: true (default axes), false (none) or a list of axes.
+  if (map.Has("serpentine")) {
+    const YAML::Node node = map.Get("serpentine");
+    bool flag = false;
+    if (node.IsScalar() && YAML::convert<bool>::decode(node, flag)) {
+      if (!flag) sweep.serpentine.clear();
+    } else if (node.IsSequence()) {
+      sweep.serpentine = ReadAxisList(node, file, "serpentine", sweep.angle_mode);
+    } else {
+      Fail(file, node.Mark(), "serpentine must be true, false or a list of axis names");
+    }
+  }
+
+  // Order: the listed axes outermost, in that order; the others after them by step cost.
+  std::vector<SweepAxis> listed;
+  if (map.Has("order")) {
+    listed = ReadAxisList(map.Get("order"), file, "order", sweep.angle_mode);
+    if (listed.empty()) Fail(file, map.Get("order").Mark(), "order is empty; list axis names");
+  }
+  std::vector<SweepAxis> order = listed;
+  for (SweepAxis axis : ChooseAxisOrder(sweep, recipe.motion)) {
+    if (std::find(order.begin(), order.end(), axis) == order.end()) order.push_back(axis);
+  }
+  sweep.order = order;
+
+  std::string why;
+  if (!sweep.IsValid(&why)) Fail(file, map.mark(), why);
+  return recipe;
+}
+
+Recipe LoadRecipe(const std::string& path) {
+  const std::string text = yaml_fields::ReadFile(path);
+  std::string base_dir = fs::path(path).parent_path().string();
+  if (base_dir.empty()) base_dir = ".";
+  return ParseRecipe(text, path, base_dir);
+}
+
+Plan PlanRecipe(const Recipe& recipe) { return MakePlan(recipe.sweep, recipe.motion); }
+
+}  // namespace irdist

@@ -1,0 +1,188 @@
+#include "app/rig.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <vector>
+
+#include "app/errors.h"
+#include "app/yaml_fields.h"
+
+namespace irdist {
+namespace {
+
+using yaml_fields::AsNumber;
+using yaml_fields::Fail;
+using yaml_fields::MapReader;
+
+bool Fail(std::string* why, const std::string& message) {
+  if (why != nullptr) *why = message;
+  return false;
+}
+
+void OneOf(const MapReader& map, const std::string& key, const std::string& value,
+           const std::vector<std::string>& valid) {
+  if (std::find(valid.begin(), valid.end(), value) == valid.end()) {
+    Fail(map.file(), map.Get(key).Mark(),
+         key + " '" + value + "' is not supported; valid: " + yaml_fields::JoinNames(valid));
+  }
+}
+
+int AtLeast(const MapReader& map, const std::string& key, int fallback, int minimum) {
+  const int value = map.Integer(key, fallback);
+  if (value < minimum) {
+    Fail(map.file(), map.Get(key).Mark(),
+         key + " must be >= " + std::to_string(minimum) + ", not " + std::to_string(value));
+  }
+  return value;
+}
+
+double NonNegative(const MapReader& map, const std::string& key, double fallback) {
+  const double value = map.Number(key, fallback);
+  if (value < 0.0) Fail(map.file(), map.Get(key).Mark(), key + " must be >= 0");
+  return value;
+}
+
+double Positive(const MapReader& map, const std::string& key, double fallback) {
+  const double value = map.Number(key, fallback);
+  if (!(value > 0.0)) Fail(map.file(), map.Get(key).Mark(), key + " must be > 0");
+  return value;
+}
+
+CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
+  const MapReader map(node, file, "camera",
+                      {"id", "pixel_format", "trigger_source", "trigger_activation",
+                       "black_level", "packet_size", "frame_timeout_ms", "readout_ms"});
+  CameraConfig camera;
+  camera.id = map.String("id", camera.id);
+  camera.pixel_format = map.String("pixel_format", camera.pixel_format);
+  OneOf(map, "pixel_format", camera.pixel_format, {"Mono8", "Mono10", "Mono12", "Mono16"});
+  camera.trigger_source = map.String("trigger_source", camera.trigger_source);
+  camera.trigger_activation = map.String("trigger_activation", camera.trigger_activation);
+  OneOf(map, "trigger_activation", camera.trigger_activation, {"RisingEdge", "FallingEdge"});
+  camera.black_level = AtLeast(map, "black_level", camera.black_level, 0);
+  camera.packet_size = AtLeast(map, "packet_size", camera.packet_size, 0);
+  camera.frame_timeout_ms = AtLeast(map, "frame_timeout_ms", camera.frame_timeout_ms, 1);
+  camera.readout_ms = NonNegative(map, "readout_ms", camera.readout_ms);
+  return camera;
+}
+
+AxisRange ReadRange(const MapReader& limits, const std::string& key, AxisRange fallback) {
+  if (!limits.Has(key)) return fallback;
+  const YAML::Node node = limits.Get(key);
+  if (!node.IsSequence() || node.size() != 2) {
+    Fail(limits.file(), node.Mark(),
+         "station.limits." + key + " must be a list [min, max] of two numbers");
+  }
+  AxisRange range{AsNumber(node[0], limits.file(), key + " min"),
+                  AsNumber(node[1], limits.file(), key + " max")};
+  if (!(range.min < range.max)) {
+    Fail(limits.file(), node.Mark(), "station.limits." + key + " must have min < max");
+  }
+  return range;
+}
+
+AxisMotion ReadAxisMotion(const MapReader& motion, const std::string& key, AxisMotion fallback) {
+  if (!motion.Has(key)) return fallback;
+  const MapReader map(motion.Get(key), motion.file(), "station.motion." + key,
+                      {"speed", "acceleration", "settle_ms"});
+  AxisMotion axis;
+  axis.speed = Positive(map, "speed", fallback.speed);
+  axis.acceleration = Positive(map, "acceleration", fallback.acceleration);
+  axis.settle_ms = NonNegative(map, "settle_ms", fallback.settle_ms);
+  return axis;
+}
+
+StationConfig ReadStation(const YAML::Node& node, const std::string& file) {
+  const MapReader map(node, file, "station",
+                      {"port", "baud", "reply_timeout_ms", "limits", "motion"});
+  StationConfig station;
+  station.port = map.String("port", station.port);
+  station.baud = AtLeast(map, "baud", station.baud, 1);
+  station.reply_timeout_ms = AtLeast(map, "reply_timeout_ms", station.reply_timeout_ms, 1);
+  if (map.Has("limits")) {
+    const MapReader limits(map.Get("limits"), file, "station.limits",
+                           {"slide_mm", "pan_deg", "tilt_deg", "bias_ma"});
+    station.limits.slide_mm = ReadRange(limits, "slide_mm", station.limits.slide_mm);
+    station.limits.pan_deg = ReadRange(limits, "pan_deg", station.limits.pan_deg);
+    station.limits.tilt_deg = ReadRange(limits, "tilt_deg", station.limits.tilt_deg);
+    station.limits.bias_ma = ReadRange(limits, "bias_ma", station.limits.bias_ma);
+  }
+  if (map.Has("motion")) {
+    const MapReader motion(map.Get("motion"), file, "station.motion",
+                           {"slide", "pan", "tilt", "axes_move_together", "frame_overhead_ms",
+                            "pose_overhead_ms"});
+    MotionModel& model = station.motion;
+    model.slide = ReadAxisMotion(motion, "slide", model.slide);
+    model.pan = ReadAxisMotion(motion, "pan", model.pan);
+    model.tilt = ReadAxisMotion(motion, "tilt", model.tilt);
+    model.axes_move_together = motion.Boolean("axes_move_together", model.axes_move_together);
+    model.frame_overhead_ms = NonNegative(motion, "frame_overhead_ms", model.frame_overhead_ms);
+    model.pose_overhead_ms = NonNegative(motion, "pose_overhead_ms", model.pose_overhead_ms);
+  }
+  return station;
+}
+
+}  // namespace
+
+bool CameraConfig::IsValid(std::string* why) const {
+  if (id.empty()) return Fail(why, "camera.id must not be empty (use auto)");
+  if (black_level < 0) return Fail(why, "camera.black_level must be >= 0");
+  if (packet_size < 0) return Fail(why, "camera.packet_size must be >= 0");
+  if (frame_timeout_ms < 1) return Fail(why, "camera.frame_timeout_ms must be >= 1");
+  if (!(readout_ms >= 0.0)) return Fail(why, "camera.readout_ms must be >= 0");
+  return true;
+}
+
+bool StationLimits::IsValid(std::string* why) const {
+  for (const AxisRange* range : {&slide_mm, &pan_deg, &tilt_deg, &bias_ma}) {
+    if (!(range->min < range->max)) return Fail(why, "station.limits: every min must be < max");
+  }
+  return true;
+}
+
+bool StationConfig::IsValid(std::string* why) const {
+  if (port.empty()) return Fail(why, "station.port must not be empty (use auto)");
+  if (baud < 1) return Fail(why, "station.baud must be >= 1");
+  if (reply_timeout_ms < 1) return Fail(why, "station.reply_timeout_ms must be >= 1");
+  return limits.IsValid(why) && motion.IsValid(why);
+}
+
+bool Rig::IsValid(std::string* why) const {
+  return camera.IsValid(why) && station.IsValid(why);
+}
+
+Rig ParseRig(const std::string& text, const std::string& file) {
+  const YAML::Node root = yaml_fields::Parse(text, file);
+  const MapReader map(root, file, "the rig file",
+                      {"name", "kind", "camera", "station", "virtual"});
+  Rig rig;
+  rig.path = file;
+  rig.name = map.String("name", std::filesystem::path(file).stem().string());
+  const std::string kind = map.String("kind", "hardware");
+  OneOf(map, "kind", kind, {"virtual", "hardware"});
+  rig.kind = kind == "virtual" ? RigKind::kVirtual : RigKind::kHardware;
+  if (map.Has("camera")) rig.camera = ReadCamera(map.Get("camera"), file);
+  if (map.Has("station")) rig.station = ReadStation(map.Get("station"), file);
+  rig.station.motion.readout_ms = rig.camera.readout_ms;
+  rig.has_virtual_section = map.Has("virtual");
+  if (rig.kind == RigKind::kHardware) {
+    if (rig.has_virtual_section) {
+      Fail(file, map.Get("virtual").Mark(),
+           "a virtual: section belongs to a rig of kind: virtual; remove it or set kind: virtual");
+    }
+    if (rig.station.port == "auto") {
+      const YAML::Node station = map.Get("station");
+      const YAML::Node port = station ? station["port"] : YAML::Node();
+      Fail(file, port ? port.Mark() : map.mark(),
+           "station.port must name the serial device on a hardware rig (e.g. /dev/ttyUSB0), "
+           "not auto");
+    }
+  }
+  std::string why;
+  if (!rig.IsValid(&why)) Fail(file, map.mark(), why);
+  return rig;
+}
+
+Rig LoadRig(const std::string& path) { return ParseRig(yaml_fields::ReadFile(path), path); }
+
+}  // namespace irdist

@@ -1,0 +1,67 @@
+#pragma once
+// Rig files (recipes/rigs/*.yaml): which camera and which station a run uses. The app reads the
+// `camera:` and `station:` sections into plain structs; the `virtual:` section (physics of the
+// virtual rig) is accepted here and parsed by sim/ itself. docs/recipes.md lists every key.
+
+#include <string>
+
+#include "station/plan.h"
+
+namespace irdist {
+
+struct CameraConfig {
+  std::string id = "auto";                    // Aravis device id, serial or IP; "auto" = the only one
+  std::string pixel_format = "Mono12";        // Mono8, Mono10, Mono12 or Mono16
+  std::string trigger_source = "Line1";       // camera input wired to the station's trigger output
+  std::string trigger_activation = "RisingEdge";  // RisingEdge or FallingEdge
+  int black_level = 0;                        // camera black level register, >= 0
+  int packet_size = 0;                        // GigE Vision packet size, bytes; 0 = negotiate
+  int frame_timeout_ms = 1000;                // a frame later than this after its trigger is lost
+  double readout_ms = 25.0;                   // sensor readout + transfer of one frame (plan estimate)
+  bool IsValid(std::string* why) const;
+};
+
+// A closed interval [min, max] in the axis's unit.
+struct AxisRange {
+  double min = 0.0;
+  double max = 0.0;
+  bool Contains(double value) const { return value >= min && value <= max; }
+};
+
+// The station's soft limits: a recipe value outside them is an error before anything moves.
+struct StationLimits {
+  AxisRange slide_mm{1000.0, 3500.0};
+  AxisRange pan_deg{-45.0, 45.0};
+  AxisRange tilt_deg{-45.0, 45.0};
+  AxisRange bias_ma{0.0, 600.0};
+  bool IsValid(std::string* why) const;
+};
+
+struct StationConfig {
+  std::string port = "auto";   // serial device (/dev/ttyUSB0); "auto": the virtual rig's pty
+  int baud = 115200;           // serial speed, bit/s
+  int reply_timeout_ms = 500;  // deadline of every reply
+  StationLimits limits;
+  MotionModel motion;          // optional `motion:` section; readout_ms comes from camera:
+  bool IsValid(std::string* why) const;
+};
+
+enum class RigKind { kVirtual, kHardware };
+
+struct Rig {
+  std::string path;            // the file it was read from
+  std::string name;            // `name:`, defaults to the file's stem
+  RigKind kind = RigKind::kVirtual;
+  CameraConfig camera;
+  StationConfig station;
+  bool has_virtual_section = false;
+  bool IsValid(std::string* why) const;
+};
+
+// Reads and checks a rig file. Throws RecipeError (file:line:column and what would be valid) on an
+// unreadable file, unknown key, wrong type or inconsistent value.
+Rig LoadRig(const std::string& path);
+// Same, from text; `file` names it in errors.
+Rig ParseRig(const std::string& text, const std::string& file);
+
+}  // namespace irdist

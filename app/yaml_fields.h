@@ -1,0 +1,65 @@
+#pragma once
+// Strict reading of YAML files for recipes and rig files: every key known, every value of the
+// right type, and every error a RecipeError naming file:line:column and what would be valid.
+// Internal to app/ (this header exposes yaml-cpp types; only app/*.cc include it).
+
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "app/errors.h"
+
+namespace irdist::yaml_fields {
+
+// Throws RecipeError at `mark` (yaml-cpp marks are 0-based; the error is 1-based).
+[[noreturn]] void Fail(const std::string& file, const YAML::Mark& mark, const std::string& message);
+
+// Parses YAML text; a syntax error becomes a RecipeError with its position. An empty document
+// yields a Null node.
+YAML::Node Parse(const std::string& text, const std::string& file);
+
+// Reads the whole file; throws RecipeError (line 0) when it cannot be read.
+std::string ReadFile(const std::string& path);
+
+// The closest candidate to `word` by edit distance, or "" when none is close.
+std::string ClosestMatch(const std::string& word, const std::vector<std::string>& candidates);
+
+// "a, b, c"
+std::string JoinNames(const std::vector<std::string>& names);
+
+// A YAML map whose keys must all be in `allowed`; duplicate keys are errors too.
+class MapReader {
+ public:
+  // `context` names the section in messages ("bracket", "the recipe", "station.limits").
+  MapReader(const YAML::Node& node, std::string file, std::string context,
+            std::vector<std::string> allowed);
+
+  bool Has(const std::string& key) const;
+  // The value node; throws "missing key" at the map's position when absent.
+  YAML::Node Require(const std::string& key) const;
+  // The value node, or an undefined node when absent.
+  YAML::Node Get(const std::string& key) const;
+  const YAML::Mark& mark() const { return mark_; }
+  const std::string& file() const { return file_; }
+
+  double Number(const std::string& key, double fallback) const;
+  int Integer(const std::string& key, int fallback) const;
+  bool Boolean(const std::string& key, bool fallback) const;
+  std::string String(const std::string& key, const std::string& fallback) const;
+
+ private:
+  YAML::Node node_;
+  std::string file_;
+  std::string context_;
+  std::vector<std::string> allowed_;
+  YAML::Mark mark_;
+};
+
+// Scalar conversions; `what` names the value in messages ("bracket.t_ref_ms").
+double AsNumber(const YAML::Node& node, const std::string& file, const std::string& what);
+int AsInteger(const YAML::Node& node, const std::string& file, const std::string& what);
+bool AsBoolean(const YAML::Node& node, const std::string& file, const std::string& what);
+std::string AsString(const YAML::Node& node, const std::string& file, const std::string& what);
+
+}  // namespace irdist::yaml_fields

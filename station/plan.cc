@@ -1,0 +1,465 @@
+#include "station/plan.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <sstream>
+
+#include "base/check.h"
+
+namespace irdist {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kSameValue = 1e-9;  // two axis values closer than this are the same position
+
+double DegToRad(double deg) { return deg * kPi / 180.0; }
+double RadToDeg(double rad) { return rad * 180.0 / kPi; }
+
+bool Fail(std::string* why, const std::string& message) {
+  if (why != nullptr) *why = message;
+  return false;
+}
+
+bool AllFinite(const std::vector<double>& values) {
+  return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+}
+
+bool AxisValid(const AxisValues& axis, const std::string& name, std::string* why) {
+  if (axis.random.has_value()) {
+    std::string inner;
+    if (!axis.random->IsValid(&inner)) return Fail(why, name + ": " + inner);
+    return true;
+  }
+  if (axis.values.empty()) return Fail(why, name + ": no values");
+  if (!AllFinite(axis.values)) return Fail(why, name + ": values must be finite");
+  return true;
+}
+
+const AxisValues& AxisOf(const SweepSpec& spec, SweepAxis axis) {
+  switch (axis) {
+    case SweepAxis::kSlide:
+      return spec.slide_mm;
+    case SweepAxis::kAngle:
+      return spec.angle_deg;
+    case SweepAxis::kTilt:
+      return spec.tilt_deg;
+    case SweepAxis::kBias:
+      return spec.bias_ma;
+  }
+  IRDIST_CHECK(false, "unknown SweepAxis");
+}
+
+// Deterministic normal draws: mt19937_64 (specified bit for bit by the standard) and Box-Muller
+// written here, since std::normal_distribution differs between standard libraries.
+class NormalSource {
+ public:
+  explicit NormalSource(std::uint64_t seed) : engine_(seed) {}
+  double Next() {
+    if (has_spare_) {
+      has_spare_ = false;
+      return spare_;
+    }
+    constexpr double kScale = 1.0 / 9007199254740992.0;  // 2^-53
+    double u1 = 0.0;
+    while (u1 <= 0.0) u1 = static_cast<double>(engine_() >> 11) * kScale;
+    const double u2 = static_cast<double>(engine_() >> 11) * kScale;
+    const double r = std::sqrt(-2.0 * std::log(u1));
+    spare_ = r * std::sin(2.0 * kPi * u2);
+    has_spare_ = true;
+    return r * std::cos(2.0 * kPi * u2);
+  }
+
+ private:
+  std::mt19937_64 engine_;
+  bool has_spare_ = false;
+  double spare_ = 0.0;
+};
+
+std::vector<double> DrawSet(const RandomDraws& draws, NormalSource* source) {
+  std::vector<double> values;
+  values.reserve(draws.count);
+  while (static_cast<int>(values.size()) < draws.count) {
+    const double v = draws.mean + draws.sd * source->Next();
+    if (v >= draws.min && v <= draws.max) values.push_back(v);
+  }
+  return values;
+}
+
+double MedianStep(const AxisValues& axis) {
+  if (axis.random.has_value()) return axis.random->sd;
+  std::vector<double> sorted = axis.values;
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<double> steps;
+  for (size_t i = 1; i < sorted.size(); ++i) {
+    if (sorted[i] - sorted[i - 1] > kSameValue) steps.push_back(sorted[i] - sorted[i - 1]);
+  }
+  if (steps.empty()) return 0.0;
+  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  return steps[steps.size() / 2];
+}
+
+std::string Seconds(double s) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.1f s", s);
+  return buffer;
+}
+
+}  // namespace
+
+std::string SweepAxisName(SweepAxis axis, AngleMode angle_mode) {
+  switch (axis) {
+    case SweepAxis::kSlide:
+      return "slide_mm";
+    case SweepAxis::kAngle:
+      return angle_mode == AngleMode::kTheta ? "theta_deg" : "pan_deg";
+    case SweepAxis::kTilt:
+      return "tilt_deg";
+    case SweepAxis::kBias:
+      return "bias_ma";
+  }
+  return "?";
+}
+
+bool RandomDraws::IsValid(std::string* why) const {
+  if (!std::isfinite(mean)) return Fail(why, "mean must be finite");
+  if (!(sd >= 0.0) || !std::isfinite(sd)) return Fail(why, "sd must be >= 0");
+  if (count < 1) return Fail(why, "count must be >= 1");
+  if (!(min < max)) return Fail(why, "min must be < max");
+  if (!(mean >= min && mean <= max)) return Fail(why, "mean must lie in [min, max]");
+  return true;
+}
+
+int AxisValues::Count() const {
+  return random.has_value() ? random->count : static_cast<int>(values.size());
+}
+
+bool BracketSpec::IsValid(std::string* why) const {
+  if (!(t_ref_ms > 0.0) || !std::isfinite(t_ref_ms)) return Fail(why, "t_ref_ms must be > 0");
+  if (t_meas_ms.empty()) return Fail(why, "t_meas_ms must hold at least one exposure");
+  for (double t : t_meas_ms) {
+    if (!std::isfinite(t) || !(t > t_ref_ms)) {
+      return Fail(why, "every t_meas_ms must be greater than t_ref_ms");
+    }
+  }
+  if (repeats < 1) return Fail(why, "repeats must be >= 1");
+  return true;
+}
+
+bool SettleSpec::IsValid(std::string* why) const {
+  if (!(after_move_ms >= 0.0) || !std::isfinite(after_move_ms)) {
+    return Fail(why, "after_move_ms must be >= 0");
+  }
+  if (!(after_current_ms >= 0.0) || !std::isfinite(after_current_ms)) {
+    return Fail(why, "after_current_ms must be >= 0");
+  }
+  return true;
+}
+
+bool SweepSpec::IsValid(std::string* why) const {
+  const std::array<SweepAxis, 4> all = {SweepAxis::kSlide, SweepAxis::kAngle, SweepAxis::kTilt,
+                                        SweepAxis::kBias};
+  for (SweepAxis axis : all) {
+    if (!AxisValid(AxisOf(*this, axis), SweepAxisName(axis, angle_mode), why)) return false;
+  }
+  for (const AxisValues* axis : {&angle_deg, &tilt_deg}) {
+    for (double v : axis->values) {
+      if (!(std::abs(v) < 90.0)) return Fail(why, "angles must lie in (-90, 90) deg");
+    }
+  }
+  if (!order.empty()) {
+    if (order.size() != all.size()) return Fail(why, "order must name each of the 4 axes once");
+    for (SweepAxis axis : all) {
+      if (std::count(order.begin(), order.end(), axis) != 1) {
+        return Fail(why, "order must name each of the 4 axes once");
+      }
+    }
+  }
+  for (SweepAxis axis : serpentine) {
+    if (std::count(serpentine.begin(), serpentine.end(), axis) != 1) {
+      return Fail(why, "serpentine names an axis twice");
+    }
+  }
+  std::string inner;
+  if (!bracket.IsValid(&inner)) return Fail(why, "bracket: " + inner);
+  if (!settle.IsValid(&inner)) return Fail(why, "settle: " + inner);
+  return true;
+}
+
+bool MotionModel::IsValid(std::string* why) const {
+  const std::array<std::pair<const char*, const AxisMotion*>, 3> axes = {
+      {{"slide", &slide}, {"pan", &pan}, {"tilt", &tilt}}};
+  for (const auto& [name, axis] : axes) {
+    if (!(axis->speed > 0.0) || !std::isfinite(axis->speed)) {
+      return Fail(why, std::string(name) + ".speed must be > 0");
+    }
+    if (!(axis->acceleration > 0.0) || !std::isfinite(axis->acceleration)) {
+      return Fail(why, std::string(name) + ".acceleration must be > 0");
+    }
+    if (!(axis->settle_ms >= 0.0)) return Fail(why, std::string(name) + ".settle_ms must be >= 0");
+  }
+  if (!(readout_ms >= 0.0)) return Fail(why, "readout_ms must be >= 0");
+  if (!(frame_overhead_ms >= 0.0)) return Fail(why, "frame_overhead_ms must be >= 0");
+  if (!(pose_overhead_ms >= 0.0)) return Fail(why, "pose_overhead_ms must be >= 0");
+  return true;
+}
+
+double TrapezoidMoveS(double distance, const AxisMotion& motion) {
+  IRDIST_CHECK(motion.speed > 0.0 && motion.acceleration > 0.0, "bad AxisMotion");
+  const double d = std::abs(distance);
+  if (d <= 0.0) return 0.0;
+  const double v = motion.speed;
+  const double a = motion.acceleration;
+  // Accelerating to v and back down covers v^2/a; shorter moves never reach cruise speed.
+  if (d >= v * v / a) return d / v + v / a;
+  return 2.0 * std::sqrt(d / a);
+}
+
+std::vector<BracketFrame> BracketFrames(const BracketSpec& bracket) {
+  std::vector<BracketFrame> frames;
+  auto add = [&frames](double exposure_ms, bool is_reference, int reference_index) {
+    BracketFrame frame;
+    frame.index = static_cast<int>(frames.size());
+    frame.exposure_ms = exposure_ms;
+    frame.is_reference = is_reference;
+    frame.reference_index = reference_index;
+    frames.push_back(frame);
+    return frame.index;
+  };
+  int reference = -1;
+  for (size_t n = 0; n < bracket.t_meas_ms.size(); ++n) {
+    if (n == 0 || bracket.retake_reference) reference = add(bracket.t_ref_ms, true, -1);
+    add(bracket.t_meas_ms[n], false, reference);
+  }
+  return frames;
+}
+
+std::vector<SweepAxis> ChooseAxisOrder(const SweepSpec& spec, const MotionModel& motion) {
+  const std::array<SweepAxis, 4> canonical = {SweepAxis::kSlide, SweepAxis::kAngle,
+                                              SweepAxis::kTilt, SweepAxis::kBias};
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  auto cost = [&](SweepAxis axis) {
+    const AxisValues& values = AxisOf(spec, axis);
+    if (values.random.has_value() && values.random->per_pose) return -kInf;
+    if (values.Count() <= 1) return kInf;
+    const double step = MedianStep(values);
+    const double move_settle_s = spec.settle.after_move_ms / 1000.0;
+    switch (axis) {
+      case SweepAxis::kSlide:
+        return TrapezoidMoveS(step, motion.slide) + motion.slide.settle_ms / 1000.0 + move_settle_s;
+      case SweepAxis::kAngle:
+        return TrapezoidMoveS(step, motion.pan) + motion.pan.settle_ms / 1000.0 + move_settle_s;
+      case SweepAxis::kTilt:
+        return TrapezoidMoveS(step, motion.tilt) + motion.tilt.settle_ms / 1000.0 + move_settle_s;
+      case SweepAxis::kBias:
+        return spec.settle.after_current_ms / 1000.0;
+    }
+    return 0.0;
+  };
+  std::vector<std::pair<double, SweepAxis>> ranked;
+  for (SweepAxis axis : canonical) ranked.emplace_back(cost(axis), axis);
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<SweepAxis> order;
+  for (const auto& entry : ranked) order.push_back(entry.second);
+  return order;
+}
+
+Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
+  std::string why;
+  IRDIST_CHECK(spec.IsValid(&why), why);
+  IRDIST_CHECK(motion.IsValid(&why), why);
+
+  const std::vector<SweepAxis> order =
+      spec.order.empty() ? ChooseAxisOrder(spec, motion) : spec.order;
+  const int repeats = spec.bracket.repeats;
+
+  Plan plan;
+  plan.bracket = BracketFrames(spec.bracket);
+  PlanSummary& summary = plan.summary;
+  for (SweepAxis axis : order) {
+    summary.order.push_back(SweepAxisName(axis, spec.angle_mode));
+    summary.axis_counts.push_back(AxisOf(spec, axis).Count());
+  }
+  summary.repeats = repeats;
+
+  // Random axes: one generator per axis, sets drawn in sweep order.
+  std::array<std::optional<NormalSource>, 4> sources;
+  std::array<std::vector<double>, 4> current_set;  // values of each axis for the current outer combination
+  std::array<long, 4> set_outer = {-1, -1, -1, -1};
+  for (size_t k = 0; k < order.size(); ++k) {
+    const AxisValues& values = AxisOf(spec, order[k]);
+    if (values.random.has_value()) {
+      sources[k].emplace(values.random->seed);
+    } else {
+      current_set[k] = values.values;
+    }
+  }
+
+  const size_t axes = order.size();
+  std::vector<int> counts(axes);
+  long total = repeats;
+  for (size_t k = 0; k < axes; ++k) {
+    counts[k] = AxisOf(spec, order[k]).Count();
+    total *= counts[k];
+  }
+  plan.poses.reserve(static_cast<size_t>(total));
+
+  std::vector<int> digit(axes, 0);  // mixed-radix counter over the axes, outermost first
+  for (long flat = 0; flat < total / repeats; ++flat) {
+    // Decode the counter.
+    long rest = flat;
+    for (size_t k = axes; k-- > 0;) {
+      digit[k] = static_cast<int>(rest % counts[k]);
+      rest /= counts[k];
+    }
+    std::array<double, 4> value{};
+    long outer = 0;  // flattened index over the axes outside k
+    for (size_t k = 0; k < axes; ++k) {
+      const AxisValues& values = AxisOf(spec, order[k]);
+      if (values.random.has_value()) {
+        const long wanted = values.random->per_pose ? outer : 0;
+        if (set_outer[k] != wanted) {
+          current_set[k] = DrawSet(*values.random, &*sources[k]);
+          set_outer[k] = wanted;
+        }
+      }
+      const bool snake =
+          k > 0 && outer % 2 == 1 &&
+          std::find(spec.serpentine.begin(), spec.serpentine.end(), order[k]) !=
+              spec.serpentine.end();
+      const int i = snake ? counts[k] - 1 - digit[k] : digit[k];
+      value[static_cast<size_t>(order[k])] = current_set[k][static_cast<size_t>(i)];
+      outer = outer * counts[k] + digit[k];
+    }
+    Pose pose;
+    pose.slide_mm = value[static_cast<size_t>(SweepAxis::kSlide)];
+    pose.tilt_deg = value[static_cast<size_t>(SweepAxis::kTilt)];
+    pose.bias_ma = value[static_cast<size_t>(SweepAxis::kBias)];
+    const double angle = value[static_cast<size_t>(SweepAxis::kAngle)];
+    const double cos_tilt = std::cos(DegToRad(pose.tilt_deg));
+    if (spec.angle_mode == AngleMode::kTheta) {
+      const double c = std::cos(DegToRad(angle)) / cos_tilt;
+      IRDIST_CHECK(c <= 1.0 + 1e-12, "theta ", angle, " deg cannot be reached with tilt ",
+                   pose.tilt_deg, " deg: |theta| must be >= |tilt|");
+      const double pan = RadToDeg(std::acos(std::min(1.0, c)));
+      pose.theta_deg = angle;
+      pose.pan_deg = angle < 0.0 ? -pan : pan;
+    } else {
+      pose.pan_deg = angle;
+      pose.theta_deg =
+          RadToDeg(std::acos(std::min(1.0, std::cos(DegToRad(angle)) * cos_tilt)));
+    }
+    for (int r = 0; r < repeats; ++r) {
+      pose.repeat = r;
+      pose.index = static_cast<int>(plan.poses.size());
+      plan.poses.push_back(pose);
+    }
+  }
+
+  // Duration estimate.
+  summary.pose_count = static_cast<int>(plan.poses.size());
+  summary.frames_per_pose = static_cast<int>(plan.bracket.size());
+  summary.frame_count = summary.pose_count * summary.frames_per_pose;
+  const int differences_per_pose = static_cast<int>(std::count_if(
+      plan.bracket.begin(), plan.bracket.end(), [](const BracketFrame& f) { return !f.is_reference; }));
+  summary.difference_count = summary.pose_count * differences_per_pose;
+
+  double bracket_exposure_s = 0.0;
+  for (const BracketFrame& frame : plan.bracket) bracket_exposure_s += frame.exposure_ms / 1000.0;
+  const double frames_per_pose = static_cast<double>(plan.bracket.size());
+
+  const Pose* previous = nullptr;
+  for (const Pose& pose : plan.poses) {
+    bool moved = false;
+    if (previous == nullptr) {
+      moved = true;  // the move from home: its profile is not counted, its settle is
+      summary.station_settle_s +=
+          std::max({motion.slide.settle_ms, motion.pan.settle_ms, motion.tilt.settle_ms}) / 1000.0;
+    } else {
+      const std::array<std::pair<double, const AxisMotion*>, 3> deltas = {
+          {{pose.slide_mm - previous->slide_mm, &motion.slide},
+           {pose.pan_deg - previous->pan_deg, &motion.pan},
+           {pose.tilt_deg - previous->tilt_deg, &motion.tilt}}};
+      double move_s = 0.0;
+      double settle_s = 0.0;
+      for (const auto& [delta, axis] : deltas) {
+        if (std::abs(delta) <= kSameValue) continue;
+        moved = true;
+        const double t = TrapezoidMoveS(delta, *axis);
+        if (motion.axes_move_together) {
+          move_s = std::max(move_s, t);
+          settle_s = std::max(settle_s, axis->settle_ms / 1000.0);
+        } else {
+          move_s += t;
+          settle_s += axis->settle_ms / 1000.0;
+        }
+      }
+      summary.motion_s += move_s;
+      summary.station_settle_s += settle_s;
+    }
+    if (moved) {
+      ++summary.moves;
+      summary.move_settle_s += spec.settle.after_move_ms / 1000.0;
+    }
+    if (previous == nullptr || std::abs(pose.bias_ma - previous->bias_ma) > kSameValue) {
+      ++summary.current_changes;
+      summary.current_settle_s += spec.settle.after_current_ms / 1000.0;
+    }
+    summary.exposure_s += bracket_exposure_s;
+    summary.readout_s += frames_per_pose * motion.readout_ms / 1000.0;
+    summary.overhead_s +=
+        (frames_per_pose * motion.frame_overhead_ms + motion.pose_overhead_ms) / 1000.0;
+    previous = &pose;
+  }
+  summary.total_s = summary.motion_s + summary.station_settle_s + summary.move_settle_s +
+                    summary.current_settle_s + summary.exposure_s + summary.readout_s +
+                    summary.overhead_s;
+  summary.physical_bound_s = summary.motion_s + summary.exposure_s + summary.readout_s;
+  return plan;
+}
+
+std::string FormatDuration(double seconds) {
+  char buffer[64];
+  if (seconds < 60.0) {
+    std::snprintf(buffer, sizeof(buffer), "%.1f s", seconds);
+  } else if (seconds < 3600.0) {
+    const int minutes = static_cast<int>(seconds / 60.0);
+    std::snprintf(buffer, sizeof(buffer), "%dm %04.1fs", minutes, seconds - 60.0 * minutes);
+  } else {
+    const long total = std::lround(seconds);
+    std::snprintf(buffer, sizeof(buffer), "%ldh %02ldm %02lds", total / 3600, (total / 60) % 60,
+                  total % 60);
+  }
+  return buffer;
+}
+
+std::string PlanSummary::BriefReport() const {
+  std::ostringstream out;
+  out << "Grid: ";
+  for (size_t k = 0; k < order.size(); ++k) {
+    if (k > 0) out << " x ";
+    out << order[k] << " " << axis_counts[k];
+  }
+  out << " (outermost first) x " << repeats << (repeats == 1 ? " repeat" : " repeats") << " = "
+      << pose_count << " poses\n";
+  out << "Frames: " << frames_per_pose << " per pose, " << frame_count << " in all; "
+      << difference_count << " differences\n";
+  out << "Estimated duration: " << FormatDuration(total_s) << "\n";
+  out << "  motion           " << Seconds(motion_s) << " (" << moves
+      << " moves, trapezoidal profiles; homing not included)\n";
+  out << "  station settle   " << Seconds(station_settle_s) << "\n";
+  out << "  settle after move " << Seconds(move_settle_s) << "\n";
+  out << "  current settle   " << Seconds(current_settle_s) << " (" << current_changes
+      << " current changes)\n";
+  out << "  exposure         " << Seconds(exposure_s) << "\n";
+  out << "  readout          " << Seconds(readout_s) << "\n";
+  out << "  overhead         " << Seconds(overhead_s) << " (per frame and per pose)\n";
+  out << "Physical bound (moves + exposures + readout): " << FormatDuration(physical_bound_s);
+  return out.str();
+}
+
+}  // namespace irdist
