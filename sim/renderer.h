@@ -1,0 +1,75 @@
+#pragma once
+// One frame of the virtual camera: the Scene's signal for the state of the world during the
+// exposure, exposed on the Sensor. Also the scene's ground truth for a pose (blob size, peak gray
+// level) for reports. Thread-safe (const) once constructed.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "sim/rig_physics.h"
+#include "sim/scene.h"
+#include "sim/sensor.h"
+#include "sim/world.h"
+
+namespace irdist::sim {
+
+// The physical state seen by one exposure.
+struct FrameConditions {
+  PoseState pose_start;        // state when the exposure starts
+  PoseState pose_end;          // state when it ends (differs while an axis moves)
+  double exposure_s = 0.008;
+  double junction_rise_k = 0.0;  // IRED junction temperature above ambient, mid-exposure
+  double black_offset_dn = 0.0;  // camera BlackLevel feature, ADC counts
+};
+
+// What the scene looks like for one pose, current and exposure, without noise.
+struct GroundTruth {
+  double theta_deg = 0.0;
+  double major_px = 0.0;           // geometric ellipse axes of the emitter's image
+  double minor_px = 0.0;
+  double width_px = 0.0;           // 2 * sqrt(second moment) along x and y after blur,
+  double height_px = 0.0;          //   i.e. the blob's intensity-weighted size
+  double intensity_mw_sr = 0.0;    // on-axis radiant intensity
+  double signal_e = 0.0;           // total signal photo-electrons
+  double peak_signal_e = 0.0;      // brightest pixel's mean signal electrons
+  double peak_adc = 0.0;           // brightest pixel's mean ADC value incl. dark and black level
+  double peak_gray = 0.0;          // the same in the output format
+  bool saturated = false;          // peak reaches full well or ADC maximum
+  std::string BriefReport() const;
+};
+
+class Renderer {
+ public:
+  explicit Renderer(const RigPhysics& physics);
+
+  const Scene& scene() const { return scene_; }
+  const Sensor& sensor() const { return sensor_; }
+
+  // Mean signal electrons for the conditions (averaging the start and end poses of a moving
+  // exposure, and the intensity at the bias currents of both).
+  SignalWindow Signal(const FrameConditions& conditions) const;
+
+  // Renders the region with top-left `roi_origin` and out's size into `out` (type from format).
+  void Render(const FrameConditions& conditions, std::uint64_t frame_index, PixelFormat format,
+              cv::Point roi_origin, cv::Mat& out) const;
+  // The full sensor.
+  cv::Mat Render(const FrameConditions& conditions, std::uint64_t frame_index,
+                 PixelFormat format) const;
+
+  // Noise-free description of a static pose at `bias_ma` (junction at `junction_rise_k`).
+  GroundTruth Describe(const PoseState& pose, double exposure_s, PixelFormat format,
+                       double junction_rise_k = 0.0) const;
+
+ private:
+  Scene scene_;
+  Sensor sensor_;
+};
+
+// Conditions for a static pose (start = end) and a cold emitter: a helper for tests and reports.
+FrameConditions StaticConditions(double slide_mm, double pan_deg, double tilt_deg, double bias_ma,
+                                 double exposure_s);
+
+}  // namespace irdist::sim

@@ -1,0 +1,108 @@
+#pragma once
+// Every physical parameter of the virtual rig's camera side (emitter, optics, sensor, timing,
+// camera faults), read from the `virtual:` section of a rig file (recipes/rigs/virtual.yaml).
+// docs/virtual-rig.md explains each field, its physical meaning and the source of its default.
+// The `virtual.station:` subsection belongs to the station emulator (LoadEmulatorOptions).
+
+#include <cstdint>
+#include <string>
+
+#include "base/check.h"
+
+namespace irdist::sim {
+
+// A rig file that cannot be read or holds a bad `virtual:` key or value. The message names the
+// file and line and says what to change.
+class RigFileError : public Error {
+ public:
+  using Error::Error;
+};
+
+enum class EmissionPattern {
+  kGaussian,  // rho(a) = exp(-a^2 / (2 sigma^2))
+  kCosPower,  // rho(a) = cos(a)^m (m = 1 is a Lambertian emitter)
+};
+
+struct EmitterOptions {
+  double diameter_mm = 10.0;  // diameter of the uniformly bright circular emitting disc
+  // Radiant intensity on the emission axis at the reference temperature:
+  // I0 = slope * (i - threshold) * (1 - sublinear_per_ma * (i - threshold)), 0 below threshold.
+  double threshold_ma = 50.0;
+  double slope_mw_sr_per_ma = 0.5;
+  double sublinear_per_ma = 0.0;  // droop at high current (0 = linear)
+  EmissionPattern pattern = EmissionPattern::kGaussian;
+  double pattern_sigma_deg = 30.0;  // Gaussian width of the emission pattern
+  double pattern_cos_power = 4.0;   // exponent m of the cos^m pattern
+  double wavelength_nm = 850.0;     // peak emission wavelength (photon energy)
+  // Thermal model: junction temperature T = ambient + dT, dT' = (R_th * i * V_f - dT) / tau;
+  // intensity scales by (1 + temp_coeff_per_k * dT).
+  double temp_coeff_per_k = -0.005;
+  double ambient_c = 25.0;
+  double forward_voltage_v = 1.6;             // electrical power i * V_f heats the junction
+  double thermal_resistance_k_per_w = 20.0;   // steady-state junction rise per watt
+  double thermal_time_constant_s = 60.0;      // first-order time constant of the rise
+  // Lateral offset of the emitter centre from the optical axis (the slide runs along the axis).
+  double offset_x_mm = 0.0;
+  double offset_y_mm = 0.0;
+  bool IsValid(std::string* why) const;
+};
+
+struct OpticsOptions {
+  double focal_length_mm = 16.0;
+  double f_number = 8.0;              // working aperture N: irradiance ~ pi L / (4 N^2)
+  double lens_transmission = 0.9;     // transmission of the lens at the emitter wavelength
+  double filter_transmission = 1.6e-4;  // band-pass + neutral-density filter stack in front
+  double psf_sigma_px = 0.7;          // Gaussian blur (diffraction at N=8 plus defocus), pixels
+  bool vignetting = true;             // cos^4 of the field angle
+  int supersample = 8;                // sub-samples per pixel side when integrating the disc
+  bool IsValid(std::string* why) const;
+};
+
+enum class PixelFormat { kMono8, kMono12, kMono16 };
+
+struct SensorOptions {
+  int width_px = 1280;
+  int height_px = 1024;
+  double pixel_pitch_um = 5.3;
+  double quantum_efficiency = 0.35;   // electrons per photon at the emitter wavelength
+  double full_well_e = 10500.0;       // electrons at which a pixel saturates
+  double system_gain_dn_per_e = 0.39; // K, ADC counts per electron
+  double read_noise_e = 7.0;          // temporal dark noise, electrons rms
+  double dark_current_e_per_s = 20.0; // at the sensor temperature below
+  double black_level_dn = 16.0;       // offset added before the ADC, ADC counts
+  int adc_bits = 12;                  // Mono12 carries the ADC value, Mono8/Mono16 are shifted
+  double nonlinearity = 0.0;          // y = x - nonlinearity * x^2 / x_max (0 = linear)
+  double background_e_per_s = 0.0;    // uniform background photo-electrons per pixel
+  double temperature_c = 40.0;        // sensor temperature, reported as DeviceTemperature
+  std::uint64_t seed = 1;             // noise of frame n is drawn from (seed, n)
+  bool IsValid(std::string* why) const;
+  int AdcMax() const { return (1 << adc_bits) - 1; }
+};
+
+struct CameraOptions {
+  std::string serial = "IRDV0001";     // GigE serial number (< 16 characters)
+  double readout_ms = 12.0;            // sensor readout after the exposure ends
+  double trigger_frequency_hz = 2000;  // fake camera's trigger polling tick
+  double drop_frame_rate = 0.0;        // probability that a whole frame is never sent
+  double lost_packet_ratio = 0.0;      // probability that each GVSP packet is lost
+  bool IsValid(std::string* why) const;
+};
+
+struct RigPhysics {
+  double time_scale = 1.0;  // simulated seconds per host second (1 = real time)
+  EmitterOptions emitter;
+  OpticsOptions optics;
+  SensorOptions sensor;
+  CameraOptions camera;
+  bool IsValid(std::string* why) const;
+};
+
+// Reads the `virtual:` section of a rig file (keys: time_scale, seed, serial, emitter:, optics:,
+// sensor:, camera:, and station:, which is left to LoadEmulatorOptions). Absent keys keep their
+// defaults; an unknown key, a wrong type or an invalid combination throws RigFileError naming
+// the file and line.
+RigPhysics LoadRigPhysics(const std::string& rig_path);
+
+const char* PixelFormatName(PixelFormat format);
+
+}  // namespace irdist::sim

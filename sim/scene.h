@@ -1,0 +1,66 @@
+#pragma once
+// The scene: the IRED (a uniformly bright tilted disc with an emission pattern, a drive-current
+// law and a thermal model) seen through the lens. It produces the mean number of signal
+// photo-electrons per pixel, by ray casting each sub-pixel onto the disc's plane (a true
+// perspective projection, integrated over the pixel) and blurring with the optics' PSF. Noise,
+// dark signal and quantisation are the Sensor's business.
+//
+// Geometry: the camera's pinhole is the origin, the optical axis is +z, image x/y follow the
+// sensor's columns/rows. The emitter's centre is at (offset_x_mm, offset_y_mm, slide_mm). Its
+// emission axis is n = (sin(pan) cos(tilt), sin(tilt), -cos(pan) cos(tilt)), so at pan = tilt = 0
+// it points at the camera and cos(theta) = cos(pan) cos(tilt) (sim/world.h).
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "sim/rig_physics.h"
+#include "sim/world.h"
+
+namespace irdist::sim {
+
+// Mean signal photo-electrons per pixel over a window of the full sensor (no dark signal).
+struct SignalWindow {
+  cv::Rect rect;     // in full-sensor pixel coordinates (may be empty)
+  cv::Mat1f electrons;  // rect.height x rect.width
+};
+
+// Geometry of the emitter's image, for reports and tests.
+struct EmitterImage {
+  double center_x_px = 0.0;  // projected centre of the disc (full-sensor pixels)
+  double center_y_px = 0.0;
+  double major_px = 0.0;     // full axes of the projected ellipse (before blur)
+  double minor_px = 0.0;
+  double theta_deg = 0.0;    // angle between emission axis and the line to the camera
+};
+
+class Scene {
+ public:
+  explicit Scene(const RigPhysics& physics);
+
+  const RigPhysics& physics() const { return physics_; }
+
+  // Junction temperature rise (K) above ambient at simulated time t_s, integrating the
+  // first-order thermal model over the piecewise-constant current history.
+  double JunctionRiseK(const std::vector<CurrentStep>& history, double t_s) const;
+  // On-axis radiant intensity (mW/sr) at bias current i and a junction rise dT.
+  double OnAxisIntensityMwSr(double bias_ma, double junction_rise_k) const;
+  // Relative emission pattern rho(angle), 1 on axis.
+  double Pattern(double angle_rad) const;
+
+  EmitterImage Project(const PoseState& pose) const;
+
+  // Mean signal electrons per pixel for an exposure of `exposure_s` seconds at on-axis intensity
+  // `intensity_mw_sr`, over a window around the emitter's image (clipped to the sensor).
+  SignalWindow RenderSignal(const PoseState& pose, double intensity_mw_sr,
+                            double exposure_s) const;
+
+  // Photo-electrons per second per pixel per unit scene radiance (W m^-2 sr^-1) on the axis.
+  double ElectronsPerRadianceSecond() const { return electrons_per_radiance_s_; }
+
+ private:
+  RigPhysics physics_;
+  double electrons_per_radiance_s_ = 0.0;
+};
+
+}  // namespace irdist::sim

@@ -1,0 +1,151 @@
+#include "sim/sensor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace irdist::sim {
+namespace {
+
+constexpr int kTableBits = 14;
+constexpr int kTableSize = 1 << kTableBits;
+
+std::uint64_t SplitMix64(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+std::uint64_t FrameSeed(std::uint64_t seed, std::uint64_t frame_index, std::uint64_t stream) {
+  std::uint64_t state = seed * 0x100000001B3ull ^ (frame_index + 0x51ED270B27ull * stream);
+  SplitMix64(state);
+  return SplitMix64(state);
+}
+
+template <typename T>
+void FillFromTable(cv::Mat& out, const std::vector<std::uint16_t>& table, std::uint64_t state) {
+  for (int row = 0; row < out.rows; ++row) {
+    T* dst = out.ptr<T>(row);
+    int col = 0;
+    while (col < out.cols) {
+      std::uint64_t bits = SplitMix64(state);
+      for (int k = 0; k < 4 && col < out.cols; ++k, ++col) {  // 4 x 14 of the 64 bits
+        dst[col] = static_cast<T>(table[bits & (kTableSize - 1)]);
+        bits >>= kTableBits;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+int FormatBits(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::kMono8:
+      return 8;
+    case PixelFormat::kMono12:
+      return 12;
+    case PixelFormat::kMono16:
+      return 16;
+  }
+  return 16;
+}
+
+int FormatCvType(PixelFormat format) {
+  return format == PixelFormat::kMono8 ? CV_8UC1 : CV_16UC1;
+}
+
+Sensor::Sensor(const SensorOptions& options) : options_(options) {
+  std::string why;
+  IRDIST_CHECK(options_.IsValid(&why), why);
+}
+
+std::uint16_t Sensor::Pack(int adc, PixelFormat format) const {
+  const int shift = FormatBits(format) - options_.adc_bits;
+  return static_cast<std::uint16_t>(shift >= 0 ? adc << shift : adc >> -shift);
+}
+
+double Sensor::MeanAdc(double signal_electrons, double exposure_s, double black_offset_dn) const {
+  const SensorOptions& s = options_;
+  const double electrons =
+      std::min(s.full_well_e, signal_electrons +
+                                  (s.dark_current_e_per_s + s.background_e_per_s) * exposure_s);
+  const double max = s.AdcMax();
+  double x = s.system_gain_dn_per_e * electrons + s.black_level_dn + black_offset_dn;
+  x -= s.nonlinearity * x * x / max;
+  return std::clamp(x, 0.0, max);
+}
+
+int Sensor::ToAdc(double electrons, double read_noise_e, double black_dn) const {
+  const SensorOptions& s = options_;
+  electrons = std::min(electrons, s.full_well_e);
+  const double max = s.AdcMax();
+  double x = s.system_gain_dn_per_e * (electrons + read_noise_e) + black_dn;
+  x -= s.nonlinearity * x * x / max;
+  return static_cast<int>(std::clamp(std::floor(x + 0.5), 0.0, max));
+}
+
+void Sensor::Expose(const SignalWindow& signal, double exposure_s, std::uint64_t frame_index,
+                    PixelFormat format, cv::Point roi_origin, cv::Mat& out,
+                    double black_offset_dn) const {
+  IRDIST_CHECK(out.type() == FormatCvType(format), "output image type does not match format");
+  IRDIST_CHECK(exposure_s >= 0.0);
+  const SensorOptions& s = options_;
+  const double black_dn = s.black_level_dn + black_offset_dn;
+  const double dark_e = (s.dark_current_e_per_s + s.background_e_per_s) * exposure_s;
+
+  // The background's distribution, as 65536 exact draws for this frame.
+  std::mt19937_64 table_rng(FrameSeed(s.seed, frame_index, 1));
+  std::vector<std::uint16_t> table(kTableSize);
+  {
+    std::poisson_distribution<long> dark(dark_e > 0.0 ? dark_e : 1.0);
+    std::normal_distribution<double> read(0.0, s.read_noise_e);
+    for (auto& value : table) {
+      const double electrons = dark_e > 0.0 ? static_cast<double>(dark(table_rng)) : 0.0;
+      value = Pack(ToAdc(electrons, read(table_rng), black_dn), format);
+    }
+  }
+
+  const cv::Rect roi(roi_origin, out.size());
+  const cv::Rect window = signal.rect & roi;
+  const std::uint64_t fill_state = FrameSeed(s.seed, frame_index, 2);
+  if (out.depth() == CV_8U) {
+    FillFromTable<std::uint8_t>(out, table, fill_state);
+  } else {
+    FillFromTable<std::uint16_t>(out, table, fill_state);
+  }
+  if (window.empty()) return;
+
+  // Exact draws inside the emitter's window.
+  std::mt19937_64 rng(FrameSeed(s.seed, frame_index, 3));
+  std::normal_distribution<double> read(0.0, s.read_noise_e);
+  for (int row = window.y; row < window.y + window.height; ++row) {
+    const float* src = signal.electrons[row - signal.rect.y];
+    for (int col = window.x; col < window.x + window.width; ++col) {
+      const double mean = src[col - signal.rect.x] + dark_e;
+      double electrons = 0.0;
+      if (mean > 1e7) {
+        electrons = std::normal_distribution<double>(mean, std::sqrt(mean))(rng);
+      } else if (mean > 0.0) {
+        electrons = static_cast<double>(std::poisson_distribution<long>(mean)(rng));
+      }
+      const std::uint16_t value = Pack(ToAdc(electrons, read(rng), black_dn), format);
+      if (out.depth() == CV_8U) {
+        out.at<std::uint8_t>(row - roi.y, col - roi.x) = static_cast<std::uint8_t>(value);
+      } else {
+        out.at<std::uint16_t>(row - roi.y, col - roi.x) = value;
+      }
+    }
+  }
+}
+
+cv::Mat Sensor::Expose(const SignalWindow& signal, double exposure_s, std::uint64_t frame_index,
+                       PixelFormat format) const {
+  cv::Mat out(options_.height_px, options_.width_px, FormatCvType(format));
+  Expose(signal, exposure_s, frame_index, format, cv::Point(0, 0), out);
+  return out;
+}
+
+}  // namespace irdist::sim

@@ -1,0 +1,82 @@
+#pragma once
+// The whole virtual rig: one World, served as a GigE Vision camera on 127.0.0.1 (CameraServer)
+// and as a motion station on a pseudo-terminal (StationEmulator). `irdist sim`, and
+// calibrate/validate on a virtual rig, start one of these and connect to what Info() prints, as
+// they would to hardware.
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "sim/renderer.h"
+#include "sim/rig_physics.h"
+#include "sim/world.h"
+
+namespace irdist::sim {
+
+class CameraServer;
+class StationEmulator;
+
+// Values that replace the rig file's (unset = keep the file's).
+struct VirtualRigOverrides {
+  std::optional<double> time_scale;    // simulated s per host s
+  std::optional<std::uint64_t> seed;   // sensor noise (and emulator) seed
+  std::optional<std::string> serial;   // camera serial number (< 16 characters)
+  bool IsValid(std::string* why) const;
+};
+
+// What to connect to.
+struct VirtualRigInfo {
+  std::string camera_id;       // Aravis device id, "Aravis-Fake-<serial>"
+  std::string camera_address;  // "127.0.0.1": open by address (loopback, see issue 4's facts)
+  std::string serial;          // verify it after opening the camera
+  std::string station_port;    // pty slave path, e.g. /dev/pts/7
+  double time_scale = 1.0;
+  std::string BriefReport() const;  // "camera: ...\nstation: ...\n"
+};
+
+class VirtualRig {
+ public:
+  // Loads the rig file's `virtual:` section (physics and virtual.station:), applies the
+  // overrides and starts the camera and the station. Throws RigFileError, CameraServerError or
+  // irdist::Error (pty).
+  static std::unique_ptr<VirtualRig> Start(const std::string& rig_path,
+                                           const VirtualRigOverrides& overrides = {});
+  // The same from already loaded physics (station options from `rig_path` if not empty).
+  static std::unique_ptr<VirtualRig> Start(const RigPhysics& physics,
+                                           const std::string& rig_path = "");
+  ~VirtualRig();  // stops
+  VirtualRig(const VirtualRig&) = delete;
+  VirtualRig& operator=(const VirtualRig&) = delete;
+
+  const VirtualRigInfo& Info() const { return info_; }
+  World& world() { return *world_; }
+  CameraServer& camera() { return *camera_; }
+  StationEmulator* station() { return station_.get(); }  // nullptr if built without it
+  const RigPhysics& physics() const { return physics_; }
+
+  // Noise-free ground truth of the scene for a pose, current and exposure (cold emitter unless
+  // junction_rise_k is given), in the given output format.
+  GroundTruth Describe(double slide_mm, double pan_deg, double tilt_deg, double bias_ma,
+                       double exposure_us, PixelFormat format = PixelFormat::kMono12,
+                       double junction_rise_k = 0.0) const;
+
+  // Stops station and camera. Idempotent.
+  void Stop();
+
+ private:
+  explicit VirtualRig(const RigPhysics& physics);
+  static std::unique_ptr<VirtualRig> StartImpl(const RigPhysics& physics,
+                                               const std::string& rig_path,
+                                               std::optional<std::uint64_t> seed);
+
+  RigPhysics physics_;
+  std::unique_ptr<World> world_;
+  std::unique_ptr<CameraServer> camera_;
+  std::unique_ptr<StationEmulator> station_;
+  Renderer renderer_;
+  VirtualRigInfo info_;
+};
+
+}  // namespace irdist::sim
