@@ -244,7 +244,7 @@ std::vector<SweepAxis> ChooseAxisOrder(const SweepSpec& spec, const MotionModel&
   auto cost = [&](SweepAxis axis) {
     const AxisValues& values = AxisOf(spec, axis);
     if (values.random.has_value() && values.random->per_pose) return -kInf;
-    if (values.Count() <= 1) return kInf;
+    if (values.Count() <= 1) return -1.0;  // never changes: innermost, before per-pose draws
     const double step = MedianStep(values);
     const double move_settle_s = spec.settle.after_move_ms / 1000.0;
     switch (axis) {
@@ -347,7 +347,8 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
                    pose.tilt_deg, " deg: |theta| must be >= |tilt|");
       const double pan = RadToDeg(std::acos(std::min(1.0, c)));
       pose.theta_deg = angle;
-      pose.pan_deg = angle < 0.0 ? -pan : pan;
+      // At tilt 0 the pan is theta itself, exactly (acos(cos x) is off by an ulp or two).
+      pose.pan_deg = pose.tilt_deg == 0.0 ? angle : (angle < 0.0 ? -pan : pan);
     } else {
       pose.pan_deg = angle;
       pose.theta_deg =
@@ -449,15 +450,15 @@ std::string PlanSummary::BriefReport() const {
   out << "Frames: " << frames_per_pose << " per pose, " << frame_count << " in all; "
       << difference_count << " differences\n";
   out << "Estimated duration: " << FormatDuration(total_s) << "\n";
-  out << "  motion           " << Seconds(motion_s) << " (" << moves
+  out << "  motion            " << Seconds(motion_s) << " (" << moves
       << " moves, trapezoidal profiles; homing not included)\n";
-  out << "  station settle   " << Seconds(station_settle_s) << "\n";
+  out << "  station settle    " << Seconds(station_settle_s) << "\n";
   out << "  settle after move " << Seconds(move_settle_s) << "\n";
-  out << "  current settle   " << Seconds(current_settle_s) << " (" << current_changes
+  out << "  current settle    " << Seconds(current_settle_s) << " (" << current_changes
       << " current changes)\n";
-  out << "  exposure         " << Seconds(exposure_s) << "\n";
-  out << "  readout          " << Seconds(readout_s) << "\n";
-  out << "  overhead         " << Seconds(overhead_s) << " (per frame and per pose)\n";
+  out << "  exposure          " << Seconds(exposure_s) << "\n";
+  out << "  readout           " << Seconds(readout_s) << "\n";
+  out << "  overhead          " << Seconds(overhead_s) << " (per frame and per pose)\n";
   out << "Physical bound (moves + exposures + readout): " << FormatDuration(physical_bound_s);
   return out.str();
 }

@@ -127,8 +127,8 @@ struct BracketFrame {
 std::vector<BracketFrame> BracketFrames(const BracketSpec& bracket);
 
 // Axis order chosen by cost of one step (trapezoid time of the median step plus settles; the
-// current's settle for the bias), most expensive outermost; single-valued axes first; per-pose
-// random axes innermost.
+// current's settle for the bias), most expensive outermost; single-valued axes after them;
+// per-pose random axes innermost.
 std::vector<SweepAxis> ChooseAxisOrder(const SweepSpec& spec, const MotionModel& motion);
 
 struct PlanSummary {

@@ -1,0 +1,169 @@
+#include "app/cli.h"
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace irdist {
+namespace {
+
+const std::string kRecipes = std::string(IRDIST_SOURCE_DIR) + "/recipes";
+
+// Runs RunIrdist on the words of a command line; returns its exit code.
+int RunWords(const std::vector<std::string>& words, const Handlers& handlers, std::string* out = nullptr,
+        std::string* err = nullptr) {
+  std::vector<const char*> argv = {"irdist"};
+  for (const std::string& word : words) argv.push_back(word.c_str());
+  std::ostringstream out_stream;
+  std::ostringstream err_stream;
+  const int code = RunIrdist(static_cast<int>(argv.size()), argv.data(), {out_stream, err_stream},
+                             handlers);
+  if (out != nullptr) *out = out_stream.str();
+  if (err != nullptr) *err = err_stream.str();
+  return code;
+}
+
+TEST(CliTest, DefaultArgsAreUsable) {
+  PlanArgs plan;
+  EXPECT_GT(plan.show_poses, 0);
+  SimArgs sim;
+  EXPECT_EQ(sim.rig, "virtual");
+  EXPECT_TRUE(static_cast<bool>(DefaultHandlers().plan));
+}
+
+TEST(CliTest, EverySubcommandIsInTheTable) {
+  EXPECT_EQ(SubcommandNames(), (std::vector<std::string>{"calibrate", "validate", "fit", "playback",
+                                                         "check", "plan", "sim", "devices"}));
+}
+
+TEST(CliTest, UnknownOrMissingCommandIsAUsageError) {
+  try {
+    RunWords({"frobnicate"}, DefaultHandlers());
+    FAIL() << "no error";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown command 'frobnicate'"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("calibrate, validate, fit"), std::string::npos);
+  }
+  EXPECT_THROW(RunWords({}, DefaultHandlers()), UsageError);
+  EXPECT_THROW(RunWords({"plan"}, DefaultHandlers()), UsageError);           // recipe missing
+  EXPECT_THROW(RunWords({"plan", "a", "b"}, DefaultHandlers()), UsageError);  // one too many
+  EXPECT_THROW(RunWords({"validate", "r.yaml"}, DefaultHandlers()), UsageError);  // --model missing
+  EXPECT_THROW(RunWords({"plan", "--bogus", "r.yaml"}, DefaultHandlers()), UsageError);
+}
+
+TEST(CliTest, HelpListsTheCommands) {
+  std::string out;
+  EXPECT_EQ(RunWords({"--help"}, DefaultHandlers(), &out), 0);
+  for (const std::string& name : SubcommandNames()) {
+    EXPECT_NE(out.find(name), std::string::npos) << name;
+  }
+}
+
+TEST(CliTest, UnintegratedCommandsSaySoWithWhatTheyWaitFor) {
+  const Handlers handlers = DefaultHandlers();
+  const std::vector<std::vector<std::string>> commands = {
+      {"fit", "rec"}, {"playback", "rec", "--model", "m.yaml"}, {"check", "rec"}, {"sim"},
+      {"devices"}};
+  for (const auto& command : commands) {
+    SCOPED_TRACE(command[0]);
+    try {
+      RunWords(command, handlers);
+      ADD_FAILURE() << "no error";
+    } catch (const NotAvailableError& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("'irdist " + command[0] + "' is not available"), std::string::npos);
+      EXPECT_NE(message.find("integrated"), std::string::npos);
+    }
+  }
+}
+
+TEST(CliTest, CalibrateChecksTheRecipeBeforeSayingItIsNotAvailable) {
+  std::string out;
+  EXPECT_THROW(RunWords({"calibrate", kRecipes + "/smoke-calibration.yaml"}, DefaultHandlers(), &out),
+               NotAvailableError);
+  // A bad recipe is reported as such (not as "not available").
+  EXPECT_THROW(RunWords({"calibrate", "/nonexistent.yaml"}, DefaultHandlers()), RecipeError);
+}
+
+TEST(CliTest, HandlersReceiveTheirArguments) {
+  Handlers handlers;
+  CalibrateArgs calibrate;
+  ValidateArgs validate;
+  handlers.calibrate = [&](const CalibrateArgs& args, CommandIo io) {
+    calibrate = args;
+    io.out << "calibrated";
+  };
+  handlers.validate = [&](const ValidateArgs& args, CommandIo) { validate = args; };
+  std::string out;
+  EXPECT_EQ(RunWords({"calibrate", "r.yaml", "--out", "runs/x", "--resume", "runs/y"}, handlers, &out), 0);
+  EXPECT_EQ(out, "calibrated");
+  EXPECT_EQ(calibrate.recipe, "r.yaml");
+  EXPECT_EQ(calibrate.out_dir, "runs/x");
+  EXPECT_EQ(calibrate.resume_dir, "runs/y");
+  EXPECT_EQ(RunWords({"validate", "v.yaml", "--model", "m.yaml"}, handlers), 0);
+  EXPECT_EQ(validate.recipe, "v.yaml");
+  EXPECT_EQ(validate.model, "m.yaml");
+  EXPECT_EQ(validate.out_dir, "");
+  // An empty handler is "not available".
+  EXPECT_THROW(RunWords({"plan", "r.yaml"}, handlers), NotAvailableError);
+}
+
+TEST(CliTest, PlanPrintsCountsOrderAndDuration) {
+  std::string out;
+  EXPECT_EQ(RunWords({"plan", kRecipes + "/table3-calibration.yaml"}, DefaultHandlers(), &out), 0);
+  EXPECT_NE(out.find("64 poses"), std::string::npos) << out;
+  EXPECT_NE(out.find("320 in all"), std::string::npos) << out;
+  EXPECT_NE(out.find("256 differences"), std::string::npos) << out;
+  EXPECT_NE(out.find("Estimated duration"), std::string::npos) << out;
+  EXPECT_NE(out.find("motion"), std::string::npos) << out;
+  EXPECT_NE(out.find("readout"), std::string::npos) << out;
+  EXPECT_NE(out.find("Physical bound"), std::string::npos) << out;
+  EXPECT_NE(out.find("first 8 of 64 poses"), std::string::npos) << out;
+
+  EXPECT_EQ(RunWords({"plan", kRecipes + "/smoke-calibration.yaml", "--poses", "-1"}, DefaultHandlers(),
+                &out),
+            0);
+  EXPECT_NE(out.find("all 8 poses"), std::string::npos) << out;
+}
+
+// The built binary: typed errors become exit codes and one message on stderr.
+int RunBinary(const std::string& arguments, std::string* output) {
+  const std::string command =
+      std::string(IRDIST_BINARY_DIR) + "/app/irdist " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return -1;
+  std::array<char, 4096> buffer{};
+  output->clear();
+  size_t n = 0;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) output->append(buffer.data(), n);
+  const int status = pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(CliTest, BinaryExitCodes) {
+  std::string output;
+  EXPECT_EQ(RunBinary("plan " + kRecipes + "/smoke-calibration.yaml", &output), 0) << output;
+  EXPECT_NE(output.find("24 in all"), std::string::npos) << output;
+
+  EXPECT_EQ(RunBinary("frobnicate", &output), 2) << output;
+  EXPECT_EQ(output.rfind("irdist: unknown command", 0), 0u) << output;
+
+  EXPECT_EQ(RunBinary("fit somewhere", &output), 2) << output;
+  EXPECT_NE(output.find("not available"), std::string::npos) << output;
+
+  EXPECT_EQ(RunBinary("plan /nonexistent/recipe.yaml", &output), 1) << output;
+  EXPECT_NE(output.find("/nonexistent/recipe.yaml: cannot open"), std::string::npos) << output;
+  // One line, no stack of noise.
+  EXPECT_EQ(output.find('\n'), output.size() - 1) << output;
+
+  EXPECT_EQ(RunBinary("--help", &output), 0) << output;
+}
+
+}  // namespace
+}  // namespace irdist

@@ -1,0 +1,146 @@
+#include "app/rig.h"
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "app/errors.h"
+
+namespace irdist {
+namespace {
+
+const std::string kRigs = std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs";
+
+TEST(RigTest, DefaultsAreValid) {
+  std::string why;
+  EXPECT_TRUE(CameraConfig().IsValid(&why)) << why;
+  EXPECT_TRUE(StationLimits().IsValid(&why)) << why;
+  EXPECT_TRUE(StationConfig().IsValid(&why)) << why;
+  EXPECT_TRUE(Rig().IsValid(&why)) << why;
+}
+
+TEST(RigTest, VirtualRigLoads) {
+  const Rig rig = LoadRig(kRigs + "/virtual.yaml");
+  EXPECT_EQ(rig.name, "virtual");
+  EXPECT_EQ(rig.kind, RigKind::kVirtual);
+  EXPECT_EQ(rig.camera.trigger_source, "Line1");
+  EXPECT_EQ(rig.station.limits.slide_mm.min, 1000.0);
+  EXPECT_EQ(rig.station.limits.slide_mm.max, 3500.0);
+  EXPECT_EQ(rig.station.limits.pan_deg.min, -45.0);
+  EXPECT_EQ(rig.station.limits.bias_ma.max, 600.0);
+  std::string why;
+  EXPECT_TRUE(rig.IsValid(&why)) << why;
+}
+
+TEST(RigTest, ExampleHardwareRigLoads) {
+  const Rig rig = LoadRig(kRigs + "/example-hardware.yaml");
+  EXPECT_EQ(rig.kind, RigKind::kHardware);
+  EXPECT_EQ(rig.station.port, "/dev/ttyUSB0");
+  EXPECT_FALSE(rig.has_virtual_section);
+  EXPECT_EQ(rig.station.motion.slide.speed, 50.0);
+  EXPECT_EQ(rig.station.motion.pan.acceleration, 20.0);
+  EXPECT_EQ(rig.station.motion.readout_ms, rig.camera.readout_ms);
+}
+
+TEST(RigTest, EveryKeyIsRead) {
+  const Rig rig = ParseRig(R"(name: lab
+kind: hardware
+camera:
+  id: "192.168.1.20"
+  pixel_format: Mono16
+  trigger_source: Line2
+  trigger_activation: FallingEdge
+  black_level: 12
+  packet_size: 8000
+  frame_timeout_ms: 2500
+  readout_ms: 40
+station:
+  port: /dev/ttyACM0
+  baud: 9600
+  reply_timeout_ms: 800
+  limits:
+    slide_mm: [1200, 3000]
+    pan_deg: [-30, 30]
+    tilt_deg: [-10, 10]
+    bias_ma: [100, 550]
+  motion:
+    slide: {speed: 80, acceleration: 100, settle_ms: 300}
+    pan: {speed: 10}
+    axes_move_together: false
+    frame_overhead_ms: 7
+    pose_overhead_ms: 90
+)",
+                           "lab.yaml");
+  EXPECT_EQ(rig.name, "lab");
+  EXPECT_EQ(rig.camera.id, "192.168.1.20");
+  EXPECT_EQ(rig.camera.pixel_format, "Mono16");
+  EXPECT_EQ(rig.camera.trigger_source, "Line2");
+  EXPECT_EQ(rig.camera.trigger_activation, "FallingEdge");
+  EXPECT_EQ(rig.camera.black_level, 12);
+  EXPECT_EQ(rig.camera.packet_size, 8000);
+  EXPECT_EQ(rig.camera.frame_timeout_ms, 2500);
+  EXPECT_EQ(rig.station.port, "/dev/ttyACM0");
+  EXPECT_EQ(rig.station.baud, 9600);
+  EXPECT_EQ(rig.station.reply_timeout_ms, 800);
+  EXPECT_EQ(rig.station.limits.slide_mm.min, 1200.0);
+  EXPECT_EQ(rig.station.limits.tilt_deg.max, 10.0);
+  EXPECT_EQ(rig.station.limits.bias_ma.min, 100.0);
+  const MotionModel& m = rig.station.motion;
+  EXPECT_EQ(m.slide.speed, 80.0);
+  EXPECT_EQ(m.slide.acceleration, 100.0);
+  EXPECT_EQ(m.slide.settle_ms, 300.0);
+  EXPECT_EQ(m.pan.speed, 10.0);
+  EXPECT_EQ(m.pan.acceleration, MotionModel().pan.acceleration);  // unspecified: default
+  EXPECT_FALSE(m.axes_move_together);
+  EXPECT_EQ(m.frame_overhead_ms, 7.0);
+  EXPECT_EQ(m.pose_overhead_ms, 90.0);
+  EXPECT_EQ(m.readout_ms, 40.0);
+}
+
+struct BadRig {
+  const char* what;
+  const char* text;
+  int line;
+  int column;
+  const char* message;
+};
+
+const BadRig kBadRigs[] = {
+    {"unknown camera key", "kind: virtual\ncamera:\n  exposure: 3\n", 3, 3,
+     "unknown key 'exposure' in camera"},
+    {"unknown top-level key", "kind: virtual\ncameras: {}\n", 2, 1, "did you mean 'camera'?"},
+    {"wrong type", "kind: virtual\nstation:\n  baud: fast\n", 3, 9, "must be a whole number"},
+    {"limits min above max", "kind: virtual\nstation:\n  limits:\n    pan_deg: [45, -45]\n", 4, 14,
+     "must have min < max"},
+    {"limits not a pair", "kind: virtual\nstation:\n  limits:\n    pan_deg: 45\n", 4, 14,
+     "a list [min, max]"},
+    {"bad pixel format", "kind: virtual\ncamera:\n  pixel_format: RGB8\n", 3, 17,
+     "valid: Mono8, Mono10, Mono12, Mono16"},
+    {"bad kind", "kind: imaginary\n", 1, 7, "valid: virtual, hardware"},
+    {"hardware with an automatic port", "kind: hardware\nstation:\n  port: auto\n", 3, 9,
+     "must name the serial device"},
+    {"negative speed", "kind: virtual\nstation:\n  motion:\n    tilt: {speed: -1}\n", 4, 19,
+     "speed must be > 0"},
+};
+
+TEST(RigTest, BadRigFilesNameTheirLineAndColumn) {
+  for (const BadRig& bad : kBadRigs) {
+    SCOPED_TRACE(bad.what);
+    try {
+      ParseRig(bad.text, "rig.yaml");
+      ADD_FAILURE() << "no error";
+    } catch (const RecipeError& e) {
+      EXPECT_EQ(e.file(), "rig.yaml");
+      EXPECT_EQ(e.line(), bad.line) << e.what();
+      EXPECT_EQ(e.column(), bad.column) << e.what();
+      EXPECT_NE(e.message().find(bad.message), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(RigTest, MissingRigFileIsARecipeError) {
+  EXPECT_THROW(LoadRig("/nonexistent/rig.yaml"), RecipeError);
+}
+
+}  // namespace
+}  // namespace irdist

@@ -1,0 +1,78 @@
+#include "app/yaml_fields.h"
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace irdist::yaml_fields {
+namespace {
+
+TEST(YamlFieldsTest, ClosestMatchSuggestsNearNamesOnly) {
+  const std::vector<std::string> keys = {"slide_mm", "theta_deg", "pan_deg", "tilt_deg", "bias_ma"};
+  EXPECT_EQ(ClosestMatch("slide", keys), "slide_mm");
+  EXPECT_EQ(ClosestMatch("bias_mA", keys), "bias_ma");
+  EXPECT_EQ(ClosestMatch("tilt", keys), "tilt_deg");
+  EXPECT_EQ(ClosestMatch("temperature_c", keys), "");
+}
+
+TEST(YamlFieldsTest, SyntaxErrorsCarryTheirPosition) {
+  try {
+    Parse("a: [1, 2\nb: 3\n", "f.yaml");
+    FAIL() << "no error";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.file(), "f.yaml");
+    EXPECT_GT(e.line(), 0);
+    EXPECT_GT(e.column(), 0);
+    EXPECT_NE(e.message().find("YAML syntax error"), std::string::npos);
+  }
+}
+
+TEST(YamlFieldsTest, MapReaderRefusesUnknownAndDuplicateKeys) {
+  const YAML::Node ok = Parse("a: 1\nb: x\n", "f.yaml");
+  const MapReader map(ok, "f.yaml", "section", {"a", "b", "c"});
+  EXPECT_EQ(map.Number("a", 0.0), 1.0);
+  EXPECT_EQ(map.String("b", ""), "x");
+  EXPECT_EQ(map.Integer("c", 7), 7);  // absent: the fallback
+  EXPECT_FALSE(map.Has("c"));
+  try {
+    map.Require("c");
+    FAIL() << "no error";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.line(), 1);
+    EXPECT_NE(e.message().find("section is missing the key 'c'"), std::string::npos);
+  }
+  EXPECT_THROW(MapReader(Parse("a: 1\nd: 2\n", "f.yaml"), "f.yaml", "section", {"a"}),
+               RecipeError);
+  try {
+    MapReader(Parse("a: 1\na: 2\n", "f.yaml"), "f.yaml", "section", {"a"});
+    FAIL() << "no error";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.line(), 2);
+    EXPECT_EQ(e.column(), 1);
+  }
+  EXPECT_THROW(MapReader(Parse("[1, 2]", "f.yaml"), "f.yaml", "section", {"a"}), RecipeError);
+}
+
+TEST(YamlFieldsTest, ScalarConversionsAreStrict) {
+  const YAML::Node node = Parse("i: 3\nf: 2.5\nt: yes\ns: word\nl: [1]\nn:\n", "f.yaml");
+  EXPECT_EQ(AsInteger(node["i"], "f.yaml", "i"), 3);
+  EXPECT_THROW(AsInteger(node["f"], "f.yaml", "f"), RecipeError);
+  EXPECT_EQ(AsNumber(node["f"], "f.yaml", "f"), 2.5);
+  EXPECT_THROW(AsNumber(node["s"], "f.yaml", "s"), RecipeError);
+  EXPECT_THROW(AsNumber(node["l"], "f.yaml", "l"), RecipeError);
+  EXPECT_THROW(AsNumber(node["n"], "f.yaml", "n"), RecipeError);
+  EXPECT_TRUE(AsBoolean(node["t"], "f.yaml", "t"));
+  EXPECT_THROW(AsBoolean(node["s"], "f.yaml", "s"), RecipeError);
+  EXPECT_EQ(AsString(node["s"], "f.yaml", "s"), "word");
+  EXPECT_THROW(AsString(node["l"], "f.yaml", "l"), RecipeError);
+}
+
+TEST(YamlFieldsTest, RecipeErrorFormatsItsPosition) {
+  const RecipeError with_position("r.yaml", 3, 7, "bad");
+  EXPECT_STREQ(with_position.what(), "r.yaml:3:7: bad");
+  const RecipeError without("r.yaml", 0, 0, "cannot open");
+  EXPECT_STREQ(without.what(), "r.yaml: cannot open");
+}
+
+}  // namespace
+}  // namespace irdist::yaml_fields
