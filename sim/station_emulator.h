@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "base/check.h"
 #include "sim/world.h"
 
 namespace irdist::sim {

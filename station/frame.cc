@@ -22,7 +22,7 @@ std::string EncodeRequest(int seq, std::string_view command) {
   IRDIST_CHECK(seq >= 0 && seq <= kMaxSequence, "sequence number ", seq);
   IRDIST_CHECK(!command.empty(), "empty command");
   for (char c : command) {
-    IRDIST_CHECK(c >= 0x20 && c < 0x7F && c != '*' && c != '#', "unprintable or reserved byte in ",
+    IRDIST_CHECK(c >= 0x20 && c < 0x7F && c != '#', "unprintable or reserved byte in ",
                  std::string(command));
   }
   std::string text = "#" + std::to_string(seq) + " " + std::string(command);

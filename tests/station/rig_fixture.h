@@ -1,0 +1,52 @@
+#pragma once
+// A virtual station for the station tests: a World running fast, the emulator on a real pty, a
+// SerialTransport logging to a file in the build tree, and a StationClient.
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+
+#include "sim/station_emulator.h"
+#include "sim/world.h"
+#include "station/line_log.h"
+#include "station/serial_transport.h"
+#include "station/station_client.h"
+
+namespace irdist::testing {
+
+struct VirtualStation {
+  explicit VirtualStation(double time_scale, sim::EmulatorOptions emulator_options = {},
+                          ClientOptions client_options = FastClient())
+      : world(time_scale), emulator(world, emulator_options) {
+    port = emulator.Start();
+    const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    log = std::make_unique<LineLog>(std::string(IRDIST_BINARY_DIR) + "/station_test_" + name +
+                                    ".log");
+    transport = std::make_unique<SerialTransport>(port, SerialOptions{}, log.get());
+    client = std::make_unique<StationClient>(*transport, client_options);
+  }
+  static ClientOptions FastClient() {
+    ClientOptions o;
+    o.reply_timeout = std::chrono::milliseconds(150);
+    o.poll_period = std::chrono::milliseconds(2);
+    o.move_timeout = std::chrono::milliseconds(20000);
+    o.max_retries = 10;
+    return o;
+  }
+  sim::World world;
+  sim::StationEmulator emulator;
+  std::string port;
+  std::unique_ptr<LineLog> log;
+  std::unique_ptr<SerialTransport> transport;
+  std::unique_ptr<StationClient> client;
+};
+
+// Duration of a trapezoidal move from rest to rest (simulated seconds).
+inline double TrapezoidS(double distance, double speed, double accel) {
+  if (distance <= 0) return 0.0;
+  if (distance >= speed * speed / accel) return distance / speed + speed / accel;
+  return 2.0 * std::sqrt(distance / accel);
+}
+
+}  // namespace irdist::testing

@@ -1,0 +1,113 @@
+#include "station/serial_transport.h"
+
+#include <gtest/gtest.h>
+#include <pty.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <sstream>
+
+namespace irdist {
+namespace {
+
+// A raw pty pair; the test plays the peer on the master side.
+struct Pty {
+  Pty() {
+    char name[256] = {0};
+    EXPECT_EQ(openpty(&master, &slave, name, nullptr, nullptr), 0);
+    termios tio{};
+    tcgetattr(slave, &tio);
+    cfmakeraw(&tio);
+    tcsetattr(slave, TCSANOW, &tio);
+    path = name;
+  }
+  ~Pty() {
+    close(master);
+    close(slave);
+  }
+  Pty(const Pty&) = delete;
+  Pty& operator=(const Pty&) = delete;
+  void Send(const std::string& s) const { ASSERT_EQ(write(master, s.data(), s.size()), (ssize_t)s.size()); }
+  std::string Receive() const {
+    char buf[256];
+    const ssize_t n = read(master, buf, sizeof(buf));
+    return n > 0 ? std::string(buf, static_cast<std::size_t>(n)) : "";
+  }
+  int master = -1, slave = -1;
+  std::string path;
+};
+
+TEST(SerialOptions, DefaultsAreValid) {
+  std::string why;
+  EXPECT_TRUE(SerialOptions{}.IsValid(&why)) << why;
+  SerialOptions bad;
+  bad.baud = 0;
+  EXPECT_FALSE(bad.IsValid(&why));
+}
+
+TEST(SerialTransport, WritesCrLfAndReadsLines) {
+  Pty pty;
+  SerialTransport t(pty.path);
+  t.WriteLine("#1 *IDN?*00");
+  EXPECT_EQ(pty.Receive(), "#1 *IDN?*00\r\n");
+  pty.Send("first\r\nsecond\npart");
+  EXPECT_EQ(t.ReadLine(std::chrono::milliseconds(500)), "first");
+  EXPECT_EQ(t.ReadLine(std::chrono::milliseconds(500)), "second");
+  // "part" has no line end yet: a timeout, and the partial line is kept.
+  EXPECT_THROW(t.ReadLine(std::chrono::milliseconds(30)), LinkError);
+  pty.Send("ial\n");
+  EXPECT_EQ(t.ReadLine(std::chrono::milliseconds(500)), "partial");
+}
+
+TEST(SerialTransport, SilentPeerThrowsLinkErrorAfterItsDeadline) {
+  Pty pty;
+  SerialTransport t(pty.path);
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    t.ReadLine(std::chrono::milliseconds(80));
+    FAIL() << "ReadLine returned without a peer";
+  } catch (const LinkError& e) {
+    EXPECT_NE(std::string(e.what()).find("80 ms"), std::string::npos);
+    EXPECT_EQ(e.where(), pty.path);
+    EXPECT_FALSE(e.fix().empty());
+  }
+  // It waited (at least) its deadline and did not block forever: the exception came back.
+  EXPECT_GE(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(75));
+}
+
+TEST(SerialTransport, FlushDropsPendingBytes) {
+  Pty pty;
+  SerialTransport t(pty.path);
+  pty.Send("stale\n");
+  usleep(20000);
+  t.Flush();
+  pty.Send("fresh\n");
+  EXPECT_EQ(t.ReadLine(std::chrono::milliseconds(500)), "fresh");
+}
+
+TEST(SerialTransport, LogsEveryLine) {
+  Pty pty;
+  const std::string path = std::string(IRDIST_BINARY_DIR) + "/serial_transport_test.log";
+  {
+    LineLog log(path);
+    SerialTransport t(pty.path, SerialOptions{}, &log);
+    t.WriteLine("#5 POS?*11");
+    pty.Receive();
+    pty.Send("#5 OK 1,2,3*22\r\n");
+    t.ReadLine(std::chrono::milliseconds(500));
+  }
+  std::ifstream in(path);
+  std::stringstream all;
+  all << in.rdbuf();
+  EXPECT_NE(all.str().find("> #5 POS?*11"), std::string::npos);
+  EXPECT_NE(all.str().find("< #5 OK 1,2,3*22"), std::string::npos);
+}
+
+TEST(SerialTransport, MissingPortThrowsLinkError) {
+  EXPECT_THROW(SerialTransport("/dev/does-not-exist-irdist"), LinkError);
+}
+
+}  // namespace
+}  // namespace irdist

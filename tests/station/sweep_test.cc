@@ -1,0 +1,113 @@
+#include "station/sweep.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+
+#include "tests/station/rig_fixture.h"
+
+namespace irdist {
+namespace {
+
+using testing::VirtualStation;
+
+std::vector<SweepPose> Grid() {
+  std::vector<SweepPose> poses;
+  std::int64_t index = 100;
+  for (double slide : {1500.0, 2000.0, 2500.0}) {
+    for (double pan : {0.0, 10.0}) poses.push_back({index++, slide, pan, 0.0, 500.0});
+  }
+  return poses;
+}
+
+TEST(SweepOptions, DefaultsAreValid) {
+  std::string why;
+  EXPECT_TRUE(SweepOptions{}.IsValid(&why)) << why;
+  SweepOptions bad;
+  bad.max_retakes = -1;
+  EXPECT_FALSE(bad.IsValid(&why));
+}
+
+TEST(Sweep, VisitsEveryPoseSettledAtItsCurrentThenParksIredOff) {
+  VirtualStation rig(100.0);
+  Sweep sweep(*rig.client);
+  std::vector<std::int64_t> seen;
+  const std::vector<SweepPose> poses = Grid();
+  const SweepResult r = sweep.Run(poses, [&](const SweepPose& p, int attempt) {
+    const sim::PoseState truth = rig.world.Pose();
+    EXPECT_FALSE(truth.moving);
+    EXPECT_NEAR(truth.slide_mm, p.slide_mm, 1e-6);
+    EXPECT_NEAR(truth.pan_deg, p.pan_deg, 1e-6);
+    EXPECT_DOUBLE_EQ(truth.bias_ma, p.bias_ma);
+    EXPECT_EQ(attempt, 0);
+    seen.push_back(p.index);
+  });
+  EXPECT_EQ(r.poses_done, poses.size());
+  EXPECT_FALSE(r.stopped);
+  ASSERT_EQ(seen.size(), poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) EXPECT_EQ(seen[i], poses[i].index);
+  EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, 0.0);
+  EXPECT_DOUBLE_EQ(rig.world.Pose().pan_deg, 0.0);
+  EXPECT_NE(r.BriefReport().find("6 poses done"), std::string::npos);
+}
+
+TEST(Sweep, RebootDuringAPoseRetakesIt) {
+  VirtualStation rig(100.0);
+  Sweep sweep(*rig.client);
+  std::map<std::int64_t, int> attempts;
+  const SweepResult r = sweep.Run(Grid(), [&](const SweepPose& p, int attempt) {
+    attempts[p.index] = std::max(attempts[p.index], attempt);
+    EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, p.bias_ma);  // restored on the retake too
+    EXPECT_NEAR(rig.world.Pose().slide_mm, p.slide_mm, 1e-6);
+    if (p.index == 102 && attempt == 0) rig.emulator.Reboot();  // power glitch during capture
+  });
+  EXPECT_EQ(r.poses_done, 6u);
+  EXPECT_EQ(r.retakes, 1u);
+  EXPECT_EQ(r.reboots, 1u);
+  EXPECT_EQ(attempts[102], 1);
+  EXPECT_EQ(attempts[103], 0);
+}
+
+TEST(Sweep, RebootMidMoveRetakesThePose) {
+  VirtualStation rig(100.0);
+  Sweep sweep(*rig.client);
+  int calls = 0;
+  const std::vector<SweepPose> poses = Grid();
+  const SweepResult r = sweep.Run(poses, [&](const SweepPose& p, int) {
+    if (++calls == 2) rig.emulator.RebootDuringNextMove(0.5);
+    EXPECT_NEAR(rig.world.Pose().slide_mm, p.slide_mm, 1e-6);
+  });
+  EXPECT_EQ(r.poses_done, poses.size());
+  EXPECT_EQ(r.reboots, 1u);
+  EXPECT_EQ(calls, 6);  // the reboot came before the callback: nothing to retake there
+  EXPECT_EQ(rig.emulator.Reboots(), 1u);
+}
+
+TEST(Sweep, StopFlagFinishesThePoseInFlightAndParks) {
+  VirtualStation rig(100.0);
+  Sweep sweep(*rig.client);
+  std::atomic<bool> stop{false};
+  int calls = 0;
+  const SweepResult r = sweep.Run(
+      Grid(),
+      [&](const SweepPose&, int) {
+        if (++calls == 3) stop = true;  // Ctrl-C while capturing the third pose
+      },
+      &stop);
+  EXPECT_TRUE(r.stopped);
+  EXPECT_EQ(r.poses_done, 3u);
+  EXPECT_EQ(r.next_index, 103);
+  EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, 0.0);
+  EXPECT_FALSE(rig.world.Pose().moving);
+}
+
+TEST(Sweep, CallbackFailureSwitchesIredOff) {
+  VirtualStation rig(100.0);
+  Sweep sweep(*rig.client);
+  EXPECT_THROW(sweep.Run(Grid(), [&](const SweepPose&, int) { throw Error("camera lost"); }),
+               Error);
+  EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, 0.0);
+}
+
+}  // namespace
+}  // namespace irdist
