@@ -157,8 +157,11 @@ struct CameraServer::Impl {
     const int height = static_cast<int>(arv_buffer_get_image_height(buffer));
     const int x = static_cast<int>(arv_buffer_get_image_x(buffer));
     const int y = static_cast<int>(arv_buffer_get_image_y(buffer));
+    // The fake camera allocates its buffer for the full payload but reports a received size of
+    // 0 until filled: check against the payload it computes.
     size_t size = 0;
     void* data = const_cast<void*>(arv_buffer_get_data(buffer, &size));
+    size = arv_fake_camera_get_payload(fake);
     const size_t bytes_per_pixel = format == PixelFormat::kMono8 ? 1 : 2;
     if (data != nullptr && width > 0 && height > 0 &&
         static_cast<size_t>(width) * height * bytes_per_pixel <= size) {

@@ -20,7 +20,7 @@ bool Fraction(double value) { return std::isfinite(value) && value >= 0.0 && val
 
 class SectionReader {
  public:
-  using Setter = std::function<void(const YAML::Node&)>;
+  using Setter = std::function<void(const YAML::Node&, const std::string& key)>;
 
   SectionReader(std::string path, std::string section) : path_(std::move(path)),
                                                          section_(std::move(section)) {}
@@ -37,18 +37,18 @@ class SectionReader {
 
   template <typename T>
   Setter Scalar(T* target) const {
-    return [this, target](const YAML::Node& node) {
-      if (!node.IsScalar()) Throw(node, "expected a scalar value");
+    return [this, target](const YAML::Node& node, const std::string& key) {
+      if (!node.IsScalar()) Throw(node, key + ": expected a scalar value");
       try {
         *target = node.as<T>();
       } catch (const YAML::Exception&) {
-        Throw(node, "cannot read '" + node.Scalar() + "' as a number or flag");
+        Throw(node, key + ": cannot read '" + node.Scalar() + "' as a number or flag");
       }
     };
   }
   Setter String(std::string* target) const {
-    return [this, target](const YAML::Node& node) {
-      if (!node.IsScalar()) Throw(node, "expected a string");
+    return [this, target](const YAML::Node& node, const std::string& key) {
+      if (!node.IsScalar()) Throw(node, key + ": expected a string");
       *target = node.Scalar();
     };
   }
@@ -67,7 +67,7 @@ class SectionReader {
         Throw(item.first, "unknown key '" + key + "' (known keys: " + known + ")");
       }
       try {
-        it->second(item.second);
+        it->second(item.second, key);
       } catch (const RigFileError&) {
         throw;
       } catch (const std::exception& e) {
@@ -233,7 +233,7 @@ RigPhysics LoadRigPhysics(const std::string& rig_path) {
       {"slope_mw_sr_per_ma", em.Scalar(&e.slope_mw_sr_per_ma)},
       {"sublinear_per_ma", em.Scalar(&e.sublinear_per_ma)},
       {"pattern",
-       [&em, &e](const YAML::Node& node) {
+       [&em, &e](const YAML::Node& node, const std::string&) {
          const std::string name = node.IsScalar() ? node.Scalar() : "";
          if (name == "gaussian") {
            e.pattern = EmissionPattern::kGaussian;
@@ -288,10 +288,10 @@ RigPhysics LoadRigPhysics(const std::string& rig_path) {
       {"time_scale", top.Scalar(&physics.time_scale)},
       {"seed", top.Scalar(&s.seed)},
       {"serial", top.String(&c.serial)},
-      {"emitter", [&](const YAML::Node& node) { em.Read(node, emitter_keys); }},
-      {"optics", [&](const YAML::Node& node) { op.Read(node, optics_keys); }},
-      {"sensor", [&](const YAML::Node& node) { se.Read(node, sensor_keys); }},
-      {"camera", [&](const YAML::Node& node) { ca.Read(node, camera_keys); }},
+      {"emitter", [&](const YAML::Node& node, const std::string&) { em.Read(node, emitter_keys); }},
+      {"optics", [&](const YAML::Node& node, const std::string&) { op.Read(node, optics_keys); }},
+      {"sensor", [&](const YAML::Node& node, const std::string&) { se.Read(node, sensor_keys); }},
+      {"camera", [&](const YAML::Node& node, const std::string&) { ca.Read(node, camera_keys); }},
   };
   top.Read(section, top_keys, "station");
 

@@ -1,0 +1,234 @@
+#include "sim/camera_server.h"
+
+#include <arv.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "sim/renderer.h"
+#include "tests/sim/gvcp_port.h"
+
+namespace irdist::sim {
+namespace {
+
+template <typename T>
+struct GUnref {
+  void operator()(T* p) const {
+    if (p != nullptr) g_object_unref(p);
+  }
+};
+template <typename T>
+using GPtr = std::unique_ptr<T, GUnref<T>>;
+
+#define ASSERT_NO_GERROR(error)                                            \
+  do {                                                                     \
+    GError* e_ = (error);                                                  \
+    ASSERT_EQ(e_, nullptr) << (e_ != nullptr ? e_->message : "");          \
+  } while (false)
+
+constexpr char kSerial[] = "IRDTEST042";
+
+RigPhysics TestPhysics() {
+  RigPhysics p;
+  p.time_scale = 10.0;
+  p.camera.serial = kSerial;
+  p.emitter.thermal_resistance_k_per_w = 0.0;  // no drift: frames compare against one truth
+  return p;
+}
+
+// Background-subtracted Mono12 gray-level sum of an 80x80 box around the image centre.
+double SignalSum(ArvBuffer* buffer) {
+  size_t size = 0;
+  const void* data = arv_buffer_get_data(buffer, &size);
+  const int w = arv_buffer_get_image_width(buffer), h = arv_buffer_get_image_height(buffer);
+  const cv::Mat frame(h, w, CV_16UC1, const_cast<void*>(data));
+  cv::Mat box, band;
+  frame(cv::Rect(w / 2 - 40, h / 2 - 40, 80, 80)).convertTo(box, CV_64F);
+  frame(cv::Rect(0, 0, w, 100)).convertTo(band, CV_64F);
+  return cv::sum(box)[0] - cv::mean(band)[0] * 6400;
+}
+
+class CameraServerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(testing::WaitForGvcpPort(std::chrono::seconds(120)))
+        << "127.0.0.1:3956 stayed busy: another fake camera is running";
+    world_.SetPose(2000, 0, 0, false);
+    world_.SetCurrent(500);
+    server_ = std::make_unique<CameraServer>(world_, physics_);
+    server_->Start();
+    GError* error = nullptr;
+    camera_.reset(arv_camera_new("127.0.0.1", &error));
+    ASSERT_NO_GERROR(error);
+    ASSERT_NE(camera_, nullptr);
+  }
+  void TearDown() override {
+    if (stream_ && camera_) arv_camera_stop_acquisition(camera_.get(), nullptr);
+    stream_.reset();
+    camera_.reset();
+    server_.reset();
+  }
+
+  // Stream on loopback as issue 4's facts say: no packet socket, fixed 4 MB socket buffer.
+  void CreateStream() {
+    arv_camera_gv_set_stream_options(camera_.get(), ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
+    GError* error = nullptr;
+    stream_.reset(arv_camera_create_stream(camera_.get(), nullptr, nullptr, &error));
+    ASSERT_NO_GERROR(error);
+    g_object_set(stream_.get(), "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
+                 "socket-buffer-size", 4 << 20, nullptr);
+    const guint payload = arv_camera_get_payload(camera_.get(), &error);
+    ASSERT_NO_GERROR(error);
+    for (int i = 0; i < 8; ++i) arv_stream_push_buffer(stream_.get(), arv_buffer_new(payload, nullptr));
+  }
+
+  // Pops one buffer; returns nullptr on timeout, re-queues it after `use`.
+  template <typename F>
+  bool Pop(guint64 timeout_us, F use) {
+    ArvBuffer* buffer = arv_stream_timeout_pop_buffer(stream_.get(), timeout_us);
+    if (buffer == nullptr) return false;
+    const bool ok = arv_buffer_get_status(buffer) == ARV_BUFFER_STATUS_SUCCESS;
+    if (ok) use(buffer);
+    arv_stream_push_buffer(stream_.get(), buffer);
+    return ok;
+  }
+
+  RigPhysics physics_ = TestPhysics();
+  World world_{physics_.time_scale};
+  std::unique_ptr<CameraServer> server_;
+  GPtr<ArvCamera> camera_;
+  GPtr<ArvStream> stream_;
+};
+
+TEST_F(CameraServerTest, OpensByAddressWithItsSerialAndFeatures) {
+  GError* error = nullptr;
+  const char* serial = arv_camera_get_device_serial_number(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+  EXPECT_STREQ(serial, kSerial);
+  EXPECT_EQ(server_->device_id(), std::string("Aravis-Fake-") + kSerial);
+  EXPECT_STREQ(arv_camera_get_vendor_name(camera_.get(), nullptr), "Aravis");
+  EXPECT_STREQ(arv_camera_get_model_name(camera_.get(), nullptr), "Fake");
+
+  // Factory defaults: full sensor, free-running.
+  gint x, y, w, h;
+  arv_camera_get_region(camera_.get(), &x, &y, &w, &h, &error);
+  ASSERT_NO_GERROR(error);
+  EXPECT_EQ(w, 1280);
+  EXPECT_EQ(h, 1024);
+  EXPECT_STREQ(arv_camera_get_string(camera_.get(), "TriggerMode", &error), "Off");
+  ASSERT_NO_GERROR(error);
+
+  arv_camera_set_pixel_format_from_string(camera_.get(), "Mono12", &error);
+  ASSERT_NO_GERROR(error);
+  EXPECT_STREQ(arv_camera_get_pixel_format_as_string(camera_.get(), nullptr), "Mono12");
+  arv_camera_set_float(camera_.get(), "ExposureTime", 32000.0, &error);
+  ASSERT_NO_GERROR(error);
+  EXPECT_DOUBLE_EQ(arv_camera_get_exposure_time(camera_.get(), &error), 32000.0);
+  guint n = 0;
+  const char** sources =
+      arv_camera_dup_available_enumerations_as_strings(camera_.get(), "TriggerSource", &n, &error);
+  ASSERT_NO_GERROR(error);
+  std::vector<std::string> names(sources, sources + n);
+  g_free(sources);
+  EXPECT_NE(std::find(names.begin(), names.end(), "Line1"), names.end());
+  EXPECT_NE(std::find(names.begin(), names.end(), "Software"), names.end());
+  arv_camera_set_string(camera_.get(), "TriggerSource", "Line1", &error);
+  ASSERT_NO_GERROR(error);
+  EXPECT_STREQ(arv_camera_get_string(camera_.get(), "TriggerSource", &error), "Line1");
+  arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
+  ASSERT_NO_GERROR(error);
+  EXPECT_STREQ(arv_camera_get_string(camera_.get(), "TriggerMode", &error), "On");
+  EXPECT_NEAR(arv_camera_get_float(camera_.get(), "DeviceTemperature", &error),
+              physics_.sensor.temperature_c, 1e-3);
+  ASSERT_NO_GERROR(error);
+}
+
+// Free-running at power-up; then Line1-triggered frames, each with the exposure set for it.
+TEST_F(CameraServerTest, TriggeredFramesCarryTheExposureSetForThem) {
+  GError* error = nullptr;
+  arv_camera_set_pixel_format_from_string(camera_.get(), "Mono12", &error);
+  ASSERT_NO_GERROR(error);
+  CreateStream();
+  arv_camera_start_acquisition(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+  int free_frames = 0;
+  for (int i = 0; i < 20 && free_frames < 3; ++i) {
+    if (Pop(500000, [](ArvBuffer*) {})) ++free_frames;
+  }
+  EXPECT_EQ(free_frames, 3) << "no free-running frames at power-up";
+  arv_camera_stop_acquisition(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+  while (Pop(50000, [](ArvBuffer*) {})) {
+  }
+
+  arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_string(camera_.get(), "TriggerSource", "Line1", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_start_acquisition(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+
+  const Renderer truth_renderer(physics_);
+  PoseState pose;
+  pose.slide_mm = 2000;
+  pose.bias_ma = 500;
+  const double k = physics_.sensor.system_gain_dn_per_e;
+  for (double exposure_us : {8000.0, 30000.0, 12000.0, 36000.0, 20000.0, 32000.0}) {
+    arv_camera_set_exposure_time(camera_.get(), exposure_us, &error);
+    ASSERT_NO_GERROR(error);
+    world_.FireTrigger();
+    double sum = 0.0;
+    ASSERT_TRUE(Pop(2000000, [&](ArvBuffer* b) { sum = SignalSum(b); }))
+        << "no frame for the trigger at " << exposure_us << " us";
+    const double expected =
+        k * truth_renderer.Describe(pose, exposure_us * 1e-6, PixelFormat::kMono12).signal_e;
+    EXPECT_NEAR(sum / expected, 1.0, 0.02) << "exposure " << exposure_us << " us";
+    const std::vector<FrameRecord> records = server_->RecentFrames();
+    ASSERT_FALSE(records.empty());
+    EXPECT_EQ(records.back().exposure_us, exposure_us);
+    EXPECT_EQ(records.back().format, "Mono12");
+  }
+  EXPECT_EQ(server_->LinePulsesAccepted(), 6u);
+
+  // A Line1 pulse does nothing while the source is Software; the software trigger does.
+  arv_camera_set_string(camera_.get(), "TriggerSource", "Software", &error);
+  ASSERT_NO_GERROR(error);
+  world_.FireTrigger();
+  EXPECT_FALSE(Pop(300000, [](ArvBuffer*) {}));
+  arv_camera_software_trigger(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+  EXPECT_TRUE(Pop(2000000, [](ArvBuffer*) {}));
+
+  // Fault: a dropped frame never arrives; the next one does.
+  server_->SetDropFrameRate(1.0);
+  arv_camera_software_trigger(camera_.get(), &error);
+  EXPECT_FALSE(Pop(400000, [](ArvBuffer*) {}));
+  EXPECT_EQ(server_->FramesDropped(), 1u);
+  server_->SetDropFrameRate(0.0);
+  arv_camera_software_trigger(camera_.get(), &error);
+  EXPECT_TRUE(Pop(2000000, [](ArvBuffer*) {}));
+}
+
+TEST(CameraServerPort, SecondCameraOnLoopbackFailsClearly) {
+  ASSERT_TRUE(testing::WaitForGvcpPort(std::chrono::seconds(120)));
+  RigPhysics physics = TestPhysics();
+  World world(physics.time_scale);
+  CameraServer first(world, physics);
+  first.Start();
+  CameraServer second(world, physics);
+  try {
+    second.Start();
+    ADD_FAILURE() << "a second fake camera started on 127.0.0.1";
+  } catch (const CameraServerError& e) {
+    EXPECT_NE(std::string(e.what()).find("3956"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(first.running());
+  EXPECT_FALSE(second.running());
+}
+
+}  // namespace
+}  // namespace irdist::sim

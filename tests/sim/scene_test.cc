@@ -1,0 +1,133 @@
+#include "sim/scene.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+namespace irdist::sim {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+PoseState Pose(double slide_mm, double pan_deg, double tilt_deg, double bias_ma = 500.0) {
+  PoseState p;
+  p.slide_mm = slide_mm;
+  p.pan_deg = pan_deg;
+  p.tilt_deg = tilt_deg;
+  p.bias_ma = bias_ma;
+  return p;
+}
+
+double Sum(const SignalWindow& w) { return cv::sum(w.electrons)[0]; }
+
+// Eigenvalues of the intensity-weighted second-moment matrix of the window.
+void Moments(const SignalWindow& w, double* major_var, double* minor_var) {
+  double s = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  for (int r = 0; r < w.electrons.rows; ++r) {
+    for (int c = 0; c < w.electrons.cols; ++c) {
+      const double v = w.electrons(r, c);
+      s += v;
+      sx += v * c;
+      sy += v * r;
+      sxx += v * c * c;
+      syy += v * r * r;
+      sxy += v * c * r;
+    }
+  }
+  const double mx = sx / s, my = sy / s;
+  const double a = sxx / s - mx * mx, b = syy / s - my * my, c = sxy / s - mx * my;
+  const double mean = 0.5 * (a + b), diff = std::sqrt(0.25 * (a - b) * (a - b) + c * c);
+  *major_var = mean + diff;
+  *minor_var = mean - diff;
+}
+
+TEST(Scene, DiscImageIsResolvedAtThreeMetres) {
+  const Scene scene{RigPhysics{}};
+  const EmitterImage image = scene.Project(Pose(3000, 0, 0));
+  EXPECT_GE(image.major_px, 8.0);
+  EXPECT_NEAR(image.center_x_px, 640.0, 1e-9);
+  EXPECT_NEAR(image.center_y_px, 512.0, 1e-9);
+}
+
+// The projected disc is an ellipse with axis ratio cos(theta). Measured from the noise-free
+// signal's second moments, after removing the PSF's and the pixel box's variance
+// (psf^2 + 1/12 px^2 per axis). Tolerance 0.01 on the ratio (the pixel grid and perspective).
+TEST(Scene, EllipseAxisRatioIsCosTheta) {
+  const Scene scene{RigPhysics{}};
+  const double psf = RigPhysics{}.optics.psf_sigma_px;
+  const double blur_var = psf * psf + 1.0 / 12.0;
+  struct Case {
+    double d, pan, tilt;
+  };
+  for (const Case& k : {Case{1500, 0, 0}, Case{1500, 30, 0}, Case{2000, 0, 20}, Case{2500, 20, 20},
+                        Case{3000, 35, 0}, Case{3000, 10, 0}}) {
+    const PoseState pose = Pose(k.d, k.pan, k.tilt);
+    double major_var = 0, minor_var = 0;
+    Moments(scene.RenderSignal(pose, 100.0, 0.01), &major_var, &minor_var);
+    const double ratio = std::sqrt((minor_var - blur_var) / (major_var - blur_var));
+    EXPECT_NEAR(ratio, std::cos(pose.ThetaDeg() * kDeg), 0.01)
+        << "d " << k.d << " pan " << k.pan << " tilt " << k.tilt;
+    // A uniform disc of diameter D has a second moment of D^2 / 16 along its major axis.
+    const double major_px = scene.Project(pose).major_px;
+    EXPECT_NEAR(std::sqrt(major_var - blur_var), major_px / 4.0, 0.02 * major_px / 4.0);
+  }
+}
+
+TEST(Scene, TotalSignalFallsAsInverseSquareOfDistance) {
+  const Scene scene{RigPhysics{}};
+  const double s1500 = Sum(scene.RenderSignal(Pose(1500, 0, 0), 100.0, 0.01));
+  for (double d : {2000.0, 2500.0, 3000.0}) {
+    const double s = Sum(scene.RenderSignal(Pose(d, 0, 0), 100.0, 0.01));
+    EXPECT_NEAR(s / s1500, std::pow(1500.0 / d, 2), 0.002 * std::pow(1500.0 / d, 2)) << d;
+  }
+}
+
+TEST(Scene, TotalSignalFollowsEmissionPatternTimesDirection) {
+  // The total flux into the lens is I(theta) = I0 rho(theta), whatever the foreshortening.
+  const Scene scene{RigPhysics{}};
+  const double s0 = Sum(scene.RenderSignal(Pose(2000, 0, 0), 100.0, 0.01));
+  const double s30 = Sum(scene.RenderSignal(Pose(2000, 30, 0), 100.0, 0.01));
+  EXPECT_NEAR(s30 / s0, scene.Pattern(30 * kDeg), 0.005);
+  EXPECT_NEAR(scene.Pattern(30 * kDeg), std::exp(-0.5), 1e-12);  // sigma 30 deg
+}
+
+TEST(Scene, CosPowerPatternSelectable) {
+  RigPhysics p;
+  p.emitter.pattern = EmissionPattern::kCosPower;
+  p.emitter.pattern_cos_power = 3.0;
+  const Scene scene(p);
+  EXPECT_NEAR(scene.Pattern(40 * kDeg), std::pow(std::cos(40 * kDeg), 3.0), 1e-12);
+}
+
+TEST(Scene, IntensityIsLinearAboveThreshold) {
+  const Scene scene{RigPhysics{}};
+  const double th = RigPhysics{}.emitter.threshold_ma;
+  EXPECT_EQ(scene.OnAxisIntensityMwSr(th - 1.0, 0.0), 0.0);
+  const double i475 = scene.OnAxisIntensityMwSr(475, 0.0);
+  const double i500 = scene.OnAxisIntensityMwSr(500, 0.0);
+  EXPECT_NEAR(i500 / i475, (500 - th) / (475 - th), 1e-12);
+  RigPhysics p;
+  p.emitter.sublinear_per_ma = 2e-4;
+  EXPECT_LT(Scene(p).OnAxisIntensityMwSr(500, 0.0), i500);
+}
+
+TEST(Scene, SelfHeatingFollowsFirstOrderModel) {
+  const RigPhysics p;
+  const Scene scene(p);
+  const std::vector<CurrentStep> history = {{10.0, 500.0}};
+  const double steady = p.emitter.thermal_resistance_k_per_w * 0.5 * p.emitter.forward_voltage_v;
+  const double tau = p.emitter.thermal_time_constant_s;
+  EXPECT_EQ(scene.JunctionRiseK(history, 5.0), 0.0);
+  EXPECT_NEAR(scene.JunctionRiseK(history, 10.0 + tau), steady * (1 - std::exp(-1.0)), 1e-9);
+  EXPECT_NEAR(scene.JunctionRiseK(history, 10.0 + 20 * tau), steady, 1e-6);
+  // Switching off cools back down with the same time constant.
+  const std::vector<CurrentStep> on_off = {{0.0, 500.0}, {20 * tau, 0.0}};
+  EXPECT_NEAR(scene.JunctionRiseK(on_off, 21 * tau), steady * std::exp(-1.0), 1e-6);
+  // The intensity drifts down by temp_coeff per kelvin.
+  const double cold = scene.OnAxisIntensityMwSr(500, 0.0);
+  EXPECT_NEAR(scene.OnAxisIntensityMwSr(500, steady) / cold,
+              1.0 + p.emitter.temp_coeff_per_k * steady, 1e-12);
+}
+
+}  // namespace
+}  // namespace irdist::sim
