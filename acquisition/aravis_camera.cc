@@ -151,6 +151,7 @@ struct AravisCamera::Impl {
   int payload_bytes = 0;
   int packet_size = 0;
   int bit_depth = 16;
+  int warmup_discarded = 0;
   std::string pixel_format;
 
   std::string Name() const { return identity.serial + "@" + identity.address; }
@@ -584,7 +585,16 @@ void AravisCamera::StartStream() {
   arv_camera_start_acquisition(d.camera.get(), &error);
   ThrowOnError(error, "starting acquisition", d.Name());
   d.streaming = true;
+  const bool self_timed = !d.settings.triggered || d.settings.trigger_source == "Software";
+  for (int i = 0; self_timed && i < d.settings.warmup_frames; ++i) {
+    if (d.settings.triggered) SoftwareTrigger();
+    const auto frame = WaitFrame(std::chrono::milliseconds(2000));
+    if (!frame) break;  // nothing to warm up with; the capture's retries take over
+    ++d.warmup_discarded;
+  }
 }
+
+int AravisCamera::warmup_discarded() const { return impl_->warmup_discarded; }
 
 void AravisCamera::StopStream() {
   Impl& d = *impl_;

@@ -47,6 +47,8 @@ class AravisCamera final : public Camera {
   std::map<std::string, std::uint64_t> StreamStatistics() const;
   // Payload size in bytes of one frame as configured.
   int PayloadBytes() const;
+  // Warm-up frames discarded by StartStream() so far.
+  int warmup_discarded() const;
   // GigE Vision packet size in use (bytes), 0 for non-GigE cameras.
   int PacketSizeBytes() const;
 

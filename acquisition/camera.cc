@@ -20,6 +20,7 @@ bool CameraSettings::IsValid(std::string* why) const {
   if (packet_size < 0) return fail("packet_size must be >= 0 (0 = negotiate)");
   if (socket_buffer_bytes < 0) return fail("socket_buffer_bytes must be >= 0 (0 = from payload)");
   if (buffer_count < 2) return fail("buffer_count must be >= 2");
+  if (warmup_frames < 0) return fail("warmup_frames must be >= 0");
   if (frame_retention_ms < 1) return fail("frame_retention_ms must be >= 1");
   if (!(readback_tolerance >= 0.0 && readback_tolerance < 0.5)) {
     return fail("readback_tolerance must be in [0, 0.5)");

@@ -74,6 +74,10 @@ struct CameraSettings {
   // How long a partially received frame is kept before it is given up (ms). Low values detect a
   // lost triggered frame quickly (it comes back as a timeout).
   int frame_retention_ms = 50;
+  // Frames discarded right after AcquisitionStart in free-run and Software-trigger modes: Aravis
+  // sizes the stream's socket buffer on the first packet, so the first frame may come incomplete.
+  // (With a hardware trigger, BracketOptions::warmup_trigger does the same through the trigger.)
+  int warmup_frames = 1;
   // Relative tolerance when a value read back must equal the value set (floats only).
   double readback_tolerance = 0.005;
   bool IsValid(std::string* why) const;
@@ -121,7 +125,8 @@ class Camera {
   virtual double SetExposureUs(double exposure_us) = 0;
   virtual double ExposureUs() = 0;
 
-  // Starts streaming (AcquisitionStart) with the stream's buffers queued; StopStream ends it.
+  // Starts streaming (AcquisitionStart) with the stream's buffers queued, then discards the
+  // settings' warm-up frames where the camera can produce them by itself; StopStream ends it.
   virtual void StartStream() = 0;
   virtual void StopStream() = 0;
   virtual bool streaming() const = 0;

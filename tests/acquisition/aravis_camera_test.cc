@@ -134,6 +134,7 @@ TEST_F(AravisCameraTest, FreeRuns100FramesAndSoftwareTriggers20WithNoneLost) {
     ASSERT_TRUE(frame.has_value()) << "no frame " << i;
     if (frame->status != FrameStatus::kOk) {
       ++failed;
+      ADD_FAILURE() << "free-run frame " << i << ": " << FrameStatusName(frame->status);
       continue;
     }
     ++ok;
@@ -166,7 +167,9 @@ TEST_F(AravisCameraTest, FreeRuns100FramesAndSoftwareTriggers20WithNoneLost) {
   camera->StopStream();
   EXPECT_EQ(ids.size(), 20u);
   const auto stats = camera->StreamStatistics();
-  EXPECT_EQ(stats.at("n_failures"), 0u);
+  // Only the warm-up frames (discarded by StartStream, before the 20) may have failed.
+  EXPECT_LE(stats.at("n_failures"), static_cast<std::uint64_t>(camera->warmup_discarded()));
+  EXPECT_GE(stats.at("n_completed_buffers"), 20u);
 }
 
 }  // namespace

@@ -1,0 +1,130 @@
+#pragma once
+// Bracketed capture: one frame at the reference exposure t_r and one at each measurement exposure
+// t_n, of one pose and one IRED current. The trigger is a callable the caller hands in (the
+// station's trigger output in a sweep, a software trigger in tests): acquisition never knows the
+// station.
+//
+// Per frame: write ExposureTime and read it back, fire the trigger, wait for the frame, match it
+// to the request (frame id strictly newer than the last one seen, 16-bit wrap aware, and a later
+// camera timestamp), verify the exposure it was taken with (ChunkExposureTime when the camera sends
+// chunks, the read-back otherwise), and retry a missing, damaged or wrong-exposure frame up to
+// max_retries. Exposure is latched when the camera starts a frame, so exposure N+1 is only written
+// after frame N has arrived.
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "acquisition/camera.h"
+
+namespace irdist {
+
+struct BracketOptions {
+  // Reference exposure first, then the measurement exposures, in trigger order.
+  std::vector<double> exposures_us = {8000.0, 30000.0, 32000.0, 34000.0, 36000.0};
+  std::string trigger_source = "Line1";        // the camera input wired to the station
+  std::chrono::milliseconds frame_timeout{1000};
+  int max_retries = 2;                         // per frame, before the sweep stops
+  // Drift control: retake t_r next to each t_n (trigger order r, n1, r, n2, r, n3, ...).
+  bool interleave_reference = false;
+  // Relative difference allowed between requested and actual exposure.
+  double exposure_tolerance = 0.005;
+  // After a frame timed out, frames arriving within this window are late leftovers: they are
+  // discarded (counted) before the retry is triggered.
+  std::chrono::milliseconds late_frame_window{150};
+  // When Capture() starts the stream and the trigger is not Software, fire trigger(-1) once and
+  // discard its frame: Aravis sizes the socket buffer on the first packet, so the first frame
+  // after AcquisitionStart may come incomplete. The trigger callable must accept -1.
+  bool warmup_trigger = true;
+  bool IsValid(std::string* why) const;
+};
+
+enum class FrameRole { kReference, kMeasurement };
+const char* FrameRoleName(FrameRole role);  // "ref" / "meas" (the recording's spelling)
+
+// One planned frame of a bracket.
+struct PlannedFrame {
+  int frame_in_bracket = 0;
+  int exposure_index = 0;  // into BracketOptions::exposures_us
+  FrameRole role = FrameRole::kReference;
+  double exposure_us = 0.0;
+};
+// The trigger order for `options` (with interleaving applied).
+std::vector<PlannedFrame> PlanBracket(const BracketOptions& options);
+
+struct BracketFrame {
+  PlannedFrame plan;
+  cv::Mat image;                    // CV_16UC1, values as delivered
+  int bit_depth = 16;
+  double requested_exposure_us = 0.0;
+  double actual_exposure_us = 0.0;
+  bool exposure_from_chunk = false; // else: read back before the trigger
+  std::uint64_t frame_id = 0;
+  std::uint64_t timestamp_ns = 0;
+  std::int64_t host_time_ns = 0;
+  int retries = 0;                  // retries this frame needed
+  FrameStatus status = FrameStatus::kOk;
+};
+
+struct BracketResult {
+  std::vector<BracketFrame> frames;  // in trigger order; all kOk when complete
+  bool complete = false;
+  std::string failure;               // why not complete
+  std::string BriefReport() const;
+};
+
+// Everything counted over the life of a BracketCapture.
+struct CaptureStats {
+  std::int64_t brackets = 0;           // Capture() calls
+  std::int64_t brackets_failed = 0;    // brackets given up
+  std::int64_t requested = 0;          // frames planned
+  std::int64_t received = 0;           // frames delivered and accepted
+  std::int64_t retried = 0;            // extra triggers fired
+  std::int64_t lost = 0;               // frames given up after max_retries
+  std::int64_t timeouts = 0;           // attempts that saw no frame in time
+  std::int64_t damaged = 0;            // attempts whose frame came incomplete
+  std::int64_t wrong_exposure = 0;     // attempts whose frame carried another exposure
+  std::int64_t duplicates = 0;         // buffers discarded as stale or repeated (id/timestamp)
+  std::int64_t late = 0;               // frames that arrived after their attempt timed out
+  std::int64_t stray = 0;              // frames queued before a bracket (no trigger of ours)
+  std::int64_t id_gaps = 0;            // frame ids skipped by the camera
+  std::int64_t warmup = 0;             // warm-up frames fired and discarded
+  std::string BriefReport() const;
+};
+
+class BracketCapture {
+ public:
+  using Trigger = std::function<void(int frame_in_bracket)>;
+
+  // `camera` must be configured (triggered) and must outlive this object.
+  BracketCapture(Camera& camera, BracketOptions options);
+
+  // Captures one bracket, starting the camera's stream if needed. A frame still missing after
+  // max_retries ends the bracket with complete == false (the caller decides to stop the sweep).
+  // Camera failures (clamped exposure, dead link) throw CameraError; exceptions from `trigger`
+  // propagate.
+  BracketResult Capture(const Trigger& trigger);
+
+  const BracketOptions& options() const { return options_; }
+  const CaptureStats& stats() const { return stats_; }
+
+ private:
+  enum class Outcome { kOk, kTimeout, kDamaged, kWrongExposure };
+  Outcome Attempt(const PlannedFrame& plan, double readback_us, const Trigger& trigger,
+                  BracketFrame* out);
+  bool AcceptId(std::uint64_t frame_id, std::uint64_t timestamp_ns);
+  void DrainLateFrames();
+
+  Camera& camera_;
+  BracketOptions options_;
+  CaptureStats stats_;
+  bool have_last_ = false;
+  std::uint64_t last_id_ = 0;
+  std::uint64_t last_timestamp_ns_ = 0;
+};
+
+}  // namespace irdist

@@ -1,0 +1,174 @@
+#pragma once
+// Recordings on disk: docs/recording-format.md is the contract. RecordingWriter appends frames
+// crash-safely (PNG to a temp name, rename, then the CSV row appended and flushed), RecordingReader
+// gives back brackets, CheckRecording reports what is wrong with a recording, by file and line.
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "acquisition/bracket.h"
+#include "acquisition/camera.h"
+
+namespace irdist {
+
+// A recording that cannot be written or read. The message names the file (and line) and the fix.
+class RecordingError : public Error {
+ public:
+  using Error::Error;
+};
+
+inline constexpr int kRecordingFormatVersion = 1;
+
+enum class Completion { kRunning, kComplete, kCut };
+const char* CompletionName(Completion completion);  // "running" / "complete" / "cut"
+
+// recording.yaml (see docs/recording-format.md for each key).
+struct RecordingHeader {
+  int format_version = kRecordingFormatVersion;
+  Completion completion = Completion::kRunning;
+  std::string software_version;
+  std::string start_time;               // ISO 8601 UTC; set by the writer when empty
+  std::string end_time;                 // set by Close()
+  std::int64_t frame_count = -1;        // set by Close()
+  std::vector<std::string> resumed;     // one start time per resumption
+  int bit_depth = 16;                   // significant bits of the PNG values
+  std::string pixel_format;             // the camera's PixelFormat
+  CameraIdentity camera;
+  std::map<std::string, std::string> camera_features;  // read back after configuring
+  std::string station_identity;
+  std::string recipe_path;
+  std::string recipe_text;              // the recipe as used, verbatim
+  std::string rig_path;
+  std::string rig_text;                 // the rig file as used, verbatim
+};
+
+// One row of frames.csv.
+struct FrameRecord {
+  std::int64_t index = -1;              // assigned by the writer
+  std::string file;                     // assigned by the writer ("frames/000042.png")
+  std::int64_t bracket_id = 0;
+  int frame_in_bracket = 0;
+  int bracket_size = 0;
+  FrameRole role = FrameRole::kReference;
+  double requested_exposure_us = 0.0;
+  double actual_exposure_us = 0.0;
+  bool exposure_from_chunk = false;     // column exposure_source: chunk | readback
+  double bias_ma_set = 0.0;
+  double bias_ma_measured = 0.0;        // NaN = not measured (empty field)
+  double slide_mm = 0.0;
+  double pan_deg = 0.0;
+  double tilt_deg = 0.0;
+  double theta_deg = 0.0;
+  int repeat = 0;
+  std::uint64_t camera_frame_id = 0;
+  std::uint64_t camera_timestamp_ns = 0;
+  std::int64_t host_time_ns = 0;
+  std::string status = "ok";            // ok | retried
+  int line = 0;                         // line in frames.csv (filled by the reader)
+};
+
+// Builds a record from a captured frame (exposures, ids, times, role, status); the caller fills the
+// pose, current, bracket id and repeat.
+FrameRecord RecordFromFrame(const BracketFrame& frame, int bracket_size);
+
+// The frames.csv header line (without '\n').
+const std::string& FramesCsvHeader();
+
+class RecordingWriter {
+ public:
+  // Creates `dir` (must not exist, or be empty), frames/, frames.csv and recording.yaml with
+  // completion: running. Throws RecordingError.
+  static std::unique_ptr<RecordingWriter> Open(const std::string& dir, RecordingHeader header);
+  // Reopens a cut (or crashed: completion running) recording to continue it: drops a partial last
+  // CSV line and leftover temp/orphan files, appends after the last index and records the
+  // resumption in recording.yaml. Throws RecordingError if `dir` is not a recording or is complete.
+  static std::unique_ptr<RecordingWriter> Resume(const std::string& dir);
+
+  ~RecordingWriter();  // without Close(), the recording stays "running" on disk (reads as cut)
+  RecordingWriter(const RecordingWriter&) = delete;
+  RecordingWriter& operator=(const RecordingWriter&) = delete;
+
+  // Writes the frame's PNG (CV_16UC1 or CV_8UC1, values as delivered) crash-safely, then appends and
+  // flushes its row. Returns the record with index and file filled in. Throws RecordingError.
+  FrameRecord Append(const cv::Mat& image, FrameRecord record);
+  // Rewrites recording.yaml with the completion state, end time and frame count. Idempotent.
+  void Close(Completion completion);
+
+  const std::string& dir() const { return dir_; }
+  std::int64_t next_index() const { return next_index_; }
+  const RecordingHeader& header() const { return header_; }
+
+ private:
+  RecordingWriter(std::string dir, RecordingHeader header, std::int64_t next_index);
+  void WriteHeader();
+
+  std::string dir_;
+  RecordingHeader header_;
+  std::int64_t next_index_ = 0;
+  int csv_fd_ = -1;
+  bool closed_ = false;
+};
+
+// One bracket as recorded: its rows in frame_in_bracket order (the last row of each position wins
+// when a resumed run re-acquired it).
+struct RecordedBracket {
+  std::int64_t bracket_id = 0;
+  int bracket_size = 0;
+  bool complete = false;                // every position 0..bracket_size-1 present
+  std::vector<FrameRecord> frames;      // ordered by frame_in_bracket; only present positions
+  const FrameRecord* Reference() const; // first ref frame, nullptr if none
+  std::vector<const FrameRecord*> Measurements() const;
+};
+
+class RecordingReader {
+ public:
+  // Reads recording.yaml and frames.csv. A partial last line (crash mid-write) is ignored; any
+  // other unreadable row throws RecordingError naming frames.csv:line (use CheckRecording for a full
+  // report instead of the first problem).
+  explicit RecordingReader(const std::string& dir);
+
+  const std::string& dir() const { return dir_; }
+  const RecordingHeader& header() const { return header_; }
+  // Completion as written, with kRunning meaning the writer died (treat as cut).
+  Completion completion() const { return header_.completion; }
+  bool IsComplete() const { return header_.completion == Completion::kComplete; }
+  const std::vector<FrameRecord>& rows() const { return rows_; }
+  // Brackets in order of first appearance.
+  std::vector<RecordedBracket> Brackets() const;
+  std::set<std::int64_t> CompleteBracketIds() const;
+  // Loads a frame's PNG as CV_16UC1. Throws RecordingError if missing or unreadable.
+  cv::Mat LoadImage(const FrameRecord& row) const;
+
+ private:
+  std::string dir_;
+  RecordingHeader header_;
+  std::vector<FrameRecord> rows_;
+};
+
+struct RecordingCheck {
+  struct Issue {
+    std::string file;  // relative to the recording ("frames.csv", "frames/000003.png")
+    int line = 0;      // 0 when not about a line
+    std::string message;
+  };
+  Completion completion = Completion::kRunning;
+  std::int64_t rows = 0;
+  std::int64_t brackets = 0;
+  std::int64_t complete_brackets = 0;
+  std::vector<Issue> errors;    // the recording is damaged: bad rows, missing or bad PNGs, gaps
+  std::vector<Issue> warnings;  // expected after a crash: leftovers, partial last line, cut
+  bool ok() const { return errors.empty(); }
+  std::string BriefReport() const;  // one line per issue, "file:line: message"
+};
+
+// Checks a recording without throwing on what it finds (throws RecordingError only when `dir` is
+// not a recording at all). Loads every PNG to verify it.
+RecordingCheck CheckRecording(const std::string& dir);
+
+}  // namespace irdist

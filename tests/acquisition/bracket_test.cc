@@ -1,0 +1,257 @@
+// Tests of BracketCapture: the planning and the accounting against a scripted camera (every fault
+// on demand), and a real bracket against Aravis's fake GigE Vision camera, whose pattern brightness
+// tracks the exposure each frame was taken with.
+#include "acquisition/bracket.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <deque>
+
+#include "acquisition/aravis_camera.h"
+#include "tests/acquisition/fake_camera_process.h"
+
+namespace irdist {
+namespace {
+
+TEST(BracketOptions, DefaultsAreValid) {
+  std::string why;
+  EXPECT_TRUE(BracketOptions().IsValid(&why)) << why;
+  BracketOptions bad;
+  bad.exposures_us = {8000.0};
+  EXPECT_FALSE(bad.IsValid(&why));
+  bad = BracketOptions();
+  bad.exposures_us[2] = -1.0;
+  EXPECT_FALSE(bad.IsValid(&why));
+  bad = BracketOptions();
+  bad.max_retries = -1;
+  EXPECT_FALSE(bad.IsValid(&why));
+}
+
+TEST(PlanBracket, PlainAndInterleavedOrders) {
+  BracketOptions options;
+  options.exposures_us = {8000.0, 30000.0, 32000.0};
+  auto plan = PlanBracket(options);
+  ASSERT_EQ(plan.size(), 3u);
+  EXPECT_EQ(plan[0].role, FrameRole::kReference);
+  EXPECT_EQ(plan[1].role, FrameRole::kMeasurement);
+  EXPECT_DOUBLE_EQ(plan[2].exposure_us, 32000.0);
+  options.interleave_reference = true;
+  plan = PlanBracket(options);
+  ASSERT_EQ(plan.size(), 4u);
+  const double expected[] = {8000.0, 30000.0, 8000.0, 32000.0};
+  for (size_t i = 0; i < plan.size(); ++i) {
+    EXPECT_DOUBLE_EQ(plan[i].exposure_us, expected[i]);
+    EXPECT_EQ(plan[i].frame_in_bracket, static_cast<int>(i));
+  }
+  EXPECT_STREQ(FrameRoleName(plan[2].role), "ref");
+  EXPECT_STREQ(FrameRoleName(plan[3].role), "meas");
+}
+
+// A camera whose response to each trigger follows a script.
+class ScriptedCamera : public Camera {
+ public:
+  enum class Act { kDeliver, kDrop, kDamage, kRepeatLastThenDeliver, kWrongChunk };
+  std::deque<Act> script;
+  std::vector<double> exposures_at_trigger;
+  bool chunks = false;
+  std::uint64_t next_id = 1;  // GigE Vision 1.x block ids: 1..65535, then 1 again
+
+  CameraIdentity Identity() const override { return {"Test", "Scripted", "S1", "1", ""}; }
+  void Configure(const CameraSettings&) override {}
+  std::map<std::string, std::string> ReadBackFeatures() override { return {}; }
+  double SetExposureUs(double exposure_us) override { return exposure_us_ = exposure_us; }
+  double ExposureUs() override { return exposure_us_; }
+  void StartStream() override { streaming_ = true; }
+  void StopStream() override { streaming_ = false; }
+  bool streaming() const override { return streaming_; }
+  std::optional<RawFrame> WaitFrame(std::chrono::milliseconds) override {
+    if (queue_.empty()) return std::nullopt;
+    RawFrame frame = queue_.front();
+    queue_.pop_front();
+    return frame;
+  }
+  int Flush() override {
+    const int n = static_cast<int>(queue_.size());
+    queue_.clear();
+    return n;
+  }
+  void SoftwareTrigger() override {
+    exposures_at_trigger.push_back(exposure_us_);
+    const Act act = script.empty() ? Act::kDeliver : script.front();
+    if (!script.empty()) script.pop_front();
+    RawFrame frame;
+    frame.status = FrameStatus::kOk;
+    frame.image = cv::Mat(4, 4, CV_16UC1, cv::Scalar(static_cast<double>(exposure_us_ / 100.0)));
+    if (chunks) frame.chunk_exposure_us = exposure_us_;
+    switch (act) {
+      case Act::kDeliver:
+        break;
+      case Act::kDrop:
+        next_id = next_id == 65535 ? 1 : next_id + 1;
+        timestamp_ += 1000;
+        return;
+      case Act::kDamage:
+        frame.status = FrameStatus::kMissingPackets;
+        frame.image = cv::Mat();
+        break;
+      case Act::kRepeatLastThenDeliver:
+        if (last_.has_value()) queue_.push_back(*last_);
+        break;
+      case Act::kWrongChunk:
+        frame.chunk_exposure_us = exposure_us_ * 2.0;
+        break;
+    }
+    frame.frame_id = next_id;
+    next_id = next_id == 65535 ? 1 : next_id + 1;
+    timestamp_ += 1000;
+    frame.timestamp_ns = timestamp_;
+    last_ = frame;
+    queue_.push_back(frame);
+  }
+  bool HasExposureChunks() const override { return chunks; }
+
+ private:
+  double exposure_us_ = 1000.0;
+  bool streaming_ = false;
+  std::deque<RawFrame> queue_;
+  std::optional<RawFrame> last_;
+  std::uint64_t timestamp_ = 0;
+};
+
+BracketOptions FastOptions() {
+  BracketOptions options;
+  options.exposures_us = {8000.0, 30000.0, 32000.0, 34000.0, 36000.0};
+  options.trigger_source = "Software";
+  options.frame_timeout = std::chrono::milliseconds(50);
+  options.late_frame_window = std::chrono::milliseconds(0);
+  return options;
+}
+
+TEST(BracketCapture, CleanBracketCarriesRequestedExposuresInOrder) {
+  ScriptedCamera camera;
+  BracketCapture capture(camera, FastOptions());
+  std::vector<int> fired;
+  const BracketResult result = capture.Capture([&](int i) {
+    fired.push_back(i);
+    camera.SoftwareTrigger();
+  });
+  ASSERT_TRUE(result.complete) << result.BriefReport();
+  ASSERT_EQ(result.frames.size(), 5u);
+  EXPECT_EQ(fired, (std::vector<int>{0, 1, 2, 3, 4}));
+  for (size_t i = 0; i < 5; ++i) {
+    EXPECT_DOUBLE_EQ(result.frames[i].requested_exposure_us, FastOptions().exposures_us[i]);
+    EXPECT_DOUBLE_EQ(result.frames[i].actual_exposure_us, FastOptions().exposures_us[i]);
+    EXPECT_DOUBLE_EQ(camera.exposures_at_trigger[i], FastOptions().exposures_us[i]);
+    EXPECT_EQ(result.frames[i].image.at<std::uint16_t>(0, 0),
+              static_cast<std::uint16_t>(FastOptions().exposures_us[i] / 100.0));
+  }
+  EXPECT_EQ(capture.stats().requested, 5);
+  EXPECT_EQ(capture.stats().received, 5);
+  EXPECT_EQ(capture.stats().retried, 0);
+  EXPECT_EQ(capture.stats().lost, 0);
+}
+
+TEST(BracketCapture, RetriesDroppedAndDamagedFramesAndDiscardsDuplicates) {
+  using Act = ScriptedCamera::Act;
+  ScriptedCamera camera;
+  camera.next_id = 65533;  // the ids wrap during the bracket
+  camera.script = {Act::kDeliver, Act::kDrop, Act::kDeliver, Act::kDamage, Act::kDeliver,
+                   Act::kRepeatLastThenDeliver, Act::kDeliver};
+  BracketCapture capture(camera, FastOptions());
+  const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+  ASSERT_TRUE(result.complete) << result.BriefReport();
+  ASSERT_EQ(result.frames.size(), 5u);
+  EXPECT_EQ(result.frames[1].retries, 1);  // dropped once
+  EXPECT_EQ(result.frames[2].retries, 1);  // damaged once
+  EXPECT_EQ(result.frames[3].retries, 0);
+  EXPECT_EQ(result.frames[1].frame_id, 65535u);
+  EXPECT_EQ(result.frames[2].frame_id, 2u);  // wrapped (the damaged frame was 1): accepted
+  EXPECT_EQ(result.frames[4].frame_id, 4u);
+  for (size_t i = 0; i < 5; ++i) {
+    EXPECT_DOUBLE_EQ(result.frames[i].actual_exposure_us, FastOptions().exposures_us[i]);
+  }
+  const CaptureStats& stats = capture.stats();
+  EXPECT_EQ(stats.requested, 5);
+  EXPECT_EQ(stats.received, 5);
+  EXPECT_EQ(stats.retried, 2);
+  EXPECT_EQ(stats.timeouts, 1);
+  EXPECT_EQ(stats.damaged, 1);
+  EXPECT_EQ(stats.duplicates, 1);
+  EXPECT_EQ(stats.lost, 0);
+  EXPECT_GE(stats.id_gaps, 1);  // the dropped frame's id never arrived
+  EXPECT_NE(stats.BriefReport().find("retried 2"), std::string::npos);
+}
+
+TEST(BracketCapture, GivesUpAfterMaxRetriesAndCountsTheLoss) {
+  using Act = ScriptedCamera::Act;
+  ScriptedCamera camera;
+  camera.script = {Act::kDeliver, Act::kDrop, Act::kDrop, Act::kDrop};
+  BracketOptions options = FastOptions();
+  options.max_retries = 2;
+  BracketCapture capture(camera, options);
+  const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+  EXPECT_FALSE(result.complete);
+  EXPECT_EQ(result.frames.size(), 1u);
+  EXPECT_NE(result.failure.find("frame 1"), std::string::npos) << result.failure;
+  EXPECT_EQ(capture.stats().lost, 1);
+  EXPECT_EQ(capture.stats().retried, 2);
+  EXPECT_EQ(capture.stats().brackets_failed, 1);
+}
+
+TEST(BracketCapture, ChunkExposureMismatchIsRetried) {
+  using Act = ScriptedCamera::Act;
+  ScriptedCamera camera;
+  camera.chunks = true;
+  camera.script = {Act::kWrongChunk};
+  BracketCapture capture(camera, FastOptions());
+  const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+  ASSERT_TRUE(result.complete);
+  EXPECT_EQ(result.frames[0].retries, 1);
+  EXPECT_TRUE(result.frames[0].exposure_from_chunk);
+  EXPECT_EQ(capture.stats().wrong_exposure, 1);
+}
+
+// The fake camera's Mono8 pattern: pixel (x, y) = ((x + frame_id + y) % 255) * s with
+// s = 1 + log10(exposure_us / 10000). Reads the exposure back from the pixel whose base value is 200.
+double ExposureFromFakePattern(const BracketFrame& frame) {
+  const int x = static_cast<int>((200 + 255 - frame.frame_id % 255) % 255);
+  const double value = frame.image.at<std::uint16_t>(0, x);
+  return 10000.0 * std::pow(10.0, value / 200.0 - 1.0);
+}
+
+TEST(BracketCapture, FakeGigECameraFramesCarryTheRequestedExposuresInOrder) {
+  testing::FakeCameraProcess fake("IRDBRK01");
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  CameraSettings settings;
+  settings.pixel_format = "Mono8";
+  settings.trigger_source = "Software";
+  settings.width = 512;
+  settings.height = 64;
+  camera->Configure(settings);
+  BracketOptions options;
+  options.exposures_us = {10000.0, 3000.0, 5000.0, 8000.0, 14000.0};
+  options.trigger_source = "Software";
+  BracketCapture capture(*camera, options);
+  for (int repeat = 0; repeat < 2; ++repeat) {
+    const BracketResult result = capture.Capture([&](int) { camera->SoftwareTrigger(); });
+    ASSERT_TRUE(result.complete) << result.BriefReport() << " / " << capture.stats().BriefReport();
+    ASSERT_EQ(result.frames.size(), 5u);
+    for (size_t i = 0; i < 5; ++i) {
+      const BracketFrame& frame = result.frames[i];
+      EXPECT_NEAR(frame.actual_exposure_us, options.exposures_us[i], 1.0);
+      EXPECT_NEAR(ExposureFromFakePattern(frame), options.exposures_us[i],
+                  0.02 * options.exposures_us[i])
+          << "frame " << i << " of bracket " << repeat;
+      if (i > 0) {
+        EXPECT_GT(frame.timestamp_ns, result.frames[i - 1].timestamp_ns);
+      }
+    }
+  }
+  camera->StopStream();
+  EXPECT_EQ(capture.stats().lost, 0) << capture.stats().BriefReport();
+  EXPECT_EQ(capture.stats().received, 10);
+}
+
+}  // namespace
+}  // namespace irdist

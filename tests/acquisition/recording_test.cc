@@ -1,0 +1,265 @@
+// Tests of the recording format: round trip, crash safety (a writer SIGKILLed mid-run), the checker
+// on corrupted files, and resuming a cut run.
+#include "acquisition/recording.h"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+namespace irdist {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kBracketSize = 5;
+
+std::string TempDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() /
+                       ("irdist_rec_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  return dir.string();
+}
+
+RecordingHeader TestHeader() {
+  RecordingHeader header;
+  header.software_version = "irdist test";
+  header.bit_depth = 12;
+  header.pixel_format = "Mono12";
+  header.camera = {"Aravis", "Fake", "GV01", "0.8.26", "127.0.0.1"};
+  header.camera_features = {{"PixelFormat", "Mono12"}, {"TriggerSource", "Line1"},
+                            {"Width", "64"}, {"DeviceVersion", "0.8: odd # text"}};
+  header.station_identity = "IRDIST-STATION 1.0";
+  header.recipe_path = "recipes/table3-calibration.yaml";
+  header.recipe_text = "name: table3\nexposures_us: [8000, 30000]\n# a comment: kept\n";
+  header.rig_path = "recipes/rigs/virtual.yaml";
+  header.rig_text = "name: virtual\nkind: virtual\n";
+  return header;
+}
+
+// Frame `index` of the test run: every pixel tells its index, so a mix-up is visible.
+cv::Mat TestImage(std::int64_t index) {
+  cv::Mat image(24, 32, CV_16UC1, cv::Scalar(static_cast<double>(index % 4096)));
+  image.at<std::uint16_t>(0, 0) = 4095;
+  return image;
+}
+
+FrameRecord TestRecord(std::int64_t index) {
+  FrameRecord r;
+  r.bracket_id = index / kBracketSize;
+  r.frame_in_bracket = static_cast<int>(index % kBracketSize);
+  r.bracket_size = kBracketSize;
+  r.role = r.frame_in_bracket == 0 ? FrameRole::kReference : FrameRole::kMeasurement;
+  r.requested_exposure_us = 8000.0 + 2000.0 * r.frame_in_bracket;
+  r.actual_exposure_us = r.requested_exposure_us + 0.25;
+  r.bias_ma_set = 500.0;
+  r.bias_ma_measured = r.frame_in_bracket == 2 ? std::nan("") : 499.75;
+  r.slide_mm = 1500.0 + 100.0 * static_cast<double>(r.bracket_id);
+  r.pan_deg = 10.0;
+  r.tilt_deg = -5.5;
+  r.theta_deg = 11.4;
+  r.repeat = 1;
+  r.camera_frame_id = static_cast<std::uint64_t>(65530 + index) % 65536;
+  r.camera_timestamp_ns = 1000000000ull * static_cast<std::uint64_t>(index + 1);
+  r.host_time_ns = 1700000000000000000ll + index;
+  r.status = index % 7 == 3 ? "retried" : "ok";
+  return r;
+}
+
+void WriteFrames(RecordingWriter& writer, std::int64_t from, std::int64_t to) {
+  for (std::int64_t i = from; i < to; ++i) writer.Append(TestImage(i), TestRecord(i));
+}
+
+int CountCsvRows(const std::string& dir) {
+  std::ifstream in(fs::path(dir) / "frames.csv");
+  int lines = 0;
+  std::string line;
+  while (std::getline(in, line)) ++lines;
+  return lines - 1;
+}
+
+TEST(Recording, RoundTripGivesBackBracketsAndTheHeaderVerbatim) {
+  const std::string dir = TempDir("roundtrip");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, 3 * kBracketSize);
+  writer->Close(Completion::kComplete);
+
+  RecordingReader reader(dir);
+  EXPECT_TRUE(reader.IsComplete());
+  const RecordingHeader& h = reader.header();
+  EXPECT_EQ(h.recipe_text, TestHeader().recipe_text);
+  EXPECT_EQ(h.rig_text, TestHeader().rig_text);
+  EXPECT_EQ(h.camera_features, TestHeader().camera_features);
+  EXPECT_EQ(h.camera.serial, "GV01");
+  EXPECT_EQ(h.bit_depth, 12);
+  EXPECT_EQ(h.frame_count, 15);
+  EXPECT_FALSE(h.start_time.empty());
+  EXPECT_FALSE(h.end_time.empty());
+  ASSERT_EQ(reader.rows().size(), 15u);
+  const auto brackets = reader.Brackets();
+  ASSERT_EQ(brackets.size(), 3u);
+  for (const auto& bracket : brackets) {
+    EXPECT_TRUE(bracket.complete);
+    ASSERT_NE(bracket.Reference(), nullptr);
+    EXPECT_EQ(bracket.Measurements().size(), 4u);
+    for (const FrameRecord& row : bracket.frames) {
+      const FrameRecord expected = TestRecord(row.index);
+      EXPECT_EQ(row.bracket_id, bracket.bracket_id);
+      EXPECT_DOUBLE_EQ(row.actual_exposure_us, expected.actual_exposure_us);
+      EXPECT_DOUBLE_EQ(row.slide_mm, expected.slide_mm);
+      EXPECT_DOUBLE_EQ(row.tilt_deg, expected.tilt_deg);
+      EXPECT_EQ(std::isnan(row.bias_ma_measured), std::isnan(expected.bias_ma_measured));
+      EXPECT_EQ(row.camera_frame_id, expected.camera_frame_id);
+      EXPECT_EQ(row.camera_timestamp_ns, expected.camera_timestamp_ns);
+      EXPECT_EQ(row.host_time_ns, expected.host_time_ns);
+      EXPECT_EQ(row.status, expected.status);
+      const cv::Mat image = reader.LoadImage(row);
+      EXPECT_EQ(cv::norm(image, TestImage(row.index), cv::NORM_INF), 0.0);
+    }
+  }
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_TRUE(check.ok()) << check.BriefReport();
+  EXPECT_TRUE(check.warnings.empty()) << check.BriefReport();
+  EXPECT_EQ(check.complete_brackets, 3);
+  EXPECT_THROW(RecordingWriter::Open(dir, TestHeader()), RecordingError);  // not empty
+  EXPECT_THROW(RecordingWriter::Resume(dir), RecordingError);             // complete
+  fs::remove_all(dir);
+}
+
+TEST(Recording, WriterKilledMidRunLosesAtMostTheFrameInFlight) {
+  const std::string dir = TempDir("killed");
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    try {
+      auto writer = RecordingWriter::Open(dir, TestHeader());
+      for (std::int64_t i = 0;; ++i) writer->Append(TestImage(i), TestRecord(i));
+    } catch (...) {
+    }
+    ::_exit(3);
+  }
+  // Kill it once it has written a few brackets, in the middle of its work.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (CountCsvRows(dir) < 23 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ::kill(child, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the writer ended by itself";
+
+  RecordingReader reader(dir);
+  EXPECT_EQ(reader.completion(), Completion::kRunning);
+  EXPECT_FALSE(reader.IsComplete());
+  const auto& rows = reader.rows();
+  ASSERT_GE(rows.size(), 23u);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i].index, static_cast<std::int64_t>(i));  // every frame once, in order
+    const cv::Mat image = reader.LoadImage(rows[i]);
+    EXPECT_EQ(cv::norm(image, TestImage(rows[i].index), cv::NORM_INF), 0.0) << rows[i].file;
+  }
+  const std::int64_t written = static_cast<std::int64_t>(rows.size());
+  std::set<std::int64_t> expected_complete;
+  for (std::int64_t id = 0; id < written / kBracketSize; ++id) expected_complete.insert(id);
+  EXPECT_EQ(reader.CompleteBracketIds(), expected_complete);
+
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_TRUE(check.ok()) << check.BriefReport();
+  EXPECT_EQ(check.completion, Completion::kRunning);
+  EXPECT_NE(check.BriefReport().find("treat as cut"), std::string::npos);
+
+  // Resume: the rest of the run is appended after the last index and the run completes.
+  const std::int64_t total = (written / kBracketSize + 2) * kBracketSize;
+  auto writer = RecordingWriter::Resume(dir);
+  EXPECT_EQ(writer->next_index(), written);
+  const std::int64_t first_incomplete = written / kBracketSize * kBracketSize;
+  for (std::int64_t i = first_incomplete; i < total; ++i) {
+    writer->Append(TestImage(i), TestRecord(i));
+  }
+  writer->Close(Completion::kComplete);
+  RecordingReader resumed(dir);
+  EXPECT_TRUE(resumed.IsComplete());
+  EXPECT_EQ(resumed.header().resumed.size(), 1u);
+  EXPECT_EQ(static_cast<std::int64_t>(resumed.CompleteBracketIds().size()), total / kBracketSize);
+  for (const auto& bracket : resumed.Brackets()) {
+    ASSERT_TRUE(bracket.complete);
+    for (const FrameRecord& row : bracket.frames) {
+      EXPECT_EQ(row.frame_in_bracket, static_cast<int>(&row - bracket.frames.data()));
+    }
+  }
+  const RecordingCheck after = CheckRecording(dir);
+  EXPECT_TRUE(after.ok()) << after.BriefReport();
+  fs::remove_all(dir);
+}
+
+TEST(Recording, CheckReportsCorruptPngBadRowGapAndOrphanByFileAndLine) {
+  const std::string dir = TempDir("corrupt");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, 10);
+  writer->Close(Completion::kComplete);
+
+  // Corrupt frame 4's PNG, garble the row of frame 2 (line 4), delete the row of frame 7 (line 9).
+  { std::ofstream(fs::path(dir) / "frames/000004.png", std::ios::trunc) << "not a png"; }
+  std::vector<std::string> lines;
+  {
+    std::ifstream in(fs::path(dir) / "frames.csv");
+    std::string line;
+    while (std::getline(in, line)) lines.push_back(line);
+  }
+  lines[3] = "2,frames/000002.png,0,2,5,meas,12000,twelve,readback,500,,1500,10,-5.5,11.4,1,"
+             "65532,3000000000,1700000000000000002,ok";
+  lines.erase(lines.begin() + 8);
+  {
+    std::ofstream out(fs::path(dir) / "frames.csv", std::ios::trunc);
+    for (const auto& line : lines) out << line << "\n";
+  }
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_FALSE(check.ok());
+  const std::string report = check.BriefReport();
+  EXPECT_NE(report.find("frames.csv:4: bad row: bad actual_exposure_us 'twelve'"),
+            std::string::npos) << report;
+  EXPECT_NE(report.find("frames/000004.png: missing or unreadable PNG (row at frames.csv:6)"),
+            std::string::npos) << report;
+  EXPECT_NE(report.find("frames.csv:9: gap: indices 7..7 are missing"), std::string::npos)
+      << report;
+  EXPECT_NE(report.find("frames/000007.png: orphan file"), std::string::npos) << report;
+  EXPECT_NE(report.find("frame_count 10 but frames.csv has 8 rows"), std::string::npos) << report;
+
+  // The reader refuses the damaged row with its line.
+  try {
+    RecordingReader reader(dir);
+    FAIL() << "expected RecordingError";
+  } catch (const RecordingError& error) {
+    EXPECT_NE(std::string(error.what()).find("frames.csv:4"), std::string::npos) << error.what();
+  }
+  EXPECT_THROW(CheckRecording(TempDir("nothing-here")), RecordingError);
+  fs::remove_all(dir);
+}
+
+TEST(Recording, PartialLastLineAndTempFileAreWarningsNotErrors) {
+  const std::string dir = TempDir("partial");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, 6);
+  writer.reset();  // no Close(): as after a crash
+  { std::ofstream(fs::path(dir) / "frames.csv", std::ios::app) << "6,frames/000006.png,1,1,5,me"; }
+  { std::ofstream(fs::path(dir) / "frames/000007.png.tmp") << "half"; }
+  RecordingReader reader(dir);
+  EXPECT_EQ(reader.rows().size(), 6u);
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_TRUE(check.ok()) << check.BriefReport();
+  const std::string report = check.BriefReport();
+  EXPECT_NE(report.find("frames.csv:8: last line has no end of line"), std::string::npos)
+      << report;
+  EXPECT_NE(report.find("frames/000007.png.tmp"), std::string::npos) << report;
+  EXPECT_NE(report.find("bracket 1 is incomplete (1 of 5 frames)"), std::string::npos) << report;
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace irdist
