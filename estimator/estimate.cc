@@ -1,0 +1,437 @@
+#include "estimator/estimate.h"
+
+#include <ceres/jet.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "base/check.h"
+
+namespace irdist {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRad = kPi / 180.0;
+
+// One measured difference of a bracket, in the models' scaled variables.
+struct Difference {
+  double dt;  // scaled
+  double df;  // scaled
+  double de;  // measured dE
+  double ds;  // measured dS
+};
+
+struct Problem {
+  const CalibrationModel* model;
+  const FittedModel* e;
+  const FittedModel* s;
+  bool use_e;
+  const Difference* diffs;
+  int count;
+};
+
+// Relative residuals of Eq. 26 at (ln d, theta rad): [E_0, S_0, E_1, S_1, ...] (E left out when
+// degenerate). Returns the number of residuals.
+template <typename T>
+int Residuals(const Problem& p, const T& ln_d, const T& theta_rad, T* r) {
+  using std::exp;
+  const double r0 = p.model->scaling.d_ref_mm;
+  const T d_mm = exp(ln_d);
+  const T big_d = (r0 / d_mm) * (r0 / d_mm) / p.model->scaling.d_scale;
+  const T theta_deg = theta_rad / kRad;
+  int n = 0;
+  for (int i = 0; i < p.count; ++i) {
+    T vars[kNumModelVars];
+    vars[kVarD] = big_d;
+    vars[kVarT] = T(0.0);
+    vars[kVarI0] = T(0.0);
+    vars[kVarDt] = T(p.diffs[i].dt);
+    vars[kVarDF] = T(p.diffs[i].df);
+    if (p.use_e) {
+      vars[kVarRho] = Rho(theta_deg, T(p.e->sigma_deg));
+      r[n++] = EvaluateModel(GetModelSpec(ModelKind::kFreeE), p.e->coefficients.data(), vars) /
+                   p.diffs[i].de -
+               1.0;
+    }
+    vars[kVarRho] = Rho(theta_deg, T(p.s->sigma_deg));
+    r[n++] = EvaluateModel(GetModelSpec(ModelKind::kFreeSigma), p.s->coefficients.data(), vars) /
+                 p.diffs[i].ds -
+             1.0;
+  }
+  return n;
+}
+
+constexpr int kMaxResiduals = 2 * kMaxBracketExposures;
+using Jet2 = ceres::Jet<double, 2>;
+
+// Residuals and Jacobian (columns: ln d, theta rad).
+int Linearise(const Problem& p, double ln_d, double theta_rad, double* r, double (*j)[2]) {
+  Jet2 rj[kMaxResiduals];
+  const int n = Residuals(p, Jet2(ln_d, 0), Jet2(theta_rad, 1), rj);
+  for (int i = 0; i < n; ++i) {
+    r[i] = rj[i].a;
+    j[i][0] = rj[i].v[0];
+    j[i][1] = rj[i].v[1];
+  }
+  return n;
+}
+
+double SumSquares(const double* r, int n) {
+  double s = 0.0;
+  for (int i = 0; i < n; ++i) s += r[i] * r[i];
+  return s;
+}
+
+// Hand-rolled Levenberg-Marquardt on 2 (or 1, theta fixed) unknowns.
+void SolveLm(const Problem& p, bool solve_theta, const EstimateOptions& options,
+             DistanceEstimate* out) {
+  double x[2] = {std::log(out->d0_mm), out->theta0_deg * kRad};
+  double r[kMaxResiduals], j[kMaxResiduals][2];
+  int n = Linearise(p, x[0], x[1], r, j);
+  double cost = SumSquares(r, n);
+  double lambda = 1e-4;
+  out->converged = false;
+  int it = 0;
+  for (; it < options.max_iterations; ++it) {
+    Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d g = Eigen::Vector2d::Zero();
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector2d row(j[i][0], j[i][1]);
+      h += row * row.transpose();
+      g += row * r[i];
+    }
+    if (!solve_theta) {
+      h(0, 1) = h(1, 0) = 0.0;
+      h(1, 1) = 1.0;
+      g(1) = 0.0;
+    }
+    if (cost < 1e-30 || g.norm() < 1e-30) {
+      out->converged = true;
+      break;
+    }
+    bool accepted = false;
+    for (int attempt = 0; attempt < 20 && !accepted; ++attempt) {
+      Eigen::Matrix2d damped = h;
+      damped(0, 0) += lambda * std::max(h(0, 0), 1e-12);
+      damped(1, 1) += lambda * std::max(h(1, 1), 1e-12);
+      const Eigen::Vector2d step = -damped.inverse() * g;
+      const double trial[2] = {x[0] + step(0), x[1] + step(1)};
+      double rt[kMaxResiduals];
+      Residuals(p, trial[0], trial[1], rt);
+      const double trial_cost = SumSquares(rt, n);
+      if (std::isfinite(trial_cost) && trial_cost <= cost) {
+        x[0] = trial[0];
+        x[1] = trial[1];
+        cost = trial_cost;
+        lambda = std::max(lambda / 5.0, 1e-12);
+        accepted = true;
+        if (step.norm() < options.step_tolerance) out->converged = true;
+      } else {
+        lambda *= 8.0;
+      }
+    }
+    if (!accepted) {
+      out->converged = true;  // no descent left at machine precision
+      break;
+    }
+    n = Linearise(p, x[0], x[1], r, j);
+    if (out->converged) break;
+  }
+  out->iterations = it;
+  n = Linearise(p, x[0], x[1], r, j);
+  out->d_mm = std::exp(x[0]);
+  out->theta_deg = std::abs(x[1]) / kRad;  // rho is even: the sign is not observable
+  out->theta_solved = solve_theta;
+  double se = 0.0, ss = 0.0;
+  int ne = 0, ns = 0;
+  for (int i = 0; i < n; ++i) {
+    const bool is_e = p.use_e && (i % 2 == 0);
+    (is_e ? se : ss) += r[i] * r[i];
+    ++(is_e ? ne : ns);
+  }
+  out->residual_e = ne > 0 ? std::sqrt(se / ne) : 0.0;
+  out->residual_sigma = ns > 0 ? std::sqrt(ss / ns) : 0.0;
+  if (solve_theta) {
+    Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector2d row(j[i][0], j[i][1]);
+      h += row * row.transpose();
+    }
+    const Eigen::Vector2d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(h).eigenvalues();
+    out->condition_number =
+        ev(0) > 0.0 ? std::sqrt(ev(1) / ev(0)) : std::numeric_limits<double>::infinity();
+  } else {
+    out->condition_number = 1.0;
+  }
+  const CalibratedRanges& cr = p.model->ranges;
+  // Tolerances: 1e-6 relative in d, 1e-4 deg in theta (the solver's own precision).
+  out->outside_calibrated_range =
+      out->d_mm < cr.d_min_mm * (1.0 - 1e-6) || out->d_mm > cr.d_max_mm * (1.0 + 1e-6) ||
+      (solve_theta &&
+       (out->theta_deg < cr.theta_min_deg - 1e-4 || out->theta_deg > cr.theta_max_deg + 1e-4));
+}
+
+// Real roots of poly[0] + poly[1] x + poly[2] x^2 + poly[3] x^3, ascending. Returns the count.
+int RealRoots(const double poly[4], double roots[3]) {
+  double scale = 0.0;
+  for (int k = 0; k < 4; ++k) scale = std::max(scale, std::abs(poly[k]));
+  if (scale == 0.0) return 0;
+  const double c0 = poly[0] / scale, c1 = poly[1] / scale, c2 = poly[2] / scale,
+               c3 = poly[3] / scale;
+  int n = 0;
+  if (std::abs(c3) > 1e-12) {
+    // Depressed cubic by the trigonometric / Cardano formulas, then Newton polish.
+    const double a = c2 / c3, b = c1 / c3, c = c0 / c3;
+    const double q = (a * a - 3.0 * b) / 9.0;
+    const double r = (2.0 * a * a * a - 9.0 * a * b + 27.0 * c) / 54.0;
+    if (r * r < q * q * q) {
+      const double t = std::acos(std::clamp(r / std::sqrt(q * q * q), -1.0, 1.0));
+      const double m = -2.0 * std::sqrt(q);
+      roots[0] = m * std::cos(t / 3.0) - a / 3.0;
+      roots[1] = m * std::cos((t + 2.0 * kPi) / 3.0) - a / 3.0;
+      roots[2] = m * std::cos((t - 2.0 * kPi) / 3.0) - a / 3.0;
+      n = 3;
+    } else {
+      const double big_a = -std::copysign(std::cbrt(std::abs(r) + std::sqrt(r * r - q * q * q)), r);
+      const double big_b = big_a != 0.0 ? q / big_a : 0.0;
+      roots[0] = big_a + big_b - a / 3.0;
+      n = 1;
+    }
+  } else if (std::abs(c2) > 1e-12) {
+    const double disc = c1 * c1 - 4.0 * c2 * c0;
+    if (disc >= 0.0) {
+      const double q = -0.5 * (c1 + std::copysign(std::sqrt(disc), c1));
+      roots[n++] = q / c2;
+      if (q != 0.0) roots[n++] = c0 / q;
+    }
+  } else if (std::abs(c1) > 1e-12) {
+    roots[n++] = -c0 / c1;
+  }
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const double x = roots[i];
+      const double f = ((c3 * x + c2) * x + c1) * x + c0;
+      const double df = (3.0 * c3 * x + 2.0 * c2) * x + c1;
+      if (df != 0.0) roots[i] = x - f / df;
+    }
+  }
+  std::sort(roots, roots + n);
+  return n;
+}
+
+void Normalise(double poly[4]) {
+  double norm = 0.0;
+  for (int k = 0; k < 4; ++k) norm += poly[k] * poly[k];
+  norm = std::sqrt(norm);
+  if (norm > 0.0)
+    for (int k = 0; k < 4; ++k) poly[k] /= norm;
+}
+
+// Sum of |relative residual| of the voting equations at scaled D, theta0, over all differences.
+double Vote(const Problem& p, double scaled_d, double theta0_deg) {
+  const double d_mm = p.model->scaling.DistanceFromScaledD(scaled_d);
+  double r[kMaxResiduals];
+  const int n = Residuals(p, std::log(d_mm), theta0_deg * kRad, r);
+  double s = 0.0;
+  for (int i = 0; i < n; ++i) s += std::abs(r[i]);
+  return std::isfinite(s) ? s : std::numeric_limits<double>::infinity();
+}
+
+// Root selection: real, positive D, inside the calibrated range, smallest residual in the
+// equations that vote (Eq. 25 first, then each equation alone, then mid-range).
+void ChooseStart(const Problem& p, double theta0_deg, const EstimateOptions& options,
+                 DistanceEstimate* out) {
+  const ModelScaling& sc = p.model->scaling;
+  const CalibratedRanges& cr = p.model->ranges;
+  const double d_lo = cr.d_min_mm / (1.0 + options.range_margin);
+  const double d_hi = cr.d_max_mm * (1.0 + options.range_margin);
+  // Polynomials in scaled D from the first difference (Eq. 21, 23), each normalised to unit norm.
+  const Difference& df = p.diffs[0];
+  double vars[kNumModelVars] = {0.0, 0.0, 0.0, 0.0, df.dt, df.df};
+  double a[4], c[4];
+  vars[kVarRho] = Rho(theta0_deg, p.s->sigma_deg);
+  AlgebraicPolynomialInD(GetModelSpec(ModelKind::kFreeSigma), p.s->coefficients.data(), vars, df.ds,
+                         c);
+  Normalise(c);
+  vars[kVarRho] = Rho(theta0_deg, p.e->sigma_deg);
+  AlgebraicPolynomialInD(GetModelSpec(ModelKind::kFreeE), p.e->coefficients.data(), vars, df.de, a);
+  Normalise(a);
+
+  auto try_poly = [&](const double poly[4], RootSource source, bool count) {
+    double roots[3];
+    const int n = RealRoots(poly, roots);
+    double best = std::numeric_limits<double>::infinity();
+    int in_range = 0;
+    for (int i = 0; i < n; ++i) {
+      if (!(roots[i] > 0.0)) continue;
+      const double d_mm = sc.DistanceFromScaledD(roots[i]);
+      if (d_mm < d_lo || d_mm > d_hi) continue;
+      ++in_range;
+      const double v = Vote(p, roots[i], theta0_deg);
+      if (v < best) {
+        best = v;
+        out->d0_mm = d_mm;
+        out->root_index = i;
+        out->root_source = source;
+      }
+    }
+    if (count) {
+      out->num_real_roots = n;
+      out->num_roots_in_range = in_range;
+    }
+    return in_range > 0;
+  };
+
+  if (!p.use_e) {
+    if (try_poly(c, RootSource::kSigmaOnly, true)) return;
+  } else {
+    double diff[4];
+    for (int k = 0; k < 4; ++k) diff[k] = c[k] - a[k];  // Eq. 25
+    if (try_poly(diff, RootSource::kCubic, true)) return;
+    if (try_poly(c, RootSource::kSingleModel, false)) return;
+    if (try_poly(a, RootSource::kSingleModel, false)) return;
+  }
+  out->root_source = RootSource::kFallback;
+  out->root_index = -1;
+  out->d0_mm = 0.5 * (cr.d_min_mm + cr.d_max_mm);
+}
+
+void Prepare(const CalibrationModel& model, const FittedModel** e, const FittedModel** s) {
+  *e = model.Find(ModelKind::kFreeE);
+  *s = model.Find(ModelKind::kFreeSigma);
+  IRDIST_CHECK(*s != nullptr && !(*s)->coefficients.empty(),
+               "the model has no fitted free_sigma (Eq. 18) model");
+  IRDIST_CHECK(*e != nullptr && !(*e)->coefficients.empty(),
+               "the model has no fitted free_e (Eq. 17) model");
+}
+
+Difference MakeDifference(const ModelScaling& sc, const Features& ref, double t_ref_ms,
+                          const Features& meas, double t_ms) {
+  return Difference{(t_ms - t_ref_ms) / sc.t_scale_ms, (meas.f00 - ref.f00) / sc.df_scale,
+                    meas.e_rel - ref.e_rel, meas.sigma - ref.sigma};
+}
+
+DistanceEstimate Solve(const Problem& p, double theta0_deg, const EstimateOptions& options) {
+  DistanceEstimate out;
+  out.theta0_deg = theta0_deg;
+  ChooseStart(p, theta0_deg, options, &out);
+  SolveLm(p, p.use_e, options, &out);
+  return out;
+}
+
+}  // namespace
+
+bool EstimateOptions::IsValid(std::string* why) const {
+  auto fail = [why](const char* text) {
+    if (why) *why = text;
+    return false;
+  };
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (!(step_tolerance > 0.0)) return fail("step_tolerance must be > 0");
+  if (!(range_margin >= 0.0)) return fail("range_margin must be >= 0");
+  return true;
+}
+
+const char* ToString(RootSource source) {
+  switch (source) {
+    case RootSource::kCubic:
+      return "eq25_cubic";
+    case RootSource::kSigmaOnly:
+      return "sigma_only";
+    case RootSource::kSingleModel:
+      return "single_model";
+    case RootSource::kFallback:
+      return "fallback_mid_range";
+  }
+  return "unknown";
+}
+
+std::string DistanceEstimate::BriefReport() const {
+  std::ostringstream out;
+  out << "d = " << d_mm << " mm, theta = " << theta_deg << " deg"
+      << (theta_solved ? "" : " (theta from the ellipse)") << "; start d0 = " << d0_mm << " mm ("
+      << ToString(root_source) << ", root " << root_index << " of " << num_real_roots << ", "
+      << num_roots_in_range << " in range), theta0 = " << theta0_deg << " deg; residuals E "
+      << residual_e << " S " << residual_sigma << ", " << iterations << " iterations, cond "
+      << condition_number << (converged ? "" : ", NOT CONVERGED")
+      << (outside_calibrated_range ? ", OUTSIDE CALIBRATED RANGE" : "");
+  return out.str();
+}
+
+std::string BracketEstimate::BriefReport() const {
+  std::ostringstream out;
+  out << "joint: " << joint.BriefReport();
+  for (size_t i = 0; i < per_exposure.size(); ++i) {
+    out << "\n  exposure " << i << ": " << per_exposure[i].BriefReport();
+  }
+  return out.str();
+}
+
+DistanceEstimate EstimatePair(const CalibrationModel& model, const Features& reference,
+                              double t_ref_ms, const Features& measurement, double t_ms,
+                              const EstimateOptions& options) {
+  const FittedModel *e, *s;
+  Prepare(model, &e, &s);
+  const Difference diff = MakeDifference(model.scaling, reference, t_ref_ms, measurement, t_ms);
+  const Problem p{&model, e, s, !e->degenerate, &diff, 1};
+  return Solve(p, measurement.theta0_deg, options);
+}
+
+BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& reference,
+                                double t_ref_ms, const std::vector<Features>& measurements,
+                                const std::vector<double>& t_ms, const EstimateOptions& options) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), why);
+  IRDIST_CHECK(measurements.size() == t_ms.size(), "measurements and t_ms differ in length");
+  IRDIST_CHECK(!measurements.empty() && measurements.size() <= kMaxBracketExposures,
+               "a bracket needs 1..", kMaxBracketExposures, " measurement frames");
+  const FittedModel *e, *s;
+  Prepare(model, &e, &s);
+  BracketEstimate out;
+  Difference diffs[kMaxBracketExposures];
+  const int n = static_cast<int>(measurements.size());
+  double theta0 = 0.0;
+  for (int i = 0; i < n; ++i) {
+    diffs[i] = MakeDifference(model.scaling, reference, t_ref_ms, measurements[i], t_ms[i]);
+    theta0 += measurements[i].theta0_deg / n;
+    const Problem p{&model, e, s, !e->degenerate, &diffs[i], 1};
+    out.per_exposure.push_back(Solve(p, measurements[i].theta0_deg, options));
+  }
+  // Jointly: start from the per-exposure estimate with the smallest residuals.
+  const Problem joint{&model, e, s, !e->degenerate, diffs, n};
+  const DistanceEstimate* best = &out.per_exposure[0];
+  for (const DistanceEstimate& d : out.per_exposure) {
+    if (d.residual_e + d.residual_sigma < best->residual_e + best->residual_sigma) best = &d;
+  }
+  out.joint = *best;
+  out.joint.theta0_deg = theta0;
+  if (!e->degenerate) out.joint.theta0_deg = best->theta_deg;
+  out.joint.d0_mm = best->d_mm;
+  SolveLm(joint, !e->degenerate, options, &out.joint);
+  return out;
+}
+
+std::string GeometricEstimate::BriefReport() const {
+  if (!valid) return "geometric: no estimate (no blob or size below the calibrated blur)";
+  std::ostringstream out;
+  out << "geometric: d = " << d_mm << " mm" << (outside_calibrated_range ? " (OUTSIDE RANGE)" : "");
+  return out.str();
+}
+
+GeometricEstimate EstimateGeometric(const CalibrationModel& model, const Features& features) {
+  GeometricEstimate out;
+  const GeometricModel& g = model.geometric;
+  IRDIST_CHECK(g.fitted(), "the model has no fitted geometric baseline");
+  if (!features.blob_found) return out;
+  const double big_d = (features.moment_major_var_px2 - g.beta_px2) / g.alpha_px2;
+  if (!(big_d > 0.0)) return out;
+  out.valid = true;
+  out.d_mm = 1000.0 / std::sqrt(big_d);
+  out.outside_calibrated_range =
+      out.d_mm < model.ranges.d_min_mm || out.d_mm > model.ranges.d_max_mm;
+  return out;
+}
+
+}  // namespace irdist

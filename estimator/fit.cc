@@ -1,0 +1,521 @@
+#include "estimator/fit.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include "base/check.h"
+
+namespace irdist {
+namespace {
+
+// One observation of one model: scaled variables (rho filled from theta), target y.
+struct Observation {
+  std::array<double, kNumModelVars> vars;
+  double theta_deg;
+  double y;
+};
+
+bool UsesDirect(ModelKind k) {
+  return k == ModelKind::kDirectE || k == ModelKind::kDirectF || k == ModelKind::kDirectSigma;
+}
+bool UsesDiff(ModelKind k) {
+  return k == ModelKind::kDiffE || k == ModelKind::kDiffF || k == ModelKind::kDiffSigma;
+}
+
+double Target(ModelKind k, const Features& f) {
+  switch (k) {
+    case ModelKind::kDirectE:
+    case ModelKind::kDiffE:
+    case ModelKind::kFreeE:
+      return f.e_rel;
+    case ModelKind::kDirectF:
+    case ModelKind::kDiffF:
+      return f.f00;
+    case ModelKind::kDirectSigma:
+    case ModelKind::kDiffSigma:
+    case ModelKind::kFreeSigma:
+      return f.sigma;
+  }
+  return 0.0;
+}
+
+bool SampleUsable(const CalibrationSample& s, const FitOptions& options) {
+  return !options.skip_flagged_samples || (s.reference.Usable() && s.measurement.Usable());
+}
+
+std::vector<Observation> MakeObservations(ModelKind kind,
+                                          const std::vector<CalibrationSample>& samples,
+                                          const ModelScaling& scaling, const FitOptions& options) {
+  std::vector<Observation> out;
+  std::set<std::tuple<double, double, double, double>> seen_references;
+  for (const CalibrationSample& s : samples) {
+    if (!SampleUsable(s, options)) continue;
+    ModelInputs in;
+    in.d_mm = s.d_mm;
+    in.theta_deg = s.theta_deg;
+    in.bias_ma = s.bias_ma;
+    if (UsesDirect(kind)) {
+      // Each frame once: references are shared by the measurement frames of a bracket.
+      if (seen_references.insert({s.d_mm, s.theta_deg, s.bias_ma, s.t_ref_ms}).second) {
+        in.t_ms = s.t_ref_ms;
+        out.push_back({ScaleInputs(in, scaling), s.theta_deg, Target(kind, s.reference)});
+      }
+      in.t_ms = s.t_ms;
+      out.push_back({ScaleInputs(in, scaling), s.theta_deg, Target(kind, s.measurement)});
+    } else {
+      in.dt_ms = s.t_ms - s.t_ref_ms;
+      in.df = s.measurement.f00 - s.reference.f00;
+      const double y = Target(kind, s.measurement) - Target(kind, s.reference);
+      out.push_back({ScaleInputs(in, scaling), s.theta_deg, y});
+    }
+  }
+  return out;
+}
+
+struct RelativeResidual {
+  const ModelSpec* spec;
+  Observation obs;
+  template <typename T>
+  bool operator()(T const* const* parameters, T* residual) const {
+    T vars[kNumModelVars];
+    for (int v = 0; v < kNumModelVars; ++v) vars[v] = T(obs.vars[v]);
+    vars[kVarRho] = Rho(T(obs.theta_deg), parameters[1][0]);
+    residual[0] = EvaluateModel(*spec, parameters[0], vars) / obs.y - 1.0;
+    return true;
+  }
+};
+
+double RelativeCost(const ModelSpec& spec, const std::vector<double>& c, double sigma,
+                    const std::vector<Observation>& obs, std::vector<double>* residuals) {
+  double cost = 0.0;
+  if (residuals) residuals->resize(obs.size());
+  for (size_t i = 0; i < obs.size(); ++i) {
+    std::array<double, kNumModelVars> v = obs[i].vars;
+    v[kVarRho] = Rho(obs[i].theta_deg, sigma);
+    const double r = EvaluateModel(spec, c.data(), v.data()) / obs[i].y - 1.0;
+    if (residuals) (*residuals)[i] = r;
+    cost += std::isfinite(r) ? r * r : 1e300;
+  }
+  return cost;
+}
+
+// Linear start for a fixed sigma: relative least squares (no denominator), or for the ratio models
+// the smallest right singular vector of the algebraic residual (Num - y Den) / (y Den_prev),
+// reweighted a few times by the previous denominator (Sanathanan-Koerner) so that it approaches
+// the relative residual the LM minimises.
+std::vector<double> LinearStart(const ModelSpec& spec, const std::vector<int>& active, double sigma,
+                                const std::vector<Observation>& obs) {
+  const int n = static_cast<int>(active.size());
+  Eigen::MatrixXd m(obs.size(), n);  // monomials
+  for (size_t i = 0; i < obs.size(); ++i) {
+    std::array<double, kNumModelVars> v = obs[i].vars;
+    v[kVarRho] = Rho(obs[i].theta_deg, sigma);
+    double powers[kNumModelVars][4];
+    PowerTable(v.data(), powers);
+    for (int c = 0; c < n; ++c) m(i, c) = MonomialValue(spec.terms[active[c]], powers);
+  }
+  std::vector<double> coefficients(spec.num_coefficients(), 0.0);
+  Eigen::VectorXd weight = Eigen::VectorXd::Ones(obs.size());
+  const int rounds = spec.has_denominator() ? 4 : 1;
+  for (int round = 0; round < rounds; ++round) {
+    Eigen::MatrixXd a(obs.size(), n);
+    for (size_t i = 0; i < obs.size(); ++i) {
+      for (int c = 0; c < n; ++c) {
+        a(i, c) = (active[c] < spec.num_numerator ? m(i, c) / obs[i].y : -m(i, c)) * weight(i);
+      }
+    }
+    Eigen::VectorXd norms = a.colwise().norm();
+    for (int c = 0; c < n; ++c) {
+      if (norms(c) <= 0.0) norms(c) = 1.0;
+      a.col(c) /= norms(c);
+    }
+    Eigen::VectorXd x;
+    if (spec.has_denominator()) {
+      Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinV);
+      x = svd.matrixV().col(n - 1);
+    } else {
+      x = a.colPivHouseholderQr().solve(Eigen::VectorXd::Ones(obs.size()));
+    }
+    for (int c = 0; c < n; ++c) coefficients[active[c]] = x(c) / norms(c);
+    if (!spec.has_denominator()) break;
+    for (size_t i = 0; i < obs.size(); ++i) {
+      double den = 0.0;
+      for (int c = 0; c < n; ++c) {
+        if (active[c] >= spec.num_numerator) den += coefficients[active[c]] * m(i, c);
+      }
+      weight(i) = std::abs(den) > 0.0 ? 1.0 / std::abs(den) : 1.0;
+    }
+    weight /= weight.maxCoeff();
+  }
+  return coefficients;
+}
+
+double ConditionNumber(ceres::Problem* problem) {
+  ceres::CRSMatrix jacobian;
+  ceres::Problem::EvaluateOptions eval;
+  problem->Evaluate(eval, nullptr, nullptr, nullptr, &jacobian);
+  if (jacobian.num_cols == 0) return -1.0;
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(jacobian.num_rows, jacobian.num_cols);
+  for (int r = 0; r < jacobian.num_rows; ++r) {
+    for (int k = jacobian.rows[r]; k < jacobian.rows[r + 1]; ++k) {
+      dense(r, jacobian.cols[k]) = jacobian.values[k];
+    }
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(dense);
+  const Eigen::VectorXd s = svd.singularValues();
+  if (s(s.size() - 1) <= 0.0) return std::numeric_limits<double>::infinity();
+  return s(0) / s(s.size() - 1);
+}
+
+// Whether dE (or E_rel) is proportional to dF (F) over the samples: the E equation is then F's.
+bool EProportionalToF(ModelKind kind, const std::vector<CalibrationSample>& samples,
+                      const ModelScaling& scaling, const FitOptions& options) {
+  const ModelKind f_kind = UsesDirect(kind) ? ModelKind::kDirectF
+                           : UsesDiff(kind) ? ModelKind::kDiffF
+                                            : ModelKind::kDiffF;
+  const std::vector<Observation> e = MakeObservations(kind, samples, scaling, options);
+  const std::vector<Observation> f = MakeObservations(f_kind, samples, scaling, options);
+  if (e.empty() || e.size() != f.size()) return false;
+  double mean_ratio = 0.0;
+  for (size_t i = 0; i < e.size(); ++i) mean_ratio += e[i].y / f[i].y;
+  mean_ratio /= e.size();
+  for (size_t i = 0; i < e.size(); ++i) {
+    if (std::abs(e[i].y / (mean_ratio * f[i].y) - 1.0) > options.degenerate_tolerance) return false;
+  }
+  return true;
+}
+
+void FillErrors(FitSummary* s) {
+  double sum = 0.0, worst = 0.0;
+  for (double r : s->residuals) {
+    sum += std::abs(r);
+    worst = std::max(worst, std::abs(r));
+  }
+  s->mean_relative_error = s->residuals.empty() ? -1.0 : sum / s->residuals.size();
+  s->max_relative_error = s->residuals.empty() ? -1.0 : worst;
+}
+
+}  // namespace
+
+bool FitOptions::IsValid(std::string* why) const {
+  auto fail = [why](const char* text) {
+    if (why) *why = text;
+    return false;
+  };
+  if (models.empty()) return fail("models: nothing to fit");
+  if (!(sigma_min_deg > 0.0 && sigma_max_deg > sigma_min_deg))
+    return fail("need 0 < sigma_min_deg < sigma_max_deg");
+  if (sigma_scan_steps < 2) return fail("sigma_scan_steps must be >= 2");
+  if (multi_starts < 1 || multi_starts > sigma_scan_steps)
+    return fail("multi_starts must be in [1, sigma_scan_steps]");
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (!(function_tolerance >= 0.0 && gradient_tolerance >= 0.0 && parameter_tolerance >= 0.0))
+    return fail("tolerances must be >= 0");
+  if (!(degenerate_tolerance > 0.0)) return fail("degenerate_tolerance must be > 0");
+  return true;
+}
+
+const char* ToString(FitSummary::Termination termination) {
+  switch (termination) {
+    case FitSummary::Termination::kConverged:
+      return "converged";
+    case FitSummary::Termination::kNoConvergence:
+      return "no_convergence";
+    case FitSummary::Termination::kFailed:
+      return "failed";
+  }
+  return "unknown";
+}
+
+std::string FitSummary::BriefReport() const {
+  std::ostringstream out;
+  out << ToString(termination) << ": " << samples << " samples, mean relative error "
+      << 100.0 * mean_relative_error << "%, max " << 100.0 * max_relative_error
+      << "%, condition number " << condition_number << ", " << iterations << " iterations";
+  if (!message.empty()) out << " (" << message << ")";
+  return out.str();
+}
+
+const FittedModel* CalibrationModel::Find(ModelKind kind) const {
+  for (const FittedModel& m : models) {
+    if (m.kind == kind) return &m;
+  }
+  return nullptr;
+}
+
+std::string CalibrationModel::BriefReport() const {
+  std::ostringstream out;
+  out << "calibration: d " << ranges.d_min_mm << ".." << ranges.d_max_mm << " mm, theta "
+      << ranges.theta_min_deg << ".." << ranges.theta_max_deg << " deg, ROI "
+      << ToString(features.roi_policy) << "\n";
+  for (const FittedModel& m : models) {
+    out << "  " << ToString(m.kind) << " (" << ToString(m.form) << ", sigma " << m.sigma_deg
+        << " deg" << (m.degenerate ? ", DEGENERATE" : "") << "): " << m.summary.BriefReport()
+        << "\n";
+  }
+  if (geometric.fitted()) out << "  geometric: " << geometric.summary.BriefReport() << "\n";
+  return out.str();
+}
+
+ModelScaling ChooseScaling(const std::vector<CalibrationSample>& samples) {
+  ModelScaling s;
+  IRDIST_CHECK(!samples.empty(), "no calibration samples");
+  double sum_d = 0.0, sum_dt = 0.0, sum_i = 0.0, sum_df = 0.0;
+  for (const CalibrationSample& x : samples) {
+    IRDIST_CHECK(x.d_mm > 0.0, "sample with d_mm <= 0");
+    const double r = s.d_ref_mm / x.d_mm;
+    sum_d += r * r;
+    sum_dt += std::abs(x.t_ms - x.t_ref_ms);
+    sum_i += std::abs(x.bias_ma);
+    sum_df += std::abs(x.measurement.f00 - x.reference.f00);
+  }
+  const double n = samples.size();
+  auto positive = [](double v) { return v > 0.0 && std::isfinite(v) ? v : 1.0; };
+  s.d_scale = positive(sum_d / n);
+  s.t_scale_ms = positive(sum_dt / n);
+  s.i0_scale_ma = positive(sum_i / n);
+  s.df_scale = positive(sum_df / n);
+  return s;
+}
+
+FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<CalibrationSample>& samples,
+                     const ModelScaling& scaling, const FitOptions& options) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), why);
+  const ModelSpec& spec = GetModelSpec(kind);
+  FittedModel model;
+  model.kind = kind;
+  model.form = form;
+  const std::vector<Observation> obs = MakeObservations(kind, samples, scaling, options);
+  std::vector<int> active;
+  for (int j = 0; j < spec.num_coefficients(); ++j) {
+    if (IsTermActive(spec, form, j)) active.push_back(j);
+  }
+  IRDIST_CHECK(obs.size() > active.size(), ToString(kind), ": ", obs.size(),
+               " usable observations for ", active.size() + 1, " unknowns");
+  for (const Observation& o : obs) {
+    IRDIST_CHECK(o.y != 0.0 && std::isfinite(o.y), ToString(kind),
+                 ": a target of 0 makes the relative residual undefined");
+  }
+  double theta_min = obs.front().theta_deg, theta_max = theta_min;
+  for (const Observation& o : obs) {
+    theta_min = std::min(theta_min, o.theta_deg);
+    theta_max = std::max(theta_max, o.theta_deg);
+  }
+  const bool sigma_free = theta_max - theta_min > 1e-9;
+
+  // 1. Linear starts on the sigma scan.
+  struct Start {
+    double cost;
+    double sigma;
+    std::vector<double> c;
+  };
+  std::vector<Start> starts;
+  const int steps = sigma_free ? options.sigma_scan_steps : 1;
+  for (int k = 0; k < steps; ++k) {
+    const double sigma =
+        steps == 1 ? options.sigma_max_deg
+                   : options.sigma_min_deg *
+                         std::pow(options.sigma_max_deg / options.sigma_min_deg, k / (steps - 1.0));
+    std::vector<double> c = LinearStart(spec, active, sigma, obs);
+    starts.push_back({RelativeCost(spec, c, sigma, obs, nullptr), sigma, std::move(c)});
+  }
+  std::sort(starts.begin(), starts.end(),
+            [](const Start& a, const Start& b) { return a.cost < b.cost; });
+  if (sigma_free) {
+    // Golden-section refinement of the best scan sigma (between its scan neighbours) on the cost
+    // of the linear start: the LM then starts next to the minimum.
+    const double ratio = std::pow(options.sigma_max_deg / options.sigma_min_deg,
+                                  1.0 / (options.sigma_scan_steps - 1.0));
+    double lo = std::log(starts[0].sigma / ratio), hi = std::log(starts[0].sigma * ratio);
+    auto cost_at = [&](double log_sigma) {
+      const double sigma = std::exp(log_sigma);
+      return RelativeCost(spec, LinearStart(spec, active, sigma, obs), sigma, obs, nullptr);
+    };
+    const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+    double f1 = cost_at(x1), f2 = cost_at(x2);
+    for (int k = 0; k < 24; ++k) {
+      if (f1 < f2) {
+        hi = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = hi - g * (hi - lo);
+        f1 = cost_at(x1);
+      } else {
+        lo = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = lo + g * (hi - lo);
+        f2 = cost_at(x2);
+      }
+    }
+    const double sigma = std::exp(0.5 * (lo + hi));
+    std::vector<double> c = LinearStart(spec, active, sigma, obs);
+    const double cost = RelativeCost(spec, c, sigma, obs, nullptr);
+    starts.insert(starts.begin(), Start{cost, sigma, std::move(c)});
+  }
+
+  // 2. LM from the best starts.
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (int s = 0; s < std::min<int>(options.multi_starts, starts.size()); ++s) {
+    std::vector<double> c = starts[s].c;
+    double sigma = starts[s].sigma;
+    int gauge = -1;
+    if (spec.has_denominator()) {
+      double biggest = 0.0;
+      for (int j = spec.num_numerator; j < spec.num_coefficients(); ++j) {
+        if (IsTermActive(spec, form, j) && std::abs(c[j]) > biggest) {
+          biggest = std::abs(c[j]);
+          gauge = j;
+        }
+      }
+      if (gauge < 0) continue;
+      const double g = c[gauge];
+      for (double& v : c) v /= g;
+    }
+    ceres::Problem problem;
+    for (const Observation& o : obs) {
+      auto* cost = new ceres::DynamicAutoDiffCostFunction<RelativeResidual, 8>(
+          new RelativeResidual{&spec, o});
+      cost->AddParameterBlock(spec.num_coefficients());
+      cost->AddParameterBlock(1);
+      cost->SetNumResiduals(1);
+      problem.AddResidualBlock(cost, nullptr, c.data(), &sigma);
+    }
+    std::vector<int> constant;
+    for (int j = 0; j < spec.num_coefficients(); ++j) {
+      if (j == gauge || !IsTermActive(spec, form, j)) constant.push_back(j);
+    }
+    if (!constant.empty()) {
+      problem.SetManifold(c.data(), new ceres::SubsetManifold(spec.num_coefficients(), constant));
+    }
+    if (sigma_free) {
+      problem.SetParameterLowerBound(&sigma, 0, 0.5);
+    } else {
+      problem.SetParameterBlockConstant(&sigma);
+    }
+    ceres::Solver::Options solver;
+    solver.linear_solver_type = ceres::DENSE_QR;
+    solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    solver.max_num_iterations = options.max_iterations;
+    solver.function_tolerance = options.function_tolerance;
+    solver.gradient_tolerance = options.gradient_tolerance;
+    solver.parameter_tolerance = options.parameter_tolerance;
+    solver.num_threads = 1;
+    solver.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver, &problem, &summary);
+    const double cost = RelativeCost(spec, c, sigma, obs, nullptr);
+    if (!(cost < best_cost)) continue;
+    best_cost = cost;
+    model.coefficients = c;
+    model.sigma_deg = sigma;
+    FitSummary& fs = model.summary;
+    fs.termination = summary.termination_type == ceres::CONVERGENCE
+                         ? FitSummary::Termination::kConverged
+                     : summary.termination_type == ceres::NO_CONVERGENCE
+                         ? FitSummary::Termination::kNoConvergence
+                         : FitSummary::Termination::kFailed;
+    fs.message = "start " + std::to_string(s + 1) + " of " +
+                 std::to_string(std::min<int>(options.multi_starts, starts.size())) +
+                 " from sigma " + std::to_string(starts[s].sigma) + " deg";
+    fs.iterations = static_cast<int>(summary.iterations.size()) - 1;
+    fs.gauge_index = gauge;
+    fs.samples = static_cast<int>(obs.size());
+    fs.condition_number = ConditionNumber(&problem);
+  }
+  if (model.coefficients.empty()) {
+    model.summary.message = "no start could be refined";
+    return model;
+  }
+  RelativeCost(spec, model.coefficients, model.sigma_deg, obs, &model.summary.residuals);
+  FillErrors(&model.summary);
+  if (kind == ModelKind::kDirectE || kind == ModelKind::kDiffE || kind == ModelKind::kFreeE) {
+    model.degenerate = EProportionalToF(kind, samples, scaling, options);
+    if (model.degenerate) model.summary.message += "; E proportional to F: degenerate";
+  }
+  return model;
+}
+
+GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples) {
+  GeometricModel g;
+  // Relative least squares of var = alpha D + beta: rows [D/var, 1/var] . [alpha, beta] = 1.
+  std::vector<std::pair<double, double>> points;  // (D, var)
+  for (const CalibrationSample& s : samples) {
+    if (!s.measurement.blob_found || s.measurement.moment_major_var_px2 <= 0.0) continue;
+    const double r = 1000.0 / s.d_mm;
+    points.push_back({r * r, s.measurement.moment_major_var_px2});
+  }
+  g.summary.samples = static_cast<int>(points.size());
+  if (points.size() < 3) {
+    g.summary.message = "fewer than 3 samples with a blob";
+    return g;
+  }
+  Eigen::MatrixXd a(points.size(), 2);
+  for (size_t i = 0; i < points.size(); ++i) {
+    a(i, 0) = points[i].first / points[i].second;
+    a(i, 1) = 1.0 / points[i].second;
+  }
+  const Eigen::Vector2d x = a.colPivHouseholderQr().solve(Eigen::VectorXd::Ones(points.size()));
+  g.alpha_px2 = x(0);
+  g.beta_px2 = x(1);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a);
+  g.summary.condition_number = svd.singularValues()(0) / svd.singularValues()(1);
+  for (const auto& p : points) {
+    // Relative error of the distance it implies.
+    const double d_true = 1000.0 / std::sqrt(p.first);
+    const double big_d = (p.second - g.beta_px2) / g.alpha_px2;
+    const double d_est = big_d > 0.0 ? 1000.0 / std::sqrt(big_d) : 0.0;
+    g.summary.residuals.push_back(d_est / d_true - 1.0);
+  }
+  FillErrors(&g.summary);
+  g.summary.termination =
+      g.alpha_px2 > 0.0 ? FitSummary::Termination::kConverged : FitSummary::Termination::kFailed;
+  g.summary.message = "linear least squares; residuals are relative distance errors";
+  return g;
+}
+
+CalibrationModel Fit(const std::vector<CalibrationSample>& samples,
+                     const FeatureOptions& feature_options, const FitOptions& options) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), why);
+  IRDIST_CHECK(feature_options.IsValid(&why), why);
+  CalibrationModel model;
+  model.features = feature_options;
+  model.scaling = ChooseScaling(samples);
+  CalibratedRanges& r = model.ranges;
+  r.d_min_mm = r.theta_min_deg = r.t_min_ms = r.t_ref_min_ms = r.bias_min_ma =
+      std::numeric_limits<double>::infinity();
+  r.d_max_mm = r.theta_max_deg = r.t_max_ms = r.t_ref_max_ms = r.bias_max_ma =
+      -std::numeric_limits<double>::infinity();
+  for (const CalibrationSample& s : samples) {
+    r.d_min_mm = std::min(r.d_min_mm, s.d_mm);
+    r.d_max_mm = std::max(r.d_max_mm, s.d_mm);
+    r.theta_min_deg = std::min(r.theta_min_deg, s.theta_deg);
+    r.theta_max_deg = std::max(r.theta_max_deg, s.theta_deg);
+    r.t_min_ms = std::min(r.t_min_ms, s.t_ms);
+    r.t_max_ms = std::max(r.t_max_ms, s.t_ms);
+    r.t_ref_min_ms = std::min(r.t_ref_min_ms, s.t_ref_ms);
+    r.t_ref_max_ms = std::max(r.t_ref_max_ms, s.t_ref_ms);
+    r.bias_min_ma = std::min(r.bias_min_ma, s.bias_ma);
+    r.bias_max_ma = std::max(r.bias_max_ma, s.bias_ma);
+  }
+  for (ModelKind kind : options.models) {
+    const ModelForm form = (kind == ModelKind::kFreeE || kind == ModelKind::kFreeSigma)
+                               ? options.free_form
+                               : ModelForm::kFull;
+    model.models.push_back(FitModel(kind, form, samples, model.scaling, options));
+  }
+  model.geometric = FitGeometric(samples);
+  return model;
+}
+
+}  // namespace irdist

@@ -1,0 +1,39 @@
+#pragma once
+// model.yaml: the calibration (every coefficient, sigma, the scalings, the ROI policy and its
+// parameters, the calibrated ranges, fit statistics), written with max_digits10 so that reading it
+// back gives the same doubles bit for bit. Layout in docs/estimator.md.
+
+#include <string>
+
+#include "base/check.h"
+#include "estimator/fit.h"
+
+namespace irdist {
+
+constexpr int kModelFormatVersion = 1;
+
+// A model file that cannot be written, read or understood. what() names the file, the key and,
+// when known, the line.
+class ModelFileError : public Error {
+ public:
+  ModelFileError(const std::string& path, const std::string& key, int line,
+                 const std::string& problem);
+  const std::string& path() const { return path_; }
+  const std::string& key() const { return key_; }
+  int line() const { return line_; }  // 1-based, 0 when unknown
+
+ private:
+  std::string path_;
+  std::string key_;
+  int line_;
+};
+
+// The YAML text of a model (what SaveModel writes).
+std::string ModelToYaml(const CalibrationModel& model);
+// Parses YAML text; `path` only names the source in errors.
+CalibrationModel ModelFromYaml(const std::string& text, const std::string& path);
+
+void SaveModel(const CalibrationModel& model, const std::string& path);  // throws ModelFileError
+CalibrationModel LoadModel(const std::string& path);                     // throws ModelFileError
+
+}  // namespace irdist

@@ -1,0 +1,147 @@
+#include "estimator/estimate.h"
+
+#include <gtest/gtest.h>
+
+#include "base/check.h"
+#include "tests/estimator/synthetic.h"
+
+namespace irdist {
+namespace {
+
+struct Bracket {
+  Features reference;
+  std::vector<Features> measurements;
+  std::vector<double> t_ms = {30.0, 32.0, 34.0, 36.0};
+};
+
+Bracket MakeBracket(const testing::SyntheticRig& rig, double bias, double d, double theta,
+                    double theta0) {
+  Bracket b;
+  b.reference = rig.Frame(8.0, bias, d, theta, theta0);
+  for (double t : b.t_ms) b.measurements.push_back(rig.Frame(t, bias, d, theta, theta0));
+  return b;
+}
+
+TEST(EstimateOptions, DefaultsAreValid) {
+  std::string why;
+  EXPECT_TRUE(EstimateOptions().IsValid(&why)) << why;
+}
+
+TEST(Estimate, RecoversDistanceAndAngleWithoutNoise) {
+  const testing::SyntheticRig rig;
+  const CalibrationModel model = rig.ExactModel();
+  for (double bias : {460.0, 500.0, 525.0}) {  // 460 and 525 mA lie outside the calibration
+    for (double d : {1500.0, 1900.0, 2700.0, 3000.0}) {
+      for (double theta : {10.0, 20.0, 30.0, 35.0}) {
+        // The ellipse's theta0 is 2 degrees off, as in the paper.
+        const Bracket b = MakeBracket(rig, bias, d, theta, theta + 2.0);
+        const BracketEstimate e =
+            EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, EstimateOptions());
+        SCOPED_TRACE(e.BriefReport());
+        for (const DistanceEstimate& x : e.per_exposure) {
+          EXPECT_NEAR(x.d_mm, d, 1e-6 * d);
+          EXPECT_NEAR(x.theta_deg, theta, 1e-4);
+          EXPECT_EQ(x.root_source, RootSource::kCubic);
+          EXPECT_TRUE(x.theta_solved);
+          EXPECT_FALSE(x.outside_calibrated_range);
+          EXPECT_GT(x.condition_number, 1.0);
+        }
+        EXPECT_NEAR(e.joint.d_mm, d, 1e-6 * d);
+        EXPECT_NEAR(e.joint.theta_deg, theta, 1e-4);
+      }
+    }
+  }
+}
+
+TEST(Estimate, NoisyFeaturesStayWithinTheStatedBound) {
+  const testing::SyntheticRig rig;
+  const CalibrationModel model = rig.ExactModel();
+  std::srand(11);
+  auto noisy = [](double v) { return v * (1.0 + 1e-3 * (2.0 * std::rand() / RAND_MAX - 1.0)); };
+  double worst_d = 0.0, worst_joint_d = 0.0;
+  for (double d : {1500.0, 2200.0, 3000.0}) {
+    for (double theta : {15.0, 25.0, 35.0}) {
+      Bracket b = MakeBracket(rig, 500.0, d, theta, theta);
+      for (Features* f : {&b.reference, &b.measurements[0], &b.measurements[1], &b.measurements[2],
+                          &b.measurements[3]}) {
+        f->e_rel = noisy(f->e_rel);
+        f->f00 = noisy(f->f00);
+        f->sigma = noisy(f->sigma);
+      }
+      const BracketEstimate e =
+          EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, EstimateOptions());
+      for (const DistanceEstimate& x : e.per_exposure)
+        worst_d = std::max(worst_d, std::abs(x.d_mm / d - 1.0));
+      worst_joint_d = std::max(worst_joint_d, std::abs(e.joint.d_mm / d - 1.0));
+    }
+  }
+  std::printf("0.1%% feature noise: worst relative d error %.4f per exposure, %.4f joint\n",
+              worst_d, worst_joint_d);
+  // Bound: 10% per exposure, 10% joint (the E equation and the angle amplify feature noise).
+  EXPECT_LT(worst_d, 0.10);
+  EXPECT_LT(worst_joint_d, 0.10);
+}
+
+TEST(Estimate, DegenerateEEquationGetsNoVote) {
+  const testing::SyntheticRig rig;
+  CalibrationModel model = rig.ExactModel();
+  for (FittedModel& m : model.models)
+    if (m.kind == ModelKind::kFreeE) m.degenerate = true;
+  // The Sigma equation alone can have two exact in-range roots (an ambiguity of the S-only route,
+  // docs/estimator.md): when the root is unique it must be the true distance; when not, the answer
+  // must still solve the equation exactly.
+  int unique = 0;
+  for (double d : {1500.0, 1800.0, 2200.0, 2600.0, 3000.0}) {
+    const Bracket b = MakeBracket(rig, 500.0, d, 20.0, 20.0);  // exact theta0
+    const BracketEstimate e =
+        EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, EstimateOptions());
+    for (const DistanceEstimate& x : e.per_exposure) {
+      EXPECT_EQ(x.root_source, RootSource::kSigmaOnly);
+      EXPECT_FALSE(x.theta_solved);
+      EXPECT_DOUBLE_EQ(x.theta_deg, 20.0);
+      EXPECT_LT(x.residual_sigma, 1e-10);
+      EXPECT_EQ(x.residual_e, 0.0);
+      if (x.num_roots_in_range == 1) {
+        ++unique;
+        EXPECT_NEAR(x.d_mm, d, 1e-6 * d) << e.BriefReport();
+      }
+    }
+  }
+  std::printf("S-only route: %d of 20 estimates had a unique in-range root\n", unique);
+}
+
+TEST(Estimate, OutsideCalibratedRangeIsFlagged) {
+  const testing::SyntheticRig rig;
+  const CalibrationModel model = rig.ExactModel();
+  const Bracket b = MakeBracket(rig, 500.0, 3200.0, 20.0, 20.0);
+  const DistanceEstimate x =
+      EstimatePair(model, b.reference, 8.0, b.measurements[0], 30.0, EstimateOptions());
+  EXPECT_NEAR(x.d_mm, 3200.0, 1e-6 * 3200.0);
+  EXPECT_TRUE(x.outside_calibrated_range);
+  EXPECT_NE(x.BriefReport().find("OUTSIDE"), std::string::npos);
+}
+
+TEST(Estimate, GeometricBaseline) {
+  const testing::SyntheticRig rig;
+  CalibrationModel model = rig.ExactModel();
+  model.geometric = FitGeometric(rig.Table3());
+  const GeometricEstimate g = EstimateGeometric(model, rig.Frame(30.0, 500.0, 2345.0, 10.0, 10.0));
+  ASSERT_TRUE(g.valid);
+  EXPECT_NEAR(g.d_mm, 2345.0, 1e-6);
+  Features none;
+  EXPECT_FALSE(EstimateGeometric(model, none).valid);
+}
+
+TEST(Estimate, BracketPreconditions) {
+  const testing::SyntheticRig rig;
+  const CalibrationModel model = rig.ExactModel();
+  const Bracket b = MakeBracket(rig, 500.0, 2000.0, 20.0, 20.0);
+  EXPECT_THROW(EstimateBracket(model, b.reference, 8.0, b.measurements, {30.0}, EstimateOptions()),
+               CheckError);
+  CalibrationModel empty;
+  EXPECT_THROW(EstimatePair(empty, b.reference, 8.0, b.measurements[0], 30.0, EstimateOptions()),
+               CheckError);
+}
+
+}  // namespace
+}  // namespace irdist
