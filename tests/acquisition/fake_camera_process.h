@@ -38,6 +38,34 @@ inline bool LoopbackGvcpPortFree() {
   return free;
 }
 
+// Holds the project's loopback-GVCP lock and waits until UDP 127.0.0.1:3956 is free, for tests
+// that start an in-process camera (the virtual rig) on 127.0.0.1.
+class LoopbackGvcpLock {
+ public:
+  LoopbackGvcpLock() {
+    fd_ = ::open("/tmp/irdist-gvcp-127.0.0.1.lock", O_CREAT | O_RDWR | O_CLOEXEC, 0666);
+    if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0) {
+      throw std::runtime_error("cannot lock /tmp/irdist-gvcp-127.0.0.1.lock");
+    }
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!LoopbackGvcpPortFree()) {
+      if (std::chrono::steady_clock::now() > deadline) {
+        ::close(fd_);
+        throw std::runtime_error("UDP 127.0.0.1:3956 stays busy: another camera is running");
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  }
+  ~LoopbackGvcpLock() {
+    if (fd_ >= 0) ::close(fd_);  // closing releases the flock
+  }
+  LoopbackGvcpLock(const LoopbackGvcpLock&) = delete;
+  LoopbackGvcpLock& operator=(const LoopbackGvcpLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 class FakeCameraProcess {
  public:
   // extra_args: e.g. {"-r", "10"} to drop 1% of the packets.
