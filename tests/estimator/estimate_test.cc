@@ -48,6 +48,10 @@ TEST(Estimate, RecoversDistanceAndAngleWithoutNoise) {
         }
         EXPECT_NEAR(e.joint.d_mm, d, 1e-6 * d);
         EXPECT_NEAR(e.joint.theta_deg, theta, 1e-4);
+        if (bias == 500.0 && (theta == 10.0 || theta == 35.0)) {
+          std::printf("d %.0f theta %.0f: cond 2x2 %.3g, joint %.3g\n", d, theta,
+                      e.per_exposure[0].condition_number, e.joint.condition_number);
+        }
       }
     }
   }

@@ -95,6 +95,7 @@ TEST(Fit, ReducedFormIsExactWithoutBackground) {
   const CalibrationModel model = Fit(rig.Table3(), FeatureOptions(), options);
   for (const FittedModel& m : model.models) {
     EXPECT_EQ(m.form, ModelForm::kReduced);
+    std::printf("%-13s reduced: %s\n", ToString(m.kind), m.summary.BriefReport().c_str());
     EXPECT_LT(WorstPredictionError(model, m, rig), 1e-6) << m.summary.BriefReport();
     const ModelSpec& spec = GetModelSpec(m.kind);
     for (int j = 0; j < spec.num_coefficients(); ++j) {

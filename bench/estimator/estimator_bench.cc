@@ -1,0 +1,61 @@
+// Speed of the estimator's per-frame work: features on a 1280x1024 16-bit frame, and one
+// Algorithm 1 estimate (one pair, and a 4-exposure bracket).
+#include <benchmark/benchmark.h>
+#include <opencv2/imgproc.hpp>
+
+#include "estimator/estimate.h"
+#include "estimator/features.h"
+#include "tests/estimator/synthetic.h"
+
+namespace irdist {
+namespace {
+
+cv::Mat Frame() {
+  cv::Mat frame(1024, 1280, CV_32F, cv::Scalar(0.02));
+  cv::ellipse(frame, cv::Point(700, 480), cv::Size(15, 12), 30.0, 0, 360, cv::Scalar(0.6),
+              cv::FILLED);
+  cv::GaussianBlur(frame, frame, cv::Size(0, 0), 1.0);
+  cv::Mat noise(frame.size(), CV_32F);
+  cv::randn(noise, 0.0, 0.002);
+  frame += noise;
+  cv::Mat out;
+  frame.convertTo(out, CV_16U, 4095.0);
+  return out;
+}
+
+void BM_ComputeFeatures(benchmark::State& state) {
+  const cv::Mat frame = Frame();
+  FeatureOptions options;
+  options.roi_policy = static_cast<RoiPolicy>(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(ComputeFeatures(frame, 12, options));
+}
+BENCHMARK(BM_ComputeFeatures)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+void BM_EstimatePair(benchmark::State& state) {
+  const testing::SyntheticRig rig;
+  const CalibrationModel model = rig.ExactModel();
+  const Features ref = rig.Frame(8.0, 500.0, 2300.0, 20.0, 21.0);
+  const Features meas = rig.Frame(32.0, 500.0, 2300.0, 20.0, 21.0);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(EstimatePair(model, ref, 8.0, meas, 32.0, EstimateOptions()));
+  }
+}
+BENCHMARK(BM_EstimatePair)->Unit(benchmark::kMicrosecond);
+
+void BM_EstimateBracket(benchmark::State& state) {
+  const testing::SyntheticRig rig;
+  const CalibrationModel model = rig.ExactModel();
+  const Features ref = rig.Frame(8.0, 500.0, 2300.0, 20.0, 21.0);
+  std::vector<Features> meas;
+  const std::vector<double> t = {30.0, 32.0, 34.0, 36.0};
+  for (double tn : t) meas.push_back(rig.Frame(tn, 500.0, 2300.0, 20.0, 21.0));
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(EstimateBracket(model, ref, 8.0, meas, t, EstimateOptions()));
+  }
+}
+BENCHMARK(BM_EstimateBracket)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace irdist
+
+BENCHMARK_MAIN();
