@@ -508,6 +508,14 @@ void AravisCamera::Configure(const CameraSettings& settings) {
     }
   }
 
+  if (!settings.triggered && settings.frame_rate_hz > 0.0) {
+    arv_camera_set_frame_rate(d.camera.get(), settings.frame_rate_hz, &error);
+    ThrowOnError(error, "setting AcquisitionFrameRate", d.Name());
+    const double rate = arv_camera_get_frame_rate(d.camera.get(), &error);
+    ThrowOnError(error, "reading AcquisitionFrameRate", d.Name());
+    d.CheckFloat("AcquisitionFrameRate", settings.frame_rate_hz, rate);
+  }
+
   // Exposure chunks, where the camera offers them.
   d.exposure_chunks = false;
   d.chunk_parser.reset();

@@ -16,6 +16,7 @@ bool CameraSettings::IsValid(std::string* why) const {
   if (width < 0 || height < 0 || offset_x < 0 || offset_y < 0) {
     return fail("width, height and offsets must be >= 0 (0 = full sensor)");
   }
+  if (frame_rate_hz < 0.0) return fail("frame_rate_hz must be >= 0 (0 = leave as is)");
   if (!(exposure_us > 0.0)) return fail("exposure_us must be > 0");
   if (packet_size < 0) return fail("packet_size must be >= 0 (0 = negotiate)");
   if (socket_buffer_bytes < 0) return fail("socket_buffer_bytes must be >= 0 (0 = from payload)");

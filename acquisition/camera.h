@@ -54,6 +54,8 @@ struct CameraSettings {
   std::string trigger_activation = "RisingEdge";
   // Trigger mode on (the normal case); off = free-running at the camera's frame rate.
   bool triggered = true;
+  // Free-running frame rate (AcquisitionFrameRate) when triggered == false; 0 = leave as is.
+  double frame_rate_hz = 0.0;
   // BlackLevel in the camera's units; negative = leave as is. Skipped if the camera has none.
   double black_level = 0.0;
   // Gamma; <= 0 = leave as is. Only set where the camera has a Gamma feature.
