@@ -542,7 +542,7 @@ std::map<std::string, std::string> AravisCamera::ReadBackFeatures() {
     GError* error = nullptr;
     const char* value = arv_gc_feature_node_get_value_as_string(ARV_GC_FEATURE_NODE(node), &error);
     if (error != nullptr) {
-      // Present in the XML but not readable now (e.g. not implemented): record why.
+      // Present in the XML but unreadable right now: record why.
       values[feature] = std::string("<unreadable: ") + error->message + ">";
       g_error_free(error);
       continue;
