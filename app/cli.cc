@@ -1,11 +1,10 @@
 #include "app/cli.h"
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <ostream>
 #include <sstream>
-
-#include <CLI/CLI.hpp>
 
 #include "app/recipe.h"
 #include "station/plan.h"
@@ -69,8 +68,8 @@ void PrintPlan(const Recipe& recipe, const Plan& plan, int show_poses, std::ostr
   out << "Recipe: " << recipe.path << " (" << recipe.name << ")";
   if (!recipe.description.empty()) out << ": " << recipe.description;
   out << "\nRig: " << recipe.rig.name << " (" << recipe.rig_path << ")\n";
-  out << "Output: " << recipe.output_dir << "; after recording: "
-      << AfterRecordingName(recipe.after) << "\n";
+  out << "Output: " << recipe.output_dir
+      << "; after recording: " << AfterRecordingName(recipe.after) << "\n";
   const BracketSpec& bracket = recipe.sweep.bracket;
   out << "Bracket: t_ref " << bracket.t_ref_ms << " ms; t_meas " << JoinMs(bracket.t_meas_ms)
       << " ms; " << bracket.repeats << (bracket.repeats == 1 ? " repeat" : " repeats")
@@ -80,9 +79,9 @@ void PrintPlan(const Recipe& recipe, const Plan& plan, int show_poses, std::ostr
   const int total = static_cast<int>(plan.poses.size());
   const int shown = show_poses < 0 ? total : std::min(show_poses, total);
   if (shown == 0) return;
-  out << "Order (" << (shown == total ? "all " + std::to_string(total)
-                                      : "first " + std::to_string(shown) + " of " +
-                                            std::to_string(total))
+  out << "Order ("
+      << (shown == total ? "all " + std::to_string(total)
+                         : "first " + std::to_string(shown) + " of " + std::to_string(total))
       << " poses):\n";
   out << "      #  slide_mm   pan_deg  tilt_deg theta_deg   bias_ma  repeat\n";
   for (int i = 0; i < shown; ++i) {

@@ -27,20 +27,20 @@ struct CalibrateArgs {
 
 struct ValidateArgs {
   std::string recipe;
-  std::string model;       // --model: model.yaml from a calibration
+  std::string model;  // --model: model.yaml from a calibration
   std::string out_dir;
   std::string resume_dir;
 };
 
 struct FitArgs {
-  std::string recording;   // recording folder
-  std::string out;         // --out: model file to write ("" = RECORDING/../model.yaml)
+  std::string recording;  // recording folder
+  std::string out;        // --out: model file to write ("" = RECORDING/../model.yaml)
 };
 
 struct PlaybackArgs {
   std::string recording;
-  std::string model;       // --model
-  std::string out_dir;     // --out ("" = beside the recording)
+  std::string model;    // --model
+  std::string out_dir;  // --out ("" = beside the recording)
 };
 
 struct CheckArgs {
@@ -49,7 +49,7 @@ struct CheckArgs {
 
 struct PlanArgs {
   std::string recipe;
-  int show_poses = 8;      // --poses: how many poses of the order to print (-1 = all)
+  int show_poses = 8;  // --poses: how many poses of the order to print (-1 = all)
 };
 
 struct SimArgs {

@@ -21,10 +21,10 @@ class RecipeError : public Error {
         column_(column),
         message_(message) {}
 
-  const std::string& file() const { return file_; }
-  int line() const { return line_; }
-  int column() const { return column_; }
-  const std::string& message() const { return message_; }  // without the file:line:column prefix
+  const std::string& File() const { return file_; }
+  int Line() const { return line_; }
+  int Column() const { return column_; }
+  const std::string& Message() const { return message_; }  // without the file:line:column prefix
 
  private:
   static std::string Format(const std::string& file, int line, int column,

@@ -50,32 +50,32 @@ struct ParsedAxis {
 
 std::vector<double> ExpandRange(const MapReader& range, const std::string& what,
                                 std::vector<YAML::Mark>* marks) {
-  const double start = AsNumber(range.Require("start"), range.file(), what + ".start");
-  const double stop = AsNumber(range.Require("stop"), range.file(), what + ".stop");
-  const double step = AsNumber(range.Require("step"), range.file(), what + ".step");
+  const double start = AsNumber(range.Require("start"), range.File(), what + ".start");
+  const double stop = AsNumber(range.Require("stop"), range.File(), what + ".stop");
+  const double step = AsNumber(range.Require("step"), range.File(), what + ".step");
   const YAML::Mark step_mark = range.Get("step").Mark();
   const YAML::Mark stop_mark = range.Get("stop").Mark();
   if (step == 0.0) {
-    Fail(range.file(), step_mark, what + ".step must not be 0; for a single value write " +
-                                      what + ": " + Number(start));
+    Fail(range.File(), step_mark,
+         what + ".step must not be 0; for a single value write " + what + ": " + Number(start));
   }
   const double steps = (stop - start) / step;
   if (steps < -1e-9) {
-    Fail(range.file(), step_mark,
-         what + ".step " + Number(step) + " moves away from stop " + Number(stop) +
-             " (start " + Number(start) + "); use step " + Number(-step));
+    Fail(range.File(), step_mark,
+         what + ".step " + Number(step) + " moves away from stop " + Number(stop) + " (start " +
+             Number(start) + "); use step " + Number(-step));
   }
   const double whole = std::round(steps);
   if (std::abs(steps - whole) > 1e-9 * std::max(1.0, std::abs(steps))) {
     const double below = start + std::floor(steps) * step;
     const double above = start + std::ceil(steps) * step;
-    Fail(range.file(), stop_mark,
+    Fail(range.File(), stop_mark,
          what + ".stop " + Number(stop) + " is not reached from start " + Number(start) +
              " in whole steps of " + Number(step) + " (ranges include their stop); valid stops: " +
              Number(below) + " or " + Number(above));
   }
   if (whole + 1 > kMaxAxisValues) {
-    Fail(range.file(), step_mark,
+    Fail(range.File(), step_mark,
          what + " has " + Number(whole + 1) + " values; at most " + std::to_string(kMaxAxisValues));
   }
   const int count = static_cast<int>(whole) + 1;
@@ -133,7 +133,8 @@ ParsedAxis ReadAxis(const YAML::Node& node, const std::string& file, const std::
       axis.mean_mark = map.Get("mean").Mark();
       axis.random_node = node;
     } else {
-      Fail(file, node.Mark(), what + " must be " + forms + (node.size() == 0 ? " (it is empty)" : ""));
+      Fail(file, node.Mark(),
+           what + " must be " + forms + (node.size() == 0 ? " (it is empty)" : ""));
     }
   } else {
     Fail(file, node.Mark(), what + " must be " + forms);
@@ -144,8 +145,8 @@ ParsedAxis ReadAxis(const YAML::Node& node, const std::string& file, const std::
 // Values against the rig's limits; random draws get their truncation from the limits.
 void CheckLimits(ParsedAxis* axis, const AxisRange& limits, const std::string& file,
                  const std::string& what, const std::string& rig_file) {
-  const std::string valid = " is outside the rig's limits " + RangeText(limits) +
-                            " (station.limits in " + rig_file + ")";
+  const std::string valid =
+      " is outside the rig's limits " + RangeText(limits) + " (station.limits in " + rig_file + ")";
   if (axis->values.random.has_value()) {
     RandomDraws& draws = *axis->values.random;
     if (!limits.Contains(draws.mean)) {
@@ -154,7 +155,8 @@ void CheckLimits(ParsedAxis* axis, const AxisRange& limits, const std::string& f
     for (const char* key : {"min", "max"}) {
       const YAML::Node bound = axis->random_node[key];
       if (bound && !limits.Contains(AsNumber(bound, file, what + "." + key))) {
-        Fail(file, bound.Mark(), what + "." + key + " " + Number(AsNumber(bound, file, key)) + valid);
+        Fail(file, bound.Mark(),
+             what + "." + key + " " + Number(AsNumber(bound, file, key)) + valid);
       }
     }
     draws.min = std::max(draws.min, limits.min);
@@ -173,15 +175,15 @@ void CheckLimits(ParsedAxis* axis, const AxisRange& limits, const std::string& f
 SweepAxis AxisByName(const YAML::Node& node, const std::string& file, const std::string& what,
                      AngleMode mode) {
   const std::string name = AsString(node, file, what);
-  const std::vector<std::string> names = {SweepAxisName(SweepAxis::kSlide, mode),
-                                          SweepAxisName(SweepAxis::kAngle, mode),
-                                          SweepAxisName(SweepAxis::kTilt, mode),
-                                          SweepAxisName(SweepAxis::kBias, mode)};
+  const std::vector<std::string> names = {
+      SweepAxisName(SweepAxis::kSlide, mode), SweepAxisName(SweepAxis::kAngle, mode),
+      SweepAxisName(SweepAxis::kTilt, mode), SweepAxisName(SweepAxis::kBias, mode)};
   for (size_t k = 0; k < names.size(); ++k) {
     if (names[k] == name) return static_cast<SweepAxis>(k);
   }
-  Fail(file, node.Mark(), what + ": '" + name + "' is not an axis of this recipe; valid: " +
-                              yaml_fields::JoinNames(names));
+  Fail(file, node.Mark(),
+       what + ": '" + name +
+           "' is not an axis of this recipe; valid: " + yaml_fields::JoinNames(names));
 }
 
 std::vector<SweepAxis> ReadAxisList(const YAML::Node& node, const std::string& file,
@@ -256,7 +258,8 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
     recipe.after = AfterRecording::kEstimate;
   } else {
     Fail(file, map.Get("after").Mark(),
-         "after '" + after + "' is not known; valid: fit (calibration), estimate (validation), none");
+         "after '" + after +
+             "' is not known; valid: fit (calibration), estimate (validation), none");
   }
 
   // The rig first: its limits check the axes.
@@ -264,9 +267,10 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
   recipe.rig_path = FindRigFile(rig_spec, base_dir);
   if (recipe.rig_path.empty()) {
     const YAML::Node rig_node = map.Get("rig");
-    Fail(file, rig_node ? rig_node.Mark() : map.mark(),
-         "rig '" + rig_spec + "' not found; give a rig name from recipes/rigs/ (e.g. virtual) "
-         "or the path of a rig file");
+    Fail(file, rig_node ? rig_node.Mark() : map.Mark(),
+         "rig '" + rig_spec +
+             "' not found; give a rig name from recipes/rigs/ (e.g. virtual) "
+             "or the path of a rig file");
   }
   recipe.rig = LoadRig(recipe.rig_path);
   recipe.motion = recipe.rig.station.motion;
@@ -280,7 +284,7 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
          "give either theta_deg or pan_deg, not both (theta is realised by pan at the given tilt)");
   }
   if (!axes.Has("theta_deg") && !axes.Has("pan_deg")) {
-    Fail(file, axes.mark(), "axes is missing the key 'theta_deg' (or 'pan_deg')");
+    Fail(file, axes.Mark(), "axes is missing the key 'theta_deg' (or 'pan_deg')");
   }
   SweepSpec& sweep = recipe.sweep;
   sweep.angle_mode = axes.Has("theta_deg") ? AngleMode::kTheta : AngleMode::kPan;
@@ -288,10 +292,11 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
   ParsedAxis slide = ReadAxis(axes.Require("slide_mm"), file, "axes.slide_mm", true);
   ParsedAxis angle = ReadAxis(axes.Require(angle_key), file, "axes." + angle_key, true);
   ParsedAxis bias = ReadAxis(axes.Require("bias_ma"), file, "axes.bias_ma", true);
-  ParsedAxis tilt;
-  tilt.values.values = {0.0};
-  tilt.marks = {axes.mark()};
-  if (axes.Has("tilt_deg")) tilt = ReadAxis(axes.Get("tilt_deg"), file, "axes.tilt_deg", true);
+  // tilt_deg is optional: 0 when absent.
+  ParsedAxis tilt = axes.Has("tilt_deg")
+                        ? ReadAxis(axes.Get("tilt_deg"), file, "axes.tilt_deg", true)
+                        : ReadAxis(YAML::Node(0.0), file, "axes.tilt_deg", true);
+  if (!axes.Has("tilt_deg")) tilt.marks = {axes.Mark()};  // errors about the default point at axes
 
   const std::string& rig_file = recipe.rig_path;
   CheckLimits(&slide, limits.slide_mm, file, "axes.slide_mm", rig_file);
@@ -346,7 +351,8 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
   if (!(spec.t_ref_ms > 0.0)) {
     Fail(file, bracket.Get("t_ref_ms").Mark(), "bracket.t_ref_ms must be > 0 ms");
   }
-  const ParsedAxis t_meas = ReadAxis(bracket.Require("t_meas_ms"), file, "bracket.t_meas_ms", false);
+  const ParsedAxis t_meas =
+      ReadAxis(bracket.Require("t_meas_ms"), file, "bracket.t_meas_ms", false);
   spec.t_meas_ms = t_meas.values.values;
   for (size_t i = 0; i < spec.t_meas_ms.size(); ++i) {
     if (!(spec.t_meas_ms[i] > spec.t_ref_ms)) {
@@ -361,9 +367,11 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
 
   // Settle.
   if (map.Has("settle")) {
-    const MapReader settle(map.Get("settle"), file, "settle", {"after_move_ms", "after_current_ms"});
+    const MapReader settle(map.Get("settle"), file, "settle",
+                           {"after_move_ms", "after_current_ms"});
     sweep.settle.after_move_ms = settle.Number("after_move_ms", sweep.settle.after_move_ms);
-    sweep.settle.after_current_ms = settle.Number("after_current_ms", sweep.settle.after_current_ms);
+    sweep.settle.after_current_ms =
+        settle.Number("after_current_ms", sweep.settle.after_current_ms);
     for (const char* key : {"after_move_ms", "after_current_ms"}) {
       if (settle.Has(key) && settle.Number(key, 0.0) < 0.0) {
         Fail(file, settle.Get(key).Mark(), std::string("settle.") + key + " must be >= 0 ms");
@@ -397,7 +405,7 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
   sweep.order = order;
 
   std::string why;
-  if (!sweep.IsValid(&why)) Fail(file, map.mark(), why);
+  if (!sweep.IsValid(&why)) Fail(file, map.Mark(), why);
   return recipe;
 }
 

@@ -23,15 +23,15 @@ enum class AfterRecording {
 std::string AfterRecordingName(AfterRecording after);  // "none", "fit", "estimate"
 
 struct Recipe {
-  std::string path;          // the recipe file
-  std::string name;          // `name:`, defaults to the file's stem
-  std::string description;   // `description:`
-  std::string rig_path;      // resolved rig file
-  Rig rig;                   // loaded rig (camera:, station:)
-  std::string output_dir;    // `output:`, defaults to runs/<name>; relative to the working dir
+  std::string path;         // the recipe file
+  std::string name;         // `name:`, defaults to the file's stem
+  std::string description;  // `description:`
+  std::string rig_path;     // resolved rig file
+  Rig rig;                  // loaded rig (camera:, station:)
+  std::string output_dir;   // `output:`, defaults to runs/<name>; relative to the working dir
   AfterRecording after = AfterRecording::kNone;
-  SweepSpec sweep;           // axes (expanded), order, serpentine, bracket, settle
-  MotionModel motion;        // the rig's timing model (station.motion + camera.readout_ms)
+  SweepSpec sweep;     // axes (expanded), order, serpentine, bracket, settle
+  MotionModel motion;  // the rig's timing model (station.motion + camera.readout_ms)
 };
 
 // Loads a recipe and its rig. Throws RecipeError.

@@ -22,7 +22,7 @@ bool Fail(std::string* why, const std::string& message) {
 void OneOf(const MapReader& map, const std::string& key, const std::string& value,
            const std::vector<std::string>& valid) {
   if (std::find(valid.begin(), valid.end(), value) == valid.end()) {
-    Fail(map.file(), map.Get(key).Mark(),
+    Fail(map.File(), map.Get(key).Mark(),
          key + " '" + value + "' is not supported; valid: " + yaml_fields::JoinNames(valid));
   }
 }
@@ -30,7 +30,7 @@ void OneOf(const MapReader& map, const std::string& key, const std::string& valu
 int AtLeast(const MapReader& map, const std::string& key, int fallback, int minimum) {
   const int value = map.Integer(key, fallback);
   if (value < minimum) {
-    Fail(map.file(), map.Get(key).Mark(),
+    Fail(map.File(), map.Get(key).Mark(),
          key + " must be >= " + std::to_string(minimum) + ", not " + std::to_string(value));
   }
   return value;
@@ -38,20 +38,20 @@ int AtLeast(const MapReader& map, const std::string& key, int fallback, int mini
 
 double NonNegative(const MapReader& map, const std::string& key, double fallback) {
   const double value = map.Number(key, fallback);
-  if (value < 0.0) Fail(map.file(), map.Get(key).Mark(), key + " must be >= 0");
+  if (value < 0.0) Fail(map.File(), map.Get(key).Mark(), key + " must be >= 0");
   return value;
 }
 
 double Positive(const MapReader& map, const std::string& key, double fallback) {
   const double value = map.Number(key, fallback);
-  if (!(value > 0.0)) Fail(map.file(), map.Get(key).Mark(), key + " must be > 0");
+  if (!(value > 0.0)) Fail(map.File(), map.Get(key).Mark(), key + " must be > 0");
   return value;
 }
 
 CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   const MapReader map(node, file, "camera",
-                      {"id", "pixel_format", "trigger_source", "trigger_activation",
-                       "black_level", "packet_size", "frame_timeout_ms", "readout_ms"});
+                      {"id", "pixel_format", "trigger_source", "trigger_activation", "black_level",
+                       "packet_size", "frame_timeout_ms", "readout_ms"});
   CameraConfig camera;
   camera.id = map.String("id", camera.id);
   camera.pixel_format = map.String("pixel_format", camera.pixel_format);
@@ -70,20 +70,20 @@ AxisRange ReadRange(const MapReader& limits, const std::string& key, AxisRange f
   if (!limits.Has(key)) return fallback;
   const YAML::Node node = limits.Get(key);
   if (!node.IsSequence() || node.size() != 2) {
-    Fail(limits.file(), node.Mark(),
+    Fail(limits.File(), node.Mark(),
          "station.limits." + key + " must be a list [min, max] of two numbers");
   }
-  AxisRange range{AsNumber(node[0], limits.file(), key + " min"),
-                  AsNumber(node[1], limits.file(), key + " max")};
+  AxisRange range{AsNumber(node[0], limits.File(), key + " min"),
+                  AsNumber(node[1], limits.File(), key + " max")};
   if (!(range.min < range.max)) {
-    Fail(limits.file(), node.Mark(), "station.limits." + key + " must have min < max");
+    Fail(limits.File(), node.Mark(), "station.limits." + key + " must have min < max");
   }
   return range;
 }
 
 AxisMotion ReadAxisMotion(const MapReader& motion, const std::string& key, AxisMotion fallback) {
   if (!motion.Has(key)) return fallback;
-  const MapReader map(motion.Get(key), motion.file(), "station.motion." + key,
+  const MapReader map(motion.Get(key), motion.File(), "station.motion." + key,
                       {"speed", "acceleration", "settle_ms"});
   AxisMotion axis;
   axis.speed = Positive(map, "speed", fallback.speed);
@@ -108,9 +108,9 @@ StationConfig ReadStation(const YAML::Node& node, const std::string& file) {
     station.limits.bias_ma = ReadRange(limits, "bias_ma", station.limits.bias_ma);
   }
   if (map.Has("motion")) {
-    const MapReader motion(map.Get("motion"), file, "station.motion",
-                           {"slide", "pan", "tilt", "axes_move_together", "frame_overhead_ms",
-                            "pose_overhead_ms"});
+    const MapReader motion(
+        map.Get("motion"), file, "station.motion",
+        {"slide", "pan", "tilt", "axes_move_together", "frame_overhead_ms", "pose_overhead_ms"});
     MotionModel& model = station.motion;
     model.slide = ReadAxisMotion(motion, "slide", model.slide);
     model.pan = ReadAxisMotion(motion, "pan", model.pan);
@@ -147,14 +147,11 @@ bool StationConfig::IsValid(std::string* why) const {
   return limits.IsValid(why) && motion.IsValid(why);
 }
 
-bool Rig::IsValid(std::string* why) const {
-  return camera.IsValid(why) && station.IsValid(why);
-}
+bool Rig::IsValid(std::string* why) const { return camera.IsValid(why) && station.IsValid(why); }
 
 Rig ParseRig(const std::string& text, const std::string& file) {
   const YAML::Node root = yaml_fields::Parse(text, file);
-  const MapReader map(root, file, "the rig file",
-                      {"name", "kind", "camera", "station", "virtual"});
+  const MapReader map(root, file, "the rig file", {"name", "kind", "camera", "station", "virtual"});
   Rig rig;
   rig.path = file;
   rig.name = map.String("name", std::filesystem::path(file).stem().string());
@@ -173,13 +170,13 @@ Rig ParseRig(const std::string& text, const std::string& file) {
     if (rig.station.port == "auto") {
       const YAML::Node station = map.Get("station");
       const YAML::Node port = station ? station["port"] : YAML::Node();
-      Fail(file, port ? port.Mark() : map.mark(),
+      Fail(file, port ? port.Mark() : map.Mark(),
            "station.port must name the serial device on a hardware rig (e.g. /dev/ttyUSB0), "
            "not auto");
     }
   }
   std::string why;
-  if (!rig.IsValid(&why)) Fail(file, map.mark(), why);
+  if (!rig.IsValid(&why)) Fail(file, map.Mark(), why);
   return rig;
 }
 

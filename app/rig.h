@@ -10,14 +10,14 @@
 namespace irdist {
 
 struct CameraConfig {
-  std::string id = "auto";                    // Aravis device id, serial or IP; "auto" = the only one
-  std::string pixel_format = "Mono12";        // Mono8, Mono10, Mono12 or Mono16
-  std::string trigger_source = "Line1";       // camera input wired to the station's trigger output
+  std::string id = "auto";               // Aravis device id, serial or IP; "auto" = the only one
+  std::string pixel_format = "Mono12";   // Mono8, Mono10, Mono12 or Mono16
+  std::string trigger_source = "Line1";  // camera input wired to the station's trigger output
   std::string trigger_activation = "RisingEdge";  // RisingEdge or FallingEdge
-  int black_level = 0;                        // camera black level register, >= 0
-  int packet_size = 0;                        // GigE Vision packet size, bytes; 0 = negotiate
-  int frame_timeout_ms = 1000;                // a frame later than this after its trigger is lost
-  double readout_ms = 25.0;                   // sensor readout + transfer of one frame (plan estimate)
+  int black_level = 0;                            // camera black level register, >= 0
+  int packet_size = 0;                            // GigE Vision packet size, bytes; 0 = negotiate
+  int frame_timeout_ms = 1000;  // a frame later than this after its trigger is lost
+  double readout_ms = 25.0;     // sensor readout + transfer of one frame (plan estimate)
   bool IsValid(std::string* why) const;
 };
 
@@ -42,15 +42,15 @@ struct StationConfig {
   int baud = 115200;           // serial speed, bit/s
   int reply_timeout_ms = 500;  // deadline of every reply
   StationLimits limits;
-  MotionModel motion;          // optional `motion:` section; readout_ms comes from camera:
+  MotionModel motion;  // optional `motion:` section; readout_ms comes from camera:
   bool IsValid(std::string* why) const;
 };
 
 enum class RigKind { kVirtual, kHardware };
 
 struct Rig {
-  std::string path;            // the file it was read from
-  std::string name;            // `name:`, defaults to the file's stem
+  std::string path;  // the file it was read from
+  std::string name;  // `name:`, defaults to the file's stem
   RigKind kind = RigKind::kVirtual;
   CameraConfig camera;
   StationConfig station;

@@ -58,8 +58,9 @@ YAML::Node Parse(const std::string& text, const std::string& file) {
 std::string ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    throw RecipeError(path, 0, 0, "cannot open the file; check the path (relative paths are "
-                                  "taken from the current directory)");
+    throw RecipeError(path, 0, 0,
+                      "cannot open the file; check the path (relative paths are "
+                      "taken from the current directory)");
   }
   std::ostringstream text;
   text << in.rdbuf();
@@ -98,8 +99,8 @@ MapReader::MapReader(const YAML::Node& node, std::string file, std::string conte
       allowed_(std::move(allowed)),
       mark_(node.Mark()) {
   if (!node_.IsMap()) {
-    Fail(file_, mark_, context_ + " must be a map with keys " + JoinNames(allowed_) + ", not " +
-                           TypeName(node_));
+    Fail(file_, mark_,
+         context_ + " must be a map with keys " + JoinNames(allowed_) + ", not " + TypeName(node_));
   }
   std::vector<std::string> seen;
   for (const auto& entry : node_) {
@@ -107,8 +108,8 @@ MapReader::MapReader(const YAML::Node& node, std::string file, std::string conte
     if (!key.IsScalar()) Fail(file_, key.Mark(), "keys of " + context_ + " must be names");
     const std::string name = key.Scalar();
     if (std::find(allowed_.begin(), allowed_.end(), name) == allowed_.end()) {
-      std::string message = "unknown key '" + name + "' in " + context_ + "; valid keys: " +
-                            JoinNames(allowed_);
+      std::string message =
+          "unknown key '" + name + "' in " + context_ + "; valid keys: " + JoinNames(allowed_);
       const std::string closest = ClosestMatch(name, allowed_);
       if (!closest.empty()) message += " (did you mean '" + closest + "'?)";
       Fail(file_, key.Mark(), message);
@@ -156,8 +157,8 @@ double AsNumber(const YAML::Node& node, const std::string& file, const std::stri
 
 int AsInteger(const YAML::Node& node, const std::string& file, const std::string& what) {
   double value = 0.0;
-  if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) ||
-      !std::isfinite(value) || value != std::floor(value) || std::abs(value) > 2e9) {
+  if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value) ||
+      value != std::floor(value) || std::abs(value) > 2e9) {
     Fail(file, node.Mark(), what + " must be a whole number, not " + TypeName(node));
   }
   return static_cast<int>(value);
@@ -172,7 +173,8 @@ bool AsBoolean(const YAML::Node& node, const std::string& file, const std::strin
 }
 
 std::string AsString(const YAML::Node& node, const std::string& file, const std::string& what) {
-  if (!node.IsScalar()) Fail(file, node.Mark(), what + " must be a text value, not " + TypeName(node));
+  if (!node.IsScalar())
+    Fail(file, node.Mark(), what + " must be a text value, not " + TypeName(node));
   return node.Scalar();
 }
 

@@ -3,10 +3,10 @@
 // right type, and every error a RecipeError naming file:line:column and what would be valid.
 // Internal to app/ (this header exposes yaml-cpp types; only app/*.cc include it).
 
+#include <yaml-cpp/yaml.h>
+
 #include <string>
 #include <vector>
-
-#include <yaml-cpp/yaml.h>
 
 #include "app/errors.h"
 
@@ -40,8 +40,8 @@ class MapReader {
   YAML::Node Require(const std::string& key) const;
   // The value node, or an undefined node when absent.
   YAML::Node Get(const std::string& key) const;
-  const YAML::Mark& mark() const { return mark_; }
-  const std::string& file() const { return file_; }
+  const YAML::Mark& Mark() const { return mark_; }
+  const std::string& File() const { return file_; }
 
   double Number(const std::string& key, double fallback) const;
   int Integer(const std::string& key, int fallback) const;

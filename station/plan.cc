@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <limits>
 #include <random>
@@ -98,7 +99,8 @@ double MedianStep(const AxisValues& axis) {
     if (sorted[i] - sorted[i - 1] > kSameValue) steps.push_back(sorted[i] - sorted[i - 1]);
   }
   if (steps.empty()) return 0.0;
-  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), middle, steps.end());
   return steps[steps.size() / 2];
 }
 
@@ -260,10 +262,12 @@ std::vector<SweepAxis> ChooseAxisOrder(const SweepSpec& spec, const MotionModel&
     return 0.0;
   };
   std::vector<std::pair<double, SweepAxis>> ranked;
+  ranked.reserve(canonical.size());
   for (SweepAxis axis : canonical) ranked.emplace_back(cost(axis), axis);
   std::stable_sort(ranked.begin(), ranked.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
   std::vector<SweepAxis> order;
+  order.reserve(ranked.size());
   for (const auto& entry : ranked) order.push_back(entry.second);
   return order;
 }
@@ -288,7 +292,8 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
 
   // Random axes: one generator per axis, sets drawn in sweep order.
   std::array<std::optional<NormalSource>, 4> sources;
-  std::array<std::vector<double>, 4> current_set;  // values of each axis for the current outer combination
+  std::array<std::vector<double>, 4>
+      current_set;  // values of each axis for the current outer combination
   std::array<long, 4> set_outer = {-1, -1, -1, -1};
   for (size_t k = 0; k < order.size(); ++k) {
     const AxisValues& values = AxisOf(spec, order[k]);
@@ -327,10 +332,9 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
           set_outer[k] = wanted;
         }
       }
-      const bool snake =
-          k > 0 && outer % 2 == 1 &&
-          std::find(spec.serpentine.begin(), spec.serpentine.end(), order[k]) !=
-              spec.serpentine.end();
+      const bool snake = k > 0 && outer % 2 == 1 &&
+                         std::find(spec.serpentine.begin(), spec.serpentine.end(), order[k]) !=
+                             spec.serpentine.end();
       const int i = snake ? counts[k] - 1 - digit[k] : digit[k];
       value[static_cast<size_t>(order[k])] = current_set[k][static_cast<size_t>(i)];
       outer = outer * counts[k] + digit[k];
@@ -351,8 +355,7 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
       pose.pan_deg = pose.tilt_deg == 0.0 ? angle : (angle < 0.0 ? -pan : pan);
     } else {
       pose.pan_deg = angle;
-      pose.theta_deg =
-          RadToDeg(std::acos(std::min(1.0, std::cos(DegToRad(angle)) * cos_tilt)));
+      pose.theta_deg = RadToDeg(std::acos(std::min(1.0, std::cos(DegToRad(angle)) * cos_tilt)));
     }
     for (int r = 0; r < repeats; ++r) {
       pose.repeat = r;
@@ -365,8 +368,9 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
   summary.pose_count = static_cast<int>(plan.poses.size());
   summary.frames_per_pose = static_cast<int>(plan.bracket.size());
   summary.frame_count = summary.pose_count * summary.frames_per_pose;
-  const int differences_per_pose = static_cast<int>(std::count_if(
-      plan.bracket.begin(), plan.bracket.end(), [](const BracketFrame& f) { return !f.is_reference; }));
+  const int differences_per_pose =
+      static_cast<int>(std::count_if(plan.bracket.begin(), plan.bracket.end(),
+                                     [](const BracketFrame& f) { return !f.is_reference; }));
   summary.difference_count = summary.pose_count * differences_per_pose;
 
   double bracket_exposure_s = 0.0;

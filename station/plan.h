@@ -28,12 +28,12 @@ std::string SweepAxisName(SweepAxis axis, AngleMode angle_mode);
 // Normal random draws of an axis (e.g. the IRED bias current of Fig. 13). Values outside
 // [min, max] are redrawn (a truncated normal), so every draw stays inside the rig's limits.
 struct RandomDraws {
-  double mean = 500.0;      // unit of the axis
-  double sd = 50.0;         // standard deviation, unit of the axis, >= 0
-  int count = 10;           // draws per set, >= 1
-  std::uint64_t seed = 1;   // the same seed always gives the same draws
-  bool per_pose = true;     // a fresh set of draws each time an outer axis advances
-  double min = -1e300;      // truncation, unit of the axis
+  double mean = 500.0;     // unit of the axis
+  double sd = 50.0;        // standard deviation, unit of the axis, >= 0
+  int count = 10;          // draws per set, >= 1
+  std::uint64_t seed = 1;  // the same seed always gives the same draws
+  bool per_pose = true;    // a fresh set of draws each time an outer axis advances
+  double min = -1e300;     // truncation, unit of the axis
   double max = 1e300;
   bool IsValid(std::string* why) const;
 };
@@ -47,10 +47,10 @@ struct AxisValues {
 
 // The frames taken at every pose.
 struct BracketSpec {
-  double t_ref_ms = 8.0;                               // reference exposure t_r, ms
+  double t_ref_ms = 8.0;                                     // reference exposure t_r, ms
   std::vector<double> t_meas_ms = {30.0, 32.0, 34.0, 36.0};  // measurement exposures t_n, ms
-  int repeats = 1;                 // brackets per pose (the station does not move between them)
-  bool retake_reference = false;   // true: t_r is retaken right before each t_n
+  int repeats = 1;                // brackets per pose (the station does not move between them)
+  bool retake_reference = false;  // true: t_r is retaken right before each t_n
   bool IsValid(std::string* why) const;
 };
 
@@ -105,18 +105,18 @@ double TrapezoidMoveS(double distance, const AxisMotion& motion);
 // A station pose of the plan. theta_deg is the IRED orientation, cos(theta) = cos(pan) cos(tilt):
 // as given in kTheta mode (pan carries its sign), acos(cos(pan) cos(tilt)) >= 0 in kPan mode.
 struct Pose {
-  int index = 0;         // position in the plan, 0-based
+  int index = 0;  // position in the plan, 0-based
   double slide_mm = 0.0;
   double pan_deg = 0.0;
   double tilt_deg = 0.0;
   double theta_deg = 0.0;
   double bias_ma = 0.0;
-  int repeat = 0;        // 0 .. repeats-1: brackets repeated without moving
+  int repeat = 0;  // 0 .. repeats-1: brackets repeated without moving
 };
 
 // One frame of the bracket taken at each pose, in trigger order.
 struct BracketFrame {
-  int index = 0;             // position in the bracket, 0-based
+  int index = 0;  // position in the bracket, 0-based
   double exposure_ms = 0.0;
   bool is_reference = false;
   int reference_index = -1;  // measurement frame: index of the reference it is differenced with
@@ -135,22 +135,22 @@ struct PlanSummary {
   std::vector<std::string> order;  // axis names, outermost first
   std::vector<int> axis_counts;    // values per axis, in `order`
   int repeats = 1;
-  int pose_count = 0;              // including repeats
+  int pose_count = 0;  // including repeats
   int frames_per_pose = 0;
   int frame_count = 0;
-  int difference_count = 0;        // (t_n, t_r) pairs
-  int moves = 0;                   // pose changes that move at least one axis
-  int current_changes = 0;         // including switching the IRED on for the first pose
+  int difference_count = 0;  // (t_n, t_r) pairs
+  int moves = 0;             // pose changes that move at least one axis
+  int current_changes = 0;   // including switching the IRED on for the first pose
   // Duration estimate, s. Homing before the sweep is not included.
-  double motion_s = 0.0;           // trapezoidal profiles
-  double station_settle_s = 0.0;   // MotionModel settle of the moved axes
-  double move_settle_s = 0.0;      // SettleSpec::after_move_ms
-  double current_settle_s = 0.0;   // SettleSpec::after_current_ms
+  double motion_s = 0.0;          // trapezoidal profiles
+  double station_settle_s = 0.0;  // MotionModel settle of the moved axes
+  double move_settle_s = 0.0;     // SettleSpec::after_move_ms
+  double current_settle_s = 0.0;  // SettleSpec::after_current_ms
   double exposure_s = 0.0;
   double readout_s = 0.0;
-  double overhead_s = 0.0;         // per-frame and per-pose overhead
-  double total_s = 0.0;            // sum of the above
-  double physical_bound_s = 0.0;   // motion + exposure + readout
+  double overhead_s = 0.0;        // per-frame and per-pose overhead
+  double total_s = 0.0;           // sum of the above
+  double physical_bound_s = 0.0;  // motion + exposure + readout
   std::string BriefReport() const;
 };
 

@@ -1,5 +1,6 @@
 #include "app/cli.h"
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <array>
@@ -8,22 +9,20 @@
 #include <string>
 #include <vector>
 
-#include <gtest/gtest.h>
-
 namespace irdist {
 namespace {
 
 const std::string kRecipes = std::string(IRDIST_SOURCE_DIR) + "/recipes";
 
 // Runs RunIrdist on the words of a command line; returns its exit code.
-int RunWords(const std::vector<std::string>& words, const Handlers& handlers, std::string* out = nullptr,
-        std::string* err = nullptr) {
+int RunWords(const std::vector<std::string>& words, const Handlers& handlers,
+             std::string* out = nullptr, std::string* err = nullptr) {
   std::vector<const char*> argv = {"irdist"};
   for (const std::string& word : words) argv.push_back(word.c_str());
   std::ostringstream out_stream;
   std::ostringstream err_stream;
-  const int code = RunIrdist(static_cast<int>(argv.size()), argv.data(), {out_stream, err_stream},
-                             handlers);
+  const int code =
+      RunIrdist(static_cast<int>(argv.size()), argv.data(), {out_stream, err_stream}, handlers);
   if (out != nullptr) *out = out_stream.str();
   if (err != nullptr) *err = err_stream.str();
   return code;
@@ -51,8 +50,8 @@ TEST(CliTest, UnknownOrMissingCommandIsAUsageError) {
     EXPECT_NE(std::string(e.what()).find("calibrate, validate, fit"), std::string::npos);
   }
   EXPECT_THROW(RunWords({}, DefaultHandlers()), UsageError);
-  EXPECT_THROW(RunWords({"plan"}, DefaultHandlers()), UsageError);           // recipe missing
-  EXPECT_THROW(RunWords({"plan", "a", "b"}, DefaultHandlers()), UsageError);  // one too many
+  EXPECT_THROW(RunWords({"plan"}, DefaultHandlers()), UsageError);                // recipe missing
+  EXPECT_THROW(RunWords({"plan", "a", "b"}, DefaultHandlers()), UsageError);      // one too many
   EXPECT_THROW(RunWords({"validate", "r.yaml"}, DefaultHandlers()), UsageError);  // --model missing
   EXPECT_THROW(RunWords({"plan", "--bogus", "r.yaml"}, DefaultHandlers()), UsageError);
 }
@@ -67,9 +66,11 @@ TEST(CliTest, HelpListsTheCommands) {
 
 TEST(CliTest, UnintegratedCommandsSaySoWithWhatTheyWaitFor) {
   const Handlers handlers = DefaultHandlers();
-  const std::vector<std::vector<std::string>> commands = {
-      {"fit", "rec"}, {"playback", "rec", "--model", "m.yaml"}, {"check", "rec"}, {"sim"},
-      {"devices"}};
+  const std::vector<std::vector<std::string>> commands = {{"fit", "rec"},
+                                                          {"playback", "rec", "--model", "m.yaml"},
+                                                          {"check", "rec"},
+                                                          {"sim"},
+                                                          {"devices"}};
   for (const auto& command : commands) {
     SCOPED_TRACE(command[0]);
     try {
@@ -85,8 +86,9 @@ TEST(CliTest, UnintegratedCommandsSaySoWithWhatTheyWaitFor) {
 
 TEST(CliTest, CalibrateChecksTheRecipeBeforeSayingItIsNotAvailable) {
   std::string out;
-  EXPECT_THROW(RunWords({"calibrate", kRecipes + "/smoke-calibration.yaml"}, DefaultHandlers(), &out),
-               NotAvailableError);
+  EXPECT_THROW(
+      RunWords({"calibrate", kRecipes + "/smoke-calibration.yaml"}, DefaultHandlers(), &out),
+      NotAvailableError);
   // A bad recipe is reported as such (not as "not available").
   EXPECT_THROW(RunWords({"calibrate", "/nonexistent.yaml"}, DefaultHandlers()), RecipeError);
 }
@@ -101,7 +103,9 @@ TEST(CliTest, HandlersReceiveTheirArguments) {
   };
   handlers.validate = [&](const ValidateArgs& args, CommandIo) { validate = args; };
   std::string out;
-  EXPECT_EQ(RunWords({"calibrate", "r.yaml", "--out", "runs/x", "--resume", "runs/y"}, handlers, &out), 0);
+  EXPECT_EQ(
+      RunWords({"calibrate", "r.yaml", "--out", "runs/x", "--resume", "runs/y"}, handlers, &out),
+      0);
   EXPECT_EQ(out, "calibrated");
   EXPECT_EQ(calibrate.recipe, "r.yaml");
   EXPECT_EQ(calibrate.out_dir, "runs/x");
@@ -126,16 +130,15 @@ TEST(CliTest, PlanPrintsCountsOrderAndDuration) {
   EXPECT_NE(out.find("Physical bound"), std::string::npos) << out;
   EXPECT_NE(out.find("first 8 of 64 poses"), std::string::npos) << out;
 
-  EXPECT_EQ(RunWords({"plan", kRecipes + "/smoke-calibration.yaml", "--poses", "-1"}, DefaultHandlers(),
-                &out),
+  EXPECT_EQ(RunWords({"plan", kRecipes + "/smoke-calibration.yaml", "--poses", "-1"},
+                     DefaultHandlers(), &out),
             0);
   EXPECT_NE(out.find("all 8 poses"), std::string::npos) << out;
 }
 
 // The built binary: typed errors become exit codes and one message on stderr.
 int RunBinary(const std::string& arguments, std::string* output) {
-  const std::string command =
-      std::string(IRDIST_BINARY_DIR) + "/app/irdist " + arguments + " 2>&1";
+  const std::string command = std::string(IRDIST_BINARY_DIR) + "/app/irdist " + arguments + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return -1;
   std::array<char, 4096> buffer{};

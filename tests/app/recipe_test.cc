@@ -1,5 +1,8 @@
 #include "app/recipe.h"
 
+#include <gtest/gtest.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -8,9 +11,6 @@
 #include <set>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <unistd.h>
 
 namespace irdist {
 namespace {
@@ -485,17 +485,17 @@ TEST(RecipeTest, BadRecipesNameTheirLineAndColumn) {
       ParseRecipe(bad.text, "bad.yaml", kRecipes);
       ADD_FAILURE() << "no error for: " << bad.what;
     } catch (const RecipeError& e) {
-      EXPECT_EQ(e.file(), "bad.yaml");
+      EXPECT_EQ(e.File(), "bad.yaml");
       if (bad.line > 0) {
-        EXPECT_EQ(e.line(), bad.line) << e.what();
-        EXPECT_EQ(e.column(), bad.column) << e.what();
+        EXPECT_EQ(e.Line(), bad.line) << e.what();
+        EXPECT_EQ(e.Column(), bad.column) << e.what();
         const std::string prefix =
             "bad.yaml:" + std::to_string(bad.line) + ":" + std::to_string(bad.column) + ": ";
         EXPECT_EQ(std::string(e.what()).rfind(prefix, 0), 0u) << e.what();
       } else {
-        EXPECT_GT(e.line(), 0) << e.what();
+        EXPECT_GT(e.Line(), 0) << e.what();
       }
-      EXPECT_NE(e.message().find(bad.message), std::string::npos) << e.what();
+      EXPECT_NE(e.Message().find(bad.message), std::string::npos) << e.what();
     }
   }
 }
@@ -505,8 +505,8 @@ TEST(RecipeTest, MissingFileIsARecipeError) {
     LoadRecipe("/nonexistent/recipe.yaml");
     FAIL() << "no error";
   } catch (const RecipeError& e) {
-    EXPECT_EQ(e.file(), "/nonexistent/recipe.yaml");
-    EXPECT_EQ(e.line(), 0);
+    EXPECT_EQ(e.File(), "/nonexistent/recipe.yaml");
+    EXPECT_EQ(e.Line(), 0);
     EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos);
   }
 }
@@ -528,9 +528,9 @@ TEST(RecipeTest, ErrorsInTheRigFileNameTheRigFile) {
     LoadRecipe((dir / "r.yaml").string());
     FAIL() << "no error";
   } catch (const RecipeError& e) {
-    EXPECT_EQ(e.file(), (dir / "rigs" / "narrow.yaml").string());
-    EXPECT_EQ(e.line(), 5);
-    EXPECT_EQ(e.column(), 5);
+    EXPECT_EQ(e.File(), (dir / "rigs" / "narrow.yaml").string());
+    EXPECT_EQ(e.Line(), 5);
+    EXPECT_EQ(e.Column(), 5);
   }
   // With the rig fixed, its narrower limits apply to the recipe.
   {
@@ -546,9 +546,9 @@ TEST(RecipeTest, ErrorsInTheRigFileNameTheRigFile) {
     LoadRecipe((dir / "r.yaml").string());
     FAIL() << "no error";
   } catch (const RecipeError& e) {
-    EXPECT_EQ(e.file(), (dir / "r.yaml").string());
-    EXPECT_EQ(e.line(), 2);
-    EXPECT_NE(e.message().find("[1000, 1800]"), std::string::npos) << e.what();
+    EXPECT_EQ(e.File(), (dir / "r.yaml").string());
+    EXPECT_EQ(e.Line(), 2);
+    EXPECT_NE(e.Message().find("[1000, 1800]"), std::string::npos) << e.what();
   }
   std::filesystem::remove_all(dir);
 }

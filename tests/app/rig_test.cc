@@ -1,8 +1,8 @@
 #include "app/rig.h"
 
-#include <string>
-
 #include <gtest/gtest.h>
+
+#include <string>
 
 #include "app/errors.h"
 
@@ -130,10 +130,10 @@ TEST(RigTest, BadRigFilesNameTheirLineAndColumn) {
       ParseRig(bad.text, "rig.yaml");
       ADD_FAILURE() << "no error";
     } catch (const RecipeError& e) {
-      EXPECT_EQ(e.file(), "rig.yaml");
-      EXPECT_EQ(e.line(), bad.line) << e.what();
-      EXPECT_EQ(e.column(), bad.column) << e.what();
-      EXPECT_NE(e.message().find(bad.message), std::string::npos) << e.what();
+      EXPECT_EQ(e.File(), "rig.yaml");
+      EXPECT_EQ(e.Line(), bad.line) << e.what();
+      EXPECT_EQ(e.Column(), bad.column) << e.what();
+      EXPECT_NE(e.Message().find(bad.message), std::string::npos) << e.what();
     }
   }
 }

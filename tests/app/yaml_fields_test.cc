@@ -1,8 +1,8 @@
 #include "app/yaml_fields.h"
 
-#include <string>
-
 #include <gtest/gtest.h>
+
+#include <string>
 
 namespace irdist::yaml_fields {
 namespace {
@@ -20,10 +20,10 @@ TEST(YamlFieldsTest, SyntaxErrorsCarryTheirPosition) {
     Parse("a: [1, 2\nb: 3\n", "f.yaml");
     FAIL() << "no error";
   } catch (const RecipeError& e) {
-    EXPECT_EQ(e.file(), "f.yaml");
-    EXPECT_GT(e.line(), 0);
-    EXPECT_GT(e.column(), 0);
-    EXPECT_NE(e.message().find("YAML syntax error"), std::string::npos);
+    EXPECT_EQ(e.File(), "f.yaml");
+    EXPECT_GT(e.Line(), 0);
+    EXPECT_GT(e.Column(), 0);
+    EXPECT_NE(e.Message().find("YAML syntax error"), std::string::npos);
   }
 }
 
@@ -38,17 +38,16 @@ TEST(YamlFieldsTest, MapReaderRefusesUnknownAndDuplicateKeys) {
     map.Require("c");
     FAIL() << "no error";
   } catch (const RecipeError& e) {
-    EXPECT_EQ(e.line(), 1);
-    EXPECT_NE(e.message().find("section is missing the key 'c'"), std::string::npos);
+    EXPECT_EQ(e.Line(), 1);
+    EXPECT_NE(e.Message().find("section is missing the key 'c'"), std::string::npos);
   }
-  EXPECT_THROW(MapReader(Parse("a: 1\nd: 2\n", "f.yaml"), "f.yaml", "section", {"a"}),
-               RecipeError);
+  EXPECT_THROW(MapReader(Parse("a: 1\nd: 2\n", "f.yaml"), "f.yaml", "section", {"a"}), RecipeError);
   try {
     MapReader(Parse("a: 1\na: 2\n", "f.yaml"), "f.yaml", "section", {"a"});
     FAIL() << "no error";
   } catch (const RecipeError& e) {
-    EXPECT_EQ(e.line(), 2);
-    EXPECT_EQ(e.column(), 1);
+    EXPECT_EQ(e.Line(), 2);
+    EXPECT_EQ(e.Column(), 1);
   }
   EXPECT_THROW(MapReader(Parse("[1, 2]", "f.yaml"), "f.yaml", "section", {"a"}), RecipeError);
 }

@@ -1,11 +1,11 @@
 #include "station/plan.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "base/check.h"
 
@@ -125,7 +125,8 @@ TEST(PlanTest, SlowestAxisOutermostAndSerpentine) {
   const Plan plan = MakePlan(spec, MotionModel());
   ASSERT_EQ(plan.poses.size(), 18u);
   // Slide outermost and monotonic; the angle snakes (bias is not serpentine by default).
-  const std::vector<double> angles = {0, 0, 10, 10, 20, 20, 20, 20, 10, 10, 0, 0, 0, 0, 10, 10, 20, 20};
+  const std::vector<double> angles = {0,  0, 10, 10, 20, 20, 20, 20, 10,
+                                      10, 0, 0,  0,  0,  10, 10, 20, 20};
   for (size_t i = 0; i < plan.poses.size(); ++i) {
     const Pose& pose = plan.poses[i];
     EXPECT_EQ(pose.index, static_cast<int>(i));
@@ -158,8 +159,8 @@ TEST(PlanTest, NestedSerpentineChangesOneAxisPerStep) {
     seen.insert({p.slide_mm, p.pan_deg, p.tilt_deg});
     if (i == 0) continue;
     const Pose& q = plan.poses[i - 1];
-    const int changed = (p.slide_mm != q.slide_mm) + (p.pan_deg != q.pan_deg) +
-                        (p.tilt_deg != q.tilt_deg);
+    const int changed =
+        (p.slide_mm != q.slide_mm) + (p.pan_deg != q.pan_deg) + (p.tilt_deg != q.tilt_deg);
     EXPECT_EQ(changed, 1) << "pose " << i;
     // Only neighbouring values: the snake never jumps across the grid.
     EXPECT_LE(std::abs(p.slide_mm - q.slide_mm), 500.0) << i;
@@ -305,7 +306,7 @@ TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
   EXPECT_EQ(plan.poses[2].slide_mm, 1500.0);
   EXPECT_EQ(plan.poses[2].pan_deg, 10.0);
   const double pan_10 = 2.0 * std::sqrt(5.0 / 60.0 * 2.0);  // triangle: 10 deg < v^2/a = 15 deg
-  const double slide_500 = 500.0 / 200.0 + 200.0 / 400.0;    // trapezoid: 3 s
+  const double slide_500 = 500.0 / 200.0 + 200.0 / 400.0;   // trapezoid: 3 s
   const PlanSummary& s = plan.summary;
   EXPECT_NEAR(s.motion_s, slide_500 + 2.0 * pan_10, 1e-9);
   EXPECT_NEAR(s.station_settle_s, 0.100 + 0.050 + 0.100 + 0.050, 1e-9);
