@@ -1,0 +1,324 @@
+#include "app/summary.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#include <tuple>
+
+namespace irdist {
+namespace {
+
+constexpr const char* kEstimatesHeader =
+    "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,bias_ma,d_mm,theta_deg,"
+    "outside_range,ok";
+constexpr int kEstimatesColumns = 12;
+
+std::vector<std::string> SplitCsv(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, ',')) out.push_back(cell);
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+double ParseNumber(const std::string& text, const std::string& where, const char* column) {
+  try {
+    size_t used = 0;
+    const double value = std::stod(text, &used);
+    if (used == text.size()) return value;
+  } catch (const std::exception&) {
+  }
+  throw EstimatesFileError(where + ": column '" + column + "' is '" + text +
+                           "', not a number; fix or delete that row.");
+}
+
+bool ParseBool(const std::string& text, const std::string& where, const char* column) {
+  if (text == "1" || text == "true") return true;
+  if (text == "0" || text == "false") return false;
+  throw EstimatesFileError(where + ": column '" + column + "' is '" + text +
+                           "', expected 0 or 1; fix or delete that row.");
+}
+
+double Median(const std::vector<double>& v) { return Percentile(v, 50.0); }
+
+double MaxOf(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end());
+}
+
+ErrorFigures Figures(const std::vector<const EstimateRow*>& rows) {
+  ErrorFigures f;
+  std::vector<double> rel, abs_mm, th, th_ge, th_lt;
+  for (const EstimateRow* r : rows) {
+    if (!r->ok) {
+      ++f.failed;
+      continue;
+    }
+    ++f.count;
+    const double err_mm = std::abs(r->d_mm - r->true_d_mm);
+    abs_mm.push_back(err_mm);
+    rel.push_back(100.0 * err_mm / r->true_d_mm);
+    const double err_th = std::abs(std::abs(r->theta_deg) - std::abs(r->true_theta_deg));
+    th.push_back(err_th);
+    (r->true_theta_deg >= 15.0 ? th_ge : th_lt).push_back(err_th);
+  }
+  f.distance_rel_error_pct_median = Median(rel);
+  f.distance_rel_error_pct_p95 = Percentile(rel, 95.0);
+  f.distance_rel_error_pct_max = MaxOf(rel);
+  f.distance_abs_error_mm_median = Median(abs_mm);
+  f.distance_abs_error_mm_max = MaxOf(abs_mm);
+  f.theta_abs_error_deg_median = Median(th);
+  f.theta_abs_error_deg_max = MaxOf(th);
+  f.theta_ge15_count = static_cast<int>(th_ge.size());
+  f.theta_ge15_abs_error_deg_median = Median(th_ge);
+  f.theta_ge15_abs_error_deg_max = MaxOf(th_ge);
+  f.theta_lt15_count = static_cast<int>(th_lt.size());
+  f.theta_lt15_abs_error_deg_median = Median(th_lt);
+  f.theta_lt15_abs_error_deg_max = MaxOf(th_lt);
+  return f;
+}
+
+// Poses are identified by their ground truth, rounded to the station's resolution (0.01 mm/deg).
+using PoseKey = std::tuple<long, long>;
+PoseKey KeyOf(const EstimateRow& r) {
+  return {std::lround(r.true_d_mm * 100.0), std::lround(r.true_theta_deg * 100.0)};
+}
+long CurrentKey(const EstimateRow& r) { return std::lround(r.bias_ma * 10.0); }
+
+double Mean(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x;
+  return s / static_cast<double>(v.size());
+}
+
+MethodSummary SummarizeMethod(const std::string& method, const std::vector<EstimateRow>& rows) {
+  MethodSummary m;
+  m.method = method;
+  std::vector<const EstimateRow*> mine;
+  bool has_joint = false;
+  for (const EstimateRow& r : rows) {
+    if (r.method != method) continue;
+    mine.push_back(&r);
+    has_joint = has_joint || r.dt_ms == 0.0;
+  }
+  std::vector<const EstimateRow*> main_rows;
+  std::map<double, std::vector<const EstimateRow*>> per_dt;
+  for (const EstimateRow* r : mine) {
+    if (!has_joint || r->dt_ms == 0.0) main_rows.push_back(r);
+    if (r->dt_ms > 0.0) per_dt[r->dt_ms].push_back(r);
+  }
+  m.all = Figures(main_rows);
+  for (const EstimateRow* r : main_rows) m.outside_calibrated_range += r->outside_range ? 1 : 0;
+
+  std::map<PoseKey, std::map<long, std::vector<double>>> by_pose_current;
+  for (const EstimateRow* r : main_rows) {
+    if (r->ok) by_pose_current[KeyOf(*r)][CurrentKey(*r)].push_back(r->d_mm);
+  }
+  for (const auto& [pose, by_current] : by_pose_current) {
+    if (by_current.size() >= 2) {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (const auto& [current, ds] : by_current) {
+        lo = std::min(lo, Mean(ds));
+        hi = std::max(hi, Mean(ds));
+      }
+      const double shift = 100.0 * (hi - lo) / (static_cast<double>(std::get<0>(pose)) / 100.0);
+      m.current_shift_pct = std::max(m.current_shift_pct.value_or(0.0), shift);
+    }
+    for (const auto& [current, ds] : by_current) {
+      if (ds.size() < 2) continue;
+      const double mean = Mean(ds);
+      double ss = 0.0;
+      for (double d : ds) ss += (d - mean) * (d - mean);
+      const double sd = std::sqrt(ss / static_cast<double>(ds.size() - 1));
+      m.dispersion_mm = std::max(m.dispersion_mm.value_or(0.0), sd);
+    }
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& [dt, dt_rows] : per_dt) {
+    m.by_dt[dt] = Figures(dt_rows);
+    const double med = m.by_dt[dt].distance_rel_error_pct_median;
+    if (m.by_dt[dt].count > 0 && med < best) {
+      best = med;
+      m.best_dt_ms = dt;
+    }
+  }
+  return m;
+}
+
+void EmitFigures(YAML::Emitter& out, const ErrorFigures& f) {
+  out << YAML::Key << "count" << YAML::Value << f.count;
+  out << YAML::Key << "failed" << YAML::Value << f.failed;
+  out << YAML::Key << "distance_rel_error_pct" << YAML::Value << YAML::Flow << YAML::BeginMap
+      << YAML::Key << "median" << YAML::Value << f.distance_rel_error_pct_median << YAML::Key
+      << "p95" << YAML::Value << f.distance_rel_error_pct_p95 << YAML::Key << "max" << YAML::Value
+      << f.distance_rel_error_pct_max << YAML::EndMap;
+  out << YAML::Key << "distance_abs_error_mm" << YAML::Value << YAML::Flow << YAML::BeginMap
+      << YAML::Key << "median" << YAML::Value << f.distance_abs_error_mm_median << YAML::Key
+      << "max" << YAML::Value << f.distance_abs_error_mm_max << YAML::EndMap;
+  out << YAML::Key << "theta_abs_error_deg" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "median" << YAML::Value << f.theta_abs_error_deg_median;
+  out << YAML::Key << "max" << YAML::Value << f.theta_abs_error_deg_max;
+  out << YAML::Key << "theta_ge_15" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+      << "count" << YAML::Value << f.theta_ge15_count << YAML::Key << "median" << YAML::Value
+      << f.theta_ge15_abs_error_deg_median << YAML::Key << "max" << YAML::Value
+      << f.theta_ge15_abs_error_deg_max << YAML::EndMap;
+  out << YAML::Key << "theta_lt_15" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+      << "count" << YAML::Value << f.theta_lt15_count << YAML::Key << "median" << YAML::Value
+      << f.theta_lt15_abs_error_deg_median << YAML::Key << "max" << YAML::Value
+      << f.theta_lt15_abs_error_deg_max << YAML::EndMap;
+  out << YAML::EndMap;
+}
+
+void EmitMethod(YAML::Emitter& out, const MethodSummary& m) {
+  out << YAML::Key << "method" << YAML::Value << m.method;
+  EmitFigures(out, m.all);
+  out << YAML::Key << "current_shift_pct" << YAML::Value;
+  if (m.current_shift_pct) out << *m.current_shift_pct; else out << YAML::Null;
+  out << YAML::Key << "dispersion_mm" << YAML::Value;
+  if (m.dispersion_mm) out << *m.dispersion_mm; else out << YAML::Null;
+  out << YAML::Key << "by_dt" << YAML::Value << YAML::BeginMap;
+  for (const auto& [dt, f] : m.by_dt) {
+    out << YAML::Key << dt << YAML::Value << YAML::BeginMap;
+    EmitFigures(out, f);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  out << YAML::Key << "best_dt_ms" << YAML::Value;
+  if (m.best_dt_ms) out << *m.best_dt_ms; else out << YAML::Null;
+  out << YAML::Key << "outside_calibrated_range" << YAML::Value << m.outside_calibrated_range;
+}
+
+}  // namespace
+
+double Percentile(std::vector<double> values, double p) {
+  if (values.empty()) return 0.0;
+  IRDIST_CHECK(p >= 0.0 && p <= 100.0, "percentile ", p, " outside [0, 100]");
+  std::sort(values.begin(), values.end());
+  const double pos = p / 100.0 * static_cast<double>(values.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(lo + 1, values.size() - 1);
+  const double frac = pos - static_cast<double>(lo);
+  return values[lo] + frac * (values[hi] - values[lo]);
+}
+
+void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& rows) {
+  std::ofstream out(path, std::ios::trunc);
+  if (!out) throw EstimatesFileError(path + ": cannot be written; check the folder exists and is writable.");
+  out << kEstimatesHeader << '\n' << std::setprecision(10);
+  for (const EstimateRow& r : rows) {
+    out << r.bracket << ',' << r.pose << ',' << r.repeat << ',' << r.method << ',' << r.dt_ms << ','
+        << r.true_d_mm << ',' << r.true_theta_deg << ',' << r.bias_ma << ',' << r.d_mm << ','
+        << r.theta_deg << ',' << (r.outside_range ? 1 : 0) << ',' << (r.ok ? 1 : 0) << '\n';
+  }
+  out.flush();
+  if (!out) throw EstimatesFileError(path + ": write failed (disk full?); free space and rerun.");
+}
+
+std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw EstimatesFileError(path + ": cannot be opened; check the path.");
+  std::string line;
+  if (!std::getline(in, line) || line != kEstimatesHeader) {
+    throw EstimatesFileError(path + ":1: the header is not '" + std::string(kEstimatesHeader) +
+                             "'; is this an irdist estimates.csv?");
+  }
+  std::vector<EstimateRow> rows;
+  int line_no = 1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty()) continue;
+    const std::string where = path + ":" + std::to_string(line_no);
+    const std::vector<std::string> c = SplitCsv(line);
+    if (static_cast<int>(c.size()) != kEstimatesColumns) {
+      throw EstimatesFileError(where + ": " + std::to_string(c.size()) + " columns, expected " +
+                               std::to_string(kEstimatesColumns) + "; fix or delete that row.");
+    }
+    EstimateRow r;
+    r.bracket = static_cast<int>(ParseNumber(c[0], where, "bracket"));
+    r.pose = static_cast<int>(ParseNumber(c[1], where, "pose"));
+    r.repeat = static_cast<int>(ParseNumber(c[2], where, "repeat"));
+    r.method = c[3];
+    r.dt_ms = ParseNumber(c[4], where, "dt_ms");
+    r.true_d_mm = ParseNumber(c[5], where, "true_d_mm");
+    r.true_theta_deg = ParseNumber(c[6], where, "true_theta_deg");
+    r.bias_ma = ParseNumber(c[7], where, "bias_ma");
+    r.d_mm = ParseNumber(c[8], where, "d_mm");
+    r.theta_deg = ParseNumber(c[9], where, "theta_deg");
+    r.outside_range = ParseBool(c[10], where, "outside_range");
+    r.ok = ParseBool(c[11], where, "ok");
+    if (r.true_d_mm <= 0.0) {
+      throw EstimatesFileError(where + ": true_d_mm must be positive; fix that row.");
+    }
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+const MethodSummary* ValidationSummary::Find(const std::string& method) const {
+  for (const MethodSummary& m : methods) {
+    if (m.method == method) return &m;
+  }
+  return nullptr;
+}
+
+ValidationSummary Summarize(const std::vector<EstimateRow>& rows) {
+  ValidationSummary s;
+  std::vector<std::string> order;
+  for (const EstimateRow& r : rows) {
+    if (std::find(order.begin(), order.end(), r.method) == order.end()) order.push_back(r.method);
+  }
+  for (const std::string& method : order) s.methods.push_back(SummarizeMethod(method, rows));
+  return s;
+}
+
+std::string ValidationSummary::BriefReport() const {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(2);
+  for (const MethodSummary& m : methods) {
+    out << m.method << ": " << m.all.count << " estimates";
+    if (m.all.failed) out << " (" << m.all.failed << " failed)";
+    out << ", distance error median " << m.all.distance_rel_error_pct_median << "% p95 "
+        << m.all.distance_rel_error_pct_p95 << "% max " << m.all.distance_rel_error_pct_max
+        << "%, theta error (>=15 deg) median " << m.all.theta_ge15_abs_error_deg_median
+        << " max " << m.all.theta_ge15_abs_error_deg_max << " deg";
+    if (m.current_shift_pct) out << ", current shift " << *m.current_shift_pct << "%";
+    if (m.dispersion_mm) out << ", dispersion " << *m.dispersion_mm << " mm";
+    if (m.best_dt_ms) out << ", best dt " << *m.best_dt_ms << " ms";
+    if (m.outside_calibrated_range) out << ", " << m.outside_calibrated_range << " outside range";
+    out << "\n";
+  }
+  return out.str();
+}
+
+void WriteSummaryYaml(const std::string& path, const ValidationSummary& summary,
+                      const std::map<std::string, std::string>& context) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(6);
+  out << YAML::BeginMap;
+  for (const auto& [key, value] : context) out << YAML::Key << key << YAML::Value << value;
+  if (!summary.methods.empty()) EmitMethod(out, summary.methods.front());
+  for (size_t i = 1; i < summary.methods.size(); ++i) {
+    out << YAML::Key << summary.methods[i].method << YAML::Value << YAML::BeginMap;
+    EmitMethod(out, summary.methods[i]);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream file(tmp, std::ios::trunc);
+    if (!file) throw EstimatesFileError(path + ": cannot be written; check the folder.");
+    file << out.c_str() << '\n';
+    if (!file) throw EstimatesFileError(path + ": write failed (disk full?).");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    throw EstimatesFileError(path + ": could not replace the file; check permissions.");
+  }
+}
+
+}  // namespace irdist

@@ -1,0 +1,138 @@
+#include "app/summary.h"
+
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+namespace irdist {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A hand-made estimates.csv. Pose 0: 2000 mm, 20 deg, two currents, two repeats each; pose 1:
+// 1500 mm, 0 deg, one current, with per-dt rows (22 and 24 ms) beside its joint row.
+constexpr const char* kCsv =
+    "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,bias_ma,d_mm,theta_deg,"
+    "outside_range,ok\n"
+    "0,0,0,i0_free,0,2000,20,475,2010,21,0,1\n"
+    "1,0,1,i0_free,0,2000,20,475,1990,19.5,0,1\n"
+    "2,1,0,i0_free,0,2000,20,525,2020,20,0,1\n"
+    "3,1,1,i0_free,0,2000,20,525,2000,22,0,1\n"
+    "4,2,0,i0_free,0,1500,0,500,1530,5,1,1\n"
+    "4,2,0,i0_free,22,1500,0,500,1515,4,0,1\n"
+    "4,2,0,i0_free,24,1500,0,500,1503,3,0,1\n"
+    "4,2,0,geometric,0,1500,0,500,1485,0,0,1\n"
+    "5,2,1,geometric,0,1500,0,500,0,0,0,0\n";
+
+class SummaryTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("irdist_summary_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    std::ofstream(dir_ / "estimates.csv") << kCsv;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(SummaryTest, FiguresMatchHandComputedValues) {
+  const auto rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  ASSERT_EQ(rows.size(), 9u);
+  const ValidationSummary s = Summarize(rows);
+  ASSERT_EQ(s.methods.size(), 2u);
+  const MethodSummary& m = s.methods[0];
+  EXPECT_EQ(m.method, "i0_free");
+  // Joint rows only: relative errors 0.5, 0.5, 1.0, 0.0, 2.0 %.
+  EXPECT_EQ(m.all.count, 5);
+  EXPECT_NEAR(m.all.distance_rel_error_pct_median, 0.5, 1e-12);
+  EXPECT_NEAR(m.all.distance_rel_error_pct_p95, 1.8, 1e-12);  // 1 + 0.8 * (2 - 1)
+  EXPECT_NEAR(m.all.distance_rel_error_pct_max, 2.0, 1e-12);
+  EXPECT_NEAR(m.all.distance_abs_error_mm_median, 10.0, 1e-9);
+  EXPECT_NEAR(m.all.distance_abs_error_mm_max, 30.0, 1e-9);
+  EXPECT_NEAR(m.all.theta_abs_error_deg_median, 1.0, 1e-12);
+  EXPECT_NEAR(m.all.theta_abs_error_deg_max, 5.0, 1e-12);
+  EXPECT_EQ(m.all.theta_ge15_count, 4);
+  EXPECT_NEAR(m.all.theta_ge15_abs_error_deg_median, 0.75, 1e-12);
+  EXPECT_NEAR(m.all.theta_ge15_abs_error_deg_max, 2.0, 1e-12);
+  EXPECT_EQ(m.all.theta_lt15_count, 1);
+  EXPECT_NEAR(m.all.theta_lt15_abs_error_deg_max, 5.0, 1e-12);
+  // Means 2000 (475 mA) and 2010 (525 mA) at 2000 mm: 0.5 %.
+  ASSERT_TRUE(m.current_shift_pct.has_value());
+  EXPECT_NEAR(*m.current_shift_pct, 0.5, 1e-12);
+  // Repeats 2010/1990 and 2020/2000: sample sd sqrt(200) mm.
+  ASSERT_TRUE(m.dispersion_mm.has_value());
+  EXPECT_NEAR(*m.dispersion_mm, std::sqrt(200.0), 1e-9);
+  ASSERT_EQ(m.by_dt.size(), 2u);
+  EXPECT_NEAR(m.by_dt.at(22.0).distance_rel_error_pct_max, 1.0, 1e-12);
+  EXPECT_NEAR(m.by_dt.at(24.0).distance_rel_error_pct_max, 0.2, 1e-12);
+  ASSERT_TRUE(m.best_dt_ms.has_value());
+  EXPECT_EQ(*m.best_dt_ms, 24.0);
+  EXPECT_EQ(m.outside_calibrated_range, 1);
+
+  const MethodSummary* g = s.Find("geometric");
+  ASSERT_NE(g, nullptr);
+  EXPECT_EQ(g->all.count, 1);
+  EXPECT_EQ(g->all.failed, 1);
+  EXPECT_NEAR(g->all.distance_rel_error_pct_max, 1.0, 1e-12);
+  EXPECT_FALSE(g->current_shift_pct.has_value());
+  EXPECT_FALSE(g->dispersion_mm.has_value());
+}
+
+TEST_F(SummaryTest, SummaryYamlHasTheDocumentedKeys) {
+  const auto s = Summarize(ReadEstimatesCsv((dir_ / "estimates.csv").string()));
+  const std::string path = (dir_ / "summary.yaml").string();
+  WriteSummaryYaml(path, s, {{"recipe", "hand-made"}});
+  const YAML::Node y = YAML::LoadFile(path);
+  EXPECT_EQ(y["recipe"].as<std::string>(), "hand-made");
+  EXPECT_EQ(y["count"].as<int>(), 5);
+  EXPECT_NEAR(y["distance_rel_error_pct"]["p95"].as<double>(), 1.8, 1e-6);
+  EXPECT_NEAR(y["distance_abs_error_mm"]["max"].as<double>(), 30.0, 1e-6);
+  EXPECT_NEAR(y["theta_abs_error_deg"]["theta_ge_15"]["median"].as<double>(), 0.75, 1e-6);
+  EXPECT_NEAR(y["current_shift_pct"].as<double>(), 0.5, 1e-6);
+  EXPECT_NEAR(y["dispersion_mm"].as<double>(), std::sqrt(200.0), 1e-4);
+  EXPECT_NEAR(y["by_dt"][22.0]["distance_rel_error_pct"]["max"].as<double>(), 1.0, 1e-6);
+  EXPECT_EQ(y["best_dt_ms"].as<double>(), 24.0);
+  EXPECT_EQ(y["outside_calibrated_range"].as<int>(), 1);
+  EXPECT_EQ(y["geometric"]["count"].as<int>(), 1);
+  EXPECT_TRUE(y["geometric"]["dispersion_mm"].IsNull());
+}
+
+TEST_F(SummaryTest, RoundTripKeepsEveryRow) {
+  const auto rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  const std::string path = (dir_ / "copy.csv").string();
+  WriteEstimatesCsv(path, rows);
+  const auto again = ReadEstimatesCsv(path);
+  ASSERT_EQ(again.size(), rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(again[i].method, rows[i].method);
+    EXPECT_EQ(again[i].d_mm, rows[i].d_mm);
+    EXPECT_EQ(again[i].outside_range, rows[i].outside_range);
+  }
+}
+
+TEST_F(SummaryTest, BadRowIsRefusedWithItsLine) {
+  std::ofstream(dir_ / "bad.csv") << "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,"
+                                     "bias_ma,d_mm,theta_deg,outside_range,ok\n"
+                                     "0,0,0,i0_free,0,2000,20,475,2010,21,0,1\n"
+                                     "1,0,1,i0_free,0,2000,20,475,abc,19.5,0,1\n";
+  try {
+    ReadEstimatesCsv((dir_ / "bad.csv").string());
+    FAIL() << "a non-numeric d_mm was accepted";
+  } catch (const EstimatesFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.csv:3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("d_mm"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Percentile, InterpolatesBetweenOrderStatistics) {
+  EXPECT_EQ(Percentile({}, 50.0), 0.0);
+  EXPECT_EQ(Percentile({3.0, 1.0, 2.0}, 50.0), 2.0);
+  EXPECT_NEAR(Percentile({0.0, 10.0}, 95.0), 9.5, 1e-12);
+  EXPECT_THROW(Percentile({1.0}, 101.0), CheckError);
+}
+
+}  // namespace
+}  // namespace irdist
