@@ -137,6 +137,19 @@ std::vector<DeviceInfo> ListCameras() {
   return devices;
 }
 
+DeviceInfo ResolveCamera(const std::string& id_serial_or_ip,
+                         const std::vector<DeviceInfo>& devices) {
+  for (const auto& device : devices) {
+    if (device.id == id_serial_or_ip || device.serial == id_serial_or_ip) return device;
+  }
+  std::vector<std::string> names;
+  for (const auto& device : devices) names.push_back(device.id + " (" + device.address + ")");
+  throw CameraError("no camera named '" + id_serial_or_ip + "' (id, serial or IP) answers; " +
+                    "cameras found: [" + Join(names) +
+                    "]. Check power and cabling, or give the camera's IP address in the rig "
+                    "file (camera: id:).");
+}
+
 // --- Impl -----------------------------------------------------------------------------------------
 
 struct AravisCamera::Impl {
@@ -378,19 +391,8 @@ std::unique_ptr<AravisCamera> AravisCamera::Open(const std::string& id_serial_or
   std::string address = id_serial_or_ip;
   std::string wanted_serial = expected_serial;
   if (!LooksLikeIpv4(id_serial_or_ip)) {
-    const std::vector<DeviceInfo> devices = ListCameras();
-    const DeviceInfo* match = nullptr;
-    for (const auto& device : devices) {
-      if (device.id == id_serial_or_ip || device.serial == id_serial_or_ip) match = &device;
-    }
-    if (match == nullptr) {
-      std::vector<std::string> names;
-      for (const auto& device : devices) names.push_back(device.id + " (" + device.address + ")");
-      throw CameraError("no camera named '" + id_serial_or_ip + "' (id, serial or IP) answers; " +
-                        "cameras found: [" + Join(names) +
-                        "]. Check power and cabling, or give the camera's IP address in the rig "
-                        "file (camera: id:).");
-    }
+    const DeviceInfo found = ResolveCamera(id_serial_or_ip, ListCameras());
+    const DeviceInfo* match = &found;
     if (wanted_serial.empty()) wanted_serial = match->serial;
     // Loopback cameras must be opened by address (by id Aravis picks another interface).
     address = match->address.empty() ? id_serial_or_ip : match->address;

@@ -14,7 +14,13 @@
 namespace irdist {
 
 // Cameras visible to Aravis now (GigE Vision discovery, USB3 Vision, Aravis's fake interface).
+// GigE Vision discovery broadcasts on every network interface: call it only when the user asks
+// (`irdist devices --discover`, or opening a camera by id or serial), never from tests.
 std::vector<DeviceInfo> ListCameras();
+
+// The device that `id_serial_or_ip` names among `devices` (matched by Aravis id or serial number).
+// Throws CameraError listing the cameras found when none matches.
+DeviceInfo ResolveCamera(const std::string& id_serial_or_ip, const std::vector<DeviceInfo>& devices);
 
 class AravisCamera final : public Camera {
  public:

@@ -20,10 +20,15 @@ function(irdist_executable name)
   target_link_libraries(${name} PRIVATE ${ARG_DEPS})
 endfunction()
 
-# irdist_test(module/file SOURCES ... [DEPS ...] [TIMEOUT seconds] [LABELS ...])
+# Tests that start a GigE Vision camera on 127.0.0.1 (the virtual rig or Aravis's fake camera) hold
+# this CTest resource lock: only one camera can own the GVCP port 127.0.0.1:3956 at a time.
+set(IRDIST_GVCP_LOCK gvcp_127.0.0.1_3956)
+
+# irdist_test(module/file SOURCES ... [DEPS ...] [TIMEOUT seconds] [LABELS ...] [GIGE])
 # The CTest name is module/file, mirroring the source tree; the binary is test_module_file.
+# GIGE: the test starts a camera on 127.0.0.1 and takes IRDIST_GVCP_LOCK.
 function(irdist_test test_name)
-  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "GIGE" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
   string(REPLACE "/" "_" target "test_${test_name}")
   add_executable(${target} ${ARG_SOURCES})
   target_include_directories(${target} PRIVATE ${PROJECT_SOURCE_DIR})
@@ -40,6 +45,9 @@ function(irdist_test test_name)
     WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
   if(ARG_LABELS)
     set_tests_properties(${test_name} PROPERTIES LABELS "${ARG_LABELS}")
+  endif()
+  if(ARG_GIGE)
+    set_tests_properties(${test_name} PROPERTIES RESOURCE_LOCK ${IRDIST_GVCP_LOCK})
   endif()
 endfunction()
 
