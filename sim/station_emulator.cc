@@ -516,11 +516,13 @@ struct StationEmulator::Impl {
       state = homing_ok ? State::kIdle : State::kUnhomed;
     }
     PublishPose();
-    // Trigger train, in simulated time.
-    while (trig_remaining > 0 && now >= trig_next_s) {
+    // Trigger train, in simulated time. A pulse fired late (the host did not run this loop in
+    // time) pushes the rest of the train back: pulses are never closer than the period, as on a
+    // hardware timer, so a camera never sees two pulses inside one frame time.
+    if (trig_remaining > 0 && now >= trig_next_s) {
       ++pulses_total;
       --trig_remaining;
-      trig_next_s += static_cast<double>(trig_period_us) * 1e-6;
+      trig_next_s = now + static_cast<double>(trig_period_us) * 1e-6;
       if (!Chance(options.missed_pulse_rate)) {
         mutex.unlock();  // the sink may render a frame; never hold our lock across it
         world.FireTrigger();
