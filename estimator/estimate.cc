@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "base/check.h"
@@ -30,6 +31,14 @@ struct Problem {
   bool use_e;
   const Difference* diffs;
   int count;
+  // kFused: weights (1 / calibration mean relative error) and the extra equations.
+  bool fused = false;
+  double e_weight = 1.0;
+  double s_weight = 1.0;
+  double geo_weight = 0.0;         // 0: no geometric equations
+  const double* geo_ln_d = nullptr;  // per difference, ln of the frame's geometric d (NaN: none)
+  double theta_prior_rad = 0.0;
+  double theta_prior_weight = 0.0;  // 1 / sd in rad; 0: no prior
 };
 
 // Relative residuals of Eq. 26 at (ln d, theta rad): [E_0, S_0, E_1, S_1, ...] (E left out when
@@ -51,19 +60,27 @@ int Residuals(const Problem& p, const T& ln_d, const T& theta_rad, T* r) {
     vars[kVarDF] = T(p.diffs[i].df);
     if (p.use_e) {
       vars[kVarRho] = Rho(theta_deg, T(p.e->sigma_deg));
-      r[n++] = EvaluateModel(GetModelSpec(ModelKind::kFreeE), p.e->coefficients.data(), vars) /
-                   p.diffs[i].de -
-               1.0;
+      r[n++] = (EvaluateModel(GetModelSpec(ModelKind::kFreeE), p.e->coefficients.data(), vars) /
+                    p.diffs[i].de -
+                1.0) *
+               p.e_weight;
     }
     vars[kVarRho] = Rho(theta_deg, T(p.s->sigma_deg));
-    r[n++] = EvaluateModel(GetModelSpec(ModelKind::kFreeSigma), p.s->coefficients.data(), vars) /
-                 p.diffs[i].ds -
-             1.0;
+    r[n++] = (EvaluateModel(GetModelSpec(ModelKind::kFreeSigma), p.s->coefficients.data(), vars) /
+                  p.diffs[i].ds -
+              1.0) *
+             p.s_weight;
   }
+  if (p.geo_weight > 0.0) {
+    for (int i = 0; i < p.count; ++i) {
+      if (std::isfinite(p.geo_ln_d[i])) r[n++] = (ln_d - p.geo_ln_d[i]) * p.geo_weight;
+    }
+  }
+  if (p.theta_prior_weight > 0.0) r[n++] = (theta_rad - p.theta_prior_rad) * p.theta_prior_weight;
   return n;
 }
 
-constexpr int kMaxResiduals = 2 * kMaxBracketExposures;
+constexpr int kMaxResiduals = 3 * kMaxBracketExposures + 1;
 using Jet2 = ceres::Jet<double, 2>;
 
 // Residuals and Jacobian (columns: ln d, theta rad).
@@ -144,26 +161,45 @@ void SolveLm(const Problem& p, bool solve_theta, const EstimateOptions& options,
   out->d_mm = std::exp(x[0]);
   out->theta_deg = std::abs(x[1]) / kRad;  // rho is even: the sign is not observable
   out->theta_solved = solve_theta;
-  double se = 0.0, ss = 0.0;
-  int ne = 0, ns = 0;
-  for (int i = 0; i < n; ++i) {
-    const bool is_e = p.use_e && (i % 2 == 0);
-    (is_e ? se : ss) += r[i] * r[i];
-    ++(is_e ? ne : ns);
-  }
-  out->residual_e = ne > 0 ? std::sqrt(se / ne) : 0.0;
-  out->residual_sigma = ns > 0 ? std::sqrt(ss / ns) : 0.0;
-  if (solve_theta) {
-    Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
-    for (int i = 0; i < n; ++i) {
-      const Eigen::Vector2d row(j[i][0], j[i][1]);
-      h += row * row.transpose();
+  {
+    // Unweighted relative residuals of the model equations alone, for the report.
+    Problem plain = p;
+    plain.fused = false;
+    plain.e_weight = plain.s_weight = 1.0;
+    plain.geo_weight = plain.theta_prior_weight = 0.0;
+    double rp[kMaxResiduals];
+    const int np = Residuals(plain, x[0], x[1], rp);
+    double se = 0.0, ss = 0.0;
+    int ne = 0, ns = 0;
+    for (int i = 0; i < np; ++i) {
+      const bool is_e = p.use_e && (i % 2 == 0);
+      (is_e ? se : ss) += rp[i] * rp[i];
+      ++(is_e ? ne : ns);
     }
+    out->residual_e = ne > 0 ? std::sqrt(se / ne) : 0.0;
+    out->residual_sigma = ns > 0 ? std::sqrt(ss / ns) : 0.0;
+  }
+  Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d row(j[i][0], j[i][1]);
+    h += row * row.transpose();
+  }
+  if (solve_theta) {
     const Eigen::Vector2d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(h).eigenvalues();
     out->condition_number =
         ev(0) > 0.0 ? std::sqrt(ev(1) / ev(0)) : std::numeric_limits<double>::infinity();
   } else {
     out->condition_number = 1.0;
+  }
+  if (p.fused) {
+    // Residuals are in units of their calibration errors: the covariance is (J^T J)^-1.
+    if (solve_theta && h.determinant() > 0.0) {
+      const Eigen::Matrix2d cov = h.inverse();
+      out->d_std_mm = out->d_mm * std::sqrt(cov(0, 0));
+      out->theta_std_deg = std::sqrt(cov(1, 1)) / kRad;
+    } else if (h(0, 0) > 0.0) {
+      out->d_std_mm = out->d_mm / std::sqrt(h(0, 0));
+    }
   }
   const CalibratedRanges& cr = p.model->ranges;
   // Tolerances: 1e-6 relative in d, 1e-4 deg in theta (the solver's own precision).
@@ -247,6 +283,19 @@ void ChooseStart(const Problem& p, double theta0_deg, const EstimateOptions& opt
   const CalibratedRanges& cr = p.model->ranges;
   const double d_lo = cr.d_min_mm / (1.0 + options.range_margin);
   const double d_hi = cr.d_max_mm * (1.0 + options.range_margin);
+  // kGeometric: the mean of the frames' geometric ln d (NaN when there is none).
+  double tie_geo_ln_d = std::numeric_limits<double>::quiet_NaN();
+  if (options.tie_breaker == RootTieBreaker::kGeometric && p.geo_ln_d != nullptr) {
+    double sum = 0.0;
+    int count = 0;
+    for (int i = 0; i < p.count; ++i) {
+      if (std::isfinite(p.geo_ln_d[i])) {
+        sum += p.geo_ln_d[i];
+        ++count;
+      }
+    }
+    if (count > 0) tie_geo_ln_d = sum / count;
+  }
   // Polynomials in scaled D from the first difference (Eq. 21, 23), each normalised to unit norm.
   const Difference& df = p.diffs[0];
   double vars[kNumModelVars] = {0.0, 0.0, 0.0, 0.0, df.dt, df.df};
@@ -269,7 +318,9 @@ void ChooseStart(const Problem& p, double theta0_deg, const EstimateOptions& opt
       const double d_mm = sc.DistanceFromScaledD(roots[i]);
       if (d_mm < d_lo || d_mm > d_hi) continue;
       ++in_range;
-      const double v = Vote(p, roots[i], theta0_deg);
+      const double v = p.geo_ln_d != nullptr && tie_geo_ln_d == tie_geo_ln_d
+                           ? std::abs(std::log(d_mm) - tie_geo_ln_d)
+                           : Vote(p, roots[i], theta0_deg);
       if (v < best) {
         best = v;
         out->d0_mm = d_mm;
@@ -321,6 +372,57 @@ DistanceEstimate Solve(const Problem& p, double theta0_deg, const EstimateOption
   return out;
 }
 
+// theta0 of one frame under the chosen source.
+double Theta0(const CalibrationModel& model, const Features& f, const EstimateOptions& options) {
+  if (options.theta_source == ThetaSource::kFeatures || !model.geometric.fitted()) {
+    return f.theta0_deg;
+  }
+  const double beta = model.geometric.beta_px2;
+  const double major = f.moment_major_var_px2 - beta;
+  const double minor = f.moment_minor_var_px2 - beta;
+  if (!(major > 0.0)) return f.theta0_deg;
+  const double ratio = std::clamp(std::sqrt(std::max(0.0, minor) / major), 0.0, 1.0);
+  return std::acos(ratio) / kRad;
+}
+
+// ln of the frame's geometric distance, NaN when there is none.
+double GeometricLnD(const CalibrationModel& model, const Features& f) {
+  if (!model.geometric.fitted() || !f.blob_found) return std::numeric_limits<double>::quiet_NaN();
+  const double big_d = (f.moment_major_var_px2 - model.geometric.beta_px2) / model.geometric.alpha_px2;
+  if (!(big_d > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  return std::log(1000.0 / std::sqrt(big_d));
+}
+
+// Weight of an equation: 1 / its calibration fit's mean relative error (floored).
+double FitWeight(const FitSummary& s) {
+  return 1.0 / std::max(s.mean_relative_error > 0.0 ? s.mean_relative_error : 1.0, 1e-6);
+}
+
+void SetUpFused(const CalibrationModel& model, const EstimateOptions& options, const double* geo,
+                double theta_prior_deg, Problem* p) {
+  p->geo_ln_d = geo;
+  if (options.method != EstimateMethod::kFused) return;
+  p->fused = true;
+  p->e_weight = FitWeight(p->e->summary);
+  p->s_weight = FitWeight(p->s->summary);
+  // Geometric summary residuals are relative distance errors: the weight is for ln d directly.
+  if (model.geometric.fitted()) p->geo_weight = FitWeight(model.geometric.summary);
+  p->theta_prior_rad = theta_prior_deg * kRad;
+  p->theta_prior_weight = 1.0 / (options.theta_prior_sd_deg * kRad);
+}
+
+double MeanFinite(const double* v, int n) {
+  double sum = 0.0;
+  int count = 0;
+  for (int i = 0; i < n; ++i) {
+    if (std::isfinite(v[i])) {
+      sum += v[i];
+      ++count;
+    }
+  }
+  return count > 0 ? std::exp(sum / count) : 0.0;
+}
+
 }  // namespace
 
 bool EstimateOptions::IsValid(std::string* why) const {
@@ -331,6 +433,7 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(step_tolerance > 0.0)) return fail("step_tolerance must be > 0");
   if (!(range_margin >= 0.0)) return fail("range_margin must be >= 0");
+  if (!(theta_prior_sd_deg > 0.0)) return fail("theta_prior_sd_deg must be > 0");
   return true;
 }
 
@@ -375,8 +478,13 @@ DistanceEstimate EstimatePair(const CalibrationModel& model, const Features& ref
   const FittedModel *e, *s;
   Prepare(model, &e, &s);
   const Difference diff = MakeDifference(model.scaling, reference, t_ref_ms, measurement, t_ms);
-  const Problem p{&model, e, s, !e->degenerate, &diff, 1};
-  return Solve(p, measurement.theta0_deg, options);
+  const double geo = GeometricLnD(model, measurement);
+  const double theta0 = Theta0(model, measurement, options);
+  Problem p{&model, e, s, !e->degenerate, &diff, 1};
+  SetUpFused(model, options, &geo, theta0, &p);
+  DistanceEstimate out = Solve(p, theta0, options);
+  out.d_geometric_mm = MeanFinite(&geo, 1);
+  return out;
 }
 
 BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& reference,
@@ -391,16 +499,25 @@ BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& r
   Prepare(model, &e, &s);
   BracketEstimate out;
   Difference diffs[kMaxBracketExposures];
+  double geo[kMaxBracketExposures];
+  double thetas[kMaxBracketExposures];
   const int n = static_cast<int>(measurements.size());
   double theta0 = 0.0;
   for (int i = 0; i < n; ++i) {
     diffs[i] = MakeDifference(model.scaling, reference, t_ref_ms, measurements[i], t_ms[i]);
-    theta0 += measurements[i].theta0_deg / n;
-    const Problem p{&model, e, s, !e->degenerate, &diffs[i], 1};
-    out.per_exposure.push_back(Solve(p, measurements[i].theta0_deg, options));
+    geo[i] = GeometricLnD(model, measurements[i]);
+    thetas[i] = Theta0(model, measurements[i], options);
+    theta0 += thetas[i] / n;
+  }
+  for (int i = 0; i < n; ++i) {
+    Problem p{&model, e, s, !e->degenerate, &diffs[i], 1};
+    SetUpFused(model, options, &geo[i], thetas[i], &p);
+    out.per_exposure.push_back(Solve(p, thetas[i], options));
+    out.per_exposure.back().d_geometric_mm = MeanFinite(&geo[i], 1);
   }
   // Jointly: start from the per-exposure estimate with the smallest residuals.
-  const Problem joint{&model, e, s, !e->degenerate, diffs, n};
+  Problem joint{&model, e, s, !e->degenerate, diffs, n};
+  SetUpFused(model, options, geo, theta0, &joint);
   const DistanceEstimate* best = &out.per_exposure[0];
   for (const DistanceEstimate& d : out.per_exposure) {
     if (d.residual_e + d.residual_sigma < best->residual_e + best->residual_sigma) best = &d;
@@ -409,6 +526,7 @@ BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& r
   out.joint.theta0_deg = theta0;
   if (!e->degenerate) out.joint.theta0_deg = best->theta_deg;
   out.joint.d0_mm = best->d_mm;
+  out.joint.d_geometric_mm = MeanFinite(geo, n);
   SolveLm(joint, !e->degenerate, options, &out.joint);
   return out;
 }
@@ -429,6 +547,80 @@ GeometricEstimate EstimateGeometric(const CalibrationModel& model, const Feature
   if (!(big_d > 0.0)) return out;
   out.valid = true;
   out.d_mm = 1000.0 / std::sqrt(big_d);
+  out.outside_calibrated_range =
+      out.d_mm < model.ranges.d_min_mm || out.d_mm > model.ranges.d_max_mm;
+  return out;
+}
+
+EstimateOptions PaperEstimateOptions() {
+  EstimateOptions options;
+  options.method = EstimateMethod::kAlgorithm1;
+  options.theta_source = ThetaSource::kFeatures;
+  options.tie_breaker = RootTieBreaker::kResidualVote;
+  return options;
+}
+
+const char* ToString(EstimateMethod method) {
+  return method == EstimateMethod::kAlgorithm1 ? "algorithm1" : "fused";
+}
+const char* ToString(ThetaSource source) {
+  return source == ThetaSource::kFeatures ? "features" : "calibrated_blur";
+}
+const char* ToString(RootTieBreaker tie_breaker) {
+  return tie_breaker == RootTieBreaker::kResidualVote ? "residual_vote" : "geometric";
+}
+
+std::string I0DependentEstimate::BriefReport() const {
+  if (!valid) return "i0_dependent: no estimate";
+  std::ostringstream out;
+  out << "i0_dependent: d = " << d_mm << " mm at an assumed " << assumed_bias_ma
+      << " mA, theta = " << theta_deg << " deg (ellipse)"
+      << (outside_calibrated_range ? " (OUTSIDE RANGE)" : "");
+  return out.str();
+}
+
+I0DependentEstimate EstimateI0Dependent(const CalibrationModel& model, const Features& reference,
+                                        double t_ref_ms, const std::vector<Features>& measurements,
+                                        const std::vector<double>& t_ms, double assumed_bias_ma) {
+  IRDIST_CHECK(measurements.size() == t_ms.size(), "measurements and t_ms differ in length");
+  I0DependentEstimate out;
+  out.assumed_bias_ma = assumed_bias_ma;
+  const FittedModel* f = model.Find(ModelKind::kDiffF);
+  if (f == nullptr || f->coefficients.empty() || !reference.blob_found) return out;
+  const ModelSpec& spec = GetModelSpec(ModelKind::kDiffF);
+  // dF = u + v D at fixed theta: least squares of (u + v D) / y - 1 over the bracket.
+  double num = 0.0, den = 0.0, theta = 0.0;
+  int n = 0;
+  for (size_t i = 0; i < measurements.size(); ++i) {
+    const Features& m = measurements[i];
+    if (!m.blob_found) continue;
+    theta += m.theta0_deg;
+    ++n;
+  }
+  if (n == 0) return out;
+  theta /= n;
+  for (size_t i = 0; i < measurements.size(); ++i) {
+    const Features& m = measurements[i];
+    if (!m.blob_found) continue;
+    ModelInputs in;
+    in.bias_ma = assumed_bias_ma;
+    in.dt_ms = t_ms[i] - t_ref_ms;
+    in.theta_deg = theta;
+    std::array<double, kNumModelVars> vars = ScaleInputs(in, model.scaling);
+    vars[kVarRho] = Rho(theta, f->sigma_deg);
+    vars[kVarD] = 0.0;
+    const double u = EvaluateModel(spec, f->coefficients.data(), vars.data());
+    vars[kVarD] = 1.0;
+    const double v = EvaluateModel(spec, f->coefficients.data(), vars.data()) - u;
+    const double y = m.f00 - reference.f00;
+    if (!(std::abs(y) > 0.0)) continue;
+    num += (v / y) * (1.0 - u / y);
+    den += (v / y) * (v / y);
+  }
+  if (!(den > 0.0) || !(num / den > 0.0)) return out;
+  out.valid = true;
+  out.d_mm = model.scaling.DistanceFromScaledD(num / den);
+  out.theta_deg = theta;
   out.outside_calibrated_range =
       out.d_mm < model.ranges.d_min_mm || out.d_mm > model.ranges.d_max_mm;
   return out;

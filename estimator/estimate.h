@@ -11,7 +11,35 @@
 
 namespace irdist {
 
+// How a bracket's distance is solved (docs/estimator.md: measured on the virtual rig).
+enum class EstimateMethod {
+  kAlgorithm1,  // the paper: Eq. 25 root, then Eq. 26 by LM (E and Sigma equations)
+  // Default. Eq. 26's equations plus one geometric equation per measurement frame (the blob's
+  // second-moment size, fit.h GeometricModel), each residual divided by its calibration fit's
+  // mean relative error (the paper's suggested weighting), theta from the prior below.
+  kFused,
+};
+// Where theta0 (the start, and for kFused the prior) comes from.
+enum class ThetaSource {
+  kFeatures,        // Features::theta0_deg (the ellipse chosen by FeatureOptions)
+  kCalibratedBlur,  // default: the moment ellipse with the calibrated blur variance removed
+};
+// How the root of Eq. 25 is chosen among several in range.
+enum class RootTieBreaker {
+  kResidualVote,  // smallest residual in the voting equations (the paper's criterion)
+  kGeometric,     // default: the root nearest the geometric estimate
+};
+const char* ToString(EstimateMethod method);
+const char* ToString(ThetaSource source);
+const char* ToString(RootTieBreaker tie_breaker);
+
 struct EstimateOptions {
+  EstimateMethod method = EstimateMethod::kFused;
+  ThetaSource theta_source = ThetaSource::kCalibratedBlur;
+  RootTieBreaker tie_breaker = RootTieBreaker::kGeometric;
+  // kFused with an informative E equation (theta solved): sd of the theta prior, deg. With a
+  // degenerate E (fixed window) theta is the prior itself: the Sigma equation barely sees it.
+  double theta_prior_sd_deg = 0.5;
   int max_iterations = 50;        // LM iterations of Eq. 26
   double step_tolerance = 1e-12;  // stop when the step in (ln d, theta rad) is below this
   // Roots of Eq. 25 are "in range" within [d_min / (1 + m), d_max * (1 + m)].
@@ -43,6 +71,11 @@ struct DistanceEstimate {
   // the solution (2x2 for one exposure; 2N x 2 jointly). 1-D (theta fixed) reports 1.
   double condition_number = -1.0;
   bool theta_solved = false;  // false when the E equation is degenerate: theta stays theta0
+  // Standard errors from the solver's covariance, (J^T J)^-1 of the residuals weighted by the
+  // calibration fits' mean relative errors (kFused); -1 when not computed (kAlgorithm1).
+  double d_std_mm = -1.0;
+  double theta_std_deg = -1.0;
+  double d_geometric_mm = 0.0;  // mean geometric estimate of the measurement frames (0: none)
   bool converged = false;
   bool outside_calibrated_range = false;
   std::string BriefReport() const;
@@ -76,5 +109,27 @@ struct GeometricEstimate {
 
 // The geometric baseline (fit.h, GeometricModel) on one frame's features.
 GeometricEstimate EstimateGeometric(const CalibrationModel& model, const Features& features);
+
+// The I0-DEPENDENT comparison: the differential F model (Eq. 11, kDiffF) read at an assumed bias
+// current (the nominal one), theta from the ellipse, d by least squares on the relative residuals
+// of every t_n of the bracket (dF is linear in D at fixed theta: closed form). It is what the
+// I0-free method is meant to beat: any change of the radiant intensity (self-heating, another
+// current) biases it by half the relative change.
+struct I0DependentEstimate {
+  bool valid = false;  // a fitted diff_f model, usable frames and a positive D
+  double d_mm = 0.0;
+  double theta_deg = 0.0;  // the ellipse's (not solved)
+  double assumed_bias_ma = 0.0;
+  bool outside_calibrated_range = false;
+  std::string BriefReport() const;
+};
+
+I0DependentEstimate EstimateI0Dependent(const CalibrationModel& model, const Features& reference,
+                                        double t_ref_ms, const std::vector<Features>& measurements,
+                                        const std::vector<double>& t_ms, double assumed_bias_ma);
+
+// The paper's pipeline as specified (Algorithm 1 per t_n, theta0 from the ellipse, root of
+// Eq. 25 by residual vote), for reporting beside the defaults.
+EstimateOptions PaperEstimateOptions();
 
 }  // namespace irdist

@@ -171,6 +171,13 @@ std::string Features::BriefReport() const {
   return out.str();
 }
 
+FeatureOptions PaperFeatureOptions() {
+  FeatureOptions options;
+  options.roi_policy = RoiPolicy::kFixedWindow;
+  options.window_side_px = 64;
+  return options;
+}
+
 Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options) {
   std::string why;
   IRDIST_CHECK(options.IsValid(&why), why);

@@ -104,6 +104,9 @@ struct Features {
   std::string BriefReport() const;
 };
 
+// The features as the paper's pipeline uses them (fixed window, for the paper-method report).
+FeatureOptions PaperFeatureOptions();
+
 // Computes the features of one frame. image: CV_16UC1 holding Mono8/10/12/14/16 content in its low
 // bit_depth bits. Throws CheckError on a wrong type/bit depth or invalid options. An image without
 // a blob gives blob_found = false (a value, not an error).

@@ -204,6 +204,12 @@ void FillErrors(FitSummary* s) {
 
 }  // namespace
 
+FitOptions PaperFitOptions() {
+  FitOptions options;
+  options.free_form = ModelForm::kFull;
+  return options;
+}
+
 bool FitOptions::IsValid(std::string* why) const {
   auto fail = [why](const char* text) {
     if (why) *why = text;

@@ -110,6 +110,9 @@ struct CalibrationModel {
   std::string BriefReport() const;
 };
 
+// The paper's calibration as specified: the full Eq. 17-18 forms (dt^2 terms kept).
+FitOptions PaperFitOptions();
+
 // Fits one model to the samples (scaling given). Throws CheckError on invalid options or on fewer
 // samples than coefficients.
 FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<CalibrationSample>& samples,

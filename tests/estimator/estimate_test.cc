@@ -36,7 +36,7 @@ TEST(Estimate, RecoversDistanceAndAngleWithoutNoise) {
         // The ellipse's theta0 is 2 degrees off, as in the paper.
         const Bracket b = MakeBracket(rig, bias, d, theta, theta + 2.0);
         const BracketEstimate e =
-            EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, EstimateOptions());
+            EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, PaperEstimateOptions());
         SCOPED_TRACE(e.BriefReport());
         for (const DistanceEstimate& x : e.per_exposure) {
           EXPECT_NEAR(x.d_mm, d, 1e-6 * d);
@@ -73,7 +73,7 @@ TEST(Estimate, NoisyFeaturesStayWithinTheStatedBound) {
         f->sigma = noisy(f->sigma);
       }
       const BracketEstimate e =
-          EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, EstimateOptions());
+          EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, PaperEstimateOptions());
       for (const DistanceEstimate& x : e.per_exposure)
         worst_d = std::max(worst_d, std::abs(x.d_mm / d - 1.0));
       worst_joint_d = std::max(worst_joint_d, std::abs(e.joint.d_mm / d - 1.0));
@@ -98,7 +98,7 @@ TEST(Estimate, DegenerateEEquationGetsNoVote) {
   for (double d : {1500.0, 1800.0, 2200.0, 2600.0, 3000.0}) {
     const Bracket b = MakeBracket(rig, 500.0, d, 20.0, 20.0);  // exact theta0
     const BracketEstimate e =
-        EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, EstimateOptions());
+        EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, PaperEstimateOptions());
     for (const DistanceEstimate& x : e.per_exposure) {
       EXPECT_EQ(x.root_source, RootSource::kSigmaOnly);
       EXPECT_FALSE(x.theta_solved);
@@ -119,7 +119,7 @@ TEST(Estimate, OutsideCalibratedRangeIsFlagged) {
   const CalibrationModel model = rig.ExactModel();
   const Bracket b = MakeBracket(rig, 500.0, 3200.0, 20.0, 20.0);
   const DistanceEstimate x =
-      EstimatePair(model, b.reference, 8.0, b.measurements[0], 30.0, EstimateOptions());
+      EstimatePair(model, b.reference, 8.0, b.measurements[0], 30.0, PaperEstimateOptions());
   EXPECT_NEAR(x.d_mm, 3200.0, 1e-6 * 3200.0);
   EXPECT_TRUE(x.outside_calibrated_range);
   EXPECT_NE(x.BriefReport().find("OUTSIDE"), std::string::npos);
@@ -140,10 +140,10 @@ TEST(Estimate, BracketPreconditions) {
   const testing::SyntheticRig rig;
   const CalibrationModel model = rig.ExactModel();
   const Bracket b = MakeBracket(rig, 500.0, 2000.0, 20.0, 20.0);
-  EXPECT_THROW(EstimateBracket(model, b.reference, 8.0, b.measurements, {30.0}, EstimateOptions()),
+  EXPECT_THROW(EstimateBracket(model, b.reference, 8.0, b.measurements, {30.0}, PaperEstimateOptions()),
                CheckError);
   CalibrationModel empty;
-  EXPECT_THROW(EstimatePair(empty, b.reference, 8.0, b.measurements[0], 30.0, EstimateOptions()),
+  EXPECT_THROW(EstimatePair(empty, b.reference, 8.0, b.measurements[0], 30.0, PaperEstimateOptions()),
                CheckError);
 }
 

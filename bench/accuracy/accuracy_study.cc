@@ -1,0 +1,351 @@
+// Accuracy study on the virtual rig without GigE or serial: frames rendered directly with
+// sim::Renderer (sensor noise, per-frame seeds, the IRED's self-heating along the sweep), the
+// Table 3 calibration fitted, and the validation grids of Fig. 10, 13 and 14 estimated by every
+// method: the paper's pipeline (Algorithm 1 per t_n, full Eq. 17-18, fixed window), the default
+// pipeline (estimator defaults), the I0-dependent direct model at the nominal current and the
+// geometric baseline. Prints the issue-6 figures. Usage:
+//   irdist_accuracy_study [--rig recipes/rigs/virtual.yaml] [--seed N] [--quick]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "estimator/estimate.h"
+#include "estimator/features.h"
+#include "estimator/fit.h"
+#include "sim/renderer.h"
+#include "sim/rig_physics.h"
+
+namespace irdist {
+namespace {
+
+constexpr double kTRefMs = 8.0;
+
+struct Pose {
+  double d_mm, theta_deg, bias_ma;
+  int rep;
+};
+
+struct Bracket {
+  Pose pose;
+  Features reference;
+  std::vector<Features> measurements;
+  std::vector<double> t_ms;
+  double rise_k = 0.0;  // junction rise at the reference frame
+};
+
+// Renders sweeps with the IRED's thermal history: the current is switched on at the sweep's start
+// (cold IRED), each pose takes `move_s` of motion, then the bracket's frames follow each other
+// (exposure + readout).
+class SweepRenderer {
+ public:
+  SweepRenderer(const sim::RigPhysics& physics, std::uint64_t seed)
+      : physics_(physics), renderer_(physics), seed_(seed) {}
+
+  std::vector<Bracket> Run(const std::vector<Pose>& poses, const std::vector<double>& t_ms,
+                           const FeatureOptions& fo) {
+    std::vector<sim::CurrentStep> history;
+    double now = 0.0;
+    double current = -1.0;
+    std::vector<Bracket> out;
+    const int side = 192;
+    const cv::Point origin(physics_.sensor.width_px / 2 - side / 2,
+                           physics_.sensor.height_px / 2 - side / 2);
+    cv::Mat frame(side, side, CV_16UC1);
+    for (const Pose& p : poses) {
+      if (p.bias_ma != current) {
+        history.push_back({now, p.bias_ma});
+        current = p.bias_ma;
+      }
+      now += 1.5;  // motion and settling
+      Bracket b;
+      b.pose = p;
+      b.t_ms = t_ms;
+      std::vector<double> all = {kTRefMs};
+      all.insert(all.end(), t_ms.begin(), t_ms.end());
+      for (size_t k = 0; k < all.size(); ++k) {
+        sim::FrameConditions c =
+            sim::StaticConditions(p.d_mm, p.theta_deg, 0.0, p.bias_ma, all[k] * 1e-3);
+        c.junction_rise_k = renderer_.scene().JunctionRiseK(history, now + 0.5 * all[k] * 1e-3);
+        if (k == 0) b.rise_k = c.junction_rise_k;
+        renderer_.Render(c, ++frame_index_ + seed_ * 1000003ull, sim::PixelFormat::kMono12,
+                         origin, frame);
+        Features f = ComputeFeatures(frame, 12, fo);
+        if (k == 0) {
+          b.reference = f;
+        } else {
+          b.measurements.push_back(f);
+        }
+        now += all[k] * 1e-3 + physics_.camera.readout_ms * 1e-3;
+      }
+      out.push_back(std::move(b));
+    }
+    return out;
+  }
+  double JunctionSteadyK(double bias_ma) const {
+    const auto& e = physics_.emitter;
+    return e.thermal_resistance_k_per_w * bias_ma * 1e-3 * e.forward_voltage_v;
+  }
+
+ private:
+  sim::RigPhysics physics_;
+  sim::Renderer renderer_;
+  std::uint64_t seed_;
+  std::uint64_t frame_index_ = 0;
+};
+
+struct Row {
+  Pose pose;
+  double dt_ms;  // 0 = joint over the bracket
+  double d_mm, theta_deg;
+  bool ok;
+  double d_std = 0.0;
+};
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * (v.size() - 1);
+  const size_t i = static_cast<size_t>(pos);
+  const double f = pos - i;
+  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
+}
+
+struct Figures {
+  int n = 0, failed = 0;
+  double med = 0, p95 = 0, max = 0;  // relative distance error, %
+  double th_med = 0, th_max = 0;     // |theta error| for theta >= 15, deg
+  double shift = 0;                  // current shift, %
+  double disp = 0;                   // largest sd over repetitions, mm
+};
+
+Figures Summarise(const std::vector<Row>& rows, bool theta_reported) {
+  Figures f;
+  std::vector<double> err, th;
+  std::map<std::tuple<double, double, double>, std::map<double, std::vector<double>>> by_pose;
+  for (const Row& r : rows) {
+    if (!r.ok) {
+      ++f.failed;
+      continue;
+    }
+    if (r.pose.d_mm < 1499 || r.pose.d_mm > 2901 || r.pose.theta_deg > 30.01) continue;
+    ++f.n;
+    err.push_back(100.0 * std::abs(r.d_mm / r.pose.d_mm - 1.0));
+    if (theta_reported && r.pose.theta_deg >= 15) th.push_back(std::abs(r.theta_deg - r.pose.theta_deg));
+    by_pose[{r.pose.d_mm, r.pose.theta_deg, r.dt_ms}][r.pose.bias_ma].push_back(r.d_mm);
+  }
+  f.med = Percentile(err, 0.5);
+  f.p95 = Percentile(err, 0.95);
+  f.max = err.empty() ? 0 : *std::max_element(err.begin(), err.end());
+  f.th_med = Percentile(th, 0.5);
+  f.th_max = th.empty() ? 0 : *std::max_element(th.begin(), th.end());
+  for (const auto& [key, currents] : by_pose) {
+    std::vector<double> means;
+    for (const auto& [i, v] : currents) {
+      double m = 0;
+      for (double x : v) m += x / v.size();
+      means.push_back(m);
+      if (v.size() > 2) {
+        double s = 0;
+        for (double x : v) s += (x - m) * (x - m);
+        f.disp = std::max(f.disp, std::sqrt(s / (v.size() - 1)));
+      }
+    }
+    if (means.size() > 1) {
+      const auto [lo, hi] = std::minmax_element(means.begin(), means.end());
+      f.shift = std::max(f.shift, 100.0 * (*hi - *lo) / std::get<0>(key));
+    }
+  }
+  return f;
+}
+
+void Print(const char* experiment, const char* method, const Figures& f, bool theta_reported) {
+  std::printf("  %-8s %-16s n=%4d fail=%3d  rel.err%% med %.3f p95 %.3f max %.3f", experiment,
+              method, f.n, f.failed, f.med, f.p95, f.max);
+  if (theta_reported) std::printf("  theta>=15 med %.2f max %.2f deg", f.th_med, f.th_max);
+  std::printf("  shift %.3f%%  disp %.2f mm\n", f.shift, f.disp);
+}
+
+std::vector<CalibrationSample> Samples(const std::vector<Bracket>& brackets) {
+  std::vector<CalibrationSample> out;
+  for (const Bracket& b : brackets) {
+    for (size_t k = 0; k < b.measurements.size(); ++k) {
+      CalibrationSample s;
+      s.reference = b.reference;
+      s.measurement = b.measurements[k];
+      s.t_ref_ms = kTRefMs;
+      s.t_ms = b.t_ms[k];
+      s.bias_ma = b.pose.bias_ma;
+      s.d_mm = b.pose.d_mm;
+      s.theta_deg = b.pose.theta_deg;
+      out.push_back(s);
+    }
+  }
+  return out;
+}
+
+struct Pipeline {
+  std::string name;
+  FeatureOptions features;
+  FitOptions fit;
+  EstimateOptions estimate;
+  bool per_exposure = false;  // report each t_n (the paper) rather than the joint estimate
+  CalibrationModel model;
+};
+
+struct Methods {
+  std::map<std::string, std::vector<Row>> rows;
+};
+
+void Estimate(const Pipeline& pl, const std::vector<Bracket>& brackets, Methods* m,
+              bool with_baselines, double nominal_ma) {
+  for (const Bracket& b : brackets) {
+    if (!b.reference.Usable()) {
+      m->rows[pl.name].push_back({b.pose, 0, 0, 0, false});
+      continue;
+    }
+    const BracketEstimate be =
+        EstimateBracket(pl.model, b.reference, kTRefMs, b.measurements, b.t_ms, pl.estimate);
+    if (pl.per_exposure) {
+      for (size_t k = 0; k < b.t_ms.size(); ++k) {
+        const DistanceEstimate& e = be.per_exposure[k];
+        m->rows[pl.name].push_back({b.pose, b.t_ms[k] - kTRefMs, e.d_mm, e.theta_deg, true});
+      }
+    } else {
+      m->rows[pl.name].push_back(
+          {b.pose, 0, be.joint.d_mm, be.joint.theta_deg, true, be.joint.d_std_mm});
+    }
+    if (!with_baselines) continue;
+    const I0DependentEstimate di =
+        EstimateI0Dependent(pl.model, b.reference, kTRefMs, b.measurements, b.t_ms, nominal_ma);
+    m->rows["i0_dependent"].push_back({b.pose, 0, di.d_mm, di.theta_deg, di.valid});
+    double g = 0;
+    int ng = 0;
+    for (const Features& f : b.measurements) {
+      const GeometricEstimate ge = EstimateGeometric(pl.model, f);
+      if (ge.valid) {
+        g += ge.d_mm;
+        ++ng;
+      }
+    }
+    m->rows["geometric"].push_back({b.pose, 0, ng ? g / ng : 0, 0, ng > 0});
+  }
+}
+
+std::vector<double> Range(double a, double b, double step) {
+  std::vector<double> v;
+  for (double x = a; x <= b + 1e-9; x += step) v.push_back(x);
+  return v;
+}
+
+int Main(int argc, char** argv) {
+  std::string rig = std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml";
+  std::uint64_t seed = 7;
+  bool quick = false;
+  bool verbose = false;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--rig") && i + 1 < argc) rig = argv[++i];
+    else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) seed = std::stoull(argv[++i]);
+    else if (!std::strcmp(argv[i], "--quick")) quick = true;
+    else if (!std::strcmp(argv[i], "--verbose")) verbose = true;
+  }
+  const sim::RigPhysics physics = sim::LoadRigPhysics(rig);
+  std::printf("rig %s, seed %llu\n", rig.c_str(), static_cast<unsigned long long>(seed));
+  const auto t0 = std::chrono::steady_clock::now();
+
+  // Pipelines.
+  std::vector<Pipeline> pipelines(3);
+  pipelines[0].name = "paper";
+  pipelines[0].features = PaperFeatureOptions();
+  pipelines[0].fit = PaperFitOptions();
+  pipelines[0].estimate = PaperEstimateOptions();
+  pipelines[0].per_exposure = true;
+  pipelines[1].name = "default";
+  pipelines[2].name = "alg1_joint";  // default fit, Algorithm 1 jointly over t_n, better theta0
+  pipelines[2].estimate.method = EstimateMethod::kAlgorithm1;
+
+  // Calibration: Table 3.
+  std::vector<Pose> calib;
+  for (double d : Range(1500, 3000, 500))
+    for (double th : Range(0, 35, 5))
+      for (double i : {475.0, 500.0}) calib.push_back({d, th, i, 0});
+  const std::vector<double> calib_t = {30, 32, 34, 36};
+
+  for (Pipeline& pl : pipelines) {
+    SweepRenderer sr(physics, seed);
+    const auto brackets = sr.Run(calib, calib_t, pl.features);
+    pl.model = Fit(Samples(brackets), pl.features, pl.fit);
+    if (verbose) std::printf("calibration %s:\n%s\n", pl.name.c_str(), pl.model.BriefReport().c_str());
+    const FittedModel* fs = pl.model.Find(ModelKind::kFreeSigma);
+    std::printf("calibration %-10s free_sigma (%s) mean %.3f%% max %.3f%% cond %.2g; geometric mean "
+                "%.3f%% max %.3f%%; blur variance %.3f px^2\n",
+                pl.name.c_str(), ToString(fs->form), 100 * fs->summary.mean_relative_error,
+                100 * fs->summary.max_relative_error, fs->summary.condition_number,
+                100 * pl.model.geometric.summary.mean_relative_error,
+                100 * pl.model.geometric.summary.max_relative_error, pl.model.geometric.beta_px2);
+  }
+
+  // Validation grids.
+  struct Experiment {
+    const char* name;
+    std::vector<Pose> poses;
+    std::vector<double> t_ms;
+  };
+  std::vector<Experiment> experiments;
+  {
+    Experiment e{"fig10", {}, Range(30, 40, 2)};
+    for (double d : Range(1500, 2900, 200))
+      for (double th : {0.0, 10.0, 20.0, 30.0})
+        for (double i : {475.0, 500.0, 525.0}) e.poses.push_back({d, th, i, 0});
+    experiments.push_back(e);
+  }
+  {
+    Experiment e{"fig13", {}, {35}};
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> cur(500.0, 50.0);
+    for (double d : {1700.0, 2300.0, 2900.0})
+      for (double th : {10.0, 15.0, 20.0})
+        for (int k = 0; k < 10; ++k) e.poses.push_back({d, th, std::clamp(cur(rng), 300.0, 650.0), k});
+    experiments.push_back(e);
+  }
+  {
+    Experiment e{"fig14", {}, {35}};
+    for (double th : {0.0, 10.0, 20.0, 30.0})
+      for (int k = 0; k < (quick ? 20 : 100); ++k) e.poses.push_back({2700, th, 500, k});
+    experiments.push_back(e);
+  }
+  for (const Experiment& ex : experiments) {
+    Methods m;
+    for (size_t p = 0; p < pipelines.size(); ++p) {
+      SweepRenderer sr(physics, seed + 100);
+      const auto brackets = sr.Run(ex.poses, ex.t_ms, pipelines[p].features);
+      Estimate(pipelines[p], brackets, &m, pipelines[p].name == "default", 500.0);
+    }
+    std::printf("%s (%zu brackets, t_n", ex.name, ex.poses.size());
+    for (double t : ex.t_ms) std::printf(" %g", t);
+    std::printf(" ms):\n");
+    for (const auto& [name, rows] : m.rows) {
+      if (name == "default" && !m.rows["default"].empty()) {
+        double sd = 0;
+        for (const Row& r : rows) sd += r.d_std / rows.size();
+        std::printf("  %-8s default mean standard error per estimate %.2f mm\n", ex.name, sd);
+      }
+      const bool th = name != "geometric";
+      Print(ex.name, name.c_str(), Summarise(rows, th), th);
+    }
+  }
+  std::printf("elapsed %.1f s\n",
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return 0;
+}
+
+}  // namespace
+}  // namespace irdist
+
+int main(int argc, char** argv) { return irdist::Main(argc, argv); }
