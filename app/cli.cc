@@ -7,6 +7,8 @@
 #include <sstream>
 
 #include "app/recipe.h"
+#include "app/run.h"
+#include "app/tools.h"
 #include "station/plan.h"
 
 namespace irdist {
@@ -93,14 +95,6 @@ void PrintPlan(const Recipe& recipe, const Plan& plan, int show_poses, std::ostr
   }
 }
 
-void CheckRecipeThenNotAvailable(const std::string& name, const std::string& recipe_path,
-                                 CommandIo io) {
-  const Recipe recipe = LoadRecipe(recipe_path);
-  PrintPlan(recipe, PlanRecipe(recipe), 4, io.out);
-  io.out << "The recipe is valid; nothing was moved or recorded.\n";
-  ThrowNotAvailable(name);
-}
-
 }  // namespace
 
 std::vector<std::string> SubcommandNames() {
@@ -117,12 +111,13 @@ void RunPlan(const PlanArgs& args, CommandIo io) {
 Handlers DefaultHandlers() {
   Handlers handlers;
   handlers.plan = RunPlan;
-  handlers.calibrate = [](const CalibrateArgs& args, CommandIo io) {
-    CheckRecipeThenNotAvailable("calibrate", args.recipe, io);
-  };
-  handlers.validate = [](const ValidateArgs& args, CommandIo io) {
-    CheckRecipeThenNotAvailable("validate", args.recipe, io);
-  };
+  handlers.calibrate = RunCalibrate;
+  handlers.validate = RunValidate;
+  handlers.fit = RunFit;
+  handlers.playback = RunPlayback;
+  handlers.check = RunCheck;
+  handlers.sim = RunSim;
+  handlers.devices = RunDevices;
   return handlers;
 }
 
@@ -162,6 +157,10 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub->add_option("recipe", calibrate.recipe, "Recipe file (recipes/*.yaml)")->required();
   sub->add_option("--out", calibrate.out_dir, "Run folder (overrides the recipe's output)");
   sub->add_option("--resume", calibrate.resume_dir, "Continue the cut run in this folder");
+  sub->add_option("--time-scale", calibrate.time_scale,
+                  "Virtual rig: simulated seconds per host second (default: the rig file's)")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--quiet", calibrate.quiet, "No progress output");
   table.emplace_back(sub, [&] { Invoke(handlers.calibrate, "calibrate", calibrate, io); });
 
   sub = add("validate");
@@ -169,6 +168,10 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub->add_option("--model", validate.model, "model.yaml from a calibration")->required();
   sub->add_option("--out", validate.out_dir, "Run folder (overrides the recipe's output)");
   sub->add_option("--resume", validate.resume_dir, "Continue the cut run in this folder");
+  sub->add_option("--time-scale", validate.time_scale,
+                  "Virtual rig: simulated seconds per host second (default: the rig file's)")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--quiet", validate.quiet, "No progress output");
   table.emplace_back(sub, [&] { Invoke(handlers.validate, "validate", validate, io); });
 
   sub = add("fit");
@@ -178,8 +181,9 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
 
   sub = add("playback");
   sub->add_option("recording", playback.recording, "Recording folder")->required();
-  sub->add_option("--model", playback.model, "model.yaml from a calibration")->required();
-  sub->add_option("--out", playback.out_dir, "Folder for estimates.csv and summary.yaml");
+  sub->add_option("--model", playback.model, "model.yaml from a calibration");
+  sub->add_option("--out", playback.out_dir, "Folder for features.csv, estimates.csv, summary.yaml");
+  sub->add_flag("--show", playback.show, "Step through the frames in a window (needs a display)");
   table.emplace_back(sub, [&] { Invoke(handlers.playback, "playback", playback, io); });
 
   sub = add("check");
@@ -195,9 +199,14 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
 
   sub = add("sim");
   sub->add_option("rig", sim.rig, "Rig name or rig file of kind virtual")->capture_default_str();
+  sub->add_option("--rig", sim.rig, "Rig name or rig file of kind virtual");
+  sub->add_option("--time-scale", sim.time_scale, "Simulated seconds per host second")
+      ->check(CLI::PositiveNumber);
   table.emplace_back(sub, [&] { Invoke(handlers.sim, "sim", sim, io); });
 
   sub = add("devices");
+  sub->add_flag("--discover", devices.discover,
+                "Also discover GigE/USB cameras (broadcasts on every network interface)");
   table.emplace_back(sub, [&] { Invoke(handlers.devices, "devices", devices, io); });
 
   try {

@@ -23,6 +23,8 @@ struct CalibrateArgs {
   std::string recipe;      // recipe file
   std::string out_dir;     // --out: overrides the recipe's output directory ("" = recipe's)
   std::string resume_dir;  // --resume: continue a cut run from its recording ("" = new run)
+  double time_scale = 0.0;  // --time-scale: virtual rig's simulated s per host s (0 = rig file's)
+  bool quiet = false;       // --quiet: no progress output
 };
 
 struct ValidateArgs {
@@ -30,6 +32,8 @@ struct ValidateArgs {
   std::string model;  // --model: model.yaml from a calibration
   std::string out_dir;
   std::string resume_dir;
+  double time_scale = 0.0;
+  bool quiet = false;
 };
 
 struct FitArgs {
@@ -41,6 +45,7 @@ struct PlaybackArgs {
   std::string recording;
   std::string model;    // --model
   std::string out_dir;  // --out ("" = beside the recording)
+  bool show = false;    // --show: step through the frames in an OpenCV window
 };
 
 struct CheckArgs {
@@ -54,9 +59,12 @@ struct PlanArgs {
 
 struct SimArgs {
   std::string rig = "virtual";  // rig name or rig file (kind: virtual)
+  double time_scale = 0.0;      // --time-scale (0 = rig file's)
 };
 
-struct DevicesArgs {};
+struct DevicesArgs {
+  bool discover = false;  // --discover: GigE/USB camera discovery (broadcasts on every interface)
+};
 
 // One handler per subcommand. A handler reports results on io.out, throws irdist::Error
 // subclasses on failure (main.cc maps them to exit codes) and returns normally on success.
@@ -71,8 +79,7 @@ struct Handlers {
   std::function<void(const DevicesArgs&, CommandIo)> devices;
 };
 
-// The handlers of this build: `plan` is complete; calibrate and validate check the recipe and
-// print its plan, then report that the run is not available yet; the others are empty.
+// The handlers of this build: every command (app/run.h, app/tools.h).
 Handlers DefaultHandlers();
 
 // Names of the subcommands, in help order.

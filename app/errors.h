@@ -1,6 +1,6 @@
 #pragma once
 // The app's typed errors. main.cc maps them to exit codes: RecipeError and every other
-// irdist::Error -> 1 (a failed run), UsageError and NotAvailableError -> 2.
+// irdist::Error -> 1 (a failed run), UsageError and NotAvailableError -> 2, InterruptedError -> 130.
 
 #include <string>
 #include <utility>
@@ -49,6 +49,25 @@ class UsageError : public Error {
 
 // The command exists but its modules are not integrated into this build yet. Exit code 2.
 class NotAvailableError : public Error {
+ public:
+  using Error::Error;
+};
+
+// A run stopped by SIGINT/SIGTERM after finishing the bracket in flight: the recording is closed as
+// cut and the message says how to resume. Exit code 130.
+class InterruptedError : public Error {
+ public:
+  using Error::Error;
+};
+
+// A run folder that cannot be used (a recording already there, nothing to resume). Exit code 1.
+class RunFolderError : public Error {
+ public:
+  using Error::Error;
+};
+
+// A check that ran but found problems (e.g. `irdist check` on a damaged recording). Exit code 1.
+class CheckFailedError : public Error {
  public:
   using Error::Error;
 };

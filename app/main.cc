@@ -10,6 +10,9 @@ int main(int argc, char** argv) {
   } catch (const irdist::UsageError& e) {
     std::cerr << "irdist: " << e.what() << "\n";
     return 2;
+  } catch (const irdist::InterruptedError& e) {
+    std::cerr << "irdist: " << e.what() << "\n";
+    return 130;
   } catch (const irdist::NotAvailableError& e) {
     std::cerr << "irdist: " << e.what() << "\n";
     return 2;

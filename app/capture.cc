@@ -1,0 +1,114 @@
+#include "app/capture.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "acquisition/aravis_camera.h"
+#include "acquisition/bracket.h"
+#include "acquisition/recording.h"
+
+namespace irdist {
+
+struct LiveRecorder::Impl {
+  LiveCaptureSetup setup;
+  std::unique_ptr<AravisCamera> camera;
+  std::unique_ptr<RecordingWriter> writer;
+  std::unique_ptr<BracketCapture> capture;
+  FeatureMap cache;
+  int bit_depth = 16;
+};
+
+RecordingState ReadRecordingState(const std::string& recording_dir) {
+  const RecordingReader reader(recording_dir);
+  RecordingState state;
+  state.recipe_text = reader.header().recipe_text;
+  state.recipe_path = reader.header().recipe_path;
+  state.complete = reader.IsComplete();
+  state.complete_brackets = reader.CompleteBracketIds();
+  return state;
+}
+
+LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
+  Impl& m = *impl_;
+  m.setup = setup;
+  m.camera = AravisCamera::Open(setup.camera_name, setup.camera_serial);
+  CameraSettings settings;
+  settings.pixel_format = setup.pixel_format;
+  settings.trigger_source = setup.trigger_source;
+  settings.trigger_activation = setup.trigger_activation;
+  settings.black_level = setup.black_level;
+  settings.packet_size = setup.packet_size;
+  IRDIST_CHECK(!setup.exposures_us.empty(), "a bracket needs exposures");
+  settings.exposure_us = setup.exposures_us.front();
+  settings.buffer_count =
+      std::max(settings.buffer_count, static_cast<int>(2 * setup.exposures_us.size() + 4));
+  m.camera->Configure(settings);
+
+  if (setup.resume) {
+    m.writer = RecordingWriter::Resume(setup.recording_dir);
+  } else {
+    RecordingHeader header;
+    header.software_version = setup.software_version;
+    header.bit_depth = BitDepthOfPixelFormat(setup.pixel_format);
+    header.pixel_format = setup.pixel_format;
+    header.camera = m.camera->Identity();
+    header.camera_features = m.camera->ReadBackFeatures();
+    header.station_identity = setup.station_identity;
+    header.recipe_path = setup.recipe_path;
+    header.recipe_text = setup.recipe_text;
+    header.rig_path = setup.rig_path;
+    header.rig_text = setup.rig_text;
+    m.writer = RecordingWriter::Open(setup.recording_dir, header);
+  }
+  m.bit_depth = m.writer->header().bit_depth;
+
+  BracketOptions options;
+  options.exposures_us = setup.exposures_us;
+  options.interleave_reference = setup.interleave_reference;
+  options.trigger_source = setup.trigger_source;
+  options.frame_timeout = std::chrono::milliseconds(setup.frame_timeout_ms);
+  m.capture = std::make_unique<BracketCapture>(*m.camera, options);
+}
+
+LiveRecorder::~LiveRecorder() = default;
+
+void LiveRecorder::CaptureBracket(const LivePose& pose, const std::function<void(int)>& trigger,
+                                  const std::function<double()>& measure_current_ma) {
+  Impl& m = *impl_;
+  BracketResult result = m.capture->Capture(trigger);
+  if (!result.complete) result = m.capture->Capture(trigger);
+  if (!result.complete) {
+    throw CameraError("bracket " + std::to_string(pose.bracket_id) + " incomplete twice (" +
+                      result.failure + "; " + m.capture->stats().BriefReport() +
+                      "). Check the trigger wiring (camera " + m.setup.trigger_source +
+                      ") and the camera link, then resume the run.");
+  }
+  const double measured_ma = measure_current_ma();
+  // Appended only once the whole bracket is captured: a retake after a station reboot never finds
+  // earlier frames of its pose in the recording.
+  const int size = static_cast<int>(result.frames.size());
+  for (const BracketFrame& frame : result.frames) {
+    FrameRecord record = RecordFromFrame(frame, size);
+    record.bracket_id = pose.bracket_id;
+    record.bias_ma_set = pose.bias_ma;
+    record.bias_ma_measured = measured_ma;
+    record.slide_mm = pose.slide_mm;
+    record.pan_deg = pose.pan_deg;
+    record.tilt_deg = pose.tilt_deg;
+    record.theta_deg = pose.theta_deg;
+    record.repeat = pose.repeat;
+    const FrameRecord written = m.writer->Append(frame.image, record);
+    m.cache[written.index] = FrameFeatures(frame.image, m.bit_depth, m.setup.feature_options);
+  }
+}
+
+void LiveRecorder::Close(bool cut) {
+  if (impl_->camera->streaming()) impl_->camera->StopStream();
+  impl_->writer->Close(cut ? Completion::kCut : Completion::kComplete);
+}
+
+std::string LiveRecorder::StatsReport() const { return impl_->capture->stats().BriefReport(); }
+
+const FeatureMap& LiveRecorder::cache() const { return impl_->cache; }
+
+}  // namespace irdist

@@ -1,0 +1,78 @@
+#pragma once
+// The camera and recording side of a live run, behind plain types: app/run.cc drives the station
+// and sees station/plan.h, whose irdist::BracketFrame clashes with acquisition/bracket.h's, so the
+// acquisition headers stay in capture.cc.
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "app/offline.h"
+#include "estimator/features.h"
+
+namespace irdist {
+
+struct LiveCaptureSetup {
+  std::string camera_name;    // address, id or serial for AravisCamera::Open
+  std::string camera_serial;  // expected serial ("" = no check)
+  std::string pixel_format = "Mono12";
+  std::string trigger_source = "Line1";
+  std::string trigger_activation = "RisingEdge";
+  double black_level = 0.0;
+  int packet_size = 0;
+  std::vector<double> exposures_us;  // t_r first, then the t_n
+  bool interleave_reference = false;
+  int frame_timeout_ms = 1000;
+  // The recording: a new one (header from these) or a cut one to continue.
+  std::string recording_dir;
+  bool resume = false;
+  std::string software_version;
+  std::string station_identity;
+  std::string recipe_path, recipe_text, rig_path, rig_text;
+  FeatureOptions feature_options;  // features of every frame, computed while it is in memory
+};
+
+// The pose a bracket belongs to, as the recording stores it.
+struct LivePose {
+  std::int64_t bracket_id = 0;
+  double slide_mm = 0.0, pan_deg = 0.0, tilt_deg = 0.0, theta_deg = 0.0, bias_ma = 0.0;
+  int repeat = 0;
+};
+
+// What is already in a recording: its recipe text, whether it is complete, its complete brackets.
+struct RecordingState {
+  std::string recipe_text;
+  std::string recipe_path;
+  bool complete = false;
+  std::set<std::int64_t> complete_brackets;
+};
+RecordingState ReadRecordingState(const std::string& recording_dir);  // throws RecordingError
+
+class LiveRecorder {
+ public:
+  // Opens and configures the camera, opens (or resumes) the recording. Throws CameraError,
+  // RecordingError.
+  explicit LiveRecorder(const LiveCaptureSetup& setup);
+  ~LiveRecorder();  // without Close(): the recording stays "running" (reads as cut)
+  LiveRecorder(const LiveRecorder&) = delete;
+  LiveRecorder& operator=(const LiveRecorder&) = delete;
+
+  // Captures one bracket (`trigger` fires one pulse; called with -1 for a warm-up frame), retaking
+  // an incomplete bracket once, measures the current, then appends every frame. Throws CameraError
+  // when the bracket stays incomplete.
+  void CaptureBracket(const LivePose& pose, const std::function<void(int)>& trigger,
+                      const std::function<double()>& measure_current_ma);
+  void Close(bool cut);  // stops the stream, closes the recording as complete or cut
+  std::string StatsReport() const;
+  const FeatureMap& cache() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace irdist

@@ -1,0 +1,449 @@
+#include "app/offline.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <ostream>
+#include <sstream>
+
+#include <filesystem>
+#include <set>
+#include <tuple>
+#include <optional>
+
+#include "acquisition/recording.h"
+#include "app/run.h"
+#include "app/tools.h"
+#include "estimator/estimate.h"
+#include "estimator/model_file.h"
+#include "estimator/models.h"
+
+namespace irdist {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string Num(double value) {
+  if (!std::isfinite(value)) return "nan";
+  char buffer[40];
+  std::snprintf(buffer, sizeof(buffer), "%.10g", value);
+  return buffer;
+}
+
+// Measurement frames of a bracket with the reference each one is differenced with.
+struct Pair {
+  const FrameRecord* reference = nullptr;
+  const FrameRecord* measurement = nullptr;
+};
+
+std::vector<Pair> PairsOf(const RecordedBracket& bracket) {
+  std::vector<Pair> pairs;
+  const FrameRecord* last_reference = nullptr;
+  for (const FrameRecord& row : bracket.frames) {
+    if (row.role == FrameRole::kReference) {
+      last_reference = &row;
+    } else if (last_reference != nullptr) {
+      pairs.push_back({last_reference, &row});
+    }
+  }
+  return pairs;
+}
+
+const Features& FeaturesOf(const FeatureMap& features, const FrameRecord& row) {
+  const auto it = features.find(row.index);
+  IRDIST_CHECK(it != features.end(), "no features for frame ", row.index);
+  return it->second;
+}
+
+void Normalise(double poly[4]) {
+  double norm = 0.0;
+  for (int k = 0; k < 4; ++k) norm += poly[k] * poly[k];
+  norm = std::sqrt(norm);
+  if (norm > 0.0) {
+    for (int k = 0; k < 4; ++k) poly[k] /= norm;
+  }
+}
+
+std::string ParentOf(const std::string& dir) {
+  fs::path path = fs::path(dir).lexically_normal();
+  if (path.filename().empty()) path = path.parent_path();
+  const fs::path parent = path.parent_path();
+  return parent.empty() ? "." : parent.string();
+}
+
+}  // namespace
+
+int BitDepthOfPixelFormat(const std::string& pixel_format) {
+  if (pixel_format == "Mono8") return 8;
+  if (pixel_format == "Mono10") return 10;
+  if (pixel_format == "Mono12") return 12;
+  if (pixel_format == "Mono14") return 14;
+  return 16;
+}
+
+Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options) {
+  return ComputeFeatures(image, bit_depth, options);
+}
+
+FeatureMap RecordingFeatures(const RecordingReader& reader, const FeatureOptions& options,
+                             const FeatureMap& cache) {
+  FeatureMap features;
+  const int bit_depth = reader.header().bit_depth;
+  for (const FrameRecord& row : reader.rows()) {
+    const auto cached = cache.find(row.index);
+    if (cached != cache.end()) {
+      features[row.index] = cached->second;
+    } else {
+      features[row.index] = FrameFeatures(reader.LoadImage(row), bit_depth, options);
+    }
+  }
+  return features;
+}
+
+void WriteFeaturesCsv(const std::string& path, const std::vector<FrameRecord>& rows,
+                      const FeatureMap& features) {
+  std::ostringstream out;
+  out << "index,file,bracket,frame_in_bracket,role,exposure_us,bias_ma,slide_mm,theta_deg,"
+         "blob_found,usable,saturated_pixels,touches_border,clipped,roi_x,roi_y,roi_w,roi_h,"
+         "roi_area_px,background,peak,e_rel,f00,sigma,centroid_x_px,centroid_y_px,"
+         "major_px,minor_px,ellipse_angle_deg,theta0_deg\n";
+  for (const FrameRecord& row : rows) {
+    const Features& f = FeaturesOf(features, row);
+    const EllipseFit& e = f.ellipse_moments.valid ? f.ellipse_moments : f.ellipse_contour;
+    out << row.index << ',' << row.file << ',' << row.bracket_id << ',' << row.frame_in_bracket
+        << ',' << FrameRoleName(row.role) << ',' << Num(row.requested_exposure_us) << ','
+        << Num(row.bias_ma_set) << ',' << Num(row.slide_mm) << ',' << Num(row.theta_deg) << ','
+        << (f.blob_found ? 1 : 0) << ',' << (f.Usable() ? 1 : 0) << ',' << f.saturated_pixels
+        << ',' << (f.touches_border ? 1 : 0) << ',' << (f.blob_clipped_by_roi ? 1 : 0) << ','
+        << f.roi.x << ',' << f.roi.y << ',' << f.roi.width << ',' << f.roi.height << ','
+        << f.roi_area_px << ',' << Num(f.background) << ',' << Num(f.peak) << ','
+        << Num(f.e_rel) << ',' << Num(f.f00) << ',' << Num(f.sigma) << ','
+        << Num(f.centroid_px.x) << ',' << Num(f.centroid_px.y) << ',' << Num(e.major_px) << ','
+        << Num(e.minor_px) << ',' << Num(e.angle_deg) << ',' << Num(f.theta0_deg) << '\n';
+  }
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  file << out.str();
+  file.flush();
+  if (!file) {
+    throw RecordingError(path + ": cannot write features.csv; check the folder exists and is "
+                         "writable.");
+  }
+}
+
+std::vector<CalibrationSample> SamplesFromRecording(const RecordingReader& reader,
+                                                    const FeatureMap& features) {
+  std::vector<CalibrationSample> samples;
+  for (const RecordedBracket& bracket : reader.Brackets()) {
+    if (!bracket.complete) continue;
+    for (const Pair& pair : PairsOf(bracket)) {
+      CalibrationSample s;
+      s.reference = FeaturesOf(features, *pair.reference);
+      s.measurement = FeaturesOf(features, *pair.measurement);
+      s.t_ref_ms = pair.reference->requested_exposure_us / 1000.0;
+      s.t_ms = pair.measurement->requested_exposure_us / 1000.0;
+      s.bias_ma = pair.measurement->bias_ma_set;
+      s.d_mm = pair.measurement->slide_mm;
+      s.theta_deg = std::fabs(pair.measurement->theta_deg);
+      samples.push_back(s);
+    }
+  }
+  return samples;
+}
+
+std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
+                                                  const std::vector<CalibrationSample>& samples,
+                                                  int eq25_curves) {
+  std::vector<CalibrationPoint> points;
+  const FittedModel* free_e = model.Find(ModelKind::kFreeE);
+  const FittedModel* free_s = model.Find(ModelKind::kFreeSigma);
+  if (free_e == nullptr || free_s == nullptr) return points;
+  const size_t stride =
+      eq25_curves > 0 ? std::max<size_t>(1, samples.size() / static_cast<size_t>(eq25_curves)) : 0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const CalibrationSample& s = samples[i];
+    if (!s.reference.Usable() || !s.measurement.Usable()) continue;
+    CalibrationPoint p;
+    p.d_mm = s.d_mm;
+    p.theta_deg = s.theta_deg;
+    p.bias_ma = s.bias_ma;
+    p.dt_ms = s.t_ms - s.t_ref_ms;
+    ModelInputs in;
+    in.d_mm = s.d_mm;
+    in.theta_deg = s.theta_deg;
+    in.bias_ma = s.bias_ma;
+    in.dt_ms = p.dt_ms;
+    in.df = s.measurement.f00 - s.reference.f00;
+    p.de_measured = s.measurement.e_rel - s.reference.e_rel;
+    p.ds_measured = s.measurement.sigma - s.reference.sigma;
+    p.de_model = free_e->Predict(model.scaling, in);
+    p.ds_model = free_s->Predict(model.scaling, in);
+    if (stride > 0 && i % stride == 0 &&
+        static_cast<int>(i / stride) < eq25_curves) {
+      // Eq. 25 (c - a) as a function of d at the true theta, each polynomial normalised.
+      std::array<double, kNumModelVars> vars = ScaleInputs(in, model.scaling);
+      double a[4], c[4];
+      vars[kVarRho] = Rho(s.theta_deg, free_s->sigma_deg);
+      AlgebraicPolynomialInD(GetModelSpec(ModelKind::kFreeSigma), free_s->coefficients.data(),
+                             vars.data(), p.ds_measured, c);
+      vars[kVarRho] = Rho(s.theta_deg, free_e->sigma_deg);
+      AlgebraicPolynomialInD(GetModelSpec(ModelKind::kFreeE), free_e->coefficients.data(),
+                             vars.data(), p.de_measured, a);
+      Normalise(a);
+      Normalise(c);
+      const double d_lo = 0.8 * model.ranges.d_min_mm, d_hi = 1.2 * model.ranges.d_max_mm;
+      for (int k = 0; k <= 60; ++k) {
+        const double d_mm = d_lo + (d_hi - d_lo) * k / 60.0;
+        const double x = model.scaling.ScaledD(d_mm);
+        double value = 0.0;
+        for (int j = 3; j >= 0; --j) value = value * x + (c[j] - a[j]);
+        p.eq25_d_mm.push_back(d_mm);
+        p.eq25_value.push_back(value);
+      }
+    }
+    points.push_back(std::move(p));
+  }
+  return points;
+}
+
+CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
+                              const FeatureOptions& feature_options, const std::string& model_path,
+                              const std::string& report_dir, std::ostream& out) {
+  const std::vector<CalibrationSample> samples = SamplesFromRecording(reader, features);
+  int usable = 0;
+  for (const CalibrationSample& s : samples) usable += s.reference.Usable() && s.measurement.Usable();
+  if (usable == 0) {
+    throw RecordingError(reader.dir() + ": no usable calibration sample (" +
+                         std::to_string(samples.size()) +
+                         " differences, none with a clean blob in both frames); check the "
+                         "exposures and the IRED current of the recipe.");
+  }
+  out << "Fitting " << samples.size() << " differences (" << usable << " usable) from "
+      << reader.dir() << "\n";
+  // Models with more unknowns (coefficients + sigma) than observations are left out (a small
+  // recipe such as smoke-calibration.yaml cannot determine the 24-term direct Sigma model).
+  FitOptions fit_options;
+  std::set<std::tuple<double, double, double, double>> references;
+  int usable_frames = 0;
+  for (const CalibrationSample& s : samples) {
+    if (!s.reference.Usable() || !s.measurement.Usable()) continue;
+    usable_frames += 1 + (references.insert({s.d_mm, s.theta_deg, s.bias_ma, s.t_ref_ms}).second
+                              ? 1
+                              : 0);
+  }
+  std::vector<ModelKind> kept;
+  for (ModelKind kind : fit_options.models) {
+    const bool direct = kind == ModelKind::kDirectE || kind == ModelKind::kDirectF ||
+                        kind == ModelKind::kDirectSigma;
+    const int observations = direct ? usable_frames : usable;
+    const bool free = kind == ModelKind::kFreeE || kind == ModelKind::kFreeSigma;
+    const ModelSpec& spec = GetModelSpec(kind);
+    int unknowns = 1;  // sigma
+    for (int i = 0; i < spec.num_coefficients(); ++i) {
+      unknowns += IsTermActive(spec, free ? fit_options.free_form : ModelForm::kFull, i) ? 1 : 0;
+    }
+    if (observations > unknowns) {
+      kept.push_back(kind);
+    } else if (kind == ModelKind::kFreeE || kind == ModelKind::kFreeSigma) {
+      throw RecordingError(reader.dir() + ": " + std::to_string(observations) +
+                           " usable differences cannot determine the " + ToString(kind) +
+                           " model (" + std::to_string(unknowns) +
+                           " unknowns); record more poses (recipes/table3-calibration.yaml).");
+    } else {
+      out << "  " << ToString(kind) << ": not fitted (" << observations << " observations for "
+          << unknowns << " unknowns)\n";
+    }
+  }
+  fit_options.models = kept;
+  const CalibrationModel model = Fit(samples, feature_options, fit_options);
+  SaveModel(model, model_path);
+  for (const FittedModel& m : model.models) {
+    out << "  " << ToString(m.kind) << " (" << ToString(m.form) << "): "
+        << m.summary.BriefReport() << "\n";
+  }
+  out << "  geometric: " << model.geometric.summary.BriefReport() << "\n";
+  out << "Model: " << model_path << "\n";
+  if (!report_dir.empty()) {
+    std::ostringstream text;
+    text << "Calibration from " << reader.dir() << "\n" << model.BriefReport() << "\n";
+    const std::string index = WriteReport(report_dir, "irdist calibration", text.str(),
+                                          CalibrationPlots(CalibrationPointsOf(model, samples)));
+    out << "Report: " << index << "\n";
+  }
+  return model;
+}
+
+std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
+                                           const FeatureMap& features,
+                                           const CalibrationModel& model) {
+  std::vector<EstimateRow> i0_free, geometric;
+  const EstimateOptions options;
+  for (const RecordedBracket& bracket : reader.Brackets()) {
+    if (!bracket.complete) continue;
+    const std::vector<Pair> pairs = PairsOf(bracket);
+    if (pairs.empty()) continue;
+    const FrameRecord& first = *pairs.front().measurement;
+    EstimateRow base;
+    base.bracket = static_cast<int>(bracket.bracket_id);
+    base.pose = static_cast<int>(bracket.bracket_id);
+    base.repeat = first.repeat;
+    base.true_d_mm = first.slide_mm;
+    base.true_theta_deg = first.theta_deg;
+    base.bias_ma = first.bias_ma_set;
+
+    bool all_usable = true;
+    std::vector<Features> measurements;
+    std::vector<double> t_ms;
+    const FrameRecord& reference = *pairs.front().reference;
+    for (const Pair& pair : pairs) {
+      all_usable = all_usable && FeaturesOf(features, *pair.reference).Usable() &&
+                   FeaturesOf(features, *pair.measurement).Usable();
+      measurements.push_back(FeaturesOf(features, *pair.measurement));
+      t_ms.push_back(pair.measurement->requested_exposure_us / 1000.0);
+    }
+    const double t_ref_ms = reference.requested_exposure_us / 1000.0;
+
+    // I0-free (Algorithm 1): joint, then per t_n.
+    EstimateRow joint = base;
+    joint.method = "i0_free";
+    joint.dt_ms = 0.0;
+    std::vector<EstimateRow> per_dt;
+    for (const Pair& pair : pairs) {
+      EstimateRow row = base;
+      row.method = "i0_free";
+      row.dt_ms = (pair.measurement->requested_exposure_us - pair.reference->requested_exposure_us) /
+                  1000.0;
+      per_dt.push_back(row);
+    }
+    if (all_usable && measurements.size() <= static_cast<size_t>(kMaxBracketExposures)) {
+      const BracketEstimate estimate = EstimateBracket(
+          model, FeaturesOf(features, reference), t_ref_ms, measurements, t_ms, options);
+      joint.d_mm = estimate.joint.d_mm;
+      joint.theta_deg = estimate.joint.theta_deg;
+      joint.outside_range = estimate.joint.outside_calibrated_range;
+      joint.ok = std::isfinite(estimate.joint.d_mm) &&
+                 estimate.joint.root_source != RootSource::kFallback;
+      for (size_t k = 0; k < pairs.size(); ++k) {
+        // Each t_n with the reference it is differenced with.
+        const DistanceEstimate e =
+            pairs[k].reference == &reference
+                ? estimate.per_exposure[k]
+                : EstimatePair(model, FeaturesOf(features, *pairs[k].reference),
+                               pairs[k].reference->requested_exposure_us / 1000.0, measurements[k],
+                               t_ms[k], options);
+        per_dt[k].d_mm = e.d_mm;
+        per_dt[k].theta_deg = e.theta_deg;
+        per_dt[k].outside_range = e.outside_calibrated_range;
+        per_dt[k].ok = std::isfinite(e.d_mm) && e.root_source != RootSource::kFallback;
+      }
+    } else {
+      joint.ok = false;
+      for (EstimateRow& row : per_dt) row.ok = false;
+    }
+    i0_free.push_back(joint);
+    i0_free.insert(i0_free.end(), per_dt.begin(), per_dt.end());
+
+    // Geometric baseline: mean over the measurement frames.
+    if (model.geometric.fitted()) {
+      EstimateRow row = base;
+      row.method = "geometric";
+      double sum = 0.0;
+      int n = 0;
+      bool outside = false;
+      for (const Features& f : measurements) {
+        if (!f.Usable()) continue;
+        const GeometricEstimate g = EstimateGeometric(model, f);
+        if (!g.valid) continue;
+        sum += g.d_mm;
+        outside = outside || g.outside_calibrated_range;
+        ++n;
+      }
+      row.ok = n > 0;
+      row.d_mm = n > 0 ? sum / n : 0.0;
+      row.theta_deg = 0.0;
+      row.outside_range = outside;
+      geometric.push_back(row);
+    }
+  }
+  i0_free.insert(i0_free.end(), geometric.begin(), geometric.end());
+  return i0_free;
+}
+
+ValidationSummary WriteValidation(const std::string& dir, const std::vector<EstimateRow>& rows,
+                                  const std::map<std::string, std::string>& context,
+                                  std::ostream& out) {
+  WriteEstimatesCsv(dir + "/estimates.csv", rows);
+  const ValidationSummary summary = Summarize(rows);
+  WriteSummaryYaml(dir + "/summary.yaml", summary, context);
+  const std::string index = WriteReport(dir + "/report", "irdist validation",
+                                        summary.BriefReport(), ValidationPlots(rows, summary));
+  out << summary.BriefReport() << "\n";
+  out << "Estimates: " << dir << "/estimates.csv\nSummary: " << dir
+      << "/summary.yaml\nReport: " << index << "\n";
+  return summary;
+}
+
+void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
+                        const FeatureMap& cache, std::ostream& out) {
+  const RecordingReader reader(run_dir + "/recording");
+  const FeatureMap features = RecordingFeatures(reader, options, cache);
+  WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
+  FitRecording(reader, features, options, run_dir + "/model.yaml", run_dir + "/report", out);
+}
+
+void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,
+                       const std::map<std::string, std::string>& context, const FeatureMap& cache,
+                       std::ostream& out) {
+  const RecordingReader reader(run_dir + "/recording");
+  const FeatureMap features = RecordingFeatures(reader, model.features, cache);
+  WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
+  WriteValidation(run_dir, EstimateRecording(reader, features, model), context, out);
+}
+
+void RunFit(const FitArgs& args, CommandIo io) {
+  const RecordingReader reader(args.recording);
+  if (!reader.IsComplete()) {
+    io.err << "warning: " << args.recording << " is " << CompletionName(reader.completion())
+           << "; fitting its complete brackets.\n";
+  }
+  const std::string model_path =
+      args.out.empty() ? ParentOf(args.recording) + "/model.yaml" : args.out;
+  const std::string out_dir = ParentOf(model_path);
+  fs::create_directories(out_dir);
+  const FeatureOptions options;
+  const FeatureMap features = RecordingFeatures(reader, options);
+  WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
+  FitRecording(reader, features, options, model_path, out_dir + "/report", io.out);
+}
+
+void RunPlayback(const PlaybackArgs& args, CommandIo io) {
+  const RecordingReader reader(args.recording);
+  std::optional<CalibrationModel> model;
+  if (!args.model.empty()) model = LoadModel(args.model);
+  const FeatureOptions options = model ? model->features : FeatureOptions{};
+  const std::string out_dir = args.out_dir.empty() ? ParentOf(args.recording) : args.out_dir;
+  fs::create_directories(out_dir);
+  const FeatureMap features = RecordingFeatures(reader, options);
+  WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
+  io.out << "Features: " << out_dir << "/features.csv (" << features.size() << " frames)\n";
+  std::vector<EstimateRow> rows;
+  if (model) {
+    rows = EstimateRecording(reader, features, *model);
+    WriteValidation(out_dir, rows,
+                    {{"recipe", reader.header().recipe_path}, {"model", args.model},
+                     {"recording", args.recording}},
+                    io.out);
+  }
+  if (args.show) ShowPlayback(reader, features, rows);
+}
+
+void RunCheck(const CheckArgs& args, CommandIo io) {
+  const RecordingCheck check = CheckRecording(args.recording);
+  io.out << check.BriefReport() << "\n";
+  if (!check.ok()) {
+    throw CheckFailedError(args.recording + ": " + std::to_string(check.errors.size()) +
+                           " error(s) in the recording (listed above).");
+  }
+}
+
+}  // namespace irdist

@@ -1,0 +1,82 @@
+#pragma once
+// The processing after recording, shared by the live runs (calibrate, validate) and the offline
+// commands (fit, playback): per-frame features (features.csv), calibration samples and the fit,
+// per-bracket estimates (estimates.csv, summary.yaml) and the reports. Live and offline call the
+// same functions on the same rows, so the same recording (and model) gives byte-identical files.
+
+#include <cstdint>
+#include <iosfwd>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "app/report.h"
+#include "app/summary.h"
+#include "estimator/features.h"
+#include "estimator/fit.h"
+
+namespace irdist {
+
+// acquisition/recording.h is not included here: it defines irdist::BracketFrame, as does
+// station/plan.h, so no translation unit may see both (app/run.cc sees plan.h).
+class RecordingReader;
+struct FrameRecord;
+
+// Significant bits of a GenICam pixel format ("Mono12" -> 12); 16 when unknown.
+int BitDepthOfPixelFormat(const std::string& pixel_format);
+
+// Features of every row of a recording, by frame index.
+using FeatureMap = std::map<std::int64_t, Features>;
+
+// The features of one frame: the single function live and playback runs use.
+Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options);
+
+// Features of every row of `reader` (rows() order). Rows whose index is in `cache` (frames still
+// in memory from a live run) are taken from it; the others are computed from their PNG.
+FeatureMap RecordingFeatures(const RecordingReader& reader, const FeatureOptions& options,
+                             const FeatureMap& cache = {});
+
+// features.csv: one row per frame of the recording, in rows() order (columns in docs/reports.md).
+void WriteFeaturesCsv(const std::string& path, const std::vector<FrameRecord>& rows,
+                      const FeatureMap& features);
+
+// Every (reference, measurement) pair of the recording's complete brackets; a measurement pairs
+// with the nearest reference before it in trigger order. Exposures are the requested ones.
+std::vector<CalibrationSample> SamplesFromRecording(const RecordingReader& reader,
+                                                    const FeatureMap& features);
+
+// Calibration: samples -> Fit (default options) -> SaveModel(model_path) -> report in report_dir
+// (measured vs modelled dE/dS, Eq. 25 curves). Prints each model's FitSummary to `out`.
+CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
+                              const FeatureOptions& feature_options, const std::string& model_path,
+                              const std::string& report_dir, std::ostream& out);
+
+// The report's calibration points (Fig. 7 and Fig. 8) for a fitted model.
+std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
+                                                  const std::vector<CalibrationSample>& samples,
+                                                  int eq25_curves = 4);
+
+// Estimates of every complete bracket: method "i0_free" (joint row dt_ms = 0, then one row per
+// t_n) and "geometric" (the mean over the bracket's measurement frames, dt_ms = 0). Ground truth
+// from the recording's rows (slide_mm, theta_deg, bias_ma_set).
+std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
+                                           const FeatureMap& features,
+                                           const CalibrationModel& model);
+
+// The processing after a live run, on DIR/recording: features.csv (frames in `cache` are taken
+// from it), then model.yaml + report/ (calibration) or estimates.csv + summary.yaml + report/
+// (validation, with `model`).
+void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
+                        const FeatureMap& cache, std::ostream& out);
+void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,
+                       const std::map<std::string, std::string>& context, const FeatureMap& cache,
+                       std::ostream& out);
+
+// Writes estimates.csv, summary.yaml and report/ into `dir`; prints the summary's BriefReport.
+ValidationSummary WriteValidation(const std::string& dir, const std::vector<EstimateRow>& rows,
+                                  const std::map<std::string, std::string>& context,
+                                  std::ostream& out);
+
+}  // namespace irdist

@@ -1,0 +1,418 @@
+#include "app/run.h"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "app/capture.h"
+#include "app/offline.h"
+#include "app/recipe.h"
+#include "app/tools.h"
+#include "estimator/model_file.h"
+#include "sim/virtual_rig.h"
+#include "station/line_log.h"
+#include "station/serial_transport.h"
+#include "station/station_client.h"
+#include "station/sweep.h"
+
+namespace irdist {
+
+namespace fs = std::filesystem;
+
+std::atomic<bool>& StopRequested() {
+  static std::atomic<bool> stop{false};
+  return stop;
+}
+
+namespace {
+
+extern "C" void OnStopSignal(int) { StopRequested().store(true); }
+
+constexpr const char* kSoftwareVersion = "irdist 0.1.0";
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw RecipeError(path, 0, 0, "cannot read the file; check the path.");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string Timestamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&now, &tm);
+  char buffer[32];
+  std::strftime(buffer, sizeof(buffer), "%Y%m%d-%H%M%S", &tm);
+  return buffer;
+}
+
+// Progress on stderr: a bar with ETA on a terminal, one log line per pose otherwise.
+class Progress {
+ public:
+  Progress(std::ostream& err, bool quiet, int total, int already_done, double estimate_host_s)
+      : err_(err),
+        quiet_(quiet),
+        tty_(isatty(STDERR_FILENO) == 1),
+        total_(total),
+        start_done_(already_done),
+        estimate_host_s_(estimate_host_s),
+        start_(std::chrono::steady_clock::now()) {}
+
+  void Update(int done, const std::string& what) {
+    if (quiet_) return;
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const int todo = total_ - start_done_;
+    const int done_here = done - start_done_;
+    // The plan's estimate per pose, corrected by the measured rate once poses are done.
+    const double per_pose_plan = total_ > 0 ? estimate_host_s_ / total_ : 0.0;
+    double per_pose = per_pose_plan;
+    if (done_here > 0) {
+      const double measured = elapsed / done_here;
+      const double weight = std::min(1.0, done_here / 5.0);
+      per_pose = weight * measured + (1.0 - weight) * per_pose_plan;
+    }
+    const double eta = per_pose * (total_ - done);
+    const double fraction = total_ > 0 ? static_cast<double>(done) / total_ : 1.0;
+    if (tty_) {
+      constexpr int kWidth = 30;
+      const int filled = static_cast<int>(fraction * kWidth);
+      err_ << "\r[" << std::string(static_cast<size_t>(filled), '#')
+           << std::string(static_cast<size_t>(kWidth - filled), '.') << "] " << done << "/"
+           << total_ << " poses, ETA " << FormatDuration(eta) << "   " << std::flush;
+      if (done == total_) err_ << "\n";
+    } else {
+      err_ << "pose " << done << "/" << total_ << " (" << what << "), elapsed "
+           << FormatDuration(elapsed) << ", ETA " << FormatDuration(eta) << "\n";
+    }
+    (void)todo;
+  }
+  void Finish() {
+    if (!quiet_ && tty_) err_ << "\n";
+  }
+
+ private:
+  std::ostream& err_;
+  bool quiet_;
+  bool tty_;
+  int total_;
+  int start_done_;
+  double estimate_host_s_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+enum class RunKind { kCalibrate, kValidate };
+
+struct RunRequest {
+  RunKind kind = RunKind::kCalibrate;
+  std::string recipe_path;
+  std::string model_path;  // validate
+  std::string out_dir;
+  std::string resume_dir;
+  double time_scale = 0.0;
+  bool quiet = false;
+};
+
+// What the recording phase leaves for the processing phase.
+struct Recorded {
+  std::string dir;
+  FeatureMap cache;  // features of the frames captured in this session
+  bool cut = false;
+};
+
+std::vector<SweepPose> SweepPoses(const Plan& plan, const std::set<std::int64_t>& done) {
+  std::vector<SweepPose> poses;
+  for (const Pose& p : plan.poses) {
+    if (done.count(p.index) > 0) continue;
+    SweepPose s;
+    s.index = p.index;
+    s.slide_mm = p.slide_mm;
+    s.pan_deg = p.pan_deg;
+    s.tilt_deg = p.tilt_deg;
+    s.bias_ma = p.bias_ma;
+    poses.push_back(s);
+  }
+  return poses;
+}
+
+void SleepHostMs(double ms) {
+  if (ms > 0.0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(ms));
+}
+
+// A free station.N.log name for the log of an earlier session.
+std::string KeepEarlierLog(const std::string& dir) {
+  const std::string current = dir + "/station.log";
+  if (!fs::exists(current)) return "";
+  for (int n = 1;; ++n) {
+    const std::string kept = dir + "/station." + std::to_string(n) + ".log";
+    if (!fs::exists(kept)) {
+      fs::rename(current, kept);
+      return kept;
+    }
+  }
+}
+
+Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& plan,
+                const FeatureOptions& feature_options, CommandIo io) {
+  Recorded recorded;
+  const bool resume = !request.resume_dir.empty();
+  const std::string recipe_text = ReadText(recipe.path);
+
+  std::set<std::int64_t> done_ids;
+  if (resume) {
+    recorded.dir = request.resume_dir;
+    const std::string recording_dir = recorded.dir + "/recording";
+    if (!fs::exists(recording_dir + "/recording.yaml")) {
+      throw RunFolderError(recording_dir + ": no recording to resume (recording.yaml missing); "
+                           "pass the folder of a cut run to --resume.");
+    }
+    const RecordingState state = ReadRecordingState(recording_dir);
+    if (state.recipe_text != recipe_text) {
+      throw RecipeError(recipe.path, 0, 0,
+                        "differs from the recipe recorded in " + recording_dir +
+                            "/recording.yaml (recipe " + state.recipe_path +
+                            "); resume with the recipe the run started with.");
+    }
+    if (state.complete) {
+      io.err << "The recording in " << recording_dir << " is complete; nothing to resume.\n";
+      return recorded;
+    }
+    done_ids = state.complete_brackets;
+    io.err << "Resuming " << recorded.dir << ": " << done_ids.size() << " of "
+           << plan.poses.size() << " brackets already recorded.\n";
+  } else {
+    recorded.dir = request.out_dir.empty() ? recipe.output_dir + "-" + Timestamp()
+                                           : request.out_dir;
+    if (fs::exists(recorded.dir + "/recording")) {
+      throw RunFolderError(recorded.dir + "/recording exists already; choose another --out "
+                           "folder, or continue that run with --resume " + recorded.dir + ".");
+    }
+  }
+  fs::create_directories(recorded.dir);
+  const std::vector<SweepPose> poses = SweepPoses(plan, done_ids);
+
+  // The rig: a virtual one is started here and stopped at the end, on every path (it is declared
+  // first, so the camera and the station link are closed before it).
+  std::unique_ptr<sim::VirtualRig> virtual_rig;
+  double time_scale = 1.0;
+  std::string port = recipe.rig.station.port;
+  LiveCaptureSetup setup;
+  setup.camera_name = recipe.rig.camera.id;
+  if (recipe.rig.kind == RigKind::kVirtual) {
+    sim::VirtualRigOverrides overrides;
+    if (request.time_scale > 0.0) overrides.time_scale = request.time_scale;
+    virtual_rig = sim::VirtualRig::Start(recipe.rig_path, overrides);
+    const sim::VirtualRigInfo& info = virtual_rig->Info();
+    time_scale = info.time_scale;
+    port = info.station_port;
+    setup.camera_name = info.camera_address;
+    setup.camera_serial = info.serial;
+    if (!request.quiet) io.err << "Virtual rig (time scale " << time_scale << "):\n" << info.BriefReport();
+  } else {
+    if (port == "auto") {
+      throw RecipeError(recipe.rig_path, 0, 0,
+                        "station.port is 'auto', which only a virtual rig can resolve; set it to "
+                        "the station's serial device (see 'irdist devices').");
+    }
+    if (setup.camera_name == "auto") setup.camera_name = OnlyCamera();
+  }
+
+  const std::string earlier_log = KeepEarlierLog(recorded.dir);
+  if (!earlier_log.empty()) io.err << "Earlier station log kept as " << earlier_log << "\n";
+  LineLog log(recorded.dir + "/station.log");
+  SerialOptions serial_options;
+  serial_options.baud = static_cast<unsigned int>(recipe.rig.station.baud);
+  SerialTransport transport(port, serial_options, &log);
+  ClientOptions client_options;
+  client_options.reply_timeout = std::chrono::milliseconds(recipe.rig.station.reply_timeout_ms);
+  StationClient client(transport, client_options);
+  const StationIdentity identity = client.Identify();
+
+  const BracketSpec& bracket = recipe.sweep.bracket;
+  setup.pixel_format = recipe.rig.camera.pixel_format;
+  // The virtual camera's frames come from the station's trigger output, on Line1.
+  setup.trigger_source =
+      recipe.rig.kind == RigKind::kVirtual ? "Line1" : recipe.rig.camera.trigger_source;
+  setup.trigger_activation = recipe.rig.camera.trigger_activation;
+  setup.black_level = recipe.rig.camera.black_level;
+  setup.packet_size = recipe.rig.camera.packet_size;
+  setup.exposures_us.push_back(bracket.t_ref_ms * 1000.0);
+  double longest_ms = bracket.t_ref_ms;
+  for (double t : bracket.t_meas_ms) {
+    setup.exposures_us.push_back(t * 1000.0);
+    longest_ms = std::max(longest_ms, t);
+  }
+  setup.interleave_reference = bracket.retake_reference;
+  setup.frame_timeout_ms =
+      recipe.rig.camera.frame_timeout_ms + static_cast<int>(std::ceil(longest_ms / time_scale));
+  setup.recording_dir = recorded.dir + "/recording";
+  setup.resume = resume;
+  setup.software_version = kSoftwareVersion;
+  setup.station_identity = identity.vendor + " " + identity.model + " serial " + identity.serial +
+                           " firmware " + identity.firmware + " boot " + identity.boot_id;
+  setup.recipe_path = recipe.path;
+  setup.recipe_text = recipe_text;
+  setup.rig_path = recipe.rig_path;
+  setup.rig_text = ReadText(recipe.rig_path);
+  setup.feature_options = feature_options;
+  LiveRecorder recorder(setup);
+
+  // One pulse of the station's trigger output per frame (also for the warm-up frame, -1).
+  const auto fire = [&](int) {
+    client.Trigger(1, 100.0, 1000.0);
+    client.WaitTriggerDone();
+  };
+  const auto measure = [&]() { return client.MeasureCurrent(); };
+
+  Progress progress(io.err, request.quiet, static_cast<int>(plan.poses.size()),
+                    static_cast<int>(done_ids.size()), plan.summary.total_s / time_scale);
+  int done_count = static_cast<int>(done_ids.size());
+  std::optional<Pose> last_pose;
+  const SettleSpec& settle = recipe.sweep.settle;
+
+  const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int attempt) {
+    const Pose& pose = plan.poses[static_cast<size_t>(sweep_pose.index)];
+    // The recipe's waits on top of the station's own settle; simulated waits run time_scale
+    // times faster on a virtual rig.
+    const bool moved = attempt > 0 || !last_pose || last_pose->slide_mm != pose.slide_mm ||
+                       last_pose->pan_deg != pose.pan_deg || last_pose->tilt_deg != pose.tilt_deg;
+    const bool current_changed = attempt > 0 || !last_pose || last_pose->bias_ma != pose.bias_ma;
+    double wait_ms = 0.0;
+    if (moved) wait_ms += settle.after_move_ms;
+    if (current_changed) wait_ms += settle.after_current_ms;
+    SleepHostMs(wait_ms / time_scale);
+    last_pose = pose;
+
+    LivePose live;
+    live.bracket_id = pose.index;
+    live.slide_mm = pose.slide_mm;
+    live.pan_deg = pose.pan_deg;
+    live.tilt_deg = pose.tilt_deg;
+    live.theta_deg = pose.theta_deg;
+    live.bias_ma = pose.bias_ma;
+    live.repeat = pose.repeat;
+    recorder.CaptureBracket(live, fire, measure);
+    ++done_count;
+    std::ostringstream what;
+    what << "d " << pose.slide_mm << " mm, theta " << pose.theta_deg << " deg, " << pose.bias_ma
+         << " mA";
+    progress.Update(done_count, what.str());
+  };
+
+  const auto t0 = std::chrono::steady_clock::now();
+  Sweep sweep(client);
+  SweepResult result;
+  try {
+    result = sweep.Run(poses, at_pose, &StopRequested());
+  } catch (...) {
+    progress.Finish();
+    recorder.Close(true);
+    throw;
+  }
+  progress.Finish();
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  recorded.cut = result.stopped || result.next_index >= 0;
+  recorder.Close(recorded.cut);
+  recorded.cache = recorder.cache();
+  io.out << "Sweep: " << result.BriefReport() << "\n";
+  io.out << "Capture: " << recorder.StatsReport() << "\n";
+  io.out << "Station link: " << client.stats().BriefReport() << "\n";
+  io.out << "Wall time " << FormatDuration(wall_s) << " for " << poses.size()
+         << " poses; plan estimate " << FormatDuration(plan.summary.total_s / time_scale)
+         << " and physical bound " << FormatDuration(plan.summary.physical_bound_s / time_scale)
+         << " for all " << plan.poses.size() << " poses at time scale " << time_scale << "\n";
+  return recorded;
+}
+
+void RunRecipe(const RunRequest& request, CommandIo io) {
+  const Recipe recipe = LoadRecipe(request.recipe_path);
+  const Plan plan = PlanRecipe(recipe);
+  std::optional<CalibrationModel> model;
+  if (request.kind == RunKind::kValidate) model = LoadModel(request.model_path);
+  const FeatureOptions feature_options = model ? model->features : FeatureOptions{};
+  io.out << "Recipe " << recipe.path << ": " << plan.summary.BriefReport() << "\n";
+
+  SignalGuard guard;
+  const Recorded recorded = Record(request, recipe, plan, feature_options, io);
+  if (recorded.cut) {
+    throw InterruptedError("run stopped; the recording in " + recorded.dir +
+                           "/recording is closed as cut. Continue it with: irdist " +
+                           (request.kind == RunKind::kCalibrate ? "calibrate " : "validate ") +
+                           recipe.path +
+                           (request.kind == RunKind::kValidate ? " --model " + request.model_path
+                                                               : std::string()) +
+                           " --resume " + recorded.dir);
+  }
+
+  if (request.kind == RunKind::kCalibrate) {
+    ProcessCalibration(recorded.dir, feature_options, recorded.cache, io.out);
+  } else {
+    ProcessValidation(recorded.dir, *model,
+                      {{"recipe", recipe.path}, {"model", request.model_path},
+                       {"recording", recorded.dir + "/recording"}},
+                      recorded.cache, io.out);
+  }
+  io.out << "Run folder: " << recorded.dir << "\n";
+}
+
+}  // namespace
+
+struct SignalGuard::Saved {
+  struct sigaction interrupt {};
+  struct sigaction terminate {};
+};
+
+SignalGuard::SignalGuard() : saved_(new Saved) {
+  StopRequested().store(false);
+  struct sigaction action {};
+  action.sa_handler = OnStopSignal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  sigaction(SIGINT, &action, &saved_->interrupt);
+  sigaction(SIGTERM, &action, &saved_->terminate);
+}
+
+SignalGuard::~SignalGuard() {
+  sigaction(SIGINT, &saved_->interrupt, nullptr);
+  sigaction(SIGTERM, &saved_->terminate, nullptr);
+  delete saved_;
+}
+
+void RunCalibrate(const CalibrateArgs& args, CommandIo io) {
+  RunRequest request;
+  request.kind = RunKind::kCalibrate;
+  request.recipe_path = args.recipe;
+  request.out_dir = args.out_dir;
+  request.resume_dir = args.resume_dir;
+  request.time_scale = args.time_scale;
+  request.quiet = args.quiet;
+  RunRecipe(request, io);
+}
+
+void RunValidate(const ValidateArgs& args, CommandIo io) {
+  RunRequest request;
+  request.kind = RunKind::kValidate;
+  request.recipe_path = args.recipe;
+  request.model_path = args.model;
+  request.out_dir = args.out_dir;
+  request.resume_dir = args.resume_dir;
+  request.time_scale = args.time_scale;
+  request.quiet = args.quiet;
+  RunRecipe(request, io);
+}
+
+}  // namespace irdist

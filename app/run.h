@@ -1,0 +1,46 @@
+#pragma once
+// The runs behind the irdist commands: calibrate and validate (sweep a recipe on a rig, record,
+// then fit or estimate), fit and playback (the same processing from a recording), check.
+//
+// Run folder layout (always the same):
+//   DIR/recording/      the recording (docs/recording-format.md)
+//   DIR/station.log     every line sent to and received from the station
+//   DIR/features.csv    per-frame features (docs/reports.md)
+//   DIR/model.yaml      calibrate: the calibration (docs/estimator.md)
+//   DIR/estimates.csv   validate: per-bracket estimates; DIR/summary.yaml: the figures
+//   DIR/report/index.html
+// A resumed run keeps the earlier sessions' station logs as station.<n>.log.
+
+#include <atomic>
+
+#include "app/cli.h"
+
+namespace irdist {
+
+// Set by SIGINT/SIGTERM while a run's SignalGuard is alive; polled between poses.
+std::atomic<bool>& StopRequested();
+
+// Installs SIGINT/SIGTERM handlers that set StopRequested() (and clears it); restores the previous
+// handlers when destroyed.
+class SignalGuard {
+ public:
+  SignalGuard();
+  ~SignalGuard();
+  SignalGuard(const SignalGuard&) = delete;
+  SignalGuard& operator=(const SignalGuard&) = delete;
+
+ private:
+  struct Saved;
+  Saved* saved_;
+};
+
+// Throw InterruptedError after a Ctrl-C (recording closed as cut), RecipeError, CameraError,
+// LinkError, StationError, RecordingError, ModelFileError.
+void RunCalibrate(const CalibrateArgs& args, CommandIo io);
+void RunValidate(const ValidateArgs& args, CommandIo io);
+void RunFit(const FitArgs& args, CommandIo io);
+void RunPlayback(const PlaybackArgs& args, CommandIo io);
+// Prints the check's report; throws CheckFailedError when the recording has errors.
+void RunCheck(const CheckArgs& args, CommandIo io);
+
+}  // namespace irdist
