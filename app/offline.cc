@@ -273,11 +273,70 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   return model;
 }
 
+namespace {
+
+// One method's rows for a bracket: the joint estimate (dt_ms = 0), then one row per t_n.
+void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& options,
+                        const std::string& method, const EstimateRow& base,
+                        const std::vector<Pair>& pairs, const FeatureMap& features,
+                        bool all_usable, std::vector<EstimateRow>* out) {
+  const FrameRecord& reference = *pairs.front().reference;
+  std::vector<Features> measurements;
+  std::vector<double> t_ms;
+  for (const Pair& pair : pairs) {
+    measurements.push_back(FeaturesOf(features, *pair.measurement));
+    t_ms.push_back(pair.measurement->requested_exposure_us / 1000.0);
+  }
+  EstimateRow joint = base;
+  joint.method = method;
+  joint.dt_ms = 0.0;
+  std::vector<EstimateRow> per_dt;
+  for (const Pair& pair : pairs) {
+    EstimateRow row = base;
+    row.method = method;
+    row.dt_ms =
+        (pair.measurement->requested_exposure_us - pair.reference->requested_exposure_us) / 1000.0;
+    row.ok = false;
+    per_dt.push_back(row);
+  }
+  joint.ok = false;
+  if (all_usable && measurements.size() <= static_cast<size_t>(kMaxBracketExposures)) {
+    const double t_ref_ms = reference.requested_exposure_us / 1000.0;
+    const BracketEstimate estimate = EstimateBracket(model, FeaturesOf(features, reference),
+                                                     t_ref_ms, measurements, t_ms, options);
+    const auto fill = [](const DistanceEstimate& e, EstimateRow* row) {
+      row->d_mm = e.d_mm;
+      row->theta_deg = e.theta_deg;
+      row->outside_range = e.outside_calibrated_range;
+      row->ok = std::isfinite(e.d_mm) && e.d_mm > 0.0 && e.root_source != RootSource::kFallback;
+    };
+    fill(estimate.joint, &joint);
+    for (size_t k = 0; k < pairs.size(); ++k) {
+      // Each t_n with the reference it is differenced with (interleaved brackets).
+      if (pairs[k].reference == &reference) {
+        fill(estimate.per_exposure[k], &per_dt[k]);
+      } else {
+        fill(EstimatePair(model, FeaturesOf(features, *pairs[k].reference),
+                          pairs[k].reference->requested_exposure_us / 1000.0, measurements[k],
+                          t_ms[k], options),
+             &per_dt[k]);
+      }
+    }
+  }
+  out->push_back(joint);
+  out->insert(out->end(), per_dt.begin(), per_dt.end());
+}
+
+}  // namespace
+
 std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
                                            const FeatureMap& features,
                                            const CalibrationModel& model) {
-  std::vector<EstimateRow> i0_free, geometric;
+  std::vector<EstimateRow> i0_free, paper, i0_dependent, geometric;
   const EstimateOptions options;
+  const EstimateOptions paper_options = PaperEstimateOptions();
+  // The I0-dependent comparison assumes the calibration's mean current (the nominal one).
+  const double nominal_ma = model.scaling.i0_scale_ma;
   for (const RecordedBracket& bracket : reader.Brackets()) {
     if (!bracket.complete) continue;
     const std::vector<Pair> pairs = PairsOf(bracket);
@@ -294,78 +353,58 @@ std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
     bool all_usable = true;
     std::vector<Features> measurements;
     std::vector<double> t_ms;
-    const FrameRecord& reference = *pairs.front().reference;
     for (const Pair& pair : pairs) {
       all_usable = all_usable && FeaturesOf(features, *pair.reference).Usable() &&
                    FeaturesOf(features, *pair.measurement).Usable();
       measurements.push_back(FeaturesOf(features, *pair.measurement));
       t_ms.push_back(pair.measurement->requested_exposure_us / 1000.0);
     }
-    const double t_ref_ms = reference.requested_exposure_us / 1000.0;
+    EstimateMethodRows(model, options, "i0_free", base, pairs, features, all_usable, &i0_free);
+    EstimateMethodRows(model, paper_options, "paper", base, pairs, features, all_usable, &paper);
 
-    // I0-free (Algorithm 1): joint, then per t_n.
-    EstimateRow joint = base;
-    joint.method = "i0_free";
-    joint.dt_ms = 0.0;
-    std::vector<EstimateRow> per_dt;
-    for (const Pair& pair : pairs) {
+    if (model.Find(ModelKind::kDiffF) != nullptr) {
       EstimateRow row = base;
-      row.method = "i0_free";
-      row.dt_ms = (pair.measurement->requested_exposure_us - pair.reference->requested_exposure_us) /
-                  1000.0;
-      per_dt.push_back(row);
-    }
-    if (all_usable && measurements.size() <= static_cast<size_t>(kMaxBracketExposures)) {
-      const BracketEstimate estimate = EstimateBracket(
-          model, FeaturesOf(features, reference), t_ref_ms, measurements, t_ms, options);
-      joint.d_mm = estimate.joint.d_mm;
-      joint.theta_deg = estimate.joint.theta_deg;
-      joint.outside_range = estimate.joint.outside_calibrated_range;
-      joint.ok = std::isfinite(estimate.joint.d_mm) &&
-                 estimate.joint.root_source != RootSource::kFallback;
-      for (size_t k = 0; k < pairs.size(); ++k) {
-        // Each t_n with the reference it is differenced with.
-        const DistanceEstimate e =
-            pairs[k].reference == &reference
-                ? estimate.per_exposure[k]
-                : EstimatePair(model, FeaturesOf(features, *pairs[k].reference),
-                               pairs[k].reference->requested_exposure_us / 1000.0, measurements[k],
-                               t_ms[k], options);
-        per_dt[k].d_mm = e.d_mm;
-        per_dt[k].theta_deg = e.theta_deg;
-        per_dt[k].outside_range = e.outside_calibrated_range;
-        per_dt[k].ok = std::isfinite(e.d_mm) && e.root_source != RootSource::kFallback;
+      row.method = "i0_dependent";
+      row.ok = false;
+      if (all_usable) {
+        const FrameRecord& reference = *pairs.front().reference;
+        const I0DependentEstimate e = EstimateI0Dependent(
+            model, FeaturesOf(features, reference), reference.requested_exposure_us / 1000.0,
+            measurements, t_ms, nominal_ma);
+        row.ok = e.valid;
+        row.d_mm = e.d_mm;
+        row.theta_deg = e.theta_deg;
+        row.outside_range = e.outside_calibrated_range;
       }
-    } else {
-      joint.ok = false;
-      for (EstimateRow& row : per_dt) row.ok = false;
+      i0_dependent.push_back(row);
     }
-    i0_free.push_back(joint);
-    i0_free.insert(i0_free.end(), per_dt.begin(), per_dt.end());
 
-    // Geometric baseline: mean over the measurement frames.
+    // Geometric baseline: the mean over the measurement frames; theta from their ellipses.
     if (model.geometric.fitted()) {
       EstimateRow row = base;
       row.method = "geometric";
-      double sum = 0.0;
+      double sum_d = 0.0, sum_theta = 0.0;
       int n = 0;
       bool outside = false;
       for (const Features& f : measurements) {
         if (!f.Usable()) continue;
         const GeometricEstimate g = EstimateGeometric(model, f);
         if (!g.valid) continue;
-        sum += g.d_mm;
+        sum_d += g.d_mm;
+        sum_theta += f.theta0_deg;
         outside = outside || g.outside_calibrated_range;
         ++n;
       }
       row.ok = n > 0;
-      row.d_mm = n > 0 ? sum / n : 0.0;
-      row.theta_deg = 0.0;
+      row.d_mm = n > 0 ? sum_d / n : 0.0;
+      row.theta_deg = n > 0 ? sum_theta / n : 0.0;
       row.outside_range = outside;
       geometric.push_back(row);
     }
   }
-  i0_free.insert(i0_free.end(), geometric.begin(), geometric.end());
+  for (const auto* block : {&paper, &i0_dependent, &geometric}) {
+    i0_free.insert(i0_free.end(), block->begin(), block->end());
+  }
   return i0_free;
 }
 
