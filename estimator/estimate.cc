@@ -403,10 +403,12 @@ void SetUpFused(const CalibrationModel& model, const EstimateOptions& options, c
   p->geo_ln_d = geo;
   if (options.method != EstimateMethod::kFused) return;
   p->fused = true;
-  p->e_weight = FitWeight(p->e->summary);
-  p->s_weight = FitWeight(p->s->summary);
+  p->e_weight = FitWeight(p->e->summary) * options.radiometric_weight;
+  p->s_weight = FitWeight(p->s->summary) * options.radiometric_weight;
   // Geometric summary residuals are relative distance errors: the weight is for ln d directly.
-  if (model.geometric.fitted()) p->geo_weight = FitWeight(model.geometric.summary);
+  if (model.geometric.fitted()) {
+    p->geo_weight = FitWeight(model.geometric.summary) * options.geometric_weight;
+  }
   p->theta_prior_rad = theta_prior_deg * kRad;
   p->theta_prior_weight = 1.0 / (options.theta_prior_sd_deg * kRad);
 }
@@ -434,6 +436,8 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(step_tolerance > 0.0)) return fail("step_tolerance must be > 0");
   if (!(range_margin >= 0.0)) return fail("range_margin must be >= 0");
   if (!(theta_prior_sd_deg > 0.0)) return fail("theta_prior_sd_deg must be > 0");
+  if (!(radiometric_weight > 0.0)) return fail("radiometric_weight must be > 0");
+  if (!(geometric_weight >= 0.0)) return fail("geometric_weight must be >= 0");
   return true;
 }
 

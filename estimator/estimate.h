@@ -40,6 +40,12 @@ struct EstimateOptions {
   // kFused with an informative E equation (theta solved): sd of the theta prior, deg. With a
   // degenerate E (fixed window) theta is the prior itself: the Sigma equation barely sees it.
   double theta_prior_sd_deg = 0.5;
+  // kFused: multipliers on the fit-derived weights of the radiometric (E, Sigma) equations and
+  // of the geometric ones (1 = the calibration fits' mean relative errors as they are). 0.5
+  // measured best on the virtual rig (docs/estimator.md): a dS fit error maps to less than the
+  // same error in d, so the fit-error weight overrates the Sigma equation.
+  double radiometric_weight = 0.5;
+  double geometric_weight = 1.0;
   int max_iterations = 50;        // LM iterations of Eq. 26
   double step_tolerance = 1e-12;  // stop when the step in (ln d, theta rad) is below this
   // Roots of Eq. 25 are "in range" within [d_min / (1 + m), d_max * (1 + m)].

@@ -123,6 +123,7 @@ struct Figures {
   double th_med = 0, th_max = 0;     // |theta error| for theta >= 15, deg
   double shift = 0;                  // current shift, %
   double disp = 0;                   // largest sd over repetitions, mm
+  Pose worst_theta{0, 0, 0, 0};      // pose of the largest theta error (theta >= 15)
 };
 
 Figures Summarise(const std::vector<Row>& rows, bool theta_reported) {
@@ -137,7 +138,10 @@ Figures Summarise(const std::vector<Row>& rows, bool theta_reported) {
     if (r.pose.d_mm < 1499 || r.pose.d_mm > 2901 || r.pose.theta_deg > 30.01) continue;
     ++f.n;
     err.push_back(100.0 * std::abs(r.d_mm / r.pose.d_mm - 1.0));
-    if (theta_reported && r.pose.theta_deg >= 15) th.push_back(std::abs(r.theta_deg - r.pose.theta_deg));
+    if (theta_reported && r.pose.theta_deg >= 15) {
+      th.push_back(std::abs(r.theta_deg - r.pose.theta_deg));
+      if (th.back() >= *std::max_element(th.begin(), th.end())) f.worst_theta = r.pose;
+    }
     by_pose[{r.pose.d_mm, r.pose.theta_deg, r.dt_ms}][r.pose.bias_ma].push_back(r.d_mm);
   }
   f.med = Percentile(err, 0.5);
@@ -168,7 +172,10 @@ Figures Summarise(const std::vector<Row>& rows, bool theta_reported) {
 void Print(const char* experiment, const char* method, const Figures& f, bool theta_reported) {
   std::printf("  %-8s %-16s n=%4d fail=%3d  rel.err%% med %.3f p95 %.3f max %.3f", experiment,
               method, f.n, f.failed, f.med, f.p95, f.max);
-  if (theta_reported) std::printf("  theta>=15 med %.2f max %.2f deg", f.th_med, f.th_max);
+  if (theta_reported) {
+    std::printf("  theta>=15 med %.2f max %.2f deg (at %g mm %g deg)", f.th_med, f.th_max,
+                f.worst_theta.d_mm, f.worst_theta.theta_deg);
+  }
   std::printf("  shift %.3f%%  disp %.2f mm\n", f.shift, f.disp);
 }
 
@@ -254,13 +261,65 @@ int Main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) seed = std::stoull(argv[++i]);
     else if (!std::strcmp(argv[i], "--quick")) quick = true;
     else if (!std::strcmp(argv[i], "--verbose")) verbose = true;
+    else if (!std::strcmp(argv[i], "--radiometric-weight")) ++i;
   }
   const sim::RigPhysics physics = sim::LoadRigPhysics(rig);
   std::printf("rig %s, seed %llu\n", rig.c_str(), static_cast<unsigned long long>(seed));
   const auto t0 = std::chrono::steady_clock::now();
 
+  // Exposure linearity of the renderer and sensor (the acquisition report of 4.05x at 36 ms):
+  // frame signal above the black level, 36 ms vs 8 ms, at a fixed junction rise and across a
+  // cold start (the current switched on just before the 8 ms frame).
+  {
+    sim::Renderer r(physics);
+    const double black = physics.sensor.black_level_dn;
+    auto frame_signal = [&](double t_ms, double rise_k, std::uint64_t index) {
+      sim::FrameConditions c = sim::StaticConditions(1500, 0, 0, 500, t_ms * 1e-3);
+      c.junction_rise_k = rise_k;
+      const cv::Mat f = r.Render(c, index, sim::PixelFormat::kMono12);
+      const cv::Rect w(physics.sensor.width_px / 2 - 40, physics.sensor.height_px / 2 - 40, 80, 80);
+      return cv::sum(f(w))[0] - black * w.area();
+    };
+    const double steady = 20.0 * 0.5 * 1.6;
+    const double s8 = frame_signal(8, steady, 1), s36 = frame_signal(36, steady, 2);
+    const double cold36 = frame_signal(36, 0.0, 3);
+    std::printf("linearity: signal(36 ms)/signal(8 ms) = %.4f (expected 4.5000) at a steady "
+                "junction; %.4f if the 8 ms frame saw a cold junction and the 36 ms a hot one\n",
+                s36 / s8, s36 / cold36 * 4.5);
+    sim::PoseState pose;
+    pose.slide_mm = 1500;
+    pose.bias_ma = 500;
+    std::printf("  1500 mm, 500 mA, 36 ms, steady junction: %s\n",
+                r.Describe(pose, 0.036, sim::PixelFormat::kMono12, steady).BriefReport().c_str());
+    // Noise-free: the mean signal electrons of the scene, and the same with 20 frames averaged.
+    auto mean_signal = [&](double t_ms) {
+      sim::FrameConditions c = sim::StaticConditions(1500, 0, 0, 500, t_ms * 1e-3);
+      c.junction_rise_k = steady;
+      return cv::sum(r.Signal(c).electrons)[0];
+    };
+    double a8 = 0, a36 = 0;
+    for (int k = 0; k < 20; ++k) {
+      a8 += frame_signal(8, steady, 100 + k);
+      a36 += frame_signal(36, steady, 200 + k);
+    }
+    std::printf("  noise-free scene signal ratio %.5f; mean of 20 noisy frames each %.4f\n",
+                mean_signal(36) / mean_signal(8), a36 / a8);
+  }
+
   // Pipelines.
   std::vector<Pipeline> pipelines(3);
+  std::vector<double> extra_weights;
+  for (int i = 1; i < argc; ++i)
+    if (!std::strcmp(argv[i], "--radiometric-weight") && i + 1 < argc)
+      extra_weights.push_back(std::stod(argv[++i]));
+  for (double w : extra_weights) {
+    Pipeline pl;
+    char name[32];
+    std::snprintf(name, sizeof(name), "fused_w%.3g", w);
+    pl.name = name;
+    pl.estimate.radiometric_weight = w;
+    pipelines.push_back(pl);
+  }
   pipelines[0].name = "paper";
   pipelines[0].features = PaperFeatureOptions();
   pipelines[0].fit = PaperFitOptions();

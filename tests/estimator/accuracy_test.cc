@@ -1,0 +1,159 @@
+// Accuracy regression on the virtual rig: frames rendered with sim::Renderer (sensor noise, the
+// IRED's steady self-heating), a reduced Table 3 calibration, validation at off-grid poses and
+// currents. Bounds are the issue-6 goals plus a stated margin for the reduced grid (fewer
+// calibration poses and exposures than Table 3); bench/accuracy has the full study.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "estimator/estimate.h"
+#include "estimator/features.h"
+#include "estimator/fit.h"
+#include "sim/renderer.h"
+#include "sim/rig_physics.h"
+
+namespace irdist {
+namespace {
+
+constexpr double kTRefMs = 8.0;
+
+struct Bracket {
+  double d_mm, theta_deg, bias_ma;
+  Features reference;
+  std::vector<Features> measurements;
+  std::vector<double> t_ms;
+};
+
+class AccuracyTest : public ::testing::Test {
+ protected:
+  AccuracyTest()
+      : physics_(sim::LoadRigPhysics(std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml")),
+        renderer_(physics_) {}
+
+  Bracket Render(double d_mm, double theta_deg, double bias_ma, const std::vector<double>& t_ms,
+                 const FeatureOptions& fo) {
+    Bracket b{d_mm, theta_deg, bias_ma, {}, {}, t_ms};
+    const auto& e = physics_.emitter;
+    const double rise_k = e.thermal_resistance_k_per_w * bias_ma * 1e-3 * e.forward_voltage_v;
+    const int side = 160;
+    const cv::Point origin(physics_.sensor.width_px / 2 - side / 2,
+                           physics_.sensor.height_px / 2 - side / 2);
+    cv::Mat frame(side, side, CV_16UC1);
+    std::vector<double> all = {kTRefMs};
+    all.insert(all.end(), t_ms.begin(), t_ms.end());
+    for (size_t k = 0; k < all.size(); ++k) {
+      sim::FrameConditions c = sim::StaticConditions(d_mm, theta_deg, 0.0, bias_ma, all[k] * 1e-3);
+      c.junction_rise_k = rise_k;
+      renderer_.Render(c, ++frame_index_, sim::PixelFormat::kMono12, origin, frame);
+      const Features f = ComputeFeatures(frame, 12, fo);
+      if (k == 0) {
+        b.reference = f;
+      } else {
+        b.measurements.push_back(f);
+      }
+    }
+    return b;
+  }
+
+  CalibrationModel Calibrate(const FeatureOptions& fo, const FitOptions& fit) {
+    std::vector<CalibrationSample> samples;
+    for (double d : {1500.0, 2000.0, 2500.0, 3000.0}) {
+      for (double th : {0.0, 10.0, 20.0, 30.0, 35.0}) {
+        for (double i : {475.0, 500.0}) {
+          const Bracket b = Render(d, th, i, {30.0, 34.0}, fo);
+          for (size_t k = 0; k < b.t_ms.size(); ++k) {
+            CalibrationSample s;
+            s.reference = b.reference;
+            s.measurement = b.measurements[k];
+            s.t_ref_ms = kTRefMs;
+            s.t_ms = b.t_ms[k];
+            s.bias_ma = i;
+            s.d_mm = d;
+            s.theta_deg = th;
+            samples.push_back(s);
+          }
+        }
+      }
+    }
+    return Fit(samples, fo, fit);
+  }
+
+  sim::RigPhysics physics_;
+  sim::Renderer renderer_;
+  std::uint64_t frame_index_ = 0;
+};
+
+TEST_F(AccuracyTest, DefaultPipelineMeetsTheGoalsAtOffGridPoses) {
+  const FeatureOptions fo;
+  const CalibrationModel model = Calibrate(fo, FitOptions());
+  const EstimateOptions eo;
+  // Goals (issue 6) and the margins of this reduced grid.
+  const double kMaxRelError = 0.010 + 0.003;
+  const double kMaxThetaErrorDeg = 1.0 + 0.5;
+  const double kMaxCurrentShift = 0.003 + 0.002;
+  double worst = 0.0, worst_theta = 0.0, worst_shift = 0.0, worst_i0 = 0.0;
+  for (double d : {1700.0, 2300.0, 2700.0}) {
+    for (double th : {5.0, 15.0, 25.0}) {
+      std::map<double, double> by_current;
+      for (double i : {475.0, 525.0}) {
+        const Bracket b = Render(d, th, i, {32.0, 35.0}, fo);
+        ASSERT_TRUE(b.reference.Usable()) << b.reference.BriefReport();
+        const BracketEstimate e =
+            EstimateBracket(model, b.reference, kTRefMs, b.measurements, b.t_ms, eo);
+        const double rel = std::abs(e.joint.d_mm / d - 1.0);
+        EXPECT_LE(rel, kMaxRelError) << "d " << d << " theta " << th << " I " << i << ": "
+                                     << e.joint.BriefReport();
+        EXPECT_GT(e.joint.d_std_mm, 0.0);
+        worst = std::max(worst, rel);
+        if (th >= 15.0) {
+          worst_theta = std::max(worst_theta, std::abs(e.joint.theta_deg - th));
+          EXPECT_LE(std::abs(e.joint.theta_deg - th), kMaxThetaErrorDeg) << e.joint.BriefReport();
+        }
+        by_current[i] = e.joint.d_mm;
+        const I0DependentEstimate di =
+            EstimateI0Dependent(model, b.reference, kTRefMs, b.measurements, b.t_ms, 500.0);
+        ASSERT_TRUE(di.valid);
+        if (i == 525.0) worst_i0 = std::max(worst_i0, std::abs(di.d_mm / d - 1.0));
+      }
+      const double shift = std::abs(by_current[475.0] - by_current[525.0]) / d;
+      EXPECT_LE(shift, kMaxCurrentShift) << "d " << d << " theta " << th;
+      worst_shift = std::max(worst_shift, shift);
+    }
+  }
+  // The I0-dependent estimate at the nominal 500 mA must see the 5% brighter IRED at 525 mA
+  // (about 2.5% in d): the rendering and the drift reach the features.
+  EXPECT_GT(worst_i0, 0.015);
+  std::printf("worst relative error %.3f%%, theta (>= 15 deg) %.2f deg, current shift %.3f%%, "
+              "i0-dependent at 525 mA %.2f%%\n",
+              100 * worst, worst_theta, 100 * worst_shift, 100 * worst_i0);
+}
+
+TEST_F(AccuracyTest, PaperPipelineRunsAndStaysNearItsPublishedError) {
+  const FeatureOptions fo = PaperFeatureOptions();
+  const CalibrationModel model = Calibrate(fo, PaperFitOptions());
+  std::vector<double> errors;
+  for (double d : {1700.0, 2700.0}) {
+    for (double th : {15.0, 25.0}) {
+      const Bracket b = Render(d, th, 500.0, {32.0, 35.0}, fo);
+      const BracketEstimate e = EstimateBracket(model, b.reference, kTRefMs, b.measurements,
+                                                b.t_ms, PaperEstimateOptions());
+      for (const DistanceEstimate& x : e.per_exposure) {
+        ASSERT_TRUE(std::isfinite(x.d_mm));
+        errors.push_back(std::abs(x.d_mm / d - 1.0));
+      }
+    }
+  }
+  // The paper: > 50% of its estimates within 2%. Its root vote can pick the wrong one of the two
+  // in-range roots of the Sigma equation (tens of percent off), so only the median is bounded.
+  std::sort(errors.begin(), errors.end());
+  for (double e : errors) std::printf("%.2f%% ", 100 * e);
+  std::printf("\n");
+  EXPECT_LE(errors[errors.size() / 2], 0.02);
+}
+
+}  // namespace
+}  // namespace irdist
