@@ -35,7 +35,7 @@ struct Problem {
   bool fused = false;
   double e_weight = 1.0;
   double s_weight = 1.0;
-  double geo_weight = 0.0;         // 0: no geometric equations
+  double geo_weight = 0.0;           // 0: no geometric equations
   const double* geo_ln_d = nullptr;  // per difference, ln of the frame's geometric d (NaN: none)
   double theta_prior_rad = 0.0;
   double theta_prior_weight = 0.0;  // 1 / sd in rad; 0: no prior
@@ -388,7 +388,8 @@ double Theta0(const CalibrationModel& model, const Features& f, const EstimateOp
 // ln of the frame's geometric distance, NaN when there is none.
 double GeometricLnD(const CalibrationModel& model, const Features& f) {
   if (!model.geometric.fitted() || !f.blob_found) return std::numeric_limits<double>::quiet_NaN();
-  const double big_d = (f.moment_major_var_px2 - model.geometric.beta_px2) / model.geometric.alpha_px2;
+  const double big_d =
+      (f.moment_major_var_px2 - model.geometric.beta_px2) / model.geometric.alpha_px2;
   if (!(big_d > 0.0)) return std::numeric_limits<double>::quiet_NaN();
   return std::log(1000.0 / std::sqrt(big_d));
 }

@@ -74,8 +74,8 @@ class SweepRenderer {
             sim::StaticConditions(p.d_mm, p.theta_deg, 0.0, p.bias_ma, all[k] * 1e-3);
         c.junction_rise_k = renderer_.scene().JunctionRiseK(history, now + 0.5 * all[k] * 1e-3);
         if (k == 0) b.rise_k = c.junction_rise_k;
-        renderer_.Render(c, ++frame_index_ + seed_ * 1000003ull, sim::PixelFormat::kMono12,
-                         origin, frame);
+        renderer_.Render(c, ++frame_index_ + seed_ * 1000003ull, sim::PixelFormat::kMono12, origin,
+                         frame);
         Features f = ComputeFeatures(frame, 12, fo);
         if (k == 0) {
           b.reference = f;
@@ -257,11 +257,16 @@ int Main(int argc, char** argv) {
   bool quick = false;
   bool verbose = false;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--rig") && i + 1 < argc) rig = argv[++i];
-    else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) seed = std::stoull(argv[++i]);
-    else if (!std::strcmp(argv[i], "--quick")) quick = true;
-    else if (!std::strcmp(argv[i], "--verbose")) verbose = true;
-    else if (!std::strcmp(argv[i], "--radiometric-weight")) ++i;
+    if (!std::strcmp(argv[i], "--rig") && i + 1 < argc)
+      rig = argv[++i];
+    else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc)
+      seed = std::stoull(argv[++i]);
+    else if (!std::strcmp(argv[i], "--quick"))
+      quick = true;
+    else if (!std::strcmp(argv[i], "--verbose"))
+      verbose = true;
+    else if (!std::strcmp(argv[i], "--radiometric-weight"))
+      ++i;
   }
   const sim::RigPhysics physics = sim::LoadRigPhysics(rig);
   std::printf("rig %s, seed %llu\n", rig.c_str(), static_cast<unsigned long long>(seed));
@@ -283,9 +288,10 @@ int Main(int argc, char** argv) {
     const double steady = 20.0 * 0.5 * 1.6;
     const double s8 = frame_signal(8, steady, 1), s36 = frame_signal(36, steady, 2);
     const double cold36 = frame_signal(36, 0.0, 3);
-    std::printf("linearity: signal(36 ms)/signal(8 ms) = %.4f (expected 4.5000) at a steady "
-                "junction; %.4f if the 8 ms frame saw a cold junction and the 36 ms a hot one\n",
-                s36 / s8, s36 / cold36 * 4.5);
+    std::printf(
+        "linearity: signal(36 ms)/signal(8 ms) = %.4f (expected 4.5000) at a steady "
+        "junction; %.4f if the 8 ms frame saw a cold junction and the 36 ms a hot one\n",
+        s36 / s8, s36 / cold36 * 4.5);
     sim::PoseState pose;
     pose.slide_mm = 1500;
     pose.bias_ma = 500;
@@ -340,14 +346,16 @@ int Main(int argc, char** argv) {
     SweepRenderer sr(physics, seed);
     const auto brackets = sr.Run(calib, calib_t, pl.features);
     pl.model = Fit(Samples(brackets), pl.features, pl.fit);
-    if (verbose) std::printf("calibration %s:\n%s\n", pl.name.c_str(), pl.model.BriefReport().c_str());
+    if (verbose)
+      std::printf("calibration %s:\n%s\n", pl.name.c_str(), pl.model.BriefReport().c_str());
     const FittedModel* fs = pl.model.Find(ModelKind::kFreeSigma);
-    std::printf("calibration %-10s free_sigma (%s) mean %.3f%% max %.3f%% cond %.2g; geometric mean "
-                "%.3f%% max %.3f%%; blur variance %.3f px^2\n",
-                pl.name.c_str(), ToString(fs->form), 100 * fs->summary.mean_relative_error,
-                100 * fs->summary.max_relative_error, fs->summary.condition_number,
-                100 * pl.model.geometric.summary.mean_relative_error,
-                100 * pl.model.geometric.summary.max_relative_error, pl.model.geometric.beta_px2);
+    std::printf(
+        "calibration %-10s free_sigma (%s) mean %.3f%% max %.3f%% cond %.2g; geometric mean "
+        "%.3f%% max %.3f%%; blur variance %.3f px^2\n",
+        pl.name.c_str(), ToString(fs->form), 100 * fs->summary.mean_relative_error,
+        100 * fs->summary.max_relative_error, fs->summary.condition_number,
+        100 * pl.model.geometric.summary.mean_relative_error,
+        100 * pl.model.geometric.summary.max_relative_error, pl.model.geometric.beta_px2);
   }
 
   // Validation grids.
@@ -370,7 +378,8 @@ int Main(int argc, char** argv) {
     std::normal_distribution<double> cur(500.0, 50.0);
     for (double d : {1700.0, 2300.0, 2900.0})
       for (double th : {10.0, 15.0, 20.0})
-        for (int k = 0; k < 10; ++k) e.poses.push_back({d, th, std::clamp(cur(rng), 300.0, 650.0), k});
+        for (int k = 0; k < 10; ++k)
+          e.poses.push_back({d, th, std::clamp(cur(rng), 300.0, 650.0), k});
     experiments.push_back(e);
   }
   {

@@ -31,7 +31,8 @@ struct Bracket {
 class AccuracyTest : public ::testing::Test {
  protected:
   AccuracyTest()
-      : physics_(sim::LoadRigPhysics(std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml")),
+      : physics_(
+            sim::LoadRigPhysics(std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml")),
         renderer_(physics_) {}
 
   Bracket Render(double d_mm, double theta_deg, double bias_ma, const std::vector<double>& t_ms,
@@ -105,8 +106,8 @@ TEST_F(AccuracyTest, DefaultPipelineMeetsTheGoalsAtOffGridPoses) {
         const BracketEstimate e =
             EstimateBracket(model, b.reference, kTRefMs, b.measurements, b.t_ms, eo);
         const double rel = std::abs(e.joint.d_mm / d - 1.0);
-        EXPECT_LE(rel, kMaxRelError) << "d " << d << " theta " << th << " I " << i << ": "
-                                     << e.joint.BriefReport();
+        EXPECT_LE(rel, kMaxRelError)
+            << "d " << d << " theta " << th << " I " << i << ": " << e.joint.BriefReport();
         EXPECT_GT(e.joint.d_std_mm, 0.0);
         worst = std::max(worst, rel);
         if (th >= 15.0) {
@@ -127,9 +128,10 @@ TEST_F(AccuracyTest, DefaultPipelineMeetsTheGoalsAtOffGridPoses) {
   // The I0-dependent estimate at the nominal 500 mA must see the 5% brighter IRED at 525 mA
   // (about 2.5% in d): the rendering and the drift reach the features.
   EXPECT_GT(worst_i0, 0.015);
-  std::printf("worst relative error %.3f%%, theta (>= 15 deg) %.2f deg, current shift %.3f%%, "
-              "i0-dependent at 525 mA %.2f%%\n",
-              100 * worst, worst_theta, 100 * worst_shift, 100 * worst_i0);
+  std::printf(
+      "worst relative error %.3f%%, theta (>= 15 deg) %.2f deg, current shift %.3f%%, "
+      "i0-dependent at 525 mA %.2f%%\n",
+      100 * worst, worst_theta, 100 * worst_shift, 100 * worst_i0);
 }
 
 TEST_F(AccuracyTest, PaperPipelineRunsAndStaysNearItsPublishedError) {
@@ -139,8 +141,8 @@ TEST_F(AccuracyTest, PaperPipelineRunsAndStaysNearItsPublishedError) {
   for (double d : {1700.0, 2700.0}) {
     for (double th : {15.0, 25.0}) {
       const Bracket b = Render(d, th, 500.0, {32.0, 35.0}, fo);
-      const BracketEstimate e = EstimateBracket(model, b.reference, kTRefMs, b.measurements,
-                                                b.t_ms, PaperEstimateOptions());
+      const BracketEstimate e = EstimateBracket(model, b.reference, kTRefMs, b.measurements, b.t_ms,
+                                                PaperEstimateOptions());
       for (const DistanceEstimate& x : e.per_exposure) {
         ASSERT_TRUE(std::isfinite(x.d_mm));
         errors.push_back(std::abs(x.d_mm / d - 1.0));
