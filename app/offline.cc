@@ -422,6 +422,15 @@ ValidationSummary WriteValidation(const std::string& dir, const std::vector<Esti
   return summary;
 }
 
+void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& options,
+                          const FeatureMap& cache, std::ostream& out) {
+  const RecordingReader reader(run_dir + "/recording");
+  const FeatureMap features = RecordingFeatures(reader, options, cache);
+  WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
+  out << "Recorded " << reader.rows().size() << " frames (recipe: after: none); features: "
+      << run_dir << "/features.csv\n";
+}
+
 void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
                         const FeatureMap& cache, std::ostream& out) {
   const RecordingReader reader(run_dir + "/recording");

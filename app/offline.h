@@ -68,6 +68,8 @@ std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
 // The processing after a live run, on DIR/recording: features.csv (frames in `cache` are taken
 // from it), then model.yaml + report/ (calibration) or estimates.csv + summary.yaml + report/
 // (validation, with `model`).
+void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& options,
+                          const FeatureMap& cache, std::ostream& out);  // features.csv only
 void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
                         const FeatureMap& cache, std::ostream& out);
 void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,

@@ -358,7 +358,9 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
                            " --resume " + recorded.dir);
   }
 
-  if (request.kind == RunKind::kCalibrate) {
+  if (recipe.after == AfterRecording::kNone) {
+    ProcessRecordingOnly(recorded.dir, feature_options, recorded.cache, io.out);
+  } else if (request.kind == RunKind::kCalibrate) {
     ProcessCalibration(recorded.dir, feature_options, recorded.cache, io.out);
   } else {
     ProcessValidation(recorded.dir, *model,
