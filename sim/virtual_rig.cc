@@ -62,15 +62,10 @@ std::unique_ptr<VirtualRig> VirtualRig::StartImpl(const RigPhysics& physics,
   rig->info_.camera_address = rig->camera_->address();
   rig->info_.serial = rig->camera_->serial();
   rig->info_.time_scale = physics.time_scale;
-#ifdef IRDIST_SIM_HAS_STATION_EMULATOR
   EmulatorOptions options = rig_path.empty() ? EmulatorOptions{} : LoadEmulatorOptions(rig_path);
   if (seed) options.seed = *seed;
   rig->station_ = std::make_unique<StationEmulator>(*rig->world_, options);
   rig->info_.station_port = rig->station_->Start();
-#else
-  (void)rig_path;
-  (void)seed;
-#endif
   return rig;
 }
 
@@ -86,9 +81,7 @@ GroundTruth VirtualRig::Describe(double slide_mm, double pan_deg, double tilt_de
 }
 
 void VirtualRig::Stop() {
-#ifdef IRDIST_SIM_HAS_STATION_EMULATOR
   if (station_) station_->Stop();
-#endif
   if (camera_) camera_->Stop();
 }
 
