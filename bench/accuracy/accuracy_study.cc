@@ -4,7 +4,9 @@
 // method: the paper's pipeline (Algorithm 1 per t_n, full Eq. 17-18, fixed window), the default
 // pipeline (estimator defaults), the I0-dependent direct model at the nominal current and the
 // geometric baseline. Prints the issue-6 figures. Usage:
-//   irdist_accuracy_study [--rig recipes/rigs/virtual.yaml] [--seed N] [--quick]
+//   irdist_accuracy_study [--rig recipes/rigs/virtual.yaml] [--seed N] [--quick] [--crb-only]
+// It also prints the Cramer-Rao bound on d and theta at 2.7 m (crb.h) for the Fig. 14 conditions,
+// for one (t_r, t_n) pair and for a whole bracket, beside the measured dispersion of Fig. 14.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -18,6 +20,7 @@
 
 #include "estimator/estimate.h"
 #include "estimator/features.h"
+#include "bench/accuracy/crb.h"
 #include "estimator/fit.h"
 #include "sim/renderer.h"
 #include "sim/rig_physics.h"
@@ -251,11 +254,35 @@ std::vector<double> Range(double a, double b, double step) {
   return v;
 }
 
+// Per angle of Fig. 14: sd of d and of theta over the repetitions, and the mean error, for the
+// methods that estimate from the whole bracket.
+void PrintDispersion(const Methods& m) {
+  for (const auto& [name, rows] : m.rows) {
+    if (name == "paper") continue;
+    std::map<double, std::vector<const Row*>> by_theta;
+    for (const Row& r : rows)
+      if (r.ok) by_theta[r.pose.theta_deg].push_back(&r);
+    std::printf("  fig14    %-16s per theta: sd d / sd theta / mean theta err:", name.c_str());
+    for (const auto& [th, v] : by_theta) {
+      double md = 0, mt = 0;
+      for (const Row* r : v) md += r->d_mm / v.size(), mt += r->theta_deg / v.size();
+      double sd = 0, st = 0;
+      for (const Row* r : v)
+        sd += (r->d_mm - md) * (r->d_mm - md), st += (r->theta_deg - mt) * (r->theta_deg - mt);
+      const double k = v.size() > 1 ? 1.0 / (v.size() - 1) : 0.0;
+      std::printf("  %g: %.2f mm / %.2f / %+.2f deg", th, std::sqrt(sd * k), std::sqrt(st * k),
+                  mt - th);
+    }
+    std::printf("\n");
+  }
+}
+
 int Main(int argc, char** argv) {
   std::string rig = std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml";
   std::uint64_t seed = 7;
   bool quick = false;
   bool verbose = false;
+  bool crb_only = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--rig") && i + 1 < argc)
       rig = argv[++i];
@@ -263,7 +290,14 @@ int Main(int argc, char** argv) {
       seed = std::stoull(argv[++i]);
     else if (!std::strcmp(argv[i], "--quick"))
       quick = true;
-    else if (!std::strcmp(argv[i], "--verbose"))
+    else if (!std::strcmp(argv[i], "--crb-only"))
+      crb_only = true;
+    else if (!std::strcmp(argv[i], "--help")) {
+      std::printf(
+          "irdist_accuracy_study [--rig FILE] [--seed N] [--quick] [--verbose] [--crb-only]\n"
+          "  [--radiometric-weight W]...\n");
+      return 0;
+    } else if (!std::strcmp(argv[i], "--verbose"))
       verbose = true;
     else if (!std::strcmp(argv[i], "--radiometric-weight"))
       ++i;
@@ -311,6 +345,33 @@ int Main(int argc, char** argv) {
     std::printf("  noise-free scene signal ratio %.5f; mean of 20 noisy frames each %.4f\n",
                 mean_signal(36) / mean_signal(8), a36 / a8);
   }
+
+  // The statistical limit: Cramer-Rao bound at 2.7 m, 500 mA, steady junction.
+  {
+    const double steady = physics.emitter.thermal_resistance_k_per_w * 0.5 *
+                           physics.emitter.forward_voltage_v;
+    std::printf("Cramer-Rao bound (unknowns ln I0, theta, x, y, d; EMVA noise):\n");
+    for (double th : {0.0, 10.0, 20.0, 30.0}) {
+      CrbConditions c{2700.0, th, 500.0, steady, {kTRefMs, 35.0}};
+      const CrbResult pair = ComputeCrb(physics, c);
+      c.exposures_ms = {kTRefMs, 30, 32, 34, 36, 38, 40};
+      const CrbResult bracket = ComputeCrb(physics, c);
+      std::printf("  2700 mm theta %2g: pair (8, 35 ms): %s\n", th, pair.BriefReport().c_str());
+      std::printf("                    bracket (8; 30..40 ms): %s\n",
+                  bracket.BriefReport().c_str());
+    }
+    std::printf("  scaling with d (theta 0, pair 8/35 ms):");
+    double prev_d = 0, prev_sd = 0;
+    for (double d : {1500.0, 2100.0, 2700.0}) {
+      const CrbResult r = ComputeCrb(physics, {d, 0.0, 500.0, steady, {kTRefMs, 35.0}});
+      std::printf(" %g mm %.2f mm", d, r.d_sd_mm);
+      if (prev_d > 0) std::printf(" (exponent %.2f)", std::log(r.d_sd_mm / prev_sd) / std::log(d / prev_d));
+      prev_d = d;
+      prev_sd = r.d_sd_mm;
+    }
+    std::printf("\n");
+  }
+  if (crb_only) return 0;
 
   // Pipelines.
   std::vector<Pipeline> pipelines(3);
@@ -407,6 +468,7 @@ int Main(int argc, char** argv) {
       const bool th = name != "geometric";
       Print(ex.name, name.c_str(), Summarise(rows, th), th);
     }
+    if (std::string(ex.name) == "fig14") PrintDispersion(m);
   }
   std::printf("elapsed %.1f s\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
