@@ -16,6 +16,11 @@ struct LiveRecorder::Impl {
   std::unique_ptr<BracketCapture> capture;
   FeatureMap cache;
   int bit_depth = 16;
+  // The last bracket captured, not yet appended.
+  bool has_pending = false;
+  LivePose pending_pose;
+  BracketResult pending;
+  double pending_measured_ma = 0.0;
 };
 
 RecordingState ReadRecordingState(const std::string& recording_dir) {
@@ -83,15 +88,23 @@ void LiveRecorder::CaptureBracket(const LivePose& pose, const std::function<void
                       "). Check the trigger wiring (camera " + m.setup.trigger_source +
                       ") and the camera link, then resume the run.");
   }
-  const double measured_ma = measure_current_ma();
-  // Appended only once the whole bracket is captured: a retake after a station reboot never finds
-  // earlier frames of its pose in the recording.
-  const int size = static_cast<int>(result.frames.size());
-  for (const BracketFrame& frame : result.frames) {
+  m.pending_measured_ma = measure_current_ma();
+  m.pending = std::move(result);
+  m.pending_pose = pose;
+  m.has_pending = true;
+}
+
+bool LiveRecorder::CommitPending() {
+  Impl& m = *impl_;
+  if (!m.has_pending) return false;
+  m.has_pending = false;
+  const LivePose& pose = m.pending_pose;
+  const int size = static_cast<int>(m.pending.frames.size());
+  for (const BracketFrame& frame : m.pending.frames) {
     FrameRecord record = RecordFromFrame(frame, size);
     record.bracket_id = pose.bracket_id;
     record.bias_ma_set = pose.bias_ma;
-    record.bias_ma_measured = measured_ma;
+    record.bias_ma_measured = m.pending_measured_ma;
     record.slide_mm = pose.slide_mm;
     record.pan_deg = pose.pan_deg;
     record.tilt_deg = pose.tilt_deg;
@@ -100,6 +113,13 @@ void LiveRecorder::CaptureBracket(const LivePose& pose, const std::function<void
     const FrameRecord written = m.writer->Append(frame.image, record);
     m.cache[written.index] = FrameFeatures(frame.image, m.bit_depth, m.setup.feature_options);
   }
+  m.pending = BracketResult{};
+  return true;
+}
+
+void LiveRecorder::DropPending() {
+  impl_->has_pending = false;
+  impl_->pending = BracketResult{};
 }
 
 void LiveRecorder::Close(bool cut) {

@@ -62,10 +62,16 @@ class LiveRecorder {
   LiveRecorder& operator=(const LiveRecorder&) = delete;
 
   // Captures one bracket (`trigger` fires one pulse; called with -1 for a warm-up frame), retaking
-  // an incomplete bracket once, measures the current, then appends every frame. Throws CameraError
-  // when the bracket stays incomplete.
+  // an incomplete bracket once, and measures the current. The bracket is held back (pending) until
+  // CommitPending(): the sweep checks the station after the pose's callback and retakes the pose
+  // if it rebooted meanwhile, so a bracket is only good once the sweep has moved on. A pending
+  // bracket is replaced by the next capture. Throws CameraError when it stays incomplete.
   void CaptureBracket(const LivePose& pose, const std::function<void(int)>& trigger,
                       const std::function<double()>& measure_current_ma);
+  // Appends the pending bracket's frames to the recording (and computes their features); returns
+  // whether there was one.
+  bool CommitPending();
+  void DropPending();
   void Close(bool cut);  // stops the stream, closes the recording as complete or cut
   std::string StatsReport() const;
   const FeatureMap& cache() const;

@@ -308,7 +308,9 @@ void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& op
       row->d_mm = e.d_mm;
       row->theta_deg = e.theta_deg;
       row->outside_range = e.outside_calibrated_range;
-      row->ok = std::isfinite(e.d_mm) && e.d_mm > 0.0 && e.root_source != RootSource::kFallback;
+      // A fallback start (no root of Eq. 25 in range) is not a failure when the solver converged
+      // from it; a non-converged solve is.
+      row->ok = std::isfinite(e.d_mm) && e.d_mm > 0.0 && e.converged;
     };
     fill(estimate.joint, &joint);
     for (size_t k = 0; k < pairs.size(); ++k) {

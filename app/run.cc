@@ -75,7 +75,6 @@ class Progress {
     if (quiet_) return;
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    const int todo = total_ - start_done_;
     const int done_here = done - start_done_;
     // The plan's estimate per pose, corrected by the measured rate once poses are done.
     const double per_pose_plan = total_ > 0 ? estimate_host_s_ / total_ : 0.0;
@@ -93,15 +92,15 @@ class Progress {
       err_ << "\r[" << std::string(static_cast<size_t>(filled), '#')
            << std::string(static_cast<size_t>(kWidth - filled), '.') << "] " << done << "/"
            << total_ << " poses, ETA " << FormatDuration(eta) << "   " << std::flush;
-      if (done == total_) err_ << "\n";
+      line_open_ = true;
     } else {
       err_ << "pose " << done << "/" << total_ << " (" << what << "), elapsed "
            << FormatDuration(elapsed) << ", ETA " << FormatDuration(eta) << "\n";
     }
-    (void)todo;
   }
   void Finish() {
-    if (!quiet_ && tty_) err_ << "\n";
+    if (line_open_) err_ << "\n";
+    line_open_ = false;
   }
 
  private:
@@ -112,6 +111,7 @@ class Progress {
   int start_done_;
   double estimate_host_s_;
   std::chrono::steady_clock::time_point start_;
+  bool line_open_ = false;
 };
 
 enum class RunKind { kCalibrate, kValidate };
@@ -281,10 +281,24 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
                     static_cast<int>(done_ids.size()), plan.summary.total_s / time_scale);
   int done_count = static_cast<int>(done_ids.size());
   std::optional<Pose> last_pose;
+  std::string last_what;
   const SettleSpec& settle = recipe.sweep.settle;
 
+  // A bracket is appended once the sweep has confirmed its pose (moved on to the next one, or
+  // returned): after a station reboot the sweep calls again for the same pose with attempt > 0,
+  // and the earlier capture is dropped unseen.
+  const auto commit = [&]() {
+    if (!recorder.CommitPending()) return;
+    ++done_count;
+    progress.Update(done_count, last_what);
+  };
   const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int attempt) {
     const Pose& pose = plan.poses[static_cast<size_t>(sweep_pose.index)];
+    if (attempt == 0) {
+      commit();
+    } else {
+      recorder.DropPending();
+    }
     // The recipe's waits on top of the station's own settle; simulated waits run time_scale
     // times faster on a virtual rig.
     const bool moved = attempt > 0 || !last_pose || last_pose->slide_mm != pose.slide_mm ||
@@ -305,11 +319,10 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
     live.bias_ma = pose.bias_ma;
     live.repeat = pose.repeat;
     recorder.CaptureBracket(live, fire, measure);
-    ++done_count;
     std::ostringstream what;
     what << "d " << pose.slide_mm << " mm, theta " << pose.theta_deg << " deg, " << pose.bias_ma
          << " mA";
-    progress.Update(done_count, what.str());
+    last_what = what.str();
   };
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -318,10 +331,13 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   try {
     result = sweep.Run(poses, at_pose, &StopRequested());
   } catch (...) {
+    // The pose in flight was not confirmed by the sweep: it is retaken on --resume.
+    recorder.DropPending();
     progress.Finish();
     recorder.Close(true);
     throw;
   }
+  commit();  // the sweep returned: its last pose is confirmed
   progress.Finish();
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -346,8 +362,12 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
   const FeatureOptions feature_options = model ? model->features : FeatureOptions{};
   io.out << "Recipe " << recipe.path << ": " << plan.summary.BriefReport() << "\n";
 
-  SignalGuard guard;
-  const Recorded recorded = Record(request, recipe, plan, feature_options, io);
+  Recorded recorded;
+  {
+    // Ctrl-C stops the sweep cleanly; after the recording it ends the process as usual.
+    SignalGuard guard;
+    recorded = Record(request, recipe, plan, feature_options, io);
+  }
   if (recorded.cut) {
     throw InterruptedError("run stopped; the recording in " + recorded.dir +
                            "/recording is closed as cut. Continue it with: irdist " +
