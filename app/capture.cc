@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <future>
 
 #include "acquisition/aravis_camera.h"
 #include "acquisition/bracket.h"
@@ -21,6 +22,7 @@ struct LiveRecorder::Impl {
   LivePose pending_pose;
   BracketResult pending;
   double pending_measured_ma = 0.0;
+  std::future<void> committing;  // the commit in flight
 };
 
 RecordingState ReadRecordingState(const std::string& recording_dir) {
@@ -75,7 +77,9 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   m.capture = std::make_unique<BracketCapture>(*m.camera, options);
 }
 
-LiveRecorder::~LiveRecorder() = default;
+LiveRecorder::~LiveRecorder() {
+  if (impl_->committing.valid()) impl_->committing.wait();
+}
 
 void LiveRecorder::CaptureBracket(const LivePose& pose, const std::function<void(int)>& trigger,
                                   const std::function<double()>& measure_current_ma) {
@@ -94,27 +98,38 @@ void LiveRecorder::CaptureBracket(const LivePose& pose, const std::function<void
   m.has_pending = true;
 }
 
-bool LiveRecorder::CommitPending() {
+bool LiveRecorder::CommitPending(std::function<void()> on_committed) {
   Impl& m = *impl_;
+  WaitCommitted();
   if (!m.has_pending) return false;
   m.has_pending = false;
-  const LivePose& pose = m.pending_pose;
-  const int size = static_cast<int>(m.pending.frames.size());
-  for (const BracketFrame& frame : m.pending.frames) {
-    FrameRecord record = RecordFromFrame(frame, size);
-    record.bracket_id = pose.bracket_id;
-    record.bias_ma_set = pose.bias_ma;
-    record.bias_ma_measured = m.pending_measured_ma;
-    record.slide_mm = pose.slide_mm;
-    record.pan_deg = pose.pan_deg;
-    record.tilt_deg = pose.tilt_deg;
-    record.theta_deg = pose.theta_deg;
-    record.repeat = pose.repeat;
-    const FrameRecord written = m.writer->Append(frame.image, record);
-    m.cache[written.index] = FrameFeatures(frame.image, m.bit_depth, m.setup.feature_options);
-  }
+  // The worker owns the bracket from here; the writer and the cache are only touched by it until
+  // WaitCommitted().
+  auto task = [&m, pose = m.pending_pose, bracket = std::move(m.pending),
+               measured_ma = m.pending_measured_ma, done = std::move(on_committed)]() {
+    const int size = static_cast<int>(bracket.frames.size());
+    for (const BracketFrame& frame : bracket.frames) {
+      FrameRecord record = RecordFromFrame(frame, size);
+      record.bracket_id = pose.bracket_id;
+      record.bias_ma_set = pose.bias_ma;
+      record.bias_ma_measured = measured_ma;
+      record.slide_mm = pose.slide_mm;
+      record.pan_deg = pose.pan_deg;
+      record.tilt_deg = pose.tilt_deg;
+      record.theta_deg = pose.theta_deg;
+      record.repeat = pose.repeat;
+      const FrameRecord written = m.writer->Append(frame.image, record);
+      m.cache[written.index] = FrameFeatures(frame.image, m.bit_depth, m.setup.feature_options);
+    }
+    if (done) done();
+  };
   m.pending = BracketResult{};
+  m.committing = std::async(std::launch::async, std::move(task));
   return true;
+}
+
+void LiveRecorder::WaitCommitted() {
+  if (impl_->committing.valid()) impl_->committing.get();
 }
 
 void LiveRecorder::DropPending() {
@@ -123,6 +138,7 @@ void LiveRecorder::DropPending() {
 }
 
 void LiveRecorder::Close(bool cut) {
+  if (impl_->committing.valid()) impl_->committing.wait();  // its error, if any, is already known
   if (impl_->camera->streaming()) impl_->camera->StopStream();
   impl_->writer->Close(cut ? Completion::kCut : Completion::kComplete);
 }

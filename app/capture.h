@@ -68,13 +68,17 @@ class LiveRecorder {
   // bracket is replaced by the next capture. Throws CameraError when it stays incomplete.
   void CaptureBracket(const LivePose& pose, const std::function<void(int)>& trigger,
                       const std::function<double()>& measure_current_ma);
-  // Appends the pending bracket's frames to the recording (and computes their features); returns
-  // whether there was one.
-  bool CommitPending();
+  // Appends the pending bracket's frames to the recording and computes their features, on a
+  // worker thread (PNG encoding and features take ~0.1 s per frame; they overlap the next move and
+  // capture). Waits for the previous commit first. `on_committed` runs on the worker after the
+  // append. Returns whether there was a pending bracket.
+  bool CommitPending(std::function<void()> on_committed = {});
+  // Waits for the commit in flight; rethrows its error (RecordingError).
+  void WaitCommitted();
   void DropPending();
   void Close(bool cut);  // stops the stream, closes the recording as complete or cut
   std::string StatsReport() const;
-  const FeatureMap& cache() const;
+  const FeatureMap& cache() const;  // after WaitCommitted()
 
  private:
   struct Impl;

@@ -288,9 +288,10 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   // returned): after a station reboot the sweep calls again for the same pose with attempt > 0,
   // and the earlier capture is dropped unseen.
   const auto commit = [&]() {
-    if (!recorder.CommitPending()) return;
-    ++done_count;
-    progress.Update(done_count, last_what);
+    recorder.CommitPending([&progress, &done_count, what = last_what]() {
+      ++done_count;
+      progress.Update(done_count, what);
+    });
   };
   const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int attempt) {
     const Pose& pose = plan.poses[static_cast<size_t>(sweep_pose.index)];
@@ -333,11 +334,17 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   } catch (...) {
     // The pose in flight was not confirmed by the sweep: it is retaken on --resume.
     recorder.DropPending();
+    try {
+      recorder.WaitCommitted();
+    } catch (const Error& e) {
+      io.err << "\nirdist: also: " << e.what() << "\n";
+    }
     progress.Finish();
     recorder.Close(true);
     throw;
   }
   commit();  // the sweep returned: its last pose is confirmed
+  recorder.WaitCommitted();
   progress.Finish();
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
