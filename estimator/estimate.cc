@@ -385,6 +385,39 @@ double Theta0(const CalibrationModel& model, const Features& f, const EstimateOp
   return std::acos(ratio) / kRad;
 }
 
+// theta0 from the signal-weighted mean of the frames' moment matrices (kBracketMoments), with the
+// calibrated blur removed; falls back to Theta0 of `fallback` when no frame has moments.
+double Theta0Combined(const CalibrationModel& model, const Features* const* frames, int count,
+                      const Features& fallback, const EstimateOptions& options) {
+  if (options.theta_source != ThetaSource::kBracketMoments || !model.geometric.fitted()) {
+    return Theta0(model, fallback, options);
+  }
+  double xx = 0.0, yy = 0.0, xy = 0.0, weight = 0.0;
+  for (int i = 0; i < count; ++i) {
+    const Features& f = *frames[i];
+    if (!f.blob_found || !f.ellipse_moments.valid) continue;
+    const double signal = f.f00 - f.background * f.roi_area_px;  // normalised gray levels
+    if (!(signal > 0.0)) continue;
+    const double a = f.ellipse_moments.angle_deg * kRad;
+    const double c = std::cos(a), s = std::sin(a);
+    const double l1 = f.moment_major_var_px2, l2 = f.moment_minor_var_px2;
+    xx += signal * (l1 * c * c + l2 * s * s);
+    yy += signal * (l1 * s * s + l2 * c * c);
+    xy += signal * (l1 - l2) * s * c;
+    weight += signal;
+  }
+  if (!(weight > 0.0)) return Theta0(model, fallback, options);
+  xx /= weight;
+  yy /= weight;
+  xy /= weight;
+  const double root = std::sqrt(std::max(0.0, 0.25 * (xx - yy) * (xx - yy) + xy * xy));
+  const double beta = model.geometric.beta_px2;
+  const double major = 0.5 * (xx + yy) + root - beta;
+  const double minor = 0.5 * (xx + yy) - root - beta;
+  if (!(major > 0.0)) return Theta0(model, fallback, options);
+  return std::acos(std::clamp(std::sqrt(std::max(0.0, minor) / major), 0.0, 1.0)) / kRad;
+}
+
 // ln of the frame's geometric distance, NaN when there is none.
 double GeometricLnD(const CalibrationModel& model, const Features& f) {
   if (!model.geometric.fitted() || !f.blob_found) return std::numeric_limits<double>::quiet_NaN();
@@ -484,7 +517,8 @@ DistanceEstimate EstimatePair(const CalibrationModel& model, const Features& ref
   Prepare(model, &e, &s);
   const Difference diff = MakeDifference(model.scaling, reference, t_ref_ms, measurement, t_ms);
   const double geo = GeometricLnD(model, measurement);
-  const double theta0 = Theta0(model, measurement, options);
+  const Features* pair[2] = {&reference, &measurement};
+  const double theta0 = Theta0Combined(model, pair, 2, measurement, options);
   Problem p{&model, e, s, !e->degenerate, &diff, 1};
   SetUpFused(model, options, &geo, theta0, &p);
   DistanceEstimate out = Solve(p, theta0, options);
@@ -511,8 +545,15 @@ BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& r
   for (int i = 0; i < n; ++i) {
     diffs[i] = MakeDifference(model.scaling, reference, t_ref_ms, measurements[i], t_ms[i]);
     geo[i] = GeometricLnD(model, measurements[i]);
-    thetas[i] = Theta0(model, measurements[i], options);
+    const Features* pair[2] = {&reference, &measurements[i]};
+    thetas[i] = Theta0Combined(model, pair, 2, measurements[i], options);
     theta0 += thetas[i] / n;
+  }
+  if (options.theta_source == ThetaSource::kBracketMoments) {
+    const Features* frames[kMaxBracketExposures + 1];
+    frames[0] = &reference;
+    for (int i = 0; i < n; ++i) frames[i + 1] = &measurements[i];
+    theta0 = Theta0Combined(model, frames, n + 1, measurements[0], options);
   }
   for (int i = 0; i < n; ++i) {
     Problem p{&model, e, s, !e->degenerate, &diffs[i], 1};
@@ -569,7 +610,15 @@ const char* ToString(EstimateMethod method) {
   return method == EstimateMethod::kAlgorithm1 ? "algorithm1" : "fused";
 }
 const char* ToString(ThetaSource source) {
-  return source == ThetaSource::kFeatures ? "features" : "calibrated_blur";
+  switch (source) {
+    case ThetaSource::kFeatures:
+      return "features";
+    case ThetaSource::kCalibratedBlur:
+      return "calibrated_blur";
+    case ThetaSource::kBracketMoments:
+      return "bracket_moments";
+  }
+  return "unknown";
 }
 const char* ToString(RootTieBreaker tie_breaker) {
   return tie_breaker == RootTieBreaker::kResidualVote ? "residual_vote" : "geometric";

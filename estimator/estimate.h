@@ -23,6 +23,11 @@ enum class EstimateMethod {
 enum class ThetaSource {
   kFeatures,        // Features::theta0_deg (the ellipse chosen by FeatureOptions)
   kCalibratedBlur,  // default: the moment ellipse with the calibrated blur variance removed
+  // The moment matrices of every frame of the bracket (the reference and the measurements)
+  // averaged with weights proportional to their signal (the variance of a second moment falls
+  // as 1 / signal in the shot-noise regime), then the calibrated blur removed. EstimatePair
+  // and the per-exposure estimates use their pair (reference + measurement).
+  kBracketMoments,
 };
 // How the root of Eq. 25 is chosen among several in range.
 enum class RootTieBreaker {

@@ -67,6 +67,51 @@ Moments WeightedMoments(const cv::Mat& image, const cv::Rect& rect, double backg
   return m;
 }
 
+// kAperture: moments of every pixel within `radius` of (cx, cy), background-subtracted with the
+// mean of the window's pixels beyond radius + 1 (the blob's support ends well inside the radius).
+Moments ApertureMoments(const cv::Mat& image, const cv::Rect& rect, double cx, double cy,
+                        double radius, double fallback_background) {
+  double outside = 0.0;
+  int n_outside = 0;
+  const double r_in2 = radius * radius, r_out2 = (radius + 1.0) * (radius + 1.0);
+  for (int y = rect.y; y < rect.y + rect.height; ++y) {
+    const uint16_t* row = image.ptr<uint16_t>(y);
+    for (int x = rect.x; x < rect.x + rect.width; ++x) {
+      const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+      if (r2 > r_out2) {
+        outside += row[x];
+        ++n_outside;
+      }
+    }
+  }
+  const double background = n_outside >= 64 ? outside / n_outside : fallback_background;
+  Moments m;
+  double sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
+  for (int y = rect.y; y < rect.y + rect.height; ++y) {
+    const uint16_t* row = image.ptr<uint16_t>(y);
+    const double dy = y - cy;
+    for (int x = rect.x; x < rect.x + rect.width; ++x) {
+      const double dx = x - cx;
+      if (dx * dx + dy * dy > r_in2) continue;
+      const double w = row[x] - background;
+      m.weight += w;
+      sx += w * dx;
+      sy += w * dy;
+      sxx += w * dx * dx;
+      syy += w * dy * dy;
+      sxy += w * dx * dy;
+    }
+  }
+  if (m.weight <= 0.0) return m;
+  const double mx = sx / m.weight, my = sy / m.weight;
+  m.cx = cx + mx;
+  m.cy = cy + my;
+  m.sxx = sxx / m.weight - mx * mx;
+  m.syy = syy / m.weight - my * my;
+  m.sxy = sxy / m.weight - mx * my;
+  return m;
+}
+
 double Theta0FromAxes(double minor, double major) {
   if (major <= 0.0) return 0.0;
   const double ratio = std::clamp(minor / major, 0.0, 1.0);
@@ -83,6 +128,26 @@ const char* ToString(RoiPolicy policy) {
       return "threshold";
   }
   return "unknown";
+}
+
+const char* ToString(MomentMethod method) {
+  switch (method) {
+    case MomentMethod::kThreshold:
+      return "threshold";
+    case MomentMethod::kAperture:
+      return "aperture";
+  }
+  return "unknown";
+}
+
+bool ParseMomentMethod(const std::string& name, MomentMethod* method) {
+  for (MomentMethod m : {MomentMethod::kThreshold, MomentMethod::kAperture}) {
+    if (name == ToString(m)) {
+      *method = m;
+      return true;
+    }
+  }
+  return false;
 }
 
 const char* ToString(EllipseMethod method) {
@@ -152,6 +217,7 @@ bool FeatureOptions::IsValid(std::string* why) const {
   if (!(moment_threshold_fraction >= 0.0 && moment_threshold_fraction < 1.0))
     return fail("moment_threshold_fraction must be in [0,1)");
   if (!(psf_sigma_px >= 0.0)) return fail("psf_sigma_px must be >= 0");
+  if (!(aperture_margin_px >= 0.0)) return fail("aperture_margin_px must be >= 0");
   if (detection_downsample < 1 || detection_downsample > 16)
     return fail("detection_downsample must be in [1,16]");
   if (!(min_contrast_fraction > 0.0 && min_contrast_fraction < 1.0))
@@ -291,7 +357,21 @@ Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptio
   out.sigma = std::sqrt(std::max(0.0, sum_sq / area - mean * mean));
 
   // 5. Ellipse from background-subtracted second moments.
-  const Moments m = WeightedMoments(image, window, background, moment_threshold);
+  Moments m = WeightedMoments(image, window, background, moment_threshold);
+  if (options.moment_method == MomentMethod::kAperture && m.weight > 0.0) {
+    // Support: the farthest pixel above the moment threshold from the thresholded centroid.
+    double support2 = 0.0;
+    for (int y = window.y; y < window.y + window.height; ++y) {
+      const uint16_t* row = image.ptr<uint16_t>(y);
+      for (int x = window.x; x < window.x + window.width; ++x) {
+        if (row[x] <= moment_threshold) continue;
+        support2 = std::max(support2, (x - m.cx) * (x - m.cx) + (y - m.cy) * (y - m.cy));
+      }
+    }
+    const Moments a = ApertureMoments(image, window, m.cx, m.cy,
+                                      std::sqrt(support2) + options.aperture_margin_px, background);
+    if (a.weight > 0.0 && a.sxx > 0.0 && a.syy > 0.0) m = a;
+  }
   {
     const double tr = m.sxx + m.syy;
     const double det_root =

@@ -29,11 +29,27 @@ enum class EllipseMethod {
   kContour,  // cv::fitEllipse on the half-maximum contour
 };
 
+// Which pixels enter the second moments (Features::moment_*_var_px2: the geometric baseline's size
+// and the ellipse of theta0).
+enum class MomentMethod {
+  // The pixels above moment_threshold_fraction of the peak. The hard cut through the PSF's wings
+  // moves with the blob's sub-pixel phase and size: a pose-dependent bias of up to ~1.5 deg on
+  // theta0 at 2.9 m on the virtual rig (docs/estimator.md).
+  kThreshold,
+  // Every pixel of a circular aperture around the centroid, background-subtracted with the mean
+  // of the window outside it (no threshold): the aperture reaches aperture_margin_px beyond the
+  // farthest pixel above the moment threshold, so its edge lies in pure noise and the moments
+  // are the blob's own for any emitter profile (variances of profile and blur add).
+  kAperture,
+};
+
 const char* ToString(RoiPolicy policy);
 const char* ToString(EllipseMethod method);
+const char* ToString(MomentMethod method);
 // Parse the names ToString gives; return false when the name is unknown.
 bool ParseRoiPolicy(const std::string& name, RoiPolicy* policy);
 bool ParseEllipseMethod(const std::string& name, EllipseMethod* method);
+bool ParseMomentMethod(const std::string& name, MomentMethod* method);
 
 // The camera's inverse radiometric response f on normalised gray levels: identity when empty,
 // otherwise the piecewise-linear curve through the knots (m_k, f_k), m strictly increasing in [0,1]
@@ -56,6 +72,10 @@ struct FeatureOptions {
   // Pixels above background + moment_threshold_fraction * (peak - background) enter the second
   // moments and the centroid (the rest is noise that would bias them).
   double moment_threshold_fraction = 0.02;
+  // Which pixels enter the second moments (see MomentMethod).
+  MomentMethod moment_method = MomentMethod::kThreshold;
+  // kAperture: margin (px) of the aperture beyond the farthest pixel above the moment threshold.
+  double aperture_margin_px = 3.0;
   // Blur (Gaussian PSF sigma, px) removed from the second moments before the axis ratio; 0 = none.
   double psf_sigma_px = 0.0;
   // Blob detection runs on the frame downsampled by this factor (area average).

@@ -277,12 +277,88 @@ void PrintDispersion(const Methods& m) {
   }
 }
 
+// theta0 from a second-moment matrix (xx, yy, xy) with the blur variance `beta` removed.
+double ThetaFromMoments(double xx, double yy, double xy, double beta) {
+  const double tr = xx + yy;
+  const double root = std::sqrt(std::max(0.0, 0.25 * (xx - yy) * (xx - yy) + xy * xy));
+  const double major = 0.5 * tr + root - beta, minor = 0.5 * tr - root - beta;
+  if (!(major > 0)) return 0;
+  return std::acos(std::clamp(std::sqrt(std::max(0.0, minor) / major), 0.0, 1.0)) * 180 / M_PI;
+}
+
+// Dispersion and bias of theta0 variants over repeated frames of static poses (8 ms reference,
+// 35 ms measurement), beside the Cramer-Rao bound.
+void ThetaProbe(const sim::RigPhysics& physics, std::uint64_t seed) {
+  const double beta = physics.optics.psf_sigma_px * physics.optics.psf_sigma_px + 1.0 / 12;
+  const double steady = physics.emitter.thermal_resistance_k_per_w * 0.5 *
+                        physics.emitter.forward_voltage_v;
+  sim::Renderer r(physics);
+  const int side = 192;
+  const cv::Point origin(physics.sensor.width_px / 2 - side / 2,
+                         physics.sensor.height_px / 2 - side / 2);
+  cv::Mat frame(side, side, CV_16UC1);
+  for (double d : {2100.0, 2900.0}) {
+    for (double th : {15.0, 20.0, 30.0}) {
+      const CrbResult crb = ComputeCrb(physics, {d, th, 500.0, steady, {kTRefMs, 35.0}});
+      std::printf("%g mm %g deg: CRB theta %.3f deg\n", d, th, crb.theta_sd_deg);
+      // > 0: threshold moments at that fraction; < 0: aperture moments with that margin (px).
+      std::vector<double> fractions = {0.02, -2.0, -3.0, -5.0};
+      std::vector<std::vector<double>> meas(fractions.size() * 3);
+      for (int rep = 0; rep < 60; ++rep) {
+        for (size_t fi = 0; fi < fractions.size(); ++fi) {
+          FeatureOptions fo;
+          if (fractions[fi] > 0) {
+            fo.moment_threshold_fraction = fractions[fi];
+          } else {
+            fo.moment_method = MomentMethod::kAperture;
+            fo.aperture_margin_px = -fractions[fi];
+          }
+          Features f[2];
+          for (int k = 0; k < 2; ++k) {
+            sim::FrameConditions c = sim::StaticConditions(d, th, 0, 500, (k ? 35.0 : kTRefMs) * 1e-3);
+            c.junction_rise_k = steady;
+            r.Render(c, seed * 1000003ull + rep * 2 + k, sim::PixelFormat::kMono12, origin, frame);
+            f[k] = ComputeFeatures(frame, 12, fo);
+          }
+          auto mat = [](const Features& x, double* xx, double* yy, double* xy) {
+            const double a = x.ellipse_moments.angle_deg * M_PI / 180;
+            const double l1 = x.moment_major_var_px2, l2 = x.moment_minor_var_px2;
+            *xx = l1 * std::cos(a) * std::cos(a) + l2 * std::sin(a) * std::sin(a);
+            *yy = l1 * std::sin(a) * std::sin(a) + l2 * std::cos(a) * std::cos(a);
+            *xy = (l1 - l2) * std::sin(a) * std::cos(a);
+          };
+          double m[2][3];
+          for (int k = 0; k < 2; ++k) mat(f[k], &m[k][0], &m[k][1], &m[k][2]);
+          meas[fi * 3].push_back(ThetaFromMoments(m[1][0], m[1][1], m[1][2], beta));
+          const double w0 = f[0].f00 - f[0].background * f[0].roi_area_px;
+          const double w1 = f[1].f00 - f[1].background * f[1].roi_area_px;
+          double c[3];
+          for (int j = 0; j < 3; ++j) c[j] = (w0 * m[0][j] + w1 * m[1][j]) / (w0 + w1);
+          meas[fi * 3 + 1].push_back(ThetaFromMoments(c[0], c[1], c[2], beta));
+          meas[fi * 3 + 2].push_back(ThetaFromMoments(m[0][0], m[0][1], m[0][2], beta));
+        }
+      }
+      for (size_t v = 0; v < meas.size(); ++v) {
+        double mean = 0, sd = 0;
+        for (double x : meas[v]) mean += x / meas[v].size();
+        for (double x : meas[v]) sd += (x - mean) * (x - mean) / (meas[v].size() - 1);
+        std::printf("  %s %.2f %-10s bias %+.3f sd %.3f\n", fractions[v / 3] > 0 ? "thr" : "ap.margin",
+                    std::abs(fractions[v / 3]),
+                    v % 3 == 0 ? "35ms" : v % 3 == 1 ? "combined" : "8ms", mean - th,
+                    std::sqrt(sd));
+      }
+    }
+  }
+}
+
 int Main(int argc, char** argv) {
   std::string rig = std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml";
   std::uint64_t seed = 7;
   bool quick = false;
   bool verbose = false;
   bool crb_only = false;
+  bool theta_probe = false;
+  bool theta_variants = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--rig") && i + 1 < argc)
       rig = argv[++i];
@@ -290,6 +366,10 @@ int Main(int argc, char** argv) {
       seed = std::stoull(argv[++i]);
     else if (!std::strcmp(argv[i], "--quick"))
       quick = true;
+    else if (!std::strcmp(argv[i], "--theta-variants"))
+      theta_variants = true;
+    else if (!std::strcmp(argv[i], "--theta-probe"))
+      theta_probe = true;
     else if (!std::strcmp(argv[i], "--crb-only"))
       crb_only = true;
     else if (!std::strcmp(argv[i], "--help")) {
@@ -372,6 +452,10 @@ int Main(int argc, char** argv) {
     std::printf("\n");
   }
   if (crb_only) return 0;
+  if (theta_probe) {
+    ThetaProbe(physics, seed);
+    return 0;
+  }
 
   // Pipelines.
   std::vector<Pipeline> pipelines(3);
@@ -395,6 +479,16 @@ int Main(int argc, char** argv) {
   pipelines[1].name = "default";
   pipelines[2].name = "alg1_joint";  // default fit, Algorithm 1 jointly over t_n, better theta0
   pipelines[2].estimate.method = EstimateMethod::kAlgorithm1;
+  if (theta_variants) {
+    Pipeline pl;
+    pl.name = "theta_bracket";  // theta0 from the signal-weighted moments of every frame
+    pl.estimate.theta_source = ThetaSource::kBracketMoments;
+    pipelines.push_back(pl);
+    pl.name = "theta_aperture";  // aperture moments (features and geometric baseline)
+    pl.estimate.theta_source = ThetaSource::kCalibratedBlur;
+    pl.features.moment_method = MomentMethod::kAperture;
+    pipelines.push_back(pl);
+  }
 
   // Calibration: Table 3.
   std::vector<Pose> calib;

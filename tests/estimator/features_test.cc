@@ -70,6 +70,52 @@ TEST(FeatureOptions, DefaultsAreValid) {
   EXPECT_NE(why.find("increase"), std::string::npos);
 }
 
+TEST(FeatureOptions, MomentMethodNamesRoundTrip) {
+  for (MomentMethod m : {MomentMethod::kThreshold, MomentMethod::kAperture}) {
+    MomentMethod parsed = m == MomentMethod::kThreshold ? MomentMethod::kAperture
+                                                        : MomentMethod::kThreshold;
+    EXPECT_TRUE(ParseMomentMethod(ToString(m), &parsed));
+    EXPECT_EQ(parsed, m);
+  }
+  MomentMethod m;
+  EXPECT_FALSE(ParseMomentMethod("gaussian", &m));
+  FeatureOptions bad;
+  bad.aperture_margin_px = -1.0;
+  std::string why;
+  EXPECT_FALSE(bad.IsValid(&why));
+}
+
+// Aperture moments keep the blob's whole profile: the variances of profile and blur add, so going
+// from one blur to another changes both axes' variances by exactly the difference of the blurs'
+// variances; the threshold cuts the wider blur's wings and sees less of it.
+TEST(Features, ApertureMomentsAddTheWholeBlurVariance) {
+  Features aperture_f[2], threshold_f[2];
+  const double blurs[2] = {0.7, 1.5};
+  for (int k = 0; k < 2; ++k) {
+    Blob b;
+    b.diameter_px = 16.0;
+    b.theta_deg = 25.0;
+    b.blur_sigma_px = blurs[k];
+    b.cx = 640.37;
+    b.cy = 512.81;
+    const cv::Mat image = Render(b, 12);
+    FeatureOptions aperture;
+    aperture.moment_method = MomentMethod::kAperture;
+    aperture_f[k] = ComputeFeatures(image, 12, aperture);
+    threshold_f[k] = ComputeFeatures(image, 12, FeatureOptions());
+    ASSERT_TRUE(aperture_f[k].blob_found && threshold_f[k].blob_found);
+    EXPECT_NEAR(aperture_f[k].centroid_px.x, b.cx, 0.05);
+  }
+  const double expected = blurs[1] * blurs[1] - blurs[0] * blurs[0];
+  const double major = aperture_f[1].moment_major_var_px2 - aperture_f[0].moment_major_var_px2;
+  const double minor = aperture_f[1].moment_minor_var_px2 - aperture_f[0].moment_minor_var_px2;
+  EXPECT_NEAR(major, expected, 0.02 * expected);
+  EXPECT_NEAR(minor, expected, 0.02 * expected);
+  const double threshold_major =
+      threshold_f[1].moment_major_var_px2 - threshold_f[0].moment_major_var_px2;
+  EXPECT_LT(threshold_major, major - 0.05 * expected);
+}
+
 TEST(Features, F00EqualsDftDcTermOfRoi) {
   Blob b;
   const cv::Mat image = Render(b, 12);
