@@ -182,7 +182,8 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub = add("playback");
   sub->add_option("recording", playback.recording, "Recording folder")->required();
   sub->add_option("--model", playback.model, "model.yaml from a calibration");
-  sub->add_option("--out", playback.out_dir, "Folder for features.csv, estimates.csv, summary.yaml");
+  sub->add_option("--out", playback.out_dir,
+                  "Folder for features.csv, estimates.csv, summary.yaml");
   sub->add_flag("--show", playback.show, "Step through the frames in a window (needs a display)");
   table.emplace_back(sub, [&] { Invoke(handlers.playback, "playback", playback, io); });
 

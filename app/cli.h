@@ -20,9 +20,9 @@ struct CommandIo {
 };
 
 struct CalibrateArgs {
-  std::string recipe;      // recipe file
-  std::string out_dir;     // --out: overrides the recipe's output directory ("" = recipe's)
-  std::string resume_dir;  // --resume: continue a cut run from its recording ("" = new run)
+  std::string recipe;       // recipe file
+  std::string out_dir;      // --out: overrides the recipe's output directory ("" = recipe's)
+  std::string resume_dir;   // --resume: continue a cut run from its recording ("" = new run)
   double time_scale = 0.0;  // --time-scale: virtual rig's simulated s per host s (0 = rig file's)
   bool quiet = false;       // --quiet: no progress output
 };

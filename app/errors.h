@@ -1,6 +1,7 @@
 #pragma once
 // The app's typed errors. main.cc maps them to exit codes: RecipeError and every other
-// irdist::Error -> 1 (a failed run), UsageError and NotAvailableError -> 2, InterruptedError -> 130.
+// irdist::Error -> 1 (a failed run), UsageError and NotAvailableError -> 2, InterruptedError ->
+// 130.
 
 #include <string>
 #include <utility>

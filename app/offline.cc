@@ -2,14 +2,13 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <ostream>
-#include <sstream>
-
 #include <filesystem>
-#include <set>
-#include <tuple>
+#include <fstream>
 #include <optional>
+#include <ostream>
+#include <set>
+#include <sstream>
+#include <tuple>
 
 #include "acquisition/recording.h"
 #include "app/run.h"
@@ -114,19 +113,20 @@ void WriteFeaturesCsv(const std::string& path, const std::vector<FrameRecord>& r
     out << row.index << ',' << row.file << ',' << row.bracket_id << ',' << row.frame_in_bracket
         << ',' << FrameRoleName(row.role) << ',' << Num(row.requested_exposure_us) << ','
         << Num(row.bias_ma_set) << ',' << Num(row.slide_mm) << ',' << Num(row.theta_deg) << ','
-        << (f.blob_found ? 1 : 0) << ',' << (f.Usable() ? 1 : 0) << ',' << f.saturated_pixels
-        << ',' << (f.touches_border ? 1 : 0) << ',' << (f.blob_clipped_by_roi ? 1 : 0) << ','
-        << f.roi.x << ',' << f.roi.y << ',' << f.roi.width << ',' << f.roi.height << ','
-        << f.roi_area_px << ',' << Num(f.background) << ',' << Num(f.peak) << ','
-        << Num(f.e_rel) << ',' << Num(f.f00) << ',' << Num(f.sigma) << ','
-        << Num(f.centroid_px.x) << ',' << Num(f.centroid_px.y) << ',' << Num(e.major_px) << ','
-        << Num(e.minor_px) << ',' << Num(e.angle_deg) << ',' << Num(f.theta0_deg) << '\n';
+        << (f.blob_found ? 1 : 0) << ',' << (f.Usable() ? 1 : 0) << ',' << f.saturated_pixels << ','
+        << (f.touches_border ? 1 : 0) << ',' << (f.blob_clipped_by_roi ? 1 : 0) << ',' << f.roi.x
+        << ',' << f.roi.y << ',' << f.roi.width << ',' << f.roi.height << ',' << f.roi_area_px
+        << ',' << Num(f.background) << ',' << Num(f.peak) << ',' << Num(f.e_rel) << ','
+        << Num(f.f00) << ',' << Num(f.sigma) << ',' << Num(f.centroid_px.x) << ','
+        << Num(f.centroid_px.y) << ',' << Num(e.major_px) << ',' << Num(e.minor_px) << ','
+        << Num(e.angle_deg) << ',' << Num(f.theta0_deg) << '\n';
   }
   std::ofstream file(path, std::ios::binary | std::ios::trunc);
   file << out.str();
   file.flush();
   if (!file) {
-    throw RecordingError(path + ": cannot write features.csv; check the folder exists and is "
+    throw RecordingError(path +
+                         ": cannot write features.csv; check the folder exists and is "
                          "writable.");
   }
 }
@@ -178,8 +178,7 @@ std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
     p.ds_measured = s.measurement.sigma - s.reference.sigma;
     p.de_model = free_e->Predict(model.scaling, in);
     p.ds_model = free_s->Predict(model.scaling, in);
-    if (stride > 0 && i % stride == 0 &&
-        static_cast<int>(i / stride) < eq25_curves) {
+    if (stride > 0 && i % stride == 0 && static_cast<int>(i / stride) < eq25_curves) {
       // Eq. 25 (c - a) as a function of d at the true theta, each polynomial normalised.
       std::array<double, kNumModelVars> vars = ScaleInputs(in, model.scaling);
       double a[4], c[4];
@@ -211,7 +210,8 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
                               const std::string& report_dir, std::ostream& out) {
   const std::vector<CalibrationSample> samples = SamplesFromRecording(reader, features);
   int usable = 0;
-  for (const CalibrationSample& s : samples) usable += s.reference.Usable() && s.measurement.Usable();
+  for (const CalibrationSample& s : samples)
+    usable += s.reference.Usable() && s.measurement.Usable();
   if (usable == 0) {
     throw RecordingError(reader.dir() + ": no usable calibration sample (" +
                          std::to_string(samples.size()) +
@@ -227,9 +227,8 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   int usable_frames = 0;
   for (const CalibrationSample& s : samples) {
     if (!s.reference.Usable() || !s.measurement.Usable()) continue;
-    usable_frames += 1 + (references.insert({s.d_mm, s.theta_deg, s.bias_ma, s.t_ref_ms}).second
-                              ? 1
-                              : 0);
+    usable_frames +=
+        1 + (references.insert({s.d_mm, s.theta_deg, s.bias_ma, s.t_ref_ms}).second ? 1 : 0);
   }
   std::vector<ModelKind> kept;
   for (ModelKind kind : fit_options.models) {
@@ -258,8 +257,8 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   const CalibrationModel model = Fit(samples, feature_options, fit_options);
   SaveModel(model, model_path);
   for (const FittedModel& m : model.models) {
-    out << "  " << ToString(m.kind) << " (" << ToString(m.form) << "): "
-        << m.summary.BriefReport() << "\n";
+    out << "  " << ToString(m.kind) << " (" << ToString(m.form) << "): " << m.summary.BriefReport()
+        << "\n";
   }
   out << "  geometric: " << model.geometric.summary.BriefReport() << "\n";
   out << "Model: " << model_path << "\n";
@@ -278,8 +277,8 @@ namespace {
 // One method's rows for a bracket: the joint estimate (dt_ms = 0), then one row per t_n.
 void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& options,
                         const std::string& method, const EstimateRow& base,
-                        const std::vector<Pair>& pairs, const FeatureMap& features,
-                        bool all_usable, std::vector<EstimateRow>* out) {
+                        const std::vector<Pair>& pairs, const FeatureMap& features, bool all_usable,
+                        std::vector<EstimateRow>* out) {
   const FrameRecord& reference = *pairs.front().reference;
   std::vector<Features> measurements;
   std::vector<double> t_ms;
@@ -370,9 +369,9 @@ std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
       row.ok = false;
       if (all_usable) {
         const FrameRecord& reference = *pairs.front().reference;
-        const I0DependentEstimate e = EstimateI0Dependent(
-            model, FeaturesOf(features, reference), reference.requested_exposure_us / 1000.0,
-            measurements, t_ms, nominal_ma);
+        const I0DependentEstimate e = EstimateI0Dependent(model, FeaturesOf(features, reference),
+                                                          reference.requested_exposure_us / 1000.0,
+                                                          measurements, t_ms, nominal_ma);
         row.ok = e.valid;
         row.d_mm = e.d_mm;
         row.theta_deg = e.theta_deg;
@@ -416,8 +415,8 @@ ValidationSummary WriteValidation(const std::string& dir, const std::vector<Esti
   WriteEstimatesCsv(dir + "/estimates.csv", rows);
   const ValidationSummary summary = Summarize(rows);
   WriteSummaryYaml(dir + "/summary.yaml", summary, context);
-  const std::string index = WriteReport(dir + "/report", "irdist validation",
-                                        summary.BriefReport(), ValidationPlots(rows, summary));
+  const std::string index = WriteReport(dir + "/report", "irdist validation", summary.BriefReport(),
+                                        ValidationPlots(rows, summary));
   out << summary.BriefReport() << "\n";
   out << "Estimates: " << dir << "/estimates.csv\nSummary: " << dir
       << "/summary.yaml\nReport: " << index << "\n";
@@ -429,8 +428,8 @@ void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& opti
   const RecordingReader reader(run_dir + "/recording");
   const FeatureMap features = RecordingFeatures(reader, options, cache);
   WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
-  out << "Recorded " << reader.rows().size() << " frames (recipe: after: none); features: "
-      << run_dir << "/features.csv\n";
+  out << "Recorded " << reader.rows().size()
+      << " frames (recipe: after: none); features: " << run_dir << "/features.csv\n";
 }
 
 void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
@@ -480,7 +479,8 @@ void RunPlayback(const PlaybackArgs& args, CommandIo io) {
   if (model) {
     rows = EstimateRecording(reader, features, *model);
     WriteValidation(out_dir, rows,
-                    {{"recipe", reader.header().recipe_path}, {"model", args.model},
+                    {{"recipe", reader.header().recipe_path},
+                     {"model", args.model},
                      {"recording", args.recording}},
                     io.out);
   }

@@ -7,10 +7,9 @@
 #include <cstdint>
 #include <iosfwd>
 #include <map>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "app/report.h"
 #include "app/summary.h"

@@ -176,7 +176,8 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
     recorded.dir = request.resume_dir;
     const std::string recording_dir = recorded.dir + "/recording";
     if (!fs::exists(recording_dir + "/recording.yaml")) {
-      throw RunFolderError(recording_dir + ": no recording to resume (recording.yaml missing); "
+      throw RunFolderError(recording_dir +
+                           ": no recording to resume (recording.yaml missing); "
                            "pass the folder of a cut run to --resume.");
     }
     const RecordingState state = ReadRecordingState(recording_dir);
@@ -191,14 +192,16 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
       return recorded;
     }
     done_ids = state.complete_brackets;
-    io.err << "Resuming " << recorded.dir << ": " << done_ids.size() << " of "
-           << plan.poses.size() << " brackets already recorded.\n";
+    io.err << "Resuming " << recorded.dir << ": " << done_ids.size() << " of " << plan.poses.size()
+           << " brackets already recorded.\n";
   } else {
-    recorded.dir = request.out_dir.empty() ? recipe.output_dir + "-" + Timestamp()
-                                           : request.out_dir;
+    recorded.dir =
+        request.out_dir.empty() ? recipe.output_dir + "-" + Timestamp() : request.out_dir;
     if (fs::exists(recorded.dir + "/recording")) {
-      throw RunFolderError(recorded.dir + "/recording exists already; choose another --out "
-                           "folder, or continue that run with --resume " + recorded.dir + ".");
+      throw RunFolderError(recorded.dir +
+                           "/recording exists already; choose another --out "
+                           "folder, or continue that run with --resume " +
+                           recorded.dir + ".");
     }
   }
   fs::create_directories(recorded.dir);
@@ -220,7 +223,8 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
     port = info.station_port;
     setup.camera_name = info.camera_address;
     setup.camera_serial = info.serial;
-    if (!request.quiet) io.err << "Virtual rig (time scale " << time_scale << "):\n" << info.BriefReport();
+    if (!request.quiet)
+      io.err << "Virtual rig (time scale " << time_scale << "):\n" << info.BriefReport();
   } else {
     if (port == "auto") {
       throw RecipeError(recipe.rig_path, 0, 0,
@@ -376,13 +380,12 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
     recorded = Record(request, recipe, plan, feature_options, io);
   }
   if (recorded.cut) {
-    throw InterruptedError("run stopped; the recording in " + recorded.dir +
-                           "/recording is closed as cut. Continue it with: irdist " +
-                           (request.kind == RunKind::kCalibrate ? "calibrate " : "validate ") +
-                           recipe.path +
-                           (request.kind == RunKind::kValidate ? " --model " + request.model_path
-                                                               : std::string()) +
-                           " --resume " + recorded.dir);
+    throw InterruptedError(
+        "run stopped; the recording in " + recorded.dir +
+        "/recording is closed as cut. Continue it with: irdist " +
+        (request.kind == RunKind::kCalibrate ? "calibrate " : "validate ") + recipe.path +
+        (request.kind == RunKind::kValidate ? " --model " + request.model_path : std::string()) +
+        " --resume " + recorded.dir);
   }
 
   if (recipe.after == AfterRecording::kNone) {
@@ -391,7 +394,8 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
     ProcessCalibration(recorded.dir, feature_options, recorded.cache, io.out);
   } else {
     ProcessValidation(recorded.dir, *model,
-                      {{"recipe", recipe.path}, {"model", request.model_path},
+                      {{"recipe", recipe.path},
+                       {"model", request.model_path},
                        {"recording", recorded.dir + "/recording"}},
                       recorded.cache, io.out);
   }

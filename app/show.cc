@@ -2,10 +2,9 @@
 // sees station/plan.h (its BracketFrame clashes with acquisition's).
 #include <cstdlib>
 #include <map>
-#include <sstream>
-
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "acquisition/recording.h"
 #include "app/tools.h"
@@ -17,8 +16,9 @@ void ShowPlayback(const RecordingReader& reader, const FeatureMap& features,
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
   if ((display == nullptr || *display == '\0') && (wayland == nullptr || *wayland == '\0')) {
-    throw DisplayError("--show needs a display (DISPLAY or WAYLAND_DISPLAY is not set); run it "
-                       "in a desktop session or with X forwarding (ssh -X), or leave --show out.");
+    throw DisplayError(
+        "--show needs a display (DISPLAY or WAYLAND_DISPLAY is not set); run it "
+        "in a desktop session or with X forwarding (ssh -X), or leave --show out.");
   }
   std::map<int, const EstimateRow*> joint;
   for (const EstimateRow& row : estimates) {
@@ -41,13 +41,13 @@ void ShowPlayback(const RecordingReader& reader, const FeatureMap& features,
       cv::rectangle(view, f->second.roi, cv::Scalar(0, 255, 0), 1);
       const EllipseFit& e = f->second.ellipse_moments;
       if (e.valid) {
-        cv::ellipse(view,
-                    cv::RotatedRect(cv::Point2f(static_cast<float>(e.center_px.x),
-                                                static_cast<float>(e.center_px.y)),
-                                    cv::Size2f(static_cast<float>(e.major_px),
-                                               static_cast<float>(e.minor_px)),
-                                    static_cast<float>(e.angle_deg)),
-                    cv::Scalar(0, 0, 255), 1);
+        cv::ellipse(
+            view,
+            cv::RotatedRect(
+                cv::Point2f(static_cast<float>(e.center_px.x), static_cast<float>(e.center_px.y)),
+                cv::Size2f(static_cast<float>(e.major_px), static_cast<float>(e.minor_px)),
+                static_cast<float>(e.angle_deg)),
+            cv::Scalar(0, 0, 255), 1);
       }
     }
     std::ostringstream text;

@@ -77,8 +77,9 @@ void RunSim(const SimArgs& args, CommandIo io) {
   const std::string rig_path = ResolveRig(args.rig);
   const Rig rig = LoadRig(rig_path);
   if (rig.kind != RigKind::kVirtual) {
-    throw RecipeError(rig_path, 0, 0, "is a hardware rig (kind: hardware); 'irdist sim' runs "
-                                      "rigs of kind virtual only.");
+    throw RecipeError(rig_path, 0, 0,
+                      "is a hardware rig (kind: hardware); 'irdist sim' runs "
+                      "rigs of kind virtual only.");
   }
   SignalGuard guard;
   sim::VirtualRigOverrides overrides;
@@ -96,8 +97,8 @@ void RunSim(const SimArgs& args, CommandIo io) {
           << info.camera_address << "\"\nserial: \"" << info.serial << "\"\nstation_port: \""
           << info.station_port << "\"\ntime_scale: " << info.time_scale << "\n";
   }
-  io.out << "camera: " << info.camera_id << " " << info.camera_address << " serial "
-         << info.serial << "\n";
+  io.out << "camera: " << info.camera_id << " " << info.camera_address << " serial " << info.serial
+         << "\n";
   io.out << "station: " << info.station_port << "\n";
   io.out << "time scale: " << info.time_scale << "\nstate: " << state_path
          << "\nRunning until Ctrl-C (SIGINT or SIGTERM).\n"
@@ -145,8 +146,8 @@ void RunDevices(const DevicesArgs& args, CommandIo io) {
   io.out << "Cameras:\n";
   const std::vector<DeviceInfo> cameras = ListCameras();
   for (const DeviceInfo& d : cameras) {
-    io.out << "  " << d.id << " (" << d.protocol << ") " << d.vendor << " " << d.model
-           << " serial " << d.serial << (d.address.empty() ? "" : " at " + d.address) << "\n";
+    io.out << "  " << d.id << " (" << d.protocol << ") " << d.vendor << " " << d.model << " serial "
+           << d.serial << (d.address.empty() ? "" : " at " + d.address) << "\n";
   }
   if (cameras.empty()) io.out << "  none\n";
 }
@@ -154,8 +155,7 @@ void RunDevices(const DevicesArgs& args, CommandIo io) {
 std::string OnlyCamera() {
   const std::vector<DeviceInfo> cameras = ListCameras();
   if (cameras.size() != 1) {
-    throw CameraError("camera.id is 'auto' but discovery found " +
-                      std::to_string(cameras.size()) +
+    throw CameraError("camera.id is 'auto' but discovery found " + std::to_string(cameras.size()) +
                       " cameras; set camera.id in the rig file to an id, serial or IP address "
                       "('irdist devices --discover' lists them).");
   }

@@ -3,7 +3,6 @@
 #include "app/capture.h"
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <filesystem>
@@ -14,9 +13,9 @@ namespace irdist {
 namespace {
 
 TEST(CaptureTest, RecordingStateListsCompleteBracketsOnly) {
-  const std::string dir = (std::filesystem::temp_directory_path() /
-                           ("irdist-capture-" + std::to_string(getpid())))
-                              .string();
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("irdist-capture-" + std::to_string(getpid())))
+          .string();
   std::filesystem::remove_all(dir);
   {
     RecordingHeader header;

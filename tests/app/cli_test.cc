@@ -72,10 +72,10 @@ TEST(CliTest, EveryCommandHasAHandler) {
 
 TEST(CliTest, OfflineCommandsReportAMissingRecordingAsAnError) {
   const Handlers handlers = DefaultHandlers();
-  for (const std::vector<std::string>& command : std::vector<std::vector<std::string>>{
-           {"fit", "/nonexistent-recording"},
-           {"playback", "/nonexistent-recording"},
-           {"check", "/nonexistent-recording"}}) {
+  for (const std::vector<std::string>& command :
+       std::vector<std::vector<std::string>>{{"fit", "/nonexistent-recording"},
+                                             {"playback", "/nonexistent-recording"},
+                                             {"check", "/nonexistent-recording"}}) {
     SCOPED_TRACE(command[0]);
     try {
       RunWords(command, handlers);
@@ -83,8 +83,7 @@ TEST(CliTest, OfflineCommandsReportAMissingRecordingAsAnError) {
     } catch (const NotAvailableError&) {
       ADD_FAILURE() << "the command is integrated";
     } catch (const Error& e) {
-      EXPECT_NE(std::string(e.what()).find("nonexistent-recording"), std::string::npos)
-          << e.what();
+      EXPECT_NE(std::string(e.what()).find("nonexistent-recording"), std::string::npos) << e.what();
     }
   }
 }

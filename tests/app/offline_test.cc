@@ -91,8 +91,10 @@ TEST_F(OfflineTest, FeaturesFromPngEqualFeaturesFromMemory) {
   FeatureMap cache;
   for (size_t i = 0; i < images_.size(); ++i) {
     cache[static_cast<std::int64_t>(i)] = FrameFeatures(images_[i], 12, options);
-    EXPECT_EQ(cache[static_cast<std::int64_t>(i)].e_rel, from_png.at(static_cast<std::int64_t>(i)).e_rel);
-    EXPECT_EQ(cache[static_cast<std::int64_t>(i)].sigma, from_png.at(static_cast<std::int64_t>(i)).sigma);
+    EXPECT_EQ(cache[static_cast<std::int64_t>(i)].e_rel,
+              from_png.at(static_cast<std::int64_t>(i)).e_rel);
+    EXPECT_EQ(cache[static_cast<std::int64_t>(i)].sigma,
+              from_png.at(static_cast<std::int64_t>(i)).sigma);
   }
   // A cached entry is taken as is (the live run's in-memory frames).
   cache[2].e_rel = 42.0;
@@ -136,9 +138,9 @@ TEST_F(OfflineTest, FitRefusesARecordingTooSmallForTheModels) {
   const RecordingReader reader((dir_ / "recording").string());
   const FeatureMap features = RecordingFeatures(reader, FeatureOptions{});
   std::ostringstream out;
-  EXPECT_THROW(FitRecording(reader, features, FeatureOptions{}, (dir_ / "model.yaml").string(),
-                            "", out),
-               RecordingError);
+  EXPECT_THROW(
+      FitRecording(reader, features, FeatureOptions{}, (dir_ / "model.yaml").string(), "", out),
+      RecordingError);
   EXPECT_FALSE(fs::exists(dir_ / "model.yaml"));
 }
 

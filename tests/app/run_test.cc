@@ -3,7 +3,6 @@
 #include "app/run.h"
 
 #include <gtest/gtest.h>
-
 #include <signal.h>
 
 namespace irdist {
@@ -13,7 +12,8 @@ std::atomic<int> previous_calls{0};
 extern "C" void PreviousHandler(int) { previous_calls.fetch_add(1); }
 
 TEST(SignalGuardTest, SigintAndSigtermRequestAStopThenTheOldHandlersReturn) {
-  struct sigaction old_int {}, old_term {}, mine {};
+  struct sigaction old_int {
+  }, old_term{}, mine{};
   mine.sa_handler = PreviousHandler;
   sigemptyset(&mine.sa_mask);
   sigaction(SIGINT, &mine, &old_int);

@@ -1,6 +1,5 @@
 // playback --show without a display: a clear error, no window and no crash.
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <cstdlib>
@@ -13,9 +12,9 @@ namespace irdist {
 namespace {
 
 TEST(ShowTest, WithoutADisplaySaysSo) {
-  const std::string dir = (std::filesystem::temp_directory_path() /
-                           ("irdist-show-" + std::to_string(getpid())))
-                              .string();
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("irdist-show-" + std::to_string(getpid())))
+          .string();
   std::filesystem::remove_all(dir);
   {
     RecordingHeader header;

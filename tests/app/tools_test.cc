@@ -3,7 +3,6 @@
 #include "app/tools.h"
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <cstdlib>

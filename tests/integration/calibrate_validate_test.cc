@@ -147,9 +147,9 @@ TEST_F(CalibrateValidate, ValidationWritesEstimatesSummaryAndReport) {
   EXPECT_TRUE(methods.count("i0_free") && methods.count("geometric"));
 
   const YAML::Node summary = YAML::LoadFile(run + "/summary.yaml");
-  for (const char* key : {"count", "distance_rel_error_pct", "distance_abs_error_mm",
-                          "theta_abs_error_deg", "current_shift_pct", "dispersion_mm", "by_dt",
-                          "best_dt_ms", "outside_calibrated_range"}) {
+  for (const char* key :
+       {"count", "distance_rel_error_pct", "distance_abs_error_mm", "theta_abs_error_deg",
+        "current_shift_pct", "dispersion_mm", "by_dt", "best_dt_ms", "outside_calibrated_range"}) {
     EXPECT_TRUE(summary[key].IsDefined()) << key;
   }
   EXPECT_EQ(summary["count"].as<int>(), 8);

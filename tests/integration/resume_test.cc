@@ -2,7 +2,6 @@
 // with the same frame set as an uninterrupted run of the same recipe (same pose/exposure rows, none
 // twice, none missing), and the checker finds nothing wrong.
 #include <gtest/gtest.h>
-
 #include <signal.h>
 
 #include <filesystem>
@@ -48,8 +47,8 @@ std::set<FrameKey> FrameSet(const std::string& recording, int* brackets, int* in
     ++*brackets;
     if (!b.complete) ++*incomplete;
     for (const FrameRecord& f : b.frames) {
-      keys.insert({f.bracket_id, f.frame_in_bracket, FrameRoleName(f.role),
-                   f.requested_exposure_us, f.slide_mm, f.theta_deg, f.bias_ma_set, f.repeat});
+      keys.insert({f.bracket_id, f.frame_in_bracket, FrameRoleName(f.role), f.requested_exposure_us,
+                   f.slide_mm, f.theta_deg, f.bias_ma_set, f.repeat});
     }
   }
   return keys;

@@ -1,7 +1,6 @@
 // `irdist sim` prints what to connect to, leaves a state file that `irdist devices` lists, and
 // stops cleanly (exit 0, state file removed) on SIGINT.
 #include <gtest/gtest.h>
-
 #include <signal.h>
 
 #include <filesystem>
@@ -25,8 +24,8 @@ TEST(Sim, PrintsCameraAndStationAndStopsOnSigint) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   std::smatch camera, station, state;
-  ASSERT_TRUE(std::regex_search(log, camera,
-                                std::regex(R"(camera: (\S+) 127\.0\.0\.1 serial (\S+))")))
+  ASSERT_TRUE(
+      std::regex_search(log, camera, std::regex(R"(camera: (\S+) 127\.0\.0\.1 serial (\S+))")))
       << log;
   EXPECT_EQ(camera[2].str(), "IRDV0001");
   ASSERT_TRUE(std::regex_search(log, station, std::regex(R"(station: (/dev/\S+))"))) << log;
