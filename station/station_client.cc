@@ -349,16 +349,30 @@ std::uint64_t StationClient::Trigger(int count, double width_us, double period_u
   IRDIST_CHECK(count >= 1 && width_us > 0 && period_us > width_us, "count ", count, " width ",
                width_us, " period ", period_us);
   const std::uint64_t before = Pulses().total;
-  const std::string width = "TRIG:WIDT " + std::to_string(std::llround(width_us));
-  const std::string period = "TRIG:PER " + std::to_string(std::llround(period_us));
-  Command("TRIG:COUN " + std::to_string(count));
-  // The station keeps width < period at all times: order the two settings accordingly.
-  const Reply first = Exchange(width);
-  if (!first.ok) {
-    Command(period);
-    Command(width);
-  } else {
-    Command(period);
+  const long long width_rounded = std::llround(width_us);
+  const long long period_rounded = std::llround(period_us);
+  // Settings survive until the next power-up; a reboot changes the boot id (seen by Pulses()'s
+  // caller through Status(), or here through the cache key) and they are sent again.
+  const bool programmed = trigger_boot_id_ == boot_id_ && !boot_id_.empty() &&
+                          trigger_count_ == count && trigger_width_us_ == width_rounded &&
+                          trigger_period_us_ == period_rounded;
+  if (!programmed) {
+    trigger_boot_id_.clear();
+    const std::string width = "TRIG:WIDT " + std::to_string(width_rounded);
+    const std::string period = "TRIG:PER " + std::to_string(period_rounded);
+    Command("TRIG:COUN " + std::to_string(count));
+    // The station keeps width < period at all times: order the two settings accordingly.
+    const Reply first = Exchange(width);
+    if (!first.ok) {
+      Command(period);
+      Command(width);
+    } else {
+      Command(period);
+    }
+    trigger_boot_id_ = boot_id_;
+    trigger_count_ = count;
+    trigger_width_us_ = width_rounded;
+    trigger_period_us_ = period_rounded;
   }
   Command("TRIG:FIRE");
   return before;

@@ -159,6 +159,10 @@ class StationClient {
   ClientOptions options_;
   int next_seq_ = 1;
   std::string boot_id_;
+  // Trigger train settings last programmed (count, width us, period us) and under which boot id:
+  // a bracket fires many one-pulse trains, and only the first needs COUN/WIDT/PER.
+  std::string trigger_boot_id_;
+  long long trigger_count_ = -1, trigger_width_us_ = -1, trigger_period_us_ = -1;
   bool homed_ = false;
   bool recovering_ = false;
   double current_ma_ = 0.0;

@@ -62,11 +62,13 @@ SweepResult Sweep::Run(const std::vector<SweepPose>& poses, const PoseCallback& 
               client_.Home();
             }
           }
-          client_.MoveTo({pose.slide_mm, pose.pan_deg, pose.tilt_deg});
+          // Current first: the IRED's thermal transient then overlaps the move.
           if (std::llround(pose.bias_ma * 100.0) !=
               std::llround(client_.current_setpoint_ma() * 100.0)) {
             client_.SetCurrent(pose.bias_ma);
+            current_changed_at_ = std::chrono::steady_clock::now();
           }
+          client_.MoveTo({pose.slide_mm, pose.pan_deg, pose.tilt_deg});
           at_pose(pose, attempt);
           // The capture is only good if the station did not reboot meanwhile.
           client_.Status();

@@ -5,6 +5,7 @@
 // then the station is parked with the IRED off.
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -39,7 +40,8 @@ struct SweepResult {
   std::string BriefReport() const;
 };
 
-// Called at each settled pose with the IRED at pose.bias_ma. `attempt` is 0 the first time; a
+// Called at each settled pose with the IRED at pose.bias_ma (set before the move, so that its
+// thermal transient runs while the axes travel: see Sweep::current_changed_at()). `attempt` is 0 the first time; a
 // retake after a station reboot calls again with attempt > 0, and whatever the caller recorded for
 // this pose in earlier attempts must be discarded. Exceptions thrown here end the sweep (after
 // the IRED is switched off) and propagate.
@@ -56,10 +58,15 @@ class Sweep {
   SweepResult Run(const std::vector<SweepPose>& poses, const PoseCallback& at_pose,
                   const std::atomic<bool>* stop = nullptr);
 
+  // When the IRED current last changed (host clock); a caller that waits for the IRED's thermal
+  // transient waits only what is left of it once the move is done.
+  std::chrono::steady_clock::time_point current_changed_at() const { return current_changed_at_; }
+
  private:
   void Park();
   StationClient& client_;
   SweepOptions options_;
+  std::chrono::steady_clock::time_point current_changed_at_{};
 };
 
 }  // namespace irdist

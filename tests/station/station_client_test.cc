@@ -173,6 +173,30 @@ TEST(StationClient, TriggerTrainFiresCountPulsesAtItsPeriod) {
   rig.world.SetTriggerSink(nullptr);
 }
 
+TEST(StationClient, TriggerSettingsAreSentOnceUntilTheyChangeOrTheStationReboots) {
+  VirtualStation rig(50.0);
+  StationClient& c = *rig.client;
+  c.Home();
+  c.Trigger(1, 100.0, 1000.0);
+  c.WaitTriggerDone();
+  const std::uint64_t before = c.stats().requests;
+  c.Trigger(1, 100.0, 1000.0);  // same train: only PULS? and FIRE
+  EXPECT_EQ(c.stats().requests - before, 2u);
+  c.WaitTriggerDone();
+  const std::uint64_t before_change = c.stats().requests;
+  c.Trigger(2, 100.0, 2000.0);  // a new train is programmed again
+  EXPECT_GE(c.stats().requests - before_change, 5u);
+  EXPECT_EQ(c.WaitTriggerDone(), 4u);
+  EXPECT_EQ(rig.world.TriggerPulses(), 4u);
+  rig.emulator.Reboot();
+  EXPECT_THROW(c.Status(), StationRebooted);  // recovered: homed, current restored
+  const std::uint64_t before_reboot = c.stats().requests;
+  c.Trigger(2, 100.0, 2000.0);  // the rebooted station forgot the settings: sent again
+  EXPECT_GE(c.stats().requests - before_reboot, 5u);
+  c.WaitTriggerDone();
+  EXPECT_EQ(rig.world.TriggerPulses(), 6u);
+}
+
 TEST(StationClient, MissedPulsesStillCounted) {
   sim::EmulatorOptions o;
   o.missed_pulse_rate = 0.5;
