@@ -380,10 +380,12 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
   const Pose* previous = nullptr;
   for (const Pose& pose : plan.poses) {
     bool moved = false;
+    double travel_s = 0.0;  // move, station settle and the recipe's wait after it
     if (previous == nullptr) {
       moved = true;  // the move from home: its profile is not counted, its settle is
-      summary.station_settle_s +=
+      travel_s =
           std::max({motion.slide.settle_ms, motion.pan.settle_ms, motion.tilt.settle_ms}) / 1000.0;
+      summary.station_settle_s += travel_s;
     } else {
       const std::array<std::pair<double, const AxisMotion*>, 3> deltas = {
           {{pose.slide_mm - previous->slide_mm, &motion.slide},
@@ -405,14 +407,19 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
       }
       summary.motion_s += move_s;
       summary.station_settle_s += settle_s;
+      travel_s = move_s + settle_s;
     }
     if (moved) {
       ++summary.moves;
       summary.move_settle_s += spec.settle.after_move_ms / 1000.0;
+      travel_s += spec.settle.after_move_ms / 1000.0;
     }
     if (previous == nullptr || std::abs(pose.bias_ma - previous->bias_ma) > kSameValue) {
+      // The current is set before the move, so its settle runs while the axes travel: only what
+      // is left of it afterwards costs time.
       ++summary.current_changes;
-      summary.current_settle_s += spec.settle.after_current_ms / 1000.0;
+      summary.current_settle_s +=
+          std::max(0.0, spec.settle.after_current_ms / 1000.0 - travel_s);
     }
     summary.exposure_s += bracket_exposure_s;
     summary.readout_s += frames_per_pose * motion.readout_ms / 1000.0;

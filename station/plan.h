@@ -145,7 +145,7 @@ struct PlanSummary {
   double motion_s = 0.0;          // trapezoidal profiles
   double station_settle_s = 0.0;  // MotionModel settle of the moved axes
   double move_settle_s = 0.0;     // SettleSpec::after_move_ms
-  double current_settle_s = 0.0;  // SettleSpec::after_current_ms
+  double current_settle_s = 0.0;  // what is left of after_current_ms once the move is done
   double exposure_s = 0.0;
   double readout_s = 0.0;
   double overhead_s = 0.0;        // per-frame and per-pose overhead

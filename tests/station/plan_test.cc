@@ -312,7 +312,9 @@ TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
   EXPECT_NEAR(s.station_settle_s, 0.100 + 0.050 + 0.100 + 0.050, 1e-9);
   EXPECT_NEAR(s.move_settle_s, 4 * 0.200, 1e-9);
   EXPECT_EQ(s.current_changes, 1);
-  EXPECT_NEAR(s.current_settle_s, 0.500, 1e-9);
+  // The current is set before the first move: its 500 ms overlap the station's 100 ms settle
+  // and the 200 ms wait after the move.
+  EXPECT_NEAR(s.current_settle_s, 0.500 - 0.100 - 0.200, 1e-9);
   EXPECT_NEAR(s.exposure_s, 4 * (0.008 + 0.030), 1e-9);
   EXPECT_NEAR(s.readout_s, 4 * 2 * 0.025, 1e-9);
   EXPECT_NEAR(s.overhead_s, 4 * (2 * 0.005 + 0.020), 1e-9);
@@ -350,7 +352,9 @@ TEST(PlanTest, CurrentChangesAreCounted) {
   spec.serpentine.push_back(SweepAxis::kBias);  // 475 500 525 | 525 500 475
   const Plan snake = MakePlan(spec, MotionModel());
   EXPECT_EQ(snake.summary.current_changes, 5);
-  EXPECT_NEAR(snake.summary.current_settle_s, 5 * spec.settle.after_current_ms / 1000.0, 1e-12);
+  // The first change overlaps the move from home (station settle 100 ms + 200 ms after the
+  // move); the other four happen without a move and cost their whole 500 ms.
+  EXPECT_NEAR(snake.summary.current_settle_s, (0.5 - 0.1 - 0.2) + 4 * 0.5, 1e-12);
 }
 
 TEST(PlanTest, FormatDurationReadsNaturally) {
