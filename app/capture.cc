@@ -145,6 +145,6 @@ void LiveRecorder::Close(bool cut) {
 
 std::string LiveRecorder::StatsReport() const { return impl_->capture->stats().BriefReport(); }
 
-const FeatureMap& LiveRecorder::cache() const { return impl_->cache; }
+const FeatureMap& LiveRecorder::FeatureCache() const { return impl_->cache; }
 
 }  // namespace irdist

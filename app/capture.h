@@ -60,6 +60,8 @@ class LiveRecorder {
   ~LiveRecorder();  // without Close(): the recording stays "running" (reads as cut)
   LiveRecorder(const LiveRecorder&) = delete;
   LiveRecorder& operator=(const LiveRecorder&) = delete;
+  LiveRecorder(LiveRecorder&&) = delete;
+  LiveRecorder& operator=(LiveRecorder&&) = delete;
 
   // Captures one bracket (`trigger` fires one pulse; called with -1 for a warm-up frame), retaking
   // an incomplete bracket once, and measures the current. The bracket is held back (pending) until
@@ -78,7 +80,7 @@ class LiveRecorder {
   void DropPending();
   void Close(bool cut);  // stops the stream, closes the recording as complete or cut
   std::string StatsReport() const;
-  const FeatureMap& cache() const;  // after WaitCommitted()
+  const FeatureMap& FeatureCache() const;  // after WaitCommitted()
 
  private:
   struct Impl;

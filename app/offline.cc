@@ -254,7 +254,7 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
     }
   }
   fit_options.models = kept;
-  const CalibrationModel model = Fit(samples, feature_options, fit_options);
+  CalibrationModel model = Fit(samples, feature_options, fit_options);
   SaveModel(model, model_path);
   for (const FittedModel& m : model.models) {
     out << "  " << ToString(m.kind) << " (" << ToString(m.form) << "): " << m.summary.BriefReport()
@@ -413,7 +413,7 @@ ValidationSummary WriteValidation(const std::string& dir, const std::vector<Esti
                                   const std::map<std::string, std::string>& context,
                                   std::ostream& out) {
   WriteEstimatesCsv(dir + "/estimates.csv", rows);
-  const ValidationSummary summary = Summarize(rows);
+  ValidationSummary summary = Summarize(rows);
   WriteSummaryYaml(dir + "/summary.yaml", summary, context);
   const std::string index = WriteReport(dir + "/report", "irdist validation", summary.BriefReport(),
                                         ValidationPlots(rows, summary));

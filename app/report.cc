@@ -19,10 +19,17 @@ std::string HtmlEscape(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -31,7 +38,8 @@ std::string HtmlEscape(const std::string& text) {
 void WriteFile(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::trunc);
   out << text;
-  if (!out) throw ReportError(path.string() + ": cannot be written; check the folder and free space.");
+  if (!out)
+    throw ReportError(path.string() + ": cannot be written; check the folder and free space.");
 }
 
 std::string ReadFile(const fs::path& path) {
@@ -88,8 +96,10 @@ std::vector<Plot> ValidationPlots(const std::vector<EstimateRow>& rows,
     script << "\n";
     plots.push_back({"fig10_distance", "Estimated against true distance",
                      "Estimated distance (mm) against the station's distance (mm), one series per "
-                     "IRED bias current (" + method + "). Reproduces Fig. 10 of the paper: "
-                     "the estimate should not move with the current.",
+                     "IRED bias current (" +
+                         method +
+                         "). Reproduces Fig. 10 of the paper: "
+                         "the estimate should not move with the current.",
                      data.str(), script.str()});
   }
 
@@ -143,7 +153,9 @@ std::vector<Plot> ValidationPlots(const std::vector<EstimateRow>& rows,
     }
     std::ostringstream hs;
     hs << "set xlabel 'relative distance error (%)'\nset ylabel 'estimates'\nset grid\n"
-          "set style fill solid 0.6\nset boxwidth " << (1.8 * span / bins) << "\n"
+          "set style fill solid 0.6\nset boxwidth "
+       << (1.8 * span / bins)
+       << "\n"
           "plot '__DATA__' using 1:2 with boxes lc rgb '#3366aa' notitle\n";
     plots.push_back({"fig13_histogram", "Histogram of distance errors",
                      "Distribution of the signed relative distance error (%). Reproduces the "
@@ -164,7 +176,8 @@ std::vector<Plot> ValidationPlots(const std::vector<EstimateRow>& rows,
                 "set key outside right\nplot ";
       int block = 0;
       for (const auto& [theta, rs] : by_theta) {
-        for (const EstimateRow* r : rs) data << r->repeat << ' ' << r->d_mm << ' ' << r->true_d_mm << '\n';
+        for (const EstimateRow* r : rs)
+          data << r->repeat << ' ' << r->d_mm << ' ' << r->true_d_mm << '\n';
         data << "\n\n";
         script << (block ? ", " : "") << "'__DATA__' index " << block
                << " using 1:2 with points pt 7 ps 0.5 title '" << theta << " deg'";
@@ -189,18 +202,18 @@ std::vector<Plot> ValidationPlots(const std::vector<EstimateRow>& rows,
         data << r->true_d_mm << ' ' << RelErrPct(*r) << '\n';
       }
       data << "\n\n";
-      script << (block ? ", " : "") << "'__DATA__' index " << block
-             << " using ($1+" << (block * 10) << "):2 with points pt 7 ps 0.5 title '"
-             << ms.method << "'";
+      script << (block ? ", " : "") << "'__DATA__' index " << block << " using ($1+" << (block * 10)
+             << "):2 with points pt 7 ps 0.5 title '" << ms.method << "'";
       ++block;
     }
     script << "\n";
-    plots.push_back({"methods", "Methods side by side",
-                     "Signed relative distance error (%) against the true distance (mm) for each "
-                     "estimation method (I0-free radiometric, I0-dependent direct model, purely "
-                     "geometric apparent size); series offset by 10 mm for legibility. Not a figure of "
-                     "the paper: the comparison NOTES.md asks for.",
-                     data.str(), script.str()});
+    plots.push_back(
+        {"methods", "Methods side by side",
+         "Signed relative distance error (%) against the true distance (mm) for each "
+         "estimation method (I0-free radiometric, I0-dependent direct model, purely "
+         "geometric apparent size); series offset by 10 mm for legibility. Not a figure of "
+         "the paper: the comparison NOTES.md asks for.",
+         data.str(), script.str()});
   }
   return plots;
 }
@@ -216,20 +229,22 @@ std::vector<Plot> CalibrationPlots(const std::vector<CalibrationPoint>& points) 
            << 100.0 * (p.de_model - p.de_measured) / p.de_measured << ' '
            << 100.0 * (p.ds_model - p.ds_measured) / p.ds_measured << '\n';
     }
-    script << "set multiplot layout 2,2\nset grid\n"
-              "set xlabel 'measured dE_{rel}'\nset ylabel 'model dE_{rel}'\n"
-              "plot '__DATA__' using 1:2 with points pt 7 ps 0.4 notitle, x notitle lc rgb '#888888'\n"
-              "set xlabel 'measured dSigma (DN)'\nset ylabel 'model dSigma (DN)'\n"
-              "plot '__DATA__' using 3:4 with points pt 7 ps 0.4 notitle, x notitle lc rgb '#888888'\n"
-              "set xlabel 'sample'\nset ylabel 'dE relative error (%)'\n"
-              "plot '__DATA__' using 0:5 with impulses notitle\n"
-              "set xlabel 'sample'\nset ylabel 'dSigma relative error (%)'\n"
-              "plot '__DATA__' using 0:6 with impulses notitle\nunset multiplot\n";
-    plots.push_back({"fig7_fit", "Calibration fit: measured against modelled",
-                     "Measured against modelled differences dE_rel (dimensionless) and dSigma (DN), "
-                     "and their relative errors (%) per calibration sample. Reproduces Fig. 7 of "
-                     "the paper (the I0-free models, Eq. 17-18).",
-                     data.str(), script.str()});
+    script
+        << "set multiplot layout 2,2\nset grid\n"
+           "set xlabel 'measured dE_{rel}'\nset ylabel 'model dE_{rel}'\n"
+           "plot '__DATA__' using 1:2 with points pt 7 ps 0.4 notitle, x notitle lc rgb '#888888'\n"
+           "set xlabel 'measured dSigma (DN)'\nset ylabel 'model dSigma (DN)'\n"
+           "plot '__DATA__' using 3:4 with points pt 7 ps 0.4 notitle, x notitle lc rgb '#888888'\n"
+           "set xlabel 'sample'\nset ylabel 'dE relative error (%)'\n"
+           "plot '__DATA__' using 0:5 with impulses notitle\n"
+           "set xlabel 'sample'\nset ylabel 'dSigma relative error (%)'\n"
+           "plot '__DATA__' using 0:6 with impulses notitle\nunset multiplot\n";
+    plots.push_back(
+        {"fig7_fit", "Calibration fit: measured against modelled",
+         "Measured against modelled differences dE_rel (dimensionless) and dSigma (DN), "
+         "and their relative errors (%) per calibration sample. Reproduces Fig. 7 of "
+         "the paper (the I0-free models, Eq. 17-18).",
+         data.str(), script.str()});
   }
   std::ostringstream data, script;
   script << "set xlabel 'distance d (mm)'\nset ylabel 'Eq. 25 polynomial (scaled)'\nset grid\n"
@@ -292,8 +307,8 @@ std::string WriteReport(const std::string& dir, const std::string& title,
     html << "<figure id='" << plot.name << "'><h2>" << HtmlEscape(plot.title) << "</h2>\n";
     bool drawn = false;
     if (have_gnuplot) {
-      const std::string cmd = "cd '" + dir + "' && gnuplot '" + plot.name + ".gp' 2>'" +
-                              plot.name + ".log'";
+      const std::string cmd =
+          "cd '" + dir + "' && gnuplot '" + plot.name + ".gp' 2>'" + plot.name + ".log'";
       drawn = std::system(cmd.c_str()) == 0 && fs::exists(base.string() + ".svg");
     }
     if (drawn) {

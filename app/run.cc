@@ -157,7 +157,7 @@ std::string KeepEarlierLog(const std::string& dir) {
   const std::string current = dir + "/station.log";
   if (!fs::exists(current)) return "";
   for (int n = 1;; ++n) {
-    const std::string kept = dir + "/station." + std::to_string(n) + ".log";
+    std::string kept = dir + "/station." + std::to_string(n) + ".log";
     if (!fs::exists(kept)) {
       fs::rename(current, kept);
       return kept;
@@ -354,7 +354,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   recorded.cut = result.stopped || result.next_index >= 0;
   recorder.Close(recorded.cut);
-  recorded.cache = recorder.cache();
+  recorded.cache = recorder.FeatureCache();
   io.out << "Sweep: " << result.BriefReport() << "\n";
   io.out << "Capture: " << recorder.StatsReport() << "\n";
   io.out << "Station link: " << client.stats().BriefReport() << "\n";

@@ -28,6 +28,8 @@ class SignalGuard {
   ~SignalGuard();
   SignalGuard(const SignalGuard&) = delete;
   SignalGuard& operator=(const SignalGuard&) = delete;
+  SignalGuard(SignalGuard&&) = delete;
+  SignalGuard& operator=(SignalGuard&&) = delete;
 
  private:
   struct Saved;

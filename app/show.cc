@@ -13,8 +13,9 @@ namespace irdist {
 
 void ShowPlayback(const RecordingReader& reader, const FeatureMap& features,
                   const std::vector<EstimateRow>& estimates) {
-  const char* display = std::getenv("DISPLAY");
-  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  const char* display =
+      std::getenv("DISPLAY");  // NOLINT(concurrency-mt-unsafe): read once, nobody sets it
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");  // NOLINT(concurrency-mt-unsafe)
   if ((display == nullptr || *display == '\0') && (wayland == nullptr || *wayland == '\0')) {
     throw DisplayError(
         "--show needs a display (DISPLAY or WAYLAND_DISPLAY is not set); run it "

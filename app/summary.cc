@@ -179,9 +179,15 @@ void EmitMethod(YAML::Emitter& out, const MethodSummary& m) {
   out << YAML::Key << "method" << YAML::Value << m.method;
   EmitFigures(out, m.all);
   out << YAML::Key << "current_shift_pct" << YAML::Value;
-  if (m.current_shift_pct) out << *m.current_shift_pct; else out << YAML::Null;
+  if (m.current_shift_pct)
+    out << *m.current_shift_pct;
+  else
+    out << YAML::Null;
   out << YAML::Key << "dispersion_mm" << YAML::Value;
-  if (m.dispersion_mm) out << *m.dispersion_mm; else out << YAML::Null;
+  if (m.dispersion_mm)
+    out << *m.dispersion_mm;
+  else
+    out << YAML::Null;
   out << YAML::Key << "by_dt" << YAML::Value << YAML::BeginMap;
   for (const auto& [dt, f] : m.by_dt) {
     out << YAML::Key << dt << YAML::Value << YAML::BeginMap;
@@ -190,7 +196,10 @@ void EmitMethod(YAML::Emitter& out, const MethodSummary& m) {
   }
   out << YAML::EndMap;
   out << YAML::Key << "best_dt_ms" << YAML::Value;
-  if (m.best_dt_ms) out << *m.best_dt_ms; else out << YAML::Null;
+  if (m.best_dt_ms)
+    out << *m.best_dt_ms;
+  else
+    out << YAML::Null;
   out << YAML::Key << "outside_calibrated_range" << YAML::Value << m.outside_calibrated_range;
 }
 
@@ -209,7 +218,9 @@ double Percentile(std::vector<double> values, double p) {
 
 void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& rows) {
   std::ofstream out(path, std::ios::trunc);
-  if (!out) throw EstimatesFileError(path + ": cannot be written; check the folder exists and is writable.");
+  if (!out)
+    throw EstimatesFileError(path +
+                             ": cannot be written; check the folder exists and is writable.");
   out << kEstimatesHeader << '\n' << std::setprecision(10);
   for (const EstimateRow& r : rows) {
     out << r.bracket << ',' << r.pose << ',' << r.repeat << ',' << r.method << ',' << r.dt_ms << ','
@@ -285,8 +296,8 @@ std::string ValidationSummary::BriefReport() const {
     if (m.all.failed) out << " (" << m.all.failed << " failed)";
     out << ", distance error median " << m.all.distance_rel_error_pct_median << "% p95 "
         << m.all.distance_rel_error_pct_p95 << "% max " << m.all.distance_rel_error_pct_max
-        << "%, theta error (>=15 deg) median " << m.all.theta_ge15_abs_error_deg_median
-        << " max " << m.all.theta_ge15_abs_error_deg_max << " deg";
+        << "%, theta error (>=15 deg) median " << m.all.theta_ge15_abs_error_deg_median << " max "
+        << m.all.theta_ge15_abs_error_deg_max << " deg";
     if (m.current_shift_pct) out << ", current shift " << *m.current_shift_pct << "%";
     if (m.dispersion_mm) out << ", dispersion " << *m.dispersion_mm << " mm";
     if (m.best_dt_ms) out << ", best dt " << *m.best_dt_ms << " ms";

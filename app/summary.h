@@ -13,11 +13,11 @@ namespace irdist {
 
 // One distance estimate against the station's ground truth (one row of estimates.csv).
 struct EstimateRow {
-  int bracket = 0;             // bracket id in the recording
-  int pose = 0;                // pose index of the sweep (same slide/pan/tilt/current)
-  int repeat = 0;              // repetition of the pose
-  std::string method;          // "i0_free", "i0_dependent", "geometric", ...
-  double dt_ms = 0.0;          // exposure difference; 0 = joint estimate over every t_n of the bracket
+  int bracket = 0;     // bracket id in the recording
+  int pose = 0;        // pose index of the sweep (same slide/pan/tilt/current)
+  int repeat = 0;      // repetition of the pose
+  std::string method;  // "i0_free", "i0_dependent", "geometric", ...
+  double dt_ms = 0.0;  // exposure difference; 0 = joint estimate over every t_n of the bracket
   double true_d_mm = 0.0;
   double true_theta_deg = 0.0;
   double bias_ma = 0.0;        // current as set for this bracket
@@ -57,7 +57,7 @@ struct ErrorFigures {
 
 struct MethodSummary {
   std::string method;
-  ErrorFigures all;                        // the default rows (joint over t_n when present)
+  ErrorFigures all;                         // the default rows (joint over t_n when present)
   std::optional<double> current_shift_pct;  // needs >= 2 currents at one pose
   std::optional<double> dispersion_mm;      // needs >= 2 repetitions of one pose
   std::map<double, ErrorFigures> by_dt;     // per exposure difference (dt_ms > 0 rows)

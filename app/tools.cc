@@ -23,7 +23,7 @@ namespace irdist {
 namespace fs = std::filesystem;
 
 std::string SimStateDir() {
-  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
+  const char* runtime = std::getenv("XDG_RUNTIME_DIR");  // NOLINT(concurrency-mt-unsafe)
   if (runtime != nullptr && *runtime != '\0' && fs::is_directory(runtime)) return runtime;
   return "/tmp";
 }
@@ -32,7 +32,7 @@ namespace {
 
 std::string ResolveRig(const std::string& spec) {
   if (fs::exists(spec)) return spec;
-  const std::string found = FindRigFile(spec, fs::current_path().string());
+  std::string found = FindRigFile(spec, fs::current_path().string());
   if (found.empty()) {
     throw RecipeError(spec, 0, 0,
                       "no such rig: give a rig file (recipes/rigs/virtual.yaml) or the name of "
@@ -51,6 +51,8 @@ class RemoveOnExit {
   }
   RemoveOnExit(const RemoveOnExit&) = delete;
   RemoveOnExit& operator=(const RemoveOnExit&) = delete;
+  RemoveOnExit(RemoveOnExit&&) = delete;
+  RemoveOnExit& operator=(RemoveOnExit&&) = delete;
 
  private:
   std::string path_;
