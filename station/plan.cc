@@ -430,7 +430,8 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
   summary.total_s = summary.motion_s + summary.station_settle_s + summary.move_settle_s +
                     summary.current_settle_s + summary.exposure_s + summary.readout_s +
                     summary.overhead_s;
-  summary.physical_bound_s = summary.motion_s + summary.exposure_s + summary.readout_s;
+  summary.physical_bound_s =
+      summary.motion_s + summary.station_settle_s + summary.exposure_s + summary.readout_s;
   return plan;
 }
 

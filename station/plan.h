@@ -2,6 +2,7 @@
 // Sweep plans: a recipe's axes expanded into the ordered list of station poses, the bracket of
 // frames taken at each pose, and an estimate of how long the sweep takes (motion with a trapezoidal
 // profile per axis, settle, exposure, readout, IRED current settle) beside its physical bound
+// (the moves with the axes' own settle, the exposures and the readout: what no software can save)
 // (moves + exposures + readout, no settle and no overhead).
 //
 // Plain data only: no Asio, no yaml-cpp. app/recipe.h fills a SweepSpec from a recipe file; the
@@ -150,7 +151,7 @@ struct PlanSummary {
   double readout_s = 0.0;
   double overhead_s = 0.0;        // per-frame and per-pose overhead
   double total_s = 0.0;           // sum of the above
-  double physical_bound_s = 0.0;  // motion + exposure + readout
+  double physical_bound_s = 0.0;  // motion and the axes' own settle + exposure + readout
   std::string BriefReport() const;
 };
 

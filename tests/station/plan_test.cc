@@ -322,7 +322,8 @@ TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
               s.motion_s + s.station_settle_s + s.move_settle_s + s.current_settle_s +
                   s.exposure_s + s.readout_s + s.overhead_s,
               1e-9);
-  EXPECT_NEAR(s.physical_bound_s, slide_500 + 2.0 * pan_10 + 4 * 0.038 + 4 * 0.050, 1e-9);
+  EXPECT_NEAR(s.physical_bound_s,
+              slide_500 + 2.0 * pan_10 + 0.300 + 4 * 0.038 + 4 * 0.050, 1e-9);
   EXPECT_LT(s.physical_bound_s, s.total_s);
 
   // A diagonal move: together it lasts as long as its slowest axis, sequentially the sum.
