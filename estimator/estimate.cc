@@ -372,17 +372,30 @@ DistanceEstimate Solve(const Problem& p, double theta0_deg, const EstimateOption
   return out;
 }
 
+// theta (deg) from moment variances with the calibrated blur removed, through the calibrated
+// correction when the model has one and the options ask for it; NaN when the blob is not larger
+// than the blur.
+double ThetaFromVariances(const CalibrationModel& model, double major_var_px2,
+                          double minor_var_px2, const EstimateOptions& options) {
+  if (options.theta_correction && model.theta_correction.fitted()) {
+    return model.theta_correction.ThetaDeg(major_var_px2, minor_var_px2, model.geometric);
+  }
+  const double beta = model.geometric.beta_px2;
+  const double major = major_var_px2 - beta;
+  const double minor = minor_var_px2 - beta;
+  if (!(major > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  const double ratio = std::clamp(std::sqrt(std::max(0.0, minor) / major), 0.0, 1.0);
+  return std::acos(ratio) / kRad;
+}
+
 // theta0 of one frame under the chosen source.
 double Theta0(const CalibrationModel& model, const Features& f, const EstimateOptions& options) {
   if (options.theta_source == ThetaSource::kFeatures || !model.geometric.fitted()) {
     return f.theta0_deg;
   }
-  const double beta = model.geometric.beta_px2;
-  const double major = f.moment_major_var_px2 - beta;
-  const double minor = f.moment_minor_var_px2 - beta;
-  if (!(major > 0.0)) return f.theta0_deg;
-  const double ratio = std::clamp(std::sqrt(std::max(0.0, minor) / major), 0.0, 1.0);
-  return std::acos(ratio) / kRad;
+  const double theta = ThetaFromVariances(model, f.moment_major_var_px2, f.moment_minor_var_px2,
+                                          options);
+  return std::isfinite(theta) ? theta : f.theta0_deg;
 }
 
 // theta0 from the signal-weighted mean of the frames' moment matrices (kBracketMoments), with the
@@ -411,11 +424,9 @@ double Theta0Combined(const CalibrationModel& model, const Features* const* fram
   yy /= weight;
   xy /= weight;
   const double root = std::sqrt(std::max(0.0, 0.25 * (xx - yy) * (xx - yy) + xy * xy));
-  const double beta = model.geometric.beta_px2;
-  const double major = 0.5 * (xx + yy) + root - beta;
-  const double minor = 0.5 * (xx + yy) - root - beta;
-  if (!(major > 0.0)) return Theta0(model, fallback, options);
-  return std::acos(std::clamp(std::sqrt(std::max(0.0, minor) / major), 0.0, 1.0)) / kRad;
+  const double theta =
+      ThetaFromVariances(model, 0.5 * (xx + yy) + root, 0.5 * (xx + yy) - root, options);
+  return std::isfinite(theta) ? theta : Theta0(model, fallback, options);
 }
 
 // ln of the frame's geometric distance, NaN when there is none.
@@ -603,6 +614,7 @@ EstimateOptions PaperEstimateOptions() {
   options.method = EstimateMethod::kAlgorithm1;
   options.theta_source = ThetaSource::kFeatures;
   options.tie_breaker = RootTieBreaker::kResidualVote;
+  options.theta_correction = false;
   return options;
 }
 

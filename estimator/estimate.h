@@ -42,6 +42,12 @@ struct EstimateOptions {
   EstimateMethod method = EstimateMethod::kFused;
   ThetaSource theta_source = ThetaSource::kCalibratedBlur;
   RootTieBreaker tie_breaker = RootTieBreaker::kGeometric;
+  // kCalibratedBlur / kBracketMoments: map the moment ellipse to theta with the model's calibrated
+  // theta correction (fit.h ThetaCorrection) when the model has one; otherwise (false, the
+  // default) theta0 = acos of the blur-corrected axis ratio. Not the default: on the virtual rig
+  // the ellipse bias is not smooth in d at the scale of Table 3's 500 mm grid and the correction
+  // made theta worse (docs/estimator.md).
+  bool theta_correction = false;
   // kFused with an informative E equation (theta solved): sd of the theta prior, deg. With a
   // degenerate E (fixed window) theta is the prior itself: the Sigma equation barely sees it.
   double theta_prior_sd_deg = 0.5;

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -202,7 +203,51 @@ void FillErrors(FitSummary* s) {
   s->max_relative_error = s->residuals.empty() ? -1.0 : worst;
 }
 
+// Monomials of total degree <= `degree` in (x, z), graded order (ThetaCorrection).
+int ThetaBasis(int degree, double x, double z, double* out) {
+  int n = 0;
+  for (int total = 0; total <= degree; ++total) {
+    for (int zp = 0; zp <= total; ++zp) {
+      out[n++] = std::pow(x, total - zp) * std::pow(z, zp);
+    }
+  }
+  return n;
+}
+
+// x = (minor - beta) / (major - beta) and the geometric distance (mm); false without a blob
+// larger than the blur.
+bool RatioAndDistance(double major, double minor, const GeometricModel& g, double* x,
+                      double* d_mm) {
+  const double a = major - g.beta_px2;
+  if (!(a > 0.0) || !(g.alpha_px2 > 0.0)) return false;
+  *x = std::clamp(std::max(0.0, minor - g.beta_px2) / a, 0.0, 1.0);
+  *d_mm = 1000.0 / std::sqrt(a / g.alpha_px2);
+  return true;
+}
+
 }  // namespace
+
+double ThetaCorrection::ThetaDeg(double major_var_px2, double minor_var_px2,
+                                 const GeometricModel& g) const {
+  double x, d_mm;
+  if (!RatioAndDistance(major_var_px2, minor_var_px2, g, &x, &d_mm)) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  double cos2 = x;
+  if (fitted()) {
+    x = std::clamp(x, ratio_sq_min, ratio_sq_max);
+    const double half = 0.5 * (d_max_mm - d_min_mm);
+    const double z = half > 0.0 ? (std::clamp(d_mm, d_min_mm, d_max_mm) - d_min_mm) / half - 1.0
+                                : 0.0;
+    double basis[10];
+    const int n = ThetaBasis(degree, x, z, basis);
+    IRDIST_CHECK(static_cast<int>(coefficients.size()) == n, "theta correction of degree ", degree,
+                 " needs ", n, " coefficients, has ", coefficients.size());
+    cos2 = 0.0;
+    for (int k = 0; k < n; ++k) cos2 += coefficients[k] * basis[k];
+  }
+  return std::acos(std::sqrt(std::clamp(cos2, 0.0, 1.0))) * 180.0 / 3.14159265358979323846;
+}
 
 FitOptions PaperFitOptions() {
   FitOptions options;
@@ -225,6 +270,8 @@ bool FitOptions::IsValid(std::string* why) const {
   if (!(function_tolerance >= 0.0 && gradient_tolerance >= 0.0 && parameter_tolerance >= 0.0))
     return fail("tolerances must be >= 0");
   if (!(degenerate_tolerance > 0.0)) return fail("degenerate_tolerance must be > 0");
+  if (theta_correction_degree < 1 || theta_correction_degree > 3)
+    return fail("theta_correction_degree must be in [1, 3]");
   return true;
 }
 
@@ -267,6 +314,12 @@ std::string CalibrationModel::BriefReport() const {
         << "\n";
   }
   if (geometric.fitted()) out << "  geometric: " << geometric.summary.BriefReport() << "\n";
+  if (theta_correction.fitted()) {
+    out << "  theta correction (degree " << theta_correction.degree << "): "
+        << theta_correction.summary.samples << " frames, mean |error| "
+        << theta_correction.summary.mean_relative_error << " deg, max "
+        << theta_correction.summary.max_relative_error << " deg\n";
+  }
   return out.str();
 }
 
@@ -521,7 +574,88 @@ CalibrationModel Fit(const std::vector<CalibrationSample>& samples,
     model.models.push_back(FitModel(kind, form, samples, model.scaling, options));
   }
   model.geometric = FitGeometric(samples);
+  if (options.fit_theta_correction) {
+    model.theta_correction =
+        FitThetaCorrection(samples, model.geometric, options.theta_correction_degree);
+  }
   return model;
+}
+
+ThetaCorrection FitThetaCorrection(const std::vector<CalibrationSample>& samples,
+                                   const GeometricModel& geometric, int degree) {
+  IRDIST_CHECK(degree >= 1 && degree <= 3, "theta correction degree ", degree, " not in [1, 3]");
+  ThetaCorrection tc;
+  struct Frame {
+    double x, d_mm, theta_deg;
+  };
+  std::vector<Frame> frames;
+  if (geometric.fitted()) {
+    for (const CalibrationSample& s : samples) {
+      const Features& m = s.measurement;
+      if (!m.Usable()) continue;
+      Frame f{0.0, 0.0, s.theta_deg};
+      if (RatioAndDistance(m.moment_major_var_px2, m.moment_minor_var_px2, geometric, &f.x,
+                           &f.d_mm)) {
+        frames.push_back(f);
+      }
+    }
+  }
+  const int terms = ThetaCorrection::NumTerms(degree);
+  tc.summary.samples = static_cast<int>(frames.size());
+  if (!geometric.fitted() || static_cast<int>(frames.size()) < 2 * terms) {
+    tc.summary.message = geometric.fitted() ? "too few usable frames for the theta correction"
+                                            : "no geometric model (blur variance) to correct";
+    return tc;
+  }
+  tc.degree = degree;
+  tc.ratio_sq_min = tc.d_min_mm = std::numeric_limits<double>::infinity();
+  tc.ratio_sq_max = tc.d_max_mm = -std::numeric_limits<double>::infinity();
+  for (const Frame& f : frames) {
+    tc.ratio_sq_min = std::min(tc.ratio_sq_min, f.x);
+    tc.ratio_sq_max = std::max(tc.ratio_sq_max, f.x);
+    tc.d_min_mm = std::min(tc.d_min_mm, f.d_mm);
+    tc.d_max_mm = std::max(tc.d_max_mm, f.d_mm);
+  }
+  const double half = 0.5 * (tc.d_max_mm - tc.d_min_mm);
+  Eigen::MatrixXd a(frames.size(), terms);
+  Eigen::VectorXd y(frames.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const double z = half > 0.0 ? (frames[i].d_mm - tc.d_min_mm) / half - 1.0 : 0.0;
+    double basis[10];
+    ThetaBasis(degree, frames[i].x, z, basis);
+    for (int k = 0; k < terms; ++k) a(i, k) = basis[k];
+    // Rows at theta >= 10 deg weighted by 1 / (d cos^2 / d theta) = 1 / sin(2 theta): their
+    // residuals are then theta errors (rad). Nearly round blobs (theta < 10 deg: the eigenvalue
+    // noise floor dominates their axis ratio) get a small constant weight, so that they do not
+    // bend the fit at the angles where theta is observable.
+    const double th = frames[i].theta_deg * 3.14159265358979323846 / 180.0;
+    const double w = frames[i].theta_deg >= 10.0 ? 1.0 / std::sin(2.0 * th) : 0.25;
+    const double c = std::cos(th);
+    y(i) = c * c * w;
+    a.row(i) *= w;
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  tc.summary.condition_number = sv(sv.size() - 1) > 0.0 ? sv(0) / sv(sv.size() - 1)
+                                                        : std::numeric_limits<double>::infinity();
+  if (!(sv(sv.size() - 1) > 1e-12 * sv(0))) {
+    tc.summary.message = "rank-deficient: the calibration needs several angles and distances";
+    tc.degree = 0;
+    return tc;
+  }
+  const Eigen::VectorXd c = svd.solve(y);
+  tc.coefficients.assign(c.data(), c.data() + c.size());
+  for (const CalibrationSample& s : samples) {
+    const Features& m = s.measurement;
+    if (!m.Usable()) continue;
+    const double t = tc.ThetaDeg(m.moment_major_var_px2, m.moment_minor_var_px2, geometric);
+    if (std::isfinite(t)) tc.summary.residuals.push_back(t - s.theta_deg);
+  }
+  FillErrors(&tc.summary);
+  tc.summary.termination = FitSummary::Termination::kConverged;
+  tc.summary.message =
+      "linear least squares of cos^2(theta); residuals are theta errors in degrees";
+  return tc;
 }
 
 }  // namespace irdist

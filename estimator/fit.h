@@ -45,6 +45,10 @@ struct FitOptions {
   double degenerate_tolerance = 1e-6;
   // Skip samples whose features are flagged (no blob, saturated, border, clipped).
   bool skip_flagged_samples = true;
+  // Fit the calibrated theta correction (ThetaCorrection below) of total degree
+  // theta_correction_degree (1..3) in (squared axis ratio, geometric distance).
+  bool fit_theta_correction = true;
+  int theta_correction_degree = 2;
   bool IsValid(std::string* why) const;
 };
 
@@ -99,6 +103,30 @@ struct GeometricModel {
   bool fitted() const { return alpha_px2 > 0.0; }
 };
 
+// Calibrated theta correction. The moment ellipse with the calibrated blur variance beta removed
+// gives x = (minor - beta) / (major - beta), ideally cos^2(theta); threshold cuts through the
+// blob's wings and the blur make it deviate by a pose-dependent amount (docs/estimator.md). At
+// calibration, where theta and d are known, cos^2(theta) is fitted by linear least squares as a
+// polynomial of total degree `degree` in x and z, z the geometric distance (GeometricModel)
+// mapped to [-1, 1] over [d_min_mm, d_max_mm]. Monomials in graded order: degree 1: 1, x, z;
+// degree 2 adds x^2, x z, z^2; degree 3 adds x^3, x^2 z, x z^2, z^3. Applying it clamps x and z to
+// their calibrated ranges (no extrapolation) and cos^2 to [0, 1].
+struct ThetaCorrection {
+  int degree = 0;
+  std::vector<double> coefficients;  // empty: no correction (older model files)
+  double ratio_sq_min = 0.0, ratio_sq_max = 1.0;  // calibrated range of x
+  double d_min_mm = 0.0, d_max_mm = 0.0;          // calibrated range of the geometric distance
+  // Residuals: corrected theta minus true theta of every calibration frame, in DEGREES (the
+  // "relative error" fields hold degrees here).
+  FitSummary summary;
+  bool fitted() const { return !coefficients.empty(); }
+  // Number of monomials of a total degree (1: 3, 2: 6, 3: 10).
+  static int NumTerms(int degree) { return (degree + 1) * (degree + 2) / 2; }
+  // theta (deg) from the moment variances of one frame (or a combined moment matrix), with the
+  // geometric model's blur variance and scale. NaN when the blob is not larger than the blur.
+  double ThetaDeg(double major_var_px2, double minor_var_px2, const GeometricModel& g) const;
+};
+
 // Everything Algorithm 1 needs, and everything the model file holds.
 struct CalibrationModel {
   FeatureOptions features;  // ROI policy and its parameters, identical in measurement
@@ -106,6 +134,7 @@ struct CalibrationModel {
   CalibratedRanges ranges;
   std::vector<FittedModel> models;
   GeometricModel geometric;
+  ThetaCorrection theta_correction;  // not fitted: theta from the blur-corrected ratio alone
   const FittedModel* Find(ModelKind kind) const;  // nullptr if not fitted
   std::string BriefReport() const;
 };
@@ -122,6 +151,12 @@ FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<Calibrati
 ModelScaling ChooseScaling(const std::vector<CalibrationSample>& samples);
 
 GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples);
+
+// Fits the theta correction on the measurement frames of the usable samples (degree 1..3). Not
+// fitted (empty coefficients, summary message says why) without a fitted geometric model or with
+// fewer than 2x the number of terms of usable frames.
+ThetaCorrection FitThetaCorrection(const std::vector<CalibrationSample>& samples,
+                                   const GeometricModel& geometric, int degree);
 
 // Full calibration: scalings, ranges, every model of options.models and the geometric baseline.
 // feature_options is recorded (it must be what computed the samples' features).

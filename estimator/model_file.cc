@@ -141,6 +141,8 @@ std::string ModelToYaml(const CalibrationModel& model) {
   out << YAML::Key << "window_side_px" << YAML::Value << f.window_side_px;
   EmitDouble(out, "threshold_fraction", f.threshold_fraction);
   EmitDouble(out, "moment_threshold_fraction", f.moment_threshold_fraction);
+  out << YAML::Key << "moment_method" << YAML::Value << ToString(f.moment_method);
+  EmitDouble(out, "aperture_margin_px", f.aperture_margin_px);
   EmitDouble(out, "psf_sigma_px", f.psf_sigma_px);
   out << YAML::Key << "detection_downsample" << YAML::Value << f.detection_downsample;
   EmitDouble(out, "min_contrast_fraction", f.min_contrast_fraction);
@@ -189,6 +191,19 @@ std::string ModelToYaml(const CalibrationModel& model) {
   EmitDouble(out, "beta_px2", model.geometric.beta_px2);
   EmitFit(out, model.geometric.summary);
   out << YAML::EndMap;
+
+  const ThetaCorrection& tc = model.theta_correction;
+  if (tc.fitted()) {
+    out << YAML::Key << "theta_correction" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "degree" << YAML::Value << tc.degree;
+    out << YAML::Key << "coefficients" << YAML::Value << YAML::Flow << tc.coefficients;
+    out << YAML::Key << "ratio_sq" << YAML::Value << YAML::Flow << YAML::BeginSeq
+        << tc.ratio_sq_min << tc.ratio_sq_max << YAML::EndSeq;
+    out << YAML::Key << "d_geometric_mm" << YAML::Value << YAML::Flow << YAML::BeginSeq
+        << tc.d_min_mm << tc.d_max_mm << YAML::EndSeq;
+    EmitFit(out, tc.summary);
+    out << YAML::EndMap;
+  }
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
@@ -203,10 +218,11 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   }
   if (!root.IsMap()) rd.Fail(root, "", "the document is not a map");
   const int version = rd.Scalar<int>(root, "", "format_version");
-  if (version != kModelFormatVersion) {
+  if (version < kOldestModelFormatVersion || version > kModelFormatVersion) {
     rd.Fail(root["format_version"], "format_version",
-            "version " + std::to_string(version) + " is not the supported version " +
-                std::to_string(kModelFormatVersion));
+            "version " + std::to_string(version) + " is not a supported version (" +
+                std::to_string(kOldestModelFormatVersion) + ".." +
+                std::to_string(kModelFormatVersion) + ")");
   }
   CalibrationModel model;
   const YAML::Node f = rd.Child(root, "", "features");
@@ -217,6 +233,16 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   fo.threshold_fraction = rd.Scalar<double>(f, "features", "threshold_fraction");
   fo.moment_threshold_fraction = rd.Scalar<double>(f, "features", "moment_threshold_fraction");
   fo.psf_sigma_px = rd.Scalar<double>(f, "features", "psf_sigma_px");
+  // Version 2 keys; absent (version 1): the defaults, which is what version 1 files were made with.
+  if (f["moment_method"].IsDefined() && !f["moment_method"].IsNull()) {
+    if (!ParseMomentMethod(rd.Scalar<std::string>(f, "features", "moment_method"),
+                           &fo.moment_method))
+      rd.Fail(f["moment_method"], "features.moment_method",
+              "unknown moment method (threshold or aperture)");
+  }
+  if (f["aperture_margin_px"].IsDefined() && !f["aperture_margin_px"].IsNull()) {
+    fo.aperture_margin_px = rd.Scalar<double>(f, "features", "aperture_margin_px");
+  }
   fo.detection_downsample = rd.Scalar<int>(f, "features", "detection_downsample");
   fo.min_contrast_fraction = rd.Scalar<double>(f, "features", "min_contrast_fraction");
   if (!ParseEllipseMethod(rd.Scalar<std::string>(f, "features", "ellipse_method"),
@@ -272,6 +298,25 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   model.geometric.alpha_px2 = rd.Scalar<double>(g, "geometric", "alpha_px2");
   model.geometric.beta_px2 = rd.Scalar<double>(g, "geometric", "beta_px2");
   model.geometric.summary = rd.Fit(g, "geometric");
+
+  const YAML::Node t = root["theta_correction"];
+  if (t.IsDefined() && !t.IsNull()) {
+    ThetaCorrection& tc = model.theta_correction;
+    tc.degree = rd.Scalar<int>(t, "theta_correction", "degree");
+    if (tc.degree < 1 || tc.degree > 3)
+      rd.Fail(t["degree"], "theta_correction.degree", "must be 1, 2 or 3");
+    tc.coefficients = rd.Doubles(t, "theta_correction", "coefficients", false);
+    const int expected = ThetaCorrection::NumTerms(tc.degree);
+    if (static_cast<int>(tc.coefficients.size()) != expected) {
+      rd.Fail(t["coefficients"], "theta_correction.coefficients",
+              "expected " + std::to_string(expected) + " coefficients for degree " +
+                  std::to_string(tc.degree) + ", found " +
+                  std::to_string(tc.coefficients.size()));
+    }
+    rd.Range(t, "theta_correction", "ratio_sq", &tc.ratio_sq_min, &tc.ratio_sq_max);
+    rd.Range(t, "theta_correction", "d_geometric_mm", &tc.d_min_mm, &tc.d_max_mm);
+    tc.summary = rd.Fit(t, "theta_correction");
+  }
   return model;
 }
 

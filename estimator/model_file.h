@@ -10,7 +10,10 @@
 
 namespace irdist {
 
-constexpr int kModelFormatVersion = 1;
+// 2 adds features.moment_method, features.aperture_margin_px and theta_correction. Version 1 files
+// still load: those keys take their defaults and the model has no theta correction.
+constexpr int kModelFormatVersion = 2;
+constexpr int kOldestModelFormatVersion = 1;
 
 // A model file that cannot be written, read or understood. what() names the file, the key and,
 // when known, the line.

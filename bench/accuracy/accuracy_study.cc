@@ -359,6 +359,7 @@ int Main(int argc, char** argv) {
   bool crb_only = false;
   bool theta_probe = false;
   bool theta_variants = false;
+  std::string dump_theta;  // CSV of the calibration frames' moments and theta0 (default pipeline)
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--rig") && i + 1 < argc)
       rig = argv[++i];
@@ -375,11 +376,16 @@ int Main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--help")) {
       std::printf(
           "irdist_accuracy_study [--rig FILE] [--seed N] [--quick] [--verbose] [--crb-only]\n"
-          "  [--radiometric-weight W]...\n");
+          "  [--radiometric-weight W]... [--theta-degree N]... [--dump-theta CSV]\n"
+          "  (pipeline theta_cal: the default with the calibrated theta correction;\n"
+          "   --theta-degree N adds the default with a correction of total degree N)\n");
       return 0;
     } else if (!std::strcmp(argv[i], "--verbose"))
       verbose = true;
-    else if (!std::strcmp(argv[i], "--radiometric-weight"))
+    else if (!std::strcmp(argv[i], "--dump-theta") && i + 1 < argc)
+      dump_theta = argv[++i];
+    else if (!std::strcmp(argv[i], "--radiometric-weight") ||
+             !std::strcmp(argv[i], "--theta-degree"))
       ++i;
   }
   const sim::RigPhysics physics = sim::LoadRigPhysics(rig);
@@ -479,6 +485,21 @@ int Main(int argc, char** argv) {
   pipelines[1].name = "default";
   pipelines[2].name = "alg1_joint";  // default fit, Algorithm 1 jointly over t_n, better theta0
   pipelines[2].estimate.method = EstimateMethod::kAlgorithm1;
+  {
+    Pipeline pl;
+    pl.name = "theta_cal";  // default with the calibrated theta correction (fit.h)
+    pl.estimate.theta_correction = true;
+    pipelines.push_back(pl);
+  }
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--theta-degree") && i + 1 < argc) {
+      Pipeline pl;
+      pl.fit.theta_correction_degree = std::stoi(argv[++i]);
+      pl.estimate.theta_correction = true;
+      pl.name = "theta_cal_deg" + std::to_string(pl.fit.theta_correction_degree);
+      pipelines.push_back(pl);
+    }
+  }
   if (theta_variants) {
     Pipeline pl;
     pl.name = "theta_bracket";  // theta0 from the signal-weighted moments of every frame
@@ -487,6 +508,9 @@ int Main(int argc, char** argv) {
     pl.name = "theta_aperture";  // aperture moments (features and geometric baseline)
     pl.estimate.theta_source = ThetaSource::kCalibratedBlur;
     pl.features.moment_method = MomentMethod::kAperture;
+    pipelines.push_back(pl);
+    pl.name = "theta_ap_cal";  // aperture moments with the calibrated theta correction
+    pl.estimate.theta_correction = true;
     pipelines.push_back(pl);
   }
 
@@ -501,6 +525,25 @@ int Main(int argc, char** argv) {
     SweepRenderer sr(physics, seed);
     const auto brackets = sr.Run(calib, calib_t, pl.features);
     pl.model = Fit(Samples(brackets), pl.features, pl.fit);
+    if (!dump_theta.empty() && pl.name == "default") {
+      // Per calibration frame: true pose, moment variances, theta0 without / with correction.
+      FILE* out = std::fopen(dump_theta.c_str(), "w");
+      if (out != nullptr) {
+        std::fprintf(out, "d_mm,theta_deg,bias_ma,t_ms,major_px2,minor_px2,peak,raw_deg,cal_deg\n");
+        ThetaCorrection none;
+        for (const CalibrationSample& s : Samples(brackets)) {
+          const Features& m = s.measurement;
+          std::fprintf(out, "%g,%g,%g,%g,%.9g,%.9g,%.6g,%.6f,%.6f\n", s.d_mm, s.theta_deg,
+                       s.bias_ma, s.t_ms, m.moment_major_var_px2, m.moment_minor_var_px2, m.peak,
+                       none.ThetaDeg(m.moment_major_var_px2, m.moment_minor_var_px2,
+                                     pl.model.geometric),
+                       pl.model.theta_correction.ThetaDeg(m.moment_major_var_px2,
+                                                          m.moment_minor_var_px2,
+                                                          pl.model.geometric));
+        }
+        std::fclose(out);
+      }
+    }
     if (verbose)
       std::printf("calibration %s:\n%s\n", pl.name.c_str(), pl.model.BriefReport().c_str());
     const FittedModel* fs = pl.model.Find(ModelKind::kFreeSigma);
@@ -511,6 +554,12 @@ int Main(int argc, char** argv) {
         100 * fs->summary.max_relative_error, fs->summary.condition_number,
         100 * pl.model.geometric.summary.mean_relative_error,
         100 * pl.model.geometric.summary.max_relative_error, pl.model.geometric.beta_px2);
+    const ThetaCorrection& tc = pl.model.theta_correction;
+    if (tc.fitted()) {
+      std::printf("  theta correction degree %d: %d frames, |theta error| mean %.3f max %.3f deg\n",
+                  tc.degree, tc.summary.samples, tc.summary.mean_relative_error,
+                  tc.summary.max_relative_error);
+    }
   }
 
   // Validation grids.

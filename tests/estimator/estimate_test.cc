@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "base/check.h"
 #include "tests/estimator/synthetic.h"
 
@@ -134,6 +136,46 @@ TEST(Estimate, GeometricBaseline) {
   EXPECT_NEAR(g.d_mm, 2345.0, 1e-6);
   Features none;
   EXPECT_FALSE(EstimateGeometric(model, none).valid);
+}
+
+// The ellipse of a frame distorted as x = (minor - blur) / (major - blur) = 0.97 cos^2 + 0.01.
+void DistortEllipse(double theta_deg, Features* f) {
+  const double c = std::cos(theta_deg * M_PI / 180.0);
+  f->moment_minor_var_px2 = 1.0 + (0.97 * c * c + 0.01) * (f->moment_major_var_px2 - 1.0);
+}
+
+TEST(Estimate, CalibratedThetaCorrectionFormsTheta0) {
+  const testing::SyntheticRig rig;
+  std::vector<CalibrationSample> samples = rig.Table3();
+  for (CalibrationSample& s : samples) DistortEllipse(s.theta_deg, &s.measurement);
+  CalibrationModel model = rig.ExactModel();
+  model.geometric = FitGeometric(samples);
+  model.theta_correction = FitThetaCorrection(samples, model.geometric, 2);
+  ASSERT_TRUE(model.theta_correction.fitted());
+  for (double theta : {15.0, 22.0, 31.0}) {
+    Bracket b = MakeBracket(rig, 500.0, 2300.0, theta, 0.0);
+    DistortEllipse(theta, &b.reference);
+    for (Features& m : b.measurements) DistortEllipse(theta, &m);
+    EstimateOptions on;  // kCalibratedBlur (default) with the correction
+    on.theta_correction = true;
+    EstimateOptions off = on;
+    off.theta_correction = false;
+    const BracketEstimate e_on = EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, on);
+    const BracketEstimate e_off =
+        EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, off);
+    EXPECT_NEAR(e_on.per_exposure[0].theta0_deg, theta, 1e-3);
+    EXPECT_GT(std::abs(e_off.per_exposure[0].theta0_deg - theta), 0.5);
+    const DistanceEstimate pair =
+        EstimatePair(model, b.reference, 8.0, b.measurements[0], b.t_ms[0], on);
+    EXPECT_NEAR(pair.theta0_deg, theta, 1e-3);
+    EstimateOptions bracket_moments = on;
+    bracket_moments.theta_source = ThetaSource::kBracketMoments;
+    const BracketEstimate e_bm =
+        EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, bracket_moments);
+    EXPECT_NEAR(e_bm.per_exposure[0].theta0_deg, theta, 1e-3);
+  }
+  // The paper's options keep the features' ellipse.
+  EXPECT_FALSE(PaperEstimateOptions().theta_correction);
 }
 
 TEST(Estimate, BracketPreconditions) {

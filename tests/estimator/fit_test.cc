@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "base/check.h"
 #include "tests/estimator/synthetic.h"
 
@@ -149,6 +151,68 @@ TEST(Fit, GeometricBaselineRecoversSizeLaw) {
   EXPECT_NEAR(g.alpha_px2, 30.0, 1e-9);
   EXPECT_NEAR(g.beta_px2, 1.0, 1e-9);
   EXPECT_LT(g.summary.max_relative_error, 1e-12);
+}
+
+// Table 3 samples whose moment ellipse is distorted: x = (minor - blur) / (major - blur) =
+// 0.97 cos^2(theta) + 0.01 + 0.005 z (z the distance mapped to [-1, 1] over 1.5..3 m), the kind of
+// pose-dependent deviation a threshold cut or an unmodelled blur leaves.
+std::vector<CalibrationSample> DistortedEllipses(const testing::SyntheticRig& rig) {
+  std::vector<CalibrationSample> samples = rig.Table3();
+  for (CalibrationSample& s : samples) {
+    const double c = std::cos(s.theta_deg * M_PI / 180.0);
+    const double z = (s.d_mm - 2250.0) / 750.0;
+    const double x = 0.97 * c * c + 0.01 + 0.005 * z;
+    Features& m = s.measurement;
+    m.moment_minor_var_px2 = 1.0 + x * (m.moment_major_var_px2 - 1.0);
+  }
+  return samples;
+}
+
+TEST(Fit, ThetaCorrectionRemovesASmoothEllipseBias) {
+  const testing::SyntheticRig rig;
+  const std::vector<CalibrationSample> samples = DistortedEllipses(rig);
+  const GeometricModel g = FitGeometric(samples);
+  for (int degree : {1, 2, 3}) {
+    const ThetaCorrection tc = FitThetaCorrection(samples, g, degree);
+    ASSERT_TRUE(tc.fitted()) << tc.summary.message;
+    EXPECT_EQ(static_cast<int>(tc.coefficients.size()), ThetaCorrection::NumTerms(degree));
+    EXPECT_LT(tc.summary.max_relative_error, 1e-5) << "degree " << degree;  // degrees
+    EXPECT_NEAR(tc.d_min_mm, 1500.0, 1e-6);
+    EXPECT_NEAR(tc.d_max_mm, 3000.0, 1e-6);
+  }
+  // Off the calibration grid: 1.7 m, 22 deg; the uncorrected ratio is more than 1 deg off.
+  const ThetaCorrection tc = FitThetaCorrection(samples, g, 2);
+  const double major = 30.0 * (1000.0 / 1700.0) * (1000.0 / 1700.0) + 1.0;
+  const double c = std::cos(22.0 * M_PI / 180.0);
+  const double x = 0.97 * c * c + 0.01 + 0.005 * (1700.0 - 2250.0) / 750.0;
+  const double minor = 1.0 + x * (major - 1.0);
+  EXPECT_NEAR(tc.ThetaDeg(major, minor, g), 22.0, 1e-4);
+  EXPECT_GT(std::abs(ThetaCorrection().ThetaDeg(major, minor, g) - 22.0), 1.0);
+  // No extrapolation: a distance beyond the calibrated range is read at its edge, and a rounder
+  // blob than any calibrated one at the calibrated maximum of x.
+  const double far_major = 30.0 * (1000.0 / 6000.0) * (1000.0 / 6000.0) + 1.0;
+  const double far_minor = 1.0 + x * (far_major - 1.0);
+  EXPECT_TRUE(std::isfinite(tc.ThetaDeg(far_major, far_minor, g)));
+  EXPECT_NEAR(tc.ThetaDeg(major, major, g),
+              tc.ThetaDeg(major, 1.0 + tc.ratio_sq_max * (major - 1.0), g), 1e-9);
+  EXPECT_NEAR(tc.ThetaDeg(far_major, far_minor, g),
+              tc.ThetaDeg(30.0 * (1000.0 / 3000.0) * (1000.0 / 3000.0) + 1.0,
+                          1.0 + x * 30.0 * (1000.0 / 3000.0) * (1000.0 / 3000.0), g),
+              1e-6);
+  // Not larger than the blur: NaN.
+  EXPECT_TRUE(std::isnan(tc.ThetaDeg(0.5, 0.5, g)));
+}
+
+TEST(Fit, ThetaCorrectionNeedsAnEllipse) {
+  // The plain synthetic frames have no minor axis (every x is 0): rank-deficient, not fitted.
+  const testing::SyntheticRig rig;
+  const std::vector<CalibrationSample> samples = rig.Table3();
+  const ThetaCorrection tc = FitThetaCorrection(samples, FitGeometric(samples), 2);
+  EXPECT_FALSE(tc.fitted());
+  EXPECT_FALSE(tc.summary.message.empty());
+  // Without a geometric model there is no blur variance to remove.
+  EXPECT_FALSE(FitThetaCorrection(samples, GeometricModel(), 2).fitted());
+  EXPECT_THROW(FitThetaCorrection(samples, FitGeometric(samples), 4), CheckError);
 }
 
 TEST(Fit, TooFewSamplesIsACheckError) {

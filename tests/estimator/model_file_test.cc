@@ -23,7 +23,22 @@ CalibrationModel SmallModel() {
   features.window_side_px = 48;
   features.inverse_response.m = {0.0, 0.3, 1.0};
   features.inverse_response.f = {0.0, 0.1 / 3.0, 1.0};
-  return Fit(rig.Table3(), features, options);
+  features.moment_method = MomentMethod::kAperture;
+  features.aperture_margin_px = 4.25;
+  CalibrationModel model = Fit(rig.Table3(), features, options);
+  // The synthetic frames carry no minor axis: a hand-made correction (degree 2).
+  ThetaCorrection& tc = model.theta_correction;
+  tc.degree = 2;
+  tc.coefficients = {0.01, 0.97, 0.1 / 3.0, 0.02, -0.003, 1e-17};
+  tc.ratio_sq_min = 0.6;
+  tc.ratio_sq_max = 0.999;
+  tc.d_min_mm = 1499.5;
+  tc.d_max_mm = 3000.25;
+  tc.summary.termination = FitSummary::Termination::kConverged;
+  tc.summary.mean_relative_error = 0.1 / 7.0;
+  tc.summary.max_relative_error = 0.5;
+  tc.summary.samples = 256;
+  return model;
 }
 
 bool BitEqual(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
@@ -60,6 +75,20 @@ TEST(ModelFile, RoundTripIsBitExact) {
     EXPECT_EQ(a.summary.samples, b.summary.samples);
   }
   EXPECT_TRUE(BitEqual(back.geometric.alpha_px2, model.geometric.alpha_px2));
+  EXPECT_EQ(back.features.moment_method, MomentMethod::kAperture);
+  EXPECT_TRUE(BitEqual(back.features.aperture_margin_px, 4.25));
+  const ThetaCorrection &ta = model.theta_correction, &tb = back.theta_correction;
+  ASSERT_TRUE(tb.fitted());
+  EXPECT_EQ(tb.degree, 2);
+  ASSERT_EQ(tb.coefficients.size(), ta.coefficients.size());
+  for (size_t j = 0; j < ta.coefficients.size(); ++j)
+    EXPECT_TRUE(BitEqual(ta.coefficients[j], tb.coefficients[j])) << j;
+  EXPECT_TRUE(BitEqual(ta.ratio_sq_min, tb.ratio_sq_min));
+  EXPECT_TRUE(BitEqual(ta.ratio_sq_max, tb.ratio_sq_max));
+  EXPECT_TRUE(BitEqual(ta.d_min_mm, tb.d_min_mm));
+  EXPECT_TRUE(BitEqual(ta.d_max_mm, tb.d_max_mm));
+  EXPECT_TRUE(BitEqual(ta.summary.mean_relative_error, tb.summary.mean_relative_error));
+  EXPECT_EQ(tb.summary.samples, 256);
   // Writing again gives the same text.
   EXPECT_EQ(ModelToYaml(back), ModelToYaml(model));
 }
@@ -71,9 +100,55 @@ TEST(ModelFile, FileHoldsTheFitStatistics) {
     EXPECT_NE(text.find(key), std::string::npos) << key;
 }
 
+TEST(ModelFile, VersionOneFileLoadsWithDefaultsAndNoThetaCorrection) {
+  // A version 1 file: no moment_method, aperture_margin_px or theta_correction keys.
+  CalibrationModel v1 = SmallModel();
+  v1.features.moment_method = MomentMethod::kThreshold;
+  v1.features.aperture_margin_px = FeatureOptions().aperture_margin_px;
+  v1.theta_correction = ThetaCorrection();
+  std::string text = ModelToYaml(v1);
+  ASSERT_EQ(text.find("theta_correction"), std::string::npos);
+  text.replace(text.find("format_version: 2"), 17, "format_version: 1");
+  for (const char* key : {"moment_method", "aperture_margin_px"}) {
+    const size_t at = text.find(std::string("  ") + key + ":");
+    ASSERT_NE(at, std::string::npos) << key;
+    text.erase(at, text.find('\n', at) - at + 1);
+  }
+  const CalibrationModel back = ModelFromYaml(text, "v1.yaml");
+  EXPECT_EQ(back.features.moment_method, MomentMethod::kThreshold);
+  EXPECT_EQ(back.features.aperture_margin_px, FeatureOptions().aperture_margin_px);
+  EXPECT_FALSE(back.theta_correction.fitted());
+  EXPECT_EQ(back.features.window_side_px, 48);
+}
+
+TEST(ModelFile, BadThetaCorrectionNamesTheKey) {
+  std::string text = ModelToYaml(SmallModel());
+  const size_t section = text.find("theta_correction:");
+  ASSERT_NE(section, std::string::npos);
+  const size_t at = text.find("coefficients: [", section);
+  text.replace(at, 15, "coefficients: [1, ");  // 7 coefficients for degree 2
+  try {
+    ModelFromYaml(text, "m.yaml");
+    FAIL() << "accepted a wrong number of coefficients";
+  } catch (const ModelFileError& e) {
+    EXPECT_EQ(e.key(), "theta_correction.coefficients");
+    EXPECT_GT(e.line(), 1);
+  }
+  std::string bad_method = ModelToYaml(SmallModel());
+  const size_t m = bad_method.find("moment_method: aperture");
+  ASSERT_NE(m, std::string::npos);
+  bad_method.replace(m, 23, "moment_method: banana");
+  try {
+    ModelFromYaml(bad_method, "m.yaml");
+    FAIL() << "accepted an unknown moment method";
+  } catch (const ModelFileError& e) {
+    EXPECT_EQ(e.key(), "features.moment_method");
+  }
+}
+
 TEST(ModelFile, WrongVersionIsRejected) {
   std::string text = ModelToYaml(SmallModel());
-  text.replace(text.find("format_version: 1"), 17, "format_version: 9");
+  text.replace(text.find("format_version: 2"), 17, "format_version: 9");
   try {
     ModelFromYaml(text, "m.yaml");
     FAIL() << "accepted a wrong version";
