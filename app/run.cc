@@ -309,9 +309,10 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
     const bool moved = attempt > 0 || !last_pose || last_pose->slide_mm != pose.slide_mm ||
                        last_pose->pan_deg != pose.pan_deg || last_pose->tilt_deg != pose.tilt_deg;
     const bool current_changed = attempt > 0 || !last_pose || last_pose->bias_ma != pose.bias_ma;
+    // Both waits start when the sweep calls back (settled, current just set): they run together.
     double wait_ms = 0.0;
-    if (moved) wait_ms += settle.after_move_ms;
-    if (current_changed) wait_ms += settle.after_current_ms;
+    if (moved) wait_ms = std::max(wait_ms, settle.after_move_ms);
+    if (current_changed) wait_ms = std::max(wait_ms, settle.after_current_ms);
     SleepHostMs(wait_ms / time_scale);
     last_pose = pose;
 
