@@ -286,6 +286,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   int done_count = static_cast<int>(done_ids.size());
   std::optional<Pose> last_pose;
   std::string last_what;
+  std::int64_t pending_index = -1;  // pose of the bracket held back by the recorder
   const SettleSpec& settle = recipe.sweep.settle;
 
   // A bracket is appended once the sweep has confirmed its pose (moved on to the next one, or
@@ -299,11 +300,15 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   };
   const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int attempt) {
     const Pose& pose = plan.poses[static_cast<size_t>(sweep_pose.index)];
-    if (attempt == 0) {
-      commit();
-    } else {
+    // The pending bracket is confirmed when the sweep calls for another pose (even as a retake:
+    // a reboot seen while moving to pose i+1 retakes i+1, not i); a retake of its own pose
+    // means it is void.
+    if (attempt > 0 && pending_index == sweep_pose.index) {
       recorder.DropPending();
+    } else {
+      commit();
     }
+    pending_index = sweep_pose.index;
     // The recipe's waits on top of the station's own settle; simulated waits run time_scale
     // times faster on a virtual rig.
     const bool moved = attempt > 0 || !last_pose || last_pose->slide_mm != pose.slide_mm ||
