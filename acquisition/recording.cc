@@ -503,13 +503,23 @@ FrameRecord RecordingWriter::Append(const cv::Mat& image, FrameRecord record) {
   }
   record.index = next_index_;
   record.file = FrameFileName(record.index);
+  const std::string row = FormatRow(record);
+  {
+    // The writer holds its rows to the reader's rules: a row the reader would refuse is a bug of
+    // the caller, refused before anything reaches the disk.
+    FrameRecord parsed;
+    std::string why;
+    std::string line = row;
+    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+    IRDIST_CHECK(ParseRow(line, &parsed, &why), "frame ", record.index,
+                 " would be unreadable in frames.csv: ", why);
+  }
   std::vector<uchar> png;
   if (!cv::imencode(".png", image16, png, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
     throw RecordingError("cannot encode frame " + std::to_string(record.index) + " as PNG.");
   }
   const std::string path = (fs::path(dir_) / record.file).string();
   WriteFileAtomically(path, png.data(), png.size());
-  const std::string row = FormatRow(record);
   if (!WriteAll(csv_fd_, row.data(), row.size())) {
     throw RecordingError("cannot append to " + (fs::path(dir_) / kCsv).string() + ": " + Errno() +
                          ". Is the disk full?");

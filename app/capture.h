@@ -1,7 +1,6 @@
 #pragma once
 // The camera and recording side of a live run, behind plain types: app/run.cc drives the station
-// and sees station/plan.h, whose irdist::BracketFrame clashes with acquisition/bracket.h's, so the
-// acquisition headers stay in capture.cc.
+// and the acquisition headers stay in capture.cc, so each side of the run sees one module.
 
 #include <cstdint>
 #include <functional>

@@ -18,8 +18,7 @@
 
 namespace irdist {
 
-// acquisition/recording.h is not included here: it defines irdist::BracketFrame, as does
-// station/plan.h, so no translation unit may see both (app/run.cc sees plan.h).
+// Forward declarations keep acquisition/recording.h out of the callers of this header.
 class RecordingReader;
 struct FrameRecord;
 

@@ -1,5 +1,4 @@
-// playback --show: an OpenCV window over the recording's frames. Kept apart from tools.cc, which
-// sees station/plan.h (its BracketFrame clashes with acquisition's).
+// playback --show: an OpenCV window over the recording's frames.
 #include <cstdlib>
 #include <map>
 #include <opencv2/highgui.hpp>

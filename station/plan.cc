@@ -220,10 +220,10 @@ double TrapezoidMoveS(double distance, const AxisMotion& motion) {
   return 2.0 * std::sqrt(d / a);
 }
 
-std::vector<BracketFrame> BracketFrames(const BracketSpec& bracket) {
-  std::vector<BracketFrame> frames;
+std::vector<PlannedExposure> PlannedExposures(const BracketSpec& bracket) {
+  std::vector<PlannedExposure> frames;
   auto add = [&frames](double exposure_ms, bool is_reference, int reference_index) {
-    BracketFrame frame;
+    PlannedExposure frame;
     frame.index = static_cast<int>(frames.size());
     frame.exposure_ms = exposure_ms;
     frame.is_reference = is_reference;
@@ -282,7 +282,7 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
   const int repeats = spec.bracket.repeats;
 
   Plan plan;
-  plan.bracket = BracketFrames(spec.bracket);
+  plan.bracket = PlannedExposures(spec.bracket);
   PlanSummary& summary = plan.summary;
   for (SweepAxis axis : order) {
     summary.order.push_back(SweepAxisName(axis, spec.angle_mode));
@@ -370,11 +370,11 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
   summary.frame_count = summary.pose_count * summary.frames_per_pose;
   const int differences_per_pose =
       static_cast<int>(std::count_if(plan.bracket.begin(), plan.bracket.end(),
-                                     [](const BracketFrame& f) { return !f.is_reference; }));
+                                     [](const PlannedExposure& f) { return !f.is_reference; }));
   summary.difference_count = summary.pose_count * differences_per_pose;
 
   double bracket_exposure_s = 0.0;
-  for (const BracketFrame& frame : plan.bracket) bracket_exposure_s += frame.exposure_ms / 1000.0;
+  for (const PlannedExposure& frame : plan.bracket) bracket_exposure_s += frame.exposure_ms / 1000.0;
   const double frames_per_pose = static_cast<double>(plan.bracket.size());
 
   const Pose* previous = nullptr;

@@ -116,7 +116,7 @@ struct Pose {
 };
 
 // One frame of the bracket taken at each pose, in trigger order.
-struct BracketFrame {
+struct PlannedExposure {
   int index = 0;  // position in the bracket, 0-based
   double exposure_ms = 0.0;
   bool is_reference = false;
@@ -125,7 +125,7 @@ struct BracketFrame {
 
 // The bracket's frames, in trigger order: t_r, t_n1, t_n2, ... or, with retake_reference,
 // t_r, t_n1, t_r, t_n2, ...
-std::vector<BracketFrame> BracketFrames(const BracketSpec& bracket);
+std::vector<PlannedExposure> PlannedExposures(const BracketSpec& bracket);
 
 // Axis order chosen by cost of one step (trapezoid time of the median step plus settles; the
 // current's settle for the bias), most expensive outermost; single-valued axes after them;
@@ -157,7 +157,7 @@ struct PlanSummary {
 
 struct Plan {
   std::vector<Pose> poses;
-  std::vector<BracketFrame> bracket;
+  std::vector<PlannedExposure> bracket;
   PlanSummary summary;
 };
 

@@ -41,10 +41,14 @@ struct SweepResult {
 };
 
 // Called at each settled pose with the IRED at pose.bias_ma (set before the move, so that its
-// thermal transient runs while the axes travel: see Sweep::current_changed_at()). `attempt` is 0 the first time; a
-// retake after a station reboot calls again with attempt > 0, and whatever the caller recorded for
-// this pose in earlier attempts must be discarded. Exceptions thrown here end the sweep (after
-// the IRED is switched off) and propagate.
+// thermal transient runs while the axes travel: see Sweep::current_changed_at()). `attempt` is 0
+// the first time; a retake after a station reboot calls again with attempt > 0, and whatever the
+// caller recorded for this pose in earlier attempts must be discarded.
+// A pose is confirmed only when the station is seen alive with the same boot id AFTER the callback
+// returned: that is, when the callback for the next pose runs with attempt 0, or when Run()
+// returns. A reboot seen on the way to the next pose retakes that next pose, so a caller that
+// keeps what it captured pending until then never records a pose twice or loses one.
+// Exceptions thrown here end the sweep (after the IRED is switched off) and propagate.
 using PoseCallback = std::function<void(const SweepPose& pose, int attempt)>;
 
 class Sweep {

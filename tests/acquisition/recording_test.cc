@@ -132,6 +132,20 @@ TEST(Recording, RoundTripGivesBackBracketsAndTheHeaderVerbatim) {
   fs::remove_all(dir);
 }
 
+TEST(Recording, WriterRefusesARowTheReaderWouldRefuseAndWritesNothing) {
+  const std::string dir = TempDir("unreadable");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, 1);
+  FrameRecord bad = TestRecord(1);
+  bad.bracket_size = 0;  // no bracket has zero frames
+  EXPECT_THROW(writer->Append(TestImage(1), bad), CheckError);
+  EXPECT_EQ(CountCsvRows(dir), 1);
+  EXPECT_FALSE(fs::exists(fs::path(dir) / "frames" / "000001.png"));
+  WriteFrames(*writer, 1, 2);  // the writer goes on with the next good frame
+  writer->Close(Completion::kCut);
+  EXPECT_EQ(RecordingReader(dir).rows().size(), 2u);
+}
+
 TEST(Recording, WriterKilledMidRunLosesAtMostTheFrameInFlight) {
   const std::string dir = TempDir("killed");
   const pid_t child = ::fork();

@@ -51,7 +51,7 @@ TEST(RecipeTest, Table3ExpandsToThePapersCounts) {
   EXPECT_EQ(Distinct(plan, &Pose::tilt_deg), (std::set<double>{0}));
   for (const Pose& p : plan.poses) EXPECT_EQ(p.pan_deg, p.theta_deg);  // theta by pan, tilt 0
   std::vector<double> exposures;
-  for (const BracketFrame& f : plan.bracket) exposures.push_back(f.exposure_ms);
+  for (const PlannedExposure& f : plan.bracket) exposures.push_back(f.exposure_ms);
   EXPECT_EQ(exposures, (std::vector<double>{8, 30, 32, 34, 36}));
   ExpectWithinLimits(recipe, plan);
   // Every (slide, theta, bias) combination exactly once.

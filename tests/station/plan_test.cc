@@ -69,7 +69,7 @@ TEST(PlanTest, TrapezoidMatchesHandComputedProfiles) {
 
 TEST(PlanTest, BracketFramesReferenceOnceOrRetaken) {
   BracketSpec bracket;  // t_r 8, t_n 30 32 34 36
-  std::vector<BracketFrame> frames = BracketFrames(bracket);
+  std::vector<PlannedExposure> frames = PlannedExposures(bracket);
   ASSERT_EQ(frames.size(), 5u);
   EXPECT_TRUE(frames[0].is_reference);
   EXPECT_EQ(frames[0].exposure_ms, 8.0);
@@ -81,7 +81,7 @@ TEST(PlanTest, BracketFramesReferenceOnceOrRetaken) {
   }
 
   bracket.retake_reference = true;
-  frames = BracketFrames(bracket);
+  frames = PlannedExposures(bracket);
   ASSERT_EQ(frames.size(), 8u);
   for (int n = 0; n < 4; ++n) {
     EXPECT_TRUE(frames[2 * n].is_reference);
