@@ -298,6 +298,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
       progress.Update(done_count, what);
     });
   };
+  Sweep sweep(client);
   const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int attempt) {
     const Pose& pose = plan.poses[static_cast<size_t>(sweep_pose.index)];
     // The pending bracket is confirmed when the sweep calls for another pose (even as a retake:
@@ -314,11 +315,21 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
     const bool moved = attempt > 0 || !last_pose || last_pose->slide_mm != pose.slide_mm ||
                        last_pose->pan_deg != pose.pan_deg || last_pose->tilt_deg != pose.tilt_deg;
     const bool current_changed = attempt > 0 || !last_pose || last_pose->bias_ma != pose.bias_ma;
-    // Both waits start when the sweep calls back (settled, current just set): they run together.
-    double wait_ms = 0.0;
-    if (moved) wait_ms = std::max(wait_ms, settle.after_move_ms);
-    if (current_changed) wait_ms = std::max(wait_ms, settle.after_current_ms);
-    SleepHostMs(wait_ms / time_scale);
+    // The move's wait starts now (settled); the current's started when the sweep set it, before
+    // the move, so only what is left of it is waited (a retake restores the current on recovery:
+    // its whole wait). Host waits are simulated waits divided by the time scale.
+    double wait_host_ms = 0.0;
+    if (moved) wait_host_ms = settle.after_move_ms / time_scale;
+    if (current_changed) {
+      const double since_change_ms =
+          attempt > 0 ? 0.0
+                      : std::chrono::duration<double, std::milli>(
+                            std::chrono::steady_clock::now() - sweep.current_changed_at())
+                            .count();
+      wait_host_ms =
+          std::max(wait_host_ms, settle.after_current_ms / time_scale - since_change_ms);
+    }
+    SleepHostMs(wait_host_ms);
     last_pose = pose;
 
     LivePose live;
@@ -337,7 +348,6 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   };
 
   const auto t0 = std::chrono::steady_clock::now();
-  Sweep sweep(client);
   SweepResult result;
   try {
     result = sweep.Run(poses, at_pose, &StopRequested());

@@ -351,6 +351,8 @@ TEST(PlanTest, CurrentChangesAreCounted) {
   // only happen with a serpentine bias; it is not one): 475 500 525 | 475 500 525.
   EXPECT_EQ(plan.summary.current_changes, 6);
   spec.serpentine.push_back(SweepAxis::kBias);  // 475 500 525 | 525 500 475
+  spec.settle.after_move_ms = 200.0;
+  spec.settle.after_current_ms = 500.0;
   const Plan snake = MakePlan(spec, MotionModel());
   EXPECT_EQ(snake.summary.current_changes, 5);
   // The first change overlaps the move from home (station settle 100 ms + 200 ms after the
