@@ -221,7 +221,7 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   out << "Fitting " << samples.size() << " differences (" << usable << " usable) from "
       << reader.dir() << "\n";
   // Models with more unknowns (coefficients + sigma) than observations are left out (a small
-  // recipe such as smoke-calibration.yaml cannot determine the 24-term direct Sigma model).
+  // recipe with fewer than 25 differences cannot determine the 24-term direct Sigma model).
   FitOptions fit_options;
   std::set<std::tuple<double, double, double, double>> references;
   int usable_frames = 0;

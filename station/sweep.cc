@@ -68,7 +68,16 @@ SweepResult Sweep::Run(const std::vector<SweepPose>& poses, const PoseCallback& 
             client_.SetCurrent(pose.bias_ma);
             current_changed_at_ = std::chrono::steady_clock::now();
           }
-          client_.MoveTo({pose.slide_mm, pose.pan_deg, pose.tilt_deg});
+          // A pose that only changes the current (or repeats) needs no move: the station is
+          // still where the previous pose confirmed it (a retake always moves again).
+          const bool same_place = i > 0 && attempt == 0 &&
+                                  std::llround(poses[i - 1].slide_mm * 100.0) ==
+                                      std::llround(pose.slide_mm * 100.0) &&
+                                  std::llround(poses[i - 1].pan_deg * 100.0) ==
+                                      std::llround(pose.pan_deg * 100.0) &&
+                                  std::llround(poses[i - 1].tilt_deg * 100.0) ==
+                                      std::llround(pose.tilt_deg * 100.0);
+          if (!same_place) client_.MoveTo({pose.slide_mm, pose.pan_deg, pose.tilt_deg});
           at_pose(pose, attempt);
           // The capture is only good if the station did not reboot meanwhile.
           client_.Status();

@@ -150,7 +150,7 @@ TEST(CliTest, PlanPrintsCountsOrderAndDuration) {
   EXPECT_EQ(RunWords({"plan", kRecipes + "/smoke-calibration.yaml", "--poses", "-1"},
                      DefaultHandlers(), &out),
             0);
-  EXPECT_NE(out.find("all 8 poses"), std::string::npos) << out;
+  EXPECT_NE(out.find("all 24 poses"), std::string::npos) << out;
 }
 
 // The built binary: typed errors become exit codes and one message on stderr.
@@ -169,7 +169,7 @@ int RunBinary(const std::string& arguments, std::string* output) {
 TEST(CliTest, BinaryExitCodes) {
   std::string output;
   EXPECT_EQ(RunBinary("plan " + kRecipes + "/smoke-calibration.yaml", &output), 0) << output;
-  EXPECT_NE(output.find("24 in all"), std::string::npos) << output;
+  EXPECT_NE(output.find("96 in all"), std::string::npos) << output;
 
   EXPECT_EQ(RunBinary("frobnicate", &output), 2) << output;
   EXPECT_EQ(output.rfind("irdist: unknown command", 0), 0u) << output;

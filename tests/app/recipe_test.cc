@@ -115,9 +115,9 @@ TEST(RecipeTest, ConsistencyRepeatsOneHundredTimes) {
 TEST(RecipeTest, SmokeCalibrationIsSmall) {
   const Recipe recipe = Shipped("smoke-calibration.yaml");
   const Plan plan = PlanRecipe(recipe);
-  EXPECT_EQ(plan.summary.pose_count, 8);
-  EXPECT_EQ(plan.summary.frame_count, 24);
-  EXPECT_EQ(plan.summary.difference_count, 16);
+  EXPECT_EQ(plan.summary.pose_count, 24);
+  EXPECT_EQ(plan.summary.frame_count, 96);
+  EXPECT_EQ(plan.summary.difference_count, 72);
   EXPECT_EQ(recipe.after, AfterRecording::kFit);
 }
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <map>
 
 #include "tests/station/rig_fixture.h"
@@ -49,6 +50,37 @@ TEST(Sweep, VisitsEveryPoseSettledAtItsCurrentThenParksIredOff) {
   EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, 0.0);
   EXPECT_DOUBLE_EQ(rig.world.Pose().pan_deg, 0.0);
   EXPECT_NE(r.BriefReport().find("6 poses done"), std::string::npos);
+}
+
+TEST(Sweep, CurrentFirstAndNoMoveWhenOnlyTheCurrentChanges) {
+  VirtualStation rig(100.0);
+  Sweep sweep(*rig.client);
+  const std::vector<SweepPose> poses = {{0, 1800.0, 10.0, 0.0, 450.0},
+                                        {1, 1800.0, 10.0, 0.0, 500.0},
+                                        {2, 1800.0, 10.0, 0.0, 550.0},
+                                        {3, 2000.0, 10.0, 0.0, 450.0}};
+  sweep.Run(poses, [&](const SweepPose& p, int) {
+    EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, p.bias_ma);
+    EXPECT_NEAR(rig.world.Pose().slide_mm, p.slide_mm, 1e-6);
+  });
+  rig.log.reset();  // flush
+  std::ifstream in(std::string(IRDIST_BINARY_DIR) +
+                   "/station_test_CurrentFirstAndNoMoveWhenOnlyTheCurrentChanges.log");
+  std::string line;
+  int moves = 0;
+  bool current_before_second_move = false;
+  int currents = 0;
+  while (std::getline(in, line)) {
+    if (line.find("> #") == std::string::npos) continue;
+    if (line.find(" SOUR:CURR ") != std::string::npos) ++currents;
+    if (line.find(" MOVE ") != std::string::npos) {
+      ++moves;
+      if (moves == 2) current_before_second_move = currents == 4;  // 450, 500, 550, 450
+    }
+  }
+  // Homing is not a MOVE; the sweep moves to 1800, then to 2000, then parks.
+  EXPECT_EQ(moves, 3);
+  EXPECT_TRUE(current_before_second_move);
 }
 
 TEST(Sweep, RebootDuringAPoseRetakesIt) {
