@@ -230,10 +230,11 @@ std::vector<Plot> CalibrationPlots(const std::vector<CalibrationPoint>& points) 
            << 100.0 * (p.ds_model - p.ds_measured) / p.ds_measured << '\n';
     }
     script
-        << "set multiplot layout 2,2\nset grid\n"
+        << "set multiplot layout 2,2 title '__TITLE__'\nset grid\n"
            "set xlabel 'measured dE_{rel}'\nset ylabel 'model dE_{rel}'\n"
            "plot '__DATA__' using 1:2 with points pt 7 ps 0.4 notitle, x notitle lc rgb '#888888'\n"
-           "set xlabel 'measured dSigma (DN)'\nset ylabel 'model dSigma (DN)'\n"
+           "set xlabel 'measured dSigma (normalised gray)'\n"
+           "set ylabel 'model dSigma (normalised gray)'\n"
            "plot '__DATA__' using 3:4 with points pt 7 ps 0.4 notitle, x notitle lc rgb '#888888'\n"
            "set xlabel 'sample'\nset ylabel 'dE relative error (%)'\n"
            "plot '__DATA__' using 0:5 with impulses notitle\n"
@@ -241,9 +242,11 @@ std::vector<Plot> CalibrationPlots(const std::vector<CalibrationPoint>& points) 
            "plot '__DATA__' using 0:6 with impulses notitle\nunset multiplot\n";
     plots.push_back(
         {"fig7_fit", "Calibration fit: measured against modelled",
-         "Measured against modelled differences dE_rel (dimensionless) and dSigma (DN), "
-         "and their relative errors (%) per calibration sample. Reproduces Fig. 7 of "
-         "the paper (the I0-free models, Eq. 17-18).",
+         "Measured against modelled differences dE_rel (dimensionless) and dSigma (gray levels "
+         "normalised to full scale), and their relative errors (%) per calibration sample. "
+         "Reproduces Fig. 7 of the paper (the I0-free models, Eq. 17-18). With a fixed-window "
+         "ROI dE_rel is dF / A exactly: its model fits to rounding error and carries no "
+         "distance information (docs/estimator.md).",
          data.str(), script.str()});
   }
   std::ostringstream data, script;
@@ -268,7 +271,10 @@ std::vector<Plot> CalibrationPlots(const std::vector<CalibrationPoint>& points) 
     plots.push_back({"fig8_eq25", "Eq. 25 curves",
                      "The Eq. 25 cubic in D, evaluated along d (mm) and scaled to unit maximum, "
                      "for a few calibration samples; its zero crossing is the distance root. "
-                     "Reproduces Fig. 8 of the paper.",
+                     "Reproduces Fig. 8 of the paper. Eq. 25 is only the paper's initialiser: "
+                     "with a degenerate E equation its roots can miss the true distance, which is "
+                     "why the default estimator solves the Sigma and geometric equations jointly "
+                     "(docs/estimator.md).",
                      data.str(), script.str()});
   }
   return plots;
@@ -284,7 +290,7 @@ std::string WriteReport(const std::string& dir, const std::string& title,
   html << "<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>" << HtmlEscape(title)
        << "</title>\n<style>body{font-family:sans-serif;max-width:980px;margin:2em auto;}"
           "figure{margin:2em 0;}figcaption{color:#333;font-size:0.95em;}"
-          "pre{background:#f4f4f4;padding:1em;overflow-x:auto;}</style></head><body>\n"
+          "pre{background:#f4f4f4;padding:1em;white-space:pre-wrap;}</style></head><body>\n"
        << "<h1>" << HtmlEscape(title) << "</h1>\n<pre>" << HtmlEscape(summary_text) << "</pre>\n";
   if (!have_gnuplot) {
     html << "<p><b>gnuplot was not found</b>: install it (apt-get install gnuplot-nox) and rerun "
@@ -297,11 +303,14 @@ std::string WriteReport(const std::string& dir, const std::string& title,
     for (size_t at; (at = body.find("__DATA__")) != std::string::npos;) {
       body.replace(at, 8, plot.name + ".dat");
     }
+    for (size_t at; (at = body.find("__TITLE__")) != std::string::npos;) {
+      body.replace(at, 9, plot.title);
+    }
     const bool multiplot = body.find("multiplot") != std::string::npos;
     std::ostringstream gp;
     gp << "set terminal svg size " << (multiplot ? "900,720" : "760,480")
        << " dynamic enhanced font 'sans,11'\nset output '" << plot.name << ".svg'\n"
-       << "set title '" << plot.title << "'\n"
+       << (multiplot ? std::string() : "set title '" + plot.title + "'\n")
        << body;
     WriteFile(base.string() + ".gp", gp.str());
     html << "<figure id='" << plot.name << "'><h2>" << HtmlEscape(plot.title) << "</h2>\n";

@@ -373,7 +373,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   recorded.cache = recorder.FeatureCache();
   io.out << "Sweep: " << result.BriefReport() << "\n";
   io.out << "Capture: " << recorder.StatsReport() << "\n";
-  io.out << "Station link: " << client.stats().BriefReport() << "\n";
+  io.out << client.stats().BriefReport() << "\n";
   io.out << "Wall time " << FormatDuration(wall_s) << " for " << poses.size()
          << " poses; plan estimate " << FormatDuration(plan.summary.total_s / time_scale)
          << " and physical bound " << FormatDuration(plan.summary.physical_bound_s / time_scale)
