@@ -104,6 +104,10 @@ std::vector<std::string> SubcommandNames() {
 }
 
 void RunPlan(const PlanArgs& args, CommandIo io) {
+  if (args.suggest) {
+    RunSuggest(args, io);
+    return;
+  }
   const Recipe recipe = LoadRecipe(args.recipe);
   PrintPlan(recipe, PlanRecipe(recipe), args.show_poses, io.out);
 }
@@ -196,6 +200,15 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub->add_option("--poses", plan.show_poses, "How many poses of the order to print (-1: all)")
       ->capture_default_str()
       ->check(CLI::Range(-1, 1000000));
+  sub->add_flag("--suggest", plan.suggest,
+                "Take probe frames at the recipe's two ends on its rig and propose t_r, the t_n "
+                "and the current");
+  sub->add_option("--from", plan.from_summary,
+                  "With --suggest: the latest validation's summary.yaml (its best dt)");
+  sub->add_option("--out", plan.out_dir, "With --suggest: folder of the probe run");
+  sub->add_option("--time-scale", plan.time_scale,
+                  "With --suggest on a virtual rig: simulated seconds per second");
+  sub->add_flag("--quiet", plan.quiet, "No progress output");
   table.emplace_back(sub, [&] { Invoke(handlers.plan, "plan", plan, io); });
 
   sub = add("sim");

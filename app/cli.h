@@ -55,6 +55,12 @@ struct CheckArgs {
 struct PlanArgs {
   std::string recipe;
   int show_poses = 8;  // --poses: how many poses of the order to print (-1 = all)
+  // --suggest: take probe frames on the recipe's rig and propose t_r, t_n and the current.
+  bool suggest = false;
+  std::string from_summary;  // --from: a validation's summary.yaml (its best_dt_ms)
+  std::string out_dir;       // --out: the probe run's folder
+  double time_scale = 0.0;   // --time-scale (virtual rig; 0 = rig file's)
+  bool quiet = false;
 };
 
 struct SimArgs {

@@ -67,6 +67,13 @@ class RunFolderError : public Error {
   using Error::Error;
 };
 
+// `plan --suggest` found no exposures that keep the nearest pose unsaturated and the farthest
+// above the noise. Exit code 1.
+class SuggestError : public Error {
+ public:
+  using Error::Error;
+};
+
 // A check that ran but found problems (e.g. `irdist check` on a damaged recording). Exit code 1.
 class CheckFailedError : public Error {
  public:

@@ -19,7 +19,9 @@
 #include "app/capture.h"
 #include "app/offline.h"
 #include "app/recipe.h"
+#include "app/suggest.h"
 #include "app/tools.h"
+#include "acquisition/recording.h"
 #include "estimator/model_file.h"
 #include "sim/virtual_rig.h"
 #include "station/line_log.h"
@@ -418,7 +420,118 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
   io.out << "Run folder: " << recorded.dir << "\n";
 }
 
+// The probe recipe of `plan --suggest`: the recipe's two ends (nearest distance at the smallest
+// angle and the highest current; farthest at the largest angle and the lowest current) crossed,
+// each taken at the recipe's t_r and its longest t_n. Written as YAML so that the probe run is
+// recorded like any other (its recipe text stands in its recording.yaml).
+std::string ProbeRecipeText(const Recipe& recipe, const Plan& plan) {
+  double d_min = 1e300, d_max = -1e300, th_min = 1e300, th_max = -1e300, i_min = 1e300,
+         i_max = -1e300;
+  for (const Pose& p : plan.poses) {
+    d_min = std::min(d_min, p.slide_mm);
+    d_max = std::max(d_max, p.slide_mm);
+    th_min = std::min(th_min, std::abs(p.theta_deg));
+    th_max = std::max(th_max, std::abs(p.theta_deg));
+    i_min = std::min(i_min, p.bias_ma);
+    i_max = std::max(i_max, p.bias_ma);
+  }
+  const auto pair = [](double lo, double hi) {
+    std::ostringstream out;
+    out << std::setprecision(10) << "[" << lo;
+    if (hi != lo) out << ", " << hi;
+    out << "]";
+    return out.str();
+  };
+  const BracketSpec& b = recipe.sweep.bracket;
+  const double t_long = *std::max_element(b.t_meas_ms.begin(), b.t_meas_ms.end());
+  std::ostringstream y;
+  y << std::setprecision(10) << "# Probe frames for 'irdist plan --suggest " << recipe.path
+    << "'\nname: " << recipe.name << "-probe\nrig: " << fs::absolute(recipe.rig_path).string()
+    << "\nafter: none\naxes:\n  slide_mm: " << pair(d_min, d_max)
+    << "\n  theta_deg: " << pair(th_min, th_max) << "\n  bias_ma: " << pair(i_min, i_max)
+    << "\nbracket:\n  t_ref_ms: " << b.t_ref_ms << "\n  t_meas_ms: [" << t_long << "]\n";
+  return y.str();
+}
+
 }  // namespace
+
+void RunSuggest(const PlanArgs& args, CommandIo io) {
+  const Recipe recipe = LoadRecipe(args.recipe);
+  const Plan plan = PlanRecipe(recipe);
+  SuggestOptions options;
+  if (!args.from_summary.empty()) {
+    const std::optional<double> best = ReadBestDtMs(args.from_summary);
+    if (best) {
+      options.best_dt_ms = *best;
+    } else {
+      io.err << args.from_summary << " has no best_dt_ms (a validation with one t_n?); "
+             << "suggesting without it.\n";
+    }
+  }
+  const std::string dir =
+      args.out_dir.empty() ? recipe.output_dir + "-suggest-" + Timestamp() : args.out_dir;
+  fs::create_directories(dir);
+  const std::string probe_path = dir + "/probe-recipe.yaml";
+  {
+    std::ofstream probe(probe_path, std::ios::trunc);
+    probe << ProbeRecipeText(recipe, plan);
+    if (!probe) throw RunFolderError(probe_path + ": cannot be written; check the folder.");
+  }
+  RunRequest request;
+  request.kind = RunKind::kCalibrate;
+  request.recipe_path = probe_path;
+  request.out_dir = dir;
+  request.time_scale = args.time_scale;
+  request.quiet = args.quiet;
+  const Recipe probe_recipe = LoadRecipe(probe_path);
+  const Plan probe_plan = PlanRecipe(probe_recipe);
+  io.out << "Probing " << recipe.path << " at its ends: " << probe_plan.summary.pose_count
+         << " poses, t " << recipe.sweep.bracket.t_ref_ms << " and "
+         << probe_recipe.sweep.bracket.t_meas_ms.front() << " ms\n";
+  Recorded recorded;
+  {
+    SignalGuard guard;
+    recorded = Record(request, probe_recipe, probe_plan, FeatureOptions{}, io);
+  }
+  if (recorded.cut) throw InterruptedError("probe stopped; nothing suggested.");
+  const RecordingReader reader(dir + "/recording");
+  const FeatureMap features = RecordingFeatures(reader, FeatureOptions{}, recorded.cache);
+  double d_min = 1e300, d_max = -1e300;
+  for (const FrameRecord& row : reader.rows()) {
+    d_min = std::min(d_min, row.slide_mm);
+    d_max = std::max(d_max, row.slide_mm);
+  }
+  double near_theta = 1e300, far_theta = -1e300, near_ma = -1e300, far_ma = 1e300;
+  for (const FrameRecord& row : reader.rows()) {
+    if (row.slide_mm == d_min) {
+      near_theta = std::min(near_theta, std::abs(row.theta_deg));
+      near_ma = std::max(near_ma, row.bias_ma_set);
+    }
+    if (row.slide_mm == d_max) {
+      far_theta = std::max(far_theta, std::abs(row.theta_deg));
+      far_ma = std::min(far_ma, row.bias_ma_set);
+    }
+  }
+  std::vector<ProbeFrame> probes;
+  for (const FrameRecord& row : reader.rows()) {
+    const bool nearest = row.slide_mm == d_min && std::abs(row.theta_deg) == near_theta &&
+                         row.bias_ma_set == near_ma;
+    const bool farthest = row.slide_mm == d_max && std::abs(row.theta_deg) == far_theta &&
+                          row.bias_ma_set == far_ma;
+    if (!nearest && !farthest) continue;
+    const auto f = features.find(row.index);
+    if (f == features.end() || !f->second.blob_found) {
+      throw RunFolderError(reader.dir() + ": no IRED image in frame " + row.file +
+                           "; is the IRED in view and on? (see " + dir + "/features.csv)");
+    }
+    probes.push_back({nearest, row.requested_exposure_us / 1000.0, row.bias_ma_set,
+                      f->second.peak, f->second.background});
+  }
+  const Suggestion s = SuggestExposures(probes, options);
+  io.out << "Suggested bracket for " << recipe.path << " (probe run in " << dir << "):\n"
+         << s.BriefReport();
+  if (!s.feasible) throw SuggestError("no feasible exposures: " + s.reason);
+}
 
 struct SignalGuard::Saved {
   struct sigaction interrupt {};

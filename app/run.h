@@ -44,5 +44,8 @@ void RunFit(const FitArgs& args, CommandIo io);
 void RunPlayback(const PlaybackArgs& args, CommandIo io);
 // Prints the check's report; throws CheckFailedError when the recording has errors.
 void RunCheck(const CheckArgs& args, CommandIo io);
+// plan --suggest: records probe frames at the recipe's two ends on its rig and proposes t_r, the
+// t_n and the current (app/suggest.h). Throws SuggestError when no exposures fit.
+void RunSuggest(const PlanArgs& args, CommandIo io);
 
 }  // namespace irdist

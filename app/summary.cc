@@ -278,6 +278,18 @@ const MethodSummary* ValidationSummary::Find(const std::string& method) const {
   return nullptr;
 }
 
+std::optional<double> ReadBestDtMs(const std::string& summary_yaml_path) {
+  try {
+    const YAML::Node root = YAML::LoadFile(summary_yaml_path);
+    const YAML::Node best = root["best_dt_ms"];
+    if (!best || best.IsNull()) return std::nullopt;
+    return best.as<double>();
+  } catch (const YAML::Exception& e) {
+    throw EstimatesFileError(summary_yaml_path + ":" + std::to_string(e.mark.line + 1) + ": " +
+                             e.msg + "; pass the summary.yaml of an irdist validation.");
+  }
+}
+
 ValidationSummary Summarize(const std::vector<EstimateRow>& rows) {
   ValidationSummary s;
   std::vector<std::string> order;

@@ -76,6 +76,10 @@ double Percentile(std::vector<double> values, double p);
 
 ValidationSummary Summarize(const std::vector<EstimateRow>& rows);
 
+// The top-level best_dt_ms of a summary.yaml (nullopt when it is null). Throws EstimatesFileError
+// naming the file when it cannot be read.
+std::optional<double> ReadBestDtMs(const std::string& summary_yaml_path);
+
 // summary.yaml: `count`, `distance_rel_error_pct: {median, p95, max}`, ... for the first method at
 // top level (the default pipeline), and one block per other method (`i0_dependent:`, `geometric:`).
 void WriteSummaryYaml(const std::string& path, const ValidationSummary& summary,
