@@ -84,11 +84,12 @@ AxisRange ReadRange(const MapReader& limits, const std::string& key, AxisRange f
 AxisMotion ReadAxisMotion(const MapReader& motion, const std::string& key, AxisMotion fallback) {
   if (!motion.Has(key)) return fallback;
   const MapReader map(motion.Get(key), motion.File(), "station.motion." + key,
-                      {"speed", "acceleration", "settle_ms"});
+                      {"speed", "acceleration", "settle_ms", "home"});
   AxisMotion axis;
   axis.speed = Positive(map, "speed", fallback.speed);
   axis.acceleration = Positive(map, "acceleration", fallback.acceleration);
   axis.settle_ms = NonNegative(map, "settle_ms", fallback.settle_ms);
+  axis.home = map.Has("home") ? map.Number("home", fallback.home) : fallback.home;
   return axis;
 }
 

@@ -381,34 +381,29 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
   for (const Pose& pose : plan.poses) {
     bool moved = false;
     double travel_s = 0.0;  // move, station settle and the recipe's wait after it
-    if (previous == nullptr) {
-      moved = true;  // the move from home: its profile is not counted, its settle is
-      travel_s =
-          std::max({motion.slide.settle_ms, motion.pan.settle_ms, motion.tilt.settle_ms}) / 1000.0;
-      summary.station_settle_s += travel_s;
-    } else {
-      const std::array<std::pair<double, const AxisMotion*>, 3> deltas = {
-          {{pose.slide_mm - previous->slide_mm, &motion.slide},
-           {pose.pan_deg - previous->pan_deg, &motion.pan},
-           {pose.tilt_deg - previous->tilt_deg, &motion.tilt}}};
-      double move_s = 0.0;
-      double settle_s = 0.0;
-      for (const auto& [delta, axis] : deltas) {
-        if (std::abs(delta) <= kSameValue) continue;
-        moved = true;
-        const double t = TrapezoidMoveS(delta, *axis);
-        if (motion.axes_move_together) {
-          move_s = std::max(move_s, t);
-          settle_s = std::max(settle_s, axis->settle_ms / 1000.0);
-        } else {
-          move_s += t;
-          settle_s += axis->settle_ms / 1000.0;
-        }
+    // The first pose is reached from where homing left the station (homing itself, from an
+    // unknown position, is not counted).
+    const std::array<std::pair<double, const AxisMotion*>, 3> deltas = {
+        {{pose.slide_mm - (previous ? previous->slide_mm : motion.slide.home), &motion.slide},
+         {pose.pan_deg - (previous ? previous->pan_deg : motion.pan.home), &motion.pan},
+         {pose.tilt_deg - (previous ? previous->tilt_deg : motion.tilt.home), &motion.tilt}}};
+    double move_s = 0.0;
+    double settle_s = 0.0;
+    for (const auto& [delta, axis] : deltas) {
+      if (std::abs(delta) <= kSameValue) continue;
+      moved = true;
+      const double t = TrapezoidMoveS(delta, *axis);
+      if (motion.axes_move_together) {
+        move_s = std::max(move_s, t);
+        settle_s = std::max(settle_s, axis->settle_ms / 1000.0);
+      } else {
+        move_s += t;
+        settle_s += axis->settle_ms / 1000.0;
       }
-      summary.motion_s += move_s;
-      summary.station_settle_s += settle_s;
-      travel_s = move_s + settle_s;
     }
+    summary.motion_s += move_s;
+    summary.station_settle_s += settle_s;
+    travel_s = move_s + settle_s;
     if (moved) {
       ++summary.moves;
       summary.move_settle_s += spec.settle.after_move_ms / 1000.0;

@@ -93,12 +93,13 @@ struct AxisMotion {
   double speed = 1.0;         // cruise speed, unit/s (mm/s or deg/s), > 0
   double acceleration = 1.0;  // acceleration and deceleration, unit/s^2, > 0
   double settle_ms = 0.0;     // station-side settle after the profile ends, ms
+  double home = 0.0;          // where homing leaves the axis: the sweep's first move starts there
 };
 
 // Timing model of a rig, used for the duration estimate. Defaults match the virtual rig's station
 // emulator (sim/station_emulator.h) and a 1280x1024 Mono12 frame over Gigabit Ethernet.
 struct MotionModel {
-  AxisMotion slide{200.0, 400.0, 100.0};  // mm/s, mm/s^2, ms
+  AxisMotion slide{200.0, 400.0, 100.0, 1000.0};  // mm/s, mm/s^2, ms, mm
   AxisMotion pan{30.0, 60.0, 50.0};       // deg/s, deg/s^2, ms
   AxisMotion tilt{30.0, 60.0, 50.0};      // deg/s, deg/s^2, ms
   bool axes_move_together = true;  // true: a move lasts as long as its slowest axis; false: sum

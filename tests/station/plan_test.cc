@@ -294,7 +294,7 @@ TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
   spec.settle.after_move_ms = 200.0;
   spec.settle.after_current_ms = 500.0;
   MotionModel motion;
-  motion.slide = {200.0, 400.0, 100.0};
+  motion.slide = {200.0, 400.0, 100.0, 1000.0};  // homing leaves the slide at the first pose
   motion.pan = {30.0, 60.0, 50.0};
   motion.tilt = {30.0, 60.0, 50.0};
   motion.readout_ms = 25.0;
@@ -308,13 +308,14 @@ TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
   const double pan_10 = 2.0 * std::sqrt(5.0 / 60.0 * 2.0);  // triangle: 10 deg < v^2/a = 15 deg
   const double slide_500 = 500.0 / 200.0 + 200.0 / 400.0;   // trapezoid: 3 s
   const PlanSummary& s = plan.summary;
+  // The first pose (1000, 0) is where homing leaves the station: no move to it.
   EXPECT_NEAR(s.motion_s, slide_500 + 2.0 * pan_10, 1e-9);
-  EXPECT_NEAR(s.station_settle_s, 0.100 + 0.050 + 0.100 + 0.050, 1e-9);
-  EXPECT_NEAR(s.move_settle_s, 4 * 0.200, 1e-9);
+  EXPECT_NEAR(s.station_settle_s, 0.050 + 0.100 + 0.050, 1e-9);
+  EXPECT_NEAR(s.move_settle_s, 3 * 0.200, 1e-9);
+  EXPECT_EQ(s.moves, 3);
   EXPECT_EQ(s.current_changes, 1);
-  // The current is set before the first move: its 500 ms overlap the station's 100 ms settle
-  // and the 200 ms wait after the move.
-  EXPECT_NEAR(s.current_settle_s, 0.500 - 0.100 - 0.200, 1e-9);
+  // The current is switched on at the first pose, which needs no move: its whole 500 ms count.
+  EXPECT_NEAR(s.current_settle_s, 0.500, 1e-9);
   EXPECT_NEAR(s.exposure_s, 4 * (0.008 + 0.030), 1e-9);
   EXPECT_NEAR(s.readout_s, 4 * 2 * 0.025, 1e-9);
   EXPECT_NEAR(s.overhead_s, 4 * (2 * 0.005 + 0.020), 1e-9);
@@ -323,7 +324,14 @@ TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
                   s.exposure_s + s.readout_s + s.overhead_s,
               1e-9);
   EXPECT_NEAR(s.physical_bound_s,
-              slide_500 + 2.0 * pan_10 + 0.300 + 4 * 0.038 + 4 * 0.050, 1e-9);
+              slide_500 + 2.0 * pan_10 + 0.200 + 4 * 0.038 + 4 * 0.050, 1e-9);
+
+  // From a home elsewhere, the first move counts: 500 mm of slide to reach 1000 from 500.
+  motion.slide.home = 500.0;
+  const PlanSummary from_home = MakePlan(spec, motion).summary;
+  EXPECT_NEAR(from_home.motion_s, s.motion_s + slide_500, 1e-9);
+  EXPECT_EQ(from_home.moves, 4);
+  motion.slide.home = 1000.0;
   EXPECT_LT(s.physical_bound_s, s.total_s);
 
   // A diagonal move: together it lasts as long as its slowest axis, sequentially the sum.
@@ -338,7 +346,7 @@ TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
   motion.axes_move_together = false;
   const Plan apart = MakePlan(diagonal, motion);
   EXPECT_NEAR(apart.summary.motion_s, pan_10 + (slide_500 + pan_10) + pan_10, 1e-9);
-  EXPECT_NEAR(apart.summary.station_settle_s, 0.100 + 0.050 + 0.150 + 0.050, 1e-9);
+  EXPECT_NEAR(apart.summary.station_settle_s, 0.050 + 0.150 + 0.050, 1e-9);
 }
 
 TEST(PlanTest, CurrentChangesAreCounted) {
@@ -355,9 +363,9 @@ TEST(PlanTest, CurrentChangesAreCounted) {
   spec.settle.after_current_ms = 500.0;
   const Plan snake = MakePlan(spec, MotionModel());
   EXPECT_EQ(snake.summary.current_changes, 5);
-  // The first change overlaps the move from home (station settle 100 ms + 200 ms after the
-  // move); the other four happen without a move and cost their whole 500 ms.
-  EXPECT_NEAR(snake.summary.current_settle_s, (0.5 - 0.1 - 0.2) + 4 * 0.5, 1e-12);
+  // The first change overlaps the 5.5 s move from home (1000 to 2000 mm): it costs nothing; the
+  // other four happen without a move and cost their whole 500 ms.
+  EXPECT_NEAR(snake.summary.current_settle_s, 4 * 0.5, 1e-12);
 }
 
 TEST(PlanTest, FormatDurationReadsNaturally) {
