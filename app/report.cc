@@ -203,7 +203,7 @@ std::vector<Plot> ValidationPlots(const std::vector<EstimateRow>& rows,
       }
       data << "\n\n";
       script << (block ? ", " : "") << "'__DATA__' index " << block << " using ($1+" << (block * 10)
-             << "):2 with points pt 7 ps 0.5 title '" << ms.method << "'";
+             << "):2 with points pt 7 ps 0.5 title '" << ms.method << "' noenhanced";
       ++block;
     }
     script << "\n";
