@@ -443,6 +443,28 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Open(const std::string& dir,
   return writer;
 }
 
+// The complete rows of frames.csv (a partial last line, the frame in flight of a killed writer,
+// is left out), each with its line number. Throws RecordingError naming file:line.
+static std::vector<FrameRecord> ParseCompleteRows(const CsvText& csv, const std::string& csv_path) {
+  if (csv.lines.empty() || csv.lines[0] != FramesCsvHeader()) {
+    throw RecordingError(csv_path + ":1: header line is not the irdist frames.csv header (format " +
+                         std::to_string(kRecordingFormatVersion) + "); run `irdist check`.");
+  }
+  std::vector<FrameRecord> rows;
+  const size_t complete_lines = csv.lines.size() - (csv.partial_last ? 1 : 0);
+  for (size_t i = 1; i < complete_lines; ++i) {
+    FrameRecord row;
+    std::string why;
+    if (!ParseRow(csv.lines[i], &row, &why)) {
+      throw RecordingError(csv_path + ":" + std::to_string(i + 1) + ": " + why +
+                           "; run `irdist check` for a full report and repair or delete the row.");
+    }
+    row.line = static_cast<int>(i + 1);
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
 std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir) {
   RecordingHeader header = ReadHeader(dir);
   const std::string yaml_path = (fs::path(dir) / kYaml).string();
@@ -452,19 +474,8 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir)
   }
   const std::string csv_path = (fs::path(dir) / kCsv).string();
   const CsvText csv = ReadCsv(csv_path);
-  if (csv.lines.empty() || csv.lines[0] != FramesCsvHeader()) {
-    throw RecordingError(csv_path + ":1: header line is not the irdist frames.csv header; run "
-                         "`irdist check` on it.");
-  }
   std::int64_t next_index = 0;
-  const size_t complete_lines = csv.lines.size() - (csv.partial_last ? 1 : 0);
-  for (size_t i = 1; i < complete_lines; ++i) {
-    FrameRecord row;
-    std::string why;
-    if (!ParseRow(csv.lines[i], &row, &why)) {
-      throw RecordingError(csv_path + ":" + std::to_string(i + 1) + ": " + why +
-                           "; run `irdist check` and repair the row before resuming.");
-    }
+  for (const FrameRecord& row : ParseCompleteRows(csv, csv_path)) {
     next_index = std::max(next_index, row.index + 1);
   }
   // Drop the partial last line and the leftovers of the frame in flight.
@@ -545,24 +556,10 @@ void RecordingWriter::Close(Completion completion) {
 
 // --- RecordingReader --------------------------------------------------------------------------
 
-RecordingReader::RecordingReader(const std::string& dir) : dir_(dir), header_(ReadHeader(dir)) {
+RecordingReader::RecordingReader(const std::string& dir)
+    : dir_(dir), header_(ReadHeader(dir)) {
   const std::string csv_path = (fs::path(dir) / kCsv).string();
-  const CsvText csv = ReadCsv(csv_path);
-  if (csv.lines.empty() || csv.lines[0] != FramesCsvHeader()) {
-    throw RecordingError(csv_path + ":1: header line is not the irdist frames.csv header (format " +
-                         std::to_string(kRecordingFormatVersion) + "); run `irdist check`.");
-  }
-  const size_t complete_lines = csv.lines.size() - (csv.partial_last ? 1 : 0);
-  for (size_t i = 1; i < complete_lines; ++i) {
-    FrameRecord row;
-    std::string why;
-    if (!ParseRow(csv.lines[i], &row, &why)) {
-      throw RecordingError(csv_path + ":" + std::to_string(i + 1) + ": " + why +
-                           "; run `irdist check` for a full report and repair or delete the row.");
-    }
-    row.line = static_cast<int>(i + 1);
-    rows_.push_back(std::move(row));
-  }
+  rows_ = ParseCompleteRows(ReadCsv(csv_path), csv_path);
 }
 
 std::vector<RecordedBracket> RecordingReader::Brackets() const {
