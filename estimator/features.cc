@@ -118,6 +118,178 @@ double Theta0FromAxes(double minor, double major) {
   return std::acos(ratio) * 180.0 / kPi;
 }
 
+
+// kModelFit: a uniformly bright elliptical disc {d : d^T P d <= 1} (d = pixel - centre), blurred by
+// a Gaussian of sigma s and integrated over each pixel by 4x4 sub-samples. The blurred disc at a
+// point is approximated by the blurred straight edge B + A Phi(dist / s), with dist the signed
+// distance to the disc's edge to first order, (1 - q) / (2 |P d|), q = d^T P d: exact on the
+// edge, and the error away from it sits where Phi is ~0 or ~1 for blobs several blur sigmas wide;
+// the edge's curvature shifts the blurred edge inward by kappa s^2 / 2 (modelled).
+// Parameters: centre x, y (relative to the fit's origin), P11, P12, P22, s, A, B.
+constexpr int kDiscParams = 8;
+using DiscVector = cv::Matx<double, kDiscParams, 1>;
+using DiscMatrix = cv::Matx<double, kDiscParams, kDiscParams>;
+
+// Model value of the pixel centred at (px, py) (relative to the fit's origin); its gradient with
+// respect to the parameters in *jac when jac is not null.
+double DiscPixel(const DiscVector& v, double px, double py, DiscVector* jac) {
+  constexpr double kOffsets[4] = {-0.375, -0.125, 0.125, 0.375};
+  constexpr double kInvSqrt2 = 0.70710678118654752440;
+  constexpr double kInvSqrt2Pi = 0.39894228040143267794;
+  const double cx = v(0), cy = v(1), p11 = v(2), p12 = v(3), p22 = v(4), s = v(5), a = v(6);
+  double sum_phi = 0.0;
+  DiscVector g_sum = DiscVector::zeros();
+  for (double oy : kOffsets) {
+    const double dy = py + oy - cy;
+    for (double ox : kOffsets) {
+      const double dx = px + ox - cx;
+      const double gx = p11 * dx + p12 * dy, gy = p12 * dx + p22 * dy;
+      const double q = dx * gx + dy * gy;
+      const double n = std::sqrt(gx * gx + gy * gy);
+      if (n < 1e-12) {
+        sum_phi += 1.0;
+        continue;
+      }
+      // A convex edge of curvature kappa blurs to Phi((dist - kappa s^2 / 2) / s) to first order:
+      // kappa of the level set of q through the point (its derivatives are left out of the
+      // Jacobian: a second-order term).
+      const double kappa = (n * n * (p11 + p22) - (gx * gx * p11 + 2.0 * gx * gy * p12 +
+                                                   gy * gy * p22)) / (n * n * n);
+      const double dist = (1.0 - q) / (2.0 * n);
+      const double z = dist / s - 0.5 * kappa * s;
+      if (z > 7.0) {
+        sum_phi += 1.0;
+        continue;
+      }
+      if (z < -7.0) continue;
+      sum_phi += 0.5 * std::erfc(-z * kInvSqrt2);
+      if (jac == nullptr) continue;
+      const double k = a * kInvSqrt2Pi * std::exp(-0.5 * z * z) / s;
+      const double inv_n = 1.0 / n;
+      const double dq[5] = {-2.0 * gx, -2.0 * gy, dx * dx, 2.0 * dx * dy, dy * dy};
+      const double dn[5] = {-(gx * p11 + gy * p12) * inv_n, -(gx * p12 + gy * p22) * inv_n,
+                            gx * dx * inv_n, (gx * dy + gy * dx) * inv_n, gy * dy * inv_n};
+      for (int j = 0; j < 5; ++j) g_sum(j) += k * (-0.5 * dq[j] * inv_n - dist * dn[j] * inv_n);
+      g_sum(5) -= k * (dist / s + 0.5 * kappa * s);
+    }
+  }
+  constexpr double kInvSamples = 1.0 / 16.0;
+  const double phi_mean = sum_phi * kInvSamples;
+  if (jac != nullptr) {
+    *jac = g_sum * kInvSamples;
+    (*jac)(6) = phi_mean;
+    (*jac)(7) = 1.0;
+  }
+  return v(7) + a * phi_mean;
+}
+
+bool DiscIsValid(const DiscVector& v) {
+  return v(2) > 0.0 && v(4) > 0.0 && v(2) * v(4) - v(3) * v(3) > 0.0 && v(5) > 0.05 &&
+         v(5) < 20.0 && v(6) > 0.0;
+}
+
+// Fits the disc model to the pixels of `rect` (normalised gray levels); start from the moment
+// ellipse (centre, covariance) with blur s0. Returns false when the fit fails.
+bool FitDisc(const cv::Mat& image, const cv::Rect& rect, double max_gray, const Moments& m,
+             double background, double peak, double s0, EllipseFit* fit, double* blur_px,
+             double* rms) {
+  const double ox = m.cx, oy = m.cy;
+  std::vector<cv::Vec3d> samples;  // (x - ox, y - oy, value)
+  samples.reserve(static_cast<size_t>(rect.area()));
+  for (int y = rect.y; y < rect.y + rect.height; ++y) {
+    const uint16_t* row = image.ptr<uint16_t>(y);
+    for (int x = rect.x; x < rect.x + rect.width; ++x)
+      samples.emplace_back(x - ox, y - oy, row[x] / max_gray);
+  }
+  if (samples.size() < 4 * kDiscParams) return false;
+  // Start: the disc whose covariance is the moments' minus blur and pixel variance (a uniform
+  // ellipse of semi-axis a has variance a^2 / 4 along it).
+  const double remove = s0 * s0 + 1.0 / 12.0;
+  const double tr = m.sxx + m.syy;
+  const double root = std::sqrt(0.25 * (m.sxx - m.syy) * (m.sxx - m.syy) + m.sxy * m.sxy);
+  const double l1 = std::max(0.5 * tr + root - remove, 0.25);
+  const double l2 = std::max(0.5 * tr - root - remove, 0.25);
+  const double phi = 0.5 * std::atan2(2.0 * m.sxy, m.sxx - m.syy);
+  const double c = std::cos(phi), sn = std::sin(phi);
+  const double i1 = 1.0 / (4.0 * l1), i2 = 1.0 / (4.0 * l2);
+  DiscVector v;
+  v(0) = 0.0;
+  v(1) = 0.0;
+  v(2) = i1 * c * c + i2 * sn * sn;
+  v(3) = (i1 - i2) * c * sn;
+  v(4) = i1 * sn * sn + i2 * c * c;
+  v(5) = s0;
+  v(6) = std::max((peak - background) / max_gray, 1e-6);
+  v(7) = background / max_gray;
+
+  auto cost_of = [&samples](const DiscVector& p) {
+    double cost = 0.0;
+    for (const cv::Vec3d& s : samples) {
+      const double r = DiscPixel(p, s[0], s[1], nullptr) - s[2];
+      cost += r * r;
+    }
+    return cost;
+  };
+  double cost = cost_of(v);
+  double lambda = 1e-3;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    DiscMatrix jtj = DiscMatrix::zeros();
+    DiscVector jtr = DiscVector::zeros();
+    DiscVector jac;
+    for (const cv::Vec3d& s : samples) {
+      const double r = DiscPixel(v, s[0], s[1], &jac) - s[2];
+      for (int a = 0; a < kDiscParams; ++a) {
+        if (jac(a) == 0.0) continue;
+        jtr(a) += jac(a) * r;
+        for (int b = a; b < kDiscParams; ++b) jtj(a, b) += jac(a) * jac(b);
+      }
+    }
+    for (int a = 0; a < kDiscParams; ++a)
+      for (int b = 0; b < a; ++b) jtj(a, b) = jtj(b, a);
+    bool improved = false;
+    double relative_change = 0.0;
+    for (int attempt = 0; attempt < 10 && !improved; ++attempt) {
+      DiscMatrix damped = jtj;
+      for (int a = 0; a < kDiscParams; ++a) damped(a, a) += lambda * (jtj(a, a) + 1e-12);
+      DiscVector step;
+      if (!cv::solve(damped, -jtr, step, cv::DECOMP_CHOLESKY)) {
+        lambda *= 10.0;
+        continue;
+      }
+      const DiscVector next = v + step;
+      const double next_cost = DiscIsValid(next) ? cost_of(next) : HUGE_VAL;
+      if (next_cost < cost) {
+        relative_change = (cost - next_cost) / std::max(cost, 1e-300);
+        v = next;
+        cost = next_cost;
+        lambda = std::max(lambda * 0.3, 1e-9);
+        improved = true;
+      } else {
+        lambda *= 10.0;
+      }
+    }
+    if (!improved || relative_change < 1e-7) break;
+  }
+  if (!DiscIsValid(v)) return false;
+  // Axes of the fitted disc: eigenvalues of P are 1 / semi-axis^2.
+  const double pt = v(2) + v(4);
+  const double pr = std::sqrt(0.25 * (v(2) - v(4)) * (v(2) - v(4)) + v(3) * v(3));
+  const double e_small = 0.5 * pt - pr, e_large = 0.5 * pt + pr;
+  if (!(e_small > 0.0)) return false;
+  fit->valid = true;
+  fit->center_px = cv::Point2d(ox + v(0), oy + v(1));
+  fit->major_px = 2.0 / std::sqrt(e_small);
+  fit->minor_px = 2.0 / std::sqrt(e_large);
+  // 0.5 atan2(2 P12, P11 - P22) is the direction of P's larger eigenvalue: the minor axis.
+  double angle = 0.5 * std::atan2(2.0 * v(3), v(2) - v(4)) * 180.0 / kPi + 90.0;
+  if (angle > 90.0) angle -= 180.0;
+  fit->angle_deg = angle;
+  fit->theta0_deg = Theta0FromAxes(fit->minor_px, fit->major_px);
+  *blur_px = v(5);
+  *rms = std::sqrt(cost / samples.size());
+  return true;
+}
+
 }  // namespace
 
 const char* ToString(RoiPolicy policy) {
@@ -156,6 +328,8 @@ const char* ToString(EllipseMethod method) {
       return "moments";
     case EllipseMethod::kContour:
       return "contour";
+    case EllipseMethod::kModelFit:
+      return "model_fit";
   }
   return "unknown";
 }
@@ -171,7 +345,8 @@ bool ParseRoiPolicy(const std::string& name, RoiPolicy* policy) {
 }
 
 bool ParseEllipseMethod(const std::string& name, EllipseMethod* method) {
-  for (EllipseMethod m : {EllipseMethod::kMoments, EllipseMethod::kContour}) {
+  for (EllipseMethod m :
+       {EllipseMethod::kMoments, EllipseMethod::kContour, EllipseMethod::kModelFit}) {
     if (name == ToString(m)) {
       *method = m;
       return true;
@@ -420,8 +595,26 @@ Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptio
       e.theta0_deg = Theta0FromAxes(e.minor_px, e.major_px);
     }
   }
-  const EllipseFit& chosen =
-      options.ellipse_method == EllipseMethod::kMoments ? out.ellipse_moments : out.ellipse_contour;
+  // 7. Ellipse from the blurred, pixel-integrated disc model (kModelFit), started from the
+  // moments; the fitted box reaches the moment support's extent plus the blur's reach.
+  if (options.ellipse_method == EllipseMethod::kModelFit && m.weight > 0.0 &&
+      out.moment_major_var_px2 > 0.0) {
+    const double s0 = options.psf_sigma_px > 0.0 ? options.psf_sigma_px : 0.7;
+    const double half = 2.0 * std::sqrt(out.moment_major_var_px2) + 3.0 * s0 + 3.0;
+    const int x0 = static_cast<int>(std::floor(m.cx - half));
+    const int y0 = static_cast<int>(std::floor(m.cy - half));
+    const int x1 = static_cast<int>(std::ceil(m.cx + half));
+    const int y1 = static_cast<int>(std::ceil(m.cy + half));
+    const cv::Rect box = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1) & window;
+    FitDisc(image, box, max_gray, m, background, peak, s0, &out.ellipse_model,
+            &out.model_blur_px, &out.model_rms);
+  }
+  const EllipseFit& chosen = options.ellipse_method == EllipseMethod::kMoments
+                                 ? out.ellipse_moments
+                             : options.ellipse_method == EllipseMethod::kContour
+                                 ? out.ellipse_contour
+                                 : (out.ellipse_model.valid ? out.ellipse_model
+                                                            : out.ellipse_moments);
   out.theta0_deg = chosen.theta0_deg;
   return out;
 }

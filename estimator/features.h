@@ -27,6 +27,11 @@ enum class RoiPolicy {
 enum class EllipseMethod {
   kMoments,  // intensity-weighted second moments, background subtracted (default: measured better)
   kContour,  // cv::fitEllipse on the half-maximum contour
+  // Least-squares fit (Levenberg-Marquardt, started from the moment ellipse) of a uniformly bright
+  // elliptical disc blurred by a Gaussian PSF and integrated over each pixel (4x4 sub-samples) to
+  // the blob's pixels; the blur sigma is fitted too (started from psf_sigma_px, or 0.7 px when 0).
+  // theta0 = acos(minor / major) of the fitted disc itself (no blur variance to remove).
+  kModelFit,
 };
 
 // Which pixels enter the second moments (Features::moment_*_var_px2: the geometric baseline's size
@@ -116,6 +121,9 @@ struct Features {
   double moment_minor_var_px2 = 0.0;
   EllipseFit ellipse_moments;
   EllipseFit ellipse_contour;
+  EllipseFit ellipse_model;     // kModelFit only (valid = false under the other methods)
+  double model_blur_px = 0.0;   // kModelFit: the fitted Gaussian blur sigma (pixel area excluded)
+  double model_rms = 0.0;       // kModelFit: rms residual of the fit, normalised gray levels
   double theta0_deg = 0.0;  // from the ellipse chosen by FeatureOptions::ellipse_method
   // True when the features can be used: a blob, no saturation, not on the border, not clipped.
   bool Usable() const {

@@ -347,6 +347,28 @@ void ThetaProbe(const sim::RigPhysics& physics, std::uint64_t seed) {
                     v % 3 == 0 ? "35ms" : v % 3 == 1 ? "combined" : "8ms", mean - th,
                     std::sqrt(sd));
       }
+      // EllipseMethod::kModelFit: theta0 of the fitted blurred disc, per frame.
+      std::vector<double> fit_theta[2], fit_blur;
+      FeatureOptions fo;
+      fo.ellipse_method = EllipseMethod::kModelFit;
+      for (int rep = 0; rep < 60; ++rep) {
+        for (int k = 0; k < 2; ++k) {
+          sim::FrameConditions c = sim::StaticConditions(d, th, 0, 500, (k ? 35.0 : kTRefMs) * 1e-3);
+          c.junction_rise_k = steady;
+          r.Render(c, seed * 1000003ull + rep * 2 + k, sim::PixelFormat::kMono12, origin, frame);
+          const Features f = ComputeFeatures(frame, 12, fo);
+          fit_theta[k].push_back(f.ellipse_model.theta0_deg);
+          if (k == 1) fit_blur.push_back(f.model_blur_px);
+        }
+      }
+      for (int k = 1; k >= 0; --k) {
+        double mean = 0, sd = 0, blur = 0;
+        for (double x : fit_theta[k]) mean += x / fit_theta[k].size();
+        for (double x : fit_theta[k]) sd += (x - mean) * (x - mean) / (fit_theta[k].size() - 1);
+        for (double x : fit_blur) blur += x / fit_blur.size();
+        std::printf("  model fit  %-10s bias %+.3f sd %.3f (fitted blur %.3f px)\n",
+                    k ? "35ms" : "8ms", mean - th, std::sqrt(sd), blur);
+      }
     }
   }
 }
@@ -359,6 +381,7 @@ int Main(int argc, char** argv) {
   bool crb_only = false;
   bool theta_probe = false;
   bool theta_variants = false;
+  bool model_fit = false;  // pipeline model_fit: theta0 from EllipseMethod::kModelFit
   std::string dump_theta;  // CSV of the calibration frames' moments and theta0 (default pipeline)
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--rig") && i + 1 < argc)
@@ -369,6 +392,8 @@ int Main(int argc, char** argv) {
       quick = true;
     else if (!std::strcmp(argv[i], "--theta-variants"))
       theta_variants = true;
+    else if (!std::strcmp(argv[i], "--model-fit"))
+      model_fit = true;
     else if (!std::strcmp(argv[i], "--theta-probe"))
       theta_probe = true;
     else if (!std::strcmp(argv[i], "--crb-only"))
@@ -378,7 +403,8 @@ int Main(int argc, char** argv) {
           "irdist_accuracy_study [--rig FILE] [--seed N] [--quick] [--verbose] [--crb-only]\n"
           "  [--radiometric-weight W]... [--theta-degree N]... [--dump-theta CSV]\n"
           "  (pipeline theta_cal: the default with the calibrated theta correction;\n"
-          "   --theta-degree N adds the default with a correction of total degree N)\n");
+          "   --theta-degree N adds the default with a correction of total degree N;\n"
+          "   --model-fit adds pipeline model_fit: theta0 of EllipseMethod::kModelFit)\n");
       return 0;
     } else if (!std::strcmp(argv[i], "--verbose"))
       verbose = true;
@@ -499,6 +525,13 @@ int Main(int argc, char** argv) {
       pl.name = "theta_cal_deg" + std::to_string(pl.fit.theta_correction_degree);
       pipelines.push_back(pl);
     }
+  }
+  if (model_fit) {
+    Pipeline pl;
+    pl.name = "model_fit";  // theta0 of the fitted blurred disc (features), no blur to remove
+    pl.features.ellipse_method = EllipseMethod::kModelFit;
+    pl.estimate.theta_source = ThetaSource::kFeatures;
+    pipelines.push_back(pl);
   }
   if (theta_variants) {
     Pipeline pl;
