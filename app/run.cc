@@ -233,7 +233,14 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
                         "station.port is 'auto', which only a virtual rig can resolve; set it to "
                         "the station's serial device (see 'irdist devices').");
     }
-    if (setup.camera_name == "auto") setup.camera_name = OnlyCamera();
+    // Discovery broadcasts on every network interface: a hardware run never starts it on its
+    // own, the rig file names the camera.
+    if (setup.camera_name == "auto") {
+      throw RecipeError(recipe.rig_path, 0, 0,
+                        "camera.id is 'auto', which only a virtual rig can resolve; set it to the "
+                        "camera's IP address, Aravis id or serial number ('irdist devices "
+                        "--discover' lists the cameras on the network).");
+    }
   }
 
   const std::string earlier_log = KeepEarlierLog(recorded.dir);

@@ -154,14 +154,4 @@ void RunDevices(const DevicesArgs& args, CommandIo io) {
   if (cameras.empty()) io.out << "  none\n";
 }
 
-std::string OnlyCamera() {
-  const std::vector<DeviceInfo> cameras = ListCameras();
-  if (cameras.size() != 1) {
-    throw CameraError("camera.id is 'auto' but discovery found " + std::to_string(cameras.size()) +
-                      " cameras; set camera.id in the rig file to an id, serial or IP address "
-                      "('irdist devices --discover' lists them).");
-  }
-  return cameras.front().address.empty() ? cameras.front().id : cameras.front().address;
-}
-
 }  // namespace irdist

@@ -23,10 +23,6 @@ void RunDevices(const DevicesArgs& args, CommandIo io);
 // Folder of the virtual rigs' state files.
 std::string SimStateDir();
 
-// The id of the only camera discovery finds (rig camera.id "auto"); throws CameraError when there
-// is none or more than one.
-std::string OnlyCamera();
-
 // An OpenCV window stepping through the recording's frames with the ROI, the ellipse and the
 // bracket's estimate drawn (any key: next frame, q or Esc: quit). Throws CameraError-free
 // irdist::Error (DisplayError) when no display is available.
