@@ -64,12 +64,11 @@ std::string Timestamp() {
 // Progress on stderr: a bar with ETA on a terminal, one log line per pose otherwise.
 class Progress {
  public:
-  Progress(std::ostream& err, bool quiet, int total, int already_done, double estimate_host_s)
+  Progress(std::ostream& err, bool quiet, int total, double estimate_host_s)
       : err_(err),
         quiet_(quiet),
         tty_(isatty(STDERR_FILENO) == 1),
         total_(total),
-        start_done_(already_done),
         estimate_host_s_(estimate_host_s),
         start_(std::chrono::steady_clock::now()) {}
 
@@ -77,13 +76,19 @@ class Progress {
     if (quiet_) return;
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    const int done_here = done - start_done_;
-    // The plan's estimate per pose, corrected by the measured rate once poses are done.
+    // The plan's estimate per pose, corrected by the rate measured since the first pose was
+    // done (before it, homing and the move from home would make the rate look slow).
     const double per_pose_plan = total_ > 0 ? estimate_host_s_ / total_ : 0.0;
     double per_pose = per_pose_plan;
-    if (done_here > 0) {
-      const double measured = elapsed / done_here;
-      const double weight = std::min(1.0, done_here / 5.0);
+    if (first_done_ < 0) {
+      first_done_ = done;
+      first_time_ = std::chrono::steady_clock::now();
+    } else if (done > first_done_) {
+      const int measured_poses = done - first_done_;
+      const double measured =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - first_time_).count() /
+          measured_poses;
+      const double weight = std::min(1.0, measured_poses / 5.0);
       per_pose = weight * measured + (1.0 - weight) * per_pose_plan;
     }
     const double eta = per_pose * (total_ - done);
@@ -110,9 +115,10 @@ class Progress {
   bool quiet_;
   bool tty_;
   int total_;
-  int start_done_;
   double estimate_host_s_;
   std::chrono::steady_clock::time_point start_;
+  int first_done_ = -1;  // poses done at the first update, and when
+  std::chrono::steady_clock::time_point first_time_;
   bool line_open_ = false;
 };
 
@@ -291,7 +297,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   const auto measure = [&]() { return client.MeasureCurrent(); };
 
   Progress progress(io.err, request.quiet, static_cast<int>(plan.poses.size()),
-                    static_cast<int>(done_ids.size()), plan.summary.total_s / time_scale);
+                    plan.summary.total_s / time_scale);
   int done_count = static_cast<int>(done_ids.size());
   std::optional<Pose> last_pose;
   std::string last_what;
