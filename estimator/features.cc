@@ -120,7 +120,7 @@ double Theta0FromAxes(double minor, double major) {
 
 
 // kModelFit: a uniformly bright elliptical disc {d : d^T P d <= 1} (d = pixel - centre), blurred by
-// a Gaussian of sigma s and integrated over each pixel by 4x4 sub-samples. The blurred disc at a
+// a Gaussian of sigma s and integrated over each pixel by 3x3 sub-samples. The blurred disc at a
 // point is approximated by the blurred straight edge B + A Phi(dist / s), with dist the signed
 // distance to the disc's edge to first order, (1 - q) / (2 |P d|), q = d^T P d: exact on the
 // edge, and the error away from it sits where Phi is ~0 or ~1 for blobs several blur sigmas wide;
@@ -133,10 +133,27 @@ using DiscMatrix = cv::Matx<double, kDiscParams, kDiscParams>;
 // Model value of the pixel centred at (px, py) (relative to the fit's origin); its gradient with
 // respect to the parameters in *jac when jac is not null.
 double DiscPixel(const DiscVector& v, double px, double py, DiscVector* jac) {
-  constexpr double kOffsets[4] = {-0.375, -0.125, 0.125, 0.375};
+  constexpr double kOffsets[3] = {-1.0 / 3.0, 0.0, 1.0 / 3.0};
   constexpr double kInvSqrt2 = 0.70710678118654752440;
   constexpr double kInvSqrt2Pi = 0.39894228040143267794;
   const double cx = v(0), cy = v(1), p11 = v(2), p12 = v(3), p22 = v(4), s = v(5), a = v(6);
+  // A pixel whose centre lies more than 4 blur sigmas (plus its half-diagonal) inside or outside
+  // the edge is flat: no sub-sampling.
+  {
+    const double dx = px - cx, dy = py - cy;
+    const double gx = p11 * dx + p12 * dy, gy = p12 * dx + p22 * dy;
+    const double n = std::sqrt(gx * gx + gy * gy);
+    const double dist = n > 1e-12 ? (1.0 - dx * gx - dy * gy) / (2.0 * n) : HUGE_VAL;
+    if (std::abs(dist) > 4.0 * s + 0.75) {
+      const double inside = dist > 0.0 ? 1.0 : 0.0;
+      if (jac != nullptr) {
+        *jac = DiscVector::zeros();
+        (*jac)(6) = inside;
+        (*jac)(7) = 1.0;
+      }
+      return v(7) + a * inside;
+    }
+  }
   double sum_phi = 0.0;
   DiscVector g_sum = DiscVector::zeros();
   for (double oy : kOffsets) {
@@ -157,11 +174,11 @@ double DiscPixel(const DiscVector& v, double px, double py, DiscVector* jac) {
                                                    gy * gy * p22)) / (n * n * n);
       const double dist = (1.0 - q) / (2.0 * n);
       const double z = dist / s - 0.5 * kappa * s;
-      if (z > 7.0) {
+      if (z > 4.0) {
         sum_phi += 1.0;
         continue;
       }
-      if (z < -7.0) continue;
+      if (z < -4.0) continue;
       sum_phi += 0.5 * std::erfc(-z * kInvSqrt2);
       if (jac == nullptr) continue;
       const double k = a * kInvSqrt2Pi * std::exp(-0.5 * z * z) / s;
@@ -173,7 +190,7 @@ double DiscPixel(const DiscVector& v, double px, double py, DiscVector* jac) {
       g_sum(5) -= k * (dist / s + 0.5 * kappa * s);
     }
   }
-  constexpr double kInvSamples = 1.0 / 16.0;
+  constexpr double kInvSamples = 1.0 / 9.0;
   const double phi_mean = sum_phi * kInvSamples;
   if (jac != nullptr) {
     *jac = g_sum * kInvSamples;
@@ -191,8 +208,8 @@ bool DiscIsValid(const DiscVector& v) {
 // Fits the disc model to the pixels of `rect` (normalised gray levels); start from the moment
 // ellipse (centre, covariance) with blur s0. Returns false when the fit fails.
 bool FitDisc(const cv::Mat& image, const cv::Rect& rect, double max_gray, const Moments& m,
-             double background, double peak, double s0, EllipseFit* fit, double* blur_px,
-             double* rms) {
+             const EllipseFit& contour, double background, double peak, double s0,
+             EllipseFit* fit, double* blur_px, double* rms) {
   const double ox = m.cx, oy = m.cy;
   std::vector<cv::Vec3d> samples;  // (x - ox, y - oy, value)
   samples.reserve(static_cast<size_t>(rect.area()));
@@ -209,9 +226,16 @@ bool FitDisc(const cv::Mat& image, const cv::Rect& rect, double max_gray, const 
   const double root = std::sqrt(0.25 * (m.sxx - m.syy) * (m.sxx - m.syy) + m.sxy * m.sxy);
   const double l1 = std::max(0.5 * tr + root - remove, 0.25);
   const double l2 = std::max(0.5 * tr - root - remove, 0.25);
-  const double phi = 0.5 * std::atan2(2.0 * m.sxy, m.sxx - m.syy);
+  double phi = 0.5 * std::atan2(2.0 * m.sxy, m.sxx - m.syy);
+  double i1 = 1.0 / (4.0 * l1), i2 = 1.0 / (4.0 * l2);
+  if (contour.valid && contour.minor_px > 1.0) {
+    // The half-maximum contour of a blurred disc lies close to the disc's edge, and noise in the
+    // moments' wings does not move it: the better start when it exists.
+    phi = contour.angle_deg * kPi / 180.0;
+    i1 = 4.0 / (contour.major_px * contour.major_px);
+    i2 = 4.0 / (contour.minor_px * contour.minor_px);
+  }
   const double c = std::cos(phi), sn = std::sin(phi);
-  const double i1 = 1.0 / (4.0 * l1), i2 = 1.0 / (4.0 * l2);
   DiscVector v;
   v(0) = 0.0;
   v(1) = 0.0;
@@ -232,7 +256,7 @@ bool FitDisc(const cv::Mat& image, const cv::Rect& rect, double max_gray, const 
   };
   double cost = cost_of(v);
   double lambda = 1e-3;
-  for (int iteration = 0; iteration < 30; ++iteration) {
+  for (int iteration = 0; iteration < 20; ++iteration) {
     DiscMatrix jtj = DiscMatrix::zeros();
     DiscVector jtr = DiscVector::zeros();
     DiscVector jac;
@@ -268,7 +292,7 @@ bool FitDisc(const cv::Mat& image, const cv::Rect& rect, double max_gray, const 
         lambda *= 10.0;
       }
     }
-    if (!improved || relative_change < 1e-7) break;
+    if (!improved || relative_change < 1e-5) break;
   }
   if (!DiscIsValid(v)) return false;
   // Axes of the fitted disc: eigenvalues of P are 1 / semi-axis^2.
@@ -600,13 +624,22 @@ Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptio
   if (options.ellipse_method == EllipseMethod::kModelFit && m.weight > 0.0 &&
       out.moment_major_var_px2 > 0.0) {
     const double s0 = options.psf_sigma_px > 0.0 ? options.psf_sigma_px : 0.7;
-    const double half = 2.0 * std::sqrt(out.moment_major_var_px2) + 3.0 * s0 + 3.0;
+    // Extent: the farthest pixel above half maximum (far above the noise) from the centroid.
+    double half_max2 = 0.0;
+    for (int y = window.y; y < window.y + window.height; ++y) {
+      const uint16_t* row = image.ptr<uint16_t>(y);
+      for (int x = window.x; x < window.x + window.width; ++x) {
+        if (row[x] <= half_threshold) continue;
+        half_max2 = std::max(half_max2, (x - m.cx) * (x - m.cx) + (y - m.cy) * (y - m.cy));
+      }
+    }
+    const double half = std::sqrt(half_max2) + 4.0 * s0 + 1.5;
     const int x0 = static_cast<int>(std::floor(m.cx - half));
     const int y0 = static_cast<int>(std::floor(m.cy - half));
     const int x1 = static_cast<int>(std::ceil(m.cx + half));
     const int y1 = static_cast<int>(std::ceil(m.cy + half));
     const cv::Rect box = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1) & window;
-    FitDisc(image, box, max_gray, m, background, peak, s0, &out.ellipse_model,
+    FitDisc(image, box, max_gray, m, out.ellipse_contour, background, peak, s0, &out.ellipse_model,
             &out.model_blur_px, &out.model_rms);
   }
   const EllipseFit& chosen = options.ellipse_method == EllipseMethod::kMoments

@@ -28,7 +28,7 @@ enum class EllipseMethod {
   kMoments,  // intensity-weighted second moments, background subtracted (default: measured better)
   kContour,  // cv::fitEllipse on the half-maximum contour
   // Least-squares fit (Levenberg-Marquardt, started from the moment ellipse) of a uniformly bright
-  // elliptical disc blurred by a Gaussian PSF and integrated over each pixel (4x4 sub-samples) to
+  // elliptical disc blurred by a Gaussian PSF and integrated over each pixel (3x3 sub-samples) to
   // the blob's pixels; the blur sigma is fitted too (started from psf_sigma_px, or 0.7 px when 0).
   // theta0 = acos(minor / major) of the fitted disc itself (no blur variance to remove).
   kModelFit,
