@@ -1,5 +1,9 @@
 #include "app/capture.h"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <future>
@@ -107,6 +111,12 @@ bool LiveRecorder::CommitPending(std::function<void()> on_committed) {
   // WaitCommitted().
   auto task = [&m, pose = m.pending_pose, bracket = std::move(m.pending),
                measured_ma = m.pending_measured_ma, done = std::move(on_committed)]() {
+    // PNG encoding and features yield to the capture path (camera, station, and on a virtual
+    // rig the renderer), which shares the host's cores: a nice of 10 for this thread only (Linux
+    // applies nice per thread). If the host refuses, the work only competes as before.
+    if (setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), 10) != 0) {
+      // Not an error: the commit still happens, at the default priority.
+    }
     const int size = static_cast<int>(bracket.frames.size());
     for (const BracketFrame& frame : bracket.frames) {
       FrameRecord record = RecordFromFrame(frame, size);
