@@ -35,6 +35,12 @@ std::string HtmlEscape(const std::string& text) {
   return out;
 }
 
+void ReplaceAll(std::string* text, const std::string& from, const std::string& to) {
+  for (size_t at = 0; (at = text->find(from, at)) != std::string::npos; at += to.size()) {
+    text->replace(at, from.size(), to);
+  }
+}
+
 void WriteFile(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::trunc);
   out << text;
@@ -300,18 +306,13 @@ std::string WriteReport(const std::string& dir, const std::string& title,
     const fs::path base = fs::path(dir) / plot.name;
     WriteFile(base.string() + ".dat", plot.data);
     std::string body = plot.script;
-    for (size_t at; (at = body.find("__DATA__")) != std::string::npos;) {
-      body.replace(at, 8, plot.name + ".dat");
-    }
-    for (size_t at; (at = body.find("__TITLE__")) != std::string::npos;) {
-      body.replace(at, 9, plot.title);
-    }
+    ReplaceAll(&body, "__DATA__", plot.name + ".dat");
+    ReplaceAll(&body, "__TITLE__", plot.title);
     const bool multiplot = body.find("multiplot") != std::string::npos;
     std::ostringstream gp;
     gp << "set terminal svg size " << (multiplot ? "900,720" : "760,480")
        << " dynamic enhanced font 'sans,11'\nset output '" << plot.name << ".svg'\n"
-       << (multiplot ? std::string() : "set title '" + plot.title + "'\n")
-       << body;
+       << (multiplot ? std::string() : "set title '" + plot.title + "'\n") << body;
     WriteFile(base.string() + ".gp", gp.str());
     html << "<figure id='" << plot.name << "'><h2>" << HtmlEscape(plot.title) << "</h2>\n";
     bool drawn = false;

@@ -16,12 +16,12 @@
 #include <sstream>
 #include <thread>
 
+#include "acquisition/recording.h"
 #include "app/capture.h"
 #include "app/offline.h"
 #include "app/recipe.h"
 #include "app/suggest.h"
 #include "app/tools.h"
-#include "acquisition/recording.h"
 #include "estimator/model_file.h"
 #include "sim/virtual_rig.h"
 #include "station/line_log.h"
@@ -299,7 +299,6 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   Progress progress(io.err, request.quiet, static_cast<int>(plan.poses.size()),
                     plan.summary.total_s / time_scale);
   int done_count = static_cast<int>(done_ids.size());
-  std::optional<Pose> last_pose;
   std::string last_what;
   std::int64_t pending_index = -1;  // pose of the bracket held back by the recorder
   const SettleSpec& settle = recipe.sweep.settle;
@@ -325,27 +324,20 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
       commit();
     }
     pending_index = sweep_pose.index;
-    // The recipe's waits on top of the station's own settle; simulated waits run time_scale
-    // times faster on a virtual rig.
-    const bool moved = attempt > 0 || !last_pose || last_pose->slide_mm != pose.slide_mm ||
-                       last_pose->pan_deg != pose.pan_deg || last_pose->tilt_deg != pose.tilt_deg;
-    const bool current_changed = attempt > 0 || !last_pose || last_pose->bias_ma != pose.bias_ma;
-    // The move's wait starts now (settled); the current's started when the sweep set it, before
-    // the move, so only what is left of it is waited (a retake restores the current on recovery:
-    // its whole wait). Host waits are simulated waits divided by the time scale.
+    // The recipe's waits on top of the station's own settle. The move's wait starts now
+    // (settled); the current's started when the sweep set it, before the move, so only what is
+    // left of it is waited. Host waits are simulated waits divided by the time scale.
+    const Sweep::Transition& transition = sweep.transition();
     double wait_host_ms = 0.0;
-    if (moved) wait_host_ms = settle.after_move_ms / time_scale;
-    if (current_changed) {
+    if (transition.moved) wait_host_ms = settle.after_move_ms / time_scale;
+    if (transition.current_changed) {
       const double since_change_ms =
-          attempt > 0 ? 0.0
-                      : std::chrono::duration<double, std::milli>(
-                            std::chrono::steady_clock::now() - sweep.current_changed_at())
-                            .count();
-      wait_host_ms =
-          std::max(wait_host_ms, settle.after_current_ms / time_scale - since_change_ms);
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
+                                                    transition.current_changed_at)
+              .count();
+      wait_host_ms = std::max(wait_host_ms, settle.after_current_ms / time_scale - since_change_ms);
     }
     SleepHostMs(wait_host_ms);
-    last_pose = pose;
 
     LivePose live;
     live.bracket_id = pose.index;
@@ -437,17 +429,37 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
 // angle and the highest current; farthest at the largest angle and the lowest current) crossed,
 // each taken at the recipe's t_r and its longest t_n. Written as YAML so that the probe run is
 // recorded like any other (its recipe text stands in its recording.yaml).
-std::string ProbeRecipeText(const Recipe& recipe, const Plan& plan) {
-  double d_min = 1e300, d_max = -1e300, th_min = 1e300, th_max = -1e300, i_min = 1e300,
-         i_max = -1e300;
-  for (const Pose& p : plan.poses) {
-    d_min = std::min(d_min, p.slide_mm);
-    d_max = std::max(d_max, p.slide_mm);
-    th_min = std::min(th_min, std::abs(p.theta_deg));
-    th_max = std::max(th_max, std::abs(p.theta_deg));
-    i_min = std::min(i_min, p.bias_ma);
-    i_max = std::max(i_max, p.bias_ma);
+struct RecipeEnds {
+  double d_min = 1e300, d_max = -1e300;    // mm
+  double th_min = 1e300, th_max = -1e300;  // |theta|, deg
+  double i_min = 1e300, i_max = -1e300;    // mA
+  // The bright end (nearest, smallest angle, highest current) or the faint end (farthest,
+  // largest angle, lowest current), compared at the station's resolution (0.01 unit).
+  bool Nearest(double d, double theta, double ma) const {
+    return Same(d, d_min) && Same(std::abs(theta), th_min) && Same(ma, i_max);
   }
+  bool Farthest(double d, double theta, double ma) const {
+    return Same(d, d_max) && Same(std::abs(theta), th_max) && Same(ma, i_min);
+  }
+  static bool Same(double a, double b) {
+    return std::llround(a * 100.0) == std::llround(b * 100.0);
+  }
+};
+
+RecipeEnds EndsOf(const Plan& plan) {
+  RecipeEnds e;
+  for (const Pose& p : plan.poses) {
+    e.d_min = std::min(e.d_min, p.slide_mm);
+    e.d_max = std::max(e.d_max, p.slide_mm);
+    e.th_min = std::min(e.th_min, std::abs(p.theta_deg));
+    e.th_max = std::max(e.th_max, std::abs(p.theta_deg));
+    e.i_min = std::min(e.i_min, p.bias_ma);
+    e.i_max = std::max(e.i_max, p.bias_ma);
+  }
+  return e;
+}
+
+std::string ProbeRecipeText(const Recipe& recipe, const RecipeEnds& e) {
   const auto pair = [](double lo, double hi) {
     std::ostringstream out;
     out << std::setprecision(10) << "[" << lo;
@@ -460,8 +472,8 @@ std::string ProbeRecipeText(const Recipe& recipe, const Plan& plan) {
   std::ostringstream y;
   y << std::setprecision(10) << "# Probe frames for 'irdist plan --suggest " << recipe.path
     << "'\nname: " << recipe.name << "-probe\nrig: " << fs::absolute(recipe.rig_path).string()
-    << "\nafter: none\naxes:\n  slide_mm: " << pair(d_min, d_max)
-    << "\n  theta_deg: " << pair(th_min, th_max) << "\n  bias_ma: " << pair(i_min, i_max)
+    << "\nafter: none\naxes:\n  slide_mm: " << pair(e.d_min, e.d_max)
+    << "\n  theta_deg: " << pair(e.th_min, e.th_max) << "\n  bias_ma: " << pair(e.i_min, e.i_max)
     << "\nbracket:\n  t_ref_ms: " << b.t_ref_ms << "\n  t_meas_ms: [" << t_long << "]\n";
   return y.str();
 }
@@ -471,6 +483,7 @@ std::string ProbeRecipeText(const Recipe& recipe, const Plan& plan) {
 void RunSuggest(const PlanArgs& args, CommandIo io) {
   const Recipe recipe = LoadRecipe(args.recipe);
   const Plan plan = PlanRecipe(recipe);
+  const RecipeEnds ends = EndsOf(plan);
   SuggestOptions options;
   if (!args.from_summary.empty()) {
     const std::optional<double> best = ReadBestDtMs(args.from_summary);
@@ -487,7 +500,7 @@ void RunSuggest(const PlanArgs& args, CommandIo io) {
   const std::string probe_path = dir + "/probe-recipe.yaml";
   {
     std::ofstream probe(probe_path, std::ios::trunc);
-    probe << ProbeRecipeText(recipe, plan);
+    probe << ProbeRecipeText(recipe, ends);
     if (!probe) throw RunFolderError(probe_path + ": cannot be written; check the folder.");
   }
   RunRequest request;
@@ -509,36 +522,18 @@ void RunSuggest(const PlanArgs& args, CommandIo io) {
   if (recorded.cut) throw InterruptedError("probe stopped; nothing suggested.");
   const RecordingReader reader(dir + "/recording");
   const FeatureMap features = RecordingFeatures(reader, FeatureOptions{}, recorded.cache);
-  double d_min = 1e300, d_max = -1e300;
-  for (const FrameRecord& row : reader.rows()) {
-    d_min = std::min(d_min, row.slide_mm);
-    d_max = std::max(d_max, row.slide_mm);
-  }
-  double near_theta = 1e300, far_theta = -1e300, near_ma = -1e300, far_ma = 1e300;
-  for (const FrameRecord& row : reader.rows()) {
-    if (row.slide_mm == d_min) {
-      near_theta = std::min(near_theta, std::abs(row.theta_deg));
-      near_ma = std::max(near_ma, row.bias_ma_set);
-    }
-    if (row.slide_mm == d_max) {
-      far_theta = std::max(far_theta, std::abs(row.theta_deg));
-      far_ma = std::min(far_ma, row.bias_ma_set);
-    }
-  }
   std::vector<ProbeFrame> probes;
   for (const FrameRecord& row : reader.rows()) {
-    const bool nearest = row.slide_mm == d_min && std::abs(row.theta_deg) == near_theta &&
-                         row.bias_ma_set == near_ma;
-    const bool farthest = row.slide_mm == d_max && std::abs(row.theta_deg) == far_theta &&
-                          row.bias_ma_set == far_ma;
+    const bool nearest = ends.Nearest(row.slide_mm, row.theta_deg, row.bias_ma_set);
+    const bool farthest = ends.Farthest(row.slide_mm, row.theta_deg, row.bias_ma_set);
     if (!nearest && !farthest) continue;
     const auto f = features.find(row.index);
     if (f == features.end() || !f->second.blob_found) {
       throw RunFolderError(reader.dir() + ": no IRED image in frame " + row.file +
                            "; is the IRED in view and on? (see " + dir + "/features.csv)");
     }
-    probes.push_back({nearest, row.requested_exposure_us / 1000.0, row.bias_ma_set,
-                      f->second.peak, f->second.background});
+    probes.push_back({nearest, row.requested_exposure_us / 1000.0, row.bias_ma_set, f->second.peak,
+                      f->second.background});
   }
   const Suggestion s = SuggestExposures(probes, options);
   io.out << "Suggested bracket for " << recipe.path << " (probe run in " << dir << "):\n"
@@ -567,26 +562,30 @@ SignalGuard::~SignalGuard() {
   delete saved_;
 }
 
-void RunCalibrate(const CalibrateArgs& args, CommandIo io) {
+namespace {
+
+// The options calibrate and validate share.
+template <typename Args>
+RunRequest RequestFrom(RunKind kind, const Args& args) {
   RunRequest request;
-  request.kind = RunKind::kCalibrate;
+  request.kind = kind;
   request.recipe_path = args.recipe;
   request.out_dir = args.out_dir;
   request.resume_dir = args.resume_dir;
   request.time_scale = args.time_scale;
   request.quiet = args.quiet;
-  RunRecipe(request, io);
+  return request;
+}
+
+}  // namespace
+
+void RunCalibrate(const CalibrateArgs& args, CommandIo io) {
+  RunRecipe(RequestFrom(RunKind::kCalibrate, args), io);
 }
 
 void RunValidate(const ValidateArgs& args, CommandIo io) {
-  RunRequest request;
-  request.kind = RunKind::kValidate;
-  request.recipe_path = args.recipe;
+  RunRequest request = RequestFrom(RunKind::kValidate, args);
   request.model_path = args.model;
-  request.out_dir = args.out_dir;
-  request.resume_dir = args.resume_dir;
-  request.time_scale = args.time_scale;
-  request.quiet = args.quiet;
   RunRecipe(request, io);
 }
 

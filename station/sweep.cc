@@ -4,6 +4,12 @@
 #include <sstream>
 
 namespace irdist {
+namespace {
+
+// Two set-points the station cannot tell apart (its resolution is 0.01 mm, deg or mA).
+bool SameCenti(double a, double b) { return std::llround(a * 100.0) == std::llround(b * 100.0); }
+
+}  // namespace
 
 bool SweepOptions::IsValid(std::string* why) const {
   if (max_retakes < 0) {
@@ -62,21 +68,23 @@ SweepResult Sweep::Run(const std::vector<SweepPose>& poses, const PoseCallback& 
               client_.Home();
             }
           }
-          // Current first: the IRED's thermal transient then overlaps the move.
-          if (std::llround(pose.bias_ma * 100.0) !=
-              std::llround(client_.current_setpoint_ma() * 100.0)) {
+          // Current first: the IRED's thermal transient then overlaps the move. A retake follows
+          // a reboot, whose recovery has just restored the current.
+          transition_.current_changed = attempt > 0;
+          if (!SameCenti(pose.bias_ma, client_.current_setpoint_ma())) {
             client_.SetCurrent(pose.bias_ma);
-            current_changed_at_ = std::chrono::steady_clock::now();
+            transition_.current_changed = true;
+          }
+          if (transition_.current_changed) {
+            transition_.current_changed_at = std::chrono::steady_clock::now();
           }
           // A pose that only changes the current (or repeats) needs no move: the station is
           // still where the previous pose confirmed it (a retake always moves again).
           const bool same_place = i > 0 && attempt == 0 &&
-                                  std::llround(poses[i - 1].slide_mm * 100.0) ==
-                                      std::llround(pose.slide_mm * 100.0) &&
-                                  std::llround(poses[i - 1].pan_deg * 100.0) ==
-                                      std::llround(pose.pan_deg * 100.0) &&
-                                  std::llround(poses[i - 1].tilt_deg * 100.0) ==
-                                      std::llround(pose.tilt_deg * 100.0);
+                                  SameCenti(poses[i - 1].slide_mm, pose.slide_mm) &&
+                                  SameCenti(poses[i - 1].pan_deg, pose.pan_deg) &&
+                                  SameCenti(poses[i - 1].tilt_deg, pose.tilt_deg);
+          transition_.moved = !same_place;
           if (!same_place) client_.MoveTo({pose.slide_mm, pose.pan_deg, pose.tilt_deg});
           at_pose(pose, attempt);
           // The capture is only good if the station did not reboot meanwhile.

@@ -20,14 +20,14 @@ struct SweepPose {
   double slide_mm = 0.0;
   double pan_deg = 0.0;
   double tilt_deg = 0.0;
-  double bias_ma = 0.0;    // IRED current at this pose (0 = off)
+  double bias_ma = 0.0;  // IRED current at this pose (0 = off)
 };
 
 struct SweepOptions {
-  bool home_first = true;        // home before the first pose (always done if unhomed)
-  int max_retakes = 3;           // retakes of one pose after station reboots, then give up
-  bool park_at_end = true;       // at the end (or on stop): pan = tilt = 0, slide per below
-  double park_slide_mm = -1.0;   // slide position when parking; < 0 leaves the slide where it is
+  bool home_first = true;       // home before the first pose (always done if unhomed)
+  int max_retakes = 3;          // retakes of one pose after station reboots, then give up
+  bool park_at_end = true;      // at the end (or on stop): pan = tilt = 0, slide per below
+  double park_slide_mm = -1.0;  // slide position when parking; < 0 leaves the slide where it is
   bool IsValid(std::string* why) const;
 };
 
@@ -41,7 +41,7 @@ struct SweepResult {
 };
 
 // Called at each settled pose with the IRED at pose.bias_ma (set before the move, so that its
-// thermal transient runs while the axes travel: see Sweep::current_changed_at()). `attempt` is 0
+// thermal transient runs while the axes travel: see Sweep::transition()). `attempt` is 0
 // the first time; a retake after a station reboot calls again with attempt > 0, and whatever the
 // caller recorded for this pose in earlier attempts must be discarded.
 // A pose is confirmed only when the station is seen alive with the same boot id AFTER the callback
@@ -62,15 +62,21 @@ class Sweep {
   SweepResult Run(const std::vector<SweepPose>& poses, const PoseCallback& at_pose,
                   const std::atomic<bool>* stop = nullptr);
 
-  // When the IRED current last changed (host clock); a caller that waits for the IRED's thermal
-  // transient waits only what is left of it once the move is done.
-  std::chrono::steady_clock::time_point current_changed_at() const { return current_changed_at_; }
+  // How the station reached the pose of the callback in progress: whether the axes moved and the
+  // current changed (a retake after a reboot counts as both), and when the current was set (host
+  // clock). A caller that waits for the IRED's transient waits only what is left of it.
+  struct Transition {
+    bool moved = false;
+    bool current_changed = false;
+    std::chrono::steady_clock::time_point current_changed_at{};
+  };
+  const Transition& transition() const { return transition_; }
 
  private:
   void Park();
   StationClient& client_;
   SweepOptions options_;
-  std::chrono::steady_clock::time_point current_changed_at_{};
+  Transition transition_;
 };
 
 }  // namespace irdist

@@ -9,7 +9,7 @@
 #include "acquisition/aravis_camera.h"
 #include "acquisition/bracket.h"
 #include "sim/virtual_rig.h"
-#include "tests/acquisition/fake_camera_process.h"
+#include "tests/loopback_gvcp.h"
 
 namespace irdist {
 namespace {

@@ -13,8 +13,8 @@
 #include "acquisition/recording.h"
 #include "app/summary.h"
 #include "estimator/model_file.h"
-#include "tests/acquisition/fake_camera_process.h"
 #include "tests/integration/run_helpers.h"
+#include "tests/loopback_gvcp.h"
 
 namespace irdist {
 namespace {

@@ -6,8 +6,8 @@
 #include <regex>
 
 #include "acquisition/recording.h"
-#include "tests/acquisition/fake_camera_process.h"
 #include "tests/integration/run_helpers.h"
+#include "tests/loopback_gvcp.h"
 
 namespace irdist {
 namespace {

@@ -10,8 +10,8 @@
 #include <tuple>
 
 #include "acquisition/recording.h"
-#include "tests/acquisition/fake_camera_process.h"
 #include "tests/integration/run_helpers.h"
+#include "tests/loopback_gvcp.h"
 
 namespace irdist {
 namespace {

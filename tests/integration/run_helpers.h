@@ -1,7 +1,7 @@
 #pragma once
 // Helpers of the integration tests: run the built irdist binary as a child process (its output to a
 // log file), signal it, wait for it, and small file utilities. Every test that starts a virtual
-// rig (through the binary) holds the loopback GVCP lock (tests/acquisition/fake_camera_process.h)
+// rig (through the binary) holds the loopback GVCP lock (tests/loopback_gvcp.h)
 // for as long as the child may run.
 
 #include <fcntl.h>

@@ -7,8 +7,8 @@
 
 #include "sim/renderer.h"
 #include "sim/rig_physics.h"
-#include "tests/acquisition/fake_camera_process.h"
 #include "tests/integration/run_helpers.h"
+#include "tests/loopback_gvcp.h"
 
 namespace irdist {
 namespace {

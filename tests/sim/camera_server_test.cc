@@ -1,16 +1,15 @@
 #include "sim/camera_server.h"
 
 #include <arv.h>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include <gtest/gtest.h>
-
 #include "sim/renderer.h"
-#include "tests/sim/gvcp_port.h"
+#include "tests/loopback_gvcp.h"
 
 namespace irdist::sim {
 namespace {
@@ -24,10 +23,10 @@ struct GUnref {
 template <typename T>
 using GPtr = std::unique_ptr<T, GUnref<T>>;
 
-#define ASSERT_NO_GERROR(error)                                            \
-  do {                                                                     \
-    GError* e_ = (error);                                                  \
-    ASSERT_EQ(e_, nullptr) << (e_ != nullptr ? e_->message : "");          \
+#define ASSERT_NO_GERROR(error)                                   \
+  do {                                                            \
+    GError* e_ = (error);                                         \
+    ASSERT_EQ(e_, nullptr) << (e_ != nullptr ? e_->message : ""); \
   } while (false)
 
 constexpr char kSerial[] = "IRDTEST042";
@@ -55,7 +54,7 @@ double SignalSum(ArvBuffer* buffer) {
 class CameraServerTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    ASSERT_TRUE(testing::WaitForGvcpPort(std::chrono::seconds(120)))
+    ASSERT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(120)))
         << "127.0.0.1:3956 stayed busy: another fake camera is running";
     world_.SetPose(2000, 0, 0, false);
     world_.SetCurrent(500);
@@ -83,7 +82,8 @@ class CameraServerTest : public ::testing::Test {
                  "socket-buffer-size", 4 << 20, nullptr);
     const guint payload = arv_camera_get_payload(camera_.get(), &error);
     ASSERT_NO_GERROR(error);
-    for (int i = 0; i < 8; ++i) arv_stream_push_buffer(stream_.get(), arv_buffer_new(payload, nullptr));
+    for (int i = 0; i < 8; ++i)
+      arv_stream_push_buffer(stream_.get(), arv_buffer_new(payload, nullptr));
   }
 
   // Pops one buffer; returns nullptr on timeout, re-queues it after `use`.
@@ -214,7 +214,7 @@ TEST_F(CameraServerTest, TriggeredFramesCarryTheExposureSetForThem) {
 }
 
 TEST(CameraServerPort, SecondCameraOnLoopbackFailsClearly) {
-  ASSERT_TRUE(testing::WaitForGvcpPort(std::chrono::seconds(120)));
+  ASSERT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(120)));
   RigPhysics physics = TestPhysics();
   World world(physics.time_scale);
   CameraServer first(world, physics);

@@ -1,12 +1,11 @@
 #include "sim/virtual_rig.h"
 
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <gtest/gtest.h>
-
 #include "sim/camera_server.h"
-#include "tests/sim/gvcp_port.h"
+#include "tests/loopback_gvcp.h"
 
 namespace irdist::sim {
 namespace {
@@ -22,7 +21,7 @@ TEST(VirtualRigOverrides, DefaultsAreValid) {
 }
 
 TEST(VirtualRig, StartsCameraAndStationFromTheRigFile) {
-  ASSERT_TRUE(testing::WaitForGvcpPort(std::chrono::seconds(120)));
+  ASSERT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(120)));
   VirtualRigOverrides overrides;
   overrides.time_scale = 20.0;
   overrides.serial = "IRDRIG7";
@@ -46,7 +45,8 @@ TEST(VirtualRig, StartsCameraAndStationFromTheRigFile) {
   EXPECT_EQ(rig->world().Pose().bias_ma, 480);
   rig->Stop();
   EXPECT_FALSE(rig->camera().running());
-  EXPECT_TRUE(testing::WaitForGvcpPort(std::chrono::seconds(5))) << "Stop() left the port bound";
+  EXPECT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(5)))
+      << "Stop() left the port bound";
 }
 
 TEST(VirtualRig, DescribesGroundTruthOverTheTableThreeGrid) {
