@@ -38,13 +38,14 @@ enum class EllipseMethod {
 // and the ellipse of theta0).
 enum class MomentMethod {
   // The pixels above moment_threshold_fraction of the peak. The hard cut through the PSF's wings
-  // moves with the blob's sub-pixel phase and size: a pose-dependent bias of up to ~1.5 deg on
-  // theta0 at 2.9 m on the virtual rig (docs/estimator.md).
+  // takes a share of the blob's variance that depends on its size and signal: theta0 biased by
+  // +0.3..+0.5 deg at 2.9 m on the virtual rig, and the apparent size by ~0.1 % (docs/estimator.md).
   kThreshold,
   // Every pixel of a circular aperture around the centroid, background-subtracted with the mean
   // of the window outside it (no threshold): the aperture reaches aperture_margin_px beyond the
   // farthest pixel above the moment threshold, so its edge lies in pure noise and the moments
-  // are the blob's own for any emitter profile (variances of profile and blur add).
+  // are the blob's own for any emitter profile (variances of profile and blur add). The default:
+  // theta0 unbiased within 0.03 deg where kThreshold is off by up to 0.5 (docs/estimator.md).
   kAperture,
 };
 
@@ -78,7 +79,7 @@ struct FeatureOptions {
   // moments and the centroid (the rest is noise that would bias them).
   double moment_threshold_fraction = 0.02;
   // Which pixels enter the second moments (see MomentMethod).
-  MomentMethod moment_method = MomentMethod::kThreshold;
+  MomentMethod moment_method = MomentMethod::kAperture;
   // kAperture: margin (px) of the aperture beyond the farthest pixel above the moment threshold.
   double aperture_margin_px = 3.0;
   // Blur (Gaussian PSF sigma, px) removed from the second moments before the axis ratio; 0 = none.

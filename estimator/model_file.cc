@@ -233,7 +233,9 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   fo.threshold_fraction = rd.Scalar<double>(f, "features", "threshold_fraction");
   fo.moment_threshold_fraction = rd.Scalar<double>(f, "features", "moment_threshold_fraction");
   fo.psf_sigma_px = rd.Scalar<double>(f, "features", "psf_sigma_px");
-  // Version 2 keys; absent (version 1): the defaults, which is what version 1 files were made with.
+  // Version 2 keys; absent (version 1): what version 1 files were made with (threshold moments,
+  // the default then; the default is now aperture moments).
+  fo.moment_method = MomentMethod::kThreshold;
   if (f["moment_method"].IsDefined() && !f["moment_method"].IsNull()) {
     if (!ParseMomentMethod(rd.Scalar<std::string>(f, "features", "moment_method"),
                            &fo.moment_method))

@@ -54,7 +54,7 @@ struct OpticsOptions {
   double filter_transmission = 1.6e-4;  // band-pass + neutral-density filter stack in front
   double psf_sigma_px = 0.7;          // Gaussian blur (diffraction at N=8 plus defocus), pixels
   bool vignetting = true;             // cos^4 of the field angle
-  int supersample = 8;                // sub-samples per pixel side when integrating the disc
+  int supersample = 8;  // integration strips per pixel of the disc image's height (>= 32 in all)
   bool IsValid(std::string* why) const;
 };
 

@@ -308,6 +308,7 @@ void ThetaProbe(const sim::RigPhysics& physics, std::uint64_t seed) {
         for (size_t fi = 0; fi < fractions.size(); ++fi) {
           FeatureOptions fo;
           if (fractions[fi] > 0) {
+            fo.moment_method = MomentMethod::kThreshold;
             fo.moment_threshold_fraction = fractions[fi];
           } else {
             fo.moment_method = MomentMethod::kAperture;
@@ -404,7 +405,9 @@ int Main(int argc, char** argv) {
           "  [--radiometric-weight W]... [--theta-degree N]... [--dump-theta CSV]\n"
           "  (pipeline theta_cal: the default with the calibrated theta correction;\n"
           "   --theta-degree N adds the default with a correction of total degree N;\n"
-          "   --model-fit adds pipeline model_fit: theta0 of EllipseMethod::kModelFit)\n");
+          "   --model-fit adds pipeline model_fit: theta0 of EllipseMethod::kModelFit;\n"
+          "   --theta-variants adds theta_bracket (ThetaSource::kBracketMoments) and threshold\n"
+          "   (MomentMethod::kThreshold); --theta-probe prints theta0's bias per pose and method)\n");
       return 0;
     } else if (!std::strcmp(argv[i], "--verbose"))
       verbose = true;
@@ -538,12 +541,9 @@ int Main(int argc, char** argv) {
     pl.name = "theta_bracket";  // theta0 from the signal-weighted moments of every frame
     pl.estimate.theta_source = ThetaSource::kBracketMoments;
     pipelines.push_back(pl);
-    pl.name = "theta_aperture";  // aperture moments (features and geometric baseline)
+    pl.name = "threshold";  // threshold moments (features and geometric baseline): the old default
     pl.estimate.theta_source = ThetaSource::kCalibratedBlur;
-    pl.features.moment_method = MomentMethod::kAperture;
-    pipelines.push_back(pl);
-    pl.name = "theta_ap_cal";  // aperture moments with the calibrated theta correction
-    pl.estimate.theta_correction = true;
+    pl.features.moment_method = MomentMethod::kThreshold;
     pipelines.push_back(pl);
   }
 

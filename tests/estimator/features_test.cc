@@ -102,7 +102,9 @@ TEST(Features, ApertureMomentsAddTheWholeBlurVariance) {
     FeatureOptions aperture;
     aperture.moment_method = MomentMethod::kAperture;
     aperture_f[k] = ComputeFeatures(image, 12, aperture);
-    threshold_f[k] = ComputeFeatures(image, 12, FeatureOptions());
+    FeatureOptions threshold;
+    threshold.moment_method = MomentMethod::kThreshold;
+    threshold_f[k] = ComputeFeatures(image, 12, threshold);
     ASSERT_TRUE(aperture_f[k].blob_found && threshold_f[k].blob_found);
     EXPECT_NEAR(aperture_f[k].centroid_px.x, b.cx, 0.05);
   }

@@ -100,7 +100,7 @@ TEST(ModelFile, FileHoldsTheFitStatistics) {
     EXPECT_NE(text.find(key), std::string::npos) << key;
 }
 
-TEST(ModelFile, VersionOneFileLoadsWithDefaultsAndNoThetaCorrection) {
+TEST(ModelFile, VersionOneFileLoadsAsThresholdMomentsWithoutThetaCorrection) {
   // A version 1 file: no moment_method, aperture_margin_px or theta_correction keys.
   CalibrationModel v1 = SmallModel();
   v1.features.moment_method = MomentMethod::kThreshold;
