@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <vector>
 
 #include "base/check.h"
 
@@ -346,6 +348,26 @@ bool ParseMomentMethod(const std::string& name, MomentMethod* method) {
   return false;
 }
 
+const char* ToString(ResponseScope scope) {
+  switch (scope) {
+    case ResponseScope::kERelOnly:
+      return "e_rel_only";
+    case ResponseScope::kAllPixels:
+      return "all_pixels";
+  }
+  return "unknown";
+}
+
+bool ParseResponseScope(const std::string& name, ResponseScope* scope) {
+  for (ResponseScope s : {ResponseScope::kERelOnly, ResponseScope::kAllPixels}) {
+    if (name == ToString(s)) {
+      *scope = s;
+      return true;
+    }
+  }
+  return false;
+}
+
 const char* ToString(EllipseMethod method) {
   switch (method) {
     case EllipseMethod::kMoments:
@@ -421,7 +443,11 @@ bool FeatureOptions::IsValid(std::string* why) const {
     return fail("detection_downsample must be in [1,16]");
   if (!(min_contrast_fraction > 0.0 && min_contrast_fraction < 1.0))
     return fail("min_contrast_fraction must be in (0,1)");
-  return inverse_response.IsValid(why);
+  if (!inverse_response.IsValid(why)) return false;
+  if (response_scope == ResponseScope::kAllPixels && !inverse_response.IsIdentity() &&
+      !(inverse_response.Apply(1.0) > inverse_response.Apply(0.0)))
+    return fail("inverse_response: all_pixels scope needs f(1) > f(0)");
+  return true;
 }
 
 std::string Features::BriefReport() const {
@@ -443,12 +469,61 @@ FeatureOptions PaperFeatureOptions() {
   return options;
 }
 
+cv::Mat LineariseFrame(const cv::Mat& image, int bit_depth, const InverseResponse& curve) {
+  std::string why;
+  IRDIST_CHECK(curve.IsValid(&why), why);
+  IRDIST_CHECK(!curve.IsIdentity(), "LineariseFrame needs a curve, not the identity");
+  IRDIST_CHECK(image.type() == CV_16UC1, "LineariseFrame needs a CV_16UC1 image, got type ",
+               image.type());
+  IRDIST_CHECK(bit_depth >= 8 && bit_depth <= 16, "bit_depth must be in [8,16], got ", bit_depth);
+  const double f0 = curve.Apply(0.0), f1 = curve.Apply(1.0);
+  IRDIST_CHECK(f1 > f0, "inverse response is flat: f(1) == f(0)");
+  const int levels = 1 << bit_depth;
+  const double max_gray = levels - 1.0;
+  std::vector<std::uint16_t> table(static_cast<size_t>(levels));
+  for (int g = 0; g < levels; ++g) {
+    const double l = std::clamp((curve.Apply(g / max_gray) - f0) / (f1 - f0), 0.0, 1.0);
+    table[static_cast<size_t>(g)] = static_cast<std::uint16_t>(std::lround(65535.0 * l));
+  }
+  // Values above the format's range (stray high bits) map to full scale.
+  const std::uint16_t top = table.back();
+  cv::Mat out(image.size(), CV_16UC1);
+  for (int y = 0; y < image.rows; ++y) {
+    const std::uint16_t* src = image.ptr<std::uint16_t>(y);
+    std::uint16_t* dst = out.ptr<std::uint16_t>(y);
+    for (int x = 0; x < image.cols; ++x) dst[x] = src[x] < levels ? table[src[x]] : top;
+  }
+  return out;
+}
+
 Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options) {
   std::string why;
   IRDIST_CHECK(options.IsValid(&why), why);
   IRDIST_CHECK(image.type() == CV_16UC1, "ComputeFeatures needs a CV_16UC1 image, got type ",
                image.type());
   IRDIST_CHECK(bit_depth >= 8 && bit_depth <= 16, "bit_depth must be in [8,16], got ", bit_depth);
+  if (options.response_scope == ResponseScope::kAllPixels &&
+      !options.inverse_response.IsIdentity()) {
+    FeatureOptions linear_options = options;
+    linear_options.inverse_response = InverseResponse();
+    linear_options.response_scope = ResponseScope::kERelOnly;
+    Features out = ComputeFeatures(LineariseFrame(image, bit_depth, options.inverse_response), 16,
+                                   linear_options);
+    out.bit_depth = bit_depth;
+    if (out.blob_found) {
+      // Saturation is a property of the raw frame: pixels at the format's maximum in the ROI (the
+      // threshold ROI's brightest pixels always lie inside its bounding box).
+      const int saturated_level = (1 << bit_depth) - 1;
+      int saturated = 0;
+      const cv::Rect roi = out.roi & cv::Rect(0, 0, image.cols, image.rows);
+      for (int y = roi.y; y < roi.y + roi.height; ++y) {
+        const std::uint16_t* row = image.ptr<std::uint16_t>(y);
+        for (int x = roi.x; x < roi.x + roi.width; ++x) saturated += row[x] >= saturated_level;
+      }
+      out.saturated_pixels = saturated;
+    }
+    return out;
+  }
   IRDIST_CHECK(image.rows >= options.window_side_px && image.cols >= options.window_side_px,
                "image smaller than the ROI window");
   Features out;

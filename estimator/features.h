@@ -49,13 +49,27 @@ enum class MomentMethod {
   kAperture,
 };
 
+// Which features the inverse response f (FeatureOptions::inverse_response) linearises.
+enum class ResponseScope {
+  // The paper's use: f enters E_rel only; every other feature reads the raw gray levels (default).
+  kERelOnly,
+  // Every pixel is linearised before all features (blob, background, centroid, moments, E_rel,
+  // F(0,0), Sigma, ellipses): the frame goes through a lookup table holding
+  // L(M) = (f(M) - f(0)) / (f(1) - f(0)) on 16 bits (LineariseFrame), the features are computed
+  // on it with bit_depth 16, and saturation is counted on the raw frame. L is f up to an affine
+  // map, which no feature's linearity depends on; a linear camera's recovered f gives L = M.
+  kAllPixels,
+};
+
 const char* ToString(RoiPolicy policy);
 const char* ToString(EllipseMethod method);
 const char* ToString(MomentMethod method);
+const char* ToString(ResponseScope scope);  // "e_rel_only", "all_pixels"
 // Parse the names ToString gives; return false when the name is unknown.
 bool ParseRoiPolicy(const std::string& name, RoiPolicy* policy);
 bool ParseEllipseMethod(const std::string& name, EllipseMethod* method);
 bool ParseMomentMethod(const std::string& name, MomentMethod* method);
+bool ParseResponseScope(const std::string& name, ResponseScope* scope);
 
 // The camera's inverse radiometric response f on normalised gray levels: identity when empty,
 // otherwise the piecewise-linear curve through the knots (m_k, f_k), m strictly increasing in [0,1]
@@ -90,6 +104,8 @@ struct FeatureOptions {
   double min_contrast_fraction = 0.01;
   EllipseMethod ellipse_method = EllipseMethod::kMoments;
   InverseResponse inverse_response;  // identity by default
+  // Which features inverse_response linearises (no effect while it is the identity).
+  ResponseScope response_scope = ResponseScope::kERelOnly;
   bool IsValid(std::string* why) const;
 };
 
@@ -140,5 +156,11 @@ FeatureOptions PaperFeatureOptions();
 // bit_depth bits. Throws CheckError on a wrong type/bit depth or invalid options. An image without
 // a blob gives blob_found = false (a value, not an error).
 Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options);
+
+// The frame through the lookup table of ResponseScope::kAllPixels: every gray level g of the
+// CV_16UC1 `image` (bit_depth significant bits) becomes round(65535 L(g / (2^bit_depth - 1))),
+// L(M) = (f(M) - f(0)) / (f(1) - f(0)) clamped to [0,1]. Returns a CV_16UC1 image of 16 bits.
+// Throws CheckError when the curve is the identity, invalid, or has f(1) == f(0).
+cv::Mat LineariseFrame(const cv::Mat& image, int bit_depth, const InverseResponse& curve);
 
 }  // namespace irdist
