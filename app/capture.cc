@@ -49,6 +49,10 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   settings.trigger_activation = setup.trigger_activation;
   settings.black_level = setup.black_level;
   settings.packet_size = setup.packet_size;
+  settings.offset_x = setup.roi_offset_x;
+  settings.offset_y = setup.roi_offset_y;
+  settings.width = setup.roi_width;
+  settings.height = setup.roi_height;
   IRDIST_CHECK(!setup.exposures_us.empty(), "a bracket needs exposures");
   settings.exposure_us = setup.exposures_us.front();
   settings.buffer_count =

@@ -23,6 +23,8 @@ struct LiveCaptureSetup {
   std::string trigger_activation = "RisingEdge";
   double black_level = 0.0;
   int packet_size = 0;
+  // Region of interest (sensor pixels); width 0 = the full sensor.
+  int roi_offset_x = 0, roi_offset_y = 0, roi_width = 0, roi_height = 0;
   std::vector<double> exposures_us;  // t_r first, then the t_n
   bool interleave_reference = false;
   int frame_timeout_ms = 1000;

@@ -51,7 +51,7 @@ double Positive(const MapReader& map, const std::string& key, double fallback) {
 CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   const MapReader map(node, file, "camera",
                       {"id", "pixel_format", "trigger_source", "trigger_activation", "black_level",
-                       "packet_size", "frame_timeout_ms", "readout_ms"});
+                       "packet_size", "frame_timeout_ms", "readout_ms", "roi_px"});
   CameraConfig camera;
   camera.id = map.String("id", camera.id);
   camera.pixel_format = map.String("pixel_format", camera.pixel_format);
@@ -63,6 +63,31 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   camera.packet_size = AtLeast(map, "packet_size", camera.packet_size, 0);
   camera.frame_timeout_ms = AtLeast(map, "frame_timeout_ms", camera.frame_timeout_ms, 1);
   camera.readout_ms = NonNegative(map, "readout_ms", camera.readout_ms);
+  if (map.Has("roi_px")) {
+    const YAML::Node node = map.Get("roi_px");
+    const std::string shape =
+        "camera.roi_px must be [offset_x, offset_y, width, height] in sensor pixels (or absent "
+        "for the full sensor)";
+    if (!node.IsSequence() || node.size() != 4) Fail(file, node.Mark(), shape);
+    int v[4];
+    for (int i = 0; i < 4; ++i) {
+      const double x = AsNumber(node[i], file, "camera.roi_px");
+      if (!(x >= 0.0) || x != static_cast<int>(x)) {
+        Fail(file, node[i].Mark(), shape + "; every value a whole number >= 0");
+      }
+      v[i] = static_cast<int>(x);
+    }
+    if (v[2] < kMinRoiSidePx || v[3] < kMinRoiSidePx) {
+      Fail(file, node.Mark(),
+           "camera.roi_px: width and height must be >= " + std::to_string(kMinRoiSidePx) +
+               " px (the features' 64 px window around the IRED's image, with a margin); widen "
+               "the region");
+    }
+    camera.roi_offset_x = v[0];
+    camera.roi_offset_y = v[1];
+    camera.roi_width = v[2];
+    camera.roi_height = v[3];
+  }
   return camera;
 }
 
@@ -131,6 +156,13 @@ bool CameraConfig::IsValid(std::string* why) const {
   if (packet_size < 0) return Fail(why, "camera.packet_size must be >= 0");
   if (frame_timeout_ms < 1) return Fail(why, "camera.frame_timeout_ms must be >= 1");
   if (!(readout_ms >= 0.0)) return Fail(why, "camera.readout_ms must be >= 0");
+  if (roi_offset_x < 0 || roi_offset_y < 0 || roi_width < 0 || roi_height < 0) {
+    return Fail(why, "camera.roi_px values must be >= 0");
+  }
+  if (!FullFrame() && (roi_width < kMinRoiSidePx || roi_height < kMinRoiSidePx)) {
+    return Fail(why, "camera.roi_px: width and height must be >= " +
+                         std::to_string(kMinRoiSidePx) + " px");
+  }
   return true;
 }
 

@@ -9,6 +9,9 @@
 
 namespace irdist {
 
+// The smallest region of interest a rig may set (features take a 64 px window around the blob).
+constexpr int kMinRoiSidePx = 96;
+
 struct CameraConfig {
   std::string id = "auto";               // Aravis device id, serial or IP; "auto" = the only one
   std::string pixel_format = "Mono12";   // Mono8, Mono10, Mono12 or Mono16
@@ -18,6 +21,14 @@ struct CameraConfig {
   int packet_size = 0;                            // GigE Vision packet size, bytes; 0 = negotiate
   int frame_timeout_ms = 1000;  // a frame later than this after its trigger is lost
   double readout_ms = 25.0;     // sensor readout + transfer of one frame (plan estimate)
+  // Region of interest `roi_px: [offset_x, offset_y, width, height]` (sensor pixels); width 0 =
+  // the full sensor. A region around the IRED's image cuts each frame's transfer, the recording
+  // and the host's work by the ratio of areas (docs/recipes.md).
+  int roi_offset_x = 0;
+  int roi_offset_y = 0;
+  int roi_width = 0;
+  int roi_height = 0;
+  bool FullFrame() const { return roi_width == 0; }
   bool IsValid(std::string* why) const;
 };
 

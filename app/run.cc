@@ -268,6 +268,10 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   setup.trigger_activation = recipe.rig.camera.trigger_activation;
   setup.black_level = recipe.rig.camera.black_level;
   setup.packet_size = recipe.rig.camera.packet_size;
+  setup.roi_offset_x = recipe.rig.camera.roi_offset_x;
+  setup.roi_offset_y = recipe.rig.camera.roi_offset_y;
+  setup.roi_width = recipe.rig.camera.roi_width;
+  setup.roi_height = recipe.rig.camera.roi_height;
   setup.exposures_us.push_back(bracket.t_ref_ms * 1000.0);
   double longest_ms = bracket.t_ref_ms;
   for (double t : bracket.t_meas_ms) {

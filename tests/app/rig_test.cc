@@ -28,6 +28,9 @@ TEST(RigTest, VirtualRigLoads) {
   EXPECT_EQ(rig.station.limits.slide_mm.max, 3500.0);
   EXPECT_EQ(rig.station.limits.pan_deg.min, -45.0);
   EXPECT_EQ(rig.station.limits.bias_ma.max, 600.0);
+  // A region around the sensor's centre, where the virtual IRED images at every pose.
+  EXPECT_EQ(rig.camera.roi_offset_x + rig.camera.roi_width / 2, 640);
+  EXPECT_EQ(rig.camera.roi_offset_y + rig.camera.roi_height / 2, 512);
   std::string why;
   EXPECT_TRUE(rig.IsValid(&why)) << why;
 }
@@ -40,6 +43,7 @@ TEST(RigTest, ExampleHardwareRigLoads) {
   EXPECT_EQ(rig.station.motion.slide.speed, 50.0);
   EXPECT_EQ(rig.station.motion.pan.acceleration, 20.0);
   EXPECT_EQ(rig.station.motion.readout_ms, rig.camera.readout_ms);
+  EXPECT_TRUE(rig.camera.FullFrame());  // no roi_px: the whole sensor until the user sets one
 }
 
 TEST(RigTest, EveryKeyIsRead) {
@@ -54,6 +58,7 @@ camera:
   packet_size: 8000
   frame_timeout_ms: 2500
   readout_ms: 40
+  roi_px: [300, 200, 320, 240]
 station:
   port: /dev/ttyACM0
   baud: 9600
@@ -79,6 +84,11 @@ station:
   EXPECT_EQ(rig.camera.black_level, 12);
   EXPECT_EQ(rig.camera.packet_size, 8000);
   EXPECT_EQ(rig.camera.frame_timeout_ms, 2500);
+  EXPECT_FALSE(rig.camera.FullFrame());
+  EXPECT_EQ(rig.camera.roi_offset_x, 300);
+  EXPECT_EQ(rig.camera.roi_offset_y, 200);
+  EXPECT_EQ(rig.camera.roi_width, 320);
+  EXPECT_EQ(rig.camera.roi_height, 240);
   EXPECT_EQ(rig.station.port, "/dev/ttyACM0");
   EXPECT_EQ(rig.station.baud, 9600);
   EXPECT_EQ(rig.station.reply_timeout_ms, 800);
@@ -119,6 +129,12 @@ const BadRig kBadRigs[] = {
     {"bad kind", "kind: imaginary\n", 1, 7, "valid: virtual, hardware"},
     {"hardware with an automatic port", "kind: hardware\nstation:\n  port: auto\n", 3, 9,
      "must name the serial device"},
+    {"roi not four numbers", "kind: virtual\ncamera:\n  roi_px: [0, 0, 256]\n", 3, 11,
+     "must be [offset_x, offset_y, width, height]"},
+    {"roi negative offset", "kind: virtual\ncamera:\n  roi_px: [-8, 0, 256, 256]\n", 3, 12,
+     "whole number >= 0"},
+    {"roi too small", "kind: virtual\ncamera:\n  roi_px: [0, 0, 64, 256]\n", 3, 11,
+     "width and height must be >= 96"},
     {"negative speed", "kind: virtual\nstation:\n  motion:\n    tilt: {speed: -1}\n", 4, 19,
      "speed must be > 0"},
 };

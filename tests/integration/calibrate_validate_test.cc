@@ -103,6 +103,13 @@ TEST_F(CalibrateValidate, CalibrationRecordsEveryBracketFitsAndReports) {
   EXPECT_NE(reader.header().rig_text.find("kind: virtual"), std::string::npos);
   EXPECT_EQ(reader.header().camera.serial, "IRDV0001");
   EXPECT_FALSE(reader.header().camera_features.empty());
+  // The shipped virtual rig's region of interest reaches the camera (roi_px in the rig file).
+  const auto& features = reader.header().camera_features;
+  ASSERT_TRUE(features.count("Width") && features.count("OffsetX")) << reader.header().rig_text;
+  EXPECT_EQ(features.at("Width"), "256");
+  EXPECT_EQ(features.at("Height"), "256");
+  EXPECT_EQ(features.at("OffsetX"), "512");
+  EXPECT_EQ(features.at("OffsetY"), "384");
   EXPECT_FALSE(reader.header().station_identity.empty());
   // Ground truth and the measured current travel with each frame.
   std::set<double> slides;
