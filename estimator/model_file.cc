@@ -149,6 +149,7 @@ std::string ModelToYaml(const CalibrationModel& model) {
   out << YAML::Key << "ellipse_method" << YAML::Value << ToString(f.ellipse_method);
   out << YAML::Key << "inverse_response_m" << YAML::Value << YAML::Flow << f.inverse_response.m;
   out << YAML::Key << "inverse_response_f" << YAML::Value << YAML::Flow << f.inverse_response.f;
+  out << YAML::Key << "response_scope" << YAML::Value << ToString(f.response_scope);
   out << YAML::EndMap;
 
   const ModelScaling& s = model.scaling;
@@ -252,6 +253,18 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
     rd.Fail(f["ellipse_method"], "features.ellipse_method", "unknown ellipse method");
   fo.inverse_response.m = rd.Doubles(f, "features", "inverse_response_m", true);
   fo.inverse_response.f = rd.Doubles(f, "features", "inverse_response_f", true);
+  // Version 3 key; absent (versions 1 and 2): the curve entered E_rel only.
+  fo.response_scope = ResponseScope::kERelOnly;
+  if (f["response_scope"].IsDefined() && !f["response_scope"].IsNull()) {
+    if (version < 3)
+      rd.Fail(f["response_scope"], "features.response_scope",
+              "response_scope is new in format_version 3; this file says " +
+                  std::to_string(version));
+    if (!ParseResponseScope(rd.Scalar<std::string>(f, "features", "response_scope"),
+                            &fo.response_scope))
+      rd.Fail(f["response_scope"], "features.response_scope",
+              "unknown response scope (e_rel_only or all_pixels)");
+  }
   std::string why;
   if (!fo.IsValid(&why)) rd.Fail(f, "features", why);
 

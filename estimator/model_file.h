@@ -12,7 +12,9 @@ namespace irdist {
 
 // 2 adds features.moment_method, features.aperture_margin_px and theta_correction. Version 1 files
 // still load: those keys take their defaults and the model has no theta correction.
-constexpr int kModelFormatVersion = 2;
+// 3 adds features.response_scope (e_rel_only | all_pixels); version 1 and 2 files load as
+// e_rel_only (the inverse response entered E_rel only).
+constexpr int kModelFormatVersion = 3;
 constexpr int kOldestModelFormatVersion = 1;
 
 // A model file that cannot be written, read or understood. what() names the file, the key and,

@@ -108,8 +108,8 @@ TEST(ModelFile, VersionOneFileLoadsAsThresholdMomentsWithoutThetaCorrection) {
   v1.theta_correction = ThetaCorrection();
   std::string text = ModelToYaml(v1);
   ASSERT_EQ(text.find("theta_correction"), std::string::npos);
-  text.replace(text.find("format_version: 2"), 17, "format_version: 1");
-  for (const char* key : {"moment_method", "aperture_margin_px"}) {
+  text.replace(text.find("format_version: 3"), 17, "format_version: 1");
+  for (const char* key : {"moment_method", "aperture_margin_px", "response_scope"}) {
     const size_t at = text.find(std::string("  ") + key + ":");
     ASSERT_NE(at, std::string::npos) << key;
     text.erase(at, text.find('\n', at) - at + 1);
@@ -119,6 +119,40 @@ TEST(ModelFile, VersionOneFileLoadsAsThresholdMomentsWithoutThetaCorrection) {
   EXPECT_EQ(back.features.aperture_margin_px, FeatureOptions().aperture_margin_px);
   EXPECT_FALSE(back.theta_correction.fitted());
   EXPECT_EQ(back.features.window_side_px, 48);
+}
+
+TEST(ModelFile, ResponseScopeRoundTripsAndOldVersionsMeanERelOnly) {
+  CalibrationModel model = SmallModel();
+  model.features.response_scope = ResponseScope::kAllPixels;
+  const std::string text = ModelToYaml(model);
+  EXPECT_NE(text.find("format_version: 3"), std::string::npos);
+  EXPECT_NE(text.find("response_scope: all_pixels"), std::string::npos);
+  const CalibrationModel back = ModelFromYaml(text, "v3.yaml");
+  EXPECT_EQ(back.features.response_scope, ResponseScope::kAllPixels);
+  ASSERT_EQ(back.features.inverse_response.f.size(), 3u);
+  EXPECT_EQ(ModelToYaml(back), text);
+  // Versions 1 and 2 have no response_scope: the curve entered E_rel only.
+  for (const char* version : {"format_version: 2", "format_version: 1"}) {
+    std::string old = text;
+    old.replace(old.find("format_version: 3"), 17, version);
+    const size_t at = old.find("  response_scope:");
+    std::string with_key = old;
+    old.erase(at, old.find('\n', at) - at + 1);
+    const CalibrationModel loaded = ModelFromYaml(old, "old.yaml");
+    EXPECT_EQ(loaded.features.response_scope, ResponseScope::kERelOnly) << version;
+    EXPECT_TRUE(BitEqual(loaded.features.inverse_response.f[1], model.features.inverse_response.f[1]));
+    // The key in an older file is an error naming it.
+    try {
+      ModelFromYaml(with_key, "old.yaml");
+      FAIL() << "accepted response_scope in " << version;
+    } catch (const ModelFileError& e) {
+      EXPECT_EQ(e.key(), "features.response_scope");
+      EXPECT_GT(e.line(), 1);
+    }
+  }
+  std::string bad = text;
+  bad.replace(bad.find("response_scope: all_pixels"), 26, "response_scope: some_pixels");
+  EXPECT_THROW(ModelFromYaml(bad, "m.yaml"), ModelFileError);
 }
 
 TEST(ModelFile, BadThetaCorrectionNamesTheKey) {
@@ -148,7 +182,7 @@ TEST(ModelFile, BadThetaCorrectionNamesTheKey) {
 
 TEST(ModelFile, WrongVersionIsRejected) {
   std::string text = ModelToYaml(SmallModel());
-  text.replace(text.find("format_version: 2"), 17, "format_version: 9");
+  text.replace(text.find("format_version: 3"), 17, "format_version: 9");
   try {
     ModelFromYaml(text, "m.yaml");
     FAIL() << "accepted a wrong version";
