@@ -181,6 +181,8 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub = add("fit");
   sub->add_option("recording", fit.recording, "Recording folder")->required();
   sub->add_option("--out", fit.out, "Model file to write");
+  sub->add_flag("--recover-response", fit.recover_response,
+                "Recover the camera's response from the brackets and linearise every pixel");
   table.emplace_back(sub, [&] { Invoke(handlers.fit, "fit", fit, io); });
 
   sub = add("playback");

@@ -39,6 +39,7 @@ struct ValidateArgs {
 struct FitArgs {
   std::string recording;  // recording folder
   std::string out;        // --out: model file to write ("" = RECORDING/../model.yaml)
+  bool recover_response = false;  // --recover-response: the camera's inverse response first
 };
 
 struct PlaybackArgs {

@@ -11,6 +11,7 @@
 #include <tuple>
 
 #include "acquisition/recording.h"
+#include "app/recipe.h"
 #include "app/run.h"
 #include "app/tools.h"
 #include "estimator/estimate.h"
@@ -203,6 +204,58 @@ std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
     points.push_back(std::move(p));
   }
   return points;
+}
+
+bool RecipeAsksForResponse(const RecordingReader& reader) {
+  const RecordingHeader& header = reader.header();
+  if (header.recipe_text.empty()) return false;
+  const std::string file =
+      header.recipe_path.empty() ? reader.dir() + "/recording.yaml (recipe)" : header.recipe_path;
+  return CameraResponseOfRecipeText(header.recipe_text, file) == CameraResponse::kRecover;
+}
+
+ResponseRecovery RecoverRecordingResponse(const RecordingReader& reader,
+                                          const FeatureOptions& options, std::ostream& out) {
+  const int bit_depth = reader.header().bit_depth;
+  ResponseOptions response_options;
+  response_options.neighbourhood_px = options.window_side_px;
+  ResponseRecoverer recoverer(bit_depth, response_options);
+  FeatureOptions locate = options;
+  locate.inverse_response = InverseResponse();
+  locate.response_scope = ResponseScope::kERelOnly;
+  int brackets = 0;
+  for (const RecordedBracket& bracket : reader.Brackets()) {
+    if (!bracket.complete) continue;
+    std::vector<cv::Mat> frames;
+    std::vector<double> exposures_us;
+    for (const FrameRecord& row : bracket.frames) {
+      cv::Mat image = reader.LoadImage(row);
+      if (image.type() != CV_16UC1) image.convertTo(image, CV_16UC1);
+      frames.push_back(image);
+      // The camera's own exposure when it reported one (the ratio is what the method uses).
+      exposures_us.push_back(row.actual_exposure_us > 0.0 ? row.actual_exposure_us
+                                                           : row.requested_exposure_us);
+    }
+    recoverer.AddStack(frames, exposures_us, locate);
+    ++brackets;
+  }
+  out << "Recovering the camera response from " << brackets << " brackets of " << reader.dir()
+      << "\n";
+  ResponseRecovery recovery = recoverer.Solve();
+  out << "  " << recovery.BriefReport() << "\n  f(M) at M =";
+  for (double m : {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9}) out << " " << Num(m);
+  out << ":";
+  for (double m : {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9})
+    out << " " << Num(std::round(recovery.curve.Apply(m) * 1e4) / 1e4);
+  out << "\n";
+  return recovery;
+}
+
+FeatureOptions WithResponse(const FeatureOptions& options, const ResponseRecovery& recovery) {
+  FeatureOptions out = options;
+  out.inverse_response = recovery.curve;
+  out.response_scope = ResponseScope::kAllPixels;
+  return out;
 }
 
 CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
@@ -435,9 +488,16 @@ void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& opti
 void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
                         const FeatureMap& cache, std::ostream& out) {
   const RecordingReader reader(run_dir + "/recording");
-  const FeatureMap features = RecordingFeatures(reader, options, cache);
+  FeatureOptions fit_options = options;
+  FeatureMap features;
+  if (RecipeAsksForResponse(reader)) {
+    fit_options = WithResponse(options, RecoverRecordingResponse(reader, options, out));
+    features = RecordingFeatures(reader, fit_options);
+  } else {
+    features = RecordingFeatures(reader, options, cache);
+  }
   WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
-  FitRecording(reader, features, options, run_dir + "/model.yaml", run_dir + "/report", out);
+  FitRecording(reader, features, fit_options, run_dir + "/model.yaml", run_dir + "/report", out);
 }
 
 void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,
@@ -459,7 +519,10 @@ void RunFit(const FitArgs& args, CommandIo io) {
       args.out.empty() ? ParentOf(args.recording) + "/model.yaml" : args.out;
   const std::string out_dir = ParentOf(model_path);
   fs::create_directories(out_dir);
-  const FeatureOptions options;
+  FeatureOptions options;
+  if (args.recover_response || RecipeAsksForResponse(reader)) {
+    options = WithResponse(options, RecoverRecordingResponse(reader, options, io.out));
+  }
   const FeatureMap features = RecordingFeatures(reader, options);
   WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
   FitRecording(reader, features, options, model_path, out_dir + "/report", io.out);

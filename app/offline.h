@@ -15,6 +15,7 @@
 #include "app/summary.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
+#include "estimator/response.h"
 
 namespace irdist {
 
@@ -51,6 +52,20 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
                               const FeatureOptions& feature_options, const std::string& model_path,
                               const std::string& report_dir, std::ostream& out);
 
+// Whether a calibration of this recording recovers the camera response: its recipe's
+// `calibration: {camera_response: recover}` (read from the recording's copy of the recipe).
+bool RecipeAsksForResponse(const RecordingReader& reader);
+
+// The camera's inverse response from the complete brackets of `reader` (each bracket one static
+// stack at its frames' exposures; the neighbourhood is `options.window_side_px` around the blob).
+// Prints the recovery's BriefReport and the curve to `out`. Throws ResponseError when the brackets
+// cannot determine it (the message says how to fix the recipe).
+ResponseRecovery RecoverRecordingResponse(const RecordingReader& reader,
+                                          const FeatureOptions& options, std::ostream& out);
+
+// `options` with the recovered curve applied to every pixel (ResponseScope::kAllPixels).
+FeatureOptions WithResponse(const FeatureOptions& options, const ResponseRecovery& recovery);
+
 // The report's calibration points (Fig. 7 and Fig. 8) for a fitted model.
 std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
                                                   const std::vector<CalibrationSample>& samples,
@@ -65,7 +80,9 @@ std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
 
 // The processing after a live run, on DIR/recording: features.csv (frames in `cache` are taken
 // from it), then model.yaml + report/ (calibration) or estimates.csv + summary.yaml + report/
-// (validation, with `model`).
+// (validation, with `model`). A calibration whose recipe says `camera_response: recover` first
+// recovers the response from the brackets and recomputes every frame's features with it (the
+// cache, computed without it, is not used); the curve is stored in model.yaml.
 void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& options,
                           const FeatureMap& cache, std::ostream& out);  // features.csv only
 void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,

@@ -48,6 +48,20 @@ struct ParsedAxis {
   YAML::Node random_node;         // random draws: the map
 };
 
+// `calibration: {camera_response: linear | recover}` of a recipe's top-level map.
+CameraResponse ReadCameraResponse(const MapReader& map, const std::string& file) {
+  if (!map.Has("calibration")) return CameraResponse::kLinear;
+  const MapReader calibration(map.Get("calibration"), file, "calibration", {"camera_response"});
+  const std::string value = calibration.String("camera_response", "linear");
+  if (value == "linear") return CameraResponse::kLinear;
+  if (value == "recover") return CameraResponse::kRecover;
+  Fail(file, calibration.Get("camera_response").Mark(),
+       "calibration.camera_response '" + value +
+           "' is not known; valid: linear (default), recover (the inverse response from the "
+           "brackets)");
+  return CameraResponse::kLinear;
+}
+
 std::vector<double> ExpandRange(const MapReader& range, const std::string& what,
                                 std::vector<YAML::Mark>* marks) {
   const double start = AsNumber(range.Require("start"), range.File(), what + ".start");
@@ -204,6 +218,18 @@ double Rad(double deg) { return deg * kPi / 180.0; }
 
 }  // namespace
 
+std::string CameraResponseName(CameraResponse response) {
+  return response == CameraResponse::kRecover ? "recover" : "linear";
+}
+
+CameraResponse CameraResponseOfRecipeText(const std::string& text, const std::string& file) {
+  const YAML::Node root = yaml_fields::Parse(text, file);
+  if (!root || !root.IsMap() || !root["calibration"]) return CameraResponse::kLinear;
+  YAML::Node only(YAML::NodeType::Map);
+  only["calibration"] = root["calibration"];
+  return ReadCameraResponse(MapReader(only, file, "the recipe", {"calibration"}), file);
+}
+
 std::string AfterRecordingName(AfterRecording after) {
   switch (after) {
     case AfterRecording::kNone:
@@ -240,8 +266,8 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
     throw RecipeError(file, 1, 1, "the recipe is empty; it needs at least axes: and bracket:");
   }
   const MapReader map(root, file, "the recipe",
-                      {"name", "description", "rig", "output", "after", "axes", "order",
-                       "serpentine", "bracket", "settle"});
+                      {"name", "description", "rig", "output", "after", "calibration", "axes",
+                       "order", "serpentine", "bracket", "settle"});
   Recipe recipe;
   recipe.path = file;
   recipe.name = map.String("name", fs::path(file).stem().string());
@@ -261,6 +287,8 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
          "after '" + after +
              "' is not known; valid: fit (calibration), estimate (validation), none");
   }
+
+  recipe.camera_response = ReadCameraResponse(map, file);
 
   // The rig first: its limits check the axes.
   const std::string rig_spec = map.String("rig", "virtual");

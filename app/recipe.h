@@ -22,6 +22,15 @@ enum class AfterRecording {
 
 std::string AfterRecordingName(AfterRecording after);  // "none", "fit", "estimate"
 
+// calibration.camera_response: how the calibration's fit treats the camera's response.
+enum class CameraResponse {
+  kLinear,   // the camera is taken as linear (default; the paper's assumption)
+  kRecover,  // the inverse response is recovered from the recorded brackets and linearises every
+             // pixel before the features (model.yaml: features.response_scope all_pixels)
+};
+
+std::string CameraResponseName(CameraResponse response);  // "linear", "recover"
+
 struct Recipe {
   std::string path;         // the recipe file
   std::string name;         // `name:`, defaults to the file's stem
@@ -30,6 +39,7 @@ struct Recipe {
   Rig rig;                  // loaded rig (camera:, station:)
   std::string output_dir;   // `output:`, defaults to runs/<name>; relative to the working dir
   AfterRecording after = AfterRecording::kNone;
+  CameraResponse camera_response = CameraResponse::kLinear;  // `calibration: {camera_response:}`
   SweepSpec sweep;     // axes (expanded), order, serpentine, bracket, settle
   MotionModel motion;  // the rig's timing model (station.motion + camera.readout_ms)
 };
@@ -40,6 +50,10 @@ Recipe LoadRecipe(const std::string& path);
 // Same, from text. `file` names the recipe in errors; `base_dir` is where a rig given as a
 // relative path is looked for (normally the recipe's folder).
 Recipe ParseRecipe(const std::string& text, const std::string& file, const std::string& base_dir);
+
+// Only the `calibration:` section of a recipe's text (e.g. the recipe a recording was made with,
+// RecordingHeader::recipe_text), without loading its rig. Throws RecipeError naming file:line.
+CameraResponse CameraResponseOfRecipeText(const std::string& text, const std::string& file);
 
 // Where `rig: SPEC` points: a name ("virtual") is looked up as rigs/NAME.yaml beside the recipe,
 // then as recipes/rigs/NAME.yaml of the source tree; a path (containing '/' or ending in .yaml)

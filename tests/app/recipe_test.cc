@@ -140,6 +140,7 @@ bracket:
   EXPECT_EQ(recipe.sweep.bracket.repeats, 1);
   EXPECT_FALSE(recipe.sweep.bracket.retake_reference);
   EXPECT_EQ(recipe.sweep.settle.after_move_ms, SettleSpec().after_move_ms);
+  EXPECT_EQ(recipe.camera_response, CameraResponse::kLinear);
   std::string why;
   EXPECT_TRUE(recipe.sweep.IsValid(&why)) << why;
 }
@@ -197,6 +198,35 @@ bracket: {t_ref_ms: 8, t_meas_ms: 30}
   EXPECT_EQ(v.front(), 1000.0);
   EXPECT_EQ(v.back(), 1001.0);
   for (size_t i = 0; i < v.size(); ++i) EXPECT_NEAR(v[i], 1000.0 + 0.1 * i, 1e-9);
+}
+
+TEST(RecipeTest, CalibrationCameraResponseIsRead) {
+  const char* text = R"(after: fit
+calibration:
+  camera_response: recover
+axes:
+  slide_mm: 2000
+  pan_deg: [0, 10]
+  bias_ma: 500
+bracket:
+  t_ref_ms: 8
+  t_meas_ms: 30
+)";
+  const Recipe recipe = ParseRecipe(text, "/some/where/recover.yaml", kRecipes);
+  EXPECT_EQ(recipe.camera_response, CameraResponse::kRecover);
+  EXPECT_EQ(CameraResponseName(recipe.camera_response), "recover");
+  // The same key from a recording's copy of the recipe, without its rig.
+  EXPECT_EQ(CameraResponseOfRecipeText(text, "r.yaml"), CameraResponse::kRecover);
+  EXPECT_EQ(CameraResponseOfRecipeText("calibration: {camera_response: linear}\n", "r.yaml"),
+            CameraResponse::kLinear);
+  EXPECT_EQ(CameraResponseOfRecipeText("name: x\n", "r.yaml"), CameraResponse::kLinear);
+  try {
+    CameraResponseOfRecipeText("name: x\ncalibration:\n  camera_response: gamma\n", "r.yaml");
+    FAIL() << "accepted camera_response: gamma";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.Line(), 3) << e.what();
+    EXPECT_NE(e.Message().find("valid: linear"), std::string::npos) << e.what();
+  }
 }
 
 // A recipe that the table below breaks in one place each.
@@ -470,6 +500,30 @@ bracket:
   t_meas_ms: [30, 32]
 )",
      2, 7, "axes must be a map with keys slide_mm, theta_deg, pan_deg, tilt_deg, bias_ma"},
+    {"unknown camera response", R"(name: t
+calibration:
+  camera_response: curved
+axes:
+  slide_mm: [1500, 2000]
+  theta_deg: [0, 10]
+  bias_ma: [475, 500]
+bracket:
+  t_ref_ms: 8
+  t_meas_ms: [30, 32]
+)",
+     3, 20, "calibration.camera_response 'curved' is not known; valid: linear (default), recover"},
+    {"unknown calibration key", R"(name: t
+calibration:
+  response: recover
+axes:
+  slide_mm: [1500, 2000]
+  theta_deg: [0, 10]
+  bias_ma: [475, 500]
+bracket:
+  t_ref_ms: 8
+  t_meas_ms: [30, 32]
+)",
+     3, 3, "unknown key 'response' in calibration"},
     {"YAML syntax error", R"(name: t
 axes:
   slide_mm: [1500, 2000
