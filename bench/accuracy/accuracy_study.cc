@@ -3,8 +3,11 @@
 // Table 3 calibration fitted, and the validation grids of Fig. 10, 13 and 14 estimated by every
 // method: the paper's pipeline (Algorithm 1 per t_n, full Eq. 17-18, fixed window), the default
 // pipeline (estimator defaults), the I0-dependent direct model at the nominal current and the
-// geometric baseline. Prints the issue-6 figures. Usage:
+// geometric baseline; pipeline `response` is the default estimator on features linearised by the
+// camera response recovered from the calibration's brackets (estimator/response.h). Prints the
+// issue-6 figures. Usage:
 //   irdist_accuracy_study [--rig recipes/rigs/virtual.yaml] [--seed N] [--quick] [--crb-only]
+//                         [--nonlinearity A]
 // It also prints the Cramer-Rao bound on d and theta at 2.7 m (crb.h) for the Fig. 14 conditions,
 // for one (t_r, t_n) pair and for a whole bracket, beside the measured dispersion of Fig. 14.
 #include <algorithm>
@@ -22,6 +25,7 @@
 #include "estimator/features.h"
 #include "bench/accuracy/crb.h"
 #include "estimator/fit.h"
+#include "estimator/response.h"
 #include "sim/renderer.h"
 #include "sim/rig_physics.h"
 
@@ -51,8 +55,9 @@ class SweepRenderer {
   SweepRenderer(const sim::RigPhysics& physics, std::uint64_t seed)
       : physics_(physics), renderer_(physics), seed_(seed) {}
 
+  // With `recoverer`, every bracket's frames (reference first) also go to it as one stack.
   std::vector<Bracket> Run(const std::vector<Pose>& poses, const std::vector<double>& t_ms,
-                           const FeatureOptions& fo) {
+                           const FeatureOptions& fo, ResponseRecoverer* recoverer = nullptr) {
     std::vector<sim::CurrentStep> history;
     double now = 0.0;
     double current = -1.0;
@@ -72,6 +77,8 @@ class SweepRenderer {
       b.t_ms = t_ms;
       std::vector<double> all = {kTRefMs};
       all.insert(all.end(), t_ms.begin(), t_ms.end());
+      std::vector<cv::Mat> stack;
+      std::vector<double> stack_us;
       for (size_t k = 0; k < all.size(); ++k) {
         sim::FrameConditions c =
             sim::StaticConditions(p.d_mm, p.theta_deg, 0.0, p.bias_ma, all[k] * 1e-3);
@@ -80,6 +87,10 @@ class SweepRenderer {
         renderer_.Render(c, ++frame_index_ + seed_ * 1000003ull, sim::PixelFormat::kMono12, origin,
                          frame);
         Features f = ComputeFeatures(frame, 12, fo);
+        if (recoverer != nullptr) {
+          stack.push_back(frame.clone());
+          stack_us.push_back(all[k] * 1000.0);
+        }
         if (k == 0) {
           b.reference = f;
         } else {
@@ -87,6 +98,7 @@ class SweepRenderer {
         }
         now += all[k] * 1e-3 + physics_.camera.readout_ms * 1e-3;
       }
+      if (recoverer != nullptr) recoverer->AddStack(stack, stack_us, fo);
       out.push_back(std::move(b));
     }
     return out;
@@ -202,6 +214,7 @@ std::vector<CalibrationSample> Samples(const std::vector<Bracket>& brackets) {
 
 struct Pipeline {
   std::string name;
+  bool recover_response = false;  // features with the response recovered from the calibration
   FeatureOptions features;
   FitOptions fit;
   EstimateOptions estimate;
@@ -383,12 +396,15 @@ int Main(int argc, char** argv) {
   bool theta_probe = false;
   bool theta_variants = false;
   bool model_fit = false;  // pipeline model_fit: theta0 from EllipseMethod::kModelFit
+  double nonlinearity = -1.0;  // --nonlinearity A: the rig's sensor nonlinearity replaced by A
   std::string dump_theta;  // CSV of the calibration frames' moments and theta0 (default pipeline)
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--rig") && i + 1 < argc)
       rig = argv[++i];
     else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc)
       seed = std::stoull(argv[++i]);
+    else if (!std::strcmp(argv[i], "--nonlinearity") && i + 1 < argc)
+      nonlinearity = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--quick"))
       quick = true;
     else if (!std::strcmp(argv[i], "--theta-variants"))
@@ -402,6 +418,7 @@ int Main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--help")) {
       std::printf(
           "irdist_accuracy_study [--rig FILE] [--seed N] [--quick] [--verbose] [--crb-only]\n"
+          "  [--nonlinearity A] (the sensor's y = x - A x^2 / x_max instead of the rig's)\n"
           "  [--radiometric-weight W]... [--theta-degree N]... [--dump-theta CSV]\n"
           "  (pipeline theta_cal: the default with the calibrated theta correction;\n"
           "   --theta-degree N adds the default with a correction of total degree N;\n"
@@ -417,8 +434,10 @@ int Main(int argc, char** argv) {
              !std::strcmp(argv[i], "--theta-degree"))
       ++i;
   }
-  const sim::RigPhysics physics = sim::LoadRigPhysics(rig);
-  std::printf("rig %s, seed %llu\n", rig.c_str(), static_cast<unsigned long long>(seed));
+  sim::RigPhysics physics = sim::LoadRigPhysics(rig);
+  if (nonlinearity >= 0.0) physics.sensor.nonlinearity = nonlinearity;
+  std::printf("rig %s, seed %llu, sensor nonlinearity %g\n", rig.c_str(),
+              static_cast<unsigned long long>(seed), physics.sensor.nonlinearity);
   const auto t0 = std::chrono::steady_clock::now();
 
   // Exposure linearity of the renderer and sensor (the acquisition report of 4.05x at 36 ms):
@@ -529,6 +548,14 @@ int Main(int argc, char** argv) {
       pipelines.push_back(pl);
     }
   }
+  {
+    // The default estimator on features whose every pixel is linearised by the camera response
+    // recovered from the calibration's own brackets (ResponseScope::kAllPixels).
+    Pipeline pl;
+    pl.name = "response";
+    pl.recover_response = true;
+    pipelines.push_back(pl);
+  }
   if (model_fit) {
     Pipeline pl;
     pl.name = "model_fit";  // theta0 of the fitted blurred disc (features), no blur to remove
@@ -555,6 +582,15 @@ int Main(int argc, char** argv) {
   const std::vector<double> calib_t = {30, 32, 34, 36};
 
   for (Pipeline& pl : pipelines) {
+    if (pl.recover_response) {
+      SweepRenderer sr(physics, seed);
+      ResponseRecoverer recoverer(12, ResponseOptions());
+      sr.Run(calib, calib_t, pl.features, &recoverer);
+      const ResponseRecovery recovery = recoverer.Solve();
+      std::printf("calibration %-10s %s\n", pl.name.c_str(), recovery.BriefReport().c_str());
+      pl.features.inverse_response = recovery.curve;
+      pl.features.response_scope = ResponseScope::kAllPixels;
+    }
     SweepRenderer sr(physics, seed);
     const auto brackets = sr.Run(calib, calib_t, pl.features);
     pl.model = Fit(Samples(brackets), pl.features, pl.fit);
