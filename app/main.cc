@@ -2,9 +2,15 @@
 #include <exception>
 #include <iostream>
 
+#include <glog/logging.h>
+
 #include "app/cli.h"
 
 int main(int argc, char** argv) {
+  // Ceres logs through glog; a failed trial step of one calibration start ("consecutive invalid
+  // steps") is an ERROR line there, while the fit already reports each model's termination. Keep
+  // the terminal for irdist's own messages.
+  FLAGS_minloglevel = google::GLOG_FATAL;
   try {
     return irdist::RunIrdist(argc, argv, {std::cout, std::cerr});
   } catch (const irdist::UsageError& e) {
