@@ -192,7 +192,22 @@ void SolveLm(const Problem& p, bool solve_theta, const EstimateOptions& options,
     out->condition_number = 1.0;
   }
   if (p.fused) {
-    // Residuals are in units of their calibration errors: the covariance is (J^T J)^-1.
+    // Residuals are in units of their calibration errors. Where the geometric fit has a noise
+    // model, the equations' rows are rescaled from the mean fit error to the noise expected at
+    // this d (one factor for all: their ratios stay as weighted); the theta prior's row keeps its
+    // own sd. Then the covariance is (J^T J)^-1.
+    const GeometricModel& geo = p.model->geometric;
+    const double noise = geo.NoiseRel(out->d_mm);
+    if (noise > 0.0 && geo.summary.mean_relative_error > 0.0) {
+      const double scale = geo.summary.mean_relative_error / noise;
+      const int rows = n - (p.theta_prior_weight > 0.0 ? 1 : 0);
+      h.setZero();
+      for (int i = 0; i < n; ++i) {
+        const double f = i < rows ? scale : 1.0;
+        const Eigen::Vector2d row(j[i][0] * f, j[i][1] * f);
+        h += row * row.transpose();
+      }
+    }
     if (solve_theta && h.determinant() > 0.0) {
       const Eigen::Matrix2d cov = h.inverse();
       out->d_std_mm = out->d_mm * std::sqrt(cov(0, 0));

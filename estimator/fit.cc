@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -504,6 +505,43 @@ FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<Calibrati
   return model;
 }
 
+namespace {
+
+// The residuals' rms at each calibrated distance (groups of >= 3 samples), then
+// ln rms = ln c + k ln(d / 1000 mm) by least squares weighted by the group sizes. With one
+// distance only, k = 0 and c = that rms.
+void FitGeometricNoise(const std::vector<std::pair<double, double>>& points, GeometricModel* g) {
+  std::map<double, std::pair<double, int>> groups;  // D -> (sum of r^2, count)
+  for (size_t i = 0; i < points.size(); ++i) {
+    const double r = g->summary.residuals[i];
+    if (!std::isfinite(r)) continue;
+    auto& acc = groups[points[i].first];
+    acc.first += r * r;
+    ++acc.second;
+  }
+  double sw = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0;
+  int used = 0;
+  for (const auto& [big_d, acc] : groups) {
+    if (acc.second < 3 || !(acc.first > 0.0)) continue;
+    const double x = std::log(1.0 / std::sqrt(big_d));  // ln(d / 1000 mm)
+    const double y = 0.5 * std::log(acc.first / acc.second);
+    const double w = acc.second;
+    sw += w;
+    sx += w * x;
+    sy += w * y;
+    sxx += w * x * x;
+    sxy += w * x * y;
+    ++used;
+  }
+  if (used == 0) return;
+  const double var_x = sxx / sw - (sx / sw) * (sx / sw);
+  const double k = used >= 2 && var_x > 1e-12 ? (sxy / sw - sx / sw * sy / sw) / var_x : 0.0;
+  g->noise_exponent = k;
+  g->noise_rel_at_1m = std::exp(sy / sw - k * sx / sw);
+}
+
+}  // namespace
+
 GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples) {
   GeometricModel g;
   // Relative least squares of var = alpha D + beta: rows [D/var, 1/var] . [alpha, beta] = 1.
@@ -536,6 +574,7 @@ GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples) {
     g.summary.residuals.push_back(d_est / d_true - 1.0);
   }
   FillErrors(&g.summary);
+  FitGeometricNoise(points, &g);
   g.summary.termination =
       g.alpha_px2 > 0.0 ? FitSummary::Termination::kConverged : FitSummary::Termination::kFailed;
   g.summary.message = "linear least squares; residuals are relative distance errors";

@@ -4,6 +4,7 @@
 // with the scale gauge of the ratio models fixed by holding one coefficient at 1. Also fits the
 // purely geometric baseline (distance from the blob's second-moment size).
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -99,8 +100,19 @@ struct CalibratedRanges {
 struct GeometricModel {
   double alpha_px2 = 0.0;
   double beta_px2 = 0.0;
+  // Per-frame noise of the relative distance it implies, as a function of d:
+  // sd(d) = noise_rel_at_1m * (d / 1000 mm)^noise_exponent, fitted to the calibration residuals'
+  // rms at each calibrated distance (the apparent size's noise grows with d). 0 = not fitted
+  // (model files before it): standard errors then stay in units of the mean fit error.
+  double noise_rel_at_1m = 0.0;
+  double noise_exponent = 0.0;
   FitSummary summary;
   bool fitted() const { return alpha_px2 > 0.0; }
+  // sd(d) above; 0 when the noise model is not fitted.
+  double NoiseRel(double d_mm) const {
+    return noise_rel_at_1m > 0.0 ? noise_rel_at_1m * std::pow(d_mm / 1000.0, noise_exponent)
+                                 : 0.0;
+  }
 };
 
 // Calibrated theta correction. The moment ellipse with the calibrated blur variance beta removed

@@ -190,6 +190,10 @@ std::string ModelToYaml(const CalibrationModel& model) {
   out << YAML::Key << "geometric" << YAML::Value << YAML::BeginMap;
   EmitDouble(out, "alpha_px2", model.geometric.alpha_px2);
   EmitDouble(out, "beta_px2", model.geometric.beta_px2);
+  if (model.geometric.noise_rel_at_1m > 0.0) {
+    EmitDouble(out, "noise_rel_at_1m", model.geometric.noise_rel_at_1m);
+    EmitDouble(out, "noise_exponent", model.geometric.noise_exponent);
+  }
   EmitFit(out, model.geometric.summary);
   out << YAML::EndMap;
 
@@ -312,6 +316,17 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   const YAML::Node g = rd.Child(root, "", "geometric");
   model.geometric.alpha_px2 = rd.Scalar<double>(g, "geometric", "alpha_px2");
   model.geometric.beta_px2 = rd.Scalar<double>(g, "geometric", "beta_px2");
+  // Optional (absent in files written before the noise model): standard errors then stay in
+  // units of the mean fit error.
+  if (g["noise_rel_at_1m"].IsDefined() && !g["noise_rel_at_1m"].IsNull()) {
+    model.geometric.noise_rel_at_1m = rd.Scalar<double>(g, "geometric", "noise_rel_at_1m");
+    model.geometric.noise_exponent = rd.Scalar<double>(g, "geometric", "noise_exponent");
+    if (!(model.geometric.noise_rel_at_1m > 0.0) ||
+        !std::isfinite(model.geometric.noise_exponent)) {
+      rd.Fail(g["noise_rel_at_1m"], "geometric.noise_rel_at_1m",
+              "must be > 0 with a finite noise_exponent (or both absent)");
+    }
+  }
   model.geometric.summary = rd.Fit(g, "geometric");
 
   const YAML::Node t = root["theta_correction"];

@@ -134,6 +134,45 @@ TEST_F(AccuracyTest, DefaultPipelineMeetsTheGoalsAtOffGridPoses) {
       100 * worst, worst_theta, 100 * worst_shift, 100 * worst_i0);
 }
 
+// The standard error each estimate reports must describe its scatter, at every distance: 30
+// repetitions of one pose (one 8/35 ms pair each) at 1.7 and 2.7 m, mean reported d_std against
+// the measured sd of d. The apparent size's noise grows faster than d (the Cramer-Rao bound goes
+// as d^2.6), which the geometric fit's noise model carries; in units of the mean calibration
+// error alone the standard error grew only as d (1.6x from 1.7 to 2.7 m, against ~3x).
+TEST_F(AccuracyTest, StandardErrorFollowsTheScatterAcrossDistance) {
+  const FeatureOptions fo;
+  const CalibrationModel model = Calibrate(fo, FitOptions());
+  ASSERT_GT(model.geometric.noise_rel_at_1m, 0.0);
+  ASSERT_GT(model.geometric.noise_exponent, 0.5);  // the apparent size's noise grows with d
+  const EstimateOptions eo;
+  double sd[2], se[2];
+  const double distances[2] = {1700.0, 2700.0};
+  for (int k = 0; k < 2; ++k) {
+    std::vector<double> d_mm;
+    double mean_std = 0.0;
+    for (int rep = 0; rep < 30; ++rep) {
+      const Bracket b = Render(distances[k], 20.0, 500.0, {35.0}, fo);
+      const BracketEstimate e =
+          EstimateBracket(model, b.reference, kTRefMs, b.measurements, b.t_ms, eo);
+      d_mm.push_back(e.joint.d_mm);
+      mean_std += e.joint.d_std_mm / 30.0;
+    }
+    double mean = 0.0, var = 0.0;
+    for (double d : d_mm) mean += d / d_mm.size();
+    for (double d : d_mm) var += (d - mean) * (d - mean) / (d_mm.size() - 1);
+    sd[k] = std::sqrt(var);
+    se[k] = mean_std;
+    std::printf("%.0f mm, 20 deg: sd of d %.2f mm, mean reported standard error %.2f mm (%.2fx)\n",
+                distances[k], sd[k], se[k], se[k] / sd[k]);
+    // 30 repetitions estimate an sd to ~13%; the rest is the calibration's own noise model.
+    EXPECT_GT(se[k] / sd[k], 0.7) << distances[k];
+    EXPECT_LT(se[k] / sd[k], 1.6) << distances[k];
+  }
+  const double growth_sd = sd[1] / sd[0], growth_se = se[1] / se[0];
+  std::printf("from 1.7 to 2.7 m: sd x%.2f, standard error x%.2f\n", growth_sd, growth_se);
+  EXPECT_NEAR(growth_se / growth_sd, 1.0, 0.35);
+}
+
 TEST_F(AccuracyTest, PaperPipelineRunsAndStaysNearItsPublishedError) {
   const FeatureOptions fo = PaperFeatureOptions();
   const CalibrationModel model = Calibrate(fo, PaperFitOptions());

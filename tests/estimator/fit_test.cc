@@ -153,6 +153,27 @@ TEST(Fit, GeometricBaselineRecoversSizeLaw) {
   EXPECT_LT(g.summary.max_relative_error, 1e-12);
 }
 
+// Table 3 samples whose moment variance carries a relative error growing as d^1.5 (every pose's
+// error drawn from {-1, +1} x sd, so each distance's rms is exactly the sd): the noise model
+// returns the law.
+TEST(Fit, GeometricNoiseModelFollowsTheResidualsAcrossDistance) {
+  const testing::SyntheticRig rig;
+  std::vector<CalibrationSample> samples = rig.Table3();
+  int i = 0;
+  for (CalibrationSample& s : samples) {
+    const double sd_d = 4e-4 * std::pow(s.d_mm / 1000.0, 1.5);  // relative error of d
+    // d_est = d (1 + e) from var - beta = alpha D / (1 + e)^2.
+    const double e = (i++ % 2 == 0 ? 1.0 : -1.0) * sd_d;
+    Features& m = s.measurement;
+    m.moment_major_var_px2 = 1.0 + (m.moment_major_var_px2 - 1.0) / ((1.0 + e) * (1.0 + e));
+  }
+  const GeometricModel g = FitGeometric(samples);
+  EXPECT_NEAR(g.noise_exponent, 1.5, 0.05);
+  EXPECT_NEAR(g.NoiseRel(2000.0), 4e-4 * std::pow(2.0, 1.5), 0.05 * 4e-4 * std::pow(2.0, 1.5));
+  // No noise model: NoiseRel is 0 (standard errors stay in units of the mean fit error).
+  EXPECT_EQ(GeometricModel().NoiseRel(2000.0), 0.0);
+}
+
 // Table 3 samples whose moment ellipse is distorted: x = (minor - blur) / (major - blur) =
 // 0.97 cos^2(theta) + 0.01 + 0.005 z (z the distance mapped to [-1, 1] over 1.5..3 m), the kind of
 // pose-dependent deviation a threshold cut or an unmodelled blur leaves.

@@ -26,6 +26,8 @@ CalibrationModel SmallModel() {
   features.moment_method = MomentMethod::kAperture;
   features.aperture_margin_px = 4.25;
   CalibrationModel model = Fit(rig.Table3(), features, options);
+  model.geometric.noise_rel_at_1m = 2.0 / 7.0 * 1e-3;
+  model.geometric.noise_exponent = 1.0 / 3.0 + 1.0;
   // The synthetic frames carry no minor axis: a hand-made correction (degree 2).
   ThetaCorrection& tc = model.theta_correction;
   tc.degree = 2;
@@ -75,6 +77,8 @@ TEST(ModelFile, RoundTripIsBitExact) {
     EXPECT_EQ(a.summary.samples, b.summary.samples);
   }
   EXPECT_TRUE(BitEqual(back.geometric.alpha_px2, model.geometric.alpha_px2));
+  EXPECT_TRUE(BitEqual(back.geometric.noise_rel_at_1m, model.geometric.noise_rel_at_1m));
+  EXPECT_TRUE(BitEqual(back.geometric.noise_exponent, model.geometric.noise_exponent));
   EXPECT_EQ(back.features.moment_method, MomentMethod::kAperture);
   EXPECT_TRUE(BitEqual(back.features.aperture_margin_px, 4.25));
   const ThetaCorrection &ta = model.theta_correction, &tb = back.theta_correction;
