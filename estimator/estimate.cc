@@ -39,7 +39,26 @@ struct Problem {
   const double* geo_ln_d = nullptr;  // per difference, ln of the frame's geometric d (NaN: none)
   double theta_prior_rad = 0.0;
   double theta_prior_weight = 0.0;  // 1 / sd in rad; 0: no prior
+  double huber = 0.0;               // kFused: Huber threshold of the radiometric residuals
 };
+
+inline double ValueOf(double x) { return x; }
+template <typename T, int N>
+double ValueOf(const ceres::Jet<T, N>& x) {
+  return x.a;
+}
+
+// The residual whose square is the Huber loss (x2) of r with threshold k: r itself within k,
+// sign(r) sqrt(k (2 |r| - k)) beyond (continuous with its first derivative).
+template <typename T>
+T Robust(const T& r, double k) {
+  using std::sqrt;
+  if (!(k > 0.0)) return r;
+  if (std::abs(ValueOf(r)) <= k) return r;
+  const T abs_r = r < T(0.0) ? -r : r;
+  const T robust = sqrt(k * (2.0 * abs_r - k));
+  return r < T(0.0) ? -robust : robust;
+}
 
 // Relative residuals of Eq. 26 at (ln d, theta rad): [E_0, S_0, E_1, S_1, ...] (E left out when
 // degenerate). Returns the number of residuals.
@@ -60,16 +79,20 @@ int Residuals(const Problem& p, const T& ln_d, const T& theta_rad, T* r) {
     vars[kVarDF] = T(p.diffs[i].df);
     if (p.use_e) {
       vars[kVarRho] = Rho(theta_deg, T(p.e->sigma_deg));
-      r[n++] = (EvaluateModel(GetModelSpec(ModelKind::kFreeE), p.e->coefficients.data(), vars) /
-                    p.diffs[i].de -
-                1.0) *
-               p.e_weight;
+      r[n++] = Robust((EvaluateModel(GetModelSpec(ModelKind::kFreeE), p.e->coefficients.data(),
+                                     vars) /
+                           p.diffs[i].de -
+                       1.0) *
+                          p.e_weight,
+                      p.huber);
     }
     vars[kVarRho] = Rho(theta_deg, T(p.s->sigma_deg));
-    r[n++] = (EvaluateModel(GetModelSpec(ModelKind::kFreeSigma), p.s->coefficients.data(), vars) /
-                  p.diffs[i].ds -
-              1.0) *
-             p.s_weight;
+    r[n++] = Robust((EvaluateModel(GetModelSpec(ModelKind::kFreeSigma), p.s->coefficients.data(),
+                                   vars) /
+                         p.diffs[i].ds -
+                     1.0) *
+                        p.s_weight,
+                    p.huber);
   }
   if (p.geo_weight > 0.0) {
     for (int i = 0; i < p.count; ++i) {
@@ -139,12 +162,25 @@ void SolveLm(const Problem& p, bool solve_theta, const EstimateOptions& options,
       Residuals(p, trial[0], trial[1], rt);
       const double trial_cost = SumSquares(rt, n);
       if (std::isfinite(trial_cost) && trial_cost <= cost) {
+        // Gain ratio: the actual decrease over the one the linear model predicts. With large
+        // residuals (a Sigma equation that the calibration cannot meet exactly) Gauss-Newton
+        // steps overshoot and alternate in sign; lowering the damping after such a step kept
+        // them bouncing for the whole iteration budget. Lower it only after good steps.
+        const double predicted = -(2.0 * g.dot(step) + step.dot(h * step));
+        const double ratio = predicted > 0.0 ? (cost - trial_cost) / predicted : 0.0;
+        const double decrease = cost - trial_cost;
         x[0] = trial[0];
         x[1] = trial[1];
         cost = trial_cost;
-        lambda = std::max(lambda / 5.0, 1e-12);
+        if (ratio > 0.75) {
+          lambda = std::max(lambda / 5.0, 1e-12);
+        } else if (ratio < 0.25) {
+          lambda = std::min(lambda * 4.0, 1e12);
+        }
         accepted = true;
-        if (step.norm() < options.step_tolerance) out->converged = true;
+        if (step.norm() < options.step_tolerance || decrease <= 1e-15 * (cost + decrease)) {
+          out->converged = true;
+        }
       } else {
         lambda *= 8.0;
       }
@@ -167,6 +203,7 @@ void SolveLm(const Problem& p, bool solve_theta, const EstimateOptions& options,
     plain.fused = false;
     plain.e_weight = plain.s_weight = 1.0;
     plain.geo_weight = plain.theta_prior_weight = 0.0;
+    plain.huber = 0.0;
     double rp[kMaxResiduals];
     const int np = Residuals(plain, x[0], x[1], rp);
     double se = 0.0, ss = 0.0;
@@ -465,6 +502,7 @@ void SetUpFused(const CalibrationModel& model, const EstimateOptions& options, c
   p->fused = true;
   p->e_weight = FitWeight(p->e->summary) * options.radiometric_weight;
   p->s_weight = FitWeight(p->s->summary) * options.radiometric_weight;
+  p->huber = options.radiometric_huber;
   // Geometric summary residuals are relative distance errors: the weight is for ln d directly.
   if (model.geometric.fitted()) {
     p->geo_weight = FitWeight(model.geometric.summary) * options.geometric_weight;
@@ -498,6 +536,7 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(theta_prior_sd_deg > 0.0)) return fail("theta_prior_sd_deg must be > 0");
   if (!(radiometric_weight > 0.0)) return fail("radiometric_weight must be > 0");
   if (!(geometric_weight >= 0.0)) return fail("geometric_weight must be >= 0");
+  if (!(radiometric_huber >= 0.0)) return fail("radiometric_huber must be >= 0 (0 = off)");
   return true;
 }
 

@@ -459,6 +459,9 @@ FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<Calibrati
     }
     if (sigma_free) {
       problem.SetParameterLowerBound(&sigma, 0, 0.5);
+      // Bounded above by the scan's end: where the model barely depends on sigma it would
+      // otherwise drift for the whole iteration budget (no_convergence at 1000 iterations).
+      problem.SetParameterUpperBound(&sigma, 0, options.sigma_max_deg);
     } else {
       problem.SetParameterBlockConstant(&sigma);
     }
@@ -487,6 +490,12 @@ FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<Calibrati
     fs.message = "start " + std::to_string(s + 1) + " of " +
                  std::to_string(std::min<int>(options.multi_starts, starts.size())) +
                  " from sigma " + std::to_string(starts[s].sigma) + " deg";
+    if (sigma_free && sigma >= options.sigma_max_deg * (1.0 - 1e-6)) {
+      // The I0-free ratios barely see the emission pattern (I0 rho cancels): sigma drifts along
+      // a flat direction until the bound stops it. The fit error does not depend on it.
+      fs.message += "; sigma at its upper bound (" + std::to_string(options.sigma_max_deg) +
+                    " deg): the model barely depends on it";
+    }
     fs.iterations = static_cast<int>(summary.iterations.size()) - 1;
     fs.gauge_index = gauge;
     fs.samples = static_cast<int>(obs.size());
