@@ -112,6 +112,20 @@ TEST(RecipeTest, ConsistencyRepeatsOneHundredTimes) {
   for (const auto& [theta, count] : per_angle) EXPECT_EQ(count, 100) << theta;
 }
 
+TEST(RecipeTest, ConsistencyBracketTakesTheTable3ExposuresEachRepetition) {
+  const Recipe recipe = Shipped("consistency-bracket.yaml");
+  const Recipe table3 = Shipped("table3-calibration.yaml");
+  const Plan plan = PlanRecipe(recipe);
+  EXPECT_EQ(plan.summary.pose_count, 400);
+  EXPECT_EQ(plan.summary.frame_count, 2000);
+  EXPECT_EQ(plan.summary.difference_count, 1600);
+  EXPECT_EQ(plan.summary.moves, 4);
+  // Exposures inside the calibration's: no estimate extrapolates in t.
+  EXPECT_EQ(recipe.sweep.bracket.t_meas_ms, table3.sweep.bracket.t_meas_ms);
+  EXPECT_EQ(recipe.sweep.bracket.t_ref_ms, table3.sweep.bracket.t_ref_ms);
+  EXPECT_EQ(recipe.after, AfterRecording::kEstimate);
+}
+
 TEST(RecipeTest, SmokeCalibrationIsSmall) {
   const Recipe recipe = Shipped("smoke-calibration.yaml");
   const Plan plan = PlanRecipe(recipe);
