@@ -345,10 +345,9 @@ double StationClient::MeasureCurrent() {
   return ParseCounts(Command("MEAS:CURR?"), 1, "MEAS:CURR?")[0] / 100.0;
 }
 
-std::uint64_t StationClient::Trigger(int count, double width_us, double period_us) {
+void StationClient::Trigger(int count, double width_us, double period_us) {
   IRDIST_CHECK(count >= 1 && width_us > 0 && period_us > width_us, "count ", count, " width ",
                width_us, " period ", period_us);
-  const std::uint64_t before = Pulses().total;
   const long long width_rounded = std::llround(width_us);
   const long long period_rounded = std::llround(period_us);
   // Settings survive until the next power-up; a reboot changes the boot id (seen by Pulses()'s
@@ -375,7 +374,6 @@ std::uint64_t StationClient::Trigger(int count, double width_us, double period_u
     trigger_period_us_ = period_rounded;
   }
   Command("TRIG:FIRE");
-  return before;
 }
 
 PulseCounter StationClient::Pulses() {

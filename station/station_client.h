@@ -128,9 +128,11 @@ class StationClient {
   double MeasureCurrent();          // mA, as measured by the source (noisy)
   double current_setpoint_ma() const { return current_ma_; }
 
-  // Programs and starts a pulse train: `count` rising edges `period_us` apart, each `width_us`
-  // wide. Returns the pulse counter's total before the train.
-  std::uint64_t Trigger(int count, double width_us, double period_us);
+  // Programs (when the settings changed) and starts a pulse train: `count` rising edges
+  // `period_us` apart, each `width_us` wide. One FIRE exchange when the train is the last one's
+  // (a bracket's frames): the pulse counter is not read here (Pulses() does), which saves a
+  // round trip per frame.
+  void Trigger(int count, double width_us, double period_us);
   PulseCounter Pulses();
   // Polls until the running train is done; returns the pulse total.
   std::uint64_t WaitTriggerDone();

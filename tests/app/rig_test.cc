@@ -5,6 +5,7 @@
 #include <string>
 
 #include "app/errors.h"
+#include "sim/rig_physics.h"
 
 namespace irdist {
 namespace {
@@ -33,6 +34,18 @@ TEST(RigTest, VirtualRigLoads) {
   EXPECT_EQ(rig.camera.roi_offset_y + rig.camera.roi_height / 2, 512);
   std::string why;
   EXPECT_TRUE(rig.IsValid(&why)) << why;
+}
+
+// The duration estimate and physical bound of a virtual rig use the rig file's camera.readout_ms;
+// the virtual camera reads out after virtual.camera.readout_ms. They must agree, or `irdist plan`
+// and bench/sweep measure against a wrong bound.
+TEST(RigTest, VirtualRigsEstimateWithTheirCamerasOwnReadout) {
+  for (const char* name : {"virtual.yaml", "virtual-cosm.yaml"}) {
+    const Rig rig = LoadRig(kRigs + "/" + name);
+    const sim::RigPhysics physics = sim::LoadRigPhysics(kRigs + "/" + name);
+    EXPECT_DOUBLE_EQ(rig.camera.readout_ms, physics.camera.readout_ms) << name;
+    EXPECT_DOUBLE_EQ(rig.station.motion.readout_ms, physics.camera.readout_ms) << name;
+  }
 }
 
 TEST(RigTest, ExampleHardwareRigLoads) {
