@@ -1,9 +1,10 @@
 #pragma once
 // The scene: the IRED (a uniformly bright tilted disc with an emission pattern, a drive-current
 // law and a thermal model) seen through the lens. It produces the mean number of signal
-// photo-electrons per pixel, by ray casting each sub-pixel onto the disc's plane (a true
-// perspective projection, integrated over the pixel) and blurring with the optics' PSF. Noise,
-// dark signal and quantisation are the Sensor's business.
+// photo-electrons per pixel: the disc's exact perspective image (the conic where rays through the
+// pinhole meet the tilted disc) convolved with the optics' Gaussian PSF and integrated over each
+// pixel, in closed form per strip of the image (no sampling of the sharp disc, so no aliasing;
+// docs/virtual-rig.md). Noise, dark signal and quantisation are the Sensor's business.
 //
 // Geometry: the camera's pinhole is the origin, the optical axis is +z, image x/y follow the
 // sensor's columns/rows. The emitter's centre is at (offset_x_mm, offset_y_mm, slide_mm). Its
