@@ -216,11 +216,15 @@ void SolveLm(const Problem& p, bool solve_theta, const EstimateOptions& options,
     out->residual_e = ne > 0 ? std::sqrt(se / ne) : 0.0;
     out->residual_sigma = ns > 0 ? std::sqrt(ss / ns) : 0.0;
   }
-  Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
+  // J^T J of the equations and of the theta prior (the last row when there is one) apart: the
+  // covariance below rescales the equations only.
+  const int equations = n - (p.theta_prior_weight > 0.0 ? 1 : 0);
+  Eigen::Matrix2d h_equations = Eigen::Matrix2d::Zero(), h_prior = Eigen::Matrix2d::Zero();
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector2d row(j[i][0], j[i][1]);
-    h += row * row.transpose();
+    (i < equations ? h_equations : h_prior) += row * row.transpose();
   }
+  Eigen::Matrix2d h = h_equations + h_prior;
   if (solve_theta) {
     const Eigen::Vector2d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(h).eigenvalues();
     out->condition_number =
@@ -237,13 +241,7 @@ void SolveLm(const Problem& p, bool solve_theta, const EstimateOptions& options,
     const double noise = geo.NoiseRel(out->d_mm);
     if (noise > 0.0 && geo.summary.mean_relative_error > 0.0) {
       const double scale = geo.summary.mean_relative_error / noise;
-      const int rows = n - (p.theta_prior_weight > 0.0 ? 1 : 0);
-      h.setZero();
-      for (int i = 0; i < n; ++i) {
-        const double f = i < rows ? scale : 1.0;
-        const Eigen::Vector2d row(j[i][0] * f, j[i][1] * f);
-        h += row * row.transpose();
-      }
+      h = scale * scale * h_equations + h_prior;
     }
     if (solve_theta && h.determinant() > 0.0) {
       const Eigen::Matrix2d cov = h.inverse();
