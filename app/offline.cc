@@ -258,6 +258,19 @@ FeatureOptions WithResponse(const FeatureOptions& options, const ResponseRecover
   return out;
 }
 
+namespace {
+
+// The features a fit of `reader` uses: `options`, or with the camera response recovered from
+// the brackets when `force` or the recording's recipe asks for it (`*recovered` says which).
+FeatureOptions FitFeatureOptions(const RecordingReader& reader, const FeatureOptions& options,
+                                 bool force, std::ostream& out, bool* recovered = nullptr) {
+  const bool recover = force || RecipeAsksForResponse(reader);
+  if (recovered != nullptr) *recovered = recover;
+  return recover ? WithResponse(options, RecoverRecordingResponse(reader, options, out)) : options;
+}
+
+}  // namespace
+
 // Fewer calibrated distances than Table 3's leave the I0-free Sigma model underdetermined
 // between them (docs/estimator.md).
 constexpr size_t kDenseDistances = 4;
@@ -501,14 +514,11 @@ void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& opti
 void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
                         const FeatureMap& cache, std::ostream& out) {
   const RecordingReader reader(run_dir + "/recording");
-  FeatureOptions fit_options = options;
-  FeatureMap features;
-  if (RecipeAsksForResponse(reader)) {
-    fit_options = WithResponse(options, RecoverRecordingResponse(reader, options, out));
-    features = RecordingFeatures(reader, fit_options);
-  } else {
-    features = RecordingFeatures(reader, options, cache);
-  }
+  bool recovered = false;
+  const FeatureOptions fit_options = FitFeatureOptions(reader, options, false, out, &recovered);
+  // The live cache was computed without the curve: after a recovery every frame is recomputed.
+  const FeatureMap features =
+      RecordingFeatures(reader, fit_options, recovered ? FeatureMap{} : cache);
   WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
   FitRecording(reader, features, fit_options, run_dir + "/model.yaml", run_dir + "/report", out);
 }
@@ -532,10 +542,8 @@ void RunFit(const FitArgs& args, CommandIo io) {
       args.out.empty() ? ParentOf(args.recording) + "/model.yaml" : args.out;
   const std::string out_dir = ParentOf(model_path);
   fs::create_directories(out_dir);
-  FeatureOptions options;
-  if (args.recover_response || RecipeAsksForResponse(reader)) {
-    options = WithResponse(options, RecoverRecordingResponse(reader, options, io.out));
-  }
+  const FeatureOptions options =
+      FitFeatureOptions(reader, FeatureOptions{}, args.recover_response, io.out);
   const FeatureMap features = RecordingFeatures(reader, options);
   WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
   FitRecording(reader, features, options, model_path, out_dir + "/report", io.out);

@@ -42,22 +42,16 @@ struct Problem {
   double huber = 0.0;               // kFused: Huber threshold of the radiometric residuals
 };
 
-inline double ValueOf(double x) { return x; }
-template <typename T, int N>
-double ValueOf(const ceres::Jet<T, N>& x) {
-  return x.a;
-}
-
 // The residual whose square is the Huber loss (x2) of r with threshold k: r itself within k,
-// sign(r) sqrt(k (2 |r| - k)) beyond (continuous with its first derivative).
+// sign(r) sqrt(k (2 |r| - k)) beyond (continuous with its first derivative). Jets compare by
+// value, so one template serves the solve and its derivatives.
 template <typename T>
 T Robust(const T& r, double k) {
   using std::sqrt;
-  if (!(k > 0.0)) return r;
-  if (std::abs(ValueOf(r)) <= k) return r;
-  const T abs_r = r < T(0.0) ? -r : r;
-  const T robust = sqrt(k * (2.0 * abs_r - k));
-  return r < T(0.0) ? -robust : robust;
+  if (!(k > 0.0) || (r <= T(k) && r >= T(-k))) return r;
+  const bool negative = r < T(0.0);
+  const T robust = sqrt(k * (2.0 * (negative ? -r : r) - k));
+  return negative ? -robust : robust;
 }
 
 // Relative residuals of Eq. 26 at (ln d, theta rad): [E_0, S_0, E_1, S_1, ...] (E left out when
