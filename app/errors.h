@@ -7,40 +7,13 @@
 #include <utility>
 
 #include "base/check.h"
+#include "base/input_error.h"
 
 namespace irdist {
 
-// A recipe or rig file that cannot be used: what is wrong, where (file:line:column, 1-based) and
-// what would be valid. Thrown before anything moves.
-class RecipeError : public Error {
- public:
-  // line and column are 1-based; 0 when unknown (e.g. the file cannot be opened).
-  RecipeError(std::string file, int line, int column, const std::string& message)
-      : Error(Format(file, line, column, message)),
-        file_(std::move(file)),
-        line_(line),
-        column_(column),
-        message_(message) {}
-
-  const std::string& File() const { return file_; }
-  int Line() const { return line_; }
-  int Column() const { return column_; }
-  const std::string& Message() const { return message_; }  // without the file:line:column prefix
-
- private:
-  static std::string Format(const std::string& file, int line, int column,
-                            const std::string& message) {
-    std::string where = file;
-    if (line > 0) where += ":" + std::to_string(line);
-    if (line > 0 && column > 0) where += ":" + std::to_string(column);
-    return where + ": " + message;
-  }
-
-  std::string file_;
-  int line_;
-  int column_;
-  std::string message_;
-};
+// A recipe or rig file that cannot be used (base/input_error.h): file:line:column, what is wrong
+// and what would be valid. Thrown before anything moves.
+using RecipeError = InputError;
 
 // The command line is wrong (unknown command, missing or bad argument). Exit code 2.
 class UsageError : public Error {

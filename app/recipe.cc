@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "app/yaml_fields.h"
+#include "base/yaml_fields.h"
 
 #ifndef IRDIST_SOURCE_DIR
 #define IRDIST_SOURCE_DIR "."

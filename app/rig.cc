@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "app/errors.h"
-#include "app/yaml_fields.h"
+#include "base/yaml_fields.h"
 
 namespace irdist {
 namespace {

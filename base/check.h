@@ -1,8 +1,7 @@
 #pragma once
 // The project's error base class and its CHECK macro (the COLMAP pattern, throwing instead of
-// aborting: library code never exits). Every module may include this header and nothing else of
-// base/; typed errors (CameraError, LinkError, RecipeError, ...) derive from irdist::Error in their
-// own module.
+// aborting: library code never exits). Every module may include base/; typed errors (CameraError,
+// LinkError, InputError, ...) derive from irdist::Error.
 
 #include <sstream>
 #include <stdexcept>

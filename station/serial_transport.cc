@@ -77,7 +77,7 @@ const std::string& SerialTransport::port() const { return impl_->port_name; }
 void SerialTransport::WriteLine(std::string_view line) {
   if (impl_->log) impl_->log->Sent(line);
   std::string bytes(line);
-  bytes += "\r\n";
+  bytes += impl_->options.line_end;
   bool done = false;
   boost::system::error_code result;
   asio::async_write(impl_->port, asio::buffer(bytes),

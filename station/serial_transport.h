@@ -17,6 +17,9 @@ struct SerialOptions {
   unsigned int baud = 115200;                        // bits per second, 8N1, no flow control
   std::chrono::milliseconds write_timeout{1000};     // a write not done by then throws LinkError
   std::size_t max_line_bytes = 512;                  // a longer "line" is cut and returned as is
+  // Appended to every written line: "\r\n" (irdist station), "\n" (Zaber ASCII, SCPI), " " or
+  // "\n" (FLIR PTU). Received lines always end at '\n', a '\r' before it dropped.
+  std::string line_end = "\r\n";
   bool IsValid(std::string* why) const;
 };
 

@@ -32,7 +32,7 @@ class LinkError : public Error {
 class Transport {
  public:
   virtual ~Transport() = default;
-  // Sends `line` followed by "\r\n". Throws LinkError.
+  // Sends `line` followed by the transport's line end (\r\n unless configured). Throws LinkError.
   virtual void WriteLine(std::string_view line) = 0;
   // The next received line without its line end ('\r' dropped). Throws LinkError if no complete
   // line arrives within `deadline` (the partial line is kept for the next call).

@@ -1,25 +1,27 @@
 #pragma once
 // Strict reading of YAML files for recipes and rig files: every key known, every value of the
-// right type, and every error a RecipeError naming file:line:column and what would be valid.
-// Internal to app/ (this header exposes yaml-cpp types; only app/*.cc include it).
+// right type, and every error an InputError naming file:line:column and what would be valid.
+// Shared by every reader of YAML files (app/ for recipes and rig files, sim/ for the rig file's
+// virtual: section, station/ drivers for their own rig-file sections): one strictness everywhere.
+// This header exposes yaml-cpp types: include it from .cc files only, never from a public header.
 
 #include <yaml-cpp/yaml.h>
 
 #include <string>
 #include <vector>
 
-#include "app/errors.h"
+#include "base/input_error.h"
 
 namespace irdist::yaml_fields {
 
-// Throws RecipeError at `mark` (yaml-cpp marks are 0-based; the error is 1-based).
+// Throws InputError at `mark` (yaml-cpp marks are 0-based; the error is 1-based).
 [[noreturn]] void Fail(const std::string& file, const YAML::Mark& mark, const std::string& message);
 
-// Parses YAML text; a syntax error becomes a RecipeError with its position. An empty document
+// Parses YAML text; a syntax error becomes an InputError with its position. An empty document
 // yields a Null node.
 YAML::Node Parse(const std::string& text, const std::string& file);
 
-// Reads the whole file; throws RecipeError (line 0) when it cannot be read.
+// Reads the whole file; throws InputError (line 0) when it cannot be read.
 std::string ReadFile(const std::string& path);
 
 // The closest candidate to `word` by edit distance, or "" when none is close.

@@ -1,4 +1,4 @@
-#include "app/yaml_fields.h"
+#include "base/yaml_fields.h"
 
 #include <gtest/gtest.h>
 
@@ -19,7 +19,7 @@ TEST(YamlFieldsTest, SyntaxErrorsCarryTheirPosition) {
   try {
     Parse("a: [1, 2\nb: 3\n", "f.yaml");
     FAIL() << "no error";
-  } catch (const RecipeError& e) {
+  } catch (const InputError& e) {
     EXPECT_EQ(e.File(), "f.yaml");
     EXPECT_GT(e.Line(), 0);
     EXPECT_GT(e.Column(), 0);
@@ -37,39 +37,39 @@ TEST(YamlFieldsTest, MapReaderRefusesUnknownAndDuplicateKeys) {
   try {
     map.Require("c");
     FAIL() << "no error";
-  } catch (const RecipeError& e) {
+  } catch (const InputError& e) {
     EXPECT_EQ(e.Line(), 1);
     EXPECT_NE(e.Message().find("section is missing the key 'c'"), std::string::npos);
   }
-  EXPECT_THROW(MapReader(Parse("a: 1\nd: 2\n", "f.yaml"), "f.yaml", "section", {"a"}), RecipeError);
+  EXPECT_THROW(MapReader(Parse("a: 1\nd: 2\n", "f.yaml"), "f.yaml", "section", {"a"}), InputError);
   try {
     MapReader(Parse("a: 1\na: 2\n", "f.yaml"), "f.yaml", "section", {"a"});
     FAIL() << "no error";
-  } catch (const RecipeError& e) {
+  } catch (const InputError& e) {
     EXPECT_EQ(e.Line(), 2);
     EXPECT_EQ(e.Column(), 1);
   }
-  EXPECT_THROW(MapReader(Parse("[1, 2]", "f.yaml"), "f.yaml", "section", {"a"}), RecipeError);
+  EXPECT_THROW(MapReader(Parse("[1, 2]", "f.yaml"), "f.yaml", "section", {"a"}), InputError);
 }
 
 TEST(YamlFieldsTest, ScalarConversionsAreStrict) {
   const YAML::Node node = Parse("i: 3\nf: 2.5\nt: yes\ns: word\nl: [1]\nn:\n", "f.yaml");
   EXPECT_EQ(AsInteger(node["i"], "f.yaml", "i"), 3);
-  EXPECT_THROW(AsInteger(node["f"], "f.yaml", "f"), RecipeError);
+  EXPECT_THROW(AsInteger(node["f"], "f.yaml", "f"), InputError);
   EXPECT_EQ(AsNumber(node["f"], "f.yaml", "f"), 2.5);
-  EXPECT_THROW(AsNumber(node["s"], "f.yaml", "s"), RecipeError);
-  EXPECT_THROW(AsNumber(node["l"], "f.yaml", "l"), RecipeError);
-  EXPECT_THROW(AsNumber(node["n"], "f.yaml", "n"), RecipeError);
+  EXPECT_THROW(AsNumber(node["s"], "f.yaml", "s"), InputError);
+  EXPECT_THROW(AsNumber(node["l"], "f.yaml", "l"), InputError);
+  EXPECT_THROW(AsNumber(node["n"], "f.yaml", "n"), InputError);
   EXPECT_TRUE(AsBoolean(node["t"], "f.yaml", "t"));
-  EXPECT_THROW(AsBoolean(node["s"], "f.yaml", "s"), RecipeError);
+  EXPECT_THROW(AsBoolean(node["s"], "f.yaml", "s"), InputError);
   EXPECT_EQ(AsString(node["s"], "f.yaml", "s"), "word");
-  EXPECT_THROW(AsString(node["l"], "f.yaml", "l"), RecipeError);
+  EXPECT_THROW(AsString(node["l"], "f.yaml", "l"), InputError);
 }
 
-TEST(YamlFieldsTest, RecipeErrorFormatsItsPosition) {
-  const RecipeError with_position("r.yaml", 3, 7, "bad");
+TEST(YamlFieldsTest, InputErrorFormatsItsPosition) {
+  const InputError with_position("r.yaml", 3, 7, "bad");
   EXPECT_STREQ(with_position.what(), "r.yaml:3:7: bad");
-  const RecipeError without("r.yaml", 0, 0, "cannot open");
+  const InputError without("r.yaml", 0, 0, "cannot open");
   EXPECT_STREQ(without.what(), "r.yaml: cannot open");
 }
 

@@ -1,4 +1,4 @@
-#include "app/yaml_fields.h"
+#include "base/yaml_fields.h"
 
 #include <algorithm>
 #include <cmath>
@@ -43,8 +43,8 @@ size_t EditDistance(const std::string& a, const std::string& b) {
 }  // namespace
 
 void Fail(const std::string& file, const YAML::Mark& mark, const std::string& message) {
-  if (mark.is_null()) throw RecipeError(file, 0, 0, message);
-  throw RecipeError(file, mark.line + 1, mark.column + 1, message);
+  if (mark.is_null()) throw InputError(file, 0, 0, message);
+  throw InputError(file, mark.line + 1, mark.column + 1, message);
 }
 
 YAML::Node Parse(const std::string& text, const std::string& file) {
@@ -58,7 +58,7 @@ YAML::Node Parse(const std::string& text, const std::string& file) {
 std::string ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    throw RecipeError(path, 0, 0,
+    throw InputError(path, 0, 0,
                       "cannot open the file; check the path (relative paths are "
                       "taken from the current directory)");
   }
