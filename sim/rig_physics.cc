@@ -292,6 +292,8 @@ RigPhysics LoadRigPhysics(const std::string& rig_path) {
       {"optics", [&](const YAML::Node& node, const std::string&) { op.Read(node, optics_keys); }},
       {"sensor", [&](const YAML::Node& node, const std::string&) { se.Read(node, sensor_keys); }},
       {"camera", [&](const YAML::Node& node, const std::string&) { ca.Read(node, camera_keys); }},
+      // The device emulators' own entries, read strictly by each emulator (sim/line_device.cc).
+      {"devices", [](const YAML::Node&, const std::string&) {}},
   };
   top.Read(section, top_keys, "station");
 
