@@ -1,11 +1,53 @@
 #include "sim/virtual_rig.h"
 
 #include <sstream>
+#include <vector>
 
+#include "base/yaml_fields.h"
 #include "sim/camera_server.h"
 #include "sim/station_emulator.h"
 
 namespace irdist::sim {
+namespace {
+
+// One entry of the rig file's station.devices: (its other keys are its driver's).
+struct DeviceEntry {
+  std::string name, driver, port;
+  YAML::Mark mark;
+};
+
+std::vector<DeviceEntry> ReadStationDevices(const std::string& rig_path, const std::string& text) {
+  const YAML::Node root = yaml_fields::Parse(text, rig_path);
+  const YAML::Node station = root.IsMap() ? root["station"] : YAML::Node();
+  const YAML::Node devices = station && station.IsMap() ? station["devices"] : YAML::Node();
+  std::vector<DeviceEntry> entries;
+  if (!devices || devices.IsNull()) return entries;
+  if (!devices.IsMap()) {
+    yaml_fields::Fail(rig_path, devices.Mark(),
+                      "station.devices must be a map of device name to its entry");
+  }
+  for (const auto& item : devices) {
+    DeviceEntry entry;
+    entry.name = item.first.as<std::string>();
+    entry.mark = item.second.Mark();
+    if (!item.second.IsMap()) {
+      yaml_fields::Fail(rig_path, entry.mark,
+                        "station.devices." + entry.name + " must be a map (driver, port, ...)");
+    }
+    const std::string where = "station.devices." + entry.name;
+    const auto required = [&](const char* key) {
+      const YAML::Node value = item.second[key];
+      if (!value) yaml_fields::Fail(rig_path, entry.mark, where + ": missing key '" + key + "'");
+      return yaml_fields::AsString(value, rig_path, where + "." + key);
+    };
+    entry.driver = required("driver");
+    entry.port = required("port");
+    entries.push_back(entry);
+  }
+  return entries;
+}
+
+}  // namespace
 
 bool VirtualRigOverrides::IsValid(std::string* why) const {
   if (time_scale && !(*time_scale >= 0.01 && *time_scale <= 1000.0)) {
@@ -22,8 +64,9 @@ bool VirtualRigOverrides::IsValid(std::string* why) const {
 std::string VirtualRigInfo::BriefReport() const {
   std::ostringstream out;
   out << "camera: " << camera_id << " at " << camera_address << " (serial " << serial << ")\n"
-      << "station: " << (station_port.empty() ? "(none)" : station_port) << "\n"
-      << "time_scale: " << time_scale << "\n";
+      << "station: " << (station_port.empty() ? "(none)" : station_port) << "\n";
+  for (const auto& [name, port] : device_ports) out << "device " << name << ": " << port << "\n";
+  out << "time_scale: " << time_scale << "\n";
   return out.str();
 }
 
@@ -62,11 +105,42 @@ std::unique_ptr<VirtualRig> VirtualRig::StartImpl(const RigPhysics& physics,
   rig->info_.camera_address = rig->camera_->address();
   rig->info_.serial = rig->camera_->serial();
   rig->info_.time_scale = physics.time_scale;
-  EmulatorOptions options = rig_path.empty() ? EmulatorOptions{} : LoadEmulatorOptions(rig_path);
-  if (seed) options.seed = *seed;
-  rig->station_ = std::make_unique<StationEmulator>(*rig->world_, options);
-  rig->info_.station_port = rig->station_->Start();
+  rig->StartStation(rig_path, seed);
   return rig;
+}
+
+void VirtualRig::StartStation(const std::string& rig_path, std::optional<std::uint64_t> seed) {
+  const std::string text = rig_path.empty() ? "" : yaml_fields::ReadFile(rig_path);
+  const std::vector<DeviceEntry> devices =
+      rig_path.empty() ? std::vector<DeviceEntry>{} : ReadStationDevices(rig_path, text);
+  if (devices.empty()) {  // a legacy rig file: the irdist station
+    EmulatorOptions options =
+        rig_path.empty() ? EmulatorOptions{} : LoadEmulatorOptions(rig_path);
+    if (seed) options.seed = *seed;
+    station_ = std::make_unique<StationEmulator>(*world_, options);
+    info_.station_port = station_->Start();
+    return;
+  }
+  std::uint64_t device_seed = seed.value_or(physics_.sensor.seed);
+  for (const DeviceEntry& entry : devices) {
+    if (entry.port != "auto") continue;  // a real device on a real port
+    const EmulatorInfo* emulator = FindEmulator(entry.driver);
+    if (emulator == nullptr) {
+      yaml_fields::Fail(rig_path, entry.mark,
+                        "station.devices." + entry.name + ": no emulator for driver '" +
+                            entry.driver + "' (docs/virtual-rig.md lists the emulated " +
+                            "drivers); give the device's real port instead of auto");
+    }
+    const EmulatorSpec spec{entry.name, entry.driver, rig_path, text, ++device_seed};
+    std::unique_ptr<DeviceEmulator> device = emulator->create(*world_, spec);
+    info_.device_ports[entry.name] = device->Start();
+    devices_[entry.name] = std::move(device);
+  }
+}
+
+DeviceEmulator* VirtualRig::device(const std::string& name) {
+  const auto it = devices_.find(name);
+  return it == devices_.end() ? nullptr : it->second.get();
 }
 
 GroundTruth VirtualRig::Describe(double slide_mm, double pan_deg, double tilt_deg, double bias_ma,
@@ -82,6 +156,7 @@ GroundTruth VirtualRig::Describe(double slide_mm, double pan_deg, double tilt_de
 
 void VirtualRig::Stop() {
   if (station_) station_->Stop();
+  for (auto& [name, device] : devices_) device->Stop();
   if (camera_) camera_->Stop();
 }
 

@@ -1,14 +1,18 @@
 #pragma once
 // The whole virtual rig: one World, served as a GigE Vision camera on 127.0.0.1 (CameraServer)
-// and as a motion station on a pseudo-terminal (StationEmulator). `irdist sim`, and
+// and as a motion station on pseudo-terminals: the irdist station (StationEmulator) for rig files
+// without `station.devices:`, else one device emulator (sim/device_emulator.h) per
+// `station.devices.<name>` whose port is `auto`, all acting on the one World. `irdist sim`, and
 // calibrate/validate on a virtual rig, start one of these and connect to what Info() prints, as
 // they would to hardware.
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 
+#include "sim/device_emulator.h"
 #include "sim/renderer.h"
 #include "sim/rig_physics.h"
 #include "sim/world.h"
@@ -31,9 +35,12 @@ struct VirtualRigInfo {
   std::string camera_id;       // Aravis device id, "Aravis-Fake-<serial>"
   std::string camera_address;  // "127.0.0.1": open by address (loopback, see issue 4's facts)
   std::string serial;          // verify it after opening the camera
-  std::string station_port;    // pty slave path, e.g. /dev/pts/7
+  std::string station_port;    // irdist station's pty slave path, e.g. /dev/pts/7 (rig files
+                               // without station.devices:; else empty)
+  // station.devices.<name> -> its emulator's pty slave path (devices whose port is `auto`).
+  std::map<std::string, std::string> device_ports;
   double time_scale = 1.0;
-  std::string BriefReport() const;  // "camera: ...\nstation: ...\n"
+  std::string BriefReport() const;  // "camera: ...\nstation: ...\n[device <name>: ...\n]"
 };
 
 class VirtualRig {
@@ -53,7 +60,9 @@ class VirtualRig {
   const VirtualRigInfo& Info() const { return info_; }
   World& world() { return *world_; }
   CameraServer& camera() { return *camera_; }
-  StationEmulator* station() { return station_.get(); }  // nullptr if built without it
+  StationEmulator* station() { return station_.get(); }  // nullptr with station.devices:
+  // The emulator of station.devices.<name> (nullptr when that device has no emulator running).
+  DeviceEmulator* device(const std::string& name);
   const RigPhysics& physics() const { return physics_; }
 
   // Noise-free ground truth of the scene for a pose, current and exposure (cold emitter unless
@@ -74,7 +83,10 @@ class VirtualRig {
   RigPhysics physics_;
   std::unique_ptr<World> world_;
   std::unique_ptr<CameraServer> camera_;
+  void StartStation(const std::string& rig_path, std::optional<std::uint64_t> seed);
+
   std::unique_ptr<StationEmulator> station_;
+  std::map<std::string, std::unique_ptr<DeviceEmulator>> devices_;
   Renderer renderer_;
   VirtualRigInfo info_;
 };

@@ -231,7 +231,7 @@ std::string ZaberEmulator::ReplyOfDevice(const ZaberCommand& command, int device
   body << (device < 10 ? "0" : "") << device << ' ' << command.axis;
   if (command.id >= 0) body << ' ' << command.id;
   body << ' ' << (outcome.ok ? "OK" : "RJ") << ' ' << (busy ? "BUSY" : "IDLE") << ' '
-       << Flag(command.axis > 0 ? targets : all) << ' ' << outcome.data;
+       << Flag(command.axis > 0 && !targets.empty() ? targets : all) << ' ' << outcome.data;
   std::string reply = "@" + body.str();
   if (command.checksummed) reply += ":" + Hex2(Checksum(body.str()));
   return reply + "\r\n";

@@ -1,0 +1,155 @@
+// The FLIR PTU-E emulator spoken to in raw command lines over its pty, from the PTU command
+// reference (no station/ code).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "base/input_error.h"
+#include "tests/sim/pty_host.h"
+
+namespace irdist::sim {
+namespace {
+
+using testing::PtyHost;
+using testing::WaitFor;
+
+std::string Rig(const std::string& virtual_extra = "") {
+  return "station:\n"
+         "  devices:\n"
+         "    head:\n"
+         "      driver: flir_ptu\n"
+         "      port: auto\n"
+         "      axes: {pan: pan, tilt: tilt}\n"
+         "virtual:\n"
+         "  devices:\n"
+         "    head:\n"
+         "      pan_resolution_arcsec: 90.0\n"
+         "      tilt_resolution_arcsec: 45.0\n"
+         "      pan_min_pos: -3000\n"
+         "      pan_max_pos: 3000\n"
+         "      pan_speed_pos_s: 1000\n"
+         "      pan_accel_pos_s2: 2000\n"
+         "      verbose: false\n" +
+         virtual_extra;
+}
+
+class PtuEmulatorTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    emulator_ = testing::MakeEmulator(world_, "flir_ptu", "head", Rig());
+    ASSERT_NE(emulator_, nullptr);
+    host_ = std::make_unique<PtyHost>(emulator_->Start());
+  }
+  std::string Ask(const std::string& command, int timeout_ms = 2000) {
+    return host_->Ask(command + "\r\n", timeout_ms);
+  }
+
+  World world_{20.0};
+  std::unique_ptr<DeviceEmulator> emulator_;
+  std::unique_ptr<PtyHost> host_;
+};
+
+TEST_F(PtuEmulatorTest, AnswersVersionResolutionAndLimits) {
+  EXPECT_EQ(Ask("V").substr(0, 2), "* ");
+  EXPECT_NE(Ask("V").find("Pan-Tilt Controller"), std::string::npos);
+  EXPECT_EQ(Ask("PR"), "* 90");
+  EXPECT_EQ(Ask("TR"), "* 45");
+  EXPECT_EQ(Ask("PN"), "* -3000");
+  EXPECT_EQ(Ask("PX"), "* 3000");
+  EXPECT_EQ(Ask("TN"), "* -3600");
+  EXPECT_EQ(Ask("TX"), "* 3600");
+  EXPECT_EQ(Ask("FV"), "*");
+  EXPECT_EQ(Ask("PR"), "* 90 seconds arc per Pan position");
+  EXPECT_EQ(Ask("PP"), "* Current Pan position is 0");
+}
+
+TEST_F(PtuEmulatorTest, MovesInSimulatedTimeAndAwaitAnswersWhenStopped) {
+  const double start_s = world_.clock().Now();
+  EXPECT_EQ(Ask("PP2000"), "*");
+  EXPECT_EQ(Ask("TP-800"), "*");
+  EXPECT_TRUE(world_.Pose().moving);
+  EXPECT_EQ(Ask("A", 5000), "*");
+  EXPECT_GE(world_.clock().Now() - start_s, 2000.0 / 1000.0);  // at <= 1000 positions/s
+  EXPECT_EQ(Ask("PP"), "* 2000");
+  EXPECT_EQ(Ask("TP"), "* -800");
+  EXPECT_NEAR(world_.Pose().pan_deg, 2000 * 90.0 / 3600.0, 1e-9);
+  EXPECT_NEAR(world_.Pose().tilt_deg, -800 * 45.0 / 3600.0, 1e-9);
+  EXPECT_FALSE(world_.Pose().moving);
+  EXPECT_EQ(Ask("PO-500"), "*");
+  EXPECT_EQ(Ask("A", 5000), "*");
+  EXPECT_EQ(Ask("PP"), "* 1500");
+}
+
+TEST_F(PtuEmulatorTest, SeveralCommandsOnOneLineAndSpacedArguments) {
+  host_->Send("PS 2000 PS A\r\n");
+  EXPECT_EQ(host_->ReadLine(), "*");
+  EXPECT_EQ(host_->ReadLine(), "* 2000");
+  EXPECT_EQ(host_->ReadLine(), "*");
+}
+
+TEST_F(PtuEmulatorTest, RefusesPositionsBeyondTheLimitsAndBadCommands) {
+  EXPECT_EQ(Ask("PP3001"), "! Maximum allowable Pan position exceeded");
+  EXPECT_EQ(Ask("PP-3001"), "! Minimum allowable Pan position exceeded");
+  EXPECT_EQ(Ask("TP4000"), "! Maximum allowable Tilt position exceeded");
+  EXPECT_EQ(Ask("PPx"), "! Illegal argument");
+  EXPECT_EQ(Ask("QQ"), "! Illegal command");
+  EXPECT_EQ(Ask("PS0"), "! Minimum allowable Pan speed exceeded");
+  EXPECT_EQ(Ask("PS999999"), "! Maximum allowable Pan speed exceeded");
+  EXPECT_EQ(Ask("PP"), "* 0");
+}
+
+TEST_F(PtuEmulatorTest, HaltStopsAndResetReturnsHome) {
+  EXPECT_EQ(Ask("PP3000"), "*");
+  EXPECT_TRUE(WaitFor([this] { return world_.Pose().pan_deg > 5.0; }));
+  EXPECT_EQ(Ask("H"), "*");
+  EXPECT_FALSE(world_.Pose().moving);
+  const double halted_deg = world_.Pose().pan_deg;
+  EXPECT_LT(halted_deg, 3000 * 90.0 / 3600.0);
+  EXPECT_EQ(Ask("R", 5000), "*");
+  EXPECT_EQ(Ask("PP"), "* 0");
+  EXPECT_NEAR(world_.Pose().pan_deg, 0.0, 1e-9);
+}
+
+TEST_F(PtuEmulatorTest, FaultsDropGarbleDelayStickAndPowerCycle) {
+  EmulatorFaults faults;
+  faults.drop_rate = 1.0;
+  emulator_->SetFaults(faults);
+  EXPECT_EQ(Ask("PP", 300), "");
+  faults = EmulatorFaults();
+  faults.garble_rate = 1.0;
+  emulator_->SetFaults(faults);
+  EXPECT_NE(Ask("PP"), "* 0");
+  faults = EmulatorFaults();
+  faults.delay_rate = 1.0;
+  faults.delay_s = 4.0;
+  emulator_->SetFaults(faults);
+  const double start_s = world_.clock().Now();
+  EXPECT_EQ(Ask("PP"), "* 0");
+  EXPECT_GE(world_.clock().Now() - start_s, 4.0);
+  faults = EmulatorFaults();
+  faults.stuck_axis = "tilt";
+  emulator_->SetFaults(faults);
+  EXPECT_EQ(Ask("TP1000"), "*");
+  EXPECT_EQ(Ask("A", 5000), "*");
+  EXPECT_EQ(Ask("TP"), "* 0");
+  faults = EmulatorFaults();
+  faults.power_cycle_after_s = 0.5;
+  emulator_->SetFaults(faults);
+  EXPECT_EQ(Ask("FV"), "*");
+  EXPECT_EQ(Ask("PP2000"), "*");
+  EXPECT_EQ(Ask("A", 5000), "*");  // the power-up reset brings it back to 0
+  EXPECT_EQ(Ask("PP"), "* 0");      // and the feedback mode is the power-on one (terse)
+}
+
+TEST(PtuEmulatorRig, AxesMustNamePanOrTilt) {
+  World world(1.0);
+  std::string rig = Rig();
+  rig.replace(rig.find("tilt: tilt"), 10, "tilt: roll");
+  EXPECT_THROW(testing::MakeEmulator(world, "flir_ptu", "head", rig), InputError);
+  EXPECT_THROW(testing::MakeEmulator(world, "flir_ptu", "head", Rig("      pan_speed: 3\n")),
+               InputError);
+}
+
+}  // namespace
+}  // namespace irdist::sim

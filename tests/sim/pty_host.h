@@ -1,0 +1,94 @@
+#pragma once
+// Test-only: the host side of an emulated serial device, raw POSIX I/O on the pty's slave, and
+// the construction of a device emulator from an inline rig file (no station/ code).
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "sim/device_emulator.h"
+#include "sim/world.h"
+
+namespace irdist::sim::testing {
+
+class PtyHost {
+ public:
+  explicit PtyHost(const std::string& path) {
+    fd_ = ::open(path.c_str(), O_RDWR | O_NOCTTY);
+    EXPECT_GE(fd_, 0) << path;
+    termios tio{};
+    if (fd_ >= 0 && tcgetattr(fd_, &tio) == 0) {
+      cfmakeraw(&tio);
+      tcsetattr(fd_, TCSANOW, &tio);
+    }
+  }
+  ~PtyHost() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  PtyHost(const PtyHost&) = delete;
+  PtyHost& operator=(const PtyHost&) = delete;
+
+  void Send(const std::string& bytes) {
+    ASSERT_EQ(::write(fd_, bytes.data(), bytes.size()), static_cast<ssize_t>(bytes.size()));
+  }
+  // The next line without its CR LF, or "" after `timeout_ms` of silence.
+  std::string ReadLine(int timeout_ms = 1000) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+    while (true) {
+      const std::size_t nl = buffer_.find('\n');
+      if (nl != std::string::npos) {
+        std::string line = buffer_.substr(0, nl);
+        buffer_.erase(0, nl + 1);
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        return line;
+      }
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+                            until - std::chrono::steady_clock::now()).count();
+      if (left <= 0) return "";
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, static_cast<int>(left)) > 0) {
+        char buf[256];
+        const ssize_t n = ::read(fd_, buf, sizeof(buf));
+        if (n > 0) buffer_.append(buf, static_cast<std::size_t>(n));
+      }
+    }
+  }
+  std::string Ask(const std::string& line, int timeout_ms = 1000) {
+    Send(line);
+    return ReadLine(timeout_ms);
+  }
+
+ private:
+  int fd_ = -1;
+  std::string buffer_;
+};
+
+// Builds the emulator of `driver` for device `name` of an inline rig file.
+inline std::unique_ptr<DeviceEmulator> MakeEmulator(World& world, const std::string& driver,
+                                                    const std::string& name,
+                                                    const std::string& rig_text) {
+  const EmulatorInfo* info = FindEmulator(driver);
+  EXPECT_NE(info, nullptr) << driver;
+  if (info == nullptr) return nullptr;
+  return info->create(world, EmulatorSpec{name, driver, "inline-rig.yaml", rig_text, 7});
+}
+
+// Polls `done` every millisecond for up to `timeout_s` host seconds.
+template <typename Done>
+bool WaitFor(Done done, double timeout_s = 10.0) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (std::chrono::steady_clock::now() < until) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return done();
+}
+
+}  // namespace irdist::sim::testing
