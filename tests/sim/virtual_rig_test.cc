@@ -4,8 +4,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <fstream>
+#include <sstream>
+
+#include "base/input_error.h"
 #include "sim/camera_server.h"
 #include "tests/loopback_gvcp.h"
+#include "tests/sim/pty_host.h"
 
 namespace irdist::sim {
 namespace {
@@ -67,6 +72,61 @@ TEST(VirtualRig, DescribesGroundTruthOverTheTableThreeGrid) {
       last_minor = g.minor_px;
       EXPECT_NEAR(g.theta_deg, theta, 1e-9);
     }
+  }
+}
+
+const std::string kLab = std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual-lab.yaml";
+
+TEST(VirtualRig, VirtualLabStartsItsThreeDeviceEmulatorsOnTheOneWorld) {
+  ASSERT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(120)));
+  VirtualRigOverrides overrides;
+  overrides.time_scale = 20.0;
+  std::unique_ptr<VirtualRig> rig = VirtualRig::Start(kLab, overrides);
+  const VirtualRigInfo& info = rig->Info();
+  EXPECT_EQ(rig->station(), nullptr);
+  EXPECT_EQ(info.station_port, "");
+  ASSERT_EQ(info.device_ports.size(), 3u);
+  for (const char* name : {"slide", "head", "source"}) {
+    ASSERT_EQ(info.device_ports.count(name), 1u) << name;
+    EXPECT_EQ(info.device_ports.at(name).rfind("/dev/pts/", 0), 0u);
+    EXPECT_NE(rig->device(name), nullptr);
+    EXPECT_NE(info.BriefReport().find(std::string("device ") + name + ": /dev/pts/"),
+              std::string::npos);
+  }
+  World& world = rig->world();
+  testing::PtyHost slide(info.device_ports.at("slide"));
+  EXPECT_EQ(slide.Ask("/1 1 home\n"), "@01 1 OK BUSY WR 0");
+  EXPECT_TRUE(testing::WaitFor([&] { return world.Pose().slide_mm < 1000.001; }));
+  // 1000 mm further along the slide: 1000 / 0.09921875 um microsteps.
+  EXPECT_EQ(slide.Ask("/1 1 move abs 10078740\n"), "@01 1 OK BUSY -- 0");
+  EXPECT_TRUE(testing::WaitFor([&] { return std::abs(world.Pose().slide_mm - 2000.0) < 1e-3; }));
+  testing::PtyHost head(info.device_ports.at("head"));
+  EXPECT_EQ(head.Ask("PP1000 A\r\n"), "*");
+  EXPECT_EQ(head.ReadLine(5000), "*");
+  EXPECT_NEAR(world.Pose().pan_deg, 1000 * 92.5714 / 3600.0, 1e-6);
+  testing::PtyHost source(info.device_ports.at("source"));
+  source.Send("*RST;:SOUR:FUNC CURR;:SOUR:CURR 0.4;:SENS:VOLT:PROT 3;:OUTP ON\n");
+  EXPECT_EQ(source.Ask("*OPC?\n"), "1");
+  EXPECT_NEAR(world.Pose().bias_ma, 400.0, 1e-9);
+  rig->Stop();
+  EXPECT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(5)));
+}
+
+TEST(VirtualRig, ADeviceWithoutAnEmulatorIsAnInputError) {
+  ASSERT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(120)));
+  std::ifstream in(kLab);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string rig = text.str();
+  rig.replace(rig.find("driver: flir_ptu"), 16, "driver: acme_ptu");
+  const std::string path = ::testing::TempDir() + "virtual-lab-acme.yaml";
+  std::ofstream(path) << rig;
+  try {
+    VirtualRig::Start(path);
+    FAIL() << "a driver without an emulator was accepted";
+  } catch (const InputError& e) {
+    EXPECT_GT(e.Line(), 0);
+    EXPECT_NE(std::string(e.what()).find("acme_ptu"), std::string::npos) << e.what();
   }
 }
 
