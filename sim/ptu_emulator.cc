@@ -95,6 +95,9 @@ class PtuEmulator : public LineDevice {
     ResetToPowerOn();
   }
 
+  // The serving thread calls this class's hooks: stop it before the members go.
+  ~PtuEmulator() override { Stop(); }
+
  protected:
   std::string Terminators() const override { return "\r\n"; }
   std::string HandleMessage(const std::string& message) override;

@@ -147,6 +147,9 @@ class ScpiEmulator : public LineDevice {
     Advance(Now());
   }
 
+  // The serving thread calls this class's hooks: stop it before the members go.
+  ~ScpiEmulator() override { Stop(); }
+
  protected:
   std::string Terminators() const override { return "\r\n"; }
   std::string HandleMessage(const std::string& message) override;

@@ -124,6 +124,9 @@ class ZaberEmulator : public LineDevice {
     ResetToPowerOn();
   }
 
+  // The serving thread calls this class's hooks: stop it before the members go.
+  ~ZaberEmulator() override { LineDevice::Stop(); }
+
  protected:
   std::string Terminators() const override { return "\r\n"; }
   std::string HandleMessage(const std::string& message) override;
