@@ -128,6 +128,30 @@ std::string Number(double value) {
   return text;
 }
 
+// Settings of the real instrument this model has no use for (ranges, integration time, display,
+// beeper, trigger counts...): accepted without an error so that a driver's usual set-up passes.
+bool AcceptedWithoutEffect(const std::vector<std::string>& words) {
+  static const char* const kPatterns[] = {
+      "SENSe:FUNCtion[:ON]",           "SENSe:FUNCtion:CONCurrent",
+      "SENSe:CURRent[:DC]:RANGe[:UPPer]", "SENSe:CURRent[:DC]:RANGe:AUTO",
+      "SENSe:VOLTage[:DC]:RANGe[:UPPer]", "SENSe:VOLTage[:DC]:RANGe:AUTO",
+      "SENSe:CURRent[:DC]:NPLCycles",  "SENSe:VOLTage[:DC]:NPLCycles",
+      "SOURce:CURRent:RANGe[:UPPer]",  "SOURce:CURRent:RANGe:AUTO",
+      "SOURce:VOLTage:RANGe[:UPPer]",  "SOURce:VOLTage:RANGe:AUTO",
+      "SOURce:CURRent:MODE",           "SOURce:VOLTage:MODE",
+      "SOURce:DELay",                  "SOURce:DELay:AUTO",
+      "SYSTem:REMote",                 "SYSTem:LOCal",
+      "SYSTem:RSENse",                 "SYSTem:AZERo[:STATe]",
+      "SYSTem:BEEPer:STATe",           "DISPlay:ENABle",
+      "FORMat:DATA",                   "TRIGger:COUNt",
+      "ARM:COUNt",                     "INITiate",
+      "STATus:PRESet",                 "OUTPut:SMODe"};
+  for (const char* pattern : kPatterns) {
+    if (HeaderMatches(pattern, words)) return true;
+  }
+  return false;
+}
+
 class ScpiEmulator : public LineDevice {
  public:
   ScpiEmulator(World& world, const EmulatorSpec& spec, const DeviceKeys& keys, ScpiConfig config,
@@ -339,9 +363,9 @@ std::optional<std::string> ScpiEmulator::Subsystem(const std::vector<std::string
   if ((is("MEASure[:CURRent][:DC]") || is("MEASure:VOLTage[:DC]")) && query) {
     return Measure(false);
   }
-  if ((is("SENSe:FUNCtion[:ON]") || is("SYSTem:REMote") || is("SYSTem:LOCal")) && !query) {
-    return std::nullopt;  // accepted: this model measures voltage and current concurrently
-  }
+  if (!query && AcceptedWithoutEffect(words)) return std::nullopt;
+  if (is("SYSTem:ERRor:COUNt") && query) return std::to_string(errors_.size());
+  if (is("FETCh") && query) return Measure(true);
   if (is("SOURce:CLEar:AUTO") && !query) {
     const std::string value = Upper(argument);
     if (value != "ON" && value != "OFF" && value != "1" && value != "0") {

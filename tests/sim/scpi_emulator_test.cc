@@ -130,6 +130,15 @@ TEST_F(ScpiEmulatorTest, QueuesErrorsForBadCommandsAndValues) {
   EXPECT_EQ(Ask(":SYST:ERR?"), "0,\"No error\"");
 }
 
+TEST_F(ScpiEmulatorTest, AcceptsTheUsualSetUpOfTheInstrument) {
+  Send(":SENS:FUNC \"VOLT\";:SENS:CURR:RANG:AUTO ON;:SOUR:CURR:RANG 1;:SYST:BEEP:STAT OFF");
+  Send(":SENSE:VOLTAGE:NPLCYCLES 1;:FORM:DATA ASC;:TRIG:COUN 1");
+  EXPECT_EQ(Ask(":SYST:ERR:COUN?"), "0");
+  EXPECT_EQ(Ask(":SYST:ERR?"), "0,\"No error\"");
+  Send(":SOUR:FUNC CURR;:SOUR:CURR 0.2;:OUTP ON");
+  EXPECT_NEAR(Values(Ask(":FETC?"))[1], 0.2, 1e-9);
+}
+
 TEST_F(ScpiEmulatorTest, SeveralQueriesInOneMessageAnswerInOneLine) {
   SourceCurrent(0.1, 3.0);
   EXPECT_EQ(Ask(":OUTP?;:SOUR:CURR?;*OPC?"), "0;+1.000000E-01;1");
