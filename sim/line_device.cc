@@ -280,7 +280,8 @@ void LineDevice::SendReply(const std::string& reply) {
   std::string bytes = reply;
   for (char& c : bytes) {
     if (c == '\r' || c == '\n' || uniform(rng_) >= faults.garble_rate) continue;
-    c = static_cast<char>(c ^ (1 + static_cast<int>(uniform(rng_) * 126.0)));
+    const char garbled = static_cast<char>(c ^ (1 + static_cast<int>(uniform(rng_) * 126.0)));
+    c = (garbled == '\r' || garbled == '\n') ? static_cast<char>(c ^ 0x20) : garbled;
   }
   std::size_t sent = 0;
   for (int attempts = 0; sent < bytes.size() && attempts < 1000; ++attempts) {

@@ -16,6 +16,8 @@
 //   H, HP, HT     halt both / pan / tilt
 //   V             firmware version
 //   FT / FV       terse / verbose feedback;  EE / ED echo on / off;  I immediate mode
+//   PU/PL/PB [..] upper / lower / base speed (kept, reported);  PH/PM [R|L|O|H] power modes
+//   LE / LD, CI / CV   limit enforcement, control mode (accepted)
 // Terse replies give the bare value ("* 1000"), verbose ones a sentence.
 
 #include <algorithm>
@@ -52,6 +54,8 @@ struct PtuAxis {
   double speed_pos_s = 0.0, accel_pos_s2 = 0.0;
   TrapezoidMove move;
   bool moving = false, stuck = false;
+  double speed_bounds[3] = {12000.0, 0.0, 0.0};  // PU, PL, PB
+  char hold_power = 'R', move_power = 'R';
   double Degrees() const { return position * config.resolution_arcsec / 3600.0; }
 };
 
@@ -110,6 +114,8 @@ class PtuEmulator : public LineDevice {
   std::string Position(PtuAxis& axis, bool offset, const std::string& argument);
   std::string Rate(PtuAxis& axis, bool speed, const std::string& argument);
   std::string Limit(const PtuAxis& axis, bool maximum) const;
+  std::string SpeedBound(PtuAxis& axis, char what, const std::string& argument);
+  std::string PowerMode(PtuAxis& axis, char what, const std::string& argument);
   std::string Ok(const std::string& terse, const std::string& verbose) const;
   void MoveTo(PtuAxis& axis, double target);
   void Halt(PtuAxis& axis);
@@ -127,6 +133,9 @@ void PtuEmulator::ResetToPowerOn() {
   for (PtuAxis& axis : axes_) {
     axis.speed_pos_s = axis.config.speed_pos_s;
     axis.accel_pos_s2 = axis.config.accel_pos_s2;
+    axis.speed_bounds[0] = config_.max_speed_pos_s;
+    axis.speed_bounds[1] = axis.speed_bounds[2] = 0.0;
+    axis.hold_power = axis.move_power = 'R';
     Halt(axis);
     // The power-up reset calibration: the axis finds its index and returns to 0.
     if (config_.reset_on_power_up) MoveTo(axis, 0.0);
@@ -177,7 +186,9 @@ std::string PtuEmulator::Execute(std::string command) {
     echo_ = command == "EE";
     return Ok("", "");
   }
-  if (command == "I") return Ok("", "");
+  if (command == "I" || command == "LE" || command == "LD" || command == "CI" || command == "CV") {
+    return Ok("", "");  // immediate mode, limit enforcement, control mode: no effect here
+  }
   if (command.size() >= 2 && (command[0] == 'P' || command[0] == 'T')) {
     return AxisCommand(axes_[command[0] == 'P' ? 0 : 1], command[1], command.substr(2));
   }
@@ -190,6 +201,11 @@ std::string PtuEmulator::AxisCommand(PtuAxis& axis, char what, const std::string
     case 'O': return Position(axis, true, argument);
     case 'S': return Rate(axis, true, argument);
     case 'A': return Rate(axis, false, argument);
+    case 'U':
+    case 'L':
+    case 'B': return SpeedBound(axis, what, argument);
+    case 'H':
+    case 'M': return PowerMode(axis, what, argument);
     case 'N': return argument.empty() ? Limit(axis, false) : "! Illegal argument\r\n";
     case 'X': return argument.empty() ? Limit(axis, true) : "! Illegal argument\r\n";
     case 'R': {
@@ -245,6 +261,36 @@ std::string PtuEmulator::Limit(const PtuAxis& axis, bool maximum) const {
   const std::string value = std::to_string(maximum ? axis.config.max_pos : axis.config.min_pos);
   return Ok(value, std::string(maximum ? "Maximum " : "Minimum ") + axis.name + " position is " +
                        value);
+}
+
+// PU / PL / PB (and T...): upper, lower and base speed, kept and reported; the profile uses PS.
+std::string PtuEmulator::SpeedBound(PtuAxis& axis, char what, const std::string& argument) {
+  double& value = axis.speed_bounds[what == 'U' ? 0 : what == 'L' ? 1 : 2];
+  const std::string name = what == 'U' ? "upper speed limit" : what == 'L' ? "lower speed limit"
+                                                                           : "base speed";
+  if (argument.empty()) {
+    const std::string text = std::to_string(std::lround(value));
+    return Ok(text, axis.name + " " + name + " is " + text + " positions/sec");
+  }
+  long set = 0;
+  if (!ParseInteger(argument, &set) || set < 0) return "! Illegal argument\r\n";
+  if (set > config_.max_speed_pos_s) return "! Maximum allowable " + axis.name + " speed exceeded\r\n";
+  value = static_cast<double>(set);
+  return Ok("", "");
+}
+
+// PH / PM (and T...): hold and move power modes, R(egular), L(ow), O(ff), H(igh).
+std::string PtuEmulator::PowerMode(PtuAxis& axis, char what, const std::string& argument) {
+  char& mode = what == 'H' ? axis.hold_power : axis.move_power;
+  if (argument.empty()) {
+    const std::string text(1, mode);
+    return Ok(text, axis.name + (what == 'H' ? " hold" : " move") + " power mode is " + text);
+  }
+  if (argument.size() != 1 || std::string("RLOH").find(argument[0]) == std::string::npos) {
+    return "! Illegal argument\r\n";
+  }
+  mode = argument[0];
+  return Ok("", "");
 }
 
 void PtuEmulator::MoveTo(PtuAxis& axis, double target) {

@@ -9,7 +9,7 @@
 //   reply    @dd a [id] OK|RJ IDLE|BUSY flag data[:CC]\r\n
 // The checksum CC (two hex digits) is the two's complement of the 8-bit sum of the bytes between
 // the leading '/' or '@' and the ':'; a command carrying one is verified (a mismatch is rejected
-// with BADDATA) and its reply carries one too. Warning flags: FS (stalled: a move ended away from
+// with BADDATA) and its reply carries one too. Alerts are not emitted (`set comm.alert 0` only). Warning flags: FS (stalled: a move ended away from
 // its target), WR (no reference position: after power-up until homed), "--" none.
 
 #include <algorithm>
@@ -259,7 +259,7 @@ ZaberEmulator::Outcome ZaberEmulator::Execute(const ZaberCommand& command,
     for (ZaberAxis* axis : targets) Stop(*axis, verb == "estop");
     return {};
   }
-  if (verb == "get" && words.size() == 2) return Get(words[1], command.device, targets);
+  if (verb == "get" && words.size() == 2) return Get(words[1], targets.front()->device, targets);
   if (verb == "set") return Set(words, targets);
   if (verb == "warnings") return Warnings(words, targets);
   return {false, "BADCOMMAND"};
@@ -321,11 +321,17 @@ void ZaberEmulator::Stop(ZaberAxis& axis, bool emergency) {
 
 ZaberEmulator::Outcome ZaberEmulator::Get(const std::string& setting, int device,
                                           const std::vector<ZaberAxis*>& targets) {
+  if (device == 0 && !targets.empty()) device = targets.front()->device;
   std::ostringstream data;
   if (setting == "deviceid") return {true, std::to_string(config_.device_id)};
   if (setting == "system.serial") return {true, std::to_string(config_.serial)};
   if (setting == "version") return {true, config_.version};
-  (void)device;
+  if (setting == "system.axiscount") {
+    int count = 0;
+    for (const ZaberAxis* axis : AxesOf(device)) count = std::max(count, axis->number);
+    return {true, std::to_string(count)};
+  }
+  if (setting == "comm.alert" || setting == "comm.checksum") return {true, "0"};
   for (std::size_t i = 0; i < targets.size(); ++i) {
     const ZaberAxis& axis = *targets[i];
     if (i > 0) data << ' ';
@@ -352,6 +358,7 @@ ZaberEmulator::Outcome ZaberEmulator::Set(const std::vector<std::string>& words,
                                           const std::vector<ZaberAxis*>& targets) {
   if (words.size() != 3) return {false, "BADDATA"};
   const std::string& setting = words[1];
+  if (setting == "comm.alert") return {words[2] == "0", words[2] == "0" ? "0" : "BADDATA"};
   if (setting != "maxspeed" && setting != "accel" && setting != "limit.max" &&
       setting != "limit.min") {
     return {false, "BADCOMMAND"};

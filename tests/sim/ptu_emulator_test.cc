@@ -81,6 +81,17 @@ TEST_F(PtuEmulatorTest, MovesInSimulatedTimeAndAwaitAnswersWhenStopped) {
   EXPECT_EQ(Ask("PP"), "* 1500");
 }
 
+TEST_F(PtuEmulatorTest, KeepsSpeedBoundsAndPowerModes) {
+  EXPECT_EQ(Ask("PU"), "* 12000");
+  EXPECT_EQ(Ask("PB300"), "*");
+  EXPECT_EQ(Ask("PB"), "* 300");
+  EXPECT_EQ(Ask("THL"), "*");
+  EXPECT_EQ(Ask("TH"), "* L");
+  EXPECT_EQ(Ask("PMX"), "! Illegal argument");
+  EXPECT_EQ(Ask("LE"), "*");
+  EXPECT_EQ(Ask("CI"), "*");
+}
+
 TEST_F(PtuEmulatorTest, SeveralCommandsOnOneLineAndSpacedArguments) {
   host_->Send("PS 2000 PS A\r\n");
   EXPECT_EQ(host_->ReadLine(), "*");

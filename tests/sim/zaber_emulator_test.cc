@@ -70,6 +70,8 @@ TEST_F(ZaberEmulatorTest, AnswersItsIdentityAndSettings) {
   EXPECT_EQ(Ask("/get system.serial"), "@01 0 OK IDLE WR 1234567");
   EXPECT_EQ(Ask("/1 get version"), "@01 0 OK IDLE WR 7.38");
   EXPECT_EQ(Ask("/1 1 get resolution"), "@01 1 OK IDLE WR 64");
+  EXPECT_EQ(Ask("/1 get system.axiscount"), "@01 0 OK IDLE WR 1");
+  EXPECT_EQ(Ask("/1 set comm.alert 0"), "@01 0 OK IDLE WR 0");
   EXPECT_EQ(Ask("/1 1 get limit.min"), "@01 1 OK IDLE WR 0");
   EXPECT_EQ(Ask("/1 1 get limit.max"), "@01 1 OK IDLE WR 2500000");
   // Speed data = microsteps/s x 1.6384; acceleration data = microsteps/s^2 x 1.6384 / 10000.
