@@ -202,6 +202,19 @@ TEST_F(ScpiEmulatorTest, ReplyFaultsAndPowerCycle) {
   EXPECT_EQ(Ask(":SOUR:FUNC?"), "VOLT");
 }
 
+TEST(ScpiEmulatorRig, SourceFaultsComeFromTheRigFile) {
+  World world(20.0);
+  auto emulator = testing::MakeEmulator(world, "scpi_source", "source",
+                                        Rig("      open_circuit: true\n"));
+  ASSERT_NE(emulator, nullptr);
+  PtyHost host(emulator->Start());
+  host.Send(":SOUR:FUNC CURR;:SOUR:CURR 0.5;:SENS:VOLT:PROT 3;:OUTP ON\n");
+  const std::vector<double> r = Values(host.Ask(":READ?\n"));
+  ASSERT_EQ(r.size(), 5u);
+  EXPECT_EQ(r[1], 0.0);
+  EXPECT_NEAR(r[0], 3.0, 1e-9);
+}
+
 TEST(ScpiEmulatorRig, BadElectricalModelIsAnErrorWithTheLine) {
   World world(1.0);
   try {

@@ -186,6 +186,24 @@ TEST_F(ZaberEmulatorTest, PowerCycleMidMoveLosesTheReference) {
   EXPECT_EQ(Ask("/1 1 get pos"), "@01 1 OK IDLE WR 0");
 }
 
+TEST(ZaberEmulatorRig, FaultsComeFromTheRigFile) {
+  World world(20.0);
+  auto emulator = testing::MakeEmulator(world, "zaber_ascii", "slide",
+                                        Rig("      drop_rate: 1.0\n      stuck_axis: slide\n"));
+  ASSERT_NE(emulator, nullptr);
+  PtyHost host(emulator->Start());
+  EXPECT_EQ(host.Ask("/1 1 get pos\n", 300), "");
+  EmulatorFaults faults;
+  faults.stuck_axis = "slide";
+  emulator->SetFaults(faults);
+  EXPECT_EQ(host.Ask("/1 1 get pos\n"), "@01 1 OK IDLE WR 0");
+  EXPECT_THROW(testing::MakeEmulator(world, "zaber_ascii", "slide", Rig("      drop_rate: 2\n")),
+               InputError);
+  EXPECT_THROW(testing::MakeEmulator(world, "zaber_ascii", "slide",
+                                     Rig("      stuck_axis: roll\n")),
+               InputError);
+}
+
 TEST(ZaberEmulatorRig, UnknownVirtualKeysAreErrorsWithTheLine) {
   World world(1.0);
   try {
