@@ -41,7 +41,7 @@ class PtuEmulatorTest : public ::testing::Test {
     ASSERT_NE(emulator_, nullptr);
     host_ = std::make_unique<PtyHost>(emulator_->Start());
   }
-  std::string Ask(const std::string& command, int timeout_ms = 2000) {
+  std::string Ask(const std::string& command, int timeout_ms = 5000) {
     return host_->Ask(command + "\r\n", timeout_ms);
   }
 

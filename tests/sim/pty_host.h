@@ -39,7 +39,7 @@ class PtyHost {
     ASSERT_EQ(::write(fd_, bytes.data(), bytes.size()), static_cast<ssize_t>(bytes.size()));
   }
   // The next line without its CR LF, or "" after `timeout_ms` of silence.
-  std::string ReadLine(int timeout_ms = 1000) {
+  std::string ReadLine(int timeout_ms = 3000) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
     while (true) {
       const std::size_t nl = buffer_.find('\n');
@@ -60,7 +60,7 @@ class PtyHost {
       }
     }
   }
-  std::string Ask(const std::string& line, int timeout_ms = 1000) {
+  std::string Ask(const std::string& line, int timeout_ms = 3000) {
     Send(line);
     return ReadLine(timeout_ms);
   }

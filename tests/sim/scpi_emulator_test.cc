@@ -48,7 +48,7 @@ class ScpiEmulatorTest : public ::testing::Test {
     ASSERT_NE(emulator_, nullptr);
     host_ = std::make_unique<PtyHost>(emulator_->Start());
   }
-  std::string Ask(const std::string& line, int timeout_ms = 1000) {
+  std::string Ask(const std::string& line, int timeout_ms = 3000) {
     return host_->Ask(line + "\n", timeout_ms);
   }
   void Send(const std::string& line) { host_->Send(line + "\n"); }
