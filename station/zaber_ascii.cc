@@ -21,10 +21,10 @@ using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
 constexpr char kName[] = "zaber_ascii";
-// Manual, "Physical units": maxspeed data = microsteps/s x 1.6384; accel data = microsteps/s^2 x
-// 1.6384 / 10.
+// Manual, settings `maxspeed` and `accel` (same units as the A-Series Set Target Speed / Set
+// Acceleration): microsteps/s = maxspeed / 1.6384; microsteps/s^2 = accel x 10000 / 1.6384.
 constexpr double kSpeedDataPerMicrostepS = 1.6384;
-constexpr double kAccelDataPerMicrostepS2 = 1.6384 / 10.0;
+constexpr double kAccelDataPerMicrostepS2 = 1.6384 / 10000.0;
 constexpr milliseconds kPollPeriod{20};
 
 struct Address {

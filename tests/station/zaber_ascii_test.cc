@@ -158,7 +158,8 @@ TEST(ZaberAscii, IdentifyReadsIdentityUnitsAndSpeed) {
   const AxisSpeed speed = rig.motion->Speed(Axis::kSlide);
   // 153600 / 1.6384 = 93750 microsteps/s of 3.048/64 um.
   EXPECT_NEAR(speed.speed, 93750 * 3.048e-3 / 64, 1e-9);
-  EXPECT_NEAR(speed.acceleration, 205 / 0.16384 * 3.048e-3 / 64, 1e-9);
+  // 205 x 10000 / 1.6384 = 1251221 microsteps/s^2.
+  EXPECT_NEAR(speed.acceleration, 205 * 10000 / 1.6384 * 3.048e-3 / 64, 1e-6);
   EXPECT_DOUBLE_EQ(speed.home, 1000.0);
   EXPECT_EQ(rig.motion->Axes(), std::vector<Axis>{Axis::kSlide});
 }
