@@ -121,7 +121,7 @@ std::string ScpiSource::Query(const std::string& query,
   throw LinkError("no valid reply to '" + query + "' after " + std::to_string(attempts_) +
                       " attempts" + (heard.empty() ? "" : " (last heard '" + heard + "')"),
                   spec_.port,
-                  "check the RS-232 cable (null-modem), baud rate, and that the instrument's "
+                  "check the RS-232 cable (straight-through), the baud rate, and that the instrument's "
                   "terminator is LF");
 }
 
