@@ -225,6 +225,7 @@ DeviceIdentity ScpiSource::Identify() {
   }
   CheckIdentity(idn);
   idn_ = idn;
+  link_->WriteLine("*CLS");  // IEEE 488.2: empties the error queue of older sessions
   link_->WriteLine("*RST");  // manual: output off, power-on defaults
   DrainErrors("*RST");
   ApplySourceSettings();

@@ -35,6 +35,8 @@ struct SourceMeter {
     std::string reply;
     if (line == "*IDN?") {
       reply = idn;
+    } else if (line == "*CLS") {
+      errors.clear();
     } else if (line == "*RST") {
       function = "VOLT";
       level_a = 0;
@@ -128,7 +130,8 @@ TEST(ScpiSource, IdentifyChecksTheIdentityAndLeavesTheOutputOff) {
   EXPECT_EQ(b.meter.function, "CURR");
   EXPECT_DOUBLE_EQ(b.meter.compliance_v, 3.0);
   EXPECT_FALSE(b.meter.output);
-  EXPECT_EQ(b.meter.commands.at(1), "*RST");
+  EXPECT_EQ(b.meter.commands.at(1), "*CLS");
+  EXPECT_EQ(b.meter.commands.at(2), "*RST");
 }
 
 TEST(ScpiSource, WrongInstrumentIsADeviceErrorBeforeAnyOutput) {
