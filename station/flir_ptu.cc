@@ -1,7 +1,7 @@
 // The FLIR (formerly Directed Perception) PTU driver (docs/devices/flir_ptu.md): a PTU-E series
 // pan-tilt unit as the motion role for pan and tilt. Written from the "Pan-Tilt Unit (E Series)
 // Command Reference Manual" and the PTU-D46 user's manual's command reference: commands end with
-// a delimiter (space), replies start with '*' (done) or '!' (error); positions are integers in
+// a delimiter (CR, [ENTER]), replies start with '*' (done) or '!' (error); positions are integers in
 // the unit's native steps, whose size PR/TR report in seconds of arc.
 //
 // The protocol has no request ids: replies are matched by order, one per command. Echo is
@@ -413,7 +413,9 @@ void Validate(const DeviceSpec& spec) {
 DriverInfo MakePtuInfo() {
   DriverInfo info;
   info.name = kName;
-  info.line_end = " ";  // manual: a command ends with a delimiter, a space or a carriage return
+  // Manual: a command ends with a delimiter, [SPACE] or [ENTER]; a carriage return is [ENTER]
+  // and also ends the line for readers that execute whole lines only.
+  info.line_end = "\r";
   info.default_baud = 9600;
   info.default_reply_timeout_ms = 1000;
   info.roles = {"motion"};

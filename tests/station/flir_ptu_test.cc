@@ -122,10 +122,10 @@ struct Head {
 
 constexpr double kDegPerPos = 185.1428 / 3600.0;
 
-TEST(FlirPtu, RegistersAsMotionDriverWithSpaceDelimiter) {
+TEST(FlirPtu, RegistersAsMotionDriverWithEnterDelimiter) {
   const DriverInfo* info = FindDriver("flir_ptu");
   ASSERT_NE(info, nullptr);
-  EXPECT_EQ(info->line_end, " ");
+  EXPECT_EQ(info->line_end, "\r");
   EXPECT_EQ(info->roles, std::vector<std::string>{"motion"});
 }
 
