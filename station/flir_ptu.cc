@@ -62,7 +62,7 @@ class FlirPtu : public DeviceDriver, public Motion {
     identity_.port = spec.port;
     identity_.vendor = "FLIR";
     timeout_ = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 1000);
-    attempts_ = 1 + static_cast<int>(spec.Number("retries", 2));
+    attempts_ = 1 + static_cast<int>(spec.Number("retries", 4));
     tolerance_ = static_cast<long long>(spec.Number("tolerance_positions", 0));
     home_timeout_ = milliseconds(static_cast<long long>(spec.Number("home_timeout_s", 120) * 1000));
     for (const auto& [axis, address] : spec.axes) {
@@ -102,6 +102,7 @@ class FlirPtu : public DeviceDriver, public Motion {
   long long Position(const PtuAxis& a) {
     return std::llround(QueryNumber(std::string(1, a.letter) + "P"));
   }
+  long long StablePosition(const PtuAxis& a);
   void ReadAxis(PtuAxis* a);
   void ApplySpeed(PtuAxis* a);
   void MoveAxis(PtuAxis* a, long long position);
@@ -188,6 +189,18 @@ double FlirPtu::QueryNumber(const std::string& command) {
 bool FlirPtu::Command(const std::string& command, milliseconds wait) {
   std::string body;
   return Exchange(command, wait, &body);
+}
+
+// The protocol has no checksum: a reported position is the same value read twice in a row.
+long long FlirPtu::StablePosition(const PtuAxis& a) {
+  long long last = Position(a);
+  for (int attempt = 0; attempt < attempts_; ++attempt) {
+    const long long now = Position(a);
+    if (now == last) return now;
+    last = now;
+  }
+  Fail("", AxisText(a) + " position does not read the same twice",
+       "the axis is moving or the link is damaged; check the cable");
 }
 
 void FlirPtu::ReadAxis(PtuAxis* a) {
@@ -346,7 +359,7 @@ void FlirPtu::WaitSettled(milliseconds timeout) {
 
 void FlirPtu::ReadPosition(StationPosition* position) {
   for (const PtuAxis& a : axes_) {
-    const double deg = static_cast<double>(Position(a)) * a.deg_per_position;
+    const double deg = static_cast<double>(StablePosition(a)) * a.deg_per_position;
     (a.axis == Axis::kPan ? position->pan_deg : position->tilt_deg) = deg;
   }
 }
@@ -364,7 +377,7 @@ void FlirPtu::Stop() noexcept {
 // (its power-up reset moves the axes and resets the settings).
 void FlirPtu::CheckAlive() {
   for (const PtuAxis& a : axes_) {
-    const long long pos = Position(a);
+    const long long pos = (!homed_ || moving_ || !a.has_target) ? Position(a) : StablePosition(a);
     if (!homed_ || moving_ || !a.has_target) continue;
     const bool moved = std::llabs(pos - a.target) > tolerance_;
     const bool reset = spec_.settings.count("speed_deg_s") &&
@@ -406,7 +419,7 @@ void Validate(const DeviceSpec& spec) {
     }
   }
   if (spec.Number("tolerance_positions", 0) < 0) Invalid(spec, "tolerance_positions must be >= 0");
-  const double retries = spec.Number("retries", 2);
+  const double retries = spec.Number("retries", 4);
   if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
 }
 

@@ -25,6 +25,7 @@ using std::chrono::milliseconds;
 constexpr char kName[] = "scpi_source";
 constexpr int kMaxErrorsRead = 32;  // the 2400's error queue holds 10; more = a stuck queue
 constexpr double kNan = 9.9e37;     // manual, FORMat:ELEMents: "NAN" reads as +9.91e37
+constexpr double kConfirmFraction = 0.01;  // a reading this far from the set-point is re-read
 
 std::string Upper(std::string s) {
   for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -58,7 +59,7 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
     identity_.kind = kName;
     identity_.port = spec.port;
     timeout_ = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 1000);
-    attempts_ = 1 + static_cast<int>(spec.Number("retries", 2));
+    attempts_ = 1 + static_cast<int>(spec.Number("retries", 3));
     compliance_v_ = spec.Number("compliance_v", 0.0);
   }
   ~ScpiSource() override {
@@ -78,6 +79,7 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
   std::string Query(const std::string& query,
                     const std::function<bool(const std::string&)>& valid);
   bool QueryBool(const std::string& query);
+  SourceReading ReadOnce();
   void Set(const std::string& command);
   void DrainErrors(const std::string& after);
   void Resync();
@@ -275,12 +277,9 @@ void ScpiSource::CheckOutputState() {
                      "restart the run");
 }
 
-SourceReading ScpiSource::Measure() {
-  SourceReading reading;
-  CheckOutputState();
-  if (!output_on_) return reading;
-  // Manual, FORMat:ELEMents: :READ? returns VOLT,CURR,RES,TIME,STAT (those enabled); current
-  // is the second element in the default format, in amperes.
+// One :READ?. Manual, FORMat:ELEMents: the answer is VOLT,CURR,RES,TIME,STAT (those enabled);
+// the current is the second element in the default format, in amperes.
+SourceReading ScpiSource::ReadOnce() {
   const std::string data = Query(":READ?", [](const std::string& r) {
     const std::vector<std::string> f = SplitCommas(r);
     double v = 0;
@@ -290,10 +289,23 @@ SourceReading ScpiSource::Measure() {
   double volts = 0, amps = 0;
   ParseDouble(f[0], &volts);
   ParseDouble(f[1], &amps);
+  SourceReading reading;
   reading.voltage_v = volts >= kNan ? 0.0 : volts;
   reading.current_ma = amps >= kNan ? 0.0 : amps * 1000.0;
-  reading.in_compliance = QueryBool(":SENS:VOLT:PROT:TRIP?");
   reading.output_on = true;
+  return reading;
+}
+
+SourceReading ScpiSource::Measure() {
+  CheckOutputState();
+  if (!output_on_) return SourceReading{};
+  SourceReading reading = ReadOnce();
+  // SCPI replies carry no checksum: a reading away from the set-point is confirmed by a second
+  // one (a real mismatch persists, a damaged digit does not).
+  if (std::abs(reading.current_ma - setpoint_ma_) > kConfirmFraction * setpoint_ma_) {
+    reading = ReadOnce();
+  }
+  reading.in_compliance = QueryBool(":SENS:VOLT:PROT:TRIP?");
   return reading;
 }
 
@@ -329,7 +341,7 @@ void Validate(const DeviceSpec& spec) {
   }
   const double v = spec.Number("compliance_v", 0.0);
   if (!(v > 0.0 && v <= 210.0)) Invalid(spec, "compliance_v must be in (0, 210] V");
-  const double retries = spec.Number("retries", 2);
+  const double retries = spec.Number("retries", 3);
   if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
 }
 

@@ -152,7 +152,7 @@ class ZaberAscii : public DeviceDriver, public Motion {
     identity_.port = spec.port;
     identity_.vendor = "Zaber";
     timeout_ = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 500);
-    attempts_ = 1 + static_cast<int>(spec.Number("retries", 3));
+    attempts_ = 1 + static_cast<int>(spec.Number("retries", 4));
     checksum_ = spec.Text("checksum", "true") == "true";
     direction_ = spec.Number("direction", 1.0);
     tolerance_ = static_cast<long long>(spec.Number("tolerance_microsteps", 2));
@@ -579,7 +579,7 @@ void Validate(const DeviceSpec& spec) {
   const double direction = spec.Number("direction", 1.0);
   if (direction != 1.0 && direction != -1.0) Invalid(spec, "direction must be 1 or -1");
   if (spec.Number("tolerance_microsteps", 2) < 0) Invalid(spec, "tolerance_microsteps >= 0");
-  if (spec.Number("retries", 3) < 0 || spec.Number("retries", 3) > 20) Invalid(spec, "retries 0-20");
+  if (spec.Number("retries", 4) < 0 || spec.Number("retries", 4) > 20) Invalid(spec, "retries 0-20");
   if (spec.Number("home_timeout_s", 120) <= 0) Invalid(spec, "home_timeout_s must be > 0");
   const std::string checksum = spec.Text("checksum", "true");
   if (checksum != "true" && checksum != "false") Invalid(spec, "checksum must be true or false");

@@ -31,6 +31,7 @@ struct Ptu {
   std::string version = "Pan-Tilt Controller v3.2.0, (C)2010 FLIR Motion Control Systems, Inc.";
   std::vector<std::string> commands;
   int drop_next = 0;
+  int wrong_positions = 0;  // position replies with a damaged digit
 
   PtuAxisModel& Of(char c) { return c == 'P' ? pan : tilt; }
   std::string Value(long long v, const std::string& what) const {
@@ -65,6 +66,10 @@ struct Ptu {
       case 'P': {
         if (rest.empty()) {
           a.Step();
+          if (wrong_positions > 0) {
+            --wrong_positions;
+            return Value(a.pos + 1000, "Current position");
+          }
           return Value(a.pos, "Current position");
         }
         const long long t = std::stoll(rest);
@@ -213,6 +218,15 @@ TEST(FlirPtu, DroppedQueryRepliesAreRetried) {
   Head h;
   h.motion->Identify();
   h.ptu.drop_next = 2;
+  StationPosition now;
+  h.motion->ReadPosition(&now);
+  EXPECT_NEAR(now.pan_deg, 0.0, 1e-12);
+}
+
+TEST(FlirPtu, ReportedPositionIsReadTwiceAlike) {
+  Head h;
+  h.motion->Identify();
+  h.ptu.wrong_positions = 1;
   StationPosition now;
   h.motion->ReadPosition(&now);
   EXPECT_NEAR(now.pan_deg, 0.0, 1e-12);

@@ -23,6 +23,7 @@ struct SourceMeter {
   std::vector<std::string> errors;  // the error queue
   std::vector<std::string> commands;
   int drop_next = 0;
+  int wrong_readings = 0;  // :READ? answers with a damaged current digit
 
   double Volts() const {
     if (load_ohm <= 0) return compliance_v;
@@ -60,7 +61,11 @@ struct SourceMeter {
     } else if (line == ":OUTP?") {
       reply = output ? "1" : "0";
     } else if (line == ":READ?") {
-      const double amps = Compliance() ? (load_ohm <= 0 ? 0.0 : compliance_v / load_ohm) : level_a;
+      double amps = Compliance() ? (load_ohm <= 0 ? 0.0 : compliance_v / load_ohm) : level_a;
+      if (wrong_readings > 0) {
+        --wrong_readings;
+        amps += 0.1;
+      }
       char buf[160];
       std::snprintf(buf, sizeof(buf), "%+.6E,%+.6E,+9.910000E+37,+1.234560E+02,%+.6E", Volts(),
                     amps, Compliance() ? 8.0 : 0.0);
@@ -191,6 +196,18 @@ TEST(ScpiSource, LostQueryReplyIsRetriedAfterResync) {
   b.meter.drop_next = 1;  // the :OUTP? reply of Measure is lost
   const SourceReading r = b.source->Measure();
   EXPECT_NEAR(r.current_ma, 100.0, 1e-6);
+}
+
+TEST(ScpiSource, ReadingAwayFromTheSetpointIsConfirmed) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(400.0);
+  b.meter.wrong_readings = 1;
+  EXPECT_NEAR(b.source->Measure().current_ma, 400.0, 1e-6);
+  b.meter.load_ohm = 10.0;  // a real mismatch: 400 mA x 10 ohm is over 3 V, compliance
+  const SourceReading r = b.source->Measure();
+  EXPECT_NEAR(r.current_ma, 300.0, 1e-6);
+  EXPECT_TRUE(r.in_compliance);
 }
 
 TEST(ScpiSource, OffSwitchesTheOutputOffAndNeverThrows) {
