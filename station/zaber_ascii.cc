@@ -65,14 +65,18 @@ struct Reply {
   std::string flag, status, warning, data;
 };
 
-// Splits a received line; false when it is not a well-formed message (garbled, bad checksum).
-bool ParseReply(std::string line, Reply* out) {
+// Splits a received line; false when it is not a well-formed message (garbled, bad or missing
+// checksum when `need_checksum`). *checked tells whether it carried a valid checksum.
+bool ParseReply(std::string line, bool need_checksum, Reply* out, bool* checked) {
   if (line.size() < 2 || (line[0] != '@' && line[0] != '#' && line[0] != '!')) return false;
   const std::size_t colon = line.rfind(':');
-  if (colon != std::string::npos && colon + 3 == line.size()) {
+  *checked = colon != std::string::npos && colon + 3 == line.size();
+  if (*checked) {
     const std::string body = line.substr(1, colon - 1);
     if (Lrc(body) != line.substr(colon + 1)) return false;
     line.resize(colon);
+  } else if (need_checksum) {
+    return false;
   }
   std::istringstream in(line.substr(1));
   Reply r;
@@ -221,6 +225,7 @@ class ZaberAscii : public DeviceDriver, public Motion {
   milliseconds home_timeout_{120000};
   int attempts_ = 4;
   bool checksum_ = true;
+  bool reply_checksums_ = false;  // the device checksums its replies (learnt from the first)
   double direction_ = 1.0;
   long long tolerance_ = 2;
   int next_id_ = 0;
@@ -251,11 +256,15 @@ bool ZaberAscii::Await(const Address& a, int axis, int id, milliseconds wait, Re
       return false;
     }
     Reply r;
-    if (!ParseReply(line, &r)) {
+    bool checked = false;
+    if (!ParseReply(line, reply_checksums_, &r, &checked)) {
       last_unparsed_ = line;
       continue;
     }
     if (r.type == '@' && r.device == a.device && r.axis == axis && r.id == id) {
+      // A device that answered a checksummed command with a checksum always does: from then on
+      // a reply whose checksum was damaged away is not taken.
+      reply_checksums_ = reply_checksums_ || (checksum_ && checked);
       *reply = r;
       return true;
     }

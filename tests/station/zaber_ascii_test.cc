@@ -256,6 +256,25 @@ TEST(ZaberAscii, GarbledAndDroppedQueryRepliesAreRetried) {
   EXPECT_EQ(rig.Count("get pos"), 3);
 }
 
+TEST(ZaberAscii, ReplyWhoseChecksumWasDamagedAwayIsNotTaken) {
+  Rig rig;
+  rig.motion->Identify();
+  int damaged = 1;
+  rig.wire->respond = [&rig, &damaged](const std::string& line) {
+    std::vector<std::string> replies = rig.stage.Respond(line);
+    if (damaged > 0 && !replies.empty()) {
+      --damaged;
+      std::string& r = replies.front();
+      r = r.substr(0, r.rfind(':')) + "7";  // ':' garbled: "...-- 0" -> "...-- 07"
+    }
+    return replies;
+  };
+  StationPosition now;
+  rig.motion->ReadPosition(&now);
+  EXPECT_NEAR(now.slide_mm, 1000.0, 1e-9);
+  EXPECT_EQ(rig.Count("get pos"), 2);
+}
+
 TEST(ZaberAscii, SilentDeviceIsALinkErrorAfterTheRetries) {
   Rig rig;
   rig.motion->Identify();
