@@ -129,13 +129,16 @@ class FlirPtu : public DeviceDriver, public Motion {
 // Sends one command and reads its reply. True with the text after '*'; false when no reply came
 // in `wait`. A '!' reply is a DeviceError carrying the unit's message.
 bool FlirPtu::Exchange(const std::string& command, milliseconds wait, std::string* body) {
+  // Replies carry no id: whatever arrived before this command (a late reply to an earlier one)
+  // is not its reply.
+  link_->Flush();
   link_->WriteLine(command);
   const auto deadline = Clock::now() + wait;
   while (true) {
     const auto left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now());
-    if (left.count() <= 0) return false;
     std::string line;
     try {
+      if (left.count() <= 0) throw LinkError("timeout", spec_.port, "");
       line = link_->ReadLine(left);
     } catch (const LinkError&) {
       return false;
@@ -163,7 +166,6 @@ bool FlirPtu::Exchange(const std::string& command, milliseconds wait, std::strin
 // A query (changes nothing): retried after a lost or garbled reply.
 std::string FlirPtu::Query(const std::string& command) {
   for (int attempt = 0; attempt < attempts_; ++attempt) {
-    if (attempt > 0) link_->Flush();
     std::string body;
     if (Exchange(command, timeout_, &body)) return body;
   }

@@ -232,6 +232,20 @@ TEST(FlirPtu, ReportedPositionIsReadTwiceAlike) {
   EXPECT_NEAR(now.pan_deg, 0.0, 1e-12);
 }
 
+TEST(FlirPtu, LateReplyIsNotTakenForTheNextCommands) {
+  Head h;
+  h.motion->Identify();
+  h.motion->Home();
+  StationPosition target;
+  target.pan_deg = 20.0;
+  target.tilt_deg = 5.0;
+  h.motion->StartMove(target);
+  h.motion->WaitSettled(std::chrono::milliseconds(10000));
+  // A reply to an earlier query arrives late, before the next command is sent.
+  h.wire->pending.push_back("* 9999");
+  EXPECT_EQ(h.motion->State(), MotionState::kIdle);  // one position read per axis
+}
+
 TEST(FlirPtu, LostMoveAcknowledgementIsNotResentWhenTheAxisMoves) {
   Head h;
   h.motion->Identify();
