@@ -341,8 +341,8 @@ void FlirPtu::StoppedShort(const std::string& what, const std::vector<long long>
        "check for an obstruction, an overload or a stalled axis; then home");
 }
 
-// Manual: R resets (calibrates) both axes; the '*' may come when the reset ends. Then the axes
-// are commanded to 0, where homing leaves them.
+// Manual: R resets (calibrates) both axes; the '*' may come when the reset ends. The rig's speeds
+// are set again, then the axes commanded to 0, where homing leaves them.
 void FlirPtu::Home() {
   homed_ = false;
   if (!Command("R", home_timeout_)) {
@@ -350,7 +350,11 @@ void FlirPtu::Home() {
                         std::to_string(home_timeout_.count()) + " ms",
                     spec_.port, "check the unit's power and cable; then home again");
   }
-  for (PtuAxis& a : axes_) a.has_target = false;
+  for (PtuAxis& a : axes_) {
+    a.has_target = false;
+    ApplySpeed(&a);  // a power cycle restored the unit's defaults
+    ReadAxis(&a);
+  }
   was_away_ = false;
   for (PtuAxis& a : axes_) MoveAxis(&a, 0);
   WaitAt(home_timeout_, "homing");

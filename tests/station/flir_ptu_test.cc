@@ -275,6 +275,23 @@ TEST(FlirPtu, StuckAxisTimesOutWithADeviceError) {
   EXPECT_GE(h.Count("H"), 1);  // halted
 }
 
+TEST(FlirPtu, HomingAfterAPowerCycleRestoresTheRigSpeed) {
+  DeviceSpec spec = HeadSpec();
+  spec.settings["speed_deg_s"] = {"30", 12};
+  Head h(spec);
+  h.motion->Identify();
+  h.motion->Home();
+  h.ptu.PowerCycle();
+  EXPECT_THROW(h.motion->CheckAlive(), DeviceRestarted);
+  h.motion->Home();
+  EXPECT_EQ(h.ptu.pan.speed, std::llround(30 / kDegPerPos));
+  StationPosition target;
+  target.pan_deg = 10.0;
+  h.motion->StartMove(target);
+  h.motion->WaitSettled(std::chrono::milliseconds(10000));
+  h.motion->CheckAlive();
+}
+
 TEST(FlirPtu, PowerCycleDuringAMoveIsARestart) {
   Head h;
   h.motion->Identify();
