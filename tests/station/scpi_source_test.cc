@@ -221,6 +221,19 @@ TEST(ScpiSource, OffSwitchesTheOutputOffAndNeverThrows) {
   EXPECT_NO_THROW(b.source->Off());
 }
 
+TEST(ScpiSource, OffIsRepeatedWhenTheOutputStillReadsOn) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(300.0);
+  int lost = 1;
+  b.wire->respond = [&b, &lost](const std::string& line) {
+    if (line == ":OUTP OFF" && lost-- > 0) return std::vector<std::string>{};  // damaged
+    return b.meter.Respond(line);
+  };
+  b.source->Off();
+  EXPECT_FALSE(b.meter.output);
+}
+
 TEST(ScpiSource, DestructionSwitchesTheOutputOff) {
   Bench b;
   b.source->Identify();
