@@ -205,7 +205,7 @@ TEST(ScpiSource, GarbledReplyIsRetriedAfterResync) {
   int garbled = 1;
   b.wire->respond = [&b, &garbled](const std::string& line) {
     std::vector<std::string> replies = b.meter.Respond(line);
-    if (line == ":READ?" && garbled-- > 0) replies = {"+2.1#0000E+00,+2.5\x80000E-01"};
+    if (line == ":READ?" && garbled-- > 0) replies = {"+2.1#0000E+00,+2.5?0000E-01"};
     return replies;
   };
   EXPECT_NEAR(b.source->Measure().current_ma, 250.0, 1e-6);
