@@ -408,13 +408,14 @@ std::string Fig7EPanels(const std::string& e_problem, bool top) {
     return "set xlabel 'true distance d (mm)'\nset ylabel 'measured dE_{rel}'\n"
            "plot '__DATA__' using 7:1 with points pt 7 ps 0.4 lc rgb '#777777' notitle\n";
   }
-  std::string reason = e_problem;
-  ReplaceAll(&reason, "'", "");
+  std::string reason = e_problem;  // inside a double-quoted gnuplot string: no quote, no escape
+  ReplaceAll(&reason, "\"", "");
+  ReplaceAll(&reason, "\\", "");
   // Wrap the reason at about 45 characters for the text panel.
   std::string wrapped;
   size_t line = 0;
   for (char c : reason) {
-    if (c == ' ' && line > 45) {
+    if (c == ' ' && line > 55) {
       wrapped += "\\n";
       line = 0;
       continue;
@@ -423,8 +424,8 @@ std::string Fig7EPanels(const std::string& e_problem, bool top) {
     ++line;
   }
   s << "unset grid\nunset border\nunset xtics\nunset ytics\nset xlabel ''\nset ylabel ''\n"
-    << "set label 2 'The dE_{rel} model is not a fit:\\n" << wrapped
-    << "\\nIts residuals measure nothing and are not drawn.' at graph 0.02, graph 0.75 left "
+    << "set label 2 \"The dE_rel model is not a fit:\\n" << wrapped
+    << "\\nIts residuals measure nothing and are not plotted.\" at graph 0.02, graph 0.75 left "
        "noenhanced\nplot [0:1][0:1] NaN notitle\nunset label 2\nset border\nset xtics\n"
        "set ytics\nset grid\n";
   return s.str();

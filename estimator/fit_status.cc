@@ -62,7 +62,9 @@ FitConditioning ClassifyJacobian(const Eigen::MatrixXd& jacobian,
   out.condition_number =
       s_min > 0.0 ? s_max / s_min : std::numeric_limits<double>::infinity();
   out.rank = 0;
-  for (int i = 0; i < s.size(); ++i) out.rank += s(i) > kRankTolerance * s_max ? 1 : 0;
+  const double tolerance = std::max(jacobian.rows(), jacobian.cols()) *
+                           std::numeric_limits<double>::epsilon() * s_max;
+  for (int i = 0; i < s.size(); ++i) out.rank += s(i) > tolerance ? 1 : 0;
   // Columns beyond the rows (more parameters than residuals) are null directions too.
   for (int i = out.rank; i < jacobian.cols(); ++i) {
     out.null_directions.push_back(DescribeDirection(svd.matrixV().col(i), names));

@@ -16,16 +16,15 @@ class Problem;
 
 namespace irdist {
 
-// A singular value below kRankTolerance * s_max counts as zero (a few hundred rows of doubles
-// cannot resolve more than ~1e-13 of the largest).
-constexpr double kRankTolerance = 1e-13;
+// The numerical rank: singular values above max(rows, cols) * machine epsilon * s_max (the
+// tolerance of LAPACK's and NumPy's rank), below which a direction is lost to rounding.
 // Above this singular-value ratio of J (1e20 for J^T J) the solution's coefficients keep fewer
 // than ~6 significant digits: the fit is reported ill-conditioned.
 constexpr double kIllConditionedLimit = 1e10;
 
 struct FitConditioning {
   double condition_number = -1.0;  // s_max / s_min (infinity when s_min is 0), -1 if no column
-  int rank = 0;                    // singular values above kRankTolerance * s_max
+  int rank = 0;                    // numerical rank (above)
   int parameters = 0;              // columns of the Jacobian
   // One line per null direction: the unit right singular vector, its largest components named,
   // e.g. "0.707 q3 - 0.707 q5".

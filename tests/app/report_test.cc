@@ -84,7 +84,7 @@ TEST(Report, ValidationReportHasEveryFigureDrawnAndCaptioned) {
   // The header says what produced the page.
   EXPECT_NE(html.find("<th>recipe</th><td>recipes/v.yaml</td>"), std::string::npos);
   EXPECT_NE(html.find("<th>report written</th>"), std::string::npos);
-  EXPECT_EQ(html.find("not drawn"), std::string::npos) << "a plot failed; see the .log files in "
+  EXPECT_EQ(html.find("class='missing'"), std::string::npos) << "a plot failed; see the .log files in "
                                                        << dir;
   // Self-contained: the SVGs are inline, no external references.
   EXPECT_NE(html.find("<svg"), std::string::npos);
@@ -127,7 +127,7 @@ TEST(Report, HostilePathsRunNoShellAndEveryPlotIsDrawn) {
        {"x'; touch INJECTED; echo '", "lab's run", "a \"b\" $HOME ; c", "$(touch INJECTED)"}) {
     const fs::path dir = root / name / "report";
     const std::string html = Slurp(WriteReport(dir.string(), "V", {}, "s", plots));
-    EXPECT_EQ(html.find("not drawn"), std::string::npos) << name;
+    EXPECT_EQ(html.find("class='missing'"), std::string::npos) << name;
     for (const Plot& p : plots) EXPECT_TRUE(fs::exists(dir / (p.name + ".svg"))) << name;
   }
   fs::current_path(cwd);
@@ -167,7 +167,7 @@ TEST(Report, CalibrationReportShowsFitAndEq25) {
       << plots[1].script;
   const fs::path dir = fs::temp_directory_path() / ("irdist_calrep_" + std::to_string(::getpid()));
   const std::string html = Slurp(WriteReport(dir.string(), "Calibration", {}, "fit", plots));
-  EXPECT_EQ(html.find("not drawn"), std::string::npos);
+  EXPECT_EQ(html.find("class='missing'"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir / "fig7_fit.svg"));
   EXPECT_TRUE(fs::exists(dir / "fig8_eq25.svg"));
   fs::remove_all(dir);
@@ -196,7 +196,7 @@ TEST(Report, DegenerateEModelIsNotDrawnAsAPerfectFit) {
   EXPECT_NE(plots[0].caption.find("degenerate"), std::string::npos);
   const fs::path dir = fs::temp_directory_path() / ("irdist_degrep_" + std::to_string(::getpid()));
   const std::string html = Slurp(WriteReport(dir.string(), "Calibration", {}, "fit", plots));
-  EXPECT_EQ(html.find("not drawn"), std::string::npos);
+  EXPECT_EQ(html.find("class='missing'"), std::string::npos);
   fs::remove_all(dir);
 }
 

@@ -40,11 +40,20 @@ TEST(FitStatus, MoreParametersThanResidualsIsDegenerate) {
 
 TEST(FitStatus, LargeConditionNumberIsIllConditioned) {
   Eigen::MatrixXd j = Eigen::MatrixXd::Identity(3, 2);
-  j(1, 1) = 1e-11;  // ratio 1e11: above kIllConditionedLimit, above kRankTolerance
+  j(1, 1) = 1e-11;  // ratio 1e11: above kIllConditionedLimit, above the rank tolerance (7e-16)
   const FitConditioning c = ClassifyJacobian(j, {"a", "b"});
   EXPECT_FALSE(c.degenerate());
   EXPECT_TRUE(c.ill_conditioned());
   EXPECT_NEAR(c.condition_number, 1e11, 1e5);
+}
+
+TEST(FitStatus, ADirectionBelowTheRoundingOfTheLargestIsLost) {
+  Eigen::MatrixXd j = Eigen::MatrixXd::Identity(3, 2);
+  j(1, 1) = 1e-17;  // below 3 * 2.2e-16
+  const FitConditioning c = ClassifyJacobian(j, {"a", "b"});
+  EXPECT_TRUE(c.degenerate());
+  ASSERT_EQ(c.null_directions.size(), 1u);
+  EXPECT_EQ(c.null_directions[0], "1 b");
 }
 
 TEST(FitStatus, TerminationNamesAreDistinct) {
