@@ -32,8 +32,8 @@ struct ValidateArgs {
 };
 
 struct FitArgs {
-  std::string recording;  // recording folder
-  std::string out;        // --out: model file to write ("" = RECORDING/../model.yaml)
+  std::string recording;          // recording folder
+  std::string out;                // --out: model file to write ("" = RECORDING/../model.yaml)
   bool recover_response = false;  // --recover-response: the camera's inverse response first
 };
 

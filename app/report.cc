@@ -149,8 +149,7 @@ std::string Fig10Script(const ByCurrent& by_current) {
   for (const auto& [ma, rs] : by_current) {
     s << ", '__DATA__' index " << i << " using 1:3 with points pt " << PointType(i)
       << " ps 0.5 lc rgb '" << Colour(i) << "' notitle, '__DATA__' index " << (n + i)
-      << " using 1:2 with lines lw 1.5 lc rgb '" << Colour(i) << "' title 'mean, " << ma
-      << " mA'";
+      << " using 1:2 with lines lw 1.5 lc rgb '" << Colour(i) << "' title 'mean, " << ma << " mA'";
     ++i;
   }
   s << "\nunset multiplot\n";
@@ -179,14 +178,16 @@ Plot Fig10RandomCurrents(const std::vector<const EstimateRow*>& rows) {
 Plot Fig10(const std::vector<const EstimateRow*>& rows, const std::string& method) {
   ByCurrent by_current;
   for (const EstimateRow* r : rows) by_current[std::lround(r->bias_ma)].push_back(r);
-  Plot p = by_current.size() <= 6 ? Plot{"", "", "", Fig10Data(by_current),
-                                         Fig10Script(by_current), 900, 620}
-                                  : Fig10RandomCurrents(rows);
+  Plot p = by_current.size() <= 6
+               ? Plot{"", "", "", Fig10Data(by_current), Fig10Script(by_current), 900, 620}
+               : Fig10RandomCurrents(rows);
   p.name = "fig10_distance";
   p.title = "Estimated against true distance, and the residual per bias current";
   p.caption =
       "Top: estimated distance (mm) against the station's distance (mm), one colour per IRED "
-      "bias current (mA), method " + method + "; the dashed line is estimate = truth. Bottom: "
+      "bias current (mA), method " +
+      method +
+      "; the dashed line is estimate = truth. Bottom: "
       "the residual, estimate - truth (mm), against the true distance; the line of each current "
       "joins its mean residual at each distance, the black line at 0 is the truth. The estimate "
       "is independent of the current when the lines lie on each other. Reproduces Fig. 10 of "
@@ -210,15 +211,16 @@ Plot Fig11(const MethodSummary& m) {
   }
   s << "plot '__DATA__' using 1:2 with linespoints pt 7 lc rgb '" << Colour(0)
     << "' title 'median', '' using 1:3 with linespoints pt 5 lc rgb '" << Colour(1)
-    << "' title 'p95', '' using 1:4 with linespoints pt 9 lc rgb '" << Colour(2)
-    << "' title 'max'";
+    << "' title 'p95', '' using 1:4 with linespoints pt 9 lc rgb '" << Colour(2) << "' title 'max'";
   if (m.best_dt_ms) s << ", NaN with lines lc rgb '#000000' dt 2 title 'best dt'";
   s << "\n";
   return {"fig11_dt", "Error against exposure difference",
           "Median, 95th percentile and largest |relative distance error| (%) of the per-dt "
-          "estimates (method " + m.method + ") against dt = t_n - t_r (ms); the dashed line "
-          "marks the dt with the smallest median. Reproduces Fig. 11-12 of the paper (its "
-          "'bathtub' and optimum dt).",
+          "estimates (method " +
+              m.method +
+              ") against dt = t_n - t_r (ms); the dashed line "
+              "marks the dt with the smallest median. Reproduces Fig. 11-12 of the paper (its "
+              "'bathtub' and optimum dt).",
           data.str(), s.str()};
 }
 
@@ -276,19 +278,20 @@ Plot Fig13Histogram(const std::vector<const EstimateRow*>& rows) {
 
 using ByPose = std::map<std::pair<long, long>, std::vector<const EstimateRow*>>;
 
-// At most `most` poses, evenly picked, so that the legend stays readable.
-ByPose EveryKthPose(const ByPose& by_pose, size_t most) {
+// At most `most` poses, evenly spread over the (distance, angle) order, so that the legend stays
+// readable and both ends are shown.
+ByPose SpreadPoses(const ByPose& by_pose, size_t most) {
   if (by_pose.size() <= most) return by_pose;
+  std::vector<ByPose::const_iterator> all;
+  for (auto it = by_pose.begin(); it != by_pose.end(); ++it) all.push_back(it);
   ByPose out;
-  size_t i = 0;
-  const size_t k = (by_pose.size() + most - 1) / most;
-  for (const auto& entry : by_pose) {
-    if (i++ % k == 0) out.insert(entry);
+  for (size_t i = 0; i < most; ++i) {
+    out.insert(*all[(i * (all.size() - 1) + (most - 1) / 2) / (most - 1)]);
   }
   return out;
 }
 
-Plot Fig14(const ByPose& by_pose) {
+Plot Fig14(const ByPose& by_pose, size_t total_poses) {
   std::ostringstream data, s;
   s << kCommonStyle << "set xlabel 'repetition (points of a pose spread by up to +-0.3)'\n"
     << "set ylabel 'estimate - truth (mm)'\nset xtics 1\nplot 0 title 'truth' lc rgb "
@@ -310,8 +313,10 @@ Plot Fig14(const ByPose& by_pose) {
   s << "\n";
   return {"fig14_repetitions", "Repeated estimates of one pose",
           "Deviation of the estimated distance from the station's distance (mm) over the "
-          "repetitions of each pose (true distance mm, orientation deg); the black line at 0 is "
-          "the truth. Reproduces Fig. 14 of the paper (consistency).",
+          "repetitions (numbered from 0) of each pose (true distance mm, orientation deg; " +
+              std::to_string(by_pose.size()) + " of the " + std::to_string(total_poses) +
+              " poses); the black line at 0 is the truth. Reproduces Fig. 14 of the paper "
+              "(consistency).",
           data.str(), s.str()};
 }
 
@@ -369,7 +374,7 @@ std::vector<Plot> ValidationPlots(const std::vector<EstimateRow>& rows,
     by_pose[{std::lround(r->true_d_mm), std::lround(r->true_theta_deg)}].push_back(r);
     max_repeat = std::max(max_repeat, r->repeat);
   }
-  if (max_repeat >= 2) plots.push_back(Fig14(EveryKthPose(by_pose, 8)));
+  if (max_repeat >= 2) plots.push_back(Fig14(SpreadPoses(by_pose, 8), by_pose.size()));
   if (summary.methods.size() >= 2) plots.push_back(MethodsPlot(rows, summary));
   return plots;
 }
@@ -398,7 +403,8 @@ std::string Fig7EPanels(const std::string& e_problem, bool top) {
     if (top) {
       return "set xlabel 'measured dE_{rel}'\nset ylabel 'model dE_{rel}'\n"
              "plot x notitle lc rgb '#555555' dt 2, '__DATA__' using 1:2 with points pt 7 ps "
-             "0.4 lc rgb '" + Colour(0) + "' notitle\n";
+             "0.4 lc rgb '" +
+             Colour(0) + "' notitle\n";
     }
     return "set xlabel 'calibration sample (index)'\nset ylabel 'dE_{rel} model error (%)'\n"
            "plot 0 notitle lc rgb '#000000', '__DATA__' using 0:5 with impulses lc rgb '" +
@@ -424,7 +430,8 @@ std::string Fig7EPanels(const std::string& e_problem, bool top) {
     ++line;
   }
   s << "unset grid\nunset border\nunset xtics\nunset ytics\nset xlabel ''\nset ylabel ''\n"
-    << "set label 2 \"The dE_rel model is not a fit:\\n" << wrapped
+    << "set label 2 \"The dE_rel model is not a fit:\\n"
+    << wrapped
     << "\\nIts residuals measure nothing and are not plotted.\" at graph 0.02, graph 0.75 left "
        "noenhanced\nplot [0:1][0:1] NaN notitle\nunset label 2\nset border\nset xtics\n"
        "set ytics\nset grid\n";
@@ -448,17 +455,29 @@ std::string Fig7Script(const std::string& e_problem) {
   return s.str();
 }
 
-Plot Fig7(const std::vector<CalibrationPoint>& points, const std::string& e_problem) {
-  Plot p{"fig7_fit", "Calibration fit: measured against modelled", "", Fig7Data(points),
-         Fig7Script(e_problem), 900, 720};
+Plot Fig7(const std::vector<CalibrationPoint>& points, const std::string& e_problem,
+          const std::string& sigma_problem) {
+  Plot p{"fig7_fit",
+         "Calibration fit: measured against modelled",
+         "",
+         Fig7Data(points),
+         Fig7Script(e_problem),
+         900,
+         720};
   p.caption =
       "Right: measured against modelled dSigma (gray levels normalised to full scale; the "
       "dashed line is model = measured) and the model's relative error (%) per calibration "
-      "sample. Left: ";
+      "sample" +
+      (sigma_problem.empty()
+           ? std::string(". ")
+           : " (the dSigma fit is " + sigma_problem +
+                 ": small residuals, but some of its coefficients are poorly determined). ") +
+      "Left: ";
   p.caption += e_problem.empty()
                    ? "the same for dE_rel (dimensionless). "
                    : "the measured dE_rel (dimensionless) against the true distance (mm); its "
-                     "model is not drawn as a fit because it is " + e_problem + ". ";
+                     "model is not drawn as a fit because it is " +
+                         e_problem + ". ";
   p.caption += "Reproduces Fig. 7 of the paper (the I0-free models, Eq. 17-18).";
   return p;
 }
@@ -472,8 +491,7 @@ std::vector<double> ZeroCrossings(const CalibrationPoint& p) {
     const double a = p.eq25_value[i - 1], b = p.eq25_value[i];
     if (a == 0.0) roots.push_back(p.eq25_d_mm[i - 1]);
     if ((a < 0.0) != (b < 0.0) && a != 0.0 && b != 0.0) {
-      roots.push_back(p.eq25_d_mm[i - 1] +
-                      (p.eq25_d_mm[i] - p.eq25_d_mm[i - 1]) * a / (a - b));
+      roots.push_back(p.eq25_d_mm[i - 1] + (p.eq25_d_mm[i] - p.eq25_d_mm[i - 1]) * a / (a - b));
     }
   }
   return roots;
@@ -507,13 +525,14 @@ std::optional<Plot> Fig8(const std::vector<CalibrationPoint>& points) {
     s << "set arrow from " << p.d_mm << ", graph 0 to " << p.d_mm << ", graph 1 nohead lc rgb '"
       << Colour(block) << "' dt 2 lw 1.5\n";
     plot << (block ? ", " : "plot ") << "'__DATA__' index " << block
-         << " using 1:2 with lines lw 1.5 lc rgb '" << Colour(block) << "' title '"
-         << CurveLabel(p) << "'";
+         << " using 1:2 with lines lw 1.5 lc rgb '" << Colour(block) << "' title '" << CurveLabel(p)
+         << "'";
     ++block;
   }
   if (block == 0) return std::nullopt;
-  s << plot.str() << ", NaN with lines dt 2 lc rgb '#000000' title 'dashed: the true distance of "
-                     "the curve of the same colour'\n";
+  s << plot.str()
+    << ", NaN with lines dt 2 lc rgb '#000000' title 'dashed: the true distance of "
+       "the curve of the same colour'\n";
   Plot fig{"fig8_eq25", "Eq. 25 curves", "", data.str(), s.str(), 900, 560};
   fig.caption =
       "The Eq. 25 polynomial c - a in D (the Sigma equation's polynomial minus the E "
@@ -549,7 +568,9 @@ std::vector<Plot> CalibrationPlots(const std::vector<CalibrationPoint>& points,
   std::vector<Plot> plots;
   if (points.empty()) return plots;
   const FittedModel* free_e = model.Find(ModelKind::kFreeE);
-  plots.push_back(Fig7(points, free_e != nullptr ? UnreliableFitReason(*free_e) : ""));
+  const FittedModel* free_s = model.Find(ModelKind::kFreeSigma);
+  plots.push_back(Fig7(points, free_e != nullptr ? UnreliableFitReason(*free_e) : "",
+                       free_s != nullptr ? UnreliableFitReason(*free_s) : ""));
   if (std::optional<Plot> fig8 = Fig8(points)) plots.push_back(std::move(*fig8));
   return plots;
 }
@@ -673,10 +694,10 @@ ReportFields CalibrationReportFields(const std::string& recording_dir,
     fields.push_back({std::string("fit ") + ToString(m.kind), FitText(m)});
   }
   if (model.geometric.fitted()) {
-    fields.push_back({"fit geometric", ToString(model.geometric.summary.termination) +
-                                           std::string(", mean |error| ") +
-                                           Fixed(100.0 * model.geometric.summary.mean_relative_error,
-                                                 3) + " %"});
+    fields.push_back({"fit geometric",
+                      ToString(model.geometric.summary.termination) +
+                          std::string(", mean |error| ") +
+                          Fixed(100.0 * model.geometric.summary.mean_relative_error, 3) + " %"});
   }
   fields.push_back({"calibrated range", Fixed(model.ranges.d_min_mm, 0) + " - " +
                                             Fixed(model.ranges.d_max_mm, 0) + " mm, " +
@@ -691,8 +712,8 @@ ReportFields ValidationReportFields(const std::map<std::string, std::string>& co
   const auto recording = context.find("recording");
   if (recording != context.end()) fields = RecordingReportFields(recording->second);
   for (const auto& [key, value] : context) {  // the context wins over the recording's copy
-    auto same = std::find_if(fields.begin(), fields.end(),
-                             [&](const auto& f) { return f.first == key; });
+    auto same =
+        std::find_if(fields.begin(), fields.end(), [&](const auto& f) { return f.first == key; });
     if (same == fields.end()) {
       fields.push_back({key, value});
     } else if (!value.empty()) {

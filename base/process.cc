@@ -66,7 +66,8 @@ ProcessResult WaitFor(pid_t pid, const std::vector<std::string>& argv) {
   do {
     rc = ::waitpid(pid, &status, 0);
   } while (rc < 0 && errno == EINTR);
-  if (rc < 0) throw ProcessError("waiting for " + Quoted(argv) + " failed: " + std::strerror(errno));
+  if (rc < 0)
+    throw ProcessError("waiting for " + Quoted(argv) + " failed: " + std::strerror(errno));
   ProcessResult result;
   result.exited = WIFEXITED(status);
   if (result.exited) result.exit_code = WEXITSTATUS(status);

@@ -9,7 +9,6 @@
 #include <numeric>
 #include <sstream>
 
-
 namespace irdist {
 namespace {
 
@@ -27,8 +26,10 @@ std::string DescribeDirection(const Eigen::VectorXd& v, const std::vector<std::s
   for (int i : order) {
     const double c = sign * v(i);
     if (std::abs(c) < 0.1 || shown == 6) break;
-    const std::string name = i < static_cast<int>(names.size()) ? names[i] : "x" + std::to_string(i);
-    out << (shown == 0 ? (c < 0 ? "-" : "") : (c < 0 ? " - " : " + ")) << std::abs(c) << " " << name;
+    const std::string name =
+        i < static_cast<int>(names.size()) ? names[i] : "x" + std::to_string(i);
+    out << (shown == 0 ? (c < 0 ? "-" : "") : (c < 0 ? " - " : " + ")) << std::abs(c) << " "
+        << name;
     ++shown;
   }
   return out.str();
@@ -59,11 +60,10 @@ FitConditioning ClassifyJacobian(const Eigen::MatrixXd& jacobian,
   const Eigen::VectorXd s = svd.singularValues();  // descending, min(rows, cols) of them
   const double s_max = s(0);
   const double s_min = s.size() < jacobian.cols() ? 0.0 : s(s.size() - 1);
-  out.condition_number =
-      s_min > 0.0 ? s_max / s_min : std::numeric_limits<double>::infinity();
+  out.condition_number = s_min > 0.0 ? s_max / s_min : std::numeric_limits<double>::infinity();
   out.rank = 0;
-  const double tolerance = std::max(jacobian.rows(), jacobian.cols()) *
-                           std::numeric_limits<double>::epsilon() * s_max;
+  const double tolerance =
+      std::max(jacobian.rows(), jacobian.cols()) * std::numeric_limits<double>::epsilon() * s_max;
   for (int i = 0; i < s.size(); ++i) out.rank += s(i) > tolerance ? 1 : 0;
   // Columns beyond the rows (more parameters than residuals) are null directions too.
   for (int i = out.rank; i < jacobian.cols(); ++i) {
@@ -88,7 +88,8 @@ std::string FitConditioning::Note() const {
     note << "rank " << rank << " of " << parameters << "; null directions:";
     const size_t shown = std::min<size_t>(null_directions.size(), 4);
     for (size_t i = 0; i < shown; ++i) note << " [" << null_directions[i] << "]";
-    if (shown < null_directions.size()) note << " and " << null_directions.size() - shown << " more";
+    if (shown < null_directions.size())
+      note << " and " << null_directions.size() - shown << " more";
   } else if (ill_conditioned()) {
     note << "condition number above " << kIllConditionedLimit;
   }

@@ -84,8 +84,8 @@ TEST(Report, ValidationReportHasEveryFigureDrawnAndCaptioned) {
   // The header says what produced the page.
   EXPECT_NE(html.find("<th>recipe</th><td>recipes/v.yaml</td>"), std::string::npos);
   EXPECT_NE(html.find("<th>report written</th>"), std::string::npos);
-  EXPECT_EQ(html.find("class='missing'"), std::string::npos) << "a plot failed; see the .log files in "
-                                                       << dir;
+  EXPECT_EQ(html.find("class='missing'"), std::string::npos)
+      << "a plot failed; see the .log files in " << dir;
   // Self-contained: the SVGs are inline, no external references.
   EXPECT_NE(html.find("<svg"), std::string::npos);
   EXPECT_EQ(html.find("src="), std::string::npos);
@@ -118,7 +118,8 @@ TEST(Report, HostilePathsRunNoShellAndEveryPlotIsDrawn) {
   const auto rows = Rows();
   const auto summary = Summarize(rows);
   const auto plots = ValidationPlots(rows, summary);
-  const fs::path root = fs::temp_directory_path() / ("irdist_hostile_" + std::to_string(::getpid()));
+  const fs::path root =
+      fs::temp_directory_path() / ("irdist_hostile_" + std::to_string(::getpid()));
   fs::remove_all(root);
   fs::create_directories(root);
   const fs::path cwd = fs::current_path();
