@@ -595,14 +595,15 @@ std::string ErrorFiguresText(const ErrorFigures& f) {
   return s.str();
 }
 
+// "converged, 72 samples, mean |error| 0.095 %" or "72 samples, degenerate (...)".
 std::string FitText(const FittedModel& m) {
   std::ostringstream s;
   const std::string reason = UnreliableFitReason(m);
-  s << ToString(m.summary.termination) << ", " << m.summary.samples << " samples";
   if (reason.empty()) {
-    s << ", mean |error| " << Fixed(100.0 * m.summary.mean_relative_error, 3) << " %";
+    s << ToString(m.summary.termination) << ", " << m.summary.samples << " samples, mean |error| "
+      << Fixed(100.0 * m.summary.mean_relative_error, 3) << " %";
   } else {
-    s << ": " << reason;
+    s << m.summary.samples << " samples, " << reason;
   }
   return s.str();
 }
