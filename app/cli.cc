@@ -6,6 +6,7 @@
 #include <ostream>
 #include <sstream>
 
+#include "app/offline.h"
 #include "app/recipe.h"
 #include "app/run.h"
 #include "app/tools.h"

@@ -12,8 +12,7 @@
 
 #include "acquisition/recording.h"
 #include "app/recipe.h"
-#include "app/run.h"
-#include "app/tools.h"
+#include "app/show.h"
 #include "estimator/estimate.h"
 #include "estimator/model_file.h"
 #include "estimator/models.h"
@@ -344,8 +343,10 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   if (!report_dir.empty()) {
     std::ostringstream text;
     text << "Calibration from " << reader.dir() << "\n" << model.BriefReport() << "\n";
-    const std::string index = WriteReport(report_dir, "irdist calibration", text.str(),
-                                          CalibrationPlots(CalibrationPointsOf(model, samples)));
+    const std::string index =
+        WriteReport(report_dir, "irdist calibration",
+                    CalibrationReportFields(reader.dir(), model_path, model), text.str(),
+                    CalibrationPlots(CalibrationPointsOf(model, samples), model));
     out << "Report: " << index << "\n";
   }
   return model;
@@ -494,8 +495,9 @@ ValidationSummary WriteValidation(const std::string& dir, const std::vector<Esti
   WriteEstimatesCsv(dir + "/estimates.csv", rows);
   ValidationSummary summary = Summarize(rows);
   WriteSummaryYaml(dir + "/summary.yaml", summary, context);
-  const std::string index = WriteReport(dir + "/report", "irdist validation", summary.BriefReport(),
-                                        ValidationPlots(rows, summary));
+  const std::string index =
+      WriteReport(dir + "/report", "irdist validation", ValidationReportFields(context, summary),
+                  summary.BriefReport(), ValidationPlots(rows, summary));
   out << summary.BriefReport() << "\n";
   out << "Estimates: " << dir << "/estimates.csv\nSummary: " << dir
       << "/summary.yaml\nReport: " << index << "\n";

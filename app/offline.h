@@ -1,5 +1,5 @@
 #pragma once
-// The processing after recording, shared by the live runs (calibrate, validate) and the offline
+// The offline commands (fit, playback, check) and the processing after recording, shared by the live runs (calibrate, validate) and the offline
 // commands (fit, playback): per-frame features (features.csv), calibration samples and the fit,
 // per-bracket estimates (estimates.csv, summary.yaml) and the reports. Live and offline call the
 // same functions on the same rows, so the same recording (and model) gives byte-identical files.
@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "app/command_args.h"
+#include "app/errors.h"
 #include "app/report.h"
 #include "app/summary.h"
 #include "estimator/features.h"
@@ -95,5 +97,12 @@ void ProcessValidation(const std::string& run_dir, const CalibrationModel& model
 ValidationSummary WriteValidation(const std::string& dir, const std::vector<EstimateRow>& rows,
                                   const std::map<std::string, std::string>& context,
                                   std::ostream& out);
+
+// The offline commands: `irdist fit`, `irdist playback`, `irdist check`. They throw
+// RecordingError, ModelFileError, ...; RunCheck prints the check's report and throws
+// CheckFailedError when the recording has errors.
+void RunFit(const FitArgs& args, CommandIo io);
+void RunPlayback(const PlaybackArgs& args, CommandIo io);
+void RunCheck(const CheckArgs& args, CommandIo io);
 
 }  // namespace irdist

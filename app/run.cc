@@ -21,7 +21,6 @@
 #include "app/offline.h"
 #include "app/recipe.h"
 #include "app/suggest.h"
-#include "app/tools.h"
 #include "estimator/model_file.h"
 #include "sim/virtual_rig.h"
 #include "station/line_log.h"

@@ -1,6 +1,7 @@
 #pragma once
-// The runs behind the irdist commands: calibrate and validate (sweep a recipe on a rig, record,
-// then fit or estimate), fit and playback (the same processing from a recording), check.
+// The live runs behind the irdist commands: calibrate and validate (sweep a recipe on a rig, record,
+// then fit or estimate) and plan --suggest (probe frames). The offline commands (fit, playback,
+// check) are declared in app/offline.h.
 //
 // Run folder layout (always the same):
 //   DIR/recording/      the recording (docs/recording-format.md)
@@ -13,7 +14,8 @@
 
 #include <atomic>
 
-#include "app/cli.h"
+#include "app/command_args.h"
+#include "app/errors.h"
 
 namespace irdist {
 
@@ -40,10 +42,6 @@ class SignalGuard {
 // LinkError, StationError, RecordingError, ModelFileError.
 void RunCalibrate(const CalibrateArgs& args, CommandIo io);
 void RunValidate(const ValidateArgs& args, CommandIo io);
-void RunFit(const FitArgs& args, CommandIo io);
-void RunPlayback(const PlaybackArgs& args, CommandIo io);
-// Prints the check's report; throws CheckFailedError when the recording has errors.
-void RunCheck(const CheckArgs& args, CommandIo io);
 // plan --suggest: records probe frames at the recipe's two ends on its rig and proposes t_r, the
 // t_n and the current (app/suggest.h). Throws SuggestError when no exposures fit.
 void RunSuggest(const PlanArgs& args, CommandIo io);

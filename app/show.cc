@@ -6,11 +6,12 @@
 #include <sstream>
 
 #include "acquisition/recording.h"
-#include "app/tools.h"
+#include "app/show.h"
 
 namespace irdist {
 
-void ShowPlayback(const RecordingReader& reader, const FeatureMap& features,
+void ShowPlayback(const RecordingReader& reader,
+                  const std::map<std::int64_t, Features>& features,
                   const std::vector<EstimateRow>& estimates) {
   const char* display =
       std::getenv("DISPLAY");  // NOLINT(concurrency-mt-unsafe): read once, nobody sets it

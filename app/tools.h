@@ -1,13 +1,11 @@
 #pragma once
-// The smaller commands: `irdist sim` (run a virtual rig until Ctrl-C), `irdist devices` (what
-// irdist can connect to), and playback's `--show` window.
+// The smaller commands: `irdist sim` (run a virtual rig until Ctrl-C) and `irdist devices` (what
+// irdist can connect to). Playback's `--show` window is in app/show.h.
 
 #include <string>
-#include <vector>
 
-#include "app/cli.h"
-#include "app/offline.h"
-#include "app/summary.h"
+#include "app/command_args.h"
+#include "app/errors.h"
 
 namespace irdist {
 
@@ -22,16 +20,5 @@ void RunDevices(const DevicesArgs& args, CommandIo io);
 
 // Folder of the virtual rigs' state files.
 std::string SimStateDir();
-
-// An OpenCV window stepping through the recording's frames with the ROI, the ellipse and the
-// bracket's estimate drawn (any key: next frame, q or Esc: quit). Throws CameraError-free
-// irdist::Error (DisplayError) when no display is available.
-void ShowPlayback(const RecordingReader& reader, const FeatureMap& features,
-                  const std::vector<EstimateRow>& estimates);
-
-class DisplayError : public Error {
- public:
-  using Error::Error;
-};
 
 }  // namespace irdist

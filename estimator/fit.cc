@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "base/check.h"
+#include "estimator/fit_status.h"
 
 namespace irdist {
 namespace {
@@ -159,21 +160,13 @@ std::vector<double> LinearStart(const ModelSpec& spec, const std::vector<int>& a
   return coefficients;
 }
 
-double ConditionNumber(ceres::Problem* problem) {
-  ceres::CRSMatrix jacobian;
-  ceres::Problem::EvaluateOptions eval;
-  problem->Evaluate(eval, nullptr, nullptr, nullptr, &jacobian);
-  if (jacobian.num_cols == 0) return -1.0;
-  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(jacobian.num_rows, jacobian.num_cols);
-  for (int r = 0; r < jacobian.num_rows; ++r) {
-    for (int k = jacobian.rows[r]; k < jacobian.rows[r + 1]; ++k) {
-      dense(r, jacobian.cols[k]) = jacobian.values[k];
-    }
-  }
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(dense);
-  const Eigen::VectorXd s = svd.singularValues();
-  if (s(s.size() - 1) <= 0.0) return std::numeric_limits<double>::infinity();
-  return s(0) / s(s.size() - 1);
+// The fit's condition number, and a converged fit that is degenerate or ill-conditioned said so.
+void ApplyConditioning(const FitConditioning& c, FitSummary* summary) {
+  summary->condition_number = c.condition_number;
+  if (summary->termination != FitSummary::Termination::kConverged || c.Note().empty()) return;
+  summary->termination = c.degenerate() ? FitSummary::Termination::kDegenerate
+                                        : FitSummary::Termination::kIllConditioned;
+  summary->message += (summary->message.empty() ? "" : "; ") + c.Note();
 }
 
 // Whether dE (or E_rel) is proportional to dF (F) over the samples: the E equation is then F's.
@@ -284,6 +277,10 @@ const char* ToString(FitSummary::Termination termination) {
       return "no_convergence";
     case FitSummary::Termination::kFailed:
       return "failed";
+    case FitSummary::Termination::kDegenerate:
+      return "degenerate";
+    case FitSummary::Termination::kIllConditioned:
+      return "ill-conditioned";
   }
   return "unknown";
 }
@@ -499,7 +496,11 @@ FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<Calibrati
     fs.iterations = static_cast<int>(summary.iterations.size()) - 1;
     fs.gauge_index = gauge;
     fs.samples = static_cast<int>(obs.size());
-    fs.condition_number = ConditionNumber(&problem);
+    std::vector<double*> free_blocks{c.data()};
+    if (sigma_free) free_blocks.push_back(&sigma);
+    ApplyConditioning(
+        ConditioningOf(&problem, free_blocks, FreeParameterNames(spec, form, gauge, sigma_free)),
+        &fs);
   }
   if (model.coefficients.empty()) {
     model.summary.message = "no start could be refined";

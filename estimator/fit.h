@@ -54,7 +54,11 @@ struct FitOptions {
 };
 
 struct FitSummary {
-  enum class Termination { kConverged, kNoConvergence, kFailed };
+  // kConverged: the solver converged on a full-rank, well-conditioned Jacobian. kDegenerate: it
+  // converged but the Jacobian is rank-deficient (null directions in `message`); its residuals
+  // say nothing about the model. kIllConditioned: converged, full rank, condition number above
+  // kIllConditionedLimit (estimator/fit_status.h).
+  enum class Termination { kConverged, kNoConvergence, kFailed, kDegenerate, kIllConditioned };
   Termination termination = Termination::kFailed;
   std::string message = "Fit() was not called.";
   double mean_relative_error = -1.0;  // fraction: mean |model/measured - 1|

@@ -102,7 +102,8 @@ class Reader {
     const std::string termination = Scalar<std::string>(node, key, "termination");
     bool known = false;
     for (auto t : {FitSummary::Termination::kConverged, FitSummary::Termination::kNoConvergence,
-                   FitSummary::Termination::kFailed}) {
+                   FitSummary::Termination::kFailed, FitSummary::Termination::kDegenerate,
+                   FitSummary::Termination::kIllConditioned}) {
       if (termination == ToString(t)) {
         s.termination = t;
         known = true;

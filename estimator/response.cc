@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 namespace irdist {
@@ -68,6 +69,86 @@ ResponseRecoverer::ResponseRecoverer(int bit_depth, const ResponseOptions& optio
   normal_ = std::vector<double>(static_cast<size_t>(k * k), 0.0);
 }
 
+namespace {
+
+// The stack's frames in increasing exposure.
+std::vector<size_t> ExposureOrder(const std::vector<double>& exposures_us) {
+  std::vector<size_t> order(exposures_us.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return exposures_us[a] < exposures_us[b]; });
+  return order;
+}
+
+// The instrument that groups the pixels of pair (a, b): their rate M / t in the stack's other
+// frames, or, in a stack of two, the mean of the four neighbours in the longer frame b. It carries
+// none of frames a's and b's own noise, so the grouped equations stay unbiased (sorting by M_a or
+// M_b itself would bias f flat where the scene's gray levels cluster).
+double Instrument(const std::vector<cv::Mat>& frames, const std::vector<double>& exposures_us,
+                  const std::vector<size_t>& others, size_t b, int gx, int gy) {
+  double z = 0.0;
+  if (!others.empty()) {
+    for (size_t c : others) z += frames[c].at<std::uint16_t>(gy, gx) / exposures_us[c];
+    return z;
+  }
+  int n = 0;
+  for (const cv::Point d : {cv::Point(-1, 0), cv::Point(1, 0), cv::Point(0, -1), cv::Point(0, 1)}) {
+    const int nx = gx + d.x, ny = gy + d.y;
+    if (nx < 0 || ny < 0 || nx >= frames[b].cols || ny >= frames[b].rows) continue;
+    z += frames[b].at<std::uint16_t>(ny, nx);
+    ++n;
+  }
+  return n > 0 ? z / n : 0.0;
+}
+
+// The region's pixels (y * width + x) in increasing instrument order for pair (a, b).
+std::vector<int> InstrumentOrder(const std::vector<cv::Mat>& frames,
+                                 const std::vector<double>& exposures_us, size_t a, size_t b,
+                                 const cv::Rect& region) {
+  std::vector<size_t> others;
+  for (size_t c = 0; c < frames.size(); ++c) {
+    if (c != a && c != b) others.push_back(c);
+  }
+  const int width = region.width, height = region.height;
+  std::vector<double> instrument(static_cast<size_t>(width * height));
+  std::vector<int> pixels(instrument.size());
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      instrument[static_cast<size_t>(y * width + x)] =
+          Instrument(frames, exposures_us, others, b, region.x + x, region.y + y);
+      pixels[static_cast<size_t>(y * width + x)] = y * width + x;
+    }
+  }
+  std::sort(pixels.begin(), pixels.end(), [&](int p, int q) {
+    return instrument[static_cast<size_t>(p)] < instrument[static_cast<size_t>(q)];
+  });
+  return pixels;
+}
+
+}  // namespace
+
+std::optional<cv::Rect> ResponseRecoverer::BlobRegion(const std::vector<cv::Mat>& frames,
+                                                      const std::vector<double>& exposures_us,
+                                                      const FeatureOptions& features,
+                                                      double* background) const {
+  // The blob, in the longest exposure.
+  const size_t longest =
+      std::max_element(exposures_us.begin(), exposures_us.end()) - exposures_us.begin();
+  FeatureOptions locate = features;
+  locate.inverse_response = InverseResponse();
+  locate.response_scope = ResponseScope::kERelOnly;
+  locate.window_side_px = std::min({locate.window_side_px, frames.front().rows,
+                                    frames.front().cols});
+  const Features blob = ComputeFeatures(frames[longest], bit_depth_, locate);
+  if (!blob.blob_found) return std::nullopt;
+  *background = blob.background;
+  const int side = options_.neighbourhood_px;
+  return cv::Rect(static_cast<int>(std::lround(blob.centroid_px.x - 0.5 * (side - 1))),
+                  static_cast<int>(std::lround(blob.centroid_px.y - 0.5 * (side - 1))), side,
+                  side) &
+         cv::Rect(0, 0, frames.front().cols, frames.front().rows);
+}
+
 std::int64_t ResponseRecoverer::AddStack(const std::vector<cv::Mat>& frames,
                                          const std::vector<double>& exposures_us,
                                          const FeatureOptions& features) {
@@ -82,144 +163,20 @@ std::int64_t ResponseRecoverer::AddStack(const std::vector<cv::Mat>& frames,
     ++stacks_skipped_;
     return 0;
   }
-  // The blob, in the longest exposure.
-  const size_t longest =
-      std::max_element(exposures_us.begin(), exposures_us.end()) - exposures_us.begin();
-  FeatureOptions locate = features;
-  locate.inverse_response = InverseResponse();
-  locate.response_scope = ResponseScope::kERelOnly;
-  locate.window_side_px = std::min({locate.window_side_px, frames.front().rows,
-                                    frames.front().cols});
-  const Features blob = ComputeFeatures(frames[longest], bit_depth_, locate);
-  if (!blob.blob_found) {
+  double background = 0.0;
+  const std::optional<cv::Rect> region = BlobRegion(frames, exposures_us, features, &background);
+  if (!region) {
     ++stacks_skipped_;
     return 0;
   }
-  const int side = options_.neighbourhood_px;
-  const cv::Rect region =
-      cv::Rect(static_cast<int>(std::lround(blob.centroid_px.x - 0.5 * (side - 1))),
-               static_cast<int>(std::lround(blob.centroid_px.y - 0.5 * (side - 1))), side, side) &
-      cv::Rect(0, 0, frames.front().cols, frames.front().rows);
-  const double max_gray = static_cast<double>((1 << bit_depth_) - 1);
-  const double background = blob.background;
-  const int knots = options_.num_knots;
-
   std::int64_t added = 0;
-  std::vector<size_t> order(frames.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(),
-            [&](size_t a, size_t b) { return exposures_us[a] < exposures_us[b]; });
-  const int width = region.width, height = region.height;
-  std::vector<double> instrument(static_cast<size_t>(width * height));
-  std::vector<int> pixels(instrument.size());
-  std::vector<double> row(static_cast<size_t>(2 * knots));
+  const std::vector<size_t> order = ExposureOrder(exposures_us);
   for (size_t i = 0; i < order.size(); ++i) {
     for (size_t j = i + 1; j < order.size(); ++j) {
       const size_t a = order[i], b = order[j];
-      const double t_a = exposures_us[a] * 1e-3, t_b = exposures_us[b] * 1e-3;
-      if (!(t_b > t_a * (1.0 + 1e-6))) continue;
+      if (!(exposures_us[b] * 1e-3 > exposures_us[a] * 1e-3 * (1.0 + 1e-6))) continue;
       ++pairs_seen_;
-      // The instrument that groups the pixels: their rate M / t in the stack's other frames, or,
-      // in a stack of two, the mean of the four neighbours in the longer frame. It carries none
-      // of frames a's and b's own noise, so the grouped equations stay unbiased (sorting by M_a
-      // or M_b itself would bias f flat where the scene's gray levels cluster).
-      const std::vector<size_t>* others_ptr = nullptr;
-      std::vector<size_t> others;
-      for (size_t c = 0; c < frames.size(); ++c) {
-        if (c != a && c != b) others.push_back(c);
-      }
-      others_ptr = &others;
-      for (int y = 0; y < height; ++y) {
-        for (int x = 0; x < width; ++x) {
-          const int gx = region.x + x, gy = region.y + y;
-          double z = 0.0;
-          if (!others_ptr->empty()) {
-            for (size_t c : *others_ptr) z += frames[c].at<std::uint16_t>(gy, gx) / exposures_us[c];
-          } else {
-            int n = 0;
-            for (const cv::Point d : {cv::Point(-1, 0), cv::Point(1, 0), cv::Point(0, -1),
-                                      cv::Point(0, 1)}) {
-              const int nx = gx + d.x, ny = gy + d.y;
-              if (nx < 0 || ny < 0 || nx >= frames[b].cols || ny >= frames[b].rows) continue;
-              z += frames[b].at<std::uint16_t>(ny, nx);
-              ++n;
-            }
-            z = n > 0 ? z / n : 0.0;
-          }
-          instrument[static_cast<size_t>(y * width + x)] = z;
-          pixels[static_cast<size_t>(y * width + x)] = y * width + x;
-        }
-      }
-      std::sort(pixels.begin(), pixels.end(), [&](int p, int q) {
-        return instrument[static_cast<size_t>(p)] < instrument[static_cast<size_t>(q)];
-      });
-      // Groups of group_size consecutive pixels in instrument order; one equation per group:
-      // sum_p f(M_a,p) / t_a - f(M_b,p) / t_b = 0.
-      const int g = options_.group_size;
-      for (size_t first = 0; first + static_cast<size_t>(g) <= pixels.size();
-           first += static_cast<size_t>(g)) {
-        std::fill(row.begin(), row.end(), 0.0);
-        double sum_a = 0.0, sum_b = 0.0;
-        bool saturated = false;
-        for (size_t q = first; q < first + static_cast<size_t>(g); ++q) {
-          const int p = pixels[q];
-          const int gx = region.x + p % width, gy = region.y + p / width;
-          const double m_a = frames[a].at<std::uint16_t>(gy, gx) / max_gray;
-          const double m_b = frames[b].at<std::uint16_t>(gy, gx) / max_gray;
-          if (std::max(m_a, m_b) >= options_.saturation_fraction) saturated = true;
-          sum_a += m_a;
-          sum_b += m_b;
-          int k_a, k_b;
-          double u_a, u_b;
-          Interpolation(m_a, knots, &k_a, &u_a);
-          Interpolation(m_b, knots, &k_b, &u_b);
-          row[static_cast<size_t>(k_a)] += 1.0 - u_a;
-          row[static_cast<size_t>(k_a + 1)] += u_a;
-          row[static_cast<size_t>(knots + k_b)] += 1.0 - u_b;
-          row[static_cast<size_t>(knots + k_b + 1)] += u_b;
-        }
-        const double mean_a = sum_a / g, mean_b = sum_b / g;
-        if (saturated) {
-          excluded_saturated_ += g;
-          continue;
-        }
-        if (mean_a - background < options_.min_signal_fraction) {
-          excluded_dark_ += g;
-          continue;
-        }
-        // Weight: 1 / sqrt of the row's shot-noise-like variance, sum (M_a / t_a^2 + M_b / t_b^2).
-        const double w = 1.0 / std::sqrt(sum_a / (t_a * t_a) + sum_b / (t_b * t_b));
-        for (int p = 0; p < knots; ++p) {
-          const double vp = w * (row[static_cast<size_t>(p)] / t_a -
-                                 row[static_cast<size_t>(knots + p)] / t_b);
-          if (vp == 0.0) continue;
-          for (int q = 0; q < knots; ++q) {
-            const double vq = w * (row[static_cast<size_t>(q)] / t_a -
-                                   row[static_cast<size_t>(knots + q)] / t_b);
-            normal_[static_cast<size_t>(p * knots + q)] += vp * vq;
-          }
-        }
-        gray_min_ = std::min(gray_min_, mean_a);
-        gray_max_ = std::max(gray_max_, mean_b);
-        max_ratio_ = std::max(max_ratio_, t_b / t_a);
-        if (groups_ % stride_ == 0) {
-          Group kept_row;
-          kept_row.t_a = static_cast<float>(t_a);
-          kept_row.t_b = static_cast<float>(t_b);
-          kept_row.weights.assign(row.begin(), row.end());
-          rows_.push_back(std::move(kept_row));
-          if (rows_.size() >= kMaxStoredRows) {
-            // Keep every other row and halve the rate from now on.
-            size_t kept = 0;
-            for (size_t r = 0; r < rows_.size(); r += 2) rows_[kept++] = std::move(rows_[r]);
-            rows_.resize(kept);
-            stride_ *= 2;
-          }
-        }
-        ++groups_;
-        samples_ += g;
-        added += g;
-      }
+      added += AddPair(frames, exposures_us, a, b, *region, background);
     }
   }
   if (added > 0) {
@@ -230,7 +187,92 @@ std::int64_t ResponseRecoverer::AddStack(const std::vector<cv::Mat>& frames,
   return added;
 }
 
-ResponseRecovery ResponseRecoverer::Solve() const {
+std::int64_t ResponseRecoverer::AddPair(const std::vector<cv::Mat>& frames,
+                                        const std::vector<double>& exposures_us, size_t a,
+                                        size_t b, const cv::Rect& region, double background) {
+  const double t_a = exposures_us[a] * 1e-3, t_b = exposures_us[b] * 1e-3;
+  const std::vector<int> pixels = InstrumentOrder(frames, exposures_us, a, b, region);
+  const double max_gray = static_cast<double>((1 << bit_depth_) - 1);
+  const int knots = options_.num_knots;
+  std::vector<double> row(static_cast<size_t>(2 * knots));
+  // Groups of group_size consecutive pixels in instrument order; one equation per group:
+  // sum_p f(M_a,p) / t_a - f(M_b,p) / t_b = 0.
+  const int g = options_.group_size;
+  std::int64_t added = 0;
+  for (size_t first = 0; first + static_cast<size_t>(g) <= pixels.size();
+       first += static_cast<size_t>(g)) {
+    std::fill(row.begin(), row.end(), 0.0);
+    double sum_a = 0.0, sum_b = 0.0;
+    bool saturated = false;
+    for (size_t q = first; q < first + static_cast<size_t>(g); ++q) {
+      const int p = pixels[q];
+      const int gx = region.x + p % region.width, gy = region.y + p / region.width;
+      const double m_a = frames[a].at<std::uint16_t>(gy, gx) / max_gray;
+      const double m_b = frames[b].at<std::uint16_t>(gy, gx) / max_gray;
+      if (std::max(m_a, m_b) >= options_.saturation_fraction) saturated = true;
+      sum_a += m_a;
+      sum_b += m_b;
+      int k_a, k_b;
+      double u_a, u_b;
+      Interpolation(m_a, knots, &k_a, &u_a);
+      Interpolation(m_b, knots, &k_b, &u_b);
+      row[static_cast<size_t>(k_a)] += 1.0 - u_a;
+      row[static_cast<size_t>(k_a + 1)] += u_a;
+      row[static_cast<size_t>(knots + k_b)] += 1.0 - u_b;
+      row[static_cast<size_t>(knots + k_b + 1)] += u_b;
+    }
+    if (saturated) {
+      excluded_saturated_ += g;
+    } else if (sum_a / g - background < options_.min_signal_fraction) {
+      excluded_dark_ += g;
+    } else {
+      AddEquation(row, t_a, t_b, sum_a, sum_b);
+      added += g;
+    }
+  }
+  return added;
+}
+
+void ResponseRecoverer::AddEquation(const std::vector<double>& row, double t_a, double t_b,
+                                    double sum_a, double sum_b) {
+  const int knots = options_.num_knots;
+  const int g = options_.group_size;
+  // Weight: 1 / sqrt of the row's shot-noise-like variance, sum (M_a / t_a^2 + M_b / t_b^2).
+  const double w = 1.0 / std::sqrt(sum_a / (t_a * t_a) + sum_b / (t_b * t_b));
+  for (int p = 0; p < knots; ++p) {
+    const double vp =
+        w * (row[static_cast<size_t>(p)] / t_a - row[static_cast<size_t>(knots + p)] / t_b);
+    if (vp == 0.0) continue;
+    for (int q = 0; q < knots; ++q) {
+      const double vq =
+          w * (row[static_cast<size_t>(q)] / t_a - row[static_cast<size_t>(knots + q)] / t_b);
+      normal_[static_cast<size_t>(p * knots + q)] += vp * vq;
+    }
+  }
+  gray_min_ = std::min(gray_min_, sum_a / g);
+  gray_max_ = std::max(gray_max_, sum_b / g);
+  max_ratio_ = std::max(max_ratio_, t_b / t_a);
+  if (groups_ % stride_ == 0) KeepRow(row, t_a, t_b);
+  ++groups_;
+  samples_ += g;
+}
+
+void ResponseRecoverer::KeepRow(const std::vector<double>& row, double t_a, double t_b) {
+  Group kept_row;
+  kept_row.t_a = static_cast<float>(t_a);
+  kept_row.t_b = static_cast<float>(t_b);
+  kept_row.weights.assign(row.begin(), row.end());
+  rows_.push_back(std::move(kept_row));
+  if (rows_.size() >= kMaxStoredRows) {
+    // Keep every other row and halve the rate from now on.
+    size_t kept = 0;
+    for (size_t r = 0; r < rows_.size(); r += 2) rows_[kept++] = std::move(rows_[r]);
+    rows_.resize(kept);
+    stride_ *= 2;
+  }
+}
+
+void ResponseRecoverer::CheckDetermined() const {
   const ResponseOptions& o = options_;
   if (samples_ < o.min_samples) {
     std::ostringstream why;
@@ -263,22 +305,14 @@ ResponseRecovery ResponseRecoverer::Solve() const {
                         " wide is needed. Fix: a brighter IRED current or a wider bracket (longer "
                         "t_n), without saturating.");
   }
+}
 
-  const int k = o.num_knots;
-  Eigen::MatrixXd normal = Eigen::Map<const Eigen::MatrixXd>(normal_.data(), k, k);
-  // Second-difference penalty, scaled by the data's mean diagonal.
-  const double lambda = o.smoothness * normal.trace() / k;
-  for (int r = 0; r + 2 < k; ++r) {
-    const int index[3] = {r, r + 1, r + 2};
-    const double value[3] = {1.0, -2.0, 1.0};
-    for (int p = 0; p < 3; ++p) {
-      for (int q = 0; q < 3; ++q) normal(index[p], index[q]) += lambda * value[p] * value[q];
-    }
-  }
+int ResponseRecoverer::PinnedKnot() const {
   // The scale: f at the knot with the most data (largest diagonal of the data's normal matrix) in
   // the upper half of the sampled gray levels (far from black, where f ~ 0) is held at 1 while
   // solving; holding a knot the data do not reach (f(1)) would let the homogeneous rows shrink f
   // inside the data towards 0. Then f is rescaled to f(1) = 1.
+  const int k = options_.num_knots;
   const double mid = 0.5 * (gray_min_ + gray_max_);
   int pin = std::clamp(static_cast<int>(std::lround(gray_max_ * (k - 1))), 1, k - 1);
   double pin_weight = -1.0;
@@ -290,6 +324,30 @@ ResponseRecovery ResponseRecoverer::Solve() const {
       pin_weight = weight;
     }
   }
+  return pin;
+}
+
+namespace {
+
+// The data's normal matrix plus the second-difference penalty, scaled by its mean diagonal.
+Eigen::MatrixXd SmoothedNormal(const std::vector<double>& data, int k, double smoothness) {
+  Eigen::MatrixXd normal = Eigen::Map<const Eigen::MatrixXd>(data.data(), k, k);
+  const double lambda = smoothness * normal.trace() / k;
+  for (int r = 0; r + 2 < k; ++r) {
+    const int index[3] = {r, r + 1, r + 2};
+    const double value[3] = {1.0, -2.0, 1.0};
+    for (int p = 0; p < 3; ++p) {
+      for (int q = 0; q < 3; ++q) normal(index[p], index[q]) += lambda * value[p] * value[q];
+    }
+  }
+  return normal;
+}
+
+// f at every knot with f(pin) = 1: the normal equations of the other knots; `condition` gets the
+// square root of their eigenvalue ratio. Throws ResponseError when they are singular.
+std::vector<double> SolvePinned(const Eigen::MatrixXd& normal, int pin, const std::string& grays,
+                                double* condition) {
+  const int k = static_cast<int>(normal.rows());
   std::vector<int> free_knots;
   for (int i = 0; i < k; ++i) {
     if (i != pin) free_knots.push_back(i);
@@ -305,10 +363,9 @@ ResponseRecovery ResponseRecoverer::Solve() const {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(n_xx);
   const double ev_min = eigen.eigenvalues().minCoeff(), ev_max = eigen.eigenvalues().maxCoeff();
   if (!(ev_min > ev_max * 1e-15)) {
-    throw ResponseError(
-        "camera response: the least-squares problem is singular (gray levels " + Fmt(gray_min_) +
-        ".." + Fmt(gray_max_) + "). Fix: raise smoothness or sample more gray levels (a brighter "
-        "current or a wider bracket).");
+    throw ResponseError("camera response: the least-squares problem is singular (gray levels " +
+                        grays + "). Fix: raise smoothness or sample more gray levels (a brighter "
+                        "current or a wider bracket).");
   }
   const Eigen::VectorXd x = eigen.eigenvectors() *
                             ((eigen.eigenvectors().transpose() * rhs).array() /
@@ -316,77 +373,98 @@ ResponseRecovery ResponseRecoverer::Solve() const {
                                 .matrix();
   std::vector<double> values(static_cast<size_t>(k), 1.0);
   for (int r = 0; r < n; ++r) values[static_cast<size_t>(free_knots[static_cast<size_t>(r)])] = x(r);
+  *condition = std::sqrt(ev_max / ev_min);
+  return values;
+}
+
+// The curve on evenly spaced knots, f(1) = 1. Throws ResponseError unless it rises throughout.
+InverseResponse IncreasingCurve(const std::vector<double>& values) {
   if (!(values.back() > 0.0)) {
     throw ResponseError("camera response: the recovered curve does not rise towards full scale "
                         "(f(1) <= 0). Fix: sample more gray levels (a brighter current or a wider "
                         "bracket) or raise smoothness.");
   }
-  ResponseRecovery result;
-  result.curve.m.resize(static_cast<size_t>(k));
-  result.curve.f.resize(static_cast<size_t>(k));
-  for (int i = 0; i < k; ++i) {
-    result.curve.m[static_cast<size_t>(i)] = static_cast<double>(i) / (k - 1);
-    result.curve.f[static_cast<size_t>(i)] = values[static_cast<size_t>(i)] / values.back();
+  const size_t k = values.size();
+  InverseResponse curve;
+  curve.m.resize(k);
+  curve.f.resize(k);
+  for (size_t i = 0; i < k; ++i) {
+    curve.m[i] = static_cast<double>(i) / (k - 1);
+    curve.f[i] = values[i] / values.back();
   }
-  result.curve.f.back() = 1.0;
-  result.curve.m.back() = 1.0;
-  result.condition_number = std::sqrt(ev_max / ev_min);
-  result.samples = samples_;
-  result.stacks_used = stacks_used_;
-  result.stacks_skipped = stacks_skipped_;
-  result.gray_min = gray_min_;
-  result.gray_max = gray_max_;
-  result.max_exposure_ratio = max_ratio_;
-
-  for (int i = 1; i < k; ++i) {
-    if (!(result.curve.f[static_cast<size_t>(i)] > result.curve.f[static_cast<size_t>(i - 1)])) {
+  curve.f.back() = 1.0;
+  curve.m.back() = 1.0;
+  for (size_t i = 1; i < k; ++i) {
+    if (!(curve.f[i] > curve.f[i - 1])) {
       throw ResponseError("camera response: the recovered curve is not increasing between gray "
-                          "levels " + Fmt(result.curve.m[static_cast<size_t>(i - 1)]) + " and " +
-                          Fmt(result.curve.m[static_cast<size_t>(i)]) +
+                          "levels " + Fmt(curve.m[i - 1]) + " and " + Fmt(curve.m[i]) +
                           " (the data there are too few or too noisy). Fix: raise smoothness, use "
                           "fewer knots, or record more poses with a wider bracket.");
     }
   }
+  return curve;
+}
 
-  // Residuals (relative to the mean of the two radiance estimates).
+// Where f crosses 0 (f is increasing); 0 when it does not.
+double BlackLevel(const InverseResponse& f) {
+  for (size_t i = 1; i < f.f.size(); ++i) {
+    const double f0 = f.f[i - 1], f1 = f.f[i];
+    if (f0 <= 0.0 && f1 > 0.0) return f.m[i - 1] + (f.m[i] - f.m[i - 1]) * (-f0) / (f1 - f0);
+  }
+  return 0.0;
+}
+
+// Largest deviation from the chord over [lo, hi], % of the rise: f is piecewise linear, so it
+// lies on a knot or an end.
+double LinearityErrorPct(const InverseResponse& f, double lo, double hi) {
+  const double f_lo = f.Apply(lo), f_hi = f.Apply(hi);
+  double worst = 0.0;
+  for (size_t i = 0; i < f.m.size(); ++i) {
+    const double m = f.m[i];
+    if (m <= lo || m >= hi) continue;
+    const double chord = f_lo + (f_hi - f_lo) * (m - lo) / (hi - lo);
+    worst = std::max(worst, std::abs(f.f[i] - chord));
+  }
+  return f_hi > f_lo ? 100.0 * worst / (f_hi - f_lo) : 0.0;
+}
+
+}  // namespace
+
+double ResponseRecoverer::RmsRelativeResidual(const InverseResponse& curve) const {
+  // Residuals relative to the mean of the two radiance estimates.
+  const int k = options_.num_knots;
   double sum_sq = 0.0;
   for (const Group& g : rows_) {
     double ra = 0.0, rb = 0.0;
     for (int i = 0; i < k; ++i) {
-      ra += g.weights[static_cast<size_t>(i)] * result.curve.f[static_cast<size_t>(i)];
-      rb += g.weights[static_cast<size_t>(k + i)] * result.curve.f[static_cast<size_t>(i)];
+      ra += g.weights[static_cast<size_t>(i)] * curve.f[static_cast<size_t>(i)];
+      rb += g.weights[static_cast<size_t>(k + i)] * curve.f[static_cast<size_t>(i)];
     }
     ra /= g.t_a;
     rb /= g.t_b;
     const double mean = 0.5 * (ra + rb);
     if (mean > 0.0) sum_sq += ((ra - rb) / mean) * ((ra - rb) / mean);
   }
-  result.rms_relative_residual = rows_.empty() ? 0.0 : std::sqrt(sum_sq / rows_.size());
+  return rows_.empty() ? 0.0 : std::sqrt(sum_sq / rows_.size());
+}
 
-  // Black level: where f crosses 0 (f is increasing).
-  const InverseResponse& f = result.curve;
-  result.black_level = 0.0;
-  for (int i = 1; i < k; ++i) {
-    const double f0 = f.f[static_cast<size_t>(i - 1)], f1 = f.f[static_cast<size_t>(i)];
-    if (f0 <= 0.0 && f1 > 0.0) {
-      result.black_level = f.m[static_cast<size_t>(i - 1)] +
-                           (f.m[static_cast<size_t>(i)] - f.m[static_cast<size_t>(i - 1)]) *
-                               (-f0) / (f1 - f0);
-      break;
-    }
-  }
-  // Linearity error over the sampled range: f is piecewise linear, so its largest deviation from
-  // the chord lies on a knot or an end.
-  const double lo = gray_min_, hi = gray_max_;
-  const double f_lo = f.Apply(lo), f_hi = f.Apply(hi);
-  double worst = 0.0;
-  for (int i = 0; i < k; ++i) {
-    const double m = f.m[static_cast<size_t>(i)];
-    if (m <= lo || m >= hi) continue;
-    const double chord = f_lo + (f_hi - f_lo) * (m - lo) / (hi - lo);
-    worst = std::max(worst, std::abs(f.f[static_cast<size_t>(i)] - chord));
-  }
-  result.linearity_error_pct = f_hi > f_lo ? 100.0 * worst / (f_hi - f_lo) : 0.0;
+ResponseRecovery ResponseRecoverer::Solve() const {
+  CheckDetermined();
+  const int k = options_.num_knots;
+  ResponseRecovery result;
+  const std::vector<double> values =
+      SolvePinned(SmoothedNormal(normal_, k, options_.smoothness), PinnedKnot(),
+                  Fmt(gray_min_) + ".." + Fmt(gray_max_), &result.condition_number);
+  result.curve = IncreasingCurve(values);
+  result.samples = samples_;
+  result.stacks_used = stacks_used_;
+  result.stacks_skipped = stacks_skipped_;
+  result.gray_min = gray_min_;
+  result.gray_max = gray_max_;
+  result.max_exposure_ratio = max_ratio_;
+  result.rms_relative_residual = RmsRelativeResidual(result.curve);
+  result.black_level = BlackLevel(result.curve);
+  result.linearity_error_pct = LinearityErrorPct(result.curve, gray_min_, gray_max_);
   return result;
 }
 

@@ -22,6 +22,7 @@
 
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -105,6 +106,20 @@ class ResponseRecoverer {
     float t_a = 0.0f, t_b = 0.0f;  // exposures, ms
     std::vector<float> weights;    // summed interpolation weights: num_knots for a, then for b
   };
+  // The neighbourhood around the blob of the longest exposure (nullopt: no blob); its background.
+  std::optional<cv::Rect> BlobRegion(const std::vector<cv::Mat>& frames, const std::vector<double>& exposures_us,
+                                     const FeatureOptions& features, double* background) const;
+  // The grouped equations of exposure pair (a, b), t_a < t_b; returns the samples added.
+  std::int64_t AddPair(const std::vector<cv::Mat>& frames, const std::vector<double>& exposures_us,
+                       size_t a, size_t b, const cv::Rect& region, double background);
+  // One weighted equation (interpolation weights `row`, exposures in ms, summed gray levels)
+  // into the normal matrix and the statistics.
+  void AddEquation(const std::vector<double>& row, double t_a, double t_b, double sum_a,
+                   double sum_b);
+  void KeepRow(const std::vector<double>& row, double t_a, double t_b);
+  void CheckDetermined() const;  // throws ResponseError saying what the data lack
+  int PinnedKnot() const;        // the knot held at f = 1 while solving
+  double RmsRelativeResidual(const InverseResponse& curve) const;
   int bit_depth_;
   ResponseOptions options_;
   std::vector<double> normal_;  // num_knots^2 normal matrix of the weighted rows (column-major)

@@ -1,13 +1,19 @@
 #include "app/cli.h"
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
+#include <unistd.h>
 
-#include <array>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "app/offline.h"
+#include "app/run.h"
+#include "app/tools.h"
+#include "base/process.h"
 
 namespace irdist {
 namespace {
@@ -64,10 +70,142 @@ TEST(CliTest, HelpListsTheCommands) {
   }
 }
 
-TEST(CliTest, EveryCommandHasAHandler) {
+// The table binds each command to the function of its family that runs it.
+template <typename Args>
+bool Calls(const std::function<void(const Args&, CommandIo)>& handler,
+           void (*function)(const Args&, CommandIo)) {
+  using Pointer = void (*)(const Args&, CommandIo);
+  const Pointer* target = handler.template target<Pointer>();
+  return target != nullptr && *target == function;
+}
+
+TEST(CliTest, EveryCommandRunsTheFunctionOfItsFamily) {
   const Handlers h = DefaultHandlers();
-  EXPECT_TRUE(h.calibrate && h.validate && h.fit && h.playback && h.check && h.plan && h.sim &&
-              h.devices);
+  EXPECT_TRUE(Calls(h.calibrate, &RunCalibrate));
+  EXPECT_TRUE(Calls(h.validate, &RunValidate));
+  EXPECT_TRUE(Calls(h.fit, &RunFit));
+  EXPECT_TRUE(Calls(h.playback, &RunPlayback));
+  EXPECT_TRUE(Calls(h.check, &RunCheck));
+  EXPECT_TRUE(Calls(h.plan, &RunPlan));
+  EXPECT_TRUE(Calls(h.sim, &RunSim));
+  EXPECT_TRUE(Calls(h.devices, &RunDevices));
+}
+
+// Handlers that only record the arguments they were called with.
+struct Recorder {
+  CalibrateArgs calibrate;
+  ValidateArgs validate;
+  FitArgs fit;
+  PlaybackArgs playback;
+  CheckArgs check;
+  PlanArgs plan;
+  SimArgs sim;
+  DevicesArgs devices;
+  std::vector<std::string> called;
+  // A handler that stores its arguments in *slot and notes its command.
+  template <typename Args>
+  std::function<void(const Args&, CommandIo)> Store(Args* slot, const char* name) {
+    return [this, slot, name](const Args& args, CommandIo) {
+      *slot = args;
+      called.push_back(name);
+    };
+  }
+  Handlers handlers() {
+    Handlers h;
+    h.calibrate = Store(&calibrate, "calibrate");
+    h.validate = Store(&validate, "validate");
+    h.fit = Store(&fit, "fit");
+    h.playback = Store(&playback, "playback");
+    h.check = Store(&check, "check");
+    h.plan = Store(&plan, "plan");
+    h.sim = Store(&sim, "sim");
+    h.devices = Store(&devices, "devices");
+    return h;
+  }
+};
+
+TEST(CliTest, EachCommandParsesEveryFlagIntoItsArgs) {
+  Recorder r;
+  const Handlers h = r.handlers();
+  ASSERT_EQ(RunWords({"validate", "v.yaml", "--model", "m.yaml", "--out", "o", "--resume", "p",
+                      "--time-scale", "7.5", "--quiet"},
+                     h),
+            0);
+  EXPECT_EQ(r.validate.recipe, "v.yaml");
+  EXPECT_EQ(r.validate.model, "m.yaml");
+  EXPECT_EQ(r.validate.out_dir, "o");
+  EXPECT_EQ(r.validate.resume_dir, "p");
+  EXPECT_EQ(r.validate.time_scale, 7.5);
+  EXPECT_TRUE(r.validate.quiet);
+  ASSERT_EQ(RunWords({"fit", "rec dir", "--out", "m'x.yaml", "--recover-response"}, h), 0);
+  EXPECT_EQ(r.fit.recording, "rec dir");
+  EXPECT_EQ(r.fit.out, "m'x.yaml");
+  EXPECT_TRUE(r.fit.recover_response);
+  ASSERT_EQ(RunWords({"fit", "rec"}, h), 0);
+  EXPECT_FALSE(r.fit.recover_response);
+  EXPECT_EQ(r.fit.out, "");
+  ASSERT_EQ(RunWords({"playback", "rec", "--model", "m.yaml", "--out", "o"}, h), 0);
+  EXPECT_EQ(r.playback.recording, "rec");
+  EXPECT_EQ(r.playback.model, "m.yaml");
+  EXPECT_EQ(r.playback.out_dir, "o");
+  EXPECT_FALSE(r.playback.show);
+  ASSERT_EQ(RunWords({"check", "rec"}, h), 0);
+  EXPECT_EQ(r.check.recording, "rec");
+  ASSERT_EQ(RunWords({"plan", "r.yaml", "--poses", "-1", "--suggest", "--from", "s.yaml", "--out",
+                      "o", "--time-scale", "3", "--quiet"},
+                     h),
+            0);
+  EXPECT_EQ(r.plan.recipe, "r.yaml");
+  EXPECT_EQ(r.plan.show_poses, -1);
+  EXPECT_TRUE(r.plan.suggest);
+  EXPECT_EQ(r.plan.from_summary, "s.yaml");
+  EXPECT_EQ(r.plan.out_dir, "o");
+  EXPECT_EQ(r.plan.time_scale, 3.0);
+  EXPECT_TRUE(r.plan.quiet);
+  ASSERT_EQ(RunWords({"plan", "r.yaml"}, h), 0);
+  EXPECT_EQ(r.plan.show_poses, 8);
+  EXPECT_FALSE(r.plan.suggest);
+  ASSERT_EQ(RunWords({"sim", "rigs/lab.yaml", "--time-scale", "10"}, h), 0);
+  EXPECT_EQ(r.sim.rig, "rigs/lab.yaml");
+  EXPECT_EQ(r.sim.time_scale, 10.0);
+  ASSERT_EQ(RunWords({"sim"}, h), 0);
+  EXPECT_EQ(r.sim.rig, "virtual");
+  ASSERT_EQ(RunWords({"sim", "--rig", "other"}, h), 0);
+  EXPECT_EQ(r.sim.rig, "other");
+  EXPECT_EQ(r.called, (std::vector<std::string>{"validate", "fit", "fit", "playback", "check",
+                                                "plan", "plan", "sim", "sim", "sim"}));
+}
+
+TEST(CliTest, UnknownFlagsAndBadValuesAreUsageErrorsAndRunNothing) {
+  Recorder r;
+  const Handlers h = r.handlers();
+  const std::vector<std::vector<std::string>> bad = {
+      {"calibrate", "r.yaml", "--bogus"},
+      {"validate", "v.yaml", "--model", "m.yaml", "--bogus"},
+      {"fit", "rec", "--model", "m.yaml"},  // fit takes no model
+      {"playback", "rec", "--resume", "x"},
+      {"check", "rec", "--out", "x"},
+      {"check"},
+      {"plan", "r.yaml", "--poses", "many"},
+      {"plan", "r.yaml", "--poses", "-2"},
+      {"sim", "--time-scale", "0"},
+      {"sim", "a", "b"},
+      {"devices", "--discover=maybe"},
+      {"devices", "extra"},
+      {"calibrate", "r.yaml", "--time-scale"},
+  };
+  for (const std::vector<std::string>& words : bad) {
+    std::string joined;
+    for (const std::string& w : words) joined += w + " ";
+    try {
+      RunWords(words, h);
+      ADD_FAILURE() << joined << ": accepted";
+    } catch (const UsageError& e) {
+      // The message names the command and points at its help.
+      EXPECT_NE(std::string(e.what()).find(words[0]), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_TRUE(r.called.empty()) << r.called.front();
 }
 
 TEST(CliTest, OfflineCommandsReportAMissingRecordingAsAnError) {
@@ -153,37 +291,44 @@ TEST(CliTest, PlanPrintsCountsOrderAndDuration) {
   EXPECT_NE(out.find("all 24 poses"), std::string::npos) << out;
 }
 
-// The built binary: typed errors become exit codes and one message on stderr.
-int RunBinary(const std::string& arguments, std::string* output) {
-  const std::string command = std::string(IRDIST_BINARY_DIR) + "/app/irdist " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return -1;
-  std::array<char, 4096> buffer{};
+// The built binary: typed errors become exit codes and one message on stderr (no shell: an
+// argument vector; stdout and stderr into one file).
+int RunBinary(const std::vector<std::string>& arguments, std::string* output) {
+  const std::string log = ::testing::TempDir() + "irdist_cli_test_" + std::to_string(::getpid());
+  ProcessSpec spec;
+  spec.argv = {std::string(IRDIST_BINARY_DIR) + "/app/irdist"};
+  spec.argv.insert(spec.argv.end(), arguments.begin(), arguments.end());
+  spec.stdout_path = log + ".out";
+  spec.stderr_path = log + ".err";
+  const ProcessResult result = RunProgram(spec);
   output->clear();
-  size_t n = 0;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) output->append(buffer.data(), n);
-  const int status = pclose(pipe);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  for (const std::string& path : {spec.stdout_path, spec.stderr_path}) {
+    std::ifstream in(path);
+    output->append(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  std::remove(spec.stdout_path.c_str());
+  std::remove(spec.stderr_path.c_str());
+  return result.exited ? result.exit_code : -1;
 }
 
 TEST(CliTest, BinaryExitCodes) {
   std::string output;
-  EXPECT_EQ(RunBinary("plan " + kRecipes + "/smoke-calibration.yaml", &output), 0) << output;
+  EXPECT_EQ(RunBinary({"plan", kRecipes + "/smoke-calibration.yaml"}, &output), 0) << output;
   EXPECT_NE(output.find("96 in all"), std::string::npos) << output;
 
-  EXPECT_EQ(RunBinary("frobnicate", &output), 2) << output;
+  EXPECT_EQ(RunBinary({"frobnicate"}, &output), 2) << output;
   EXPECT_EQ(output.rfind("irdist: unknown command", 0), 0u) << output;
 
-  EXPECT_EQ(RunBinary("fit /nonexistent-recording", &output), 1) << output;
+  EXPECT_EQ(RunBinary({"fit", "/nonexistent-recording"}, &output), 1) << output;
   EXPECT_NE(output.find("/nonexistent-recording"), std::string::npos) << output;
   EXPECT_EQ(output.find("not available"), std::string::npos) << output;
 
-  EXPECT_EQ(RunBinary("plan /nonexistent/recipe.yaml", &output), 1) << output;
+  EXPECT_EQ(RunBinary({"plan", "/nonexistent/recipe.yaml"}, &output), 1) << output;
   EXPECT_NE(output.find("/nonexistent/recipe.yaml: cannot open"), std::string::npos) << output;
   // One line, no stack of noise.
   EXPECT_EQ(output.find('\n'), output.size() - 1) << output;
 
-  EXPECT_EQ(RunBinary("--help", &output), 0) << output;
+  EXPECT_EQ(RunBinary({"--help"}, &output), 0) << output;
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 namespace irdist {
 namespace {
@@ -60,7 +61,8 @@ TEST(Report, ValidationReportHasEveryFigureDrawnAndCaptioned) {
                                              "fig13_histogram", "fig14_repetitions", "methods"}));
   const fs::path dir = fs::temp_directory_path() / ("irdist_report_" + std::to_string(::getpid()));
   fs::remove_all(dir);
-  const std::string index = WriteReport(dir.string(), "Validation", summary.BriefReport(), plots);
+  const std::string index = WriteReport(dir.string(), "Validation", {{"recipe", "recipes/v.yaml"}},
+                                        summary.BriefReport(), plots);
   const std::string html = Slurp(index);
   for (const Plot& p : plots) {
     EXPECT_TRUE(fs::exists(dir / (p.name + ".svg"))) << p.name;
@@ -71,13 +73,70 @@ TEST(Report, ValidationReportHasEveryFigureDrawnAndCaptioned) {
     EXPECT_TRUE(p.caption.find("(mm)") != std::string::npos ||
                 p.caption.find("(%)") != std::string::npos)
         << p.name << ": the caption gives no unit";
+    EXPECT_EQ(p.caption.find("NOTES.md"), std::string::npos) << p.name;
+    EXPECT_EQ(p.caption.find("irdist show"), std::string::npos) << p.name;
+    // The title is the page's heading only, not repeated inside the plot.
+    EXPECT_EQ(Slurp(dir / (p.name + ".svg")).find(p.title), std::string::npos) << p.name;
+    EXPECT_TRUE(p.script.find("key outside") != std::string::npos ||
+                p.script.find("title '") == std::string::npos)
+        << p.name << ": a legend on the data";
   }
-  EXPECT_EQ(html.find("not drawn"), std::string::npos) << "a plot failed; see the .log files in "
-                                                       << dir;
+  // The header says what produced the page.
+  EXPECT_NE(html.find("<th>recipe</th><td>recipes/v.yaml</td>"), std::string::npos);
+  EXPECT_NE(html.find("<th>report written</th>"), std::string::npos);
+  EXPECT_EQ(html.find("class='missing'"), std::string::npos)
+      << "a plot failed; see the .log files in " << dir;
   // Self-contained: the SVGs are inline, no external references.
   EXPECT_NE(html.find("<svg"), std::string::npos);
   EXPECT_EQ(html.find("src="), std::string::npos);
   fs::remove_all(dir);
+}
+
+const Plot& Named(const std::vector<Plot>& plots, const std::string& name) {
+  for (const Plot& p : plots) {
+    if (p.name == name) return p;
+  }
+  throw std::runtime_error("no plot " + name);
+}
+
+TEST(Report, Fig10HasAResidualPanelPerCurrentAndMethodsKeepTheTrueDistance) {
+  const auto rows = Rows();
+  const auto plots = ValidationPlots(rows, Summarize(rows));
+  const Plot& fig10 = Named(plots, "fig10_distance");
+  EXPECT_NE(fig10.script.find("estimate - truth (mm)"), std::string::npos);
+  EXPECT_NE(fig10.script.find("title 'mean, 475 mA'"), std::string::npos);
+  EXPECT_NE(fig10.script.find("title 'mean, 525 mA'"), std::string::npos);
+  // Residual column: estimate - truth of the first row (1500 mm, rep 0: -0.1%).
+  EXPECT_NE(fig10.data.find("1500 1498.5 -1.5"), std::string::npos) << fig10.data;
+  const Plot& methods = Named(plots, "methods");
+  EXPECT_EQ(methods.script.find("$1+"), std::string::npos) << "methods offset along d";
+  EXPECT_NE(methods.script.find("multiplot layout 2,1"), std::string::npos);
+  EXPECT_EQ(methods.data.substr(0, 5), "1500 ");
+}
+
+TEST(Report, HostilePathsRunNoShellAndEveryPlotIsDrawn) {
+  const auto rows = Rows();
+  const auto summary = Summarize(rows);
+  const auto plots = ValidationPlots(rows, summary);
+  const fs::path root =
+      fs::temp_directory_path() / ("irdist_hostile_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  const fs::path cwd = fs::current_path();
+  fs::current_path(root);
+  for (const std::string name :
+       {"x'; touch INJECTED; echo '", "lab's run", "a \"b\" $HOME ; c", "$(touch INJECTED)"}) {
+    const fs::path dir = root / name / "report";
+    const std::string html = Slurp(WriteReport(dir.string(), "V", {}, "s", plots));
+    EXPECT_EQ(html.find("class='missing'"), std::string::npos) << name;
+    for (const Plot& p : plots) EXPECT_TRUE(fs::exists(dir / (p.name + ".svg"))) << name;
+  }
+  fs::current_path(cwd);
+  for (const auto& entry : fs::recursive_directory_iterator(root)) {
+    EXPECT_NE(entry.path().filename(), "INJECTED") << entry.path();
+  }
+  EXPECT_FALSE(fs::exists(cwd / "INJECTED"));
+  fs::remove_all(root);
 }
 
 TEST(Report, CalibrationReportShowsFitAndEq25) {
@@ -95,13 +154,50 @@ TEST(Report, CalibrationReportShowsFitAndEq25) {
     }
     points.push_back(p);
   }
-  const auto plots = CalibrationPlots(points);
+  CalibrationModel model;
+  FittedModel free_e;
+  free_e.kind = ModelKind::kFreeE;
+  free_e.summary.termination = FitSummary::Termination::kConverged;
+  model.models.push_back(free_e);
+  const auto plots = CalibrationPlots(points, model);
   ASSERT_EQ(plots.size(), 2u);
+  EXPECT_NE(plots[0].script.find("dE_{rel} model error (%)"), std::string::npos);
+  // Fig. 8 marks each curve's true distance and says where it crosses zero (here: at the truth).
+  EXPECT_NE(plots[1].script.find("set arrow from 1500, graph 0"), std::string::npos);
+  EXPECT_NE(plots[1].script.find("true d 1500 mm, 0 deg: crosses 0 at 1500 mm"), std::string::npos)
+      << plots[1].script;
   const fs::path dir = fs::temp_directory_path() / ("irdist_calrep_" + std::to_string(::getpid()));
-  const std::string html = Slurp(WriteReport(dir.string(), "Calibration", "fit", plots));
-  EXPECT_EQ(html.find("not drawn"), std::string::npos);
+  const std::string html = Slurp(WriteReport(dir.string(), "Calibration", {}, "fit", plots));
+  EXPECT_EQ(html.find("class='missing'"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir / "fig7_fit.svg"));
   EXPECT_TRUE(fs::exists(dir / "fig8_eq25.svg"));
+  fs::remove_all(dir);
+}
+
+TEST(Report, DegenerateEModelIsNotDrawnAsAPerfectFit) {
+  std::vector<CalibrationPoint> points(5);
+  for (int i = 0; i < 5; ++i) {
+    points[i].d_mm = 1500 + 250 * i;
+    points[i].de_measured = points[i].de_model = 0.1 * (i + 1);  // "perfect"
+    points[i].ds_measured = 1.0 + i;
+    points[i].ds_model = 1.01 * (1.0 + i);
+  }
+  CalibrationModel model;
+  FittedModel free_e;
+  free_e.kind = ModelKind::kFreeE;
+  free_e.summary.termination = FitSummary::Termination::kDegenerate;
+  free_e.summary.message = "rank 16 of 17; null directions: [0.7 q3 - 0.7 q5]";
+  model.models.push_back(free_e);
+  EXPECT_NE(UnreliableFitReason(free_e).find("degenerate"), std::string::npos);
+  const auto plots = CalibrationPlots(points, model);
+  ASSERT_FALSE(plots.empty());
+  EXPECT_EQ(plots[0].script.find("dE_{rel} model error"), std::string::npos);
+  EXPECT_EQ(plots[0].script.find("'model dE_{rel}'"), std::string::npos);
+  EXPECT_NE(plots[0].script.find("not a fit"), std::string::npos);
+  EXPECT_NE(plots[0].caption.find("degenerate"), std::string::npos);
+  const fs::path dir = fs::temp_directory_path() / ("irdist_degrep_" + std::to_string(::getpid()));
+  const std::string html = Slurp(WriteReport(dir.string(), "Calibration", {}, "fit", plots));
+  EXPECT_EQ(html.find("class='missing'"), std::string::npos);
   fs::remove_all(dir);
 }
 

@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "acquisition/recording.h"
-#include "app/tools.h"
+#include "app/show.h"
 
 namespace irdist {
 namespace {
