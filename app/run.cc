@@ -19,6 +19,7 @@
 #include "acquisition/recording.h"
 #include "app/capture.h"
 #include "app/offline.h"
+#include "app/provenance.h"
 #include "app/recipe.h"
 #include "app/suggest.h"
 #include "app/tools.h"
@@ -132,6 +133,7 @@ struct RunRequest {
   std::string resume_dir;
   double time_scale = 0.0;
   bool quiet = false;
+  bool allow_model_mismatch = false;  // validate
 };
 
 // What the recording phase leaves for the processing phase.
@@ -392,11 +394,29 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   return recorded;
 }
 
+// Validate refuses a model of another camera setup before anything moves: pixel format and ROI
+// from the rig file, the serial from a virtual rig's physics (a hardware camera's serial is only
+// known once it is opened).
+void CheckModelAgainstRig(const CalibrationModel& model, const RunRequest& request,
+                          const Recipe& recipe, CommandIo io) {
+  const std::string serial = recipe.rig.kind == RigKind::kVirtual
+                                 ? sim::LoadRigPhysics(recipe.rig_path).serial
+                                 : std::string();
+  std::string warning;
+  CheckModelProvenance(model.provenance, request.model_path, ProvenanceOfRig(recipe.rig, serial),
+                       "rig " + recipe.rig.name + " (" + recipe.rig_path + ")",
+                       request.allow_model_mismatch, &warning);
+  if (!warning.empty()) io.err << warning << "\n";
+}
+
 void RunRecipe(const RunRequest& request, CommandIo io) {
   const Recipe recipe = LoadRecipe(request.recipe_path);
   const Plan plan = PlanRecipe(recipe);
   std::optional<CalibrationModel> model;
-  if (request.kind == RunKind::kValidate) model = LoadModel(request.model_path);
+  if (request.kind == RunKind::kValidate) {
+    model = LoadModel(request.model_path);
+    CheckModelAgainstRig(*model, request, recipe, io);
+  }
   const FeatureOptions feature_options = model ? model->features : FeatureOptions{};
   io.out << "Recipe " << recipe.path << ": " << plan.summary.BriefReport() << "\n";
 
@@ -590,6 +610,7 @@ void RunCalibrate(const CalibrateArgs& args, CommandIo io) {
 void RunValidate(const ValidateArgs& args, CommandIo io) {
   RunRequest request = RequestFrom(RunKind::kValidate, args);
   request.model_path = args.model;
+  request.allow_model_mismatch = args.allow_model_mismatch;
   RunRecipe(request, io);
 }
 

@@ -34,4 +34,13 @@ class DisplayError : public Error {
   using Error::Error;
 };
 
+// Throws DisplayError (naming `what`) when neither DISPLAY nor WAYLAND_DISPLAY is set.
+void RequireDisplay(const std::string& what);
+// cv::namedWindow; throws DisplayError when OpenCV cannot open it.
+void OpenWindow(const std::string& window, const std::string& what);
+// A frame for display: gray scaled to 8 bits, the features' window (green) and ellipse (red),
+// `lines` of text at the top left.
+cv::Mat FrameOverlay(const cv::Mat& image, int bit_depth, const Features* features,
+                     const std::vector<std::string>& lines);
+
 }  // namespace irdist

@@ -37,8 +37,41 @@ TEST(CliTest, DefaultArgsAreUsable) {
 }
 
 TEST(CliTest, EverySubcommandIsInTheTable) {
-  EXPECT_EQ(SubcommandNames(), (std::vector<std::string>{"calibrate", "validate", "fit", "playback",
-                                                         "check", "plan", "sim", "devices"}));
+  EXPECT_EQ(SubcommandNames(),
+            (std::vector<std::string>{"calibrate", "validate", "fit", "playback", "check", "plan",
+                                      "sim", "devices", "measure", "snap", "view"}));
+}
+
+TEST(CliTest, MeasureTakesItsOptions) {
+  Handlers handlers;
+  MeasureArgs measure;
+  handlers.measure = [&](const MeasureArgs& args, CommandIo) { measure = args; };
+  EXPECT_EQ(RunWords({"measure", "--model", "m.yaml", "--rig", "lab", "--count", "5", "--json",
+                      "--out", "o", "--record", "--at", "2000,10,0,490", "--t-meas-ms", "30,34",
+                      "--allow-model-mismatch"},
+                     handlers),
+            0);
+  EXPECT_EQ(measure.model, "m.yaml");
+  EXPECT_EQ(measure.rig, "lab");
+  EXPECT_EQ(measure.count, 5);
+  EXPECT_TRUE(measure.json && measure.record && measure.allow_model_mismatch);
+  EXPECT_EQ(measure.out_dir, "o");
+  EXPECT_EQ(measure.at, (std::vector<double>{2000, 10, 0, 490}));
+  EXPECT_EQ(measure.t_meas_ms, (std::vector<double>{30, 34}));
+  EXPECT_THROW(RunWords({"measure"}, handlers), UsageError);  // --model missing
+  EXPECT_THROW(RunWords({"measure", "--model", "m", "--at", "1,2"}, handlers), UsageError);
+}
+
+TEST(CliTest, PlaybackAndValidateTakeTheMismatchOverride) {
+  Handlers handlers;
+  PlaybackArgs playback;
+  ValidateArgs validate;
+  handlers.playback = [&](const PlaybackArgs& args, CommandIo) { playback = args; };
+  handlers.validate = [&](const ValidateArgs& args, CommandIo) { validate = args; };
+  EXPECT_EQ(RunWords({"playback", "rec", "--model", "m", "--allow-model-mismatch"}, handlers), 0);
+  EXPECT_TRUE(playback.allow_model_mismatch);
+  EXPECT_EQ(RunWords({"validate", "r.yaml", "--model", "m"}, handlers), 0);
+  EXPECT_FALSE(validate.allow_model_mismatch);
 }
 
 TEST(CliTest, UnknownOrMissingCommandIsAUsageError) {
@@ -67,7 +100,7 @@ TEST(CliTest, HelpListsTheCommands) {
 TEST(CliTest, EveryCommandHasAHandler) {
   const Handlers h = DefaultHandlers();
   EXPECT_TRUE(h.calibrate && h.validate && h.fit && h.playback && h.check && h.plan && h.sim &&
-              h.devices);
+              h.devices && h.measure && h.snap && h.view);
 }
 
 TEST(CliTest, OfflineCommandsReportAMissingRecordingAsAnError) {
