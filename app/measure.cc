@@ -411,7 +411,7 @@ bool StopNow(const MeasureArgs& args, int count, double elapsed_s) {
   return args.duration_s > 0.0 && elapsed_s >= args.duration_s;
 }
 
-void CheckArgs(const MeasureArgs& args) {
+void CheckMeasureArgs(const MeasureArgs& args) {
   if (args.record && args.out_dir.empty()) {
     throw UsageError("measure: --record needs --out DIR (the recording goes to DIR/recording).");
   }
@@ -428,7 +428,7 @@ void CheckArgs(const MeasureArgs& args) {
 }  // namespace
 
 void RunMeasure(const MeasureArgs& args, CommandIo io) {
-  CheckArgs(args);
+  CheckMeasureArgs(args);
   const CalibrationModel model = LoadModel(args.model);
   SignalGuard guard;  // Ctrl-C ends the loop after the bracket in flight
   MeasureSession session(args, model, io);

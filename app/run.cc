@@ -400,7 +400,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
 void CheckModelAgainstRig(const CalibrationModel& model, const RunRequest& request,
                           const Recipe& recipe, CommandIo io) {
   const std::string serial = recipe.rig.kind == RigKind::kVirtual
-                                 ? sim::LoadRigPhysics(recipe.rig_path).serial
+                                 ? sim::LoadRigPhysics(recipe.rig_path).camera.serial
                                  : std::string();
   std::string warning;
   CheckModelProvenance(model.provenance, request.model_path, ProvenanceOfRig(recipe.rig, serial),
