@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -28,6 +29,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kSoftwareVersion = "irdist 0.1.0";
+constexpr double kPi = 3.14159265358979323846;
 
 std::string JsonNumber(double value) {
   if (!std::isfinite(value)) return "null";
@@ -333,6 +335,12 @@ MeasureSample Session::SampleOf(const RecordedBracket& bracket, const FeatureMap
   if (!rows.i0_free.empty()) {
     s.estimate = rows.i0_free.front();
     s.have_estimate = true;
+    // theta from the calibrated ellipse correction (not solved): its calibration scatter, the sd
+    // of a normal law whose mean |error| the fit recorded.
+    const ThetaCorrection& tc = model_.theta_correction;
+    if (s.estimate.theta_std_deg < 0.0 && tc.fitted()) {
+      s.estimate.theta_std_deg = std::sqrt(kPi / 2.0) * tc.summary.mean_relative_error;
+    }
   }
   const Features& last = features.at(bracket.frames.back().index);
   s.blob_found = last.blob_found;
