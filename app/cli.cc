@@ -311,6 +311,7 @@ void AddSnapAndView(CommandTable& table) {
   sub->add_option("--out", s.out, "PNG file to write")->required();
   sub->add_option("--exposure-ms", s.exposure_ms, "Exposure")->check(CLI::PositiveNumber);
   AddAt(sub, s.at);
+  AddTimeScale(sub, s.time_scale);
 
   ViewArgs& v = table.args().view;
   sub = table.Add("view", table.handlers().view, v);
@@ -321,6 +322,7 @@ void AddSnapAndView(CommandTable& table) {
   AddAt(sub, v.at);
   sub->add_option("--frames", v.frames, "Quit after N frames (0: at q or Esc)");
   sub->add_option("--screenshot", v.screenshot, "Save the last window image to this PNG");
+  AddTimeScale(sub, v.time_scale);
 }
 
 // Unknown first words get the list of valid commands (CLI11 would only say "extra argument").

@@ -73,6 +73,7 @@ struct SnapArgs {
   std::string out;              // --out FILE.png
   double exposure_ms = 8.0;     // --exposure-ms
   std::vector<double> at;       // --at (virtual rig only)
+  double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
 };
 
 // `irdist view`: a live window on the camera.
@@ -83,6 +84,7 @@ struct ViewArgs {
   std::vector<double> at;       // --at (virtual rig only)
   int frames = 0;               // --frames: quit after N frames (0 = until q / Esc)
   std::string screenshot;       // --screenshot FILE.png: save the last window image
+  double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
 };
 
 struct CheckArgs {

@@ -30,30 +30,45 @@ void OpenWindow(const std::string& window, const std::string& what) {
   }
 }
 
+namespace {
+
+// A small frame (a region of interest) is enlarged to this width for display, by whole pixels.
+constexpr int kMinDisplayWidthPx = 768;
+
+cv::Point2f Scaled(double x, double y, int scale) {
+  // Pixel centres are at whole coordinates: pixel i covers [i - 0.5, i + 0.5).
+  return {static_cast<float>((x + 0.5) * scale - 0.5), static_cast<float>((y + 0.5) * scale - 0.5)};
+}
+
+void DrawFeatures(const Features& f, int scale, cv::Mat* view) {
+  const cv::Rect r = f.roi;
+  cv::rectangle(*view, cv::Rect(r.x * scale, r.y * scale, r.width * scale, r.height * scale),
+                cv::Scalar(0, 255, 0), 1);
+  const EllipseFit& e = f.ellipse_moments;
+  if (!e.valid) return;
+  cv::ellipse(*view,
+              cv::RotatedRect(Scaled(e.center_px.x, e.center_px.y, scale),
+                              cv::Size2f(static_cast<float>(e.major_px * scale),
+                                         static_cast<float>(e.minor_px * scale)),
+                              static_cast<float>(e.angle_deg)),
+              cv::Scalar(0, 0, 255), 1);
+}
+
+}  // namespace
+
 cv::Mat FrameOverlay(const cv::Mat& image, int bit_depth, const Features* features,
                      const std::vector<std::string>& lines) {
   const double full_scale = (1 << bit_depth) - 1;
   cv::Mat gray;
   image.convertTo(gray, CV_8U, 255.0 / full_scale);
+  const int scale = std::max(1, kMinDisplayWidthPx / std::max(1, image.cols));
+  if (scale > 1) cv::resize(gray, gray, cv::Size(), scale, scale, cv::INTER_NEAREST);
   cv::Mat view;
   cv::cvtColor(gray, view, cv::COLOR_GRAY2BGR);
-  if (features != nullptr) {
-    cv::rectangle(view, features->roi, cv::Scalar(0, 255, 0), 1);
-    const EllipseFit& e = features->ellipse_moments;
-    if (e.valid) {
-      cv::ellipse(
-          view,
-          cv::RotatedRect(
-              cv::Point2f(static_cast<float>(e.center_px.x), static_cast<float>(e.center_px.y)),
-              cv::Size2f(static_cast<float>(e.major_px), static_cast<float>(e.minor_px)),
-              static_cast<float>(e.angle_deg)),
-          cv::Scalar(0, 0, 255), 1);
-    }
-  }
-  const double scale = std::max(0.35, std::min(0.7, view.cols / 900.0));
+  if (features != nullptr) DrawFeatures(*features, scale, &view);
   for (size_t i = 0; i < lines.size(); ++i) {
-    cv::putText(view, lines[i], cv::Point(6, 16 + static_cast<int>(i * 40 * scale)),
-                cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 255, 255), 1);
+    cv::putText(view, lines[i], cv::Point(8, 22 + static_cast<int>(i) * 24),
+                cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 255, 255), 1);
   }
   return view;
 }

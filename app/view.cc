@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <memory>
 #include <opencv2/highgui.hpp>
@@ -27,15 +28,18 @@ constexpr int kSuggestedRoiSidePx = 256;
 class SingleExposure {
  public:
   SingleExposure(const std::string& rig, const std::vector<double>& at, double exposure_ms,
-                 std::ostream& err) {
+                 double time_scale, std::ostream& err) {
     LiveCameraOptions options;
     options.rig_spec = rig;
     options.at = at;
+    options.time_scale = time_scale;
     options.first_exposure_us = exposure_ms * 1000.0;
     options.longest_exposure_us = exposure_ms * 1000.0;
     live_ = std::make_unique<LiveCamera>(options, err);
     BracketOptions bracket;
-    bracket.exposures_us = {exposure_ms * 1000.0};
+    // BracketCapture takes a reference and at least one measurement: two frames at the same
+    // exposure, the second one shown (it also skips a first frame after an idle stream).
+    bracket.exposures_us = {exposure_ms * 1000.0, exposure_ms * 1000.0};
     bracket.trigger_source = live_->trigger_source();
     bracket.frame_timeout = std::chrono::milliseconds(live_->frame_timeout_ms());
     capture_ = std::make_unique<BracketCapture>(live_->camera(), bracket);
@@ -44,7 +48,7 @@ class SingleExposure {
     BracketResult result = capture_->Capture(live_->Trigger());
     if (!result.complete) result = capture_->Capture(live_->Trigger());
     if (!result.complete) throw CameraError("no frame twice: " + result.failure);
-    return result.frames.front().image;
+    return result.frames.back().image;
   }
   LiveCamera& live() { return *live_; }
 
@@ -53,14 +57,12 @@ class SingleExposure {
   std::unique_ptr<BracketCapture> capture_;
 };
 
-// The signal line: peak above background against full scale, saturated pixels.
-std::string LevelLine(const Features& f, int bit_depth) {
-  const double full_scale = (1 << bit_depth) - 1;
-  std::ostringstream out;
-  out.precision(3);
-  out << "peak " << f.peak << " (" << 100.0 * f.peak / full_scale << "% of full scale), background "
-      << f.background << ", saturated px " << f.saturated_pixels;
-  return out.str();
+// The signal line: peak and background as fractions of full scale, saturated pixels.
+std::string LevelLine(const Features& f) {
+  char text[160];
+  std::snprintf(text, sizeof(text), "peak %.1f%% of full scale, background %.2f%%, saturated px %d",
+                100.0 * f.peak, 100.0 * f.background, f.saturated_pixels);
+  return text;
 }
 
 void PrintSnap(const Features& f, const Rig& rig, std::ostream& out) {
@@ -72,8 +74,10 @@ void PrintSnap(const Features& f, const Rig& rig, std::ostream& out) {
   const double y = f.centroid_px.y + rig.camera.roi_offset_y;
   const int half = kSuggestedRoiSidePx / 2;
   out << "Blob at (" << x << ", " << y << ") sensor px\n";
-  out << "Suggested roi_px: [" << std::max(0, static_cast<int>(std::lround(x)) - half) << ", "
-      << std::max(0, static_cast<int>(std::lround(y)) - half) << ", " << kSuggestedRoiSidePx
+  // Centred on the blob: its pixel-edge coordinate (x + 0.5) rounded, minus half a side.
+  out << "Suggested roi_px: [" << std::max(0, static_cast<int>(std::lround(x + 0.5)) - half)
+      << ", " << std::max(0, static_cast<int>(std::lround(y + 0.5)) - half) << ", "
+      << kSuggestedRoiSidePx
       << ", " << kSuggestedRoiSidePx << "]\n";
 }
 
@@ -114,7 +118,7 @@ void ViewLoop(const std::function<ViewFrame()>& next, int bit_depth, const ViewA
 }  // namespace
 
 void RunSnap(const SnapArgs& args, CommandIo io) {
-  SingleExposure camera(args.rig, args.at, args.exposure_ms, io.err);
+  SingleExposure camera(args.rig, args.at, args.exposure_ms, args.time_scale, io.err);
   const cv::Mat image = camera.Next();
   if (!cv::imwrite(args.out, image)) {
     throw RunFolderError(args.out + ": cannot write the PNG; check the folder and the .png name.");
@@ -124,7 +128,7 @@ void RunSnap(const SnapArgs& args, CommandIo io) {
   io.out << "Frame: " << args.out << " (" << image.cols << " x " << image.rows << ", "
          << bit_depth << " bit)\n";
   PrintSnap(f, camera.live().rig(), io.out);
-  io.out << LevelLine(f, bit_depth) << "\n";
+  io.out << LevelLine(f) << "\n";
 }
 
 void RunView(const ViewArgs& args, CommandIo io) {
@@ -135,6 +139,7 @@ void RunView(const ViewArgs& args, CommandIo io) {
     measure.model = args.model;
     measure.rig = args.rig;
     measure.at = args.at;
+    measure.time_scale = args.time_scale;
     measure.json = true;  // no progress chatter from the rig on stderr
     MeasureSession session(measure, model, io);
     const auto t0 = std::chrono::steady_clock::now();
@@ -143,21 +148,23 @@ void RunView(const ViewArgs& args, CommandIo io) {
           const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           const MeasureSample s = session.Next(t);
           return ViewFrame{session.last_image(), session.last_features(),
-                           {MeasureLine(s), LevelLine(session.last_features(), session.bit_depth())}};
+                           {MeasureLine(s), LevelLine(session.last_features())}};
         },
         session.bit_depth(), args, io.out);
     session.Finish();
     return;
   }
-  SingleExposure camera(args.rig, args.at, args.exposure_ms, io.err);
+  SingleExposure camera(args.rig, args.at, args.exposure_ms, args.time_scale, io.err);
   const int bit_depth = camera.live().bit_depth();
   ViewLoop(
       [&] {
         ViewFrame frame;
         frame.image = camera.Next();
         frame.features = FrameFeatures(frame.image, bit_depth, FeatureOptions{});
-        frame.lines = {"exposure " + std::to_string(args.exposure_ms) + " ms",
-                       LevelLine(frame.features, bit_depth)};
+        char exposure[64];
+        std::snprintf(exposure, sizeof(exposure), "exposure %.3g ms", args.exposure_ms);
+        frame.lines = {exposure,
+                       LevelLine(frame.features)};
         return frame;
       },
       bit_depth, args, io.out);

@@ -42,6 +42,7 @@ TEST(Snap, SavesTheFrameAndFindsTheBlobOnTheAxis) {
   args.rig = VirtualRig();
   args.out = png;
   args.at = {2000.0, 0.0, 0.0, 490.0};
+  args.time_scale = 50.0;
   std::ostringstream out, err;
   RunSnap(args, {out, err});
   const cv::Mat image = cv::imread(png, cv::IMREAD_UNCHANGED);
@@ -105,12 +106,13 @@ TEST(View, ShowsTheLiveImageWithItsOverlayUnderXvfb) {
   args.rig = VirtualRig();
   args.at = {2000.0, 20.0, 0.0, 490.0};
   args.frames = 5;
+  args.time_scale = 50.0;
   args.screenshot = shot;
   std::ostringstream out, err;
   RunView(args, {out, err});
   const cv::Mat image = cv::imread(shot, cv::IMREAD_COLOR);
   ASSERT_FALSE(image.empty());
-  EXPECT_EQ(image.cols, 256);
+  EXPECT_EQ(image.cols, 768);  // the 256 px ROI, enlarged 3x for display
   // The ellipse is drawn in red and the window of the features in green around the centre.
   int red = 0, green = 0;
   for (int y = 0; y < image.rows; ++y) {
