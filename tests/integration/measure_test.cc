@@ -236,6 +236,45 @@ TEST_F(Measure, PositionAtALateralOffsetWithinHalfAPercentOfRange) {
   }
 }
 
+// validate reports the 3D position too: the shipped offset rig, its columns against the truth.
+TEST_F(Measure, ValidateWritesThePositionBesideItsTruth) {
+  WriteAll(*dir_ + "/validation-offset.yaml",
+           "name: v-offset\nrig: " + std::string(IRDIST_SOURCE_DIR) +
+               "/recipes/rigs/virtual-offset.yaml\nafter: estimate\naxes:\n  slide_mm: [1500, "
+               "2500]\n  theta_deg: [10]\n  bias_ma: [490]\nbracket:\n  t_ref_ms: 8\n  t_meas_ms: "
+               "[30, 33, 36]\n");
+  testing::LoopbackGvcpLock lock;
+  std::string output;
+  ASSERT_EQ(RunIrdist({"validate", *dir_ + "/validation-offset.yaml", "--model", Model(), "--out",
+                       *dir_ + "/val-offset", "--time-scale", kTimeScale},
+                      *dir_ + "/val-offset.log", &output),
+            0)
+      << output;
+  std::istringstream csv(ReadAll(*dir_ + "/val-offset/estimates.csv"));
+  std::string line;
+  std::getline(csv, line);
+  ASSERT_NE(line.find(",x_mm,y_mm,z_mm,"), std::string::npos) << line;
+  int checked = 0;
+  while (std::getline(csv, line)) {
+    if (line.find(",i0_free,0,") == std::string::npos) continue;  // joint rows
+    std::vector<std::string> c;
+    std::stringstream fields(line);
+    for (std::string f; std::getline(fields, f, ',');) c.push_back(f);
+    ASSERT_EQ(c.size(), 21u) << line;
+    const double x = std::stod(c[12]), y = std::stod(c[13]), z = std::stod(c[14]);
+    const double tx = std::stod(c[18]), ty = std::stod(c[19]), tz = std::stod(c[20]);
+    EXPECT_EQ(tx, 40.0);
+    EXPECT_EQ(ty, -30.0);
+    const double range = std::sqrt(tx * tx + ty * ty + tz * tz);
+    const double error = std::sqrt((x - tx) * (x - tx) + (y - ty) * (y - ty) + (z - tz) * (z - tz));
+    std::cout << "validate 3D at (40, -30, " << tz << ") mm: error " << error << " mm = "
+              << 100.0 * error / range << "% of range\n";
+    EXPECT_LE(error, 0.005 * range) << line;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2);
+}
+
 TEST_F(Measure, ModelOfAnotherCameraSetupIsRefusedUnlessOverridden) {
   const std::string other_serial = *dir_ + "/other-serial.yaml";
   const std::string other_roi = *dir_ + "/other-roi.yaml";
