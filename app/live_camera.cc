@@ -84,7 +84,12 @@ LiveCamera::LiveCamera(const LiveCameraOptions& options, std::ostream& err) : im
     name = info.camera_address;
     serial = info.serial;
     if (!options.quiet) err << "Virtual rig (time scale " << m.time_scale << "):\n" << info.BriefReport();
-    if (!options.at.empty()) PlaceThroughStation(info.station_port, options.at);
+    if (!options.at.empty()) {
+      PlaceThroughStation(info.station_port, options.at);
+    } else if (!options.quiet) {
+      err << "note: the virtual station's IRED is off until placed; give --at "
+             "SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA\n";
+    }
     m.trigger_source = "Line1";  // the rig's trigger line
   } else {
     if (!options.at.empty()) {
