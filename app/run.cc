@@ -134,6 +134,9 @@ struct RunRequest {
   double time_scale = 0.0;
   bool quiet = false;
   bool allow_model_mismatch = false;  // validate
+  // validate on hardware: the model's camera serial, which AravisCamera::Open then requires
+  // ("" = none: another camera is allowed, or the model does not say).
+  std::string expected_serial;
 };
 
 // What the recording phase leaves for the processing phase.
@@ -224,6 +227,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   std::string port = recipe.rig.station.port;
   LiveCaptureSetup setup;
   setup.camera_name = recipe.rig.camera.id;
+  setup.camera_serial = request.expected_serial;
   if (recipe.rig.kind == RigKind::kVirtual) {
     sim::VirtualRigOverrides overrides;
     if (request.time_scale > 0.0) overrides.time_scale = request.time_scale;
@@ -417,6 +421,10 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
     model = LoadModel(request.model_path);
     CheckModelAgainstRig(*model, request, recipe, io);
   }
+  RunRequest checked = request;
+  if (model && !request.allow_model_mismatch) {
+    checked.expected_serial = model->provenance.camera_serial;
+  }
   const FeatureOptions feature_options = model ? model->features : FeatureOptions{};
   io.out << "Recipe " << recipe.path << ": " << plan.summary.BriefReport() << "\n";
 
@@ -424,7 +432,7 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
   {
     // Ctrl-C stops the sweep cleanly; after the recording it ends the process as usual.
     SignalGuard guard;
-    recorded = Record(request, recipe, plan, feature_options, io);
+    recorded = Record(checked, recipe, plan, feature_options, io);
   }
   if (recorded.cut) {
     throw InterruptedError(
