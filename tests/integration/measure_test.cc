@@ -168,6 +168,15 @@ TEST_F(Measure, JsonFollowsTheSchema) {
   }
 }
 
+TEST_F(Measure, DurationStops) {
+  std::string output;
+  ASSERT_EQ(RunMeasure("duration", {"--at", "2000,0,0,490", "--duration", "1"}, &output), 0)
+      << output;
+  const size_t at = output.find("Measured ");
+  ASSERT_NE(at, std::string::npos) << output;
+  EXPECT_GE(std::stoi(output.substr(at + 9)), 1) << output;
+}
+
 TEST_F(Measure, CtrlCStopsCleanlyWithASummary) {
   testing::LoopbackGvcpLock lock;
   const std::string log = *dir_ + "/sigint.log";
