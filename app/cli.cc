@@ -6,7 +6,9 @@
 #include <ostream>
 #include <sstream>
 
+#include "app/measure.h"
 #include "app/offline.h"
+#include "app/view.h"
 #include "app/recipe.h"
 #include "app/run.h"
 #include "app/tools.h"
@@ -39,6 +41,12 @@ constexpr SubcommandInfo kSubcommands[] = {
      "the virtual rig (sim/)"},
     {"devices", "List the cameras and stations irdist can see",
      "camera discovery (acquisition/) and the station client (station/)"},
+    {"measure", "Measure distance, orientation (and 3D position) live from a calibrated camera",
+     "the camera (acquisition/) and Algorithm 1 (estimator/)"},
+    {"snap", "Save one frame to a PNG; print the blob's position and a suggested roi_px",
+     "the camera (acquisition/)"},
+    {"view", "Live window on the camera: image, blob, ellipse, levels, estimate with --model",
+     "the camera (acquisition/) and OpenCV highgui"},
 };
 
 const SubcommandInfo& Info(const std::string& name) {
@@ -123,29 +131,16 @@ Handlers DefaultHandlers() {
   handlers.check = RunCheck;
   handlers.sim = RunSim;
   handlers.devices = RunDevices;
+  handlers.measure = RunMeasure;
+  handlers.snap = RunSnap;
+  handlers.view = RunView;
   return handlers;
 }
 
-int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& handlers) {
-  const std::vector<std::string> names = SubcommandNames();
-  std::string usage_hint = "Run 'irdist --help' for the commands, 'irdist COMMAND --help' for one.";
-  if (argc > 1) {
-    const std::string first = argv[1];
-    if (!first.empty() && first[0] != '-' &&
-        std::find(names.begin(), names.end(), first) == names.end()) {
-      std::string message = "unknown command '" + first + "'; valid commands: ";
-      for (size_t i = 0; i < names.size(); ++i) message += (i > 0 ? ", " : "") + names[i];
-      throw UsageError(message + ". " + usage_hint);
-    }
-  }
+namespace {
 
-  CLI::App app{
-      "irdist: camera-to-IRED distance and orientation from gray levels, independent of the "
-      "IRED's radiant intensity.",
-      "irdist"};
-  app.require_subcommand(1);
-  app.set_version_flag("--version", "irdist 0.1.0");
-
+// Every command's arguments, filled by the parser.
+struct ParsedArgs {
   CalibrateArgs calibrate;
   ValidateArgs validate;
   FitArgs fit;
@@ -154,98 +149,237 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   PlanArgs plan;
   SimArgs sim;
   DevicesArgs devices;
+  MeasureArgs measure;
+  SnapArgs snap;
+  ViewArgs view;
+};
 
-  std::vector<std::pair<CLI::App*, std::function<void()>>> table;
-  auto add = [&](const char* name) { return app.add_subcommand(name, Info(name).summary); };
+// The subcommands as they are registered: each with the call that runs it.
+class CommandTable {
+ public:
+  CommandTable(CLI::App& app, ParsedArgs& args, const Handlers& handlers, CommandIo io)
+      : app_(app), args_(args), handlers_(handlers), io_(io) {}
 
-  CLI::App* sub = add("calibrate");
-  sub->add_option("recipe", calibrate.recipe, "Recipe file (recipes/*.yaml)")->required();
-  sub->add_option("--out", calibrate.out_dir, "Run folder (overrides the recipe's output)");
-  sub->add_option("--resume", calibrate.resume_dir, "Continue the cut run in this folder");
-  sub->add_option("--time-scale", calibrate.time_scale,
+  ParsedArgs& args() { return args_; }
+  const Handlers& handlers() const { return handlers_; }
+
+  // Adds subcommand `name` whose parsed `args` go to `handler`.
+  template <typename Args>
+  CLI::App* Add(const char* name, const std::function<void(const Args&, CommandIo)>& handler,
+                const Args& args) {
+    CLI::App* sub = app_.add_subcommand(name, Info(name).summary);
+    const std::string command = name;
+    entries_.emplace_back(sub, [&handler, &args, command, io = io_] {
+      Invoke(handler, command, args, io);
+    });
+    return sub;
+  }
+
+  // The parsed subcommand's entry, or nullptr.
+  const std::pair<CLI::App*, std::function<void()>>* Parsed() const {
+    for (const auto& entry : entries_) {
+      if (entry.first->parsed()) return &entry;
+    }
+    return nullptr;
+  }
+
+ private:
+  CLI::App& app_;
+  ParsedArgs& args_;
+  const Handlers& handlers_;
+  CommandIo io_;
+  std::vector<std::pair<CLI::App*, std::function<void()>>> entries_;
+};
+
+constexpr const char* kUsageHint =
+    "Run 'irdist --help' for the commands, 'irdist COMMAND --help' for one.";
+
+void AddTimeScale(CLI::App* sub, double& time_scale) {
+  sub->add_option("--time-scale", time_scale,
                   "Virtual rig: simulated seconds per host second (default: the rig file's)")
       ->check(CLI::PositiveNumber);
-  sub->add_flag("--quiet", calibrate.quiet, "No progress output");
-  table.emplace_back(sub, [&] { Invoke(handlers.calibrate, "calibrate", calibrate, io); });
+}
 
-  sub = add("validate");
-  sub->add_option("recipe", validate.recipe, "Recipe file (recipes/*.yaml)")->required();
-  sub->add_option("--model", validate.model, "model.yaml from a calibration")->required();
-  sub->add_option("--out", validate.out_dir, "Run folder (overrides the recipe's output)");
-  sub->add_option("--resume", validate.resume_dir, "Continue the cut run in this folder");
-  sub->add_option("--time-scale", validate.time_scale,
-                  "Virtual rig: simulated seconds per host second (default: the rig file's)")
-      ->check(CLI::PositiveNumber);
-  sub->add_flag("--quiet", validate.quiet, "No progress output");
-  table.emplace_back(sub, [&] { Invoke(handlers.validate, "validate", validate, io); });
+void AddCalibrate(CommandTable& table) {
+  CalibrateArgs& a = table.args().calibrate;
+  CLI::App* sub = table.Add("calibrate", table.handlers().calibrate, a);
+  sub->add_option("recipe", a.recipe, "Recipe file (recipes/*.yaml)")->required();
+  sub->add_option("--out", a.out_dir, "Run folder (overrides the recipe's output)");
+  sub->add_option("--resume", a.resume_dir, "Continue the cut run in this folder");
+  AddTimeScale(sub, a.time_scale);
+  sub->add_flag("--quiet", a.quiet, "No progress output");
+}
 
-  sub = add("fit");
-  sub->add_option("recording", fit.recording, "Recording folder")->required();
-  sub->add_option("--out", fit.out, "Model file to write");
-  sub->add_flag("--recover-response", fit.recover_response,
+void AddValidate(CommandTable& table) {
+  ValidateArgs& a = table.args().validate;
+  CLI::App* sub = table.Add("validate", table.handlers().validate, a);
+  sub->add_option("recipe", a.recipe, "Recipe file (recipes/*.yaml)")->required();
+  sub->add_option("--model", a.model, "model.yaml from a calibration")->required();
+  sub->add_option("--out", a.out_dir, "Run folder (overrides the recipe's output)");
+  sub->add_option("--resume", a.resume_dir, "Continue the cut run in this folder");
+  AddTimeScale(sub, a.time_scale);
+  sub->add_flag("--quiet", a.quiet, "No progress output");
+  sub->add_flag("--allow-model-mismatch", a.allow_model_mismatch,
+                "Use a model calibrated with another camera serial, pixel format or ROI");
+}
+
+void AddFitAndPlayback(CommandTable& table) {
+  FitArgs& f = table.args().fit;
+  CLI::App* sub = table.Add("fit", table.handlers().fit, f);
+  sub->add_option("recording", f.recording, "Recording folder")->required();
+  sub->add_option("--out", f.out, "Model file to write");
+  sub->add_flag("--recover-response", f.recover_response,
                 "Recover the camera's response from the brackets and linearise every pixel");
-  table.emplace_back(sub, [&] { Invoke(handlers.fit, "fit", fit, io); });
 
-  sub = add("playback");
-  sub->add_option("recording", playback.recording, "Recording folder")->required();
-  sub->add_option("--model", playback.model, "model.yaml from a calibration");
-  sub->add_option("--out", playback.out_dir,
-                  "Folder for features.csv, estimates.csv, summary.yaml");
-  sub->add_flag("--show", playback.show, "Step through the frames in a window (needs a display)");
-  table.emplace_back(sub, [&] { Invoke(handlers.playback, "playback", playback, io); });
+  PlaybackArgs& p = table.args().playback;
+  sub = table.Add("playback", table.handlers().playback, p);
+  sub->add_option("recording", p.recording, "Recording folder")->required();
+  sub->add_option("--model", p.model, "model.yaml from a calibration");
+  sub->add_option("--out", p.out_dir, "Folder for features.csv, estimates.csv, summary.yaml");
+  sub->add_flag("--show", p.show, "Step through the frames in a window (needs a display)");
+  sub->add_flag("--allow-model-mismatch", p.allow_model_mismatch,
+                "Use a model calibrated with another camera serial, pixel format or ROI");
+}
 
-  sub = add("check");
-  sub->add_option("recording", check.recording, "Recording folder")->required();
-  table.emplace_back(sub, [&] { Invoke(handlers.check, "check", check, io); });
+void AddCheckAndPlan(CommandTable& table) {
+  CheckArgs& c = table.args().check;
+  CLI::App* sub = table.Add("check", table.handlers().check, c);
+  sub->add_option("recording", c.recording, "Recording folder")->required();
 
-  sub = add("plan");
-  sub->add_option("recipe", plan.recipe, "Recipe file (recipes/*.yaml)")->required();
-  sub->add_option("--poses", plan.show_poses, "How many poses of the order to print (-1: all)")
+  PlanArgs& p = table.args().plan;
+  sub = table.Add("plan", table.handlers().plan, p);
+  sub->add_option("recipe", p.recipe, "Recipe file (recipes/*.yaml)")->required();
+  sub->add_option("--poses", p.show_poses, "How many poses of the order to print (-1: all)")
       ->capture_default_str()
       ->check(CLI::Range(-1, 1000000));
-  sub->add_flag("--suggest", plan.suggest,
+  sub->add_flag("--suggest", p.suggest,
                 "Take probe frames at the recipe's two ends on its rig and propose t_r, the t_n "
                 "and the current");
-  sub->add_option("--from", plan.from_summary,
+  sub->add_option("--from", p.from_summary,
                   "With --suggest: the latest validation's summary.yaml (its best dt)");
-  sub->add_option("--out", plan.out_dir, "With --suggest: folder of the probe run");
-  sub->add_option("--time-scale", plan.time_scale,
+  sub->add_option("--out", p.out_dir, "With --suggest: folder of the probe run");
+  sub->add_option("--time-scale", p.time_scale,
                   "With --suggest on a virtual rig: simulated seconds per second");
-  sub->add_flag("--quiet", plan.quiet, "No progress output");
-  table.emplace_back(sub, [&] { Invoke(handlers.plan, "plan", plan, io); });
+  sub->add_flag("--quiet", p.quiet, "No progress output");
+}
 
-  sub = add("sim");
-  sub->add_option("rig", sim.rig, "Rig name or rig file of kind virtual")->capture_default_str();
-  sub->add_option("--rig", sim.rig, "Rig name or rig file of kind virtual");
-  sub->add_option("--time-scale", sim.time_scale, "Simulated seconds per host second")
+void AddSimAndDevices(CommandTable& table) {
+  SimArgs& s = table.args().sim;
+  CLI::App* sub = table.Add("sim", table.handlers().sim, s);
+  sub->add_option("rig", s.rig, "Rig name or rig file of kind virtual")->capture_default_str();
+  sub->add_option("--rig", s.rig, "Rig name or rig file of kind virtual");
+  sub->add_option("--time-scale", s.time_scale, "Simulated seconds per host second")
       ->check(CLI::PositiveNumber);
-  table.emplace_back(sub, [&] { Invoke(handlers.sim, "sim", sim, io); });
 
-  sub = add("devices");
-  sub->add_flag("--discover", devices.discover,
+  DevicesArgs& d = table.args().devices;
+  sub = table.Add("devices", table.handlers().devices, d);
+  sub->add_flag("--discover", d.discover,
                 "Also discover GigE/USB cameras (broadcasts on every network interface)");
-  table.emplace_back(sub, [&] { Invoke(handlers.devices, "devices", devices, io); });
+}
 
+void AddAt(CLI::App* sub, std::vector<double>& at) {
+  sub->add_option("--at", at,
+                  "Virtual rig only: place the IRED through the station at "
+                  "SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA first")
+      ->delimiter(',')
+      ->expected(4);
+}
+
+void AddMeasure(CommandTable& table) {
+  MeasureArgs& a = table.args().measure;
+  CLI::App* sub = table.Add("measure", table.handlers().measure, a);
+  sub->add_option("--model", a.model, "model.yaml from a calibration")->required();
+  sub->add_option("--rig", a.rig, "Rig name or rig file")->capture_default_str();
+  sub->add_option("--t-ref-ms", a.t_ref_ms, "Reference exposure (default: the model's)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--t-meas-ms", a.t_meas_ms, "Measurement exposures (default: the model's)")
+      ->delimiter(',');
+  sub->add_option("--count", a.count, "Stop after N brackets")->check(CLI::PositiveNumber);
+  sub->add_option("--duration", a.duration_s, "Stop after S seconds")->check(CLI::PositiveNumber);
+  sub->add_flag("--json", a.json, "One JSON object per bracket on stdout (docs/measure.md)");
+  sub->add_option("--out", a.out_dir, "Folder for estimates.csv (and recording/ with --record)");
+  sub->add_flag("--record", a.record, "With --out: record the frames (playable by playback)");
+  AddAt(sub, a.at);
+  AddTimeScale(sub, a.time_scale);
+  sub->add_flag("--allow-model-mismatch", a.allow_model_mismatch,
+                "Use a model calibrated with another camera serial, pixel format or ROI");
+}
+
+void AddSnapAndView(CommandTable& table) {
+  SnapArgs& s = table.args().snap;
+  CLI::App* sub = table.Add("snap", table.handlers().snap, s);
+  sub->add_option("--rig", s.rig, "Rig name or rig file")->capture_default_str();
+  sub->add_option("--out", s.out, "PNG file to write")->required();
+  sub->add_option("--exposure-ms", s.exposure_ms, "Exposure")->check(CLI::PositiveNumber);
+  AddAt(sub, s.at);
+  AddTimeScale(sub, s.time_scale);
+
+  ViewArgs& v = table.args().view;
+  sub = table.Add("view", table.handlers().view, v);
+  sub->add_option("--rig", v.rig, "Rig name or rig file")->capture_default_str();
+  sub->add_option("--model", v.model, "model.yaml: show the live estimate");
+  sub->add_option("--exposure-ms", v.exposure_ms, "Exposure without a model")
+      ->check(CLI::PositiveNumber);
+  AddAt(sub, v.at);
+  sub->add_option("--frames", v.frames, "Quit after N frames (0: at q or Esc)");
+  sub->add_option("--screenshot", v.screenshot, "Save the last window image to this PNG");
+  AddTimeScale(sub, v.time_scale);
+}
+
+// Unknown first words get the list of valid commands (CLI11 would only say "extra argument").
+void CheckCommandName(int argc, const char* const* argv) {
+  if (argc <= 1) return;
+  const std::vector<std::string> names = SubcommandNames();
+  const std::string first = argv[1];
+  if (first.empty() || first[0] == '-' ||
+      std::find(names.begin(), names.end(), first) != names.end()) {
+    return;
+  }
+  std::string message = "unknown command '" + first + "'; valid commands: ";
+  for (size_t i = 0; i < names.size(); ++i) message += (i > 0 ? ", " : "") + names[i];
+  throw UsageError(message + ". " + kUsageHint);
+}
+
+// Parses; a parse error names the subcommand it happened in.
+int ParseAndRun(CLI::App& app, const CommandTable& table, int argc, const char* const* argv,
+                CommandIo io) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help, --version
     return app.exit(e, io.out, io.err);
   } catch (const CLI::ParseError& e) {
-    for (const auto& [command, run] : table) {
-      if (command->parsed()) {
-        const std::string name = command->get_name();
-        throw UsageError(name + ": " + e.what() + ". Run 'irdist " + name + " --help' for usage.");
-      }
+    if (const auto* entry = table.Parsed()) {
+      const std::string name = entry->first->get_name();
+      throw UsageError(name + ": " + e.what() + ". Run 'irdist " + name + " --help' for usage.");
     }
-    throw UsageError(std::string(e.what()) + ". " + usage_hint);
+    throw UsageError(std::string(e.what()) + ". " + kUsageHint);
   }
-  for (const auto& [command, run] : table) {
-    if (command->parsed()) {
-      run();
-      return 0;
-    }
-  }
-  throw UsageError("no command given. " + usage_hint);
+  const auto* entry = table.Parsed();
+  if (entry == nullptr) throw UsageError(std::string("no command given. ") + kUsageHint);
+  entry->second();
+  return 0;
+}
+
+}  // namespace
+
+int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& handlers) {
+  CheckCommandName(argc, argv);
+  CLI::App app{
+      "irdist: camera-to-IRED distance and orientation from gray levels, independent of the "
+      "IRED's radiant intensity.",
+      "irdist"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "irdist 0.1.0");
+  ParsedArgs args;
+  CommandTable table(app, args, handlers, io);
+  AddCalibrate(table);
+  AddValidate(table);
+  AddFitAndPlayback(table);
+  AddCheckAndPlan(table);
+  AddSimAndDevices(table);
+  AddMeasure(table);
+  AddSnapAndView(table);
+  return ParseAndRun(app, table, argc, argv, io);
 }
 
 }  // namespace irdist

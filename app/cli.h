@@ -26,6 +26,9 @@ struct Handlers {
   std::function<void(const PlanArgs&, CommandIo)> plan;
   std::function<void(const SimArgs&, CommandIo)> sim;
   std::function<void(const DevicesArgs&, CommandIo)> devices;
+  std::function<void(const MeasureArgs&, CommandIo)> measure;
+  std::function<void(const SnapArgs&, CommandIo)> snap;
+  std::function<void(const ViewArgs&, CommandIo)> view;
 };
 
 // The handlers of this build: every command (app/run.h, app/offline.h, app/tools.h).

@@ -1,11 +1,12 @@
 #pragma once
 // What every irdist command receives: its output streams and its parsed flags, one Args struct per
 // subcommand. A leaf header (no app/ include) so that each command family's header (run.h: live
-// runs, offline.h: fit/playback/check, tools.h: sim/devices, cli.h: parsing and dispatch) declares
-// its own commands without including another family's.
+// runs, offline.h: fit/playback/check, tools.h: sim/devices, measure.h and view.h: the camera-only
+// commands, cli.h: parsing and dispatch) declares its own commands without including another's.
 
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 namespace irdist {
 
@@ -29,11 +30,12 @@ struct ValidateArgs {
   std::string resume_dir;
   double time_scale = 0.0;
   bool quiet = false;
+  bool allow_model_mismatch = false;  // --allow-model-mismatch: a model of another camera setup
 };
 
 struct FitArgs {
-  std::string recording;          // recording folder
-  std::string out;                // --out: model file to write ("" = RECORDING/../model.yaml)
+  std::string recording;  // recording folder
+  std::string out;        // --out: model file to write ("" = RECORDING/../model.yaml)
   bool recover_response = false;  // --recover-response: the camera's inverse response first
 };
 
@@ -42,6 +44,43 @@ struct PlaybackArgs {
   std::string model;    // --model
   std::string out_dir;  // --out ("" = beside the recording)
   bool show = false;    // --show: step through the frames in an OpenCV window
+  bool allow_model_mismatch = false;  // --allow-model-mismatch
+};
+
+// `irdist measure`: continuous brackets on the camera alone, one estimate each (app/measure.h).
+struct MeasureArgs {
+  std::string model;            // --model: model.yaml from a calibration
+  std::string rig = "virtual";  // --rig: rig name or file
+  double t_ref_ms = 0.0;        // --t-ref-ms (0 = the model's calibration bracket)
+  std::vector<double> t_meas_ms;  // --t-meas-ms (empty = the model's)
+  int count = 0;                // --count: stop after N brackets (0 = until Ctrl-C / duration)
+  double duration_s = 0.0;      // --duration: stop after S host seconds (0 = no limit)
+  bool json = false;            // --json: one JSON object per bracket on stdout
+  std::string out_dir;          // --out: estimates.csv (and recording/ with --record)
+  bool record = false;          // --record: the frames in the recording format
+  std::vector<double> at;       // --at SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA (virtual rig only)
+  double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
+  bool allow_model_mismatch = false;
+};
+
+// `irdist snap`: one frame to a PNG, the blob's position and a suggested roi_px.
+struct SnapArgs {
+  std::string rig = "virtual";
+  std::string out;              // --out FILE.png
+  double exposure_ms = 8.0;     // --exposure-ms
+  std::vector<double> at;       // --at (virtual rig only)
+  double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
+};
+
+// `irdist view`: a live window on the camera.
+struct ViewArgs {
+  std::string rig = "virtual";
+  std::string model;            // --model: live estimate
+  double exposure_ms = 8.0;     // --exposure-ms (without a model)
+  std::vector<double> at;       // --at (virtual rig only)
+  int frames = 0;               // --frames: quit after N frames (0 = until q / Esc)
+  std::string screenshot;       // --screenshot FILE.png: save the last window image
+  double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
 };
 
 struct CheckArgs {
@@ -67,5 +106,6 @@ struct SimArgs {
 struct DevicesArgs {
   bool discover = false;  // --discover: GigE/USB camera discovery (broadcasts on every interface)
 };
+
 
 }  // namespace irdist

@@ -11,6 +11,8 @@
 #include <tuple>
 
 #include "acquisition/recording.h"
+#include "app/position.h"
+#include "app/provenance.h"
 #include "app/recipe.h"
 #include "app/show.h"
 #include "estimator/estimate.h"
@@ -333,6 +335,7 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   }
   fit_options.models = kept;
   CalibrationModel model = Fit(samples, feature_options, fit_options);
+  model.provenance = ProvenanceOfRecording(reader);
   SaveModel(model, model_path);
   for (const FittedModel& m : model.models) {
     out << "  " << ToString(m.kind) << " (" << ToString(m.form) << "): " << m.summary.BriefReport()
@@ -387,6 +390,8 @@ void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& op
       row->d_mm = e.d_mm;
       row->theta_deg = e.theta_deg;
       row->outside_range = e.outside_calibrated_range;
+      row->d_std_mm = e.d_std_mm;
+      row->theta_std_deg = e.theta_std_deg;
       // A fallback start (no root of Eq. 25 in range) is not a failure when the solver converged
       // from it; a non-converged solve is.
       row->ok = std::isfinite(e.d_mm) && e.d_mm > 0.0 && e.converged;
@@ -410,83 +415,152 @@ void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& op
 
 }  // namespace
 
+namespace {
+
+// The I0-dependent comparison's row of a bracket; it assumes the calibration's mean current.
+EstimateRow I0DependentRow(const CalibrationModel& model, const EstimateRow& base,
+                           const std::vector<Pair>& pairs, const FeatureMap& features,
+                           bool all_usable) {
+  EstimateRow row = base;
+  row.method = "i0_dependent";
+  row.ok = false;
+  if (!all_usable) return row;
+  std::vector<Features> measurements;
+  std::vector<double> t_ms;
+  for (const Pair& pair : pairs) {
+    measurements.push_back(FeaturesOf(features, *pair.measurement));
+    t_ms.push_back(pair.measurement->requested_exposure_us / 1000.0);
+  }
+  const FrameRecord& reference = *pairs.front().reference;
+  const I0DependentEstimate e =
+      EstimateI0Dependent(model, FeaturesOf(features, reference),
+                          reference.requested_exposure_us / 1000.0, measurements, t_ms,
+                          model.scaling.i0_scale_ma);
+  row.ok = e.valid;
+  row.d_mm = e.d_mm;
+  row.theta_deg = e.theta_deg;
+  row.outside_range = e.outside_calibrated_range;
+  return row;
+}
+
+// Geometric baseline: the mean over the measurement frames; theta from their ellipses.
+EstimateRow GeometricRow(const CalibrationModel& model, const EstimateRow& base,
+                         const std::vector<Pair>& pairs, const FeatureMap& features) {
+  EstimateRow row = base;
+  row.method = "geometric";
+  double sum_d = 0.0, sum_theta = 0.0;
+  int n = 0;
+  bool outside = false;
+  for (const Pair& pair : pairs) {
+    const Features& f = FeaturesOf(features, *pair.measurement);
+    if (!f.Usable()) continue;
+    const GeometricEstimate g = EstimateGeometric(model, f);
+    if (!g.valid) continue;
+    sum_d += g.d_mm;
+    sum_theta += f.theta0_deg;
+    outside = outside || g.outside_calibrated_range;
+    ++n;
+  }
+  row.ok = n > 0;
+  row.d_mm = n > 0 ? sum_d / n : 0.0;
+  row.theta_deg = n > 0 ? sum_theta / n : 0.0;
+  row.outside_range = outside;
+  return row;
+}
+
+EstimateRow BaseRowOf(const RecordedBracket& bracket, const FrameRecord& first) {
+  EstimateRow base;
+  base.bracket = static_cast<int>(bracket.bracket_id);
+  base.pose = static_cast<int>(bracket.bracket_id);
+  base.repeat = first.repeat;
+  base.true_d_mm = first.slide_mm;
+  base.true_theta_deg = first.theta_deg;
+  base.bias_ma = first.bias_ma_set;
+  return base;
+}
+
+}  // namespace
+
+namespace {
+
+// The blob's centre in the sensor's pixels: the mean centroid of the measurement frames (NaN
+// when some frame has no blob).
+cv::Point2d BlobOf(const std::vector<Pair>& pairs, const FeatureMap& features,
+                   const CameraGeometry& geometry) {
+  cv::Point2d sum(0.0, 0.0);
+  for (const Pair& pair : pairs) {
+    const Features& f = FeaturesOf(features, *pair.measurement);
+    if (!f.blob_found) return {NAN, NAN};
+    sum += f.centroid_px;
+  }
+  const double n = static_cast<double>(pairs.size());
+  return {sum.x / n + geometry.roi_offset_x, sum.y / n + geometry.roi_offset_y};
+}
+
+}  // namespace
+
+CameraGeometry GeometryOfRecording(const RecordingReader& reader) {
+  const RecordingHeader& h = reader.header();
+  if (h.rig_text.empty()) return CameraGeometry{};
+  return GeometryOfRigText(h.rig_text, h.rig_path.empty() ? reader.dir() + " (rig)" : h.rig_path);
+}
+
+BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
+                                            const FeatureMap& features,
+                                            const CalibrationModel& model,
+                                            const CameraGeometry& geometry) {
+  BracketEstimateRows rows;
+  if (!bracket.complete) return rows;
+  const std::vector<Pair> pairs = PairsOf(bracket);
+  if (pairs.empty()) return rows;
+  const EstimateRow base = BaseRowOf(bracket, *pairs.front().measurement);
+  bool all_usable = true;
+  for (const Pair& pair : pairs) {
+    all_usable = all_usable && FeaturesOf(features, *pair.reference).Usable() &&
+                 FeaturesOf(features, *pair.measurement).Usable();
+  }
+  EstimateMethodRows(model, EstimateOptions{}, "i0_free", base, pairs, features, all_usable,
+                     &rows.i0_free);
+  EstimateMethodRows(model, PaperEstimateOptions(), "paper", base, pairs, features, all_usable,
+                     &rows.paper);
+  if (model.Find(ModelKind::kDiffF) != nullptr) {
+    rows.i0_dependent.push_back(I0DependentRow(model, base, pairs, features, all_usable));
+  }
+  if (model.geometric.fitted()) rows.geometric.push_back(GeometricRow(model, base, pairs, features));
+  const cv::Point2d blob = BlobOf(pairs, features, geometry);
+  for (auto* block : {&rows.i0_free, &rows.paper, &rows.i0_dependent, &rows.geometric}) {
+    AddPositions(geometry, blob.x, blob.y, block);
+  }
+  return rows;
+}
+
+void AppendBracketRows(const BracketEstimateRows& bracket, BracketEstimateRows* all) {
+  const auto append = [](const std::vector<EstimateRow>& from, std::vector<EstimateRow>* to) {
+    to->insert(to->end(), from.begin(), from.end());
+  };
+  append(bracket.i0_free, &all->i0_free);
+  append(bracket.paper, &all->paper);
+  append(bracket.i0_dependent, &all->i0_dependent);
+  append(bracket.geometric, &all->geometric);
+}
+
+std::vector<EstimateRow> FlattenRows(const BracketEstimateRows& all) {
+  std::vector<EstimateRow> rows = all.i0_free;
+  for (const auto* block : {&all.paper, &all.i0_dependent, &all.geometric}) {
+    rows.insert(rows.end(), block->begin(), block->end());
+  }
+  return rows;
+}
+
 std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
                                            const FeatureMap& features,
                                            const CalibrationModel& model) {
-  std::vector<EstimateRow> i0_free, paper, i0_dependent, geometric;
-  const EstimateOptions options;
-  const EstimateOptions paper_options = PaperEstimateOptions();
-  // The I0-dependent comparison assumes the calibration's mean current (the nominal one).
-  const double nominal_ma = model.scaling.i0_scale_ma;
+  BracketEstimateRows all;
+  const CameraGeometry geometry = GeometryOfRecording(reader);
   for (const RecordedBracket& bracket : reader.Brackets()) {
-    if (!bracket.complete) continue;
-    const std::vector<Pair> pairs = PairsOf(bracket);
-    if (pairs.empty()) continue;
-    const FrameRecord& first = *pairs.front().measurement;
-    EstimateRow base;
-    base.bracket = static_cast<int>(bracket.bracket_id);
-    base.pose = static_cast<int>(bracket.bracket_id);
-    base.repeat = first.repeat;
-    base.true_d_mm = first.slide_mm;
-    base.true_theta_deg = first.theta_deg;
-    base.bias_ma = first.bias_ma_set;
-
-    bool all_usable = true;
-    std::vector<Features> measurements;
-    std::vector<double> t_ms;
-    for (const Pair& pair : pairs) {
-      all_usable = all_usable && FeaturesOf(features, *pair.reference).Usable() &&
-                   FeaturesOf(features, *pair.measurement).Usable();
-      measurements.push_back(FeaturesOf(features, *pair.measurement));
-      t_ms.push_back(pair.measurement->requested_exposure_us / 1000.0);
-    }
-    EstimateMethodRows(model, options, "i0_free", base, pairs, features, all_usable, &i0_free);
-    EstimateMethodRows(model, paper_options, "paper", base, pairs, features, all_usable, &paper);
-
-    if (model.Find(ModelKind::kDiffF) != nullptr) {
-      EstimateRow row = base;
-      row.method = "i0_dependent";
-      row.ok = false;
-      if (all_usable) {
-        const FrameRecord& reference = *pairs.front().reference;
-        const I0DependentEstimate e = EstimateI0Dependent(model, FeaturesOf(features, reference),
-                                                          reference.requested_exposure_us / 1000.0,
-                                                          measurements, t_ms, nominal_ma);
-        row.ok = e.valid;
-        row.d_mm = e.d_mm;
-        row.theta_deg = e.theta_deg;
-        row.outside_range = e.outside_calibrated_range;
-      }
-      i0_dependent.push_back(row);
-    }
-
-    // Geometric baseline: the mean over the measurement frames; theta from their ellipses.
-    if (model.geometric.fitted()) {
-      EstimateRow row = base;
-      row.method = "geometric";
-      double sum_d = 0.0, sum_theta = 0.0;
-      int n = 0;
-      bool outside = false;
-      for (const Features& f : measurements) {
-        if (!f.Usable()) continue;
-        const GeometricEstimate g = EstimateGeometric(model, f);
-        if (!g.valid) continue;
-        sum_d += g.d_mm;
-        sum_theta += f.theta0_deg;
-        outside = outside || g.outside_calibrated_range;
-        ++n;
-      }
-      row.ok = n > 0;
-      row.d_mm = n > 0 ? sum_d / n : 0.0;
-      row.theta_deg = n > 0 ? sum_theta / n : 0.0;
-      row.outside_range = outside;
-      geometric.push_back(row);
-    }
+    AppendBracketRows(EstimateRecordedBracket(bracket, features, model, geometry), &all);
   }
-  for (const auto* block : {&paper, &i0_dependent, &geometric}) {
-    i0_free.insert(i0_free.end(), block->begin(), block->end());
-  }
-  return i0_free;
+  return FlattenRows(all);
 }
 
 ValidationSummary WriteValidation(const std::string& dir, const std::vector<EstimateRow>& rows,
@@ -551,10 +625,27 @@ void RunFit(const FitArgs& args, CommandIo io) {
   FitRecording(reader, features, options, model_path, out_dir + "/report", io.out);
 }
 
+namespace {
+
+bool HasGroundTruth(const std::vector<EstimateRow>& rows) {
+  for (const EstimateRow& row : rows) {
+    if (std::isfinite(row.true_d_mm)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 void RunPlayback(const PlaybackArgs& args, CommandIo io) {
   const RecordingReader reader(args.recording);
   std::optional<CalibrationModel> model;
-  if (!args.model.empty()) model = LoadModel(args.model);
+  if (!args.model.empty()) {
+    model = LoadModel(args.model);
+    std::string warning;
+    CheckModelProvenance(model->provenance, args.model, ProvenanceOfRecording(reader),
+                         "the recording " + args.recording, args.allow_model_mismatch, &warning);
+    if (!warning.empty()) io.err << warning << "\n";
+  }
   const FeatureOptions options = model ? model->features : FeatureOptions{};
   const std::string out_dir = args.out_dir.empty() ? ParentOf(args.recording) : args.out_dir;
   fs::create_directories(out_dir);
@@ -564,11 +655,16 @@ void RunPlayback(const PlaybackArgs& args, CommandIo io) {
   std::vector<EstimateRow> rows;
   if (model) {
     rows = EstimateRecording(reader, features, *model);
-    WriteValidation(out_dir, rows,
-                    {{"recipe", reader.header().recipe_path},
-                     {"model", args.model},
-                     {"recording", args.recording}},
-                    io.out);
+    if (HasGroundTruth(rows)) {
+      WriteValidation(out_dir, rows,
+                      {{"recipe", reader.header().recipe_path},
+                       {"model", args.model},
+                       {"recording", args.recording}},
+                      io.out);
+    } else {  // a recording of `irdist measure`: no ground truth to summarise against
+      WriteEstimatesCsv(out_dir + "/estimates.csv", rows);
+      io.out << "Estimates: " << out_dir << "/estimates.csv (no ground truth)\n";
+    }
   }
   if (args.show) ShowPlayback(reader, features, rows);
 }

@@ -73,6 +73,25 @@ std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
                                                   const std::vector<CalibrationSample>& samples,
                                                   int eq25_curves = 4);
 
+// The estimate rows of one bracket, by method (estimates.csv lists the methods in this order).
+struct BracketEstimateRows {
+  std::vector<EstimateRow> i0_free, paper, i0_dependent, geometric;
+};
+// The rows of one complete bracket (none for an incomplete one): the single estimate path of
+// validate, playback and measure, so the same frames give the same rows everywhere.
+// With intrinsics in `geometry`, every ok row gets its 3D position (the mean blob centre of the
+// measurement frames); on a virtual rig its ground truth too (app/position.h).
+struct RecordedBracket;
+struct CameraGeometry;
+BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
+                                            const FeatureMap& features,
+                                            const CalibrationModel& model,
+                                            const CameraGeometry& geometry);
+// The geometry of the rig a recording was made on (its header's rig text).
+CameraGeometry GeometryOfRecording(const RecordingReader& reader);
+void AppendBracketRows(const BracketEstimateRows& bracket, BracketEstimateRows* all);
+std::vector<EstimateRow> FlattenRows(const BracketEstimateRows& all);  // estimates.csv order
+
 // Estimates of every complete bracket: method "i0_free" (joint row dt_ms = 0, then one row per
 // t_n) and "geometric" (the mean over the bracket's measurement frames, dt_ms = 0). Ground truth
 // from the recording's rows (slide_mm, theta_deg, bias_ma_set).

@@ -48,10 +48,38 @@ double Positive(const MapReader& map, const std::string& key, double fallback) {
   return value;
 }
 
+// camera.intrinsics: {pixels: sensor|roi, fx, fy, cx, cy, distortion: [k1, k2, p1, p2, k3]}.
+CameraIntrinsics ReadIntrinsics(const YAML::Node& node, const std::string& file) {
+  const MapReader map(node, file, "camera.intrinsics",
+                      {"pixels", "fx", "fy", "cx", "cy", "distortion"});
+  CameraIntrinsics k;
+  k.known = true;
+  const std::string pixels = map.String("pixels", "sensor");
+  OneOf(map, "pixels", pixels, {"sensor", "roi"});
+  k.in_roi_px = pixels == "roi";
+  map.Require("fx");
+  map.Require("fy");
+  k.fx_px = Positive(map, "fx", 0.0);
+  k.fy_px = Positive(map, "fy", 0.0);
+  k.cx_px = AsNumber(map.Require("cx"), file, "camera.intrinsics.cx");
+  k.cy_px = AsNumber(map.Require("cy"), file, "camera.intrinsics.cy");
+  if (map.Has("distortion")) {
+    const YAML::Node d = map.Get("distortion");
+    if (!d.IsSequence() || d.size() > 5) {
+      Fail(file, d.Mark(), "camera.intrinsics.distortion must be [k1, k2, p1, p2, k3] (OpenCV's "
+                           "order; up to 5 numbers)");
+    }
+    for (size_t i = 0; i < d.size(); ++i) {
+      k.distortion.push_back(AsNumber(d[i], file, "camera.intrinsics.distortion"));
+    }
+  }
+  return k;
+}
+
 CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   const MapReader map(node, file, "camera",
                       {"id", "pixel_format", "trigger_source", "trigger_activation", "black_level",
-                       "packet_size", "frame_timeout_ms", "readout_ms", "roi_px"});
+                       "packet_size", "frame_timeout_ms", "readout_ms", "roi_px", "intrinsics"});
   CameraConfig camera;
   camera.id = map.String("id", camera.id);
   camera.pixel_format = map.String("pixel_format", camera.pixel_format);
@@ -88,6 +116,7 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
     camera.roi_width = v[2];
     camera.roi_height = v[3];
   }
+  if (map.Has("intrinsics")) camera.intrinsics = ReadIntrinsics(map.Get("intrinsics"), file);
   return camera;
 }
 

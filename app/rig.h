@@ -4,6 +4,7 @@
 // virtual rig) is accepted here and parsed by sim/ itself. docs/recipes.md lists every key.
 
 #include <string>
+#include <vector>
 
 #include "station/plan.h"
 
@@ -11,6 +12,17 @@ namespace irdist {
 
 // The smallest region of interest a rig may set (features take a 64 px window around the blob).
 constexpr int kMinRoiSidePx = 96;
+
+// The camera's intrinsics in OpenCV's convention (cv::calibrateCamera): focal lengths and
+// principal point in pixels (pixel centres at whole coordinates), distortion k1 k2 p1 p2 k3.
+// `pixels: sensor` (the full sensor's pixels) or `pixels: roi` (the region's own pixels, as a
+// calibration on ROI images gives them). docs/recipes.md says how to obtain them.
+struct CameraIntrinsics {
+  bool known = false;  // the rig file has `camera.intrinsics`
+  bool in_roi_px = false;
+  double fx_px = 0.0, fy_px = 0.0, cx_px = 0.0, cy_px = 0.0;
+  std::vector<double> distortion;  // k1, k2, p1, p2, k3 (trailing ones may be left out)
+};
 
 struct CameraConfig {
   std::string id = "auto";               // Aravis device id, serial or IP; "auto" = the only one
@@ -29,6 +41,8 @@ struct CameraConfig {
   int roi_width = 0;
   int roi_height = 0;
   bool FullFrame() const { return roi_width == 0; }
+  // Optional `intrinsics:`: with them measure and validate report the 3D position.
+  CameraIntrinsics intrinsics;
   bool IsValid(std::string* why) const;
 };
 

@@ -19,6 +19,7 @@
 #include "acquisition/recording.h"
 #include "app/capture.h"
 #include "app/offline.h"
+#include "app/provenance.h"
 #include "app/recipe.h"
 #include "app/suggest.h"
 #include "estimator/model_file.h"
@@ -131,6 +132,10 @@ struct RunRequest {
   std::string resume_dir;
   double time_scale = 0.0;
   bool quiet = false;
+  bool allow_model_mismatch = false;  // validate
+  // validate on hardware: the model's camera serial, which AravisCamera::Open then requires
+  // ("" = none: another camera is allowed, or the model does not say).
+  std::string expected_serial;
 };
 
 // What the recording phase leaves for the processing phase.
@@ -221,6 +226,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   std::string port = recipe.rig.station.port;
   LiveCaptureSetup setup;
   setup.camera_name = recipe.rig.camera.id;
+  setup.camera_serial = request.expected_serial;
   if (recipe.rig.kind == RigKind::kVirtual) {
     sim::VirtualRigOverrides overrides;
     if (request.time_scale > 0.0) overrides.time_scale = request.time_scale;
@@ -391,11 +397,33 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   return recorded;
 }
 
+// Validate refuses a model of another camera setup before anything moves: pixel format and ROI
+// from the rig file, the serial from a virtual rig's physics (a hardware camera's serial is only
+// known once it is opened).
+void CheckModelAgainstRig(const CalibrationModel& model, const RunRequest& request,
+                          const Recipe& recipe, CommandIo io) {
+  const std::string serial = recipe.rig.kind == RigKind::kVirtual
+                                 ? sim::LoadRigPhysics(recipe.rig_path).camera.serial
+                                 : std::string();
+  std::string warning;
+  CheckModelProvenance(model.provenance, request.model_path, ProvenanceOfRig(recipe.rig, serial),
+                       "rig " + recipe.rig.name + " (" + recipe.rig_path + ")",
+                       request.allow_model_mismatch, &warning);
+  if (!warning.empty()) io.err << warning << "\n";
+}
+
 void RunRecipe(const RunRequest& request, CommandIo io) {
   const Recipe recipe = LoadRecipe(request.recipe_path);
   const Plan plan = PlanRecipe(recipe);
   std::optional<CalibrationModel> model;
-  if (request.kind == RunKind::kValidate) model = LoadModel(request.model_path);
+  if (request.kind == RunKind::kValidate) {
+    model = LoadModel(request.model_path);
+    CheckModelAgainstRig(*model, request, recipe, io);
+  }
+  RunRequest checked = request;
+  if (model && !request.allow_model_mismatch) {
+    checked.expected_serial = model->provenance.camera_serial;
+  }
   const FeatureOptions feature_options = model ? model->features : FeatureOptions{};
   io.out << "Recipe " << recipe.path << ": " << plan.summary.BriefReport() << "\n";
 
@@ -403,7 +431,7 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
   {
     // Ctrl-C stops the sweep cleanly; after the recording it ends the process as usual.
     SignalGuard guard;
-    recorded = Record(request, recipe, plan, feature_options, io);
+    recorded = Record(checked, recipe, plan, feature_options, io);
   }
   if (recorded.cut) {
     throw InterruptedError(
@@ -589,6 +617,7 @@ void RunCalibrate(const CalibrateArgs& args, CommandIo io) {
 void RunValidate(const ValidateArgs& args, CommandIo io) {
   RunRequest request = RequestFrom(RunKind::kValidate, args);
   request.model_path = args.model;
+  request.allow_model_mismatch = args.allow_model_mismatch;
   RunRecipe(request, io);
 }
 

@@ -1,9 +1,13 @@
 #pragma once
-// Playback's `--show` window (app/show.cc).
+// The display side of the app (app/show.cc): playback's `--show` window, and the frame overlay
+// and window helpers that `irdist view` shares with it.
 
 #include <cstdint>
 #include <map>
+#include <string>
 #include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "app/summary.h"
 #include "base/check.h"
@@ -24,5 +28,14 @@ class DisplayError : public Error {
  public:
   using Error::Error;
 };
+
+// Throws DisplayError (naming `what`) when neither DISPLAY nor WAYLAND_DISPLAY is set.
+void RequireDisplay(const std::string& what);
+// cv::namedWindow; throws DisplayError when OpenCV cannot open it.
+void OpenWindow(const std::string& window, const std::string& what);
+// A frame for display: gray scaled to 8 bits, the features' window (green) and ellipse (red),
+// `lines` of text at the top left.
+cv::Mat FrameOverlay(const cv::Mat& image, int bit_depth, const Features* features,
+                     const std::vector<std::string>& lines);
 
 }  // namespace irdist

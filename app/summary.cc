@@ -16,8 +16,9 @@ namespace {
 
 constexpr const char* kEstimatesHeader =
     "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,bias_ma,d_mm,theta_deg,"
-    "outside_range,ok";
-constexpr int kEstimatesColumns = 12;
+    "outside_range,ok,x_mm,y_mm,z_mm,x_se_mm,y_se_mm,z_se_mm,true_x_mm,true_y_mm,true_z_mm";
+constexpr int kEstimatesColumns = 21;
+constexpr int kEstimatesColumnsWithout3d = 12;  // files written before the 3D columns
 
 std::vector<std::string> SplitCsv(const std::string& line) {
   std::vector<std::string> out;
@@ -216,6 +217,33 @@ double Percentile(std::vector<double> values, double p) {
   return values[lo] + frac * (values[hi] - values[lo]);
 }
 
+namespace {
+
+// A ground-truth value as estimates.csv writes it: empty when unknown (irdist measure).
+std::string Truth(double value) {
+  if (!std::isfinite(value)) return "";
+  std::ostringstream out;
+  out << std::setprecision(10) << value;
+  return out.str();
+}
+
+}  // namespace
+
+namespace {
+
+// The 3D columns (12..20) of a row; empty = NaN.
+void Read3d(const std::vector<std::string>& c, const std::string& where, EstimateRow* r) {
+  double* const fields[] = {&r->x_mm,    &r->y_mm,      &r->z_mm,      &r->x_se_mm,  &r->y_se_mm,
+                            &r->z_se_mm, &r->true_x_mm, &r->true_y_mm, &r->true_z_mm};
+  const char* const names[] = {"x_mm",    "y_mm",      "z_mm",      "x_se_mm",  "y_se_mm",
+                               "z_se_mm", "true_x_mm", "true_y_mm", "true_z_mm"};
+  for (int i = 0; i < 9; ++i) {
+    *fields[i] = c[12 + i].empty() ? NAN : ParseNumber(c[12 + i], where, names[i]);
+  }
+}
+
+}  // namespace
+
 void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& rows) {
   std::ofstream out(path, std::ios::trunc);
   if (!out)
@@ -224,8 +252,13 @@ void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& 
   out << kEstimatesHeader << '\n' << std::setprecision(10);
   for (const EstimateRow& r : rows) {
     out << r.bracket << ',' << r.pose << ',' << r.repeat << ',' << r.method << ',' << r.dt_ms << ','
-        << r.true_d_mm << ',' << r.true_theta_deg << ',' << r.bias_ma << ',' << r.d_mm << ','
-        << r.theta_deg << ',' << (r.outside_range ? 1 : 0) << ',' << (r.ok ? 1 : 0) << '\n';
+        << Truth(r.true_d_mm) << ',' << Truth(r.true_theta_deg) << ',' << Truth(r.bias_ma) << ','
+        << r.d_mm << ',' << r.theta_deg << ',' << (r.outside_range ? 1 : 0) << ',' << (r.ok ? 1 : 0);
+    for (double v : {r.x_mm, r.y_mm, r.z_mm, r.x_se_mm, r.y_se_mm, r.z_se_mm, r.true_x_mm,
+                     r.true_y_mm, r.true_z_mm}) {
+      out << ',' << Truth(v);
+    }
+    out << '\n';
   }
   out.flush();
   if (!out) throw EstimatesFileError(path + ": write failed (disk full?); free space and rerun.");
@@ -235,10 +268,13 @@ std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw EstimatesFileError(path + ": cannot be opened; check the path.");
   std::string line;
-  if (!std::getline(in, line) || line != kEstimatesHeader) {
+  const std::string old_header = std::string(kEstimatesHeader).substr(
+      0, std::string(kEstimatesHeader).find(",x_mm"));
+  if (!std::getline(in, line) || (line != kEstimatesHeader && line != old_header)) {
     throw EstimatesFileError(path + ":1: the header is not '" + std::string(kEstimatesHeader) +
                              "'; is this an irdist estimates.csv?");
   }
+  const int columns = line == kEstimatesHeader ? kEstimatesColumns : kEstimatesColumnsWithout3d;
   std::vector<EstimateRow> rows;
   int line_no = 1;
   while (std::getline(in, line)) {
@@ -246,9 +282,9 @@ std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
     if (line.empty()) continue;
     const std::string where = path + ":" + std::to_string(line_no);
     const std::vector<std::string> c = SplitCsv(line);
-    if (static_cast<int>(c.size()) != kEstimatesColumns) {
+    if (static_cast<int>(c.size()) != columns) {
       throw EstimatesFileError(where + ": " + std::to_string(c.size()) + " columns, expected " +
-                               std::to_string(kEstimatesColumns) + "; fix or delete that row.");
+                               std::to_string(columns) + "; fix or delete that row.");
     }
     EstimateRow r;
     r.bracket = static_cast<int>(ParseNumber(c[0], where, "bracket"));
@@ -263,6 +299,7 @@ std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
     r.theta_deg = ParseNumber(c[9], where, "theta_deg");
     r.outside_range = ParseBool(c[10], where, "outside_range");
     r.ok = ParseBool(c[11], where, "ok");
+    if (columns == kEstimatesColumns) Read3d(c, where, &r);
     if (r.true_d_mm <= 0.0) {
       throw EstimatesFileError(where + ": true_d_mm must be positive; fix that row.");
     }

@@ -2,6 +2,7 @@
 // Validation figures from per-bracket estimates: what summary.yaml holds (docs/reports.md).
 // Pure computation over rows, so the same numbers come from a live run and from playback.
 
+#include <cmath>
 #include <map>
 #include <optional>
 #include <string>
@@ -25,6 +26,15 @@ struct EstimateRow {
   double theta_deg = 0.0;      // estimate
   bool outside_range = false;  // the estimate lies outside the calibrated range
   bool ok = true;              // false: no estimate (no root, no blob): counted, not averaged
+  // Standard errors of d_mm and theta_deg from the solver (-1 or NaN: not computed). Not in
+  // estimates.csv.
+  double d_std_mm = -1.0;
+  double theta_std_deg = -1.0;
+  // 3D position in the camera frame (mm) and its standard errors when the rig has intrinsics
+  // (app/position.h), and its ground truth on a virtual rig; NaN (empty in the CSV) otherwise.
+  double x_mm = NAN, y_mm = NAN, z_mm = NAN;
+  double x_se_mm = NAN, y_se_mm = NAN, z_se_mm = NAN;
+  double true_x_mm = NAN, true_y_mm = NAN, true_z_mm = NAN;
 };
 
 class EstimatesFileError : public Error {

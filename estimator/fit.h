@@ -10,6 +10,7 @@
 
 #include "estimator/features.h"
 #include "estimator/models.h"
+#include "estimator/provenance.h"
 
 namespace irdist {
 
@@ -151,6 +152,7 @@ struct CalibrationModel {
   std::vector<FittedModel> models;
   GeometricModel geometric;
   ThetaCorrection theta_correction;  // not fitted: theta from the blur-corrected ratio alone
+  ModelProvenance provenance;        // filled by the app from the recording (estimator/provenance.h)
   const FittedModel* Find(ModelKind kind) const;  // nullptr if not fitted
   std::string BriefReport() const;
 };

@@ -36,6 +36,27 @@ void EmitFit(YAML::Emitter& out, const FitSummary& s) {
   out << YAML::EndMap;
 }
 
+// The `provenance:` block (estimator/provenance.h); written only when known.
+void EmitProvenance(YAML::Emitter& out, const ModelProvenance& p) {
+  if (!p.known) return;
+  out << YAML::Key << "provenance" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "rig_name" << YAML::Value << p.rig_name;
+  out << YAML::Key << "rig_path" << YAML::Value << p.rig_path;
+  out << YAML::Key << "camera_vendor" << YAML::Value << p.camera_vendor;
+  out << YAML::Key << "camera_model" << YAML::Value << p.camera_model;
+  out << YAML::Key << "camera_serial" << YAML::Value << p.camera_serial;
+  out << YAML::Key << "pixel_format" << YAML::Value << p.pixel_format;
+  out << YAML::Key << "bit_depth" << YAML::Value << p.bit_depth;
+  out << YAML::Key << "roi_px" << YAML::Value << YAML::Flow << YAML::BeginSeq << p.roi_offset_x
+      << p.roi_offset_y << p.roi_width << p.roi_height << YAML::EndSeq;
+  out << YAML::Key << "recipe_path" << YAML::Value << p.recipe_path;
+  out << YAML::Key << "calibration_date" << YAML::Value << p.calibration_date;
+  out << YAML::Key << "t_ref_ms" << YAML::Value << p.t_ref_ms;
+  out << YAML::Key << "t_meas_ms" << YAML::Value << YAML::Flow << p.t_meas_ms;
+  out << YAML::Key << "retake_reference" << YAML::Value << p.retake_reference;
+  out << YAML::EndMap;
+}
+
 // Reads with the key path and line in every error.
 class Reader {
  public:
@@ -124,6 +145,34 @@ class Reader {
   std::string path_;
 };
 
+// The optional `provenance:` block; provenance.known says whether it was there.
+ModelProvenance ReadProvenance(const Reader& rd, const YAML::Node& root) {
+  ModelProvenance p;
+  const YAML::Node n = root["provenance"];
+  if (!n.IsDefined() || n.IsNull()) return p;
+  const std::string k = "provenance";
+  p.known = true;
+  p.rig_name = rd.Scalar<std::string>(n, k, "rig_name");
+  p.rig_path = rd.Scalar<std::string>(n, k, "rig_path");
+  p.camera_vendor = rd.Scalar<std::string>(n, k, "camera_vendor");
+  p.camera_model = rd.Scalar<std::string>(n, k, "camera_model");
+  p.camera_serial = rd.Scalar<std::string>(n, k, "camera_serial");
+  p.pixel_format = rd.Scalar<std::string>(n, k, "pixel_format");
+  p.bit_depth = rd.Scalar<int>(n, k, "bit_depth");
+  const std::vector<double> roi = rd.Doubles(n, k, "roi_px", false);
+  if (roi.size() != 4) rd.Fail(n["roi_px"], k + ".roi_px", "expected [x, y, width, height]");
+  p.roi_offset_x = static_cast<int>(roi[0]);
+  p.roi_offset_y = static_cast<int>(roi[1]);
+  p.roi_width = static_cast<int>(roi[2]);
+  p.roi_height = static_cast<int>(roi[3]);
+  p.recipe_path = rd.Scalar<std::string>(n, k, "recipe_path");
+  p.calibration_date = rd.Scalar<std::string>(n, k, "calibration_date");
+  p.t_ref_ms = rd.Scalar<double>(n, k, "t_ref_ms");
+  p.t_meas_ms = rd.Doubles(n, k, "t_meas_ms", false);
+  p.retake_reference = rd.Scalar<bool>(n, k, "retake_reference");
+  return p;
+}
+
 }  // namespace
 
 ModelFileError::ModelFileError(const std::string& path, const std::string& key, int line,
@@ -210,6 +259,7 @@ std::string ModelToYaml(const CalibrationModel& model) {
     EmitFit(out, tc.summary);
     out << YAML::EndMap;
   }
+  EmitProvenance(out, model.provenance);
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
@@ -348,6 +398,7 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
     rd.Range(t, "theta_correction", "d_geometric_mm", &tc.d_min_mm, &tc.d_max_mm);
     tc.summary = rd.Fit(t, "theta_correction");
   }
+  model.provenance = ReadProvenance(rd, root);
   return model;
 }
 

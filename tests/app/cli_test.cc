@@ -10,9 +10,11 @@
 #include <string>
 #include <vector>
 
+#include "app/measure.h"
 #include "app/offline.h"
 #include "app/run.h"
 #include "app/tools.h"
+#include "app/view.h"
 #include "base/process.h"
 
 namespace irdist {
@@ -43,8 +45,41 @@ TEST(CliTest, DefaultArgsAreUsable) {
 }
 
 TEST(CliTest, EverySubcommandIsInTheTable) {
-  EXPECT_EQ(SubcommandNames(), (std::vector<std::string>{"calibrate", "validate", "fit", "playback",
-                                                         "check", "plan", "sim", "devices"}));
+  EXPECT_EQ(SubcommandNames(),
+            (std::vector<std::string>{"calibrate", "validate", "fit", "playback", "check", "plan",
+                                      "sim", "devices", "measure", "snap", "view"}));
+}
+
+TEST(CliTest, MeasureTakesItsOptions) {
+  Handlers handlers;
+  MeasureArgs measure;
+  handlers.measure = [&](const MeasureArgs& args, CommandIo) { measure = args; };
+  EXPECT_EQ(RunWords({"measure", "--model", "m.yaml", "--rig", "lab", "--count", "5", "--json",
+                      "--out", "o", "--record", "--at", "2000,10,0,490", "--t-meas-ms", "30,34",
+                      "--allow-model-mismatch"},
+                     handlers),
+            0);
+  EXPECT_EQ(measure.model, "m.yaml");
+  EXPECT_EQ(measure.rig, "lab");
+  EXPECT_EQ(measure.count, 5);
+  EXPECT_TRUE(measure.json && measure.record && measure.allow_model_mismatch);
+  EXPECT_EQ(measure.out_dir, "o");
+  EXPECT_EQ(measure.at, (std::vector<double>{2000, 10, 0, 490}));
+  EXPECT_EQ(measure.t_meas_ms, (std::vector<double>{30, 34}));
+  EXPECT_THROW(RunWords({"measure"}, handlers), UsageError);  // --model missing
+  EXPECT_THROW(RunWords({"measure", "--model", "m", "--at", "1,2"}, handlers), UsageError);
+}
+
+TEST(CliTest, PlaybackAndValidateTakeTheMismatchOverride) {
+  Handlers handlers;
+  PlaybackArgs playback;
+  ValidateArgs validate;
+  handlers.playback = [&](const PlaybackArgs& args, CommandIo) { playback = args; };
+  handlers.validate = [&](const ValidateArgs& args, CommandIo) { validate = args; };
+  EXPECT_EQ(RunWords({"playback", "rec", "--model", "m", "--allow-model-mismatch"}, handlers), 0);
+  EXPECT_TRUE(playback.allow_model_mismatch);
+  EXPECT_EQ(RunWords({"validate", "r.yaml", "--model", "m"}, handlers), 0);
+  EXPECT_FALSE(validate.allow_model_mismatch);
 }
 
 TEST(CliTest, UnknownOrMissingCommandIsAUsageError) {
@@ -89,6 +124,9 @@ TEST(CliTest, EveryCommandRunsTheFunctionOfItsFamily) {
   EXPECT_TRUE(Calls(h.plan, &RunPlan));
   EXPECT_TRUE(Calls(h.sim, &RunSim));
   EXPECT_TRUE(Calls(h.devices, &RunDevices));
+  EXPECT_TRUE(Calls(h.measure, &RunMeasure));
+  EXPECT_TRUE(Calls(h.snap, &RunSnap));
+  EXPECT_TRUE(Calls(h.view, &RunView));
 }
 
 // Handlers that only record the arguments they were called with.

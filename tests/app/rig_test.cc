@@ -48,6 +48,43 @@ TEST(RigTest, VirtualRigsEstimateWithTheirCamerasOwnReadout) {
   }
 }
 
+// The virtual rigs' intrinsics are those of their physics: f / pitch, the sensor's centre in
+// OpenCV's convention (pixel centres at whole numbers), no distortion.
+TEST(RigTest, VirtualRigsCarryTheIntrinsicsOfTheirPhysics) {
+  for (const char* name : {"virtual.yaml", "virtual-cosm.yaml", "virtual-offset.yaml"}) {
+    const Rig rig = LoadRig(kRigs + "/" + name);
+    const sim::RigPhysics physics = sim::LoadRigPhysics(kRigs + "/" + name);
+    const CameraIntrinsics& k = rig.camera.intrinsics;
+    ASSERT_TRUE(k.known) << name;
+    EXPECT_FALSE(k.in_roi_px) << name;
+    const double f_px = physics.optics.focal_length_mm / (physics.sensor.pixel_pitch_um * 1e-3);
+    EXPECT_NEAR(k.fx_px, f_px, 1e-5) << name;
+    EXPECT_NEAR(k.fy_px, f_px, 1e-5) << name;
+    EXPECT_DOUBLE_EQ(k.cx_px, 0.5 * physics.sensor.width_px - 0.5) << name;
+    EXPECT_DOUBLE_EQ(k.cy_px, 0.5 * physics.sensor.height_px - 0.5) << name;
+    for (double c : k.distortion) EXPECT_EQ(c, 0.0) << name;
+  }
+}
+
+TEST(RigTest, IntrinsicsNeedTheirKeysAndRefuseUnknownOnes) {
+  const std::string head =
+      "name: r\nkind: hardware\nstation:\n  port: /dev/ttyUSB0\ncamera:\n  id: 10.0.0.2\n"
+      "  intrinsics:\n";
+  const Rig rig = ParseRig(head + "    pixels: roi\n    fx: 2000\n    fy: 2001\n    cx: 127.5\n"
+                                  "    cy: 120\n    distortion: [-0.1, 0.01]\n",
+                           "r.yaml");
+  EXPECT_TRUE(rig.camera.intrinsics.in_roi_px);
+  EXPECT_EQ(rig.camera.intrinsics.fy_px, 2001.0);
+  EXPECT_EQ(rig.camera.intrinsics.distortion, (std::vector<double>{-0.1, 0.01}));
+  EXPECT_THROW(ParseRig(head + "    fx: 2000\n    fy: 2000\n    cx: 1\n", "r.yaml"), RecipeError);
+  EXPECT_THROW(ParseRig(head + "    fx: 2000\n    fy: 2000\n    cx: 1\n    cy: 1\n    k1: 0\n",
+                        "r.yaml"),
+               RecipeError);
+  EXPECT_THROW(ParseRig(head + "    fx: -1\n    fy: 2000\n    cx: 1\n    cy: 1\n", "r.yaml"),
+               RecipeError);
+  EXPECT_FALSE(LoadRig(kRigs + "/example-hardware.yaml").camera.intrinsics.known);
+}
+
 TEST(RigTest, ExampleHardwareRigLoads) {
   const Rig rig = LoadRig(kRigs + "/example-hardware.yaml");
   EXPECT_EQ(rig.kind, RigKind::kHardware);

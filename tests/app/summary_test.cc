@@ -1,6 +1,8 @@
 #include "app/summary.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
 #include <yaml-cpp/yaml.h>
 
 #include <cstdio>
@@ -111,6 +113,32 @@ TEST_F(SummaryTest, RoundTripKeepsEveryRow) {
     EXPECT_EQ(again[i].d_mm, rows[i].d_mm);
     EXPECT_EQ(again[i].outside_range, rows[i].outside_range);
   }
+}
+
+TEST_F(SummaryTest, PositionColumnsRoundTripAndUnknownTruthIsEmpty) {
+  std::vector<EstimateRow> rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  ASSERT_GE(rows.size(), 2u);
+  rows[0].x_mm = 12.5;
+  rows[0].z_se_mm = 3.25;
+  rows[0].true_x_mm = 12.0;
+  rows[1].true_d_mm = NAN;  // irdist measure without a pose
+  const std::string path = (dir_ / "xyz.csv").string();
+  WriteEstimatesCsv(path, rows);
+  std::ifstream in(path);
+  std::string header, first, second;
+  std::getline(in, header);
+  std::getline(in, first);
+  std::getline(in, second);
+  EXPECT_NE(header.find(",x_mm,y_mm,z_mm,x_se_mm,y_se_mm,z_se_mm,true_x_mm,true_y_mm,true_z_mm"),
+            std::string::npos);
+  EXPECT_NE(first.find(",12.5,,,,,3.25,12,,"), std::string::npos) << first;
+  EXPECT_NE(second.find(",i0_free,0,,"), std::string::npos) << second;
+  rows.erase(rows.begin() + 1);
+  WriteEstimatesCsv(path, rows);
+  const std::vector<EstimateRow> again = ReadEstimatesCsv(path);
+  EXPECT_EQ(again[0].x_mm, 12.5);
+  EXPECT_EQ(again[0].true_x_mm, 12.0);
+  EXPECT_TRUE(std::isnan(again[0].y_mm));
 }
 
 TEST_F(SummaryTest, BadRowIsRefusedWithItsLine) {

@@ -97,6 +97,38 @@ TEST(ModelFile, RoundTripIsBitExact) {
   EXPECT_EQ(ModelToYaml(back), ModelToYaml(model));
 }
 
+TEST(ModelFile, ProvenanceRoundTripsAndIsOptional) {
+  CalibrationModel model = SmallModel();
+  EXPECT_EQ(ModelToYaml(model).find("provenance"), std::string::npos);  // unknown: not written
+  ModelProvenance& p = model.provenance;
+  p.known = true;
+  p.rig_name = "virtual";
+  p.rig_path = "recipes/rigs/virtual.yaml";
+  p.camera_vendor = "Aravis";
+  p.camera_model = "Fake";
+  p.camera_serial = "IRDV0001";
+  p.pixel_format = "Mono12";
+  p.bit_depth = 12;
+  p.roi_offset_x = 512;
+  p.roi_offset_y = 384;
+  p.roi_width = 256;
+  p.roi_height = 256;
+  p.recipe_path = "recipes/table3-calibration.yaml";
+  p.calibration_date = "2026-12-01T17:00:00Z";
+  p.t_ref_ms = 8.0;
+  p.t_meas_ms = {30.0, 33.0, 36.0};
+  p.retake_reference = true;
+  const std::string text = ModelToYaml(model);
+  const CalibrationModel back = ModelFromYaml(text, "p.yaml");
+  EXPECT_TRUE(back.provenance.known);
+  EXPECT_EQ(back.provenance.camera_serial, "IRDV0001");
+  EXPECT_EQ(back.provenance.roi_offset_y, 384);
+  EXPECT_EQ(back.provenance.t_meas_ms, p.t_meas_ms);
+  EXPECT_TRUE(back.provenance.retake_reference);
+  EXPECT_EQ(ModelToYaml(back), text);
+  EXPECT_FALSE(ModelFromYaml(ModelToYaml(SmallModel()), "old.yaml").provenance.known);
+}
+
 TEST(ModelFile, FileHoldsTheFitStatistics) {
   const std::string text = ModelToYaml(SmallModel());
   for (const char* key : {"format_version", "roi_policy", "mean_relative_error",

@@ -1,0 +1,463 @@
+#include "app/measure.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <sstream>
+
+#include "acquisition/bracket.h"
+#include "acquisition/recording.h"
+#include "app/live_camera.h"
+#include "app/offline.h"
+#include "app/position.h"
+#include "app/provenance.h"
+#include "app/run.h"
+#include "estimator/model_file.h"
+
+namespace irdist {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kSoftwareVersion = "irdist 0.1.0";
+constexpr double kPi = 3.14159265358979323846;
+
+std::string JsonNumber(double value) {
+  if (!std::isfinite(value)) return "null";
+  char text[40];
+  std::snprintf(text, sizeof(text), "%.10g", value);
+  return text;
+}
+
+std::string Fixed(double value, int decimals) {
+  if (!std::isfinite(value)) return "-";
+  char text[40];
+  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
+  return text;
+}
+
+const char* JsonBool(bool value) { return value ? "true" : "false"; }
+
+double Se(double value) { return value >= 0.0 ? value : std::nan(""); }
+
+}  // namespace
+
+std::string QualityFlags(const MeasureSample& s) {
+  std::string flags;
+  const auto add = [&flags](bool on, const char* name) {
+    if (on) flags += (flags.empty() ? "" : ",") + std::string(name);
+  };
+  add(!s.blob_found, "no_blob");
+  add(s.saturated, "saturated");
+  add(s.touches_border, "touches_border");
+  add(s.clipped, "clipped");
+  add(s.have_estimate && s.estimate.outside_range, "outside_range");
+  add(!s.have_estimate || !s.estimate.ok, "no_estimate");
+  return flags.empty() ? "ok" : flags;
+}
+
+std::string MeasureJson(const MeasureSample& s) {
+  const EstimateRow& e = s.estimate;
+  const bool ok = s.have_estimate && e.ok;
+  std::ostringstream out;
+  out << "{\"schema\":\"irdist.measure/" << kMeasureJsonVersion << "\",\"bracket\":" << s.bracket
+      << ",\"time_s\":" << JsonNumber(s.time_s) << ",\"ok\":" << JsonBool(ok)
+      << ",\"d_mm\":" << JsonNumber(ok ? e.d_mm : NAN)
+      << ",\"d_se_mm\":" << JsonNumber(ok ? Se(e.d_std_mm) : NAN)
+      << ",\"theta_deg\":" << JsonNumber(ok ? e.theta_deg : NAN)
+      << ",\"theta_se_deg\":" << JsonNumber(ok ? Se(e.theta_std_deg) : NAN)
+      << ",\"blob_x_px\":" << JsonNumber(s.blob_found ? s.blob_x_px : NAN)
+      << ",\"blob_y_px\":" << JsonNumber(s.blob_found ? s.blob_y_px : NAN) << ",\"flags\":{"
+      << "\"no_blob\":" << JsonBool(!s.blob_found) << ",\"saturated\":" << JsonBool(s.saturated)
+      << ",\"touches_border\":" << JsonBool(s.touches_border)
+      << ",\"clipped\":" << JsonBool(s.clipped)
+      << ",\"outside_range\":" << JsonBool(s.have_estimate && e.outside_range) << "}"
+      << ",\"position\":";
+  if (ok && s.has_position) {
+    out << "{\"x_mm\":" << JsonNumber(s.x_mm) << ",\"y_mm\":" << JsonNumber(s.y_mm)
+        << ",\"z_mm\":" << JsonNumber(s.z_mm) << ",\"x_se_mm\":" << JsonNumber(s.x_se_mm)
+        << ",\"y_se_mm\":" << JsonNumber(s.y_se_mm) << ",\"z_se_mm\":" << JsonNumber(s.z_se_mm)
+        << "}";
+  } else {
+    out << "null";
+  }
+  out << "}";
+  return out.str();
+}
+
+std::string MeasureLine(const MeasureSample& s) {
+  const EstimateRow& e = s.estimate;
+  const bool ok = s.have_estimate && e.ok;
+  std::ostringstream out;
+  out << "#" << s.bracket << " t " << Fixed(s.time_s, 2) << " s  d " << Fixed(ok ? e.d_mm : NAN, 1)
+      << " +- " << Fixed(ok ? Se(e.d_std_mm) : NAN, 1) << " mm  theta "
+      << Fixed(ok ? e.theta_deg : NAN, 2) << " +- " << Fixed(ok ? Se(e.theta_std_deg) : NAN, 2)
+      << " deg  blob (" << Fixed(s.blob_found ? s.blob_x_px : NAN, 1) << ", "
+      << Fixed(s.blob_found ? s.blob_y_px : NAN, 1) << ") px";
+  if (ok && s.has_position) {
+    out << "  xyz (" << Fixed(s.x_mm, 1) << ", " << Fixed(s.y_mm, 1) << ", " << Fixed(s.z_mm, 1)
+        << ") mm";
+  }
+  out << "  [" << QualityFlags(s) << "]";
+  return out.str();
+}
+
+void MeasureStats::Moments::Add(double value) {
+  ++n;
+  const double delta = value - mean;
+  mean += delta / n;
+  m2 += delta * (value - mean);
+}
+
+double MeasureStats::Moments::Sd() const { return n > 1 ? std::sqrt(m2 / (n - 1)) : NAN; }
+
+void MeasureStats::Add(const MeasureSample& s) {
+  ++count_;
+  if (!s.have_estimate || !s.estimate.ok) return;
+  ++estimated_;
+  d_.Add(s.estimate.d_mm);
+  theta_.Add(s.estimate.theta_deg);
+  if (!s.has_position) return;
+  x_.Add(s.x_mm);
+  y_.Add(s.y_mm);
+  z_.Add(s.z_mm);
+}
+
+std::string MeasureStats::Report(double wall_s) const {
+  std::ostringstream out;
+  out << "Measured " << count_ << " brackets in " << Fixed(wall_s, 2) << " s ("
+      << Fixed(wall_s > 0.0 ? count_ / wall_s : NAN, 2) << " brackets/s), " << estimated_
+      << " with an estimate\n";
+  const auto line = [&out](const char* name, const Moments& m, const char* unit, int decimals) {
+    if (m.n == 0) return;
+    out << "  " << name << ": mean " << Fixed(m.mean, decimals) << " " << unit << ", sd "
+        << Fixed(m.Sd(), decimals) << " " << unit << "\n";
+  };
+  line("d", d_, "mm", 2);
+  line("theta", theta_, "deg", 3);
+  line("x", x_, "mm", 2);
+  line("y", y_, "mm", 2);
+  line("z", z_, "mm", 2);
+  return out.str();
+}
+
+namespace {
+
+// The bracket measure takes: the flags', else the model's calibration bracket.
+struct MeasureBracket {
+  std::vector<double> exposures_us;  // t_r first
+  bool retake_reference = false;
+};
+
+MeasureBracket BracketFor(const MeasureArgs& args, const CalibrationModel& model) {
+  const ModelProvenance& p = model.provenance;
+  MeasureBracket b;
+  const double t_ref_ms = args.t_ref_ms > 0.0 ? args.t_ref_ms : p.t_ref_ms;
+  const std::vector<double>& t_meas_ms = args.t_meas_ms.empty() ? p.t_meas_ms : args.t_meas_ms;
+  if (!(t_ref_ms > 0.0) || t_meas_ms.empty()) {
+    throw UsageError("measure: the model " + args.model +
+                     " does not record its calibration bracket (written before provenance); "
+                     "give it with --t-ref-ms T_R --t-meas-ms T1,T2,...");
+  }
+  b.exposures_us.push_back(t_ref_ms * 1000.0);
+  for (double t : t_meas_ms) b.exposures_us.push_back(t * 1000.0);
+  b.retake_reference = args.t_meas_ms.empty() && p.retake_reference;
+  return b;
+}
+
+// The truth of a bracket: the --at pose on a virtual rig, NaN (unknown) otherwise.
+struct Truth {
+  double slide_mm = NAN, pan_deg = NAN, tilt_deg = NAN, theta_deg = NAN, bias_ma = NAN;
+};
+
+Truth TruthOf(const std::vector<double>& at) {
+  Truth t;
+  if (at.size() != 4) return t;
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  t.slide_mm = at[0];
+  t.pan_deg = at[1];
+  t.tilt_deg = at[2];
+  t.bias_ma = at[3];
+  t.theta_deg = std::acos(std::cos(at[1] * kDeg) * std::cos(at[2] * kDeg)) / kDeg;
+  return t;
+}
+
+// One camera, one bracket after another; each bracket's frames recorded (optionally) and
+// estimated with the playback path.
+class Session {
+ public:
+  Session(const MeasureArgs& args, const CalibrationModel& model, CommandIo io)
+      : args_(args), model_(model), truth_(TruthOf(args.at)) {
+    const MeasureBracket bracket = BracketFor(args, model);
+    LiveCameraOptions options;
+    options.rig_spec = args.rig;
+    options.time_scale = args.time_scale;
+    options.at = args.at;
+    options.first_exposure_us = bracket.exposures_us.front();
+    options.longest_exposure_us =
+        *std::max_element(bracket.exposures_us.begin(), bracket.exposures_us.end());
+    options.buffer_count = static_cast<int>(2 * bracket.exposures_us.size() + 4);
+    options.quiet = args.json;
+    live_ = std::make_unique<LiveCamera>(options, io.err);
+    CheckModel(io);
+    geometry_ = GeometryOfRigText(ReadRigText(), live_->rig_path());
+    roi_x_ = geometry_.roi_offset_x;
+    roi_y_ = geometry_.roi_offset_y;
+    BracketOptions capture;
+    capture.exposures_us = bracket.exposures_us;
+    capture.interleave_reference = bracket.retake_reference;
+    capture.trigger_source = live_->trigger_source();
+    capture.frame_timeout = std::chrono::milliseconds(live_->frame_timeout_ms());
+    capture_ = std::make_unique<BracketCapture>(live_->camera(), capture);
+    if (args.record) OpenRecording();
+  }
+
+  MeasureSample Next(double time_s);
+  // estimates.csv in playback's order; closes the recording as complete.
+  void Finish();
+  const cv::Mat& last_image() const { return last_image_; }
+  const Features& last_features() const { return last_features_; }
+  int bit_depth() const { return live_->bit_depth(); }
+
+ private:
+  void CheckModel(CommandIo io);
+  void OpenRecording();
+  std::vector<FrameRecord> Records(const BracketResult& result, FeatureMap* features);
+  MeasureSample SampleOf(const RecordedBracket& bracket, const FeatureMap& features,
+                         const BracketEstimateRows& rows);
+
+  const MeasureArgs& args_;
+  const CalibrationModel& model_;
+  Truth truth_;
+  std::unique_ptr<LiveCamera> live_;
+  std::unique_ptr<BracketCapture> capture_;
+  std::unique_ptr<RecordingWriter> writer_;
+  std::string ReadRigText() const;
+  CameraGeometry geometry_;
+  int roi_x_ = 0, roi_y_ = 0;
+  std::int64_t next_bracket_ = 0;
+  std::int64_t next_index_ = 0;  // frame index when nothing is recorded
+  BracketEstimateRows all_;
+  cv::Mat last_image_;
+  Features last_features_;
+};
+
+void Session::CheckModel(CommandIo io) {
+  const std::string serial = live_->camera().Identity().serial;
+  std::string warning;
+  CheckModelProvenance(model_.provenance, args_.model, ProvenanceOfRig(live_->rig(), serial),
+                       "the camera of rig " + live_->rig().name, args_.allow_model_mismatch,
+                       &warning);
+  if (!warning.empty()) io.err << warning << "\n";
+}
+
+std::string Session::ReadRigText() const {
+  std::ifstream rig_file(live_->rig_path(), std::ios::binary);
+  std::ostringstream rig_text;
+  rig_text << rig_file.rdbuf();
+  return rig_text.str();
+}
+
+void Session::OpenRecording() {
+  RecordingHeader header;
+  header.software_version = kSoftwareVersion;
+  header.bit_depth = live_->bit_depth();
+  header.pixel_format = live_->rig().camera.pixel_format;
+  header.camera = live_->camera().Identity();
+  header.camera_features = live_->camera().ReadBackFeatures();
+  header.station_identity = args_.at.empty() ? "none (irdist measure)"
+                                             : "virtual station (irdist measure --at)";
+  header.rig_path = live_->rig_path();
+  header.rig_text = ReadRigText();
+  writer_ = RecordingWriter::Open(args_.out_dir + "/recording", header);
+}
+
+std::vector<FrameRecord> Session::Records(const BracketResult& result,
+                                                 FeatureMap* features) {
+  std::vector<FrameRecord> records;
+  const int size = static_cast<int>(result.frames.size());
+  for (const BracketFrame& frame : result.frames) {
+    FrameRecord record = RecordFromFrame(frame, size);
+    record.bracket_id = next_bracket_;
+    record.bias_ma_set = truth_.bias_ma;
+    record.bias_ma_measured = std::nan("");
+    record.slide_mm = truth_.slide_mm;
+    record.pan_deg = truth_.pan_deg;
+    record.tilt_deg = truth_.tilt_deg;
+    record.theta_deg = truth_.theta_deg;
+    if (writer_) {
+      record = writer_->Append(frame.image, record);
+    } else {
+      record.index = next_index_++;
+    }
+    (*features)[record.index] = FrameFeatures(frame.image, live_->bit_depth(), model_.features);
+    records.push_back(record);
+  }
+  return records;
+}
+
+MeasureSample Session::Next(double time_s) {
+  BracketResult result = capture_->Capture(live_->Trigger());
+  if (!result.complete) result = capture_->Capture(live_->Trigger());
+  if (!result.complete) {
+    throw CameraError("bracket " + std::to_string(next_bracket_) + " incomplete twice (" +
+                      result.failure + "; " + capture_->stats().BriefReport() +
+                      "). Check the camera link and its trigger.");
+  }
+  FeatureMap features;
+  RecordedBracket bracket;
+  bracket.frames = Records(result, &features);
+  bracket.bracket_id = next_bracket_++;
+  bracket.bracket_size = static_cast<int>(bracket.frames.size());
+  bracket.complete = true;
+  const BracketEstimateRows rows = EstimateRecordedBracket(bracket, features, model_, geometry_);
+  AppendBracketRows(rows, &all_);
+  MeasureSample sample = SampleOf(bracket, features, rows);
+  sample.time_s = time_s;
+  last_image_ = result.frames.back().image;
+  last_features_ = features.at(bracket.frames.back().index);
+  return sample;
+}
+
+MeasureSample Session::SampleOf(const RecordedBracket& bracket, const FeatureMap& features,
+                                       const BracketEstimateRows& rows) {
+  MeasureSample s;
+  s.bracket = bracket.bracket_id;
+  if (!rows.i0_free.empty()) {
+    s.estimate = rows.i0_free.front();
+    s.have_estimate = true;
+    // theta from the calibrated ellipse correction (not solved): its calibration scatter, the sd
+    // of a normal law whose mean |error| the fit recorded.
+    const ThetaCorrection& tc = model_.theta_correction;
+    if (s.estimate.theta_std_deg < 0.0 && tc.fitted()) {
+      s.estimate.theta_std_deg = std::sqrt(kPi / 2.0) * tc.summary.mean_relative_error;
+    }
+  }
+  const Features& last = features.at(bracket.frames.back().index);
+  s.blob_found = last.blob_found;
+  s.blob_x_px = last.centroid_px.x + roi_x_;
+  s.blob_y_px = last.centroid_px.y + roi_y_;
+  for (const FrameRecord& row : bracket.frames) {
+    const Features& f = features.at(row.index);
+    s.blob_found = s.blob_found && f.blob_found;
+    s.saturated = s.saturated || f.saturated_pixels > 0;
+    s.touches_border = s.touches_border || f.touches_border;
+    s.clipped = s.clipped || f.blob_clipped_by_roi;
+  }
+  s.has_position = s.have_estimate && std::isfinite(s.estimate.x_mm);
+  s.x_mm = s.estimate.x_mm;
+  s.y_mm = s.estimate.y_mm;
+  s.z_mm = s.estimate.z_mm;
+  s.x_se_mm = s.estimate.x_se_mm;
+  s.y_se_mm = s.estimate.y_se_mm;
+  s.z_se_mm = s.estimate.z_se_mm;
+  return s;
+}
+
+void Session::Finish() {
+  if (capture_ && live_->camera().streaming()) live_->camera().StopStream();
+  if (writer_) writer_->Close(Completion::kComplete);
+  if (!args_.out_dir.empty()) WriteEstimatesCsv(args_.out_dir + "/estimates.csv", FlattenRows(all_));
+}
+
+}  // namespace
+
+struct MeasureSession::Impl {
+  Session session;
+};
+
+MeasureSession::MeasureSession(const MeasureArgs& args, const CalibrationModel& model,
+                               CommandIo io)
+    : impl_(new Impl{Session(args, model, io)}) {}
+MeasureSession::~MeasureSession() = default;
+MeasureSample MeasureSession::Next(double time_s) { return impl_->session.Next(time_s); }
+void MeasureSession::Finish() { impl_->session.Finish(); }
+const cv::Mat& MeasureSession::last_image() const { return impl_->session.last_image(); }
+const Features& MeasureSession::last_features() const { return impl_->session.last_features(); }
+int MeasureSession::bit_depth() const { return impl_->session.bit_depth(); }
+
+namespace {
+
+// Where the per-bracket output goes: JSON lines, a live line on a terminal, or plain lines.
+class MeasurePrinter {
+ public:
+  MeasurePrinter(std::ostream& out, bool json, bool tty) : out_(out), json_(json), tty_(tty) {}
+  void Print(const MeasureSample& s) {
+    if (json_) {
+      out_ << MeasureJson(s) << std::endl;
+    } else if (tty_) {
+      out_ << "\r\033[K" << MeasureLine(s) << std::flush;
+      line_open_ = true;
+    } else {
+      out_ << MeasureLine(s) << std::endl;
+    }
+  }
+  void Close() {
+    if (line_open_) out_ << "\n";
+    line_open_ = false;
+  }
+
+ private:
+  std::ostream& out_;
+  bool json_;
+  bool tty_;
+  bool line_open_ = false;
+};
+
+bool StopNow(const MeasureArgs& args, int count, double elapsed_s) {
+  if (StopRequested().load()) return true;
+  if (args.count > 0 && count >= args.count) return true;
+  return args.duration_s > 0.0 && elapsed_s >= args.duration_s;
+}
+
+void CheckMeasureArgs(const MeasureArgs& args) {
+  if (args.record && args.out_dir.empty()) {
+    throw UsageError("measure: --record needs --out DIR (the recording goes to DIR/recording).");
+  }
+  if (!args.out_dir.empty()) {
+    if (fs::exists(args.out_dir + "/recording") || fs::exists(args.out_dir + "/estimates.csv")) {
+      throw RunFolderError(args.out_dir +
+                           " holds an earlier measurement (estimates.csv or recording/); choose "
+                           "another --out folder.");
+    }
+    fs::create_directories(args.out_dir);
+  }
+}
+
+}  // namespace
+
+void RunMeasure(const MeasureArgs& args, CommandIo io) {
+  CheckMeasureArgs(args);
+  const CalibrationModel model = LoadModel(args.model);
+  SignalGuard guard;  // Ctrl-C ends the loop after the bracket in flight
+  MeasureSession session(args, model, io);
+  MeasurePrinter printer(io.out, args.json, !args.json && isatty(STDOUT_FILENO) == 1);
+  MeasureStats stats;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto elapsed = [&t0] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  while (!StopNow(args, stats.count(), elapsed())) {
+    const MeasureSample sample = session.Next(elapsed());
+    stats.Add(sample);
+    printer.Print(sample);
+  }
+  printer.Close();
+  const double wall_s = elapsed();
+  session.Finish();
+  std::ostream& summary = args.json ? io.err : io.out;
+  summary << stats.Report(wall_s);
+  if (!args.out_dir.empty()) summary << "Estimates: " << args.out_dir << "/estimates.csv\n";
+  if (args.record) summary << "Recording: " << args.out_dir << "/recording\n";
+}
+
+}  // namespace irdist

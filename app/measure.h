@@ -1,0 +1,92 @@
+#pragma once
+// `irdist measure`: the calibrated camera as a sensor. Continuous brackets at the model's
+// calibration exposures (or the ones given), each estimated as it arrives with the same code as
+// validate and playback (EstimateRecordedBracket), printed as a live line on a terminal, one line
+// per bracket when piped, or one JSON object per bracket (docs/measure.md). Stops after --count
+// brackets, --duration seconds or at Ctrl-C, with a summary (count, rate, mean and sd).
+// `--out DIR` writes DIR/estimates.csv (validate's columns; ground truth empty unless --at) and,
+// with --record, DIR/recording/ that `irdist playback` turns into the same estimates.csv.
+
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "app/command_args.h"
+#include "app/summary.h"
+#include "estimator/features.h"
+
+namespace irdist {
+
+// Version of the per-bracket JSON object (its "schema" field: "irdist.measure/1").
+constexpr int kMeasureJsonVersion = 1;
+
+// What one bracket gives: the default (I0-free, joint) estimate and where the blob was.
+struct MeasureSample {
+  std::int64_t bracket = 0;
+  double time_s = 0.0;  // host seconds since the first bracket started
+  EstimateRow estimate;  // the i0_free joint row
+  bool have_estimate = false;
+  double blob_x_px = 0.0, blob_y_px = 0.0;  // centroid in the sensor's pixels
+  bool blob_found = false;
+  bool saturated = false, touches_border = false, clipped = false;
+  // 3D position in the camera frame (mm), when the rig has intrinsics.
+  bool has_position = false;
+  double x_mm = 0.0, y_mm = 0.0, z_mm = 0.0;
+  double x_se_mm = 0.0, y_se_mm = 0.0, z_se_mm = 0.0;
+};
+
+// The JSON object of one bracket (one line, no trailing newline).
+std::string MeasureJson(const MeasureSample& s);
+// The one-line text form (piped output; the terminal's live line is the same text).
+std::string MeasureLine(const MeasureSample& s);
+// The quality flags of a sample, comma-separated ("ok" when none).
+std::string QualityFlags(const MeasureSample& s);
+
+// Count, rate, mean and sd of each quantity over the samples with an estimate.
+class MeasureStats {
+ public:
+  void Add(const MeasureSample& s);
+  std::string Report(double wall_s) const;
+  int count() const { return count_; }
+
+ private:
+  struct Moments {
+    int n = 0;
+    double mean = 0.0, m2 = 0.0;
+    void Add(double value);
+    double Sd() const;
+  };
+  int count_ = 0;
+  int estimated_ = 0;
+  Moments d_, theta_, x_, y_, z_;
+};
+
+struct CalibrationModel;
+
+// The camera taking brackets and estimating each (what measure and view --model run). Starts a
+// virtual rig when the rig is one; checks the model's provenance against the camera.
+class MeasureSession {
+ public:
+  // `args` and `model` must outlive the session. Throws CameraError, ModelMismatchError, ...
+  MeasureSession(const MeasureArgs& args, const CalibrationModel& model, CommandIo io);
+  ~MeasureSession();
+  MeasureSession(const MeasureSession&) = delete;
+  MeasureSession& operator=(const MeasureSession&) = delete;
+
+  MeasureSample Next(double time_s);  // one bracket; throws CameraError when it fails twice
+  // Stops the stream, closes the recording as complete, writes --out's estimates.csv.
+  void Finish();
+  const cv::Mat& last_image() const;  // the last frame of the last bracket (CV_16UC1)
+  const Features& last_features() const;
+  int bit_depth() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+void RunMeasure(const MeasureArgs& args, CommandIo io);
+
+}  // namespace irdist

@@ -1,0 +1,173 @@
+#include "app/view.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <opencv2/highgui.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <ostream>
+#include <sstream>
+
+#include "acquisition/bracket.h"
+#include "app/live_camera.h"
+#include "app/measure.h"
+#include "app/offline.h"
+#include "app/show.h"
+#include "estimator/model_file.h"
+
+namespace irdist {
+namespace {
+
+// The side of the suggested region of interest: the features' window with room to move.
+constexpr int kSuggestedRoiSidePx = 256;
+
+// One exposure after another on the rig's camera (snap, view without a model).
+class SingleExposure {
+ public:
+  SingleExposure(const std::string& rig, const std::vector<double>& at, double exposure_ms,
+                 double time_scale, std::ostream& err) {
+    LiveCameraOptions options;
+    options.rig_spec = rig;
+    options.at = at;
+    options.time_scale = time_scale;
+    options.first_exposure_us = exposure_ms * 1000.0;
+    options.longest_exposure_us = exposure_ms * 1000.0;
+    live_ = std::make_unique<LiveCamera>(options, err);
+    BracketOptions bracket;
+    // BracketCapture takes a reference and at least one measurement: two frames at the same
+    // exposure, the second one shown (it also skips a first frame after an idle stream).
+    bracket.exposures_us = {exposure_ms * 1000.0, exposure_ms * 1000.0};
+    bracket.trigger_source = live_->trigger_source();
+    bracket.frame_timeout = std::chrono::milliseconds(live_->frame_timeout_ms());
+    capture_ = std::make_unique<BracketCapture>(live_->camera(), bracket);
+  }
+  cv::Mat Next() {
+    BracketResult result = capture_->Capture(live_->Trigger());
+    if (!result.complete) result = capture_->Capture(live_->Trigger());
+    if (!result.complete) throw CameraError("no frame twice: " + result.failure);
+    return result.frames.back().image;
+  }
+  LiveCamera& live() { return *live_; }
+
+ private:
+  std::unique_ptr<LiveCamera> live_;
+  std::unique_ptr<BracketCapture> capture_;
+};
+
+// The signal line: peak and background as fractions of full scale, saturated pixels.
+std::string LevelLine(const Features& f) {
+  char text[160];
+  std::snprintf(text, sizeof(text), "peak %.1f%% of full scale, background %.2f%%, saturated px %d",
+                100.0 * f.peak, 100.0 * f.background, f.saturated_pixels);
+  return text;
+}
+
+void PrintSnap(const Features& f, const Rig& rig, std::ostream& out) {
+  if (!f.blob_found) {
+    out << "No blob found: is the IRED in view and on (on a virtual rig: --at)?\n";
+    return;
+  }
+  const double x = f.centroid_px.x + rig.camera.roi_offset_x;
+  const double y = f.centroid_px.y + rig.camera.roi_offset_y;
+  const int half = kSuggestedRoiSidePx / 2;
+  out << "Blob at (" << x << ", " << y << ") sensor px\n";
+  // Centred on the blob: its pixel-edge coordinate (x + 0.5) rounded, minus half a side.
+  out << "Suggested roi_px: [" << std::max(0, static_cast<int>(std::lround(x + 0.5)) - half)
+      << ", " << std::max(0, static_cast<int>(std::lround(y + 0.5)) - half) << ", "
+      << kSuggestedRoiSidePx
+      << ", " << kSuggestedRoiSidePx << "]\n";
+}
+
+// What the window shows of one frame.
+struct ViewFrame {
+  cv::Mat image;
+  Features features;
+  std::vector<std::string> lines;
+};
+
+constexpr const char* kKeysLine = "keys: q or Esc quit, s save a screenshot (view-N.png)";
+
+// Shows frames from `next` until q/Esc, or `frames` frames; saves the last view to `screenshot`.
+void ViewLoop(const std::function<ViewFrame()>& next, int bit_depth, const ViewArgs& args,
+              std::ostream& out) {
+  const std::string window = "irdist view";
+  OpenWindow(window, "view");
+  cv::Mat shown;
+  int saved = 0;
+  for (int n = 0; args.frames <= 0 || n < args.frames; ++n) {
+    ViewFrame frame = next();
+    frame.lines.push_back(kKeysLine);
+    shown = FrameOverlay(frame.image, bit_depth, &frame.features, frame.lines);
+    cv::imshow(window, shown);
+    const int key = cv::waitKey(1);
+    if (key == 'q' || key == 27) break;
+    if (key == 's') {
+      const std::string file = "view-" + std::to_string(saved++) + ".png";
+      if (cv::imwrite(file, shown)) out << "Saved " << file << "\n";
+    }
+  }
+  if (!args.screenshot.empty() && !shown.empty() && !cv::imwrite(args.screenshot, shown)) {
+    throw DisplayError(args.screenshot + ": cannot write the screenshot; check the folder.");
+  }
+  cv::destroyWindow(window);
+}
+
+}  // namespace
+
+void RunSnap(const SnapArgs& args, CommandIo io) {
+  SingleExposure camera(args.rig, args.at, args.exposure_ms, args.time_scale, io.err);
+  const cv::Mat image = camera.Next();
+  if (!cv::imwrite(args.out, image)) {
+    throw RunFolderError(args.out + ": cannot write the PNG; check the folder and the .png name.");
+  }
+  const int bit_depth = camera.live().bit_depth();
+  const Features f = FrameFeatures(image, bit_depth, FeatureOptions{});
+  io.out << "Frame: " << args.out << " (" << image.cols << " x " << image.rows << ", "
+         << bit_depth << " bit)\n";
+  PrintSnap(f, camera.live().rig(), io.out);
+  io.out << LevelLine(f) << "\n";
+}
+
+void RunView(const ViewArgs& args, CommandIo io) {
+  RequireDisplay("view");
+  if (!args.model.empty()) {
+    const CalibrationModel model = LoadModel(args.model);
+    MeasureArgs measure;
+    measure.model = args.model;
+    measure.rig = args.rig;
+    measure.at = args.at;
+    measure.time_scale = args.time_scale;
+    measure.json = true;  // no progress chatter from the rig on stderr
+    MeasureSession session(measure, model, io);
+    const auto t0 = std::chrono::steady_clock::now();
+    ViewLoop(
+        [&] {
+          const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          const MeasureSample s = session.Next(t);
+          return ViewFrame{session.last_image(), session.last_features(),
+                           {MeasureLine(s), LevelLine(session.last_features())}};
+        },
+        session.bit_depth(), args, io.out);
+    session.Finish();
+    return;
+  }
+  SingleExposure camera(args.rig, args.at, args.exposure_ms, args.time_scale, io.err);
+  const int bit_depth = camera.live().bit_depth();
+  ViewLoop(
+      [&] {
+        ViewFrame frame;
+        frame.image = camera.Next();
+        frame.features = FrameFeatures(frame.image, bit_depth, FeatureOptions{});
+        char exposure[64];
+        std::snprintf(exposure, sizeof(exposure), "exposure %.3g ms", args.exposure_ms);
+        frame.lines = {exposure,
+                       LevelLine(frame.features)};
+        return frame;
+      },
+      bit_depth, args, io.out);
+}
+
+}  // namespace irdist

@@ -1,0 +1,64 @@
+// PositionFromRange: the blob's undistorted ray times the range, against pinhole geometry.
+#include "app/position.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace irdist {
+namespace {
+
+CameraIntrinsics Pinhole() {
+  CameraIntrinsics k;
+  k.known = true;
+  k.fx_px = 3000.0;
+  k.fy_px = 3000.0;
+  k.cx_px = 639.5;
+  k.cy_px = 511.5;
+  return k;
+}
+
+TEST(PositionFromRange, OnTheAxisIsStraightAhead) {
+  const Position3d p = PositionFromRange(Pinhole(), 0, 0, 639.5, 511.5, 2000.0, 4.0);
+  EXPECT_NEAR(p.x_mm, 0.0, 1e-9);
+  EXPECT_NEAR(p.y_mm, 0.0, 1e-9);
+  EXPECT_NEAR(p.z_mm, 2000.0, 1e-9);
+  EXPECT_NEAR(p.z_se_mm, 4.0, 1e-12);
+}
+
+TEST(PositionFromRange, OffAxisPointComesBackFromItsProjection) {
+  // A point at (100, -60, 1800) mm projects to u = cx + f x / z, v = cy + f y / z.
+  const double x = 100.0, y = -60.0, z = 1800.0;
+  const double range = std::sqrt(x * x + y * y + z * z);
+  const Position3d p =
+      PositionFromRange(Pinhole(), 0, 0, 639.5 + 3000.0 * x / z, 511.5 + 3000.0 * y / z, range,
+                        -1.0);
+  EXPECT_NEAR(p.x_mm, x, 1e-6);
+  EXPECT_NEAR(p.y_mm, y, 1e-6);
+  EXPECT_NEAR(p.z_mm, z, 1e-6);
+  EXPECT_TRUE(std::isnan(p.x_se_mm));
+}
+
+TEST(PositionFromRange, RoiPixelsAreShiftedByTheRegionsOffset) {
+  CameraIntrinsics roi = Pinhole();
+  roi.in_roi_px = true;
+  roi.cx_px = 639.5 - 512.0;
+  roi.cy_px = 511.5 - 384.0;
+  const Position3d a = PositionFromRange(Pinhole(), 512, 384, 700.0, 450.0, 2000.0, 1.0);
+  const Position3d b = PositionFromRange(roi, 512, 384, 700.0, 450.0, 2000.0, 1.0);
+  EXPECT_NEAR(a.x_mm, b.x_mm, 1e-9);
+  EXPECT_NEAR(a.y_mm, b.y_mm, 1e-9);
+  EXPECT_GT(a.x_mm, 0.0);
+  EXPECT_LT(a.y_mm, 0.0);
+}
+
+TEST(PositionFromRange, DistortionMovesTheRay) {
+  CameraIntrinsics k = Pinhole();
+  k.distortion = {-0.2, 0.0, 0.0, 0.0, 0.0};  // barrel: image points pulled in
+  const Position3d plain = PositionFromRange(Pinhole(), 0, 0, 1000.0, 511.5, 2000.0, 1.0);
+  const Position3d barrel = PositionFromRange(k, 0, 0, 1000.0, 511.5, 2000.0, 1.0);
+  EXPECT_GT(barrel.x_mm, plain.x_mm);
+}
+
+}  // namespace
+}  // namespace irdist

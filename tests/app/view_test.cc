@@ -1,0 +1,130 @@
+// snap and view on the virtual rig (in process, GIGE): snap writes the frame and finds the blob
+// where the rig's physics puts it; view refuses without a display and, under Xvfb when the
+// machine has it, shows the live image with its overlay (checked on a screenshot).
+#include "app/view.h"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <thread>
+
+#include "app/show.h"
+#include "tests/loopback_gvcp.h"
+
+extern char** environ;
+
+namespace irdist {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Scratch(const std::string& name) {
+  const std::string dir = std::string(IRDIST_BINARY_DIR) + "/tests/app/scratch/view-" + name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string VirtualRig() { return std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml"; }
+
+TEST(Snap, SavesTheFrameAndFindsTheBlobOnTheAxis) {
+  testing::LoopbackGvcpLock lock;
+  const std::string png = Scratch("snap") + "/frame.png";
+  SnapArgs args;
+  args.rig = VirtualRig();
+  args.out = png;
+  args.at = {2000.0, 0.0, 0.0, 490.0};
+  args.time_scale = 50.0;
+  std::ostringstream out, err;
+  RunSnap(args, {out, err});
+  const cv::Mat image = cv::imread(png, cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(image.empty()) << out.str();
+  EXPECT_EQ(image.cols, 256);  // the rig's ROI
+  EXPECT_EQ(image.rows, 256);
+  EXPECT_EQ(image.depth(), CV_16U);
+  // The IRED on the optical axis images at the sensor's centre (639.5, 511.5).
+  EXPECT_NE(out.str().find("Blob at (639."), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("Suggested roi_px: [512, 384, 256, 256]"), std::string::npos)
+      << out.str();
+}
+
+TEST(View, WithoutADisplaySaysSo) {
+  unsetenv("DISPLAY");
+  unsetenv("WAYLAND_DISPLAY");
+  ViewArgs args;
+  args.rig = VirtualRig();
+  std::ostringstream out, err;
+  EXPECT_THROW(RunView(args, {out, err}), DisplayError);
+}
+
+// Xvfb on display :97 for the life of the object (skips when the machine has no Xvfb).
+class Xvfb {
+ public:
+  Xvfb() {
+    for (const char* path : {"/usr/bin/Xvfb", "/usr/local/bin/Xvfb"}) {
+      if (fs::exists(path)) binary_ = path;
+    }
+    if (binary_.empty()) return;
+    std::vector<std::string> words = {binary_, ":97", "-screen", "0", "1024x768x24", "-nolisten",
+                                      "tcp"};
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    if (posix_spawn(&pid_, binary_.c_str(), nullptr, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+  }
+  ~Xvfb() {
+    if (pid_ > 0) {
+      kill(pid_, SIGTERM);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  Xvfb(const Xvfb&) = delete;
+  Xvfb& operator=(const Xvfb&) = delete;
+  bool running() const { return pid_ > 0; }
+
+ private:
+  std::string binary_;
+  pid_t pid_ = -1;
+};
+
+TEST(View, ShowsTheLiveImageWithItsOverlayUnderXvfb) {
+  Xvfb xvfb;
+  if (!xvfb.running()) GTEST_SKIP() << "no Xvfb on this machine";
+  setenv("DISPLAY", ":97", 1);
+  testing::LoopbackGvcpLock lock;
+  const std::string shot = Scratch("xvfb") + "/view.png";
+  ViewArgs args;
+  args.rig = VirtualRig();
+  args.at = {2000.0, 20.0, 0.0, 490.0};
+  args.frames = 5;
+  args.time_scale = 50.0;
+  args.screenshot = shot;
+  std::ostringstream out, err;
+  RunView(args, {out, err});
+  const cv::Mat image = cv::imread(shot, cv::IMREAD_COLOR);
+  ASSERT_FALSE(image.empty());
+  EXPECT_EQ(image.cols, 768);  // the 256 px ROI, enlarged 3x for display
+  // The ellipse is drawn in red and the window of the features in green around the centre.
+  int red = 0, green = 0;
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
+      red += p[2] == 255 && p[1] == 0 && p[0] == 0;
+      green += p[1] == 255 && p[2] == 0 && p[0] == 0;
+    }
+  }
+  EXPECT_GT(red, 20);
+  EXPECT_GT(green, 20);
+}
+
+}  // namespace
+}  // namespace irdist

@@ -1,0 +1,339 @@
+// `irdist measure` end to end on the virtual rig, through the built binary: a small calibration
+// first (3 distances x 4 angles x 2 currents), then measure with the IRED placed through the
+// virtual station (--at) at three poses (estimates against the pose), --json against the schema
+// of docs/measure.md, --count and Ctrl-C stopping cleanly, --record + playback reproducing
+// estimates.csv byte for byte, 3D at a lateral offset, and a model from another camera setup
+// refused by measure, validate and playback unless --allow-model-mismatch.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/integration/run_helpers.h"
+#include "tests/loopback_gvcp.h"
+
+namespace irdist {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::ReadAll;
+using testing::RunIrdist;
+using testing::WriteAll;
+
+constexpr const char* kCalibrationRecipe = R"(name: measure-calibration
+rig: virtual
+after: fit
+axes:
+  slide_mm: [1500, 2000, 2500]
+  theta_deg: [0, 10, 20, 30]
+  bias_ma: [475, 500]
+bracket:
+  t_ref_ms: 8
+  t_meas_ms: [30, 33, 36]
+settle:
+  after_move_ms: 200
+  after_current_ms: 500
+)";
+
+constexpr const char* kTimeScale = "50";
+
+std::string SourceRig() { return std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml"; }
+
+// The shipped virtual rig with one line replaced.
+std::string RigWith(const std::string& from, const std::string& to) {
+  std::string text = ReadAll(SourceRig());
+  const size_t at = text.find(from);
+  if (at == std::string::npos) return "";
+  return text.replace(at, from.size(), to);
+}
+
+// The JSON objects of an output (lines starting with '{'), parsed.
+std::vector<YAML::Node> JsonLines(const std::string& output) {
+  std::vector<YAML::Node> objects;
+  std::istringstream in(output);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] == '{') objects.push_back(YAML::Load(line));
+  }
+  return objects;
+}
+
+class Measure : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new std::string(testing::ScratchDir("measure"));
+    WriteAll(*dir_ + "/calibration.yaml", kCalibrationRecipe);
+    testing::LoopbackGvcpLock lock;
+    calibrate_code_ = RunIrdist({"calibrate", *dir_ + "/calibration.yaml", "--out", *dir_ + "/cal",
+                                 "--time-scale", kTimeScale, "--quiet"},
+                                *dir_ + "/calibrate.log", &calibrate_output_);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  void SetUp() override { ASSERT_EQ(calibrate_code_, 0) << calibrate_output_; }
+
+  static std::string Model() { return *dir_ + "/cal/model.yaml"; }
+  // measure with the model at `at`; returns the exit code, the output in *output.
+  static int RunMeasure(const std::string& name, std::vector<std::string> extra,
+                        std::string* output) {
+    std::vector<std::string> args = {"measure", "--model", Model(), "--time-scale", kTimeScale};
+    args.insert(args.end(), extra.begin(), extra.end());
+    testing::LoopbackGvcpLock lock;
+    return RunIrdist(args, *dir_ + "/" + name + ".log", output);
+  }
+
+  static std::string* dir_;
+  static int calibrate_code_;
+  static std::string calibrate_output_;
+};
+
+std::string* Measure::dir_ = nullptr;
+int Measure::calibrate_code_ = -1;
+std::string Measure::calibrate_output_;
+
+TEST_F(Measure, ModelRecordsItsBracketAndProvenance) {
+  const YAML::Node model = YAML::LoadFile(Model());
+  const YAML::Node p = model["provenance"];
+  ASSERT_TRUE(p.IsDefined()) << ReadAll(Model());
+  EXPECT_EQ(p["camera_serial"].as<std::string>(), "IRDV0001");
+  EXPECT_EQ(p["pixel_format"].as<std::string>(), "Mono12");
+  EXPECT_EQ(p["bit_depth"].as<int>(), 12);
+  EXPECT_EQ(p["roi_px"][0].as<int>(), 512);
+  EXPECT_EQ(p["roi_px"][2].as<int>(), 256);
+  EXPECT_EQ(p["rig_name"].as<std::string>(), "virtual");
+  EXPECT_NE(p["recipe_path"].as<std::string>().find("calibration.yaml"), std::string::npos);
+  EXPECT_FALSE(p["calibration_date"].as<std::string>().empty());
+  EXPECT_DOUBLE_EQ(p["t_ref_ms"].as<double>(), 8.0);
+  EXPECT_EQ(p["t_meas_ms"].as<std::vector<double>>(), (std::vector<double>{30, 33, 36}));
+}
+
+// Three poses at calibrated distances, at angles and currents between the calibrated ones: every
+// bracket's estimate within the validation goals (distance 1%, theta 1 deg), and --count 3 stops
+// after exactly 3 JSON objects.
+TEST_F(Measure, EstimatesAgreeWithThePoseAtThreePoses) {
+  struct Pose {
+    const char* at;
+    double d_mm, theta_deg;
+  };
+  for (const Pose& pose : {Pose{"1500,15,0,490", 1500.0, 15.0}, Pose{"2000,0,5,480", 2000.0, 5.0},
+                           Pose{"2500,25,0,485", 2500.0, 25.0}}) {
+    std::string output;
+    ASSERT_EQ(RunMeasure(std::string("pose-") + pose.at,
+                         {"--at", pose.at, "--count", "3", "--json"}, &output),
+              0)
+        << output;
+    const std::vector<YAML::Node> objects = JsonLines(output);
+    ASSERT_EQ(objects.size(), 3u) << output;
+    for (const YAML::Node& j : objects) {
+      ASSERT_TRUE(j["ok"].as<bool>()) << output;
+      EXPECT_NEAR(j["d_mm"].as<double>(), pose.d_mm, 0.01 * pose.d_mm) << pose.at;
+      EXPECT_NEAR(j["theta_deg"].as<double>(), pose.theta_deg, 1.0) << pose.at;
+    }
+    EXPECT_NE(output.find("Measured 3 brackets"), std::string::npos) << output;
+  }
+}
+
+TEST_F(Measure, JsonFollowsTheSchema) {
+  std::string output;
+  ASSERT_EQ(RunMeasure("schema", {"--at", "2000,10,0,490", "--count", "2", "--json"}, &output), 0)
+      << output;
+  const std::vector<YAML::Node> objects = JsonLines(output);
+  ASSERT_EQ(objects.size(), 2u) << output;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const YAML::Node& j = objects[i];
+    EXPECT_EQ(j["schema"].as<std::string>(), "irdist.measure/1");
+    EXPECT_EQ(j["bracket"].as<int>(), static_cast<int>(i));
+    for (const char* key : {"time_s", "d_mm", "d_se_mm", "theta_deg", "theta_se_deg", "blob_x_px",
+                            "blob_y_px"}) {
+      ASSERT_TRUE(j[key].IsScalar()) << key << " in " << output;
+      EXPECT_TRUE(std::isfinite(j[key].as<double>())) << key;
+    }
+    EXPECT_GT(j["d_se_mm"].as<double>(), 0.0);
+    for (const char* flag : {"no_blob", "saturated", "touches_border", "clipped", "outside_range"}) {
+      EXPECT_FALSE(j["flags"][flag].as<bool>()) << flag << " in " << output;
+    }
+    // The shipped virtual rig has intrinsics: the position is there, on the axis.
+    ASSERT_TRUE(j["position"].IsMap()) << output;
+    EXPECT_NEAR(j["position"]["x_mm"].as<double>(), 0.0, 5.0);
+    // Blob near the sensor's centre (639.5, 511.5) in sensor pixels.
+    EXPECT_NEAR(j["blob_x_px"].as<double>(), 639.5, 1.0);
+    EXPECT_NEAR(j["blob_y_px"].as<double>(), 511.5, 1.0);
+  }
+}
+
+TEST_F(Measure, DurationStops) {
+  std::string output;
+  ASSERT_EQ(RunMeasure("duration", {"--at", "2000,0,0,490", "--duration", "1"}, &output), 0)
+      << output;
+  const size_t at = output.find("Measured ");
+  ASSERT_NE(at, std::string::npos) << output;
+  EXPECT_GE(std::stoi(output.substr(at + 9)), 1) << output;
+}
+
+TEST_F(Measure, CtrlCStopsCleanlyWithASummary) {
+  testing::LoopbackGvcpLock lock;
+  const std::string log = *dir_ + "/sigint.log";
+  testing::Child child({"measure", "--model", Model(), "--time-scale", kTimeScale, "--at",
+                        "2000,0,0,490"},
+                       log);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (testing::CountLines(log) < 8 && child.Running() &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  child.Signal(SIGINT);
+  EXPECT_EQ(child.Wait(std::chrono::seconds(30)), 0) << ReadAll(log);
+  const std::string output = ReadAll(log);
+  EXPECT_NE(output.find("Measured "), std::string::npos) << output;
+  EXPECT_NE(output.find("brackets/s"), std::string::npos) << output;
+  EXPECT_NE(output.find("d: mean "), std::string::npos) << output;
+}
+
+TEST_F(Measure, RecordAndPlaybackReproduceTheEstimatesByteForByte) {
+  const std::string out = *dir_ + "/recorded";
+  std::string output;
+  ASSERT_EQ(RunMeasure("record", {"--at", "1750,10,10,495", "--count", "3", "--out", out,
+                                  "--record"},
+                       &output),
+            0)
+      << output;
+  const std::string live = ReadAll(out + "/estimates.csv");
+  ASSERT_FALSE(live.empty());
+  EXPECT_NE(live.find("i0_free"), std::string::npos);
+  ASSERT_EQ(RunIrdist({"playback", out + "/recording", "--model", Model(), "--out",
+                       *dir_ + "/replayed"},
+                      *dir_ + "/replay.log", &output),
+            0)
+      << output;
+  EXPECT_TRUE(live == ReadAll(*dir_ + "/replayed/estimates.csv"))
+      << live << "\nvs\n"
+      << ReadAll(*dir_ + "/replayed/estimates.csv");
+}
+
+// 3D at a lateral offset: the emitter 40 mm right and 30 mm up of the optical axis.
+TEST_F(Measure, PositionAtALateralOffsetWithinHalfAPercentOfRange) {
+  std::string rig = RigWith("offset_x_mm: 0.0", "offset_x_mm: 40.0");
+  rig = rig.replace(rig.find("offset_y_mm: 0.0"), 16, "offset_y_mm: -30.0");
+  const std::string rig_path = *dir_ + "/offset-rig.yaml";
+  WriteAll(rig_path, rig);
+  for (double slide_mm : {1500.0, 2000.0, 2500.0}) {
+    std::string output;
+    const std::string at = std::to_string(slide_mm) + ",0,0,490";
+    ASSERT_EQ(RunMeasure("offset-" + std::to_string(static_cast<int>(slide_mm)),
+                         {"--rig", rig_path, "--at", at, "--count", "3", "--json"}, &output),
+              0)
+        << output;
+    const double range = std::sqrt(slide_mm * slide_mm + 40.0 * 40.0 + 30.0 * 30.0);
+    for (const YAML::Node& j : JsonLines(output)) {
+      ASSERT_TRUE(j["position"].IsMap()) << output;
+      const double dx = j["position"]["x_mm"].as<double>() - 40.0;
+      const double dy = j["position"]["y_mm"].as<double>() + 30.0;
+      const double dz = j["position"]["z_mm"].as<double>() - slide_mm;
+      const double error = std::sqrt(dx * dx + dy * dy + dz * dz);
+      std::cout << "3D at (40, -30, " << slide_mm << ") mm: error " << error << " mm = "
+                << 100.0 * error / range << "% of range (x " << dx << ", y " << dy << ", z "
+                << dz << ")\n";
+      EXPECT_LE(error, 0.005 * range) << output;
+    }
+  }
+}
+
+// validate reports the 3D position too: the shipped offset rig, its columns against the truth.
+TEST_F(Measure, ValidateWritesThePositionBesideItsTruth) {
+  WriteAll(*dir_ + "/validation-offset.yaml",
+           "name: v-offset\nrig: " + std::string(IRDIST_SOURCE_DIR) +
+               "/recipes/rigs/virtual-offset.yaml\nafter: estimate\naxes:\n  slide_mm: [1500, "
+               "2500]\n  theta_deg: [10]\n  bias_ma: [490]\nbracket:\n  t_ref_ms: 8\n  t_meas_ms: "
+               "[30, 33, 36]\n");
+  testing::LoopbackGvcpLock lock;
+  std::string output;
+  ASSERT_EQ(RunIrdist({"validate", *dir_ + "/validation-offset.yaml", "--model", Model(), "--out",
+                       *dir_ + "/val-offset", "--time-scale", kTimeScale},
+                      *dir_ + "/val-offset.log", &output),
+            0)
+      << output;
+  std::istringstream csv(ReadAll(*dir_ + "/val-offset/estimates.csv"));
+  std::string line;
+  std::getline(csv, line);
+  ASSERT_NE(line.find(",x_mm,y_mm,z_mm,"), std::string::npos) << line;
+  int checked = 0;
+  while (std::getline(csv, line)) {
+    if (line.find(",i0_free,0,") == std::string::npos) continue;  // joint rows
+    std::vector<std::string> c;
+    std::stringstream fields(line);
+    for (std::string f; std::getline(fields, f, ',');) c.push_back(f);
+    ASSERT_EQ(c.size(), 21u) << line;
+    const double x = std::stod(c[12]), y = std::stod(c[13]), z = std::stod(c[14]);
+    const double tx = std::stod(c[18]), ty = std::stod(c[19]), tz = std::stod(c[20]);
+    EXPECT_EQ(tx, 40.0);
+    EXPECT_EQ(ty, -30.0);
+    const double range = std::sqrt(tx * tx + ty * ty + tz * tz);
+    const double error = std::sqrt((x - tx) * (x - tx) + (y - ty) * (y - ty) + (z - tz) * (z - tz));
+    std::cout << "validate 3D at (40, -30, " << tz << ") mm: error " << error << " mm = "
+              << 100.0 * error / range << "% of range\n";
+    EXPECT_LE(error, 0.005 * range) << line;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2);
+}
+
+TEST_F(Measure, ModelOfAnotherCameraSetupIsRefusedUnlessOverridden) {
+  const std::string other_serial = *dir_ + "/other-serial.yaml";
+  const std::string other_roi = *dir_ + "/other-roi.yaml";
+  WriteAll(other_serial, RigWith("serial: IRDV0001", "serial: IRDV0002"));
+  WriteAll(other_roi, RigWith("roi_px: [512, 384, 256, 256]", "roi_px: [500, 384, 256, 256]"));
+  std::string output;
+  EXPECT_EQ(RunMeasure("refused-serial", {"--rig", other_serial, "--count", "1"}, &output), 1);
+  EXPECT_NE(output.find("IRDV0001 vs IRDV0002"), std::string::npos) << output;
+  EXPECT_EQ(RunMeasure("refused-roi", {"--rig", other_roi, "--count", "1"}, &output), 1);
+  EXPECT_NE(output.find("[512, 384, 256, 256] vs [500, 384, 256, 256]"), std::string::npos)
+      << output;
+  // Accepted with the override; a recording of the other ROI for playback below.
+  const std::string out = *dir_ + "/other-roi-run";
+  ASSERT_EQ(RunMeasure("allowed-roi", {"--rig", other_roi, "--at", "2000,0,0,490", "--count", "1",
+                                       "--out", out, "--record", "--allow-model-mismatch"},
+                       &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("warning:"), std::string::npos) << output;
+
+  EXPECT_EQ(RunIrdist({"playback", out + "/recording", "--model", Model(), "--out", out + "/pb"},
+                      *dir_ + "/pb-refused.log", &output),
+            1);
+  EXPECT_NE(output.find("roi_px [512, 384, 256, 256] vs [500, 384, 256, 256]"), std::string::npos)
+      << output;
+  EXPECT_EQ(RunIrdist({"playback", out + "/recording", "--model", Model(), "--out", out + "/pb",
+                       "--allow-model-mismatch"},
+                      *dir_ + "/pb-allowed.log", &output),
+            0)
+      << output;
+
+  // validate refuses before anything moves; accepted with the override.
+  WriteAll(*dir_ + "/validation.yaml",
+           "name: v\nrig: " + other_serial +
+               "\nafter: estimate\naxes:\n  slide_mm: [2000]\n  theta_deg: [10]\n  bias_ma: "
+               "[490]\nbracket:\n  t_ref_ms: 8\n  t_meas_ms: [30, 33]\n");
+  testing::LoopbackGvcpLock lock;
+  EXPECT_EQ(RunIrdist({"validate", *dir_ + "/validation.yaml", "--model", Model(), "--out",
+                       *dir_ + "/val-refused", "--time-scale", kTimeScale},
+                      *dir_ + "/val-refused.log", &output),
+            1);
+  EXPECT_NE(output.find("IRDV0001 vs IRDV0002"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(*dir_ + "/val-refused/recording"));
+  EXPECT_EQ(RunIrdist({"validate", *dir_ + "/validation.yaml", "--model", Model(), "--out",
+                       *dir_ + "/val-allowed", "--time-scale", kTimeScale,
+                       "--allow-model-mismatch"},
+                      *dir_ + "/val-allowed.log", &output),
+            0)
+      << output;
+}
+
+}  // namespace
+}  // namespace irdist
