@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "base/check.h"
+#include "base/yaml_fields.h"
 
 namespace irdist::sim {
 
@@ -231,6 +232,10 @@ bool EmulatorOptions::IsValid(std::string* why) const {
     return fail("garble_rate, drop_rate, delay_rate and missed_pulse_rate must be in [0, 1]");
   }
   if (!(delay_s >= 0)) return fail("delay_s must be >= 0");
+  if (fault_at_move < 0) return fail("fault_at_move must be >= 0 (0 = off)");
+  if (!fault.empty() && fault != "refuse" && fault != "estop" && fault != "silent") {
+    return fail("fault must be empty, refuse, estop or silent");
+  }
   if (!stuck_axis.empty() && stuck_axis != "slide" && stuck_axis != "pan" &&
       stuck_axis != "tilt") {
     return fail("stuck_axis must be empty, slide, pan or tilt");
@@ -255,6 +260,10 @@ void ReadKey(const YAML::Node& node, const char* key, T* value, const std::strin
 
 void ReadAxis(const YAML::Node& node, AxisOptions* axis, const std::string& where) {
   if (!node) return;
+  // Strict: a misspelt key is an InputError with file:line, never silently ignored.
+  const yaml_fields::MapReader keys(node, where, "virtual.station axis",
+                                    {"min", "max", "home", "speed", "accel", "settle_s",
+                                     "power_on"});
   ReadKey(node, "min", &axis->min, where);
   ReadKey(node, "max", &axis->max, where);
   ReadKey(node, "home", &axis->home, where);
@@ -270,7 +279,7 @@ EmulatorOptions LoadEmulatorOptions(const std::string& rig_path) {
   EmulatorOptions options;
   YAML::Node root;
   try {
-    root = YAML::LoadFile(rig_path);
+    root = yaml_fields::Parse(yaml_fields::ReadFile(rig_path), rig_path);
   } catch (const YAML::Exception& e) {
     throw Error("cannot read rig file " + rig_path + ": " + e.what() +
                 "; fix the path or the YAML syntax");
@@ -307,6 +316,17 @@ EmulatorOptions LoadEmulatorOptions(const std::string& rig_path) {
   const YAML::Node virt = root["virtual"];
   const YAML::Node node = virt ? virt["station"] : YAML::Node();
   if (node) {
+    const yaml_fields::MapReader keys(
+        node, rig_path, "virtual.station",
+        {"slide", "pan", "tilt", "homing_speed_factor", "max_current_ma", "current_noise_ma",
+         "min_trigger_width_us", "min_trigger_period_us", "max_trigger_count", "reply_latency_s",
+         "seed", "garble_rate", "drop_rate", "delay_rate", "delay_s", "reboot_after_s",
+         "stuck_axis", "missed_pulse_rate", "open_circuit", "refuse_current_off_in_estop",
+         "fault_at_move", "fault"});
+    ReadKey(node, "fault_at_move", &options.fault_at_move, rig_path);
+    ReadKey(node, "fault", &options.fault, rig_path);
+    ReadKey(node, "open_circuit", &options.open_circuit, rig_path);
+    ReadKey(node, "refuse_current_off_in_estop", &options.refuse_current_off_in_estop, rig_path);
     ReadAxis(node["slide"], &options.slide, rig_path);
     ReadAxis(node["pan"], &options.pan, rig_path);
     ReadAxis(node["tilt"], &options.tilt, rig_path);
@@ -387,6 +407,8 @@ struct StationEmulator::Impl {
   double reboot_at_s = -1.0;  // scheduled reboot (simulated time), < 0 none
   double reboot_after_move_s = -1.0;
   std::uint64_t reboots = 0, lines = 0, dropped = 0;
+  int moves_started = 0;  // accepted MOVEs to a new target, for fault_at_move
+  bool silent = false;    // fault "silent": no reply any more
 
   Impl(World& w, EmulatorOptions o) : world(w), options(std::move(o)), rng(options.seed) {
     std::string why;
@@ -440,6 +462,20 @@ struct StationEmulator::Impl {
     pending.clear();
     reboot_at_s = -1.0;
     PublishPose();
+  }
+
+  // Immediate halt, IRED off, trigger aborted: the ESTOP command or the station's stop button.
+  void EStop(double now) {
+    for (Axis& a : axes) {
+      double v = 0.0;
+      a.profile.At(now - a.profile.start_s, &a.pos, &v);
+      a.profile = Profile::Make(a.pos, a.pos, now, 0.0, a.opt->speed, a.opt->accel);
+      a.moving = false;
+    }
+    trig_remaining = 0;
+    current_centi_ma = 0;
+    world.SetCurrent(0.0);
+    state = State::kEStop;
   }
 
   void Reboot(double now) {
@@ -644,9 +680,16 @@ struct StationEmulator::Impl {
         for (int i = 0; i < 3; ++i) same = same && Centi(axes[i].profile.to) == v[i];
         return same ? "OK" : fail(-221);  // same target again: idempotent
       }
+      if (++moves_started == options.fault_at_move && options.fault == "refuse") {
+        return fail(-222);
+      }
       StartMotion(target, 1.0, now);
       state = State::kMoving;
       homing_ok = true;
+      if (moves_started == options.fault_at_move) {
+        if (options.fault == "estop") EStop(now);
+        if (options.fault == "silent") silent = true;
+      }
       if (reboot_after_move_s >= 0.0) {
         reboot_at_s = now + reboot_after_move_s;
         reboot_after_move_s = -1.0;
@@ -672,16 +715,7 @@ struct StationEmulator::Impl {
     }
     if (header == "ESTOP") {
       if (int e = no_args()) return fail(e);
-      for (Axis& a : axes) {
-        double v = 0.0;
-        a.profile.At(now - a.profile.start_s, &a.pos, &v);
-        a.profile = Profile::Make(a.pos, a.pos, now, 0.0, a.opt->speed, a.opt->accel);
-        a.moving = false;
-      }
-      trig_remaining = 0;
-      current_centi_ma = 0;
-      world.SetCurrent(0.0);
-      state = State::kEStop;
+      EStop(now);
       return "OK";
     }
     if (header == "ESTOP:CLR") {
@@ -692,11 +726,13 @@ struct StationEmulator::Impl {
     if (header == "SOUR:CURR") {
       std::vector<long long> v;
       if (int e = ints(1, &v)) return fail(e);
-      if (state == State::kEStop) return fail(202);
+      // Turning the IRED off is always possible, also in ESTOP (docs/station-protocol.md).
+      const bool off_allowed = v[0] == 0 && !options.refuse_current_off_in_estop;
+      if (state == State::kEStop && !off_allowed) return fail(202);
       if (v[0] < 0 || v[0] > Centi(options.max_current_ma)) return fail(-222);
       if (v[0] != current_centi_ma) {
         current_centi_ma = v[0];
-        world.SetCurrent(v[0] / 100.0);
+        world.SetCurrent(options.open_circuit ? 0.0 : v[0] / 100.0);
       }
       return "OK";
     }
@@ -706,8 +742,9 @@ struct StationEmulator::Impl {
     }
     if (header == "MEAS:CURR?") {
       if (int e = no_args()) return fail(e);
-      double ma = current_centi_ma / 100.0;
-      if (current_centi_ma > 0 && options.current_noise_ma > 0) {
+      // An open IRED circuit: the source's output cannot drive any current.
+      double ma = options.open_circuit ? 0.0 : current_centi_ma / 100.0;
+      if (current_centi_ma > 0 && options.current_noise_ma > 0 && !options.open_circuit) {
         ma += std::normal_distribution<double>(0.0, options.current_noise_ma)(rng);
       }
       return "OK " + std::to_string(std::max(0LL, Centi(ma)));
@@ -795,7 +832,7 @@ struct StationEmulator::Impl {
   }
 
   void Send(std::string bytes, double now) {
-    if (Chance(options.drop_rate)) {
+    if (silent || Chance(options.drop_rate)) {
       ++dropped;
       return;
     }
@@ -953,6 +990,10 @@ void StationEmulator::RebootDuringNextMove(double after_s) {
   IRDIST_CHECK(after_s >= 0.0, "after_s ", after_s);
   std::lock_guard<std::mutex> lock(impl_->mutex);
   impl_->reboot_after_move_s = after_s;
+}
+void StationEmulator::PressEmergencyStop() {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->EStop(impl_->Now());
 }
 void StationEmulator::Reboot() {
   std::lock_guard<std::mutex> lock(impl_->mutex);
