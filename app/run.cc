@@ -369,12 +369,8 @@ SweepResult SweepAndCapture(LiveSession& s, const std::vector<SweepPose>& poses)
   // Fires one frame (also the warm-up frame, -1) through the station's trigger role.
   const auto fire = [&](int frame) { s.station.Fire(frame); };
   // The measured current, checked against the set-point: an open IRED or a source in compliance
-  // stops the run (the bracket is not kept).
-  const auto measure = [&]() {
-    const SourceReading reading = s.station.MeasureCurrent();
-    s.station.CheckCurrent(reading);
-    return reading.current_ma;
-  };
+  // stops the run (the bracket is not kept); a device restart retakes the pose.
+  const auto measure = [&]() { return s.station.MeasureCheckedCurrent().current_ma; };
   const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int) {
     const Pose& pose = s.plan.poses[static_cast<size_t>(sweep_pose.index)];
     s.committer.Begin();
