@@ -81,6 +81,16 @@ TEST(Station, AnOpenIredStopsWithTheMessage) {
   }
 }
 
+// A device that restarted lost its current: that is a restart (retake), not an open IRED.
+TEST(Station, ACurrentLostToARestartIsARestart) {
+  VirtualStationRig rig(100.0);
+  rig.station->Identify();
+  rig.station->Home();
+  rig.station->SetCurrent(500.0);
+  rig.emulator.Reboot();
+  EXPECT_THROW(rig.station->MeasureCheckedCurrent(), DeviceRestarted);
+}
+
 TEST(Station, AGoodIredPassesTheCurrentCheck) {
   VirtualStationRig rig(100.0);
   rig.station->Identify();
