@@ -272,15 +272,11 @@ void ReadAxis(const YAML::Node& node, AxisOptions* axis, const std::string& wher
 
 }  // namespace
 
-EmulatorOptions LoadEmulatorOptions(const std::string& rig_path) {
-  EmulatorOptions options;
-  YAML::Node root;
-  try {
-    root = yaml_fields::Parse(yaml_fields::ReadFile(rig_path), rig_path);
-  } catch (const YAML::Exception& e) {
-    throw Error("cannot read rig file " + rig_path + ": " + e.what() +
-                "; fix the path or the YAML syntax");
-  }
+namespace {
+
+// The rig's station.limits become the emulator's soft limits (and current range).
+void ApplyStationLimits(const YAML::Node& root, const std::string& rig_path,
+                        EmulatorOptions* options) {
   auto limit = [&](const YAML::Node& limits, const char* key, AxisOptions* axis) {
     const YAML::Node pair = limits[key];
     if (!pair) return;
@@ -297,52 +293,69 @@ EmulatorOptions LoadEmulatorOptions(const std::string& rig_path) {
     }
   };
   const YAML::Node station = root["station"];
-  if (station && station["limits"]) {
-    const YAML::Node limits = station["limits"];
-    limit(limits, "slide_mm", &options.slide);
-    limit(limits, "pan_deg", &options.pan);
-    limit(limits, "tilt_deg", &options.tilt);
-    AxisOptions bias;
-    limit(limits, "bias_ma", &bias);
-    if (limits["bias_ma"]) options.max_current_ma = bias.max;
-    for (AxisOptions* a : {&options.slide, &options.pan, &options.tilt}) {
-      a->home = std::clamp(a->home, a->min, a->max);
-      a->power_on = std::clamp(a->power_on, a->min, a->max);
-    }
+  if (!station || !station["limits"]) return;
+  const YAML::Node limits = station["limits"];
+  limit(limits, "slide_mm", &options->slide);
+  limit(limits, "pan_deg", &options->pan);
+  limit(limits, "tilt_deg", &options->tilt);
+  AxisOptions bias;
+  limit(limits, "bias_ma", &bias);
+  if (limits["bias_ma"]) options->max_current_ma = bias.max;
+  for (AxisOptions* a : {&options->slide, &options->pan, &options->tilt}) {
+    a->home = std::clamp(a->home, a->min, a->max);
+    a->power_on = std::clamp(a->power_on, a->min, a->max);
   }
+}
+
+// `virtual.station:`, strictly: an unknown key is an InputError with file:line.
+void ReadVirtualStation(const YAML::Node& node, const std::string& rig_path,
+                        EmulatorOptions* o) {
+  const yaml_fields::MapReader keys(
+      node, rig_path, "virtual.station",
+      {"slide", "pan", "tilt", "homing_speed_factor", "max_current_ma", "current_noise_ma",
+       "min_trigger_width_us", "min_trigger_period_us", "max_trigger_count", "reply_latency_s",
+       "seed", "garble_rate", "drop_rate", "delay_rate", "delay_s", "reboot_after_s",
+       "stuck_axis", "missed_pulse_rate", "open_circuit", "refuse_current_off_in_estop",
+       "fault_at_move", "fault"});
+  ReadAxis(node["slide"], &o->slide, rig_path);
+  ReadAxis(node["pan"], &o->pan, rig_path);
+  ReadAxis(node["tilt"], &o->tilt, rig_path);
+  ReadKey(node, "homing_speed_factor", &o->homing_speed_factor, rig_path);
+  ReadKey(node, "max_current_ma", &o->max_current_ma, rig_path);
+  ReadKey(node, "current_noise_ma", &o->current_noise_ma, rig_path);
+  ReadKey(node, "min_trigger_width_us", &o->min_trigger_width_us, rig_path);
+  ReadKey(node, "min_trigger_period_us", &o->min_trigger_period_us, rig_path);
+  ReadKey(node, "max_trigger_count", &o->max_trigger_count, rig_path);
+  ReadKey(node, "reply_latency_s", &o->reply_latency_s, rig_path);
+  ReadKey(node, "seed", &o->seed, rig_path);
+  ReadKey(node, "garble_rate", &o->garble_rate, rig_path);
+  ReadKey(node, "drop_rate", &o->drop_rate, rig_path);
+  ReadKey(node, "delay_rate", &o->delay_rate, rig_path);
+  ReadKey(node, "delay_s", &o->delay_s, rig_path);
+  ReadKey(node, "reboot_after_s", &o->reboot_after_s, rig_path);
+  ReadKey(node, "stuck_axis", &o->stuck_axis, rig_path);
+  ReadKey(node, "missed_pulse_rate", &o->missed_pulse_rate, rig_path);
+  ReadKey(node, "open_circuit", &o->open_circuit, rig_path);
+  ReadKey(node, "refuse_current_off_in_estop", &o->refuse_current_off_in_estop, rig_path);
+  ReadKey(node, "fault_at_move", &o->fault_at_move, rig_path);
+  ReadKey(node, "fault", &o->fault, rig_path);
+}
+
+}  // namespace
+
+EmulatorOptions LoadEmulatorOptions(const std::string& rig_path) {
+  EmulatorOptions options;
+  YAML::Node root;
+  try {
+    root = yaml_fields::Parse(yaml_fields::ReadFile(rig_path), rig_path);
+  } catch (const YAML::Exception& e) {
+    throw Error("cannot read rig file " + rig_path + ": " + e.what() +
+                "; fix the path or the YAML syntax");
+  }
+  ApplyStationLimits(root, rig_path, &options);
   const YAML::Node virt = root["virtual"];
   const YAML::Node node = virt ? virt["station"] : YAML::Node();
-  if (node) {
-    const yaml_fields::MapReader keys(
-        node, rig_path, "virtual.station",
-        {"slide", "pan", "tilt", "homing_speed_factor", "max_current_ma", "current_noise_ma",
-         "min_trigger_width_us", "min_trigger_period_us", "max_trigger_count", "reply_latency_s",
-         "seed", "garble_rate", "drop_rate", "delay_rate", "delay_s", "reboot_after_s",
-         "stuck_axis", "missed_pulse_rate", "open_circuit", "refuse_current_off_in_estop",
-         "fault_at_move", "fault"});
-    ReadKey(node, "fault_at_move", &options.fault_at_move, rig_path);
-    ReadKey(node, "fault", &options.fault, rig_path);
-    ReadKey(node, "open_circuit", &options.open_circuit, rig_path);
-    ReadKey(node, "refuse_current_off_in_estop", &options.refuse_current_off_in_estop, rig_path);
-    ReadAxis(node["slide"], &options.slide, rig_path);
-    ReadAxis(node["pan"], &options.pan, rig_path);
-    ReadAxis(node["tilt"], &options.tilt, rig_path);
-    ReadKey(node, "homing_speed_factor", &options.homing_speed_factor, rig_path);
-    ReadKey(node, "max_current_ma", &options.max_current_ma, rig_path);
-    ReadKey(node, "current_noise_ma", &options.current_noise_ma, rig_path);
-    ReadKey(node, "min_trigger_width_us", &options.min_trigger_width_us, rig_path);
-    ReadKey(node, "min_trigger_period_us", &options.min_trigger_period_us, rig_path);
-    ReadKey(node, "max_trigger_count", &options.max_trigger_count, rig_path);
-    ReadKey(node, "reply_latency_s", &options.reply_latency_s, rig_path);
-    ReadKey(node, "seed", &options.seed, rig_path);
-    ReadKey(node, "garble_rate", &options.garble_rate, rig_path);
-    ReadKey(node, "drop_rate", &options.drop_rate, rig_path);
-    ReadKey(node, "delay_rate", &options.delay_rate, rig_path);
-    ReadKey(node, "delay_s", &options.delay_s, rig_path);
-    ReadKey(node, "reboot_after_s", &options.reboot_after_s, rig_path);
-    ReadKey(node, "stuck_axis", &options.stuck_axis, rig_path);
-    ReadKey(node, "missed_pulse_rate", &options.missed_pulse_rate, rig_path);
-  }
+  if (node) ReadVirtualStation(node, rig_path, &options);
   std::string why;
   if (!options.IsValid(&why)) {
     throw Error(rig_path + ": " + why + "; fix the rig file");
