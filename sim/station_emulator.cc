@@ -163,6 +163,7 @@ CommandError ErrorFor(int code) {
     case 203: return {code, "Checksum mismatch"};
     case 204: return {code, "Homing failed"};
     case 205: return {code, "Line too long"};
+    case 206: return {code, "Link lost"};
     default: return {code, "Execution error"};
   }
 }
@@ -418,6 +419,8 @@ struct StationEmulator::Impl {
   double reboot_after_move_s = -1.0;
   std::uint64_t reboots = 0, lines = 0, dropped = 0;
   int moves_started = 0;  // accepted MOVEs to a new target, for fault_at_move
+  long long link_watchdog_s = 0;      // SYST:WDOG: link lost after this long without a request
+  double last_valid_request_s = 0.0;
   bool silent = false;    // fault "silent": no reply any more
 
   Impl(World& w, EmulatorOptions o) : world(w), options(std::move(o)), rng(options.seed) {
@@ -446,6 +449,7 @@ struct StationEmulator::Impl {
 
   // Power-up: new boot id, unhomed, IRED off, trigger idle, deaf for kBootTimeS.
   void PowerUp(double now) {
+    link_watchdog_s = 0;  // power-on: no link watchdog
     std::uniform_int_distribution<std::uint32_t> dist;
     char id[16];
     std::snprintf(id, sizeof(id), "%08X", dist(entropy) ^ static_cast<std::uint32_t>(reboots));
@@ -486,6 +490,24 @@ struct StationEmulator::Impl {
     current_centi_ma = 0;
     world.SetCurrent(0.0);
     state = State::kEStop;
+  }
+
+  // No valid request within SYST:WDOG seconds: IRED off, motion and trigger stopped, error 206.
+  void OnLinkLost(double now) {
+    link_watchdog_s = 0;
+    current_centi_ma = 0;
+    world.SetCurrent(0.0);
+    trig_remaining = 0;
+    if (state == State::kMoving || state == State::kHoming || state == State::kSettling) {
+      for (Axis& a : axes) {
+        double v = 0.0;
+        a.profile.At(now - a.profile.start_s, &a.pos, &v);
+        a.profile = Profile::Make(a.pos, a.pos, now, 0.0, a.opt->speed, a.opt->accel);
+        a.moving = false;
+      }
+      state = homing_ok ? State::kIdle : State::kUnhomed;
+    }
+    PushError(206);
   }
 
   void Reboot(double now) {
@@ -529,6 +551,7 @@ struct StationEmulator::Impl {
   // Advances motion, settling, homing, booting, scheduled reboots and the trigger train to `now`.
   void Advance(double now) {
     if (reboot_at_s >= 0.0 && now >= reboot_at_s) Reboot(reboot_at_s);
+    if (link_watchdog_s > 0 && now - last_valid_request_s > link_watchdog_s) OnLinkLost(now);
     if (state == State::kBooting) {
       if (now >= boot_done_s) state = after_boot;
       else return;
@@ -647,6 +670,8 @@ struct StationEmulator::Impl {
         {"TRIG:FIRE", &Impl::CmdTrigFire},
         {"TRIG:ABOR", &Impl::CmdTrigAbor},
         {"TRIG:PULS?", &Impl::CmdTrigPulsQuery},
+        {"SYST:WDOG", &Impl::CmdSystWdog},
+        {"SYST:WDOG?", &Impl::CmdSystWdogQuery},
     };
     return table;
   }
@@ -864,6 +889,19 @@ struct StationEmulator::Impl {
     return "OK";
   }
 
+  std::string CmdSystWdog(const Request& r) {
+    std::vector<long long> v;
+    if (int e = r.Ints(1, &v)) return Fail(e);
+    if (v[0] < 0 || v[0] > 3600) return Fail(-222);
+    link_watchdog_s = v[0];
+    return "OK";
+  }
+
+  std::string CmdSystWdogQuery(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    return "OK " + std::to_string(link_watchdog_s);
+  }
+
   std::string CmdTrigPulsQuery(const Request& r) {
     if (int e = r.NoArgs()) return Fail(e);
     return "OK " + std::to_string(pulses_total) + "," + std::to_string(trig_remaining);
@@ -895,6 +933,7 @@ struct StationEmulator::Impl {
       return;
     }
     std::string reply;
+    last_valid_request_s = now;  // the link is alive (docs/station-protocol.md, link loss)
     if (text == last_request && !last_reply.empty()) {
       reply = last_reply;  // retransmission: answer again, do not execute again
     } else {
