@@ -11,6 +11,7 @@
 #include "app/view.h"
 #include "app/recipe.h"
 #include "app/run.h"
+#include "app/station_cmd.h"
 #include "app/tools.h"
 #include "station/plan.h"
 
@@ -47,6 +48,10 @@ constexpr SubcommandInfo kSubcommands[] = {
      "the camera (acquisition/)"},
     {"view", "Live window on the camera: image, blob, ellipse, levels, estimate with --model",
      "the camera (acquisition/) and OpenCV highgui"},
+    {"station", "Put the station at a pose and current by hand (move, current, off, home, status)",
+     "the station composition (station/)"},
+    {"station-test", "Check a station board against docs/station-protocol.md (pass/fail table)",
+     "the station conformance suite (station/)"},
 };
 
 const SubcommandInfo& Info(const std::string& name) {
@@ -104,6 +109,7 @@ void PrintPlan(const Recipe& recipe, const Plan& plan, int show_poses, std::ostr
   }
 }
 
+
 }  // namespace
 
 std::vector<std::string> SubcommandNames() {
@@ -134,6 +140,8 @@ Handlers DefaultHandlers() {
   handlers.measure = RunMeasure;
   handlers.snap = RunSnap;
   handlers.view = RunView;
+  handlers.station = RunStation;
+  handlers.station_test = RunStationTest;
   return handlers;
 }
 
@@ -152,6 +160,8 @@ struct ParsedArgs {
   MeasureArgs measure;
   SnapArgs snap;
   ViewArgs view;
+  StationArgs station;
+  StationTestArgs station_test;
 };
 
 // The subcommands as they are registered: each with the call that runs it.
@@ -362,6 +372,24 @@ int ParseAndRun(CLI::App& app, const CommandTable& table, int argc, const char* 
 
 }  // namespace
 
+// `irdist station` and `irdist station-test`.
+void AddStationCommands(CommandTable& table) {
+  StationArgs& station = table.args().station;
+  CLI::App* sub = table.Add("station", table.handlers().station, station);
+  sub->add_option("--rig", station.rig, "Rig name or rig file")->capture_default_str();
+  sub->add_option("action", station.action, "move | current | off | home | status")
+      ->required()
+      ->check(CLI::IsMember({"move", "current", "off", "home", "status"}));
+  sub->add_option("values", station.values, "move: SLIDE_MM PAN_DEG TILT_DEG; current: MA");
+  sub->add_option("--port", station.ports,
+                  "NAME=PATH: the port of station device NAME (default: the rig file's, or the "
+                  "running 'irdist sim' of a virtual rig)");
+  StationTestArgs& test = table.args().station_test;
+  sub = table.Add("station-test", table.handlers().station_test, test);
+  sub->add_option("port", test.port, "Serial port of the board (e.g. /dev/ttyUSB0)")->required();
+  sub->add_option("--baud", test.baud, "Serial speed, bit/s")->capture_default_str();
+}
+
 int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& handlers) {
   CheckCommandName(argc, argv);
   CLI::App app{
@@ -379,6 +407,7 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   AddSimAndDevices(table);
   AddMeasure(table);
   AddSnapAndView(table);
+  AddStationCommands(table);
   return ParseAndRun(app, table, argc, argv, io);
 }
 

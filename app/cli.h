@@ -29,6 +29,8 @@ struct Handlers {
   std::function<void(const MeasureArgs&, CommandIo)> measure;
   std::function<void(const SnapArgs&, CommandIo)> snap;
   std::function<void(const ViewArgs&, CommandIo)> view;
+  std::function<void(const StationArgs&, CommandIo)> station;
+  std::function<void(const StationTestArgs&, CommandIo)> station_test;
 };
 
 // The handlers of this build: every command (app/run.h, app/offline.h, app/tools.h).

@@ -103,6 +103,20 @@ struct SimArgs {
   double time_scale = 0.0;      // --time-scale (0 = rig file's)
 };
 
+// `irdist station`: put the station at a pose and current by hand (app/station_cmd.h).
+struct StationArgs {
+  std::string rig = "virtual";      // rig name or rig file
+  std::string action;               // move | current | off | home | status
+  std::vector<double> values;       // move: SLIDE_MM PAN_DEG TILT_DEG; current: MA
+  std::vector<std::string> ports;   // --port NAME=PATH (overrides the rig file / a running sim)
+};
+
+// `irdist station-test PORT`: the conformance suite of docs/station-protocol.md against a board.
+struct StationTestArgs {
+  std::string port;
+  int baud = 115200;
+};
+
 struct DevicesArgs {
   bool discover = false;  // --discover: GigE/USB camera discovery (broadcasts on every interface)
 };

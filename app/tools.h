@@ -2,6 +2,7 @@
 // The smaller commands: `irdist sim` (run a virtual rig until Ctrl-C) and `irdist devices` (what
 // irdist can connect to). Playback's `--show` window is in app/show.h.
 
+#include <map>
 #include <string>
 
 #include "app/command_args.h"
@@ -20,5 +21,10 @@ void RunDevices(const DevicesArgs& args, CommandIo io);
 
 // Folder of the virtual rigs' state files.
 std::string SimStateDir();
+// The rig file a `--rig` value names: a path, or a name in recipes/rigs/. Throws RecipeError.
+std::string ResolveRig(const std::string& spec);
+// A state file's `key: value` lines (irdist sim writes `port.<device>: "<pty>"` for each station
+// device, and `station_port`).
+std::map<std::string, std::string> ReadFlatYaml(const std::string& path);
 
 }  // namespace irdist

@@ -13,6 +13,7 @@
 #include "app/measure.h"
 #include "app/offline.h"
 #include "app/run.h"
+#include "app/station_cmd.h"
 #include "app/tools.h"
 #include "app/view.h"
 #include "base/process.h"
@@ -47,7 +48,8 @@ TEST(CliTest, DefaultArgsAreUsable) {
 TEST(CliTest, EverySubcommandIsInTheTable) {
   EXPECT_EQ(SubcommandNames(),
             (std::vector<std::string>{"calibrate", "validate", "fit", "playback", "check", "plan",
-                                      "sim", "devices", "measure", "snap", "view"}));
+                                      "sim", "devices", "measure", "snap", "view", "station",
+                                      "station-test"}));
 }
 
 TEST(CliTest, MeasureTakesItsOptions) {
@@ -127,6 +129,8 @@ TEST(CliTest, EveryCommandRunsTheFunctionOfItsFamily) {
   EXPECT_TRUE(Calls(h.measure, &RunMeasure));
   EXPECT_TRUE(Calls(h.snap, &RunSnap));
   EXPECT_TRUE(Calls(h.view, &RunView));
+  EXPECT_TRUE(Calls(h.station, &RunStation));
+  EXPECT_TRUE(Calls(h.station_test, &RunStationTest));
 }
 
 // Handlers that only record the arguments they were called with.
@@ -309,6 +313,26 @@ TEST(CliTest, HandlersReceiveTheirArguments) {
   EXPECT_TRUE(devices.discover);
   // An empty handler is "not available".
   EXPECT_THROW(RunWords({"plan", "r.yaml"}, handlers), NotAvailableError);
+}
+
+TEST(CliTest, StationCommandsParseTheirArguments) {
+  Handlers handlers;
+  StationArgs station;
+  handlers.station = [&](const StationArgs& args, CommandIo) { station = args; };
+  EXPECT_EQ(RunWords({"station", "--rig", "virtual-lab", "move", "2000", "10", "-5", "--port",
+                      "slide=/dev/pts/3", "--port", "head=/dev/pts/4"},
+                     handlers),
+            0);
+  EXPECT_EQ(station.rig, "virtual-lab");
+  EXPECT_EQ(station.action, "move");
+  EXPECT_EQ(station.values, (std::vector<double>{2000.0, 10.0, -5.0}));
+  EXPECT_EQ(station.ports, (std::vector<std::string>{"slide=/dev/pts/3", "head=/dev/pts/4"}));
+  EXPECT_THROW(RunWords({"station", "jump"}, handlers), UsageError);
+  StationTestArgs test;
+  handlers.station_test = [&](const StationTestArgs& args, CommandIo) { test = args; };
+  EXPECT_EQ(RunWords({"station-test", "/dev/ttyUSB0", "--baud", "57600"}, handlers), 0);
+  EXPECT_EQ(test.port, "/dev/ttyUSB0");
+  EXPECT_EQ(test.baud, 57600);
 }
 
 TEST(CliTest, PlanPrintsCountsOrderAndDuration) {

@@ -1,0 +1,177 @@
+#include "station/station.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "base/input_error.h"
+#include "tests/station/rig_fixture.h"
+
+namespace irdist {
+namespace {
+
+using testing::VirtualStationRig;
+
+TEST(Station, IdentifiesEveryDeviceBeforeAnythingMoves) {
+  VirtualStationRig rig(100.0);
+  const std::vector<DeviceIdentity>& ids = rig.station->Identify();
+  ASSERT_EQ(ids.size(), 1u);
+  EXPECT_EQ(ids[0].kind, "irdist_station");
+  EXPECT_EQ(ids[0].vendor, "IRDIST");
+  EXPECT_EQ(ids[0].port, rig.port);
+  EXPECT_NE(rig.station->IdentityBrief().find("station: irdist_station on "), std::string::npos);
+  EXPECT_EQ(rig.emulator.Reboots(), 0u);
+  EXPECT_FALSE(rig.world.Pose().moving);
+}
+
+TEST(Station, AnUnknownDriverIsAnInputErrorNamingTheEntry) {
+  StationSpec spec = VirtualStationRig::Spec("/dev/null", 5.0);
+  spec.devices[0].driver = "no_such_driver";
+  spec.devices[0].file = "rig.yaml";
+  spec.devices[0].line = 12;
+  try {
+    Station station(spec, {});
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Line(), 12);
+    EXPECT_NE(e.Message().find("irdist_station"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Station, AnAutoPortWithoutOverrideIsRefused) {
+  StationSpec spec = VirtualStationRig::Spec("auto", 5.0);
+  EXPECT_THROW(Station(spec, {}), InputError);
+}
+
+TEST(Station, MovesAllMotionDevicesAndReadsThePosition) {
+  VirtualStationRig rig(100.0);
+  rig.station->Identify();
+  rig.station->Home();
+  rig.station->MoveTo({1800.0, 5.0, -3.0});
+  const StationPosition p = rig.station->Position();
+  EXPECT_NEAR(p.slide_mm, 1800.0, 0.011);
+  EXPECT_NEAR(p.pan_deg, 5.0, 0.011);
+  EXPECT_NEAR(p.tilt_deg, -3.0, 0.011);
+  EXPECT_NEAR(rig.world.Pose().slide_mm, 1800.0, 1e-6);
+}
+
+TEST(Station, AnEStopAtStartGetsAClearMessageAtOnce) {
+  VirtualStationRig rig(100.0);
+  rig.station->Identify();
+  rig.emulator.PressEmergencyStop();
+  try {
+    rig.station->CheckReadyToStart();
+    ADD_FAILURE() << "no error";
+  } catch (const StationNotReadyError& e) {
+    EXPECT_NE(std::string(e.what()).find("emergency stop"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(rig.station->CheckAlive(), DeviceError);
+}
+
+TEST(Station, AnOpenIredStopsWithTheMessage) {
+  sim::EmulatorOptions options;
+  options.open_circuit = true;
+  VirtualStationRig rig(100.0, options);
+  rig.station->Identify();
+  rig.station->SetCurrent(500.0);
+  try {
+    rig.station->CheckCurrent(rig.station->MeasureCurrent());
+    ADD_FAILURE() << "no error";
+  } catch (const CurrentMismatchError& e) {
+    EXPECT_NE(std::string(e.what()).find("open"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("500.00 mA is set"), std::string::npos) << e.what();
+  }
+}
+
+// A device that restarted lost its current: that is a restart (retake), not an open IRED.
+TEST(Station, ACurrentLostToARestartIsARestart) {
+  VirtualStationRig rig(100.0);
+  rig.station->Identify();
+  rig.station->Home();
+  rig.station->SetCurrent(500.0);
+  rig.emulator.Reboot();
+  EXPECT_THROW(rig.station->MeasureCheckedCurrent(), DeviceRestarted);
+}
+
+TEST(Station, AGoodIredPassesTheCurrentCheck) {
+  VirtualStationRig rig(100.0);
+  rig.station->Identify();
+  rig.station->SetCurrent(500.0);
+  EXPECT_NO_THROW(rig.station->CheckCurrent(rig.station->MeasureCurrent()));
+}
+
+TEST(Station, SwitchesTheIredOffWhenDestroyed) {
+  VirtualStationRig rig(100.0);
+  rig.station->Identify();
+  rig.station->SetCurrent(300.0);
+  EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, 300.0);
+  rig.station.reset();
+  EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, 0.0);
+}
+
+TEST(Station, ReportsTheSpeedOfEveryAxis) {
+  VirtualStationRig rig(100.0);
+  const std::map<Axis, AxisSpeed> speeds = rig.station->Speeds();
+  ASSERT_EQ(speeds.size(), 3u);
+  EXPECT_GT(speeds.at(Axis::kSlide).speed, 0.0);
+  EXPECT_GT(speeds.at(Axis::kPan).speed, 0.0);
+}
+
+// Two boxes composed: one moves, the other sources the current; one log, lines prefixed by the
+// device's name.
+TEST(Station, ComposesRolesAcrossDevicesWithOneLog) {
+  sim::World world_a(100.0), world_b(100.0);
+  sim::StationEmulator emulator_a(world_a, {}), emulator_b(world_b, {});
+  StationSpec spec = VirtualStationRig::Spec(emulator_a.Start(), 5.0);
+  DeviceSpec b = spec.devices[0];
+  spec.devices[0].name = "a";
+  b.name = "b";
+  b.port = emulator_b.Start();
+  spec.devices.push_back(b);
+  spec.motion = {"a"};
+  spec.source = "b";
+  spec.trigger = "a";
+  const std::string log_path = std::string(IRDIST_BINARY_DIR) + "/station_test_composed.log";
+  {
+    LineLog log(log_path);
+    StationOptions options;
+    options.log = &log;
+    Station station(spec, options);
+    EXPECT_EQ(station.Identify().size(), 2u);
+    station.Home();
+    station.SetCurrent(250.0);
+    station.MoveTo({1700.0, 0.0, 0.0});
+    EXPECT_NEAR(world_a.Pose().slide_mm, 1700.0, 1e-6);
+    EXPECT_DOUBLE_EQ(world_a.Pose().bias_ma, 0.0);
+    EXPECT_DOUBLE_EQ(world_b.Pose().bias_ma, 250.0);
+  }
+  EXPECT_DOUBLE_EQ(world_b.Pose().bias_ma, 0.0);  // off when the station closed
+  std::ifstream in(log_path);
+  std::string line;
+  int a_lines = 0, b_lines = 0;
+  while (std::getline(in, line)) {
+    a_lines += line.find(" a: ") != std::string::npos ? 1 : 0;
+    b_lines += line.find(" b: ") != std::string::npos ? 1 : 0;
+  }
+  EXPECT_GT(a_lines, 0);
+  EXPECT_GT(b_lines, 0);
+}
+
+TEST(Station, AnAxisDrivenTwiceIsRefusedBeforeAnythingMoves) {
+  sim::World world_a(100.0), world_b(100.0);
+  sim::StationEmulator emulator_a(world_a, {}), emulator_b(world_b, {});
+  StationSpec spec = VirtualStationRig::Spec(emulator_a.Start(), 5.0);
+  DeviceSpec b = spec.devices[0];
+  spec.devices[0].name = "a";
+  b.name = "b";
+  b.port = emulator_b.Start();
+  spec.devices.push_back(b);
+  spec.motion = {"a", "b"};
+  spec.source = "a";
+  spec.trigger = "a";
+  Station station(spec, {});
+  EXPECT_THROW(station.Identify(), StationNotReadyError);
+}
+
+}  // namespace
+}  // namespace irdist
