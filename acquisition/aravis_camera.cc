@@ -284,32 +284,65 @@ struct AravisCamera::Impl {
     }
   }
 
+  // GigE Vision: packet socket off on loopback, the rig's packet size or a negotiated one.
+  void SetupPacketSize() {
+    if (arv_camera_is_gv_device(camera.get()) == FALSE) return;
+    GError* error = nullptr;
+    arv_camera_gv_set_stream_options(camera.get(),
+                                     IsLoopback(identity.address)
+                                         ? ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED
+                                         : ARV_GV_STREAM_OPTION_NONE);
+    if (settings.packet_size > 0) {
+      arv_camera_gv_set_packet_size(camera.get(), settings.packet_size, &error);
+      ThrowOnError(error, "setting the packet size", Name());
+      const guint back = arv_camera_gv_get_packet_size(camera.get(), &error);
+      ThrowOnError(error, "reading the packet size", Name());
+      if (static_cast<int>(back) != settings.packet_size) {
+        throw CameraError("camera " + Name() + ": packet size " +
+                          std::to_string(settings.packet_size) + " reads back " +
+                          std::to_string(back) +
+                          "; use a packet size the network path supports or 0 to negotiate.");
+      }
+      packet_size = static_cast<int>(back);
+    } else {
+      packet_size = static_cast<int>(arv_camera_gv_auto_packet_size(camera.get(), &error));
+      ThrowOnError(error, "negotiating the packet size", Name());
+    }
+  }
+
+  // GigE Vision stream: fixed socket buffer, packet resend when the camera supports it (GVCP
+  // capability bit), the frame retention.
+  void TuneGvStream(ArvStream* raw_stream) {
+    if (!ARV_IS_GV_STREAM(raw_stream)) return;
+    GError* error = nullptr;
+    const int socket_bytes = settings.socket_buffer_bytes > 0
+                                 ? settings.socket_buffer_bytes
+                                 : std::max(4 << 20, 2 * payload_bytes);
+    guint32 capabilities = 0;
+    arv_device_read_register(Device(), 0x0934, &capabilities, &error);  // GVCP capability
+    ThrowOnError(error, "reading the GVCP capability register", Name());
+    const bool resend = (capabilities & (1u << 2)) != 0;  // PACKETRESEND_CMD supported
+    g_object_set(raw_stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
+                 "socket-buffer-size", socket_bytes, "packet-resend",
+                 resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS : ARV_GV_STREAM_PACKET_RESEND_NEVER,
+                 "frame-retention", static_cast<guint>(settings.frame_retention_ms * 1000),
+                 nullptr);
+    gint size_back = 0;
+    guint retention_back = 0;
+    g_object_get(raw_stream, "socket-buffer-size", &size_back, "frame-retention",
+                 &retention_back, nullptr);
+    if (size_back != socket_bytes ||
+        retention_back != static_cast<guint>(settings.frame_retention_ms * 1000)) {
+      throw CameraError("camera " + Name() +
+                        ": the stream did not keep its socket buffer / frame retention "
+                        "settings; this Aravis version is not supported (need 0.8.x).");
+    }
+  }
+
   void SetupStream() {
     GError* error = nullptr;
     stream.reset();
-    const bool gv = arv_camera_is_gv_device(camera.get()) != FALSE;
-    if (gv) {
-      arv_camera_gv_set_stream_options(camera.get(),
-                                       IsLoopback(identity.address)
-                                           ? ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED
-                                           : ARV_GV_STREAM_OPTION_NONE);
-      if (settings.packet_size > 0) {
-        arv_camera_gv_set_packet_size(camera.get(), settings.packet_size, &error);
-        ThrowOnError(error, "setting the packet size", Name());
-        const guint back = arv_camera_gv_get_packet_size(camera.get(), &error);
-        ThrowOnError(error, "reading the packet size", Name());
-        if (static_cast<int>(back) != settings.packet_size) {
-          throw CameraError("camera " + Name() + ": packet size " +
-                            std::to_string(settings.packet_size) + " reads back " +
-                            std::to_string(back) +
-                            "; use a packet size the network path supports or 0 to negotiate.");
-        }
-        packet_size = static_cast<int>(back);
-      } else {
-        packet_size = static_cast<int>(arv_camera_gv_auto_packet_size(camera.get(), &error));
-        ThrowOnError(error, "negotiating the packet size", Name());
-      }
-    }
+    SetupPacketSize();
     payload_bytes = static_cast<int>(arv_camera_get_payload(camera.get(), &error));
     ThrowOnError(error, "reading PayloadSize", Name());
     if (payload_bytes <= 0) {
@@ -325,30 +358,7 @@ struct AravisCamera::Impl {
     }
     stream.reset(raw_stream);
 
-    if (ARV_IS_GV_STREAM(raw_stream)) {
-      const int socket_bytes = settings.socket_buffer_bytes > 0
-                                   ? settings.socket_buffer_bytes
-                                   : std::max(4 << 20, 2 * payload_bytes);
-      guint32 capabilities = 0;
-      arv_device_read_register(Device(), 0x0934, &capabilities, &error);  // GVCP capability
-      ThrowOnError(error, "reading the GVCP capability register", Name());
-      const bool resend = (capabilities & (1u << 2)) != 0;  // PACKETRESEND_CMD supported
-      g_object_set(raw_stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
-                   "socket-buffer-size", socket_bytes, "packet-resend",
-                   resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS : ARV_GV_STREAM_PACKET_RESEND_NEVER,
-                   "frame-retention", static_cast<guint>(settings.frame_retention_ms * 1000),
-                   nullptr);
-      gint size_back = 0;
-      guint retention_back = 0;
-      g_object_get(raw_stream, "socket-buffer-size", &size_back, "frame-retention",
-                   &retention_back, nullptr);
-      if (size_back != socket_bytes ||
-          retention_back != static_cast<guint>(settings.frame_retention_ms * 1000)) {
-        throw CameraError("camera " + Name() +
-                          ": the stream did not keep its socket buffer / frame retention "
-                          "settings; this Aravis version is not supported (need 0.8.x).");
-      }
-    }
+    TuneGvStream(raw_stream);
     for (int i = 0; i < settings.buffer_count; ++i) {
       arv_stream_push_buffer(raw_stream, arv_buffer_new_allocate(payload_bytes));
     }

@@ -263,12 +263,9 @@ struct CameraServer::Impl {
     return a.sin_addr.s_addr == b.sin_addr.s_addr && a.sin_port == b.sin_port;
   }
 
-  // Whether `from` may write (no controller yet, or it is the controller); refreshes the heartbeat.
-  bool MayWrite(const sockaddr_in& from) {
-    if (!have_controller) return true;
-    if (!SameAddress(from, controller)) return false;
-    controller_seen = SteadyClock::now();
-    return true;
+  // Whether `from` may write: no controller yet, or it is the controller.
+  bool MayWrite(const sockaddr_in& from) const {
+    return !have_controller || SameAddress(from, controller);
   }
 
   // After a command: a controller appears or leaves with the privilege register.
@@ -349,6 +346,9 @@ struct CameraServer::Impl {
       return {};
     }
     std::lock_guard<std::mutex> lock(reg_mutex);
+    // Any command from the controller is a heartbeat (GigE Vision: the primary application's
+    // control traffic keeps its privilege alive).
+    if (have_controller && SameAddress(from, controller)) controller_seen = SteadyClock::now();
     std::vector<std::uint8_t> ack;
     switch (command) {
       case kCmdDiscovery:

@@ -1,11 +1,17 @@
 #include "sim/camera_server.h"
 
+#include <arpa/inet.h>
 #include <arv.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "sim/renderer.h"
@@ -303,6 +309,66 @@ TEST_F(CameraServerTest, ResendsLostPacketsOnRequest) {
   EXPECT_GT(server_->Stats().packets_lost, 0u);
   EXPECT_GT(server_->Stats().resend_requests, 0u);
   EXPECT_GT(server_->Stats().packets_resent, 0u);
+}
+
+// Sends one GVCP WRITEREG command from `fd` to 127.0.0.1:3956 and waits for its acknowledge.
+bool WriteRegisterRaw(int fd, std::uint32_t address, std::uint32_t value, std::uint16_t id) {
+  const std::uint8_t packet[] = {0x42, 0x01, 0x00, 0x82, 0x00, 0x08,
+                                 static_cast<std::uint8_t>(id >> 8), static_cast<std::uint8_t>(id),
+                                 static_cast<std::uint8_t>(address >> 24),
+                                 static_cast<std::uint8_t>(address >> 16),
+                                 static_cast<std::uint8_t>(address >> 8),
+                                 static_cast<std::uint8_t>(address),
+                                 static_cast<std::uint8_t>(value >> 24),
+                                 static_cast<std::uint8_t>(value >> 16),
+                                 static_cast<std::uint8_t>(value >> 8),
+                                 static_cast<std::uint8_t>(value)};
+  sockaddr_in camera{};
+  camera.sin_family = AF_INET;
+  camera.sin_port = htons(3956);
+  camera.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::sendto(fd, packet, sizeof(packet), 0, reinterpret_cast<sockaddr*>(&camera),
+               sizeof(camera)) != static_cast<ssize_t>(sizeof(packet))) {
+    return false;
+  }
+  std::uint8_t ack[64];
+  pollfd wait{fd, POLLIN, 0};
+  if (::poll(&wait, 1, 2000) != 1) return false;
+  const ssize_t got = ::recv(fd, ack, sizeof(ack), 0);
+  return got >= 12 && ack[0] == 0 && ack[1] == 0 && ack[3] == 0x83;  // status 0, WRITEREG_ACK
+}
+
+// A controller that takes the camera and then falls silent (a client killed while connected)
+// loses its control privilege after its heartbeat timeout, so the next client can take over.
+TEST(CameraServerHeartbeat, SilentControllerLosesControlAfterItsHeartbeatTimeout) {
+  ASSERT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(120)));
+  RigPhysics physics = TestPhysics();
+  World world(physics.time_scale);
+  CameraServer server(world, physics);
+  server.Start();
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(fd, 0);
+  ASSERT_TRUE(WriteRegisterRaw(fd, 0x938, 300, 1));  // heartbeat timeout 300 ms
+  ASSERT_TRUE(WriteRegisterRaw(fd, 0xa00, 2, 2));    // control privilege
+  ASSERT_TRUE(WriteRegisterRaw(fd, 0x124, 1, 3));    // AcquisitionStart
+  // Another application may not write while the controller is alive.
+  GError* error = nullptr;
+  GPtr<ArvCamera> other(arv_camera_new("127.0.0.1", &error));
+  if (error != nullptr) g_clear_error(&error);
+  if (other != nullptr) {
+    arv_camera_set_exposure_time(other.get(), 20000.0, &error);
+    EXPECT_NE(error, nullptr) << "a second application wrote while the controller was alive";
+    if (error != nullptr) g_clear_error(&error);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));  // the controller is silent
+  ::close(fd);
+  EXPECT_EQ(server.Stats().controllers_expired, 1u);
+  other.reset();
+  GPtr<ArvCamera> next(arv_camera_new("127.0.0.1", &error));
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_exposure_time(next.get(), 12345.0, &error);
+  ASSERT_NO_GERROR(error);
+  EXPECT_DOUBLE_EQ(arv_camera_get_exposure_time(next.get(), &error), 12345.0);
 }
 
 TEST(CameraServerPort, SecondCameraOnLoopbackFailsClearly) {
