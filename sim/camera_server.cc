@@ -16,6 +16,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -171,6 +172,7 @@ struct CameraServer::Impl {
   Impl(World& w, const RigPhysics& p) : world(w), physics(p), renderer(p) {
     drop_rate = p.camera.drop_frame_rate;
     lost_ratio = p.camera.lost_packet_ratio;
+    write_delay_ms = p.camera.exposure_write_delay_ms;
   }
 
   World& world;
@@ -188,7 +190,9 @@ struct CameraServer::Impl {
   // Sensor state: under state_mutex.
   std::mutex state_mutex;
   std::condition_variable wake;
-  int pending_triggers = 0;
+  // Accepted triggers not started yet; a frame triggered while the sensor is idle starts (and
+  // latches its settings) at the trigger, a queued one when the sensor becomes free.
+  std::deque<std::optional<FrameSetup>> pending_triggers;
   bool busy = false;
   bool stopping = false;
 
@@ -236,19 +240,21 @@ struct CameraServer::Impl {
 
   // A trigger from `source` (Software or Line1): starts a frame when the camera waits for that one.
   bool OfferTrigger(guint32 source) {
-    {
-      std::lock_guard<std::mutex> lock(reg_mutex);
-      if (ReadLocked(kRegTriggerMode) != 1 || ReadLocked(kRegTriggerSource) != source) return false;
-    }
-    const bool acquiring = Read(kRegAcquisition) != 0;
+    std::lock_guard<std::mutex> reg_lock(reg_mutex);
+    if (ReadLocked(kRegTriggerMode) != 1 || ReadLocked(kRegTriggerSource) != source) return false;
+    const bool acquiring = ReadLocked(kRegAcquisition) != 0;
     std::lock_guard<std::mutex> lock(state_mutex);
     std::lock_guard<std::mutex> count_lock(mutex);
-    if (!acquiring || pending_triggers >= kTriggerQueue) {
+    if (!acquiring || pending_triggers.size() >= static_cast<std::size_t>(kTriggerQueue)) {
       ++stats.triggers_ignored;
       return false;
     }
-    if (busy || pending_triggers > 0) ++stats.triggers_queued;
-    ++pending_triggers;
+    if (busy || !pending_triggers.empty()) {
+      ++stats.triggers_queued;
+      pending_triggers.push_back(std::nullopt);
+    } else {
+      pending_triggers.push_back(LatchSetupLocked());
+    }
     wake.notify_all();
     return true;
   }
@@ -586,6 +592,10 @@ struct CameraServer::Impl {
 
   FrameSetup LatchSetup() {
     std::lock_guard<std::mutex> lock(reg_mutex);
+    return LatchSetupLocked();
+  }
+
+  FrameSetup LatchSetupLocked() const {
     FrameSetup s;
     s.exposure_us = static_cast<double>(ReadLocked(kRegExposureUs));
     s.pixel_format = ReadLocked(kRegPixelFormat);
@@ -642,9 +652,9 @@ struct CameraServer::Impl {
   }
 
   // One frame: latch, expose, read out, send; then keep it for resend requests.
-  void RunFrame() {
+  void RunFrame(const std::optional<FrameSetup>& latched) {
     const auto host_start = SteadyClock::now();
-    const FrameSetup s = LatchSetup();
+    const FrameSetup s = latched.has_value() ? *latched : LatchSetup();
     const std::uint64_t index = ++frame_counter;
     const std::uint16_t block_id = next_block_id;
     next_block_id = static_cast<std::uint16_t>(next_block_id == 0xffff ? 1 : next_block_id + 1);
@@ -695,22 +705,25 @@ struct CameraServer::Impl {
 
   // Waits for the next frame's start: a queued trigger (TriggerMode On) or the free-running
   // period. Returns false when stopping.
-  bool WaitForFrameStart(SteadyClock::time_point* next_free_run) {
+  bool WaitForFrameStart(SteadyClock::time_point* next_free_run,
+                         std::optional<FrameSetup>* latched) {
     while (true) {
       const bool triggered = Read(kRegTriggerMode) == 1;
       const bool acquiring = Read(kRegAcquisition) != 0;
       const auto period = std::chrono::microseconds(std::max<guint32>(Read(kRegFramePeriodUs), 1000));
       std::unique_lock<std::mutex> lock(state_mutex);
       if (stopping) return false;
-      if (!acquiring) pending_triggers = 0;
-      if (acquiring && triggered && pending_triggers > 0) {
-        --pending_triggers;
+      if (!acquiring) pending_triggers.clear();
+      if (acquiring && triggered && !pending_triggers.empty()) {
+        *latched = pending_triggers.front();
+        pending_triggers.pop_front();
         busy = true;
         return true;
       }
       const auto now = SteadyClock::now();
       if (acquiring && !triggered && now >= *next_free_run) {
         *next_free_run = std::max(*next_free_run + period, now);
+        latched->reset();
         busy = true;
         return true;
       }
@@ -721,8 +734,9 @@ struct CameraServer::Impl {
 
   void SensorLoop() {
     auto next_free_run = SteadyClock::now();
-    while (WaitForFrameStart(&next_free_run)) {
-      RunFrame();
+    std::optional<FrameSetup> latched;
+    while (WaitForFrameStart(&next_free_run, &latched)) {
+      RunFrame(latched);
       std::lock_guard<std::mutex> lock(state_mutex);
       busy = false;
     }
