@@ -671,10 +671,8 @@ std::optional<RawFrame> AravisCamera::WaitFrame(std::chrono::milliseconds timeou
   ArvBuffer* buffer = arv_stream_timeout_pop_buffer(d.stream.get(), timeout_us);
   if (buffer == nullptr) return std::nullopt;
   RawFrame frame;
-  // Stamped by Aravis's stream thread when the frame's first packet was received (system clock,
-  // ns since the Unix epoch); the pop time when the buffer has none.
-  const guint64 received_ns = arv_buffer_get_system_timestamp(buffer);
-  frame.host_time_ns = received_ns > 0 ? static_cast<std::int64_t>(received_ns) : HostNowNs();
+  // Received: stamped the moment the complete frame is taken from the stream, before any copy.
+  frame.host_time_ns = HostNowNs();
   frame.status = MapStatus(arv_buffer_get_status(buffer));
   frame.frame_id = arv_buffer_get_frame_id(buffer);
   frame.timestamp_ns = arv_buffer_get_timestamp(buffer);

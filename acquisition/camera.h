@@ -120,7 +120,7 @@ struct RawFrame {
   std::uint64_t frame_id = 0;     // camera block id (16-bit on GigE Vision 1.x, wraps)
   std::uint64_t timestamp_ns = 0; // camera timestamp
   // Host wall clock (ns since the Unix epoch) when the frame was received: stamped by the grabber
-  // as its first packet arrived, not when the application took it from the queue.
+  // as it takes the complete frame from the stream (before copying it), not later by its user.
   std::int64_t host_time_ns = 0;
   std::optional<double> chunk_exposure_us;  // ChunkExposureTime when the camera sends chunks
 };

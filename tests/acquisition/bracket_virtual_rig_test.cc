@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -138,8 +139,22 @@ CaptureStats ExpectNoMislabelledFrame(SmallRig& small, const BracketOptions& opt
                                       int brackets) {
   BracketCapture capture(*small.camera, options);
   std::vector<BracketFrame> frames;
+  const auto wall_ns = [] {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+               std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  };
   for (int b = 0; b < brackets; ++b) {
-    BracketResult result = capture.Capture([&](int) { small.camera->SoftwareTrigger(); });
+    std::vector<std::int64_t> triggered_ns;
+    BracketResult result = capture.Capture([&](int) {
+      triggered_ns.push_back(wall_ns());
+      small.camera->SoftwareTrigger();
+    });
+    // Each frame is stamped when received: after its trigger, before Capture() returned.
+    for (const BracketFrame& frame : result.frames) {
+      EXPECT_GE(frame.host_time_ns, triggered_ns.front());
+      EXPECT_LE(frame.host_time_ns, wall_ns());
+    }
     EXPECT_TRUE(result.complete) << result.BriefReport() << " / " << capture.stats().BriefReport();
     for (auto& frame : result.frames) frames.push_back(std::move(frame));
   }
