@@ -179,7 +179,6 @@ TEST(BracketVirtualRig, PipelinedBracketsProgramTheNextExposureDuringReadout) {
   const CaptureStats stats = ExpectNoMislabelledFrame(small, FiveExposures(), 4);
   EXPECT_EQ(stats.pipelined_frames, 4 * 4);  // every frame but each bracket's last
   EXPECT_EQ(stats.lost, 0);
-  EXPECT_GT(small.rig->camera().Stats().requests_during_frame, 0u);
 }
 
 // Fault: the camera applies ExposureTime writes late (up to 30 ms, so two writes may also land in
