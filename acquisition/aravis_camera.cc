@@ -165,6 +165,8 @@ struct AravisCamera::Impl {
   int packet_size = 0;
   int bit_depth = 16;
   int warmup_discarded = 0;
+  double exposure_min_us = 0.0;
+  double exposure_max_us = 0.0;
   std::string pixel_format;
 
   std::string Name() const { return identity.serial + "@" + identity.address; }
@@ -282,32 +284,65 @@ struct AravisCamera::Impl {
     }
   }
 
+  // GigE Vision: packet socket off on loopback, the rig's packet size or a negotiated one.
+  void SetupPacketSize() {
+    if (arv_camera_is_gv_device(camera.get()) == FALSE) return;
+    GError* error = nullptr;
+    arv_camera_gv_set_stream_options(camera.get(),
+                                     IsLoopback(identity.address)
+                                         ? ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED
+                                         : ARV_GV_STREAM_OPTION_NONE);
+    if (settings.packet_size > 0) {
+      arv_camera_gv_set_packet_size(camera.get(), settings.packet_size, &error);
+      ThrowOnError(error, "setting the packet size", Name());
+      const guint back = arv_camera_gv_get_packet_size(camera.get(), &error);
+      ThrowOnError(error, "reading the packet size", Name());
+      if (static_cast<int>(back) != settings.packet_size) {
+        throw CameraError("camera " + Name() + ": packet size " +
+                          std::to_string(settings.packet_size) + " reads back " +
+                          std::to_string(back) +
+                          "; use a packet size the network path supports or 0 to negotiate.");
+      }
+      packet_size = static_cast<int>(back);
+    } else {
+      packet_size = static_cast<int>(arv_camera_gv_auto_packet_size(camera.get(), &error));
+      ThrowOnError(error, "negotiating the packet size", Name());
+    }
+  }
+
+  // GigE Vision stream: fixed socket buffer, packet resend when the camera supports it (GVCP
+  // capability bit), the frame retention.
+  void TuneGvStream(ArvStream* raw_stream) {
+    if (!ARV_IS_GV_STREAM(raw_stream)) return;
+    GError* error = nullptr;
+    const int socket_bytes = settings.socket_buffer_bytes > 0
+                                 ? settings.socket_buffer_bytes
+                                 : std::max(4 << 20, 2 * payload_bytes);
+    guint32 capabilities = 0;
+    arv_device_read_register(Device(), 0x0934, &capabilities, &error);  // GVCP capability
+    ThrowOnError(error, "reading the GVCP capability register", Name());
+    const bool resend = (capabilities & (1u << 2)) != 0;  // PACKETRESEND_CMD supported
+    g_object_set(raw_stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
+                 "socket-buffer-size", socket_bytes, "packet-resend",
+                 resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS : ARV_GV_STREAM_PACKET_RESEND_NEVER,
+                 "frame-retention", static_cast<guint>(settings.frame_retention_ms * 1000),
+                 nullptr);
+    gint size_back = 0;
+    guint retention_back = 0;
+    g_object_get(raw_stream, "socket-buffer-size", &size_back, "frame-retention",
+                 &retention_back, nullptr);
+    if (size_back != socket_bytes ||
+        retention_back != static_cast<guint>(settings.frame_retention_ms * 1000)) {
+      throw CameraError("camera " + Name() +
+                        ": the stream did not keep its socket buffer / frame retention "
+                        "settings; this Aravis version is not supported (need 0.8.x).");
+    }
+  }
+
   void SetupStream() {
     GError* error = nullptr;
     stream.reset();
-    const bool gv = arv_camera_is_gv_device(camera.get()) != FALSE;
-    if (gv) {
-      arv_camera_gv_set_stream_options(camera.get(),
-                                       IsLoopback(identity.address)
-                                           ? ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED
-                                           : ARV_GV_STREAM_OPTION_NONE);
-      if (settings.packet_size > 0) {
-        arv_camera_gv_set_packet_size(camera.get(), settings.packet_size, &error);
-        ThrowOnError(error, "setting the packet size", Name());
-        const guint back = arv_camera_gv_get_packet_size(camera.get(), &error);
-        ThrowOnError(error, "reading the packet size", Name());
-        if (static_cast<int>(back) != settings.packet_size) {
-          throw CameraError("camera " + Name() + ": packet size " +
-                            std::to_string(settings.packet_size) + " reads back " +
-                            std::to_string(back) +
-                            "; use a packet size the network path supports or 0 to negotiate.");
-        }
-        packet_size = static_cast<int>(back);
-      } else {
-        packet_size = static_cast<int>(arv_camera_gv_auto_packet_size(camera.get(), &error));
-        ThrowOnError(error, "negotiating the packet size", Name());
-      }
-    }
+    SetupPacketSize();
     payload_bytes = static_cast<int>(arv_camera_get_payload(camera.get(), &error));
     ThrowOnError(error, "reading PayloadSize", Name());
     if (payload_bytes <= 0) {
@@ -323,33 +358,130 @@ struct AravisCamera::Impl {
     }
     stream.reset(raw_stream);
 
-    if (ARV_IS_GV_STREAM(raw_stream)) {
-      const int socket_bytes = settings.socket_buffer_bytes > 0
-                                   ? settings.socket_buffer_bytes
-                                   : std::max(4 << 20, 2 * payload_bytes);
-      guint32 capabilities = 0;
-      arv_device_read_register(Device(), 0x0934, &capabilities, &error);  // GVCP capability
-      ThrowOnError(error, "reading the GVCP capability register", Name());
-      const bool resend = (capabilities & (1u << 2)) != 0;  // PACKETRESEND_CMD supported
-      g_object_set(raw_stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
-                   "socket-buffer-size", socket_bytes, "packet-resend",
-                   resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS : ARV_GV_STREAM_PACKET_RESEND_NEVER,
-                   "frame-retention", static_cast<guint>(settings.frame_retention_ms * 1000),
-                   nullptr);
-      gint size_back = 0;
-      guint retention_back = 0;
-      g_object_get(raw_stream, "socket-buffer-size", &size_back, "frame-retention",
-                   &retention_back, nullptr);
-      if (size_back != socket_bytes ||
-          retention_back != static_cast<guint>(settings.frame_retention_ms * 1000)) {
-        throw CameraError("camera " + Name() +
-                          ": the stream did not keep its socket buffer / frame retention "
-                          "settings; this Aravis version is not supported (need 0.8.x).");
-      }
-    }
+    TuneGvStream(raw_stream);
     for (int i = 0; i < settings.buffer_count; ++i) {
       arv_stream_push_buffer(raw_stream, arv_buffer_new_allocate(payload_bytes));
     }
+  }
+
+  // Automatic controls off, gain at its minimum, the rig's black level and gamma.
+  void ConfigureAnalog(const CameraSettings& s) {
+    AutoOff("ExposureAuto");
+    AutoOff("GainAuto");
+    AutoOff("BlackLevelAuto");
+    GError* error = nullptr;
+    if (arv_camera_is_gain_available(camera.get(), nullptr) != FALSE) {
+      double gain_min = 0.0, gain_max = 0.0;
+      arv_camera_get_gain_bounds(camera.get(), &gain_min, &gain_max, &error);
+      ThrowOnError(error, "reading Gain bounds", Name());
+      arv_camera_set_gain(camera.get(), gain_min, &error);
+      ThrowOnError(error, "setting Gain to its minimum", Name());
+      const double gain = arv_camera_get_gain(camera.get(), &error);
+      ThrowOnError(error, "reading Gain", Name());
+      CheckFloat("Gain", gain_min, gain);
+    }
+    ConfigureBlackLevel(s);
+    if (s.gamma > 0.0 && Has("Gamma")) {
+      if (Has("GammaEnable")) {
+        arv_camera_set_boolean(camera.get(), "GammaEnable", s.gamma != 1.0, &error);
+        ThrowOnError(error, "setting GammaEnable", Name());
+      }
+      arv_camera_set_float(camera.get(), "Gamma", s.gamma, &error);
+      ThrowOnError(error, "setting Gamma", Name());
+      const double gamma = arv_camera_get_float(camera.get(), "Gamma", &error);
+      ThrowOnError(error, "reading Gamma", Name());
+      CheckFloat("Gamma", s.gamma, gamma);
+    }
+  }
+
+  void ConfigureBlackLevel(const CameraSettings& s) {
+    if (s.black_level < 0.0) return;
+    GError* error = nullptr;
+    if (arv_camera_is_black_level_available(camera.get(), nullptr) != FALSE) {
+      arv_camera_set_black_level(camera.get(), s.black_level, &error);
+      ThrowOnError(error, "setting BlackLevel", Name());
+      const double black = arv_camera_get_black_level(camera.get(), &error);
+      ThrowOnError(error, "reading BlackLevel", Name());
+      CheckFloat("BlackLevel", s.black_level, black);
+    } else if (s.black_level > 0.0) {
+      throw CameraError("camera " + Name() + " has no BlackLevel feature but the rig asks for " +
+                        std::to_string(s.black_level) +
+                        "; set camera.black_level to 0 (or -1 to leave it).");
+    }
+  }
+
+  // Continuous acquisition, the FrameStart trigger (or the free-running frame rate).
+  void ConfigureTrigger(const CameraSettings& s) {
+    if (Has("AcquisitionMode")) {
+      SetEnum("AcquisitionMode", "Continuous", "The camera must support continuous acquisition.");
+    }
+    SetEnum("TriggerSelector", "FrameStart",
+            "irdist triggers each frame; the camera needs a FrameStart trigger.");
+    SetEnum("TriggerMode", s.triggered ? "On" : "Off",
+            "irdist needs TriggerMode On/Off for FrameStart.");
+    if (s.triggered) {
+      SetEnum("TriggerSource", s.trigger_source,
+              "Set camera.trigger_source in the rig file to the input wired to the station.");
+      if (s.trigger_source != "Software" && Has("TriggerActivation")) {
+        SetEnum("TriggerActivation", s.trigger_activation,
+                "Set camera.trigger_activation in the rig file to a value the camera offers.");
+      }
+    }
+    if (!s.triggered && s.frame_rate_hz > 0.0) {
+      GError* error = nullptr;
+      arv_camera_set_frame_rate(camera.get(), s.frame_rate_hz, &error);
+      ThrowOnError(error, "setting AcquisitionFrameRate", Name());
+      const double rate = arv_camera_get_frame_rate(camera.get(), &error);
+      ThrowOnError(error, "reading AcquisitionFrameRate", Name());
+      CheckFloat("AcquisitionFrameRate", s.frame_rate_hz, rate);
+    }
+  }
+
+  // Exposure chunks, where the camera offers them.
+  void ConfigureChunks() {
+    exposure_chunks = false;
+    chunk_parser.reset();
+    if (arv_camera_are_chunks_available(camera.get(), nullptr) == FALSE || !Has("ChunkSelector")) {
+      return;
+    }
+    GError* error = nullptr;
+    const std::vector<std::string> chunks = EnumEntries("ChunkSelector");
+    if (!settings.exposure_chunks ||
+        std::find(chunks.begin(), chunks.end(), "ExposureTime") == chunks.end()) {
+      arv_camera_set_chunk_mode(camera.get(), FALSE, &error);  // none left on by a previous client
+      ThrowOnError(error, "turning chunk mode off", Name());
+      return;
+    }
+    arv_camera_set_chunks(camera.get(), "ExposureTime", &error);
+    ThrowOnError(error, "enabling the ExposureTime chunk", Name());
+    chunk_parser.reset(arv_camera_create_chunk_parser(camera.get()));
+    exposure_chunks = chunk_parser != nullptr;
+  }
+
+  void ReadExposureBounds() {
+    if (arv_camera_is_exposure_time_available(camera.get(), nullptr) == FALSE) {
+      throw CameraError("camera " + Name() +
+                        " has no ExposureTime (or ExposureTimeAbs) feature; irdist needs it.");
+    }
+    GError* error = nullptr;
+    arv_camera_get_exposure_time_bounds(camera.get(), &exposure_min_us, &exposure_max_us, &error);
+    ThrowOnError(error, "reading ExposureTime bounds", Name());
+  }
+
+  void CheckExposureRange(double exposure_us) const {
+    if (exposure_us >= exposure_min_us && exposure_us <= exposure_max_us) return;
+    std::ostringstream out;
+    out << "camera " << Name() << ": exposure " << exposure_us << " us is outside the camera's "
+        << "range [" << exposure_min_us << ", " << exposure_max_us
+        << "] us; change the recipe's exposures.";
+    throw CameraError(out.str());
+  }
+
+  void WriteExposure(double exposure_us) {
+    CheckExposureRange(exposure_us);
+    GError* error = nullptr;
+    arv_camera_set_exposure_time(camera.get(), exposure_us, &error);
+    ThrowOnError(error, "setting ExposureTime", Name());
   }
 
   cv::Mat ToMat(ArvBuffer* buffer) const {
@@ -444,93 +576,15 @@ void AravisCamera::Configure(const CameraSettings& settings) {
   Impl& d = *impl_;
   d.settings = settings;
   d.stream.reset();
-  GError* error = nullptr;
-
   d.SetEnum("PixelFormat", settings.pixel_format,
             "Set camera.pixel_format in the rig file to a Mono format the camera offers.");
   d.pixel_format = settings.pixel_format;
   d.bit_depth = BitDepthOf(settings.pixel_format);
-
-  d.AutoOff("ExposureAuto");
-  d.AutoOff("GainAuto");
-  d.AutoOff("BlackLevelAuto");
-
-  if (arv_camera_is_gain_available(d.camera.get(), nullptr) != FALSE) {
-    double gain_min = 0.0, gain_max = 0.0;
-    arv_camera_get_gain_bounds(d.camera.get(), &gain_min, &gain_max, &error);
-    ThrowOnError(error, "reading Gain bounds", d.Name());
-    arv_camera_set_gain(d.camera.get(), gain_min, &error);
-    ThrowOnError(error, "setting Gain to its minimum", d.Name());
-    const double gain = arv_camera_get_gain(d.camera.get(), &error);
-    ThrowOnError(error, "reading Gain", d.Name());
-    d.CheckFloat("Gain", gain_min, gain);
-  }
-
-  if (settings.black_level >= 0.0) {
-    if (arv_camera_is_black_level_available(d.camera.get(), nullptr) != FALSE) {
-      arv_camera_set_black_level(d.camera.get(), settings.black_level, &error);
-      ThrowOnError(error, "setting BlackLevel", d.Name());
-      const double black = arv_camera_get_black_level(d.camera.get(), &error);
-      ThrowOnError(error, "reading BlackLevel", d.Name());
-      d.CheckFloat("BlackLevel", settings.black_level, black);
-    } else if (settings.black_level > 0.0) {
-      throw CameraError("camera " + d.Name() + " has no BlackLevel feature but the rig asks for " +
-                        std::to_string(settings.black_level) +
-                        "; set camera.black_level to 0 (or -1 to leave it).");
-    }
-  }
-
-  if (settings.gamma > 0.0 && d.Has("Gamma")) {
-    if (d.Has("GammaEnable")) {
-      arv_camera_set_boolean(d.camera.get(), "GammaEnable", settings.gamma != 1.0, &error);
-      ThrowOnError(error, "setting GammaEnable", d.Name());
-    }
-    arv_camera_set_float(d.camera.get(), "Gamma", settings.gamma, &error);
-    ThrowOnError(error, "setting Gamma", d.Name());
-    const double gamma = arv_camera_get_float(d.camera.get(), "Gamma", &error);
-    ThrowOnError(error, "reading Gamma", d.Name());
-    d.CheckFloat("Gamma", settings.gamma, gamma);
-  }
-
+  d.ConfigureAnalog(settings);
   d.SetRegion(settings);
-
-  if (d.Has("AcquisitionMode")) {
-    d.SetEnum("AcquisitionMode", "Continuous", "The camera must support continuous acquisition.");
-  }
-  d.SetEnum("TriggerSelector", "FrameStart",
-            "irdist triggers each frame; the camera needs a FrameStart trigger.");
-  d.SetEnum("TriggerMode", settings.triggered ? "On" : "Off",
-            "irdist needs TriggerMode On/Off for FrameStart.");
-  if (settings.triggered) {
-    d.SetEnum("TriggerSource", settings.trigger_source,
-              "Set camera.trigger_source in the rig file to the input wired to the station.");
-    if (settings.trigger_source != "Software" && d.Has("TriggerActivation")) {
-      d.SetEnum("TriggerActivation", settings.trigger_activation,
-                "Set camera.trigger_activation in the rig file to a value the camera offers.");
-    }
-  }
-
-  if (!settings.triggered && settings.frame_rate_hz > 0.0) {
-    arv_camera_set_frame_rate(d.camera.get(), settings.frame_rate_hz, &error);
-    ThrowOnError(error, "setting AcquisitionFrameRate", d.Name());
-    const double rate = arv_camera_get_frame_rate(d.camera.get(), &error);
-    ThrowOnError(error, "reading AcquisitionFrameRate", d.Name());
-    d.CheckFloat("AcquisitionFrameRate", settings.frame_rate_hz, rate);
-  }
-
-  // Exposure chunks, where the camera offers them.
-  d.exposure_chunks = false;
-  d.chunk_parser.reset();
-  if (arv_camera_are_chunks_available(d.camera.get(), nullptr) != FALSE && d.Has("ChunkSelector")) {
-    const std::vector<std::string> chunks = d.EnumEntries("ChunkSelector");
-    if (std::find(chunks.begin(), chunks.end(), "ExposureTime") != chunks.end()) {
-      arv_camera_set_chunks(d.camera.get(), "ExposureTime", &error);
-      ThrowOnError(error, "enabling the ExposureTime chunk", d.Name());
-      d.chunk_parser.reset(arv_camera_create_chunk_parser(d.camera.get()));
-      d.exposure_chunks = d.chunk_parser != nullptr;
-    }
-  }
-
+  d.ConfigureTrigger(settings);
+  d.ConfigureChunks();
+  d.ReadExposureBounds();
   SetExposureUs(settings.exposure_us);
   d.SetupStream();
   d.configured = true;
@@ -559,25 +613,18 @@ std::map<std::string, std::string> AravisCamera::ReadBackFeatures() {
 double AravisCamera::SetExposureUs(double exposure_us) {
   IRDIST_CHECK(exposure_us > 0.0, "exposure_us must be positive, got ", exposure_us);
   Impl& d = *impl_;
-  GError* error = nullptr;
-  if (arv_camera_is_exposure_time_available(d.camera.get(), nullptr) == FALSE) {
-    throw CameraError("camera " + d.Name() +
-                      " has no ExposureTime (or ExposureTimeAbs) feature; irdist needs it.");
-  }
-  double min_us = 0.0, max_us = 0.0;
-  arv_camera_get_exposure_time_bounds(d.camera.get(), &min_us, &max_us, &error);
-  ThrowOnError(error, "reading ExposureTime bounds", d.Name());
-  if (exposure_us < min_us || exposure_us > max_us) {
-    std::ostringstream out;
-    out << "camera " << d.Name() << ": exposure " << exposure_us << " us is outside the camera's "
-        << "range [" << min_us << ", " << max_us << "] us; change the recipe's exposures.";
-    throw CameraError(out.str());
-  }
-  arv_camera_set_exposure_time(d.camera.get(), exposure_us, &error);
-  ThrowOnError(error, "setting ExposureTime", d.Name());
+  if (!(d.exposure_max_us > 0.0)) d.ReadExposureBounds();
+  d.WriteExposure(exposure_us);
   const double back = ExposureUs();
   d.CheckFloat("ExposureTime", exposure_us, back);
   return back;
+}
+
+void AravisCamera::WriteExposureUs(double exposure_us) {
+  IRDIST_CHECK(exposure_us > 0.0, "exposure_us must be positive, got ", exposure_us);
+  Impl& d = *impl_;
+  if (!(d.exposure_max_us > 0.0)) d.ReadExposureBounds();
+  d.WriteExposure(exposure_us);
 }
 
 double AravisCamera::ExposureUs() {
@@ -624,6 +671,7 @@ std::optional<RawFrame> AravisCamera::WaitFrame(std::chrono::milliseconds timeou
   ArvBuffer* buffer = arv_stream_timeout_pop_buffer(d.stream.get(), timeout_us);
   if (buffer == nullptr) return std::nullopt;
   RawFrame frame;
+  // Received: stamped the moment the complete frame is taken from the stream, before any copy.
   frame.host_time_ns = HostNowNs();
   frame.status = MapStatus(arv_buffer_get_status(buffer));
   frame.frame_id = arv_buffer_get_frame_id(buffer);
@@ -676,6 +724,22 @@ std::map<std::string, std::uint64_t> AravisCamera::StreamStatistics() const {
       out[OrEmpty(arv_stream_get_info_name(stream, i))] = arv_stream_get_info_uint64(stream, i);
     }
   }
+  return out;
+}
+
+TransferStats AravisCamera::Transfer() const {
+  TransferStats out;
+  if (impl_->stream == nullptr || !ARV_IS_GV_STREAM(impl_->stream.get())) return out;
+  const std::map<std::string, std::uint64_t> infos = StreamStatistics();
+  auto get = [&infos](const char* name) {
+    const auto it = infos.find(name);
+    return it == infos.end() ? std::uint64_t{0} : it->second;
+  };
+  out.resend_requests = get("n_resend_requests");
+  out.resent_packets = get("n_resent_packets");
+  out.missing_packets = get("n_missing_packets");
+  out.completed_frames = get("n_completed_buffers");
+  out.failed_frames = get("n_failures");
   return out;
 }
 

@@ -41,6 +41,8 @@ class AravisCamera final : public Camera {
   std::map<std::string, std::string> ReadBackFeatures() override;
   double SetExposureUs(double exposure_us) override;
   double ExposureUs() override;
+  void WriteExposureUs(double exposure_us) override;
+  TransferStats Transfer() const override;
   void StartStream() override;
   void StopStream() override;
   bool streaming() const override;

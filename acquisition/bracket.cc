@@ -1,6 +1,8 @@
 #include "acquisition/bracket.h"
 
 #include <cmath>
+#include <limits>
+#include <thread>
 #include <sstream>
 #include <utility>
 
@@ -26,6 +28,8 @@ bool BracketOptions::IsValid(std::string* why) const {
     return fail("exposure_tolerance must be in [0, 0.5)");
   }
   if (late_frame_window.count() < 0) return fail("late_frame_window must be >= 0");
+  if (pipeline_margin.count() < 0) return fail("pipeline_margin must be >= 0");
+  if (exposure_settle_timeout.count() < 0) return fail("exposure_settle_timeout must be >= 0");
   return true;
 }
 
@@ -77,7 +81,10 @@ std::string CaptureStats::BriefReport() const {
       << requested << ", received " << received << ", retried " << retried << ", lost " << lost
       << " [timeouts " << timeouts << ", damaged " << damaged << ", wrong exposure "
       << wrong_exposure << ", duplicates " << duplicates << ", late " << late << ", stray "
-      << stray << ", id gaps " << id_gaps << ", warm-up " << warmup << "]";
+      << stray << ", id gaps " << id_gaps << ", warm-up " << warmup << ", pipelined "
+      << pipelined_frames << ", exposure re-reads " << exposure_rereads << "], packets resent "
+      << transfer.resent_packets << " of " << transfer.resend_requests << " asked, missing "
+      << transfer.missing_packets;
   return out.str();
 }
 
@@ -125,10 +132,32 @@ void BracketCapture::DrainLateFrames() {
   }
 }
 
-BracketCapture::Outcome BracketCapture::Attempt(const PlannedFrame& plan, double readback_us,
-                                                const Trigger& trigger, BracketFrame* out) {
-  trigger(plan.frame_in_bracket);
-  const auto deadline = std::chrono::steady_clock::now() + options_.frame_timeout;
+bool BracketCapture::Pipelining() const {
+  return options_.pipelined && camera_.HasExposureChunks();
+}
+
+double BracketCapture::ProgramExposure(double exposure_us) {
+  camera_.WriteExposureUs(exposure_us);
+  const auto deadline = std::chrono::steady_clock::now() + options_.exposure_settle_timeout;
+  const double tolerance = std::max(options_.exposure_tolerance * exposure_us, 1e-6);
+  while (true) {
+    const double back = camera_.ExposureUs();
+    if (std::fabs(back - exposure_us) <= tolerance) return back;
+    if (std::chrono::steady_clock::now() >= deadline) {
+      std::ostringstream out;
+      out << "exposure " << exposure_us << " us was written but the camera reports " << back
+          << " us after " << options_.exposure_settle_timeout.count()
+          << " ms (clamped or rounded): use exposures within the camera's range and increments";
+      throw CameraError(out.str());
+    }
+    ++stats_.exposure_rereads;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+}
+
+BracketCapture::Outcome BracketCapture::AwaitFrame(const PlannedFrame& plan, double readback_us,
+                                                   std::chrono::steady_clock::time_point deadline,
+                                                   BracketFrame* out) {
   while (true) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
         deadline - std::chrono::steady_clock::now());
@@ -149,9 +178,10 @@ BracketCapture::Outcome BracketCapture::Attempt(const PlannedFrame& plan, double
     out->image = std::move(frame->image);
     out->bit_depth = frame->bit_depth;
     out->exposure_from_chunk = frame->chunk_exposure_us.has_value();
+    // Pipelined, the read-back says nothing about this frame: without its chunk it is not verified.
     out->actual_exposure_us = frame->chunk_exposure_us.value_or(readback_us);
     const double tolerance = options_.exposure_tolerance * plan.exposure_us;
-    if (std::fabs(out->actual_exposure_us - plan.exposure_us) > std::max(tolerance, 1e-6)) {
+    if (!(std::fabs(out->actual_exposure_us - plan.exposure_us) <= std::max(tolerance, 1e-6))) {
       out->status = FrameStatus::kWrongExposure;
       return Outcome::kWrongExposure;
     }
@@ -159,9 +189,76 @@ BracketCapture::Outcome BracketCapture::Attempt(const PlannedFrame& plan, double
   }
 }
 
-BracketResult BracketCapture::Capture(const Trigger& trigger) {
-  IRDIST_CHECK(static_cast<bool>(trigger), "Capture() needs a trigger callable");
-  ++stats_.brackets;
+BracketCapture::Outcome BracketCapture::Attempt(const PlannedFrame& plan, double readback_us,
+                                                const Trigger& trigger, const PlannedFrame* next,
+                                                BracketFrame* out) {
+  trigger(plan.frame_in_bracket);
+  const auto triggered = std::chrono::steady_clock::now();
+  if (next != nullptr) {
+    // The frame latched its exposure when it started: the next one can be written now, while
+    // this frame is read out.
+    const auto exposure = std::chrono::microseconds(std::llround(plan.exposure_us));
+    std::this_thread::sleep_until(triggered + exposure + options_.pipeline_margin);
+    camera_.WriteExposureUs(next->exposure_us);
+  }
+  return AwaitFrame(plan, readback_us, triggered + options_.frame_timeout, out);
+}
+
+void BracketCapture::CountFailure(Outcome outcome, BracketFrame* frame) {
+  switch (outcome) {
+    case Outcome::kTimeout:
+      ++stats_.timeouts;
+      frame->status = FrameStatus::kTimeout;
+      break;
+    case Outcome::kDamaged:
+      ++stats_.damaged;
+      break;
+    case Outcome::kWrongExposure:
+      ++stats_.wrong_exposure;
+      break;
+    case Outcome::kOk:
+      break;
+  }
+}
+
+bool BracketCapture::TakeFrame(const PlannedFrame& plan, const PlannedFrame* next,
+                               const Trigger& trigger, BracketFrame* frame,
+                               bool* next_programmed) {
+  frame->plan = plan;
+  frame->requested_exposure_us = plan.exposure_us;
+  const bool pipelined = Pipelining();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // On entry the camera holds this frame's exposure (written during the previous readout, or
+  // programmed serially); a retry after a pipelined write programs it again.
+  double readback_us = pipelined ? nan : ProgramExposure(plan.exposure_us);
+  for (int attempt = 0;; ++attempt) {
+    frame->retries = attempt;
+    const Outcome outcome =
+        Attempt(plan, readback_us, trigger, pipelined ? next : nullptr, frame);
+    *next_programmed = pipelined && next != nullptr;
+    if (outcome == Outcome::kOk) return true;
+    CountFailure(outcome, frame);
+    if (attempt >= options_.max_retries) return false;
+    ++stats_.retried;
+    if (outcome == Outcome::kTimeout) DrainLateFrames();
+    // A retry programs the exposure again and waits for the camera to report it (the
+    // successor's exposure may have been written meanwhile).
+    const double back = ProgramExposure(plan.exposure_us);
+    if (!pipelined) readback_us = back;
+  }
+}
+
+std::string BracketCapture::FailureText(const PlannedFrame& plan, const BracketFrame& frame) const {
+  std::ostringstream why;
+  why << "frame " << plan.frame_in_bracket << " (" << FrameRoleName(plan.role) << ", "
+      << plan.exposure_us << " us) failed " << (options_.max_retries + 1)
+      << " times, last outcome " << FrameStatusName(frame.status)
+      << "; check the trigger wiring (" << options_.trigger_source
+      << "), the network and frame_timeout";
+  return why.str();
+}
+
+void BracketCapture::PrepareStream(const Trigger& trigger) {
   if (!camera_.streaming()) {
     camera_.StartStream();
     if (options_.warmup_trigger && options_.trigger_source != "Software") {
@@ -173,55 +270,35 @@ BracketResult BracketCapture::Capture(const Trigger& trigger) {
     }
   }
   stats_.stray += camera_.Flush();
+}
 
+BracketResult BracketCapture::Capture(const Trigger& trigger) {
+  IRDIST_CHECK(static_cast<bool>(trigger), "Capture() needs a trigger callable");
+  ++stats_.brackets;
+  PrepareStream(trigger);
+  const std::vector<PlannedFrame> plan = PlanBracket(options_);
+  // Pipelined, the first exposure is programmed (and read back) while the camera is idle.
+  if (Pipelining()) ProgramExposure(plan.front().exposure_us);
   BracketResult result;
-  for (const PlannedFrame& plan : PlanBracket(options_)) {
+  for (size_t i = 0; i < plan.size(); ++i) {
     ++stats_.requested;
-    // The previous frame has arrived (or been given up), so this write cannot reach it.
-    const double readback_us = camera_.SetExposureUs(plan.exposure_us);
+    const PlannedFrame* next = i + 1 < plan.size() ? &plan[i + 1] : nullptr;
     BracketFrame frame;
-    frame.plan = plan;
-    frame.requested_exposure_us = plan.exposure_us;
-    Outcome outcome = Outcome::kTimeout;
-    for (int attempt = 0;; ++attempt) {
-      frame.retries = attempt;
-      outcome = Attempt(plan, readback_us, trigger, &frame);
-      if (outcome == Outcome::kOk) break;
-      switch (outcome) {
-        case Outcome::kTimeout:
-          ++stats_.timeouts;
-          frame.status = FrameStatus::kTimeout;
-          break;
-        case Outcome::kDamaged:
-          ++stats_.damaged;
-          break;
-        case Outcome::kWrongExposure:
-          ++stats_.wrong_exposure;
-          break;
-        case Outcome::kOk:
-          break;
-      }
-      if (attempt >= options_.max_retries) break;
-      ++stats_.retried;
-      if (outcome == Outcome::kTimeout) DrainLateFrames();
-    }
-    if (outcome != Outcome::kOk) {
+    bool next_programmed = false;
+    if (!TakeFrame(plan[i], next, trigger, &frame, &next_programmed)) {
       ++stats_.lost;
       ++stats_.brackets_failed;
-      std::ostringstream why;
-      why << "frame " << plan.frame_in_bracket << " (" << FrameRoleName(plan.role) << ", "
-          << plan.exposure_us << " us) failed " << (options_.max_retries + 1)
-          << " times, last outcome " << FrameStatusName(frame.status)
-          << "; check the trigger wiring (" << options_.trigger_source
-          << "), the network and frame_timeout";
-      result.failure = why.str();
+      result.failure = FailureText(plan[i], frame);
       result.complete = false;
+      stats_.transfer = camera_.Transfer();
       return result;
     }
+    if (next_programmed) ++stats_.pipelined_frames;
     ++stats_.received;
     result.frames.push_back(std::move(frame));
   }
   result.complete = true;
+  stats_.transfer = camera_.Transfer();
   return result;
 }
 

@@ -4,12 +4,19 @@
 // station's trigger output in a sweep, a software trigger in tests): acquisition never knows the
 // station.
 //
-// Per frame: write ExposureTime and read it back, fire the trigger, wait for the frame, match it
-// to the request (frame id strictly newer than the last one seen, 16-bit wrap aware, and a later
-// camera timestamp), verify the exposure it was taken with (ChunkExposureTime when the camera sends
-// chunks, the read-back otherwise), and retry a missing, damaged or wrong-exposure frame up to
-// max_retries. Exposure is latched when the camera starts a frame, so exposure N+1 is only written
-// after frame N has arrived.
+// Per frame: fire the trigger, wait for the frame, match it to the request (frame id strictly newer
+// than the last one seen, 16-bit wrap aware, and a later camera timestamp), verify the exposure it
+// was taken with, and retry a missing, damaged or wrong-exposure frame up to max_retries.
+//
+// The exposure is latched when the camera starts a frame. Two ways to program the next one:
+// - pipelined (the camera sends ChunkExposureTime and options.pipelined): exposure N+1 is written
+//   while frame N is read out, right after frame N's exposure ends (its trigger + exposure time +
+//   pipeline_margin), without a read-back; the frame's own chunk says what it was taken with, so a
+//   write that came late or early makes a wrong-exposure frame that is retried, never a mislabelled
+//   one. The per-frame cost beyond exposure + readout is the trigger and the transfer.
+// - serial (no chunks): exposure N+1 is written after frame N has arrived and read back until the
+//   camera reports it (a camera may apply a write late), then the trigger fires; the read-back is
+//   the frame's exposure.
 
 #include <chrono>
 #include <cstdint>
@@ -40,6 +47,13 @@ struct BracketOptions {
   // discard its frame: Aravis sizes the socket buffer on the first packet, so the first frame
   // after AcquisitionStart may come incomplete. The trigger callable must accept -1.
   bool warmup_trigger = true;
+  // Program the next exposure during the current frame's readout when the camera sends exposure
+  // chunks (see above); false = always serial.
+  bool pipelined = true;
+  // Time after trigger + exposure before the next exposure is written (covers the trigger latency).
+  std::chrono::microseconds pipeline_margin{500};
+  // Serial mode: how long a written exposure may take to read back before it is a CameraError.
+  std::chrono::milliseconds exposure_settle_timeout{500};
   bool IsValid(std::string* why) const;
 };
 
@@ -93,6 +107,9 @@ struct CaptureStats {
   std::int64_t stray = 0;              // frames queued before a bracket (no trigger of ours)
   std::int64_t id_gaps = 0;            // frame ids skipped by the camera
   std::int64_t warmup = 0;             // warm-up frames fired and discarded
+  std::int64_t pipelined_frames = 0;   // frames whose successor's exposure was written in readout
+  std::int64_t exposure_rereads = 0;   // read-backs that still showed the old value
+  TransferStats transfer;              // the camera's packet counters (resends, missing packets)
   std::string BriefReport() const;
 };
 
@@ -114,8 +131,19 @@ class BracketCapture {
 
  private:
   enum class Outcome { kOk, kTimeout, kDamaged, kWrongExposure };
+  void PrepareStream(const Trigger& trigger);
+  bool Pipelining() const;
+  // Writes `exposure_us` and reads it back until the camera reports it; returns the read-back.
+  double ProgramExposure(double exposure_us);
+  // Takes `plan` with retries; `next` (or null) is the exposure to program during its readout.
+  bool TakeFrame(const PlannedFrame& plan, const PlannedFrame* next, const Trigger& trigger,
+                 BracketFrame* frame, bool* next_programmed);
   Outcome Attempt(const PlannedFrame& plan, double readback_us, const Trigger& trigger,
-                  BracketFrame* out);
+                  const PlannedFrame* next, BracketFrame* out);
+  Outcome AwaitFrame(const PlannedFrame& plan, double readback_us,
+                     std::chrono::steady_clock::time_point deadline, BracketFrame* out);
+  void CountFailure(Outcome outcome, BracketFrame* frame);
+  std::string FailureText(const PlannedFrame& plan, const BracketFrame& frame) const;
   bool AcceptId(std::uint64_t frame_id, std::uint64_t timestamp_ns);
   void DrainLateFrames();
 

@@ -80,6 +80,9 @@ struct CameraSettings {
   // sizes the stream's socket buffer on the first packet, so the first frame may come incomplete.
   // (With a hardware trigger, BracketOptions::warmup_trigger does the same through the trigger.)
   int warmup_frames = 1;
+  // Ask for ChunkExposureTime when the camera offers it (each frame then says the exposure it was
+  // taken with, which lets BracketCapture pipeline its exposure writes); false = chunks off.
+  bool exposure_chunks = true;
   // Relative tolerance when a value read back must equal the value set (floats only).
   double readback_tolerance = 0.005;
   bool IsValid(std::string* why) const;
@@ -100,6 +103,15 @@ enum class FrameStatus {
 };
 const char* FrameStatusName(FrameStatus status);
 
+// GigE Vision transfer counters of a camera's stream since it was configured.
+struct TransferStats {
+  std::uint64_t resend_requests = 0;  // packets the grabber asked the camera to send again
+  std::uint64_t resent_packets = 0;   // of which received
+  std::uint64_t missing_packets = 0;  // packets still missing when their frame was given up
+  std::uint64_t completed_frames = 0;
+  std::uint64_t failed_frames = 0;
+};
+
 // One frame as it left the camera.
 struct RawFrame {
   FrameStatus status = FrameStatus::kUnknown;
@@ -107,7 +119,9 @@ struct RawFrame {
   int bit_depth = 16;             // significant bits of the pixel values
   std::uint64_t frame_id = 0;     // camera block id (16-bit on GigE Vision 1.x, wraps)
   std::uint64_t timestamp_ns = 0; // camera timestamp
-  std::int64_t host_time_ns = 0;  // host wall clock at reception (ns since the Unix epoch)
+  // Host wall clock (ns since the Unix epoch) when the frame was received: stamped by the grabber
+  // as it takes the complete frame from the stream (before copying it), not later by its user.
+  std::int64_t host_time_ns = 0;
   std::optional<double> chunk_exposure_us;  // ChunkExposureTime when the camera sends chunks
 };
 
@@ -126,6 +140,10 @@ class Camera {
   // clamps it beyond the settings' tolerance.
   virtual double SetExposureUs(double exposure_us) = 0;
   virtual double ExposureUs() = 0;
+  // Writes the exposure without reading it back (one control round trip): for programming the
+  // next frame while the current one is read out. Throws CameraError for a value outside the
+  // camera's range. The default writes with SetExposureUs.
+  virtual void WriteExposureUs(double exposure_us) { SetExposureUs(exposure_us); }
 
   // Starts streaming (AcquisitionStart) with the stream's buffers queued, then discards the
   // settings' warm-up frames where the camera can produce them by itself; StopStream ends it.
@@ -141,6 +159,8 @@ class Camera {
   virtual void SoftwareTrigger() = 0;
   // Whether frames carry ChunkExposureTime.
   virtual bool HasExposureChunks() const = 0;
+  // Packet resend and loss counters (zeros for cameras without a packet transport).
+  virtual TransferStats Transfer() const { return {}; }
 };
 
 }  // namespace irdist

@@ -1,13 +1,29 @@
 #pragma once
-// The virtual rig's GigE Vision camera: an Aravis fake camera (GVCP/GVSP) on 127.0.0.1, described
-// by sim/virtual_camera.xml, whose frames are rendered by the Renderer for the state of the World
-// during each exposure and with the exposure that frame was taken with.
+// The virtual rig's GigE Vision camera on 127.0.0.1, described by sim/virtual_camera.xml, whose
+// frames are rendered by the Renderer for the state of the World during each exposure and with the
+// exposure that frame was taken with.
 //
-// It powers up free-running (TriggerMode Off, 25 frames/s). With TriggerMode On and TriggerSource
-// Line1, each World::FireTrigger() pulse starts a frame; TriggerSource Software uses the
-// TriggerSoftware command. Timing: a frame occupies the camera for exposure + readout (simulated
-// time, scaled by the rig's time_scale) before it is sent. Faults: whole frames dropped at
-// drop_frame_rate, GVSP packets lost at lost_packet_ratio.
+// It is written from the GigE Vision protocol as a device implements it: a control channel (GVCP on
+// UDP 3956: discovery, register and memory reads and writes, packet resend) served by its own
+// thread at all times, also while a frame is exposed or read out, and a sensor thread that exposes,
+// reads out and streams frames (GVSP: leader, payload packets, trailer). Aravis's ArvFakeCamera is
+// only its register map (bootstrap registers and the XML file in memory).
+//
+// It powers up free-running (TriggerMode Off, 25 frames/s). With TriggerMode On, each trigger of
+// the selected TriggerSource starts a frame: a World::FireTrigger() pulse for Line1, the
+// TriggerSoftware command for Software. A trigger that arrives while a frame is exposed or read out
+// is queued (up to 4) and starts the next frame as soon as the sensor is free. The exposure time is
+// latched when a frame starts. Timing: a frame occupies the sensor for exposure + readout (simulated
+// time, scaled by the rig's time_scale) before it is sent.
+//
+// With ChunkModeActive and ChunkEnable[ExposureTime], each frame carries ChunkExposureTime (the
+// exposure it was taken with). Lost packets are resent on request (GVCP PACKETRESEND) from the last
+// frames kept in memory.
+//
+// Faults: whole frames dropped at drop_frame_rate, GVSP packets lost at lost_packet_ratio (first
+// transmissions and resends alike), and ExposureTime writes applied late (acknowledged at once, but
+// taking effect after a random delay up to a maximum, so that two quick writes may also land in the
+// reverse order).
 
 #include <cstdint>
 #include <memory>
@@ -20,7 +36,7 @@
 
 namespace irdist::sim {
 
-// The camera could not start (port taken, Aravis failure). The message says what to do.
+// The camera could not start (port taken, socket failure). The message says what to do.
 class CameraServerError : public Error {
  public:
   using Error::Error;
@@ -29,6 +45,7 @@ class CameraServerError : public Error {
 // What the camera did for one frame it exposed.
 struct FrameRecord {
   std::uint64_t index = 0;        // camera-side frame counter since Start (1, 2, ...)
+  std::uint16_t block_id = 0;     // GVSP block id the frame was sent with (1..65535)
   double sim_time_s = 0.0;        // simulated time at the start of the exposure
   double exposure_us = 0.0;       // exposure the frame was taken with
   double slide_mm = 0.0;          // pose at the start of the exposure
@@ -40,6 +57,19 @@ struct FrameRecord {
   std::string format;             // Mono8 / Mono12 / Mono16
 };
 
+// Counters of the control and stream channels.
+struct CameraServerStats {
+  std::uint64_t control_requests = 0;     // GVCP commands served
+  std::uint64_t requests_during_frame = 0;  // of which while a frame was exposed or read out
+  std::uint64_t resend_requests = 0;      // PACKETRESEND commands received
+  std::uint64_t packets_resent = 0;       // GVSP packets sent again on request
+  std::uint64_t packets_lost = 0;         // GVSP packets not sent (lost_packet_ratio)
+  std::uint64_t triggers_queued = 0;      // triggers that arrived while the sensor was busy
+  std::uint64_t triggers_ignored = 0;     // triggers beyond the queue, or with acquisition off
+  std::uint64_t exposure_writes_delayed = 0;
+  std::uint64_t controllers_expired = 0;  // control privileges released on heartbeat timeout
+};
+
 class CameraServer {
  public:
   CameraServer(World& world, const RigPhysics& physics);
@@ -47,10 +77,11 @@ class CameraServer {
   CameraServer(const CameraServer&) = delete;
   CameraServer& operator=(const CameraServer&) = delete;
 
-  // Checks that UDP port 3956 on 127.0.0.1 is free, then starts the fake camera and connects
-  // the World's trigger line. Throws CameraServerError.
+  // Checks that UDP port 3956 on 127.0.0.1 is free, binds it, then starts the control and sensor
+  // threads and connects the World's trigger line. Throws CameraServerError.
   void Start();
-  // Stops the camera and disconnects the trigger line. Idempotent.
+  // Stops both threads, closes the sockets and disconnects the trigger line. Idempotent; safe at
+  // any moment (a client in the middle of a request or killed while connected).
   void Stop();
   bool running() const;
 
@@ -58,15 +89,19 @@ class CameraServer {
   std::string serial() const;
   std::string device_id() const;  // as Aravis names it: "Aravis-Fake-<serial>"
 
-  // Fault injection, effective from the next frame.
+  // Fault injection, effective from the next frame (or the next ExposureTime write).
   void SetDropFrameRate(double rate);
   void SetLostPacketRatio(double ratio);
+  // ExposureTime writes take effect after a random delay in [0, max_delay_ms] (host ms); 0 = at
+  // once. Reads return the old value until then.
+  void SetExposureWriteDelayMs(double max_delay_ms);
 
   // Observation (thread-safe).
   std::uint64_t FramesExposed() const;
   std::uint64_t FramesDropped() const;
   std::uint64_t LinePulsesAccepted() const;  // Line1 pulses that triggered (mode On, source Line1)
   std::vector<FrameRecord> RecentFrames() const;  // the last up to 1000 frames, oldest first
+  CameraServerStats Stats() const;
 
  private:
   struct Impl;

@@ -191,6 +191,9 @@ bool CameraOptions::IsValid(std::string* why) const {
   if (!Fraction(lost_packet_ratio)) {
     return Fail(why, "camera.lost_packet_ratio must lie in [0, 1]");
   }
+  if (!std::isfinite(exposure_write_delay_ms) || exposure_write_delay_ms < 0.0) {
+    return Fail(why, "camera.exposure_write_delay_ms must be >= 0");
+  }
   return true;
 }
 
@@ -283,6 +286,7 @@ RigPhysics LoadRigPhysics(const std::string& rig_path) {
       {"trigger_frequency_hz", ca.Scalar(&c.trigger_frequency_hz)},
       {"drop_frame_rate", ca.Scalar(&c.drop_frame_rate)},
       {"lost_packet_ratio", ca.Scalar(&c.lost_packet_ratio)},
+      {"exposure_write_delay_ms", ca.Scalar(&c.exposure_write_delay_ms)},
   };
   const std::map<std::string, SectionReader::Setter> top_keys = {
       {"time_scale", top.Scalar(&physics.time_scale)},

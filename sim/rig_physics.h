@@ -82,9 +82,10 @@ struct SensorOptions {
 struct CameraOptions {
   std::string serial = "IRDV0001";     // GigE serial number (< 16 characters)
   double readout_ms = 12.0;            // sensor readout after the exposure ends
-  double trigger_frequency_hz = 2000;  // fake camera's trigger polling tick
+  double trigger_frequency_hz = 2000;  // unused (the camera reacts at once); kept for rig files
   double drop_frame_rate = 0.0;        // probability that a whole frame is never sent
   double lost_packet_ratio = 0.0;      // probability that each GVSP packet is lost
+  double exposure_write_delay_ms = 0.0;  // ExposureTime writes applied after up to this (fault)
   bool IsValid(std::string* why) const;
 };
 

@@ -1,11 +1,17 @@
 #include "sim/camera_server.h"
 
+#include <arpa/inet.h>
 #include <arv.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "sim/renderer.h"
@@ -162,7 +168,9 @@ TEST_F(CameraServerTest, TriggeredFramesCarryTheExposureSetForThem) {
   EXPECT_EQ(free_frames, 3) << "no free-running frames at power-up";
   arv_camera_stop_acquisition(camera_.get(), &error);
   ASSERT_NO_GERROR(error);
-  while (Pop(50000, [](ArvBuffer*) {})) {
+  // Every buffer left, complete or not (a loaded host may time some out).
+  while (ArvBuffer* left = arv_stream_timeout_pop_buffer(stream_.get(), 100000)) {
+    arv_stream_push_buffer(stream_.get(), left);
   }
 
   arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
@@ -211,6 +219,158 @@ TEST_F(CameraServerTest, TriggeredFramesCarryTheExposureSetForThem) {
   server_->SetDropFrameRate(0.0);
   arv_camera_software_trigger(camera_.get(), &error);
   EXPECT_TRUE(Pop(2000000, [](ArvBuffer*) {}));
+}
+
+// The control channel answers while a frame is exposed and read out, as a real camera's does: a
+// register read made during a long exposure returns before that frame arrives.
+TEST_F(CameraServerTest, ServesControlRequestsWhileAFrameIsExposedAndReadOut) {
+  GError* error = nullptr;
+  arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_string(camera_.get(), "TriggerSource", "Software", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_exposure_time(camera_.get(), 900000.0, &error);  // 90 ms of host time at 10x
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_region(camera_.get(), 0, 0, 256, 256, &error);
+  ASSERT_NO_GERROR(error);
+  CreateStream();
+  arv_camera_start_acquisition(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+  const std::uint64_t before = server_->Stats().requests_during_frame;
+  arv_camera_software_trigger(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+  while (server_->FramesExposed() == 0 && server_->Stats().requests_during_frame == before) {
+    EXPECT_DOUBLE_EQ(arv_camera_get_exposure_time(camera_.get(), &error), 900000.0);
+    ASSERT_NO_GERROR(error);
+  }
+  // Read during the frame: the frame is not there yet.
+  EXPECT_GT(server_->Stats().requests_during_frame, before);
+  EXPECT_EQ(arv_stream_try_pop_buffer(stream_.get()), nullptr);
+  ArvBuffer* buffer = arv_stream_timeout_pop_buffer(stream_.get(), 3000000);
+  ASSERT_NE(buffer, nullptr);
+  EXPECT_EQ(arv_buffer_get_status(buffer), ARV_BUFFER_STATUS_SUCCESS);
+  arv_stream_push_buffer(stream_.get(), buffer);
+}
+
+// With ChunkModeActive, each frame carries ChunkExposureTime: the exposure it was taken with,
+// even when the next exposure was written while it was read out.
+TEST_F(CameraServerTest, ChunkExposureTimeIsTheExposureEachFrameWasTakenWith) {
+  GError* error = nullptr;
+  ASSERT_TRUE(arv_camera_are_chunks_available(camera_.get(), &error));
+  arv_camera_set_chunks(camera_.get(), "ExposureTime", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_string(camera_.get(), "TriggerSource", "Software", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_region(camera_.get(), 0, 0, 256, 256, &error);
+  ASSERT_NO_GERROR(error);
+  CreateStream();
+  GPtr<ArvChunkParser> parser(arv_camera_create_chunk_parser(camera_.get()));
+  ASSERT_NE(parser, nullptr);
+  arv_camera_start_acquisition(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+  for (double exposure_us : {8000.0, 30000.0, 12000.0}) {
+    arv_camera_set_exposure_time(camera_.get(), exposure_us, &error);
+    ASSERT_NO_GERROR(error);
+    arv_camera_software_trigger(camera_.get(), &error);
+    ASSERT_NO_GERROR(error);
+    arv_camera_set_exposure_time(camera_.get(), 50000.0, &error);  // while it is exposed
+    ASSERT_NO_GERROR(error);
+    double chunk_us = 0.0;
+    ASSERT_TRUE(Pop(2000000, [&](ArvBuffer* b) {
+      ASSERT_TRUE(arv_buffer_has_chunks(b));
+      GError* e = nullptr;
+      chunk_us = arv_chunk_parser_get_float_value(parser.get(), b, "ChunkExposureTime", &e);
+      ASSERT_NO_GERROR(e);
+    }));
+    EXPECT_DOUBLE_EQ(chunk_us, exposure_us);
+  }
+}
+
+// Lost GVSP packets are sent again on the grabber's request: every frame completes.
+TEST_F(CameraServerTest, ResendsLostPacketsOnRequest) {
+  GError* error = nullptr;
+  arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_string(camera_.get(), "TriggerSource", "Software", &error);
+  ASSERT_NO_GERROR(error);
+  server_->SetLostPacketRatio(0.05);
+  CreateStream();
+  // Resends take round trips: on a loaded host give each frame 1 s (this is not a timing test).
+  g_object_set(stream_.get(), "frame-retention", 1000000u, nullptr);
+  arv_camera_start_acquisition(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+  int complete = 0;
+  for (int i = 0; i < 5; ++i) {
+    arv_camera_software_trigger(camera_.get(), &error);
+    ASSERT_NO_GERROR(error);
+    if (Pop(3000000, [](ArvBuffer*) {})) ++complete;
+  }
+  EXPECT_EQ(complete, 5);
+  EXPECT_GT(server_->Stats().packets_lost, 0u);
+  EXPECT_GT(server_->Stats().resend_requests, 0u);
+  EXPECT_GT(server_->Stats().packets_resent, 0u);
+}
+
+// Sends one GVCP WRITEREG command from `fd` to 127.0.0.1:3956 and waits for its acknowledge.
+bool WriteRegisterRaw(int fd, std::uint32_t address, std::uint32_t value, std::uint16_t id) {
+  const std::uint8_t packet[] = {0x42, 0x01, 0x00, 0x82, 0x00, 0x08,
+                                 static_cast<std::uint8_t>(id >> 8), static_cast<std::uint8_t>(id),
+                                 static_cast<std::uint8_t>(address >> 24),
+                                 static_cast<std::uint8_t>(address >> 16),
+                                 static_cast<std::uint8_t>(address >> 8),
+                                 static_cast<std::uint8_t>(address),
+                                 static_cast<std::uint8_t>(value >> 24),
+                                 static_cast<std::uint8_t>(value >> 16),
+                                 static_cast<std::uint8_t>(value >> 8),
+                                 static_cast<std::uint8_t>(value)};
+  sockaddr_in camera{};
+  camera.sin_family = AF_INET;
+  camera.sin_port = htons(3956);
+  camera.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::sendto(fd, packet, sizeof(packet), 0, reinterpret_cast<sockaddr*>(&camera),
+               sizeof(camera)) != static_cast<ssize_t>(sizeof(packet))) {
+    return false;
+  }
+  std::uint8_t ack[64];
+  pollfd wait{fd, POLLIN, 0};
+  if (::poll(&wait, 1, 2000) != 1) return false;
+  const ssize_t got = ::recv(fd, ack, sizeof(ack), 0);
+  return got >= 12 && ack[0] == 0 && ack[1] == 0 && ack[3] == 0x83;  // status 0, WRITEREG_ACK
+}
+
+// A controller that takes the camera and then falls silent (a client killed while connected)
+// loses its control privilege after its heartbeat timeout, so the next client can take over.
+TEST(CameraServerHeartbeat, SilentControllerLosesControlAfterItsHeartbeatTimeout) {
+  ASSERT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(120)));
+  RigPhysics physics = TestPhysics();
+  World world(physics.time_scale);
+  CameraServer server(world, physics);
+  server.Start();
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(fd, 0);
+  ASSERT_TRUE(WriteRegisterRaw(fd, 0x938, 300, 1));  // heartbeat timeout 300 ms
+  ASSERT_TRUE(WriteRegisterRaw(fd, 0xa00, 2, 2));    // control privilege
+  ASSERT_TRUE(WriteRegisterRaw(fd, 0x124, 1, 3));    // AcquisitionStart
+  // Another application may not write while the controller is alive.
+  GError* error = nullptr;
+  GPtr<ArvCamera> other(arv_camera_new("127.0.0.1", &error));
+  if (error != nullptr) g_clear_error(&error);
+  if (other != nullptr) {
+    arv_camera_set_exposure_time(other.get(), 20000.0, &error);
+    EXPECT_NE(error, nullptr) << "a second application wrote while the controller was alive";
+    if (error != nullptr) g_clear_error(&error);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));  // the controller is silent
+  ::close(fd);
+  EXPECT_EQ(server.Stats().controllers_expired, 1u);
+  other.reset();
+  GPtr<ArvCamera> next(arv_camera_new("127.0.0.1", &error));
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_exposure_time(next.get(), 12345.0, &error);
+  ASSERT_NO_GERROR(error);
+  EXPECT_DOUBLE_EQ(arv_camera_get_exposure_time(next.get(), &error), 12345.0);
 }
 
 TEST(CameraServerPort, SecondCameraOnLoopbackFailsClearly) {

@@ -35,6 +35,10 @@ TEST(RigPhysics, InvalidValuesAreRejectedWithAReason) {
   p = RigPhysics{};
   p.time_scale = 0.0;
   EXPECT_FALSE(p.IsValid(&why));
+  p = RigPhysics{};
+  p.camera.exposure_write_delay_ms = -1.0;
+  EXPECT_FALSE(p.IsValid(&why));
+  EXPECT_NE(why.find("exposure_write_delay_ms"), std::string::npos);
 }
 
 TEST(RigPhysics, ShippedVirtualRigLoadsAndMatchesTheDefaults) {
@@ -61,6 +65,9 @@ TEST(RigPhysics, ReadsValuesAndLeavesOthersAtDefaults) {
                                     "  sensor:\n"
                                     "    adc_bits: 10\n"
                                     "    black_level_dn: 4\n"
+                                    "  camera:\n"
+                                    "    lost_packet_ratio: 0.05\n"
+                                    "    exposure_write_delay_ms: 20\n"
                                     "  station:\n"
                                     "    anything: goes here\n");
   const RigPhysics p = LoadRigPhysics(path);
@@ -70,6 +77,8 @@ TEST(RigPhysics, ReadsValuesAndLeavesOthersAtDefaults) {
   EXPECT_EQ(p.emitter.pattern, EmissionPattern::kCosPower);
   EXPECT_EQ(p.emitter.pattern_cos_power, 2.5);
   EXPECT_EQ(p.sensor.adc_bits, 10);
+  EXPECT_EQ(p.camera.lost_packet_ratio, 0.05);
+  EXPECT_EQ(p.camera.exposure_write_delay_ms, 20.0);
   EXPECT_EQ(p.optics.focal_length_mm, OpticsOptions{}.focal_length_mm);
 }
 
