@@ -95,6 +95,20 @@ void PrintPlan(const Recipe& recipe, const Plan& plan, int show_poses, std::ostr
   }
 }
 
+// --time-scale: the virtual rig's range, said in plain numbers (not CLI11's double limits).
+CLI::Validator TimeScaleRange() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value) || !(value >= 0.01 && value <= 1000.0)) {
+          return "--time-scale " + text +
+                 " is outside 0.01..1000 (simulated seconds per host second; 1 = real time)";
+        }
+        return "";
+      },
+      "0.01..1000");
+}
+
 }  // namespace
 
 std::vector<std::string> SubcommandNames() {
@@ -163,7 +177,7 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub->add_option("--resume", calibrate.resume_dir, "Continue the cut run in this folder");
   sub->add_option("--time-scale", calibrate.time_scale,
                   "Virtual rig: simulated seconds per host second (default: the rig file's)")
-      ->check(CLI::PositiveNumber);
+      ->check(TimeScaleRange());
   sub->add_flag("--quiet", calibrate.quiet, "No progress output");
   table.emplace_back(sub, [&] { Invoke(handlers.calibrate, "calibrate", calibrate, io); });
 
@@ -174,7 +188,7 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub->add_option("--resume", validate.resume_dir, "Continue the cut run in this folder");
   sub->add_option("--time-scale", validate.time_scale,
                   "Virtual rig: simulated seconds per host second (default: the rig file's)")
-      ->check(CLI::PositiveNumber);
+      ->check(TimeScaleRange());
   sub->add_flag("--quiet", validate.quiet, "No progress output");
   table.emplace_back(sub, [&] { Invoke(handlers.validate, "validate", validate, io); });
 
@@ -183,6 +197,7 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub->add_option("--out", fit.out, "Model file to write");
   sub->add_flag("--recover-response", fit.recover_response,
                 "Recover the camera's response from the brackets and linearise every pixel");
+  sub->add_flag("--force", fit.force, "Replace an existing model.yaml, features.csv and report");
   table.emplace_back(sub, [&] { Invoke(handlers.fit, "fit", fit, io); });
 
   sub = add("playback");
@@ -191,6 +206,8 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub->add_option("--out", playback.out_dir,
                   "Folder for features.csv, estimates.csv, summary.yaml");
   sub->add_flag("--show", playback.show, "Step through the frames in a window (needs a display)");
+  sub->add_flag("--force", playback.force,
+                "Replace existing features.csv, estimates.csv, summary.yaml and report");
   table.emplace_back(sub, [&] { Invoke(handlers.playback, "playback", playback, io); });
 
   sub = add("check");
@@ -209,7 +226,8 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
                   "With --suggest: the latest validation's summary.yaml (its best dt)");
   sub->add_option("--out", plan.out_dir, "With --suggest: folder of the probe run");
   sub->add_option("--time-scale", plan.time_scale,
-                  "With --suggest on a virtual rig: simulated seconds per second");
+                  "With --suggest on a virtual rig: simulated seconds per second")
+      ->check(TimeScaleRange());
   sub->add_flag("--quiet", plan.quiet, "No progress output");
   table.emplace_back(sub, [&] { Invoke(handlers.plan, "plan", plan, io); });
 
@@ -217,7 +235,7 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub->add_option("rig", sim.rig, "Rig name or rig file of kind virtual")->capture_default_str();
   sub->add_option("--rig", sim.rig, "Rig name or rig file of kind virtual");
   sub->add_option("--time-scale", sim.time_scale, "Simulated seconds per host second")
-      ->check(CLI::PositiveNumber);
+      ->check(TimeScaleRange());
   table.emplace_back(sub, [&] { Invoke(handlers.sim, "sim", sim, io); });
 
   sub = add("devices");

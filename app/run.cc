@@ -20,6 +20,7 @@
 #include "app/capture.h"
 #include "app/offline.h"
 #include "app/recipe.h"
+#include "app/resume.h"
 #include "app/suggest.h"
 #include "app/tools.h"
 #include "estimator/model_file.h"
@@ -178,27 +179,13 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   Recorded recorded;
   const bool resume = !request.resume_dir.empty();
   const std::string recipe_text = ReadText(recipe.path);
+  const std::string command = request.kind == RunKind::kCalibrate ? "calibrate" : "validate";
 
   std::set<std::int64_t> done_ids;
   if (resume) {
     recorded.dir = request.resume_dir;
-    const std::string recording_dir = recorded.dir + "/recording";
-    if (!fs::exists(recording_dir + "/recording.yaml")) {
-      throw RunFolderError(recording_dir +
-                           ": no recording to resume (recording.yaml missing); "
-                           "pass the folder of a cut run to --resume.");
-    }
-    const RecordingState state = ReadRecordingState(recording_dir);
-    if (state.recipe_text != recipe_text) {
-      throw RecipeError(recipe.path, 0, 0,
-                        "differs from the recipe recorded in " + recording_dir +
-                            "/recording.yaml (recipe " + state.recipe_path +
-                            "); resume with the recipe the run started with.");
-    }
-    if (state.complete) {
-      io.err << "The recording in " << recording_dir << " is complete; nothing to resume.\n";
-      return recorded;
-    }
+    const ResumeState state = CheckResume(
+        recorded.dir, command, ResumeExpectationOf(recipe, recipe_text, ReadText(recipe.rig_path)));
     done_ids = state.complete_brackets;
     io.err << "Resuming " << recorded.dir << ": " << done_ids.size() << " of " << plan.poses.size()
            << " brackets already recorded.\n";
@@ -212,7 +199,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
                            recorded.dir + ".");
     }
   }
-  fs::create_directories(recorded.dir);
+  const RunFolderLock folder_lock(recorded.dir, command);
   const std::vector<SweepPose> poses = SweepPoses(plan, done_ids);
 
   // The rig: a virtual one is started here and stopped at the end, on every path (it is declared
@@ -372,6 +359,9 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
     }
     progress.Finish();
     recorder.Close(true);
+    io.err << "\nThe recording in " << recorded.dir << "/recording is closed as cut. Continue it "
+           << "with: " << ResumeCommand(command, recipe.path,
+                                        request.model_path, recorded.dir) << "\n";
     throw;
   }
   commit();  // the sweep returned: its last pose is confirmed
