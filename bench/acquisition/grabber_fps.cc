@@ -6,11 +6,16 @@
 // Both free-run the same fake camera (127.0.0.1, Mono8, width x height, AcquisitionFrameRate
 // rate_hz, packet socket disabled) for the same duration; the figure is completed frames per
 // second of wall time, and the ratio ours / arv-camera-test.
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <regex>
 #include <string>
+#include <vector>
 
 #include "acquisition/aravis_camera.h"
 #include "tests/acquisition/fake_camera_process.h"
@@ -23,20 +28,40 @@ struct Run {
   long failed = 0;
 };
 
+// Runs arv-camera-test-0.8 with an argument vector (no shell); returns its stdout and stderr.
+std::string RunArvCameraTestOutput(const std::vector<std::string>& arguments) {
+  std::vector<std::string> words = {"arv-camera-test-0.8"};
+  words.insert(words.end(), arguments.begin(), arguments.end());
+  std::vector<char*> argv;
+  for (std::string& word : words) argv.push_back(word.data());
+  argv.push_back(nullptr);
+  int fds[2];
+  if (::pipe(fds) != 0) return "";
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
+  posix_spawn_file_actions_addclose(&actions, fds[0]);
+  pid_t pid = -1;
+  const int spawned = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(fds[1]);
+  std::string output;
+  char buffer[4096];
+  ssize_t n = 0;
+  while ((n = ::read(fds[0], buffer, sizeof(buffer))) > 0) output.append(buffer, static_cast<size_t>(n));
+  ::close(fds[0]);
+  int status = 0;
+  if (spawned == 0) ::waitpid(pid, &status, 0);
+  return output;
+}
+
 Run RunArvCameraTest(double seconds, double rate_hz, int width, int height) {
-  char command[512];
-  std::snprintf(command, sizeof(command),
-                "arv-camera-test-0.8 -n 127.0.0.1 --no-packet-socket -f %g -w %d -h %d "
-                "--duration=%g 2>&1",
-                rate_hz, width, height, seconds);
   Run run;
   run.seconds = seconds;
-  FILE* pipe = ::popen(command, "r");
-  if (pipe == nullptr) return run;
-  std::string output;
-  char line[512];
-  while (std::fgets(line, sizeof(line), pipe) != nullptr) output += line;
-  ::pclose(pipe);
+  const std::string output = RunArvCameraTestOutput(
+      {"-n", "127.0.0.1", "--no-packet-socket", "-f", std::to_string(rate_hz), "-w",
+       std::to_string(width), "-h", std::to_string(height), "--duration=" + std::to_string(seconds)});
   std::smatch match;
   if (std::regex_search(output, match, std::regex("n_completed_buffers\\s*=\\s*(\\d+)"))) {
     run.completed = std::stol(match[1]);

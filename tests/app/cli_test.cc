@@ -1,7 +1,9 @@
 #include "app/cli.h"
 
 #include <gtest/gtest.h>
+#include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -153,16 +155,36 @@ TEST(CliTest, PlanPrintsCountsOrderAndDuration) {
   EXPECT_NE(out.find("all 24 poses"), std::string::npos) << out;
 }
 
-// The built binary: typed errors become exit codes and one message on stderr.
+// The built binary, run with an argument vector (no shell): typed errors become exit codes and one
+// message on stderr. `arguments` are split at spaces.
 int RunBinary(const std::string& arguments, std::string* output) {
-  const std::string command = std::string(IRDIST_BINARY_DIR) + "/app/irdist " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return -1;
-  std::array<char, 4096> buffer{};
+  std::vector<std::string> words = {std::string(IRDIST_BINARY_DIR) + "/app/irdist"};
+  std::istringstream split(arguments);
+  for (std::string word; split >> word;) words.push_back(word);
+  std::vector<char*> argv;
+  for (std::string& word : words) argv.push_back(word.data());
+  argv.push_back(nullptr);
+  int fds[2];
+  if (::pipe(fds) != 0) return -1;
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
+  posix_spawn_file_actions_addclose(&actions, fds[0]);
+  pid_t pid = -1;
+  const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(fds[1]);
   output->clear();
-  size_t n = 0;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) output->append(buffer.data(), n);
-  const int status = pclose(pipe);
+  std::array<char, 4096> buffer{};
+  ssize_t n = 0;
+  while ((n = ::read(fds[0], buffer.data(), buffer.size())) > 0) {
+    output->append(buffer.data(), static_cast<size_t>(n));
+  }
+  ::close(fds[0]);
+  if (spawned != 0) return -1;
+  int status = 0;
+  if (::waitpid(pid, &status, 0) != pid) return -1;
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -184,6 +206,22 @@ TEST(CliTest, BinaryExitCodes) {
   EXPECT_EQ(output.find('\n'), output.size() - 1) << output;
 
   EXPECT_EQ(RunBinary("--help", &output), 0) << output;
+}
+
+
+TEST(CliSafety, TimeScaleZeroIsRefusedInPlainNumbers) {
+  for (const char* command : {"calibrate", "sim"}) {
+    try {
+      RunWords({command, kRecipes + "/smoke-calibration.yaml", "--time-scale", "0"},
+               DefaultHandlers());
+      FAIL() << command << " accepted --time-scale 0";
+    } catch (const UsageError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("0.01..1000"), std::string::npos) << what;
+      EXPECT_EQ(what.find("e+308"), std::string::npos) << what;
+      EXPECT_LT(what.size(), 300u) << what;
+    }
+  }
 }
 
 }  // namespace
