@@ -219,7 +219,7 @@ bool ParseDouble(const std::string& text, double* value, bool optional = false) 
   in.imbue(std::locale::classic());
   double v = 0.0;
   in >> v;
-  if (in.fail() || !in.eof()) return false;
+  if (in.fail() || !in.eof() || !std::isfinite(v)) return false;
   *value = v;
   return true;
 }
@@ -259,12 +259,14 @@ bool ParseRow(const std::string& line, FrameRecord* r, std::string* why) {
   if (!ParseDouble(f[7], &r->actual_exposure_us)) return bad("actual_exposure_us", f[7]);
   if (f[8] != "chunk" && f[8] != "readback") return bad("exposure_source", f[8]);
   r->exposure_from_chunk = f[8] == "chunk";
-  if (!ParseDouble(f[9], &r->bias_ma_set, true)) return bad("bias_ma_set", f[9]);
+  // Only bias_ma_measured may be empty (not measured): the pose and the set current are the
+  // frame's ground truth.
+  if (!ParseDouble(f[9], &r->bias_ma_set)) return bad("bias_ma_set", f[9]);
   if (!ParseDouble(f[10], &r->bias_ma_measured, true)) return bad("bias_ma_measured", f[10]);
-  if (!ParseDouble(f[11], &r->slide_mm, true)) return bad("slide_mm", f[11]);
-  if (!ParseDouble(f[12], &r->pan_deg, true)) return bad("pan_deg", f[12]);
-  if (!ParseDouble(f[13], &r->tilt_deg, true)) return bad("tilt_deg", f[13]);
-  if (!ParseDouble(f[14], &r->theta_deg, true)) return bad("theta_deg", f[14]);
+  if (!ParseDouble(f[11], &r->slide_mm)) return bad("slide_mm", f[11]);
+  if (!ParseDouble(f[12], &r->pan_deg)) return bad("pan_deg", f[12]);
+  if (!ParseDouble(f[13], &r->tilt_deg)) return bad("tilt_deg", f[13]);
+  if (!ParseDouble(f[14], &r->theta_deg)) return bad("theta_deg", f[14]);
   if (!ParseInt(f[15], &v) || v < 0) return bad("repeat", f[15]);
   r->repeat = static_cast<int>(v);
   if (!ParseUint(f[16], &r->camera_frame_id)) return bad("camera_frame_id", f[16]);

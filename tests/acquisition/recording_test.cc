@@ -504,6 +504,16 @@ TEST(RecordingSafety, FirstWriteErrorIsReportedAndTheRecordingClosesAsCut) {
   fs::remove_all(dir);
 }
 
+TEST(RecordingSafety, EmptySlideIsAnErrorNamingFramesCsvLine) {
+  const std::string dir = CompleteRecording("emptyslide", kBracketSize);
+  EditCsvLine(dir, 4, [](std::string line) {
+    return std::regex_replace(line, std::regex(",1500,10,"), ",,10,");
+  });
+  EXPECT_NE(ReaderError(dir).find("frames.csv:4: bad row: bad slide_mm ''"), std::string::npos)
+      << ReaderError(dir);
+  fs::remove_all(dir);
+}
+
 TEST(RecordingSafety, ParsersRefuseGarbageWithNamedErrors) {
   EXPECT_FALSE(ParseFramesCsv("nonsense\n").errors.empty());
   EXPECT_THROW(ParseRecordingHeader("format: [\n", "recording.yaml"), RecordingError);
