@@ -135,15 +135,15 @@ ResumeState CheckResume(const std::string& run_dir, const std::string& command,
                          "`irdist " + made_by + "`, or start a new run.");
   }
   const RecordingReader reader(recording_dir);
-  if (reader.IsComplete()) {
-    throw RunFolderError(recording_dir + " is complete: there is nothing to resume, and its "
-                         "results stand (nothing was refitted). Start a new run with --out.");
-  }
   CheckSameText("recipe", expected.recipe_path, expected.recipe_text, reader.header().recipe_text,
                 recording_dir);
   CheckSameText("rig file", expected.rig_path, expected.rig_text, reader.header().rig_text,
                 recording_dir);
   CheckCameraSettings(reader.header(), expected, recording_dir);
+  if (reader.IsComplete()) {
+    throw RunFolderError(recording_dir + " is complete: there is nothing to resume, and its "
+                         "results stand (nothing was refitted). Start a new run with --out.");
+  }
   ResumeState state;
   state.complete_brackets = reader.CompleteBracketIds();
   return state;
