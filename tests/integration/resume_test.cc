@@ -193,7 +193,7 @@ TEST_F(Resume, ResumeRefusesAnotherRecipe) {
 
 TEST_F(Resume, ResumeOfACompleteRunSaysSoAndRefitsNothing) {
   ASSERT_EQ(reference_code_, 0);
-  const std::string model = *dir_ + "/whole/model.yaml";
+  const std::string model = *dir_ + "/whole/features.csv";  // the recipe's after: none
   ASSERT_TRUE(fs::exists(model));
   const auto written = fs::last_write_time(model);
   std::string output;
@@ -202,7 +202,7 @@ TEST_F(Resume, ResumeOfACompleteRunSaysSoAndRefitsNothing) {
             1)
       << output;
   EXPECT_NE(output.find("nothing to resume"), std::string::npos) << output;
-  EXPECT_EQ(fs::last_write_time(model), written) << "the complete run was refitted";
+  EXPECT_EQ(fs::last_write_time(model), written) << "the complete run was processed again";
 }
 
 }  // namespace
