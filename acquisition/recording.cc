@@ -1,6 +1,7 @@
 #include "acquisition/recording.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -19,7 +20,10 @@
 #include <sstream>
 #include <utility>
 
+#include <boost/crc.hpp>
 #include <opencv2/imgcodecs.hpp>
+
+#include "base/yaml_fields.h"
 
 namespace irdist {
 namespace {
@@ -76,7 +80,21 @@ bool WriteAll(int fd, const void* data, size_t size) {
   return true;
 }
 
-// Writes `data` to path + ".tmp", then renames it to `path` (atomic).
+// fsync of a folder, so that a rename in it survives a crash.
+void SyncFolder(const std::string& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) throw RecordingError("cannot open folder " + dir + " to sync it: " + Errno() + ".");
+  const bool ok = ::fsync(fd) == 0 || errno == EINVAL;  // EINVAL: the file system cannot sync
+  const int saved = errno;
+  ::close(fd);
+  if (!ok) {
+    errno = saved;
+    throw RecordingError("cannot sync folder " + dir + ": " + Errno() + ". Is the disk failing?");
+  }
+}
+
+// Writes `data` to path + ".tmp", syncs it, renames it to `path` and syncs the folder: after a
+// crash `path` is either the old or the new file, complete.
 void WriteFileAtomically(const std::string& path, const void* data, size_t size) {
   const std::string tmp = path + ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -84,16 +102,68 @@ void WriteFileAtomically(const std::string& path, const void* data, size_t size)
     throw RecordingError("cannot create " + tmp + ": " + Errno() +
                          ". Check the disk and permissions of the recording directory.");
   }
-  const bool ok = WriteAll(fd, data, size);
+  const bool ok = WriteAll(fd, data, size) && ::fsync(fd) == 0;
   const int saved = errno;
   ::close(fd);
   if (!ok) {
+    ::unlink(tmp.c_str());
     errno = saved;
     throw RecordingError("cannot write " + tmp + ": " + Errno() + ". Is the disk full?");
   }
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     throw RecordingError("cannot rename " + tmp + " to " + path + ": " + Errno() + ".");
   }
+  SyncFolder(fs::path(path).parent_path().string());
+}
+
+// Reads a regular file inside a recording, never blocking: a FIFO, a device or a symbolic link
+// is refused. Returns false and sets `why` when refused or unreadable.
+bool ReadRegularFile(const std::string& path, std::int64_t max_bytes, std::string* bytes,
+                     std::string* why) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    *why = errno == ELOOP ? "is a symbolic link (a recording holds its own files)"
+                          : std::string("cannot be opened: ") + Errno();
+    return false;
+  }
+  struct stat st {};
+  bool ok = ::fstat(fd, &st) == 0;
+  if (ok && !S_ISREG(st.st_mode)) {
+    *why = "is not a regular file (a FIFO, device or folder)";
+    ok = false;
+  } else if (ok && st.st_size > max_bytes) {
+    *why = "is " + std::to_string(st.st_size) + " bytes, over the limit of " +
+           std::to_string(max_bytes);
+    ok = false;
+  }
+  if (ok) {
+    bytes->resize(static_cast<size_t>(st.st_size));
+    size_t got = 0;
+    while (ok && got < bytes->size()) {
+      const ssize_t n = ::read(fd, bytes->data() + got, bytes->size() - got);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        *why = std::string("cannot be read: ") + (n < 0 ? Errno() : "shorter than its size");
+        ok = false;
+      } else {
+        got += static_cast<size_t>(n);
+      }
+    }
+  }
+  ::close(fd);
+  return ok;
+}
+
+constexpr std::int64_t kMaxPngBytes = std::int64_t{1} << 28;
+constexpr std::int64_t kMaxTextBytes = std::int64_t{1} << 30;
+
+// A CRC-32 of a text, as 8 hex digits: recording.yaml's check of recipe.yaml and rig.yaml.
+std::string Crc32Hex(const std::string& text) {
+  boost::crc_32_type crc;
+  crc.process_bytes(text.data(), text.size());
+  char hex[16];
+  std::snprintf(hex, sizeof(hex), "%08x", static_cast<unsigned>(crc.checksum()));
+  return hex;
 }
 
 std::string FormatRow(const FrameRecord& r) {
@@ -149,7 +219,7 @@ bool ParseDouble(const std::string& text, double* value, bool optional = false) 
   in.imbue(std::locale::classic());
   double v = 0.0;
   in >> v;
-  if (in.fail() || !in.eof()) return false;
+  if (in.fail() || !in.eof() || !std::isfinite(v)) return false;
   *value = v;
   return true;
 }
@@ -168,7 +238,11 @@ bool ParseRow(const std::string& line, FrameRecord* r, std::string* why) {
   std::int64_t v = 0;
   if (!ParseInt(f[0], &r->index) || r->index < 0) return bad("index", f[0]);
   r->file = f[1];
-  if (r->file.rfind("frames/", 0) != 0) return bad("file", f[1]);
+  if (r->file != FrameFileName(r->index)) {
+    *why = "file '" + f[1] + "' is not " + FrameFileName(r->index) +
+           " (a row names the PNG of its own index, inside the recording)";
+    return false;
+  }
   if (!ParseInt(f[2], &r->bracket_id)) return bad("bracket_id", f[2]);
   if (!ParseInt(f[3], &v) || v < 0) return bad("frame_in_bracket", f[3]);
   r->frame_in_bracket = static_cast<int>(v);
@@ -185,12 +259,14 @@ bool ParseRow(const std::string& line, FrameRecord* r, std::string* why) {
   if (!ParseDouble(f[7], &r->actual_exposure_us)) return bad("actual_exposure_us", f[7]);
   if (f[8] != "chunk" && f[8] != "readback") return bad("exposure_source", f[8]);
   r->exposure_from_chunk = f[8] == "chunk";
-  if (!ParseDouble(f[9], &r->bias_ma_set, true)) return bad("bias_ma_set", f[9]);
+  // Only bias_ma_measured may be empty (not measured): the pose and the set current are the
+  // frame's ground truth.
+  if (!ParseDouble(f[9], &r->bias_ma_set)) return bad("bias_ma_set", f[9]);
   if (!ParseDouble(f[10], &r->bias_ma_measured, true)) return bad("bias_ma_measured", f[10]);
-  if (!ParseDouble(f[11], &r->slide_mm, true)) return bad("slide_mm", f[11]);
-  if (!ParseDouble(f[12], &r->pan_deg, true)) return bad("pan_deg", f[12]);
-  if (!ParseDouble(f[13], &r->tilt_deg, true)) return bad("tilt_deg", f[13]);
-  if (!ParseDouble(f[14], &r->theta_deg, true)) return bad("theta_deg", f[14]);
+  if (!ParseDouble(f[11], &r->slide_mm)) return bad("slide_mm", f[11]);
+  if (!ParseDouble(f[12], &r->pan_deg)) return bad("pan_deg", f[12]);
+  if (!ParseDouble(f[13], &r->tilt_deg)) return bad("tilt_deg", f[13]);
+  if (!ParseDouble(f[14], &r->theta_deg)) return bad("theta_deg", f[14]);
   if (!ParseInt(f[15], &v) || v < 0) return bad("repeat", f[15]);
   r->repeat = static_cast<int>(v);
   if (!ParseUint(f[16], &r->camera_frame_id)) return bad("camera_frame_id", f[16]);
@@ -201,22 +277,15 @@ bool ParseRow(const std::string& line, FrameRecord* r, std::string* why) {
   return true;
 }
 
-// frames.csv split into lines; `partial` is set when the last line lacks its '\n'.
-struct CsvText {
+// frames.csv's text split into lines; `partial_last` when the last line lacks its '\n'.
+struct CsvLines {
   std::vector<std::string> lines;  // lines[0] is line 1
   bool partial_last = false;
-  std::uint64_t complete_bytes = 0;  // bytes up to and including the last '\n'
+  std::uint64_t complete_bytes = 0;
 };
 
-CsvText ReadCsv(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw RecordingError("cannot open " + path +
-                         ": not a recording directory (frames.csv missing). Give the directory "
-                         "that holds recording.yaml and frames.csv.");
-  }
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  CsvText csv;
+CsvLines SplitLines(const std::string& text) {
+  CsvLines csv;
   size_t start = 0;
   while (start < text.size()) {
     const size_t end = text.find('\n', start);
@@ -232,64 +301,185 @@ CsvText ReadCsv(const std::string& path) {
   return csv;
 }
 
-Completion ParseCompletion(const std::string& text, const std::string& path) {
+// Duplicates, gaps and order of the indices: the rows are frames 0, 1, 2, ... in order.
+class IndexTracker {
+ public:
+  // Returns "" when the row's index is the next one, else what is wrong.
+  std::string Add(const FrameRecord& row) {
+    std::string why;
+    const auto earlier = index_line_.find(row.index);
+    if (earlier != index_line_.end()) {
+      why = "duplicate index " + std::to_string(row.index) + " (first at line " +
+            std::to_string(earlier->second) + ")";
+    } else if (row.index > expected_) {
+      why = "gap: indices " + std::to_string(expected_) + ".." + std::to_string(row.index - 1) +
+            " are missing";
+    } else if (row.index < expected_) {
+      why = "index " + std::to_string(row.index) + " out of order (expected " +
+            std::to_string(expected_) + ")";
+    }
+    index_line_.emplace(row.index, row.line);
+    expected_ = std::max(expected_, row.index + 1);
+    return why;
+  }
+
+ private:
+  std::map<std::int64_t, int> index_line_;
+  std::int64_t expected_ = 0;
+};
+
+void AddSupersededWarning(const FrameRecord& row,
+                          std::map<std::pair<std::int64_t, int>, int>* position_line,
+                          std::vector<RecordingIssue>* warnings) {
+  const auto position = std::make_pair(row.bracket_id, row.frame_in_bracket);
+  const auto earlier = position_line->find(position);
+  if (earlier != position_line->end()) {
+    warnings->push_back({kCsv, row.line,
+                         "bracket " + std::to_string(row.bracket_id) + " frame " +
+                             std::to_string(row.frame_in_bracket) + " supersedes line " +
+                             std::to_string(earlier->second) + " (re-acquired)"});
+  }
+  (*position_line)[position] = row.line;
+}
+
+namespace yf = yaml_fields;
+
+constexpr char kRecipeFile[] = "recipe.yaml";
+constexpr char kRigFile[] = "rig.yaml";
+
+void ParseHeaderImage(const yf::MapReader& root, RecordingHeader* h) {
+  const yf::MapReader image(root.Require("image"), root.File(), "image",
+                            {"encoding", "bit_depth", "pixel_format"});
+  if (image.String("encoding", "png16") != "png16") {
+    yf::Fail(root.File(), image.Get("encoding").Mark(), "image.encoding must be png16");
+  }
+  const YAML::Node depth = image.Require("bit_depth");
+  h->bit_depth = yf::AsInteger(depth, root.File(), "image.bit_depth");
+  if (h->bit_depth < 1 || h->bit_depth > 16) {
+    yf::Fail(root.File(), depth.Mark(),
+             "image.bit_depth " + std::to_string(h->bit_depth) +
+                 " is impossible for a 16-bit PNG; it must be 1..16 (8 for Mono8, 12 for Mono12)");
+  }
+  h->pixel_format = image.String("pixel_format", "");
+}
+
+void ParseHeaderCamera(const yf::MapReader& root, RecordingHeader* h) {
+  if (!root.Has("camera")) return;
+  const yf::MapReader camera(root.Get("camera"), root.File(), "camera",
+                             {"vendor", "model", "serial", "firmware", "address", "features"});
+  h->camera.vendor = camera.String("vendor", "");
+  h->camera.model = camera.String("model", "");
+  h->camera.serial = camera.String("serial", "");
+  h->camera.firmware = camera.String("firmware", "");
+  h->camera.address = camera.String("address", "");
+  const YAML::Node features = camera.Get("features");
+  if (!features) return;
+  if (!features.IsMap()) yf::Fail(root.File(), features.Mark(), "camera.features must be a map");
+  for (const auto& item : features) {
+    h->camera_features[yf::AsString(item.first, root.File(), "camera.features key")] =
+        yf::AsString(item.second, root.File(), "camera.features value");
+  }
+}
+
+// recipe: / rig: {path, file, crc32} (the text in the file beside), or {path, text} (older).
+void ParseHeaderText(const yf::MapReader& root, const char* key, std::string* path,
+                     std::string* text, std::string* file, std::string* crc) {
+  if (!root.Has(key)) return;
+  const yf::MapReader block(root.Get(key), root.File(), key, {"path", "text", "file", "crc32"});
+  *path = block.String("path", "");
+  *text = block.String("text", "");
+  *file = block.String("file", "");
+  *crc = block.String("crc32", "");
+  if (!file->empty() && *file != kRecipeFile && *file != kRigFile) {
+    yf::Fail(root.File(), block.Get("file").Mark(),
+             std::string(key) + ".file must be recipe.yaml or rig.yaml, beside recording.yaml");
+  }
+}
+
+Completion ParseCompletionField(const yf::MapReader& root) {
+  const YAML::Node node = root.Require("completion");
+  const std::string text = yf::AsString(node, root.File(), "completion");
   if (text == "running") return Completion::kRunning;
   if (text == "complete") return Completion::kComplete;
   if (text == "cut") return Completion::kCut;
-  throw RecordingError(path + ": completion '" + text +
-                       "' is not running, complete or cut; fix the key by hand.");
+  yf::Fail(root.File(), node.Mark(),
+           "completion '" + text + "' is not running, complete or cut; fix the key by hand");
+}
+
+struct TextFiles {
+  std::string recipe_file, recipe_crc, rig_file, rig_crc;
+};
+
+RecordingHeader ParseHeaderFields(const std::string& text, const std::string& path,
+                                  TextFiles* files) {
+  const yf::MapReader root(yf::Parse(text, path), path, "recording.yaml",
+                           {"format", "format_version", "completion", "software_version",
+                            "start_time", "end_time", "frame_count", "resumed", "image", "camera",
+                            "station", "recipe", "rig"});
+  if (root.String("format", "") != "irdist-recording") {
+    yf::Fail(path, root.Mark(), "'format' is not irdist-recording; this is not an irdist "
+                                "recording header");
+  }
+  RecordingHeader h;
+  h.format_version = root.Integer("format_version", 0);
+  if (h.format_version != kRecordingFormatVersion) {
+    yf::Fail(path, root.Mark(), "format_version " + std::to_string(h.format_version) +
+                                    " is not supported (this irdist reads version " +
+                                    std::to_string(kRecordingFormatVersion) + ")");
+  }
+  h.completion = ParseCompletionField(root);
+  h.software_version = root.String("software_version", "");
+  h.start_time = root.String("start_time", "");
+  h.end_time = root.String("end_time", "");
+  h.frame_count = static_cast<std::int64_t>(root.Number("frame_count", -1));
+  if (root.Has("resumed")) {
+    const YAML::Node resumed = root.Get("resumed");
+    if (!resumed.IsSequence()) yf::Fail(path, resumed.Mark(), "resumed must be a list of times");
+    for (const auto& item : resumed) h.resumed.push_back(yf::AsString(item, path, "resumed"));
+  }
+  ParseHeaderImage(root, &h);
+  ParseHeaderCamera(root, &h);
+  if (root.Has("station")) {
+    const yf::MapReader station(root.Get("station"), path, "station", {"identity"});
+    h.station_identity = station.String("identity", "");
+  }
+  ParseHeaderText(root, "recipe", &h.recipe_path, &h.recipe_text, &files->recipe_file,
+                  &files->recipe_crc);
+  ParseHeaderText(root, "rig", &h.rig_path, &h.rig_text, &files->rig_file, &files->rig_crc);
+  return h;
+}
+
+// The recipe or rig text from its file beside recording.yaml, checked against its CRC.
+std::string ReadTextBeside(const std::string& dir, const std::string& file, const std::string& crc) {
+  const std::string path = (fs::path(dir) / file).string();
+  std::string text, why;
+  if (!ReadRegularFile(path, kMaxTextBytes, &text, &why)) {
+    throw RecordingError(path + " " + why + "; recording.yaml names it as the text used. "
+                         "Restore it from a copy of the recording.");
+  }
+  if (Crc32Hex(text) != crc) {
+    throw RecordingError(path + ": its CRC-32 is " + Crc32Hex(text) + ", recording.yaml says " +
+                         crc + "; the file was edited. Restore it from a copy of the recording.");
+  }
+  return text;
 }
 
 RecordingHeader ReadHeader(const std::string& dir) {
   const std::string path = (fs::path(dir) / kYaml).string();
+  std::string text, why;
+  if (!ReadRegularFile(path, kMaxTextBytes, &text, &why)) {
+    throw RecordingError(path + " " + why + ": not a recording directory (recording.yaml "
+                         "missing). Give the directory that holds recording.yaml and frames.csv.");
+  }
+  TextFiles files;
   RecordingHeader h;
   try {
-    const YAML::Node root = YAML::LoadFile(path);
-    if (root["format"].as<std::string>("") != "irdist-recording") {
-      throw RecordingError(path + ": 'format' is not irdist-recording; this is not an irdist "
-                           "recording header.");
-    }
-    h.format_version = root["format_version"].as<int>(0);
-    if (h.format_version != kRecordingFormatVersion) {
-      throw RecordingError(path + ": format_version " + std::to_string(h.format_version) +
-                           " is not supported (this irdist reads version " +
-                           std::to_string(kRecordingFormatVersion) + "); use a matching irdist.");
-    }
-    h.completion = ParseCompletion(root["completion"].as<std::string>(""), path);
-    h.software_version = root["software_version"].as<std::string>("");
-    h.start_time = root["start_time"].as<std::string>("");
-    h.end_time = root["end_time"].as<std::string>("");
-    h.frame_count = root["frame_count"].as<std::int64_t>(-1);
-    if (root["resumed"] && root["resumed"].IsSequence()) {
-      for (const auto& item : root["resumed"]) h.resumed.push_back(item.as<std::string>());
-    }
-    const YAML::Node image = root["image"];
-    h.bit_depth = image["bit_depth"].as<int>(16);
-    h.pixel_format = image["pixel_format"].as<std::string>("");
-    const YAML::Node camera = root["camera"];
-    h.camera.vendor = camera["vendor"].as<std::string>("");
-    h.camera.model = camera["model"].as<std::string>("");
-    h.camera.serial = camera["serial"].as<std::string>("");
-    h.camera.firmware = camera["firmware"].as<std::string>("");
-    h.camera.address = camera["address"].as<std::string>("");
-    if (camera["features"] && camera["features"].IsMap()) {
-      for (const auto& item : camera["features"]) {
-        h.camera_features[item.first.as<std::string>()] = item.second.as<std::string>("");
-      }
-    }
-    h.station_identity = root["station"]["identity"].as<std::string>("");
-    h.recipe_path = root["recipe"]["path"].as<std::string>("");
-    h.recipe_text = root["recipe"]["text"].as<std::string>("");
-    h.rig_path = root["rig"]["path"].as<std::string>("");
-    h.rig_text = root["rig"]["text"].as<std::string>("");
-  } catch (const YAML::BadFile&) {
-    throw RecordingError("cannot open " + path + ": not a recording directory (recording.yaml "
-                         "missing). Give the directory that holds recording.yaml and frames.csv.");
-  } catch (const YAML::Exception& error) {
-    throw RecordingError(path + ":" + std::to_string(error.mark.line + 1) +
-                         ": unreadable YAML (" + error.msg +
-                         "); restore the file from frames.csv's run or fix it by hand.");
+    h = ParseHeaderFields(text, path, &files);
+  } catch (const InputError& error) {
+    throw RecordingError(std::string(error.what()) + "; fix recording.yaml by hand.");
   }
+  if (!files.recipe_file.empty()) h.recipe_text = ReadTextBeside(dir, files.recipe_file, files.recipe_crc);
+  if (!files.rig_file.empty()) h.rig_text = ReadTextBeside(dir, files.rig_file, files.rig_crc);
   return h;
 }
 
@@ -322,14 +512,15 @@ std::string HeaderYaml(const RecordingHeader& h) {
   out << YAML::EndMap << YAML::EndMap;
   out << YAML::Key << "station" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "identity" << YAML::Value << h.station_identity << YAML::EndMap;
-  for (const auto& [key, path, text] :
-       {std::tuple<const char*, const std::string&, const std::string&>{"recipe", h.recipe_path,
-                                                                         h.recipe_text},
-        std::tuple<const char*, const std::string&, const std::string&>{"rig", h.rig_path,
-                                                                         h.rig_text}}) {
+  for (const auto& [key, path, file, text] :
+       {std::tuple<const char*, const std::string&, const char*, const std::string&>{
+            "recipe", h.recipe_path, kRecipeFile, h.recipe_text},
+        std::tuple<const char*, const std::string&, const char*, const std::string&>{
+            "rig", h.rig_path, kRigFile, h.rig_text}}) {
     out << YAML::Key << key << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "path" << YAML::Value << path;
-    out << YAML::Key << "text" << YAML::Value << YAML::Literal << text;
+    out << YAML::Key << "path" << YAML::Value << YAML::DoubleQuoted << path;
+    out << YAML::Key << "file" << YAML::Value << file;
+    out << YAML::Key << "crc32" << YAML::Value << YAML::DoubleQuoted << Crc32Hex(text);
     out << YAML::EndMap;
   }
   out << YAML::EndMap;
@@ -344,6 +535,126 @@ int OpenCsvForAppend(const std::string& path) {
   return fd;
 }
 
+
+// The writer's lock: flock on <dir>/writer.lock, which holds the writer's pid. Returns the fd.
+int AcquireWriterLock(const std::string& dir) {
+  const std::string path = (fs::path(dir) / "writer.lock").string();
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0) throw RecordingError("cannot create " + path + ": " + Errno() + ".");
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int saved = errno;
+    char pid[32] = {0};
+    const ssize_t n = ::pread(fd, pid, sizeof(pid) - 1, 0);
+    ::close(fd);
+    if (saved != EWOULDBLOCK) {
+      errno = saved;
+      throw RecordingError("cannot lock " + path + ": " + Errno() + ".");
+    }
+    std::string holder = n > 0 ? std::string(pid, static_cast<size_t>(n)) : "?";
+    while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
+    throw RecordingError("the recording " + dir + " is being written by process " + holder +
+                         " (it holds " + path + "); wait for that run to end or stop it, then "
+                         "resume.");
+  }
+  const std::string pid = std::to_string(::getpid()) + "\n";
+  if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, pid.data(), pid.size(), 0) < 0) {
+    // The lock holds without the pid; a refused writer then names "?".
+  }
+  return fd;
+}
+
+// Files in frames/ a resumed run does not keep: temp files and PNGs from `next_index` on.
+std::vector<std::string> Leftovers(const std::string& dir, std::int64_t next_index) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(fs::path(dir) / kFramesDir, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::int64_t index = -1;
+    const bool tmp = name.size() > 4 && name.substr(name.size() - 4) == ".tmp";
+    const bool png = name.size() > 4 && name.substr(name.size() - 4) == ".png" &&
+                     ParseInt(name.substr(0, name.size() - 4), &index);
+    if (tmp || (png && index >= next_index)) names.push_back(name);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// Moves `names` from frames/ to <dir>/set-aside-<time>/ (never deleted). Returns that folder.
+std::string MoveAside(const std::string& dir, const std::vector<std::string>& names) {
+  if (names.empty()) return "";
+  std::string stamp = NowIso8601();
+  std::replace(stamp.begin(), stamp.end(), ':', '-');
+  const fs::path aside = fs::path(dir) / ("set-aside-" + stamp);
+  std::error_code ec;
+  fs::create_directories(aside, ec);
+  if (ec) throw RecordingError("cannot create " + aside.string() + ": " + ec.message() + ".");
+  for (const std::string& name : names) {
+    fs::rename(fs::path(dir) / kFramesDir / name, aside / name, ec);
+    if (ec) {
+      throw RecordingError("cannot move " + name + " to " + aside.string() + ": " + ec.message() +
+                           "; nothing was deleted.");
+    }
+  }
+  SyncFolder((fs::path(dir) / kFramesDir).string());
+  return aside.string();
+}
+
+// Brackets in order of first appearance; the last row of each (bracket, position) wins (a
+// resumed run re-acquires incomplete brackets). The one completeness rule of every reader.
+std::vector<RecordedBracket> BracketsOf(const std::vector<FrameRecord>& rows) {
+  std::vector<RecordedBracket> brackets;
+  std::map<std::int64_t, size_t> where;
+  std::map<std::int64_t, std::map<int, const FrameRecord*>> positions;
+  for (const FrameRecord& row : rows) {
+    if (where.find(row.bracket_id) == where.end()) {
+      where[row.bracket_id] = brackets.size();
+      brackets.emplace_back();
+      brackets.back().bracket_id = row.bracket_id;
+    }
+    brackets[where[row.bracket_id]].bracket_size = row.bracket_size;
+    positions[row.bracket_id][row.frame_in_bracket] = &row;
+  }
+  for (RecordedBracket& bracket : brackets) {
+    for (const auto& [position, row] : positions[bracket.bracket_id]) {
+      if (position < bracket.bracket_size) bracket.frames.push_back(*row);
+    }
+    bracket.complete = static_cast<int>(bracket.frames.size()) == bracket.bracket_size;
+  }
+  return brackets;
+}
+
+// Reads and decodes a frame's PNG; an empty Mat and `why` when refused.
+cv::Mat LoadFrame(const std::string& dir, const FrameRecord& row, std::string* why) {
+  std::string bytes;
+  if (!ReadRegularFile((fs::path(dir) / row.file).string(), kMaxPngBytes, &bytes, why)) {
+    return cv::Mat();
+  }
+  return DecodeFramePng(std::vector<unsigned char>(bytes.begin(), bytes.end()), why);
+}
+
+std::uint32_t BigEndian32(const unsigned char* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+         std::uint32_t{p[3]};
+}
+
+// The text of frames.csv (a regular file, read without blocking).
+std::string ReadCsvText(const std::string& dir) {
+  const std::string path = (fs::path(dir) / kCsv).string();
+  std::string text, why;
+  if (!ReadRegularFile(path, kMaxTextBytes, &text, &why)) {
+    throw RecordingError(path + " " + why + ": not a recording directory (frames.csv missing or "
+                         "unreadable). Give the directory that holds recording.yaml and "
+                         "frames.csv.");
+  }
+  return text;
+}
+
+[[noreturn]] void ThrowIssue(const std::string& dir, const RecordingIssue& issue) {
+  std::string where = (fs::path(dir) / issue.file).string();
+  if (issue.line > 0) where += ":" + std::to_string(issue.line);
+  throw RecordingError(where + ": " + issue.message +
+                       "; run `irdist check` for a full report and repair or delete the row.");
+}
 }  // namespace
 
 const char* CompletionName(Completion completion) {
@@ -399,6 +710,87 @@ std::vector<const FrameRecord*> RecordedBracket::Measurements() const {
   return out;
 }
 
+// --- Parsing, shared by every reader ----------------------------------------------------------
+
+FramesCsv ParseFramesCsv(const std::string& text) {
+  FramesCsv csv;
+  const CsvLines lines = SplitLines(text);
+  csv.partial_last = lines.partial_last;
+  csv.complete_bytes = lines.complete_bytes;
+  if (lines.lines.empty() || lines.lines[0] != FramesCsvHeader()) {
+    csv.errors.push_back({kCsv, 1, "header line is not the irdist frames.csv header (format " +
+                                       std::to_string(kRecordingFormatVersion) + ")"});
+    return csv;
+  }
+  const size_t complete_lines = lines.lines.size() - (lines.partial_last ? 1 : 0);
+  if (lines.partial_last) {
+    csv.warnings.push_back({kCsv, static_cast<int>(lines.lines.size()),
+                            "last line has no end of line (cut mid-write); ignored"});
+  }
+  IndexTracker indices;
+  std::map<std::pair<std::int64_t, int>, int> position_line;
+  for (size_t i = 1; i < complete_lines; ++i) {
+    FrameRecord row;
+    std::string why;
+    row.line = static_cast<int>(i + 1);
+    if (!ParseRow(lines.lines[i], &row, &why)) {
+      csv.errors.push_back({kCsv, row.line, "bad row: " + why});
+      continue;
+    }
+    row.line = static_cast<int>(i + 1);
+    why = indices.Add(row);
+    if (!why.empty()) csv.errors.push_back({kCsv, row.line, why});
+    AddSupersededWarning(row, &position_line, &csv.warnings);
+    csv.rows.push_back(std::move(row));
+  }
+  return csv;
+}
+
+RecordingHeader ParseRecordingHeader(const std::string& text, const std::string& file) {
+  TextFiles files;
+  try {
+    return ParseHeaderFields(text, file, &files);
+  } catch (const InputError& error) {
+    throw RecordingError(std::string(error.what()) + "; fix recording.yaml by hand.");
+  }
+}
+
+RecordingHeader ReadRecordingHeader(const std::string& dir) { return ReadHeader(dir); }
+
+cv::Mat DecodeFramePng(const std::vector<unsigned char>& bytes, std::string* why) {
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (bytes.size() < 33 || std::memcmp(bytes.data(), kSignature, 8) != 0 ||
+      std::memcmp(bytes.data() + 12, "IHDR", 4) != 0) {
+    *why = "not a PNG file (no PNG signature and IHDR header)";
+    return cv::Mat();
+  }
+  const std::int64_t width = BigEndian32(bytes.data() + 16);
+  const std::int64_t height = BigEndian32(bytes.data() + 20);
+  if (width < 1 || height < 1 || width > kMaxFrameSidePx || height > kMaxFrameSidePx ||
+      width * height > kMaxFramePixels) {
+    *why = "PNG header claims " + std::to_string(width) + " x " + std::to_string(height) +
+           " px, beyond the limit of " + std::to_string(kMaxFrameSidePx) + " px a side and " +
+           std::to_string(kMaxFramePixels) + " px; the file is damaged or not a frame";
+    return cv::Mat();
+  }
+  if (bytes[24] != 16 || bytes[25] != 0) {
+    *why = "not a single-channel 16-bit PNG (bit depth " + std::to_string(bytes[24]) +
+           ", colour type " + std::to_string(bytes[25]) + ")";
+    return cv::Mat();
+  }
+  cv::Mat image;
+  try {
+    image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& error) {
+    image = cv::Mat();
+  }
+  if (image.empty() || image.type() != CV_16UC1) {
+    *why = "damaged PNG: its image data cannot be decoded as 16-bit gray";
+    return cv::Mat();
+  }
+  return image;
+}
+
 // --- RecordingWriter --------------------------------------------------------------------------
 
 RecordingWriter::RecordingWriter(std::string dir, RecordingHeader header, std::int64_t next_index)
@@ -406,11 +798,31 @@ RecordingWriter::RecordingWriter(std::string dir, RecordingHeader header, std::i
 
 RecordingWriter::~RecordingWriter() {
   if (csv_fd_ >= 0) ::close(csv_fd_);
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the lock
 }
 
 void RecordingWriter::WriteHeader() {
   const std::string text = HeaderYaml(header_);
   WriteFileAtomically((fs::path(dir_) / kYaml).string(), text.data(), text.size());
+}
+
+// recipe.yaml and rig.yaml beside recording.yaml: the texts as used, byte for byte.
+static void WriteTextsBeside(const std::string& dir, const RecordingHeader& header) {
+  WriteFileAtomically((fs::path(dir) / kRecipeFile).string(), header.recipe_text.data(),
+                      header.recipe_text.size());
+  WriteFileAtomically((fs::path(dir) / kRigFile).string(), header.rig_text.data(),
+                      header.rig_text.size());
+}
+
+static void CreateCsv(const std::string& csv_path) {
+  const std::string line = FramesCsvHeader() + "\n";
+  const int fd = ::open(csv_path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) throw RecordingError("cannot create " + csv_path + ": " + Errno() + ".");
+  const bool ok = WriteAll(fd, line.data(), line.size()) && ::fsync(fd) == 0;
+  const int saved = errno;
+  ::close(fd);
+  errno = saved;
+  if (!ok) throw RecordingError("cannot write " + csv_path + ": " + Errno() + ".");
 }
 
 std::unique_ptr<RecordingWriter> RecordingWriter::Open(const std::string& dir,
@@ -425,84 +837,71 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Open(const std::string& dir,
     throw RecordingError("cannot create " + (fs::path(dir) / kFramesDir).string() + ": " +
                          ec.message() + ". Check the path and permissions.");
   }
+  const int lock_fd = AcquireWriterLock(dir);
   if (header.start_time.empty()) header.start_time = NowIso8601();
   header.completion = Completion::kRunning;
   header.end_time.clear();
   header.frame_count = -1;
   header.format_version = kRecordingFormatVersion;
   std::unique_ptr<RecordingWriter> writer(new RecordingWriter(dir, std::move(header), 0));
+  writer->lock_fd_ = lock_fd;
   const std::string csv_path = (fs::path(dir) / kCsv).string();
-  const std::string line = FramesCsvHeader() + "\n";
-  const int fd = ::open(csv_path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) throw RecordingError("cannot create " + csv_path + ": " + Errno() + ".");
-  const bool ok = WriteAll(fd, line.data(), line.size());
-  ::close(fd);
-  if (!ok) throw RecordingError("cannot write " + csv_path + ": " + Errno() + ".");
+  CreateCsv(csv_path);
+  WriteTextsBeside(dir, writer->header_);
   writer->WriteHeader();
   writer->csv_fd_ = OpenCsvForAppend(csv_path);
   return writer;
 }
 
-// The complete rows of frames.csv (a partial last line, the frame in flight of a killed writer,
-// is left out), each with its line number. Throws RecordingError naming file:line.
-static std::vector<FrameRecord> ParseCompleteRows(const CsvText& csv, const std::string& csv_path) {
-  if (csv.lines.empty() || csv.lines[0] != FramesCsvHeader()) {
-    throw RecordingError(csv_path + ":1: header line is not the irdist frames.csv header (format " +
-                         std::to_string(kRecordingFormatVersion) + "); run `irdist check`.");
-  }
-  std::vector<FrameRecord> rows;
-  const size_t complete_lines = csv.lines.size() - (csv.partial_last ? 1 : 0);
-  for (size_t i = 1; i < complete_lines; ++i) {
-    FrameRecord row;
-    std::string why;
-    if (!ParseRow(csv.lines[i], &row, &why)) {
-      throw RecordingError(csv_path + ":" + std::to_string(i + 1) + ": " + why +
-                           "; run `irdist check` for a full report and repair or delete the row.");
-    }
-    row.line = static_cast<int>(i + 1);
-    rows.push_back(std::move(row));
-  }
-  return rows;
-}
-
 std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir) {
+  const int lock_fd = AcquireWriterLock(dir);
+  std::unique_ptr<RecordingWriter> writer(new RecordingWriter(dir, RecordingHeader{}, 0));
+  writer->lock_fd_ = lock_fd;  // released by the writer's destructor on every path
   RecordingHeader header = ReadHeader(dir);
-  const std::string yaml_path = (fs::path(dir) / kYaml).string();
   if (header.completion == Completion::kComplete) {
-    throw RecordingError(yaml_path + ": the recording is complete; there is nothing to resume. "
+    throw RecordingError((fs::path(dir) / kYaml).string() +
+                         ": the recording is complete; there is nothing to resume. "
                          "Start a new recording instead.");
   }
   const std::string csv_path = (fs::path(dir) / kCsv).string();
-  const CsvText csv = ReadCsv(csv_path);
+  const FramesCsv csv = ParseFramesCsv(ReadCsvText(dir));
+  if (!csv.errors.empty()) ThrowIssue(dir, csv.errors.front());
   std::int64_t next_index = 0;
-  for (const FrameRecord& row : ParseCompleteRows(csv, csv_path)) {
-    next_index = std::max(next_index, row.index + 1);
-  }
-  // Drop the partial last line and the leftovers of the frame in flight.
+  for (const FrameRecord& row : csv.rows) next_index = std::max(next_index, row.index + 1);
+  // The partial last line (the row in flight) is dropped; leftover files are moved aside.
   if (csv.partial_last && ::truncate(csv_path.c_str(), static_cast<off_t>(csv.complete_bytes)) != 0) {
     throw RecordingError("cannot truncate the partial last line of " + csv_path + ": " + Errno());
   }
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(fs::path(dir) / kFramesDir, ec)) {
-    const std::string name = entry.path().filename().string();
-    std::int64_t index = -1;
-    const bool tmp = name.size() > 4 && name.substr(name.size() - 4) == ".tmp";
-    const bool png = name.size() > 4 && name.substr(name.size() - 4) == ".png" &&
-                     ParseInt(name.substr(0, name.size() - 4), &index);
-    if (tmp || (png && index >= next_index)) fs::remove(entry.path(), ec);
-  }
+  const std::vector<std::string> leftovers = Leftovers(dir, next_index);
+  writer->set_aside_dir_ = MoveAside(dir, leftovers);
+  for (const std::string& name : leftovers) writer->set_aside_.push_back("frames/" + name);
   header.completion = Completion::kRunning;
   header.end_time.clear();
   header.frame_count = -1;
   header.resumed.push_back(NowIso8601());
-  std::unique_ptr<RecordingWriter> writer(new RecordingWriter(dir, std::move(header), next_index));
+  writer->header_ = std::move(header);
+  writer->next_index_ = next_index;
   writer->WriteHeader();
   writer->csv_fd_ = OpenCsvForAppend(csv_path);
   return writer;
 }
 
+// Checks the row against the reader's rules: a row the reader would refuse is a bug of the
+// caller, refused before anything reaches the disk.
+static void CheckRowReadable(const std::string& row, std::int64_t index) {
+  FrameRecord parsed;
+  std::string why;
+  std::string line = row;
+  while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+  IRDIST_CHECK(ParseRow(line, &parsed, &why), "frame ", index,
+               " would be unreadable in frames.csv: ", why);
+}
+
 FrameRecord RecordingWriter::Append(const cv::Mat& image, FrameRecord record) {
   IRDIST_CHECK(!closed_, "Append() after Close()");
+  if (!first_error_.empty()) {
+    throw RecordingError("the recording stopped at its first write error: " + first_error_);
+  }
   IRDIST_CHECK(!image.empty() && image.channels() == 1 &&
                    (image.depth() == CV_16U || image.depth() == CV_8U),
                "Append() needs a single-channel 8- or 16-bit image");
@@ -515,25 +914,20 @@ FrameRecord RecordingWriter::Append(const cv::Mat& image, FrameRecord record) {
   record.index = next_index_;
   record.file = FrameFileName(record.index);
   const std::string row = FormatRow(record);
-  {
-    // The writer holds its rows to the reader's rules: a row the reader would refuse is a bug of
-    // the caller, refused before anything reaches the disk.
-    FrameRecord parsed;
-    std::string why;
-    std::string line = row;
-    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
-    IRDIST_CHECK(ParseRow(line, &parsed, &why), "frame ", record.index,
-                 " would be unreadable in frames.csv: ", why);
-  }
-  std::vector<uchar> png;
-  if (!cv::imencode(".png", image16, png, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
-    throw RecordingError("cannot encode frame " + std::to_string(record.index) + " as PNG.");
-  }
-  const std::string path = (fs::path(dir_) / record.file).string();
-  WriteFileAtomically(path, png.data(), png.size());
-  if (!WriteAll(csv_fd_, row.data(), row.size())) {
-    throw RecordingError("cannot append to " + (fs::path(dir_) / kCsv).string() + ": " + Errno() +
-                         ". Is the disk full?");
+  CheckRowReadable(row, record.index);
+  try {
+    std::vector<uchar> png;
+    if (!cv::imencode(".png", image16, png, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
+      throw RecordingError("cannot encode frame " + std::to_string(record.index) + " as PNG.");
+    }
+    WriteFileAtomically((fs::path(dir_) / record.file).string(), png.data(), png.size());
+    if (!WriteAll(csv_fd_, row.data(), row.size())) {
+      throw RecordingError("cannot append to " + (fs::path(dir_) / kCsv).string() + ": " +
+                           Errno() + ". Is the disk full?");
+    }
+  } catch (const RecordingError& error) {
+    first_error_ = error.what();
+    throw;
   }
   ++next_index_;
   return record;
@@ -542,49 +936,37 @@ FrameRecord RecordingWriter::Append(const cv::Mat& image, FrameRecord record) {
 void RecordingWriter::Close(Completion completion) {
   IRDIST_CHECK(completion != Completion::kRunning, "Close() needs complete or cut");
   if (closed_) return;
+  closed_ = true;
   if (csv_fd_ >= 0) {
-    ::fsync(csv_fd_);
+    const bool synced = ::fsync(csv_fd_) == 0;
     ::close(csv_fd_);
     csv_fd_ = -1;
+    if (!synced && first_error_.empty()) first_error_ = "cannot sync frames.csv: " + Errno();
   }
-  header_.completion = completion;
+  header_.completion = first_error_.empty() ? completion : Completion::kCut;
   header_.end_time = NowIso8601();
   header_.frame_count = next_index_;
-  WriteHeader();
-  closed_ = true;
+  try {
+    WriteHeader();
+  } catch (const RecordingError&) {
+    // After a failed write the first error is the one reported; recording.yaml stays "running",
+    // which every reader treats as cut.
+    if (first_error_.empty()) throw;
+  }
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // the recording is closed: another writer may resume it
+  lock_fd_ = -1;
 }
 
 // --- RecordingReader --------------------------------------------------------------------------
 
 RecordingReader::RecordingReader(const std::string& dir)
     : dir_(dir), header_(ReadHeader(dir)) {
-  const std::string csv_path = (fs::path(dir) / kCsv).string();
-  rows_ = ParseCompleteRows(ReadCsv(csv_path), csv_path);
+  FramesCsv csv = ParseFramesCsv(ReadCsvText(dir));
+  if (!csv.errors.empty()) ThrowIssue(dir, csv.errors.front());
+  rows_ = std::move(csv.rows);
 }
 
-std::vector<RecordedBracket> RecordingReader::Brackets() const {
-  std::vector<RecordedBracket> brackets;
-  std::map<std::int64_t, size_t> where;
-  // Last row of each (bracket, position) wins: a resumed run re-acquires incomplete brackets.
-  std::map<std::int64_t, std::map<int, const FrameRecord*>> positions;
-  for (const FrameRecord& row : rows_) {
-    if (where.find(row.bracket_id) == where.end()) {
-      where[row.bracket_id] = brackets.size();
-      brackets.emplace_back();
-      brackets.back().bracket_id = row.bracket_id;
-    }
-    brackets[where[row.bracket_id]].bracket_size = row.bracket_size;
-    positions[row.bracket_id][row.frame_in_bracket] = &row;
-  }
-  for (RecordedBracket& bracket : brackets) {
-    const auto& present = positions[bracket.bracket_id];
-    for (const auto& [position, row] : present) {
-      if (position < bracket.bracket_size) bracket.frames.push_back(*row);
-    }
-    bracket.complete = static_cast<int>(bracket.frames.size()) == bracket.bracket_size;
-  }
-  return brackets;
-}
+std::vector<RecordedBracket> RecordingReader::Brackets() const { return BracketsOf(rows_); }
 
 std::set<std::int64_t> RecordingReader::CompleteBracketIds() const {
   std::set<std::int64_t> ids;
@@ -595,14 +977,12 @@ std::set<std::int64_t> RecordingReader::CompleteBracketIds() const {
 }
 
 cv::Mat RecordingReader::LoadImage(const FrameRecord& row) const {
-  const std::string path = (fs::path(dir_) / row.file).string();
-  cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  std::string why;
+  cv::Mat image = LoadFrame(dir_, row, &why);
   if (image.empty()) {
-    throw RecordingError(path + " (frames.csv:" + std::to_string(row.line) +
-                         "): missing or not a readable PNG; run `irdist check` on the recording.");
-  }
-  if (image.type() != CV_16UC1) {
-    throw RecordingError(path + ": expected a single-channel 16-bit PNG; the file was replaced.");
+    throw RecordingError((fs::path(dir_) / row.file).string() + " (frames.csv:" +
+                         std::to_string(row.line) + "): " + why +
+                         "; run `irdist check` on the recording.");
   }
   return image;
 }
@@ -626,95 +1006,31 @@ std::string RecordingCheck::BriefReport() const {
   return out.str();
 }
 
-RecordingCheck CheckRecording(const std::string& dir) {
-  RecordingCheck check;
-  if (!fs::exists(fs::path(dir) / kYaml) && !fs::exists(fs::path(dir) / kCsv)) {
-    throw RecordingError(dir + " is not a recording (no recording.yaml, no frames.csv).");
-  }
-  RecordingHeader header;
-  try {
-    header = ReadHeader(dir);
-    check.completion = header.completion;
-  } catch (const RecordingError& error) {
-    check.errors.push_back({kYaml, 0, error.what()});
-    check.completion = Completion::kRunning;
-  }
-  CsvText csv;
-  try {
-    csv = ReadCsv((fs::path(dir) / kCsv).string());
-  } catch (const RecordingError& error) {
-    check.errors.push_back({kCsv, 0, error.what()});
-    return check;
-  }
-  if (csv.lines.empty() || csv.lines[0] != FramesCsvHeader()) {
-    check.errors.push_back({kCsv, 1, "header line is not the frames.csv header of format 1"});
-    return check;
-  }
-  const size_t complete_lines = csv.lines.size() - (csv.partial_last ? 1 : 0);
-  if (csv.partial_last) {
-    check.warnings.push_back({kCsv, static_cast<int>(csv.lines.size()),
-                              "last line has no end of line (cut mid-write); ignored"});
-  }
-  std::vector<FrameRecord> rows;
-  std::map<std::int64_t, int> index_line;
-  std::map<std::string, int> file_line;
-  std::map<std::pair<std::int64_t, int>, int> position_line;
-  std::int64_t expected = 0;
+namespace {
+
+// Every row's PNG: readable, 16-bit gray, all of one size.
+void CheckFrames(const std::string& dir, const std::vector<FrameRecord>& rows,
+                 RecordingCheck* check) {
   cv::Size size;
-  for (size_t i = 1; i < complete_lines; ++i) {
-    const int line = static_cast<int>(i + 1);
-    FrameRecord row;
+  for (const FrameRecord& row : rows) {
     std::string why;
-    if (!ParseRow(csv.lines[i], &row, &why)) {
-      check.errors.push_back({kCsv, line, "bad row: " + why});
-      continue;
-    }
-    row.line = line;
-    if (index_line.count(row.index) != 0) {
-      check.errors.push_back({kCsv, line, "duplicate index " + std::to_string(row.index) +
-                                              " (first at line " +
-                                              std::to_string(index_line[row.index]) + ")"});
-    } else if (row.index > expected) {
-      check.errors.push_back({kCsv, line, "gap: indices " + std::to_string(expected) + ".." +
-                                              std::to_string(row.index - 1) + " are missing"});
-    } else if (row.index < expected) {
-      check.errors.push_back({kCsv, line, "index " + std::to_string(row.index) +
-                                              " out of order (expected " +
-                                              std::to_string(expected) + ")"});
-    }
-    index_line.emplace(row.index, line);
-    expected = std::max(expected, row.index + 1);
-    if (file_line.count(row.file) != 0) {
-      check.errors.push_back({kCsv, line, "duplicate file " + row.file + " (first at line " +
-                                              std::to_string(file_line[row.file]) + ")"});
-    }
-    file_line.emplace(row.file, line);
-    const auto position = std::make_pair(row.bracket_id, row.frame_in_bracket);
-    if (position_line.count(position) != 0) {
-      check.warnings.push_back(
-          {kCsv, line, "bracket " + std::to_string(row.bracket_id) + " frame " +
-                           std::to_string(row.frame_in_bracket) + " supersedes line " +
-                           std::to_string(position_line[position]) + " (re-acquired)"});
-    }
-    position_line[position] = line;
-    const cv::Mat image = cv::imread((fs::path(dir) / row.file).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat image = LoadFrame(dir, row, &why);
+    const std::string at = " (row at frames.csv:" + std::to_string(row.line) + ")";
     if (image.empty()) {
-      check.errors.push_back({row.file, 0, "missing or unreadable PNG (row at frames.csv:" +
-                                               std::to_string(line) + ")"});
-    } else if (image.type() != CV_16UC1) {
-      check.errors.push_back({row.file, 0, "not a single-channel 16-bit PNG (frames.csv:" +
-                                               std::to_string(line) + ")"});
+      check->errors.push_back({row.file, 0, why + at});
     } else if (size.area() == 0) {
       size = image.size();
     } else if (image.size() != size) {
-      check.errors.push_back({row.file, 0, "size differs from the first frame (frames.csv:" +
-                                               std::to_string(line) + ")"});
+      check->errors.push_back({row.file, 0, "size differs from the first frame" + at});
     }
-    rows.push_back(std::move(row));
   }
-  check.rows = static_cast<std::int64_t>(rows.size());
+}
 
-  // Files in frames/ without a row.
+// Files in frames/ without a row, and temp files.
+void CheckLeftovers(const std::string& dir, const std::vector<FrameRecord>& rows,
+                    RecordingCheck* check) {
+  std::set<std::string> files;
+  for (const FrameRecord& row : rows) files.insert(row.file);
   std::error_code ec;
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(fs::path(dir) / kFramesDir, ec)) {
@@ -724,45 +1040,78 @@ RecordingCheck CheckRecording(const std::string& dir) {
   for (const std::string& name : names) {
     const std::string relative = std::string(kFramesDir) + "/" + name;
     if (name.size() > 4 && name.substr(name.size() - 4) == ".tmp") {
-      check.warnings.push_back({relative, 0, "leftover temporary file of a frame in flight"});
-    } else if (file_line.count(relative) == 0) {
-      check.warnings.push_back({relative, 0, "orphan file: no row in frames.csv refers to it"});
+      check->warnings.push_back({relative, 0, "leftover temporary file of a frame in flight"});
+    } else if (files.count(relative) == 0) {
+      check->warnings.push_back({relative, 0, "orphan file: no row in frames.csv refers to it"});
     }
   }
+}
 
-  // Brackets.
-  std::map<std::int64_t, std::pair<int, std::set<int>>> brackets;
-  for (const FrameRecord& row : rows) {
-    auto& bracket = brackets[row.bracket_id];
-    bracket.first = row.bracket_size;
-    bracket.second.insert(row.frame_in_bracket);
-  }
-  check.brackets = static_cast<std::int64_t>(brackets.size());
-  for (const auto& [id, bracket] : brackets) {
-    if (static_cast<int>(bracket.second.size()) == bracket.first) {
-      ++check.complete_brackets;
+void CheckBrackets(const std::vector<FrameRecord>& rows, RecordingCheck* check) {
+  const std::vector<RecordedBracket> brackets = BracketsOf(rows);
+  check->brackets = static_cast<std::int64_t>(brackets.size());
+  for (const RecordedBracket& bracket : brackets) {
+    if (bracket.complete) {
+      ++check->complete_brackets;
     } else {
-      check.warnings.push_back({kCsv, 0, "bracket " + std::to_string(id) + " is incomplete (" +
-                                             std::to_string(bracket.second.size()) + " of " +
-                                             std::to_string(bracket.first) + " frames)"});
+      check->warnings.push_back({kCsv, 0, "bracket " + std::to_string(bracket.bracket_id) +
+                                              " is incomplete (" +
+                                              std::to_string(bracket.frames.size()) + " of " +
+                                              std::to_string(bracket.bracket_size) + " frames)"});
     }
   }
-  switch (check.completion) {
+}
+
+void CheckCompletion(const RecordingHeader& header, RecordingCheck* check) {
+  switch (check->completion) {
     case Completion::kRunning:
-      check.warnings.push_back(
+      check->warnings.push_back(
           {kYaml, 0, "completion is 'running': the writer died; the run is cut"});
       break;
     case Completion::kCut:
-      check.warnings.push_back({kYaml, 0, "completion is 'cut': the run was stopped early"});
+      check->warnings.push_back({kYaml, 0, "completion is 'cut': the run was stopped early"});
       break;
     case Completion::kComplete:
-      if (header.frame_count != check.rows) {
-        check.errors.push_back({kYaml, 0, "frame_count " + std::to_string(header.frame_count) +
-                                              " but frames.csv has " +
-                                              std::to_string(check.rows) + " rows"});
+      if (header.frame_count != check->rows) {
+        check->errors.push_back({kYaml, 0, "frame_count " + std::to_string(header.frame_count) +
+                                               " but frames.csv has " +
+                                               std::to_string(check->rows) + " rows"});
       }
       break;
   }
+}
+
+}  // namespace
+
+RecordingCheck CheckRecording(const std::string& dir) {
+  RecordingCheck check;
+  if (!fs::exists(fs::path(dir) / kYaml) && !fs::exists(fs::path(dir) / kCsv)) {
+    throw RecordingError(dir + " is not a recording (no recording.yaml, no frames.csv).");
+  }
+  RecordingHeader header;
+  check.completion = Completion::kRunning;
+  bool header_ok = true;
+  try {
+    header = ReadHeader(dir);
+    check.completion = header.completion;
+  } catch (const RecordingError& error) {
+    check.errors.push_back({kYaml, 0, error.what()});
+    header_ok = false;
+  }
+  FramesCsv csv;
+  try {
+    csv = ParseFramesCsv(ReadCsvText(dir));
+  } catch (const RecordingError& error) {
+    check.errors.push_back({kCsv, 0, error.what()});
+    return check;
+  }
+  check.errors.insert(check.errors.end(), csv.errors.begin(), csv.errors.end());
+  check.warnings.insert(check.warnings.end(), csv.warnings.begin(), csv.warnings.end());
+  check.rows = static_cast<std::int64_t>(csv.rows.size());
+  CheckFrames(dir, csv.rows, &check);
+  CheckLeftovers(dir, csv.rows, &check);
+  CheckBrackets(csv.rows, &check);
+  if (header_ok) CheckCompletion(header, &check);
   return check;
 }
 

@@ -43,9 +43,20 @@ struct RecordingHeader {
   std::map<std::string, std::string> camera_features;  // read back after configuring
   std::string station_identity;
   std::string recipe_path;
-  std::string recipe_text;              // the recipe as used, verbatim
+  std::string recipe_text;              // the recipe as used, byte for byte (recipe.yaml beside)
   std::string rig_path;
-  std::string rig_text;                 // the rig file as used, verbatim
+  std::string rig_text;                 // the rig file as used, byte for byte (rig.yaml beside)
+};
+
+// Largest frame the readers decode (checked on the PNG header, before decoding).
+inline constexpr std::int64_t kMaxFrameSidePx = 16384;
+inline constexpr std::int64_t kMaxFramePixels = std::int64_t{1} << 26;  // 64 Mpx, 128 MB at 16 bit
+
+// One problem found in a recording: file relative to the recording, line (0 = not about a line).
+struct RecordingIssue {
+  std::string file;  // "frames.csv", "frames/000003.png"
+  int line = 0;
+  std::string message;
 };
 
 // One row of frames.csv.
@@ -86,9 +97,13 @@ class RecordingWriter {
   // completion: running. Throws RecordingError.
   static std::unique_ptr<RecordingWriter> Open(const std::string& dir, RecordingHeader header);
   // Reopens a cut (or crashed: completion running) recording to continue it: drops a partial last
-  // CSV line and leftover temp/orphan files, appends after the last index and records the
-  // resumption in recording.yaml. Throws RecordingError if `dir` is not a recording or is complete.
+  // CSV line, moves leftover temp/orphan files aside (never deletes a frame; set_aside() lists
+  // them), appends after the last index and records the resumption in recording.yaml. Throws
+  // RecordingError if `dir` is not a recording, is complete, or frames.csv has errors.
   static std::unique_ptr<RecordingWriter> Resume(const std::string& dir);
+  // Both hold the recording's lock (flock on <dir>/writer.lock, with the writer's pid) for the
+  // writer's lifetime (until Close): a second writer is refused with a RecordingError naming the
+  // first's pid.
 
   ~RecordingWriter();  // without Close(), the recording stays "running" on disk (reads as cut)
   RecordingWriter(const RecordingWriter&) = delete;
@@ -98,7 +113,13 @@ class RecordingWriter {
   // flushes its row. Returns the record with index and file filled in. Throws RecordingError.
   FrameRecord Append(const cv::Mat& image, FrameRecord record);
   // Rewrites recording.yaml with the completion state, end time and frame count. Idempotent.
+  // After a failed Append (the first error is what the caller reports), Close never throws: if
+  // recording.yaml cannot be rewritten the recording stays "running", which reads as cut.
   void Close(Completion completion);
+  // Files moved aside by Resume() (relative to the recording), and where to.
+  const std::vector<std::string>& set_aside() const { return set_aside_; }
+  const std::string& set_aside_dir() const { return set_aside_dir_; }
+  bool failed() const { return !first_error_.empty(); }
 
   const std::string& dir() const { return dir_; }
   std::int64_t next_index() const { return next_index_; }
@@ -112,7 +133,11 @@ class RecordingWriter {
   RecordingHeader header_;
   std::int64_t next_index_ = 0;
   int csv_fd_ = -1;
+  int lock_fd_ = -1;
   bool closed_ = false;
+  std::string first_error_;
+  std::vector<std::string> set_aside_;
+  std::string set_aside_dir_;
 };
 
 // One bracket as recorded: its rows in frame_in_bracket order (the last row of each position wins
@@ -142,7 +167,9 @@ class RecordingReader {
   // Brackets in order of first appearance.
   std::vector<RecordedBracket> Brackets() const;
   std::set<std::int64_t> CompleteBracketIds() const;
-  // Loads a frame's PNG as CV_16UC1. Throws RecordingError if missing or unreadable.
+  // Loads a frame's PNG as CV_16UC1 (a regular file inside the recording, never a FIFO or a
+  // link; its header checked against the size limits before decoding). Throws RecordingError
+  // naming the file, its frames.csv line and the fix.
   cv::Mat LoadImage(const FrameRecord& row) const;
 
  private:
@@ -152,11 +179,7 @@ class RecordingReader {
 };
 
 struct RecordingCheck {
-  struct Issue {
-    std::string file;  // relative to the recording ("frames.csv", "frames/000003.png")
-    int line = 0;      // 0 when not about a line
-    std::string message;
-  };
+  using Issue = RecordingIssue;
   Completion completion = Completion::kRunning;
   std::int64_t rows = 0;
   std::int64_t brackets = 0;
@@ -166,6 +189,27 @@ struct RecordingCheck {
   bool ok() const { return errors.empty(); }
   std::string BriefReport() const;  // one line per issue, "file:line: message"
 };
+
+// frames.csv parsed once for every reader: the header line, each row (its `file` must be
+// frames/<index>.png of its own index), duplicates, gaps and order. A partial last line is a
+// warning and left out. Used by RecordingReader (first error thrown) and CheckRecording (all).
+struct FramesCsv {
+  std::vector<FrameRecord> rows;  // the readable complete rows, line filled
+  std::vector<RecordingIssue> errors, warnings;
+  std::uint64_t complete_bytes = 0;  // bytes up to and including the last '\n'
+  bool partial_last = false;
+};
+FramesCsv ParseFramesCsv(const std::string& text);
+
+// recording.yaml's text parsed strictly (unknown keys are errors; bit_depth 1..16 required).
+// The recipe and rig text are read from recipe.yaml / rig.yaml by ReadRecordingHeader. `file`
+// names the file in messages. Throws RecordingError naming file:line and the fix.
+RecordingHeader ParseRecordingHeader(const std::string& text, const std::string& file);
+RecordingHeader ReadRecordingHeader(const std::string& dir);
+
+// Decodes a frame's PNG bytes as CV_16UC1 after checking its header (signature, IHDR, 16-bit
+// gray, sides within the limits). Returns an empty Mat and sets `why` when refused.
+cv::Mat DecodeFramePng(const std::vector<unsigned char>& bytes, std::string* why);
 
 // Checks a recording without throwing on what it finds (throws RecordingError only when `dir` is
 // not a recording at all). Loads every PNG to verify it.

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <future>
+#include <iostream>
 
 #include "acquisition/aravis_camera.h"
 #include "acquisition/bracket.h"
@@ -107,6 +108,10 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
 
   if (setup.resume) {
     m.writer = RecordingWriter::Resume(setup.recording_dir);
+    if (!m.writer->set_aside().empty()) {
+      std::cerr << "Moved " << m.writer->set_aside().size() << " leftover file(s) of the cut run "
+                << "aside to " << m.writer->set_aside_dir() << " (nothing was deleted).\n";
+    }
   } else {
     RecordingHeader header;
     header.software_version = setup.software_version;

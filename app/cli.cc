@@ -109,6 +109,19 @@ void PrintPlan(const Recipe& recipe, const Plan& plan, int show_poses, std::ostr
   }
 }
 
+// --time-scale: the virtual rig's range, said in plain numbers (not CLI11's double limits).
+CLI::Validator TimeScaleRange() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value) || !(value >= 0.01 && value <= 1000.0)) {
+          return "--time-scale " + text +
+                 " is outside 0.01..1000 (simulated seconds per host second; 1 = real time)";
+        }
+        return "";
+      },
+      "0.01..1000");
+}
 
 }  // namespace
 
@@ -207,7 +220,7 @@ constexpr const char* kUsageHint =
 void AddTimeScale(CLI::App* sub, double& time_scale) {
   sub->add_option("--time-scale", time_scale,
                   "Virtual rig: simulated seconds per host second (default: the rig file's)")
-      ->check(CLI::PositiveNumber);
+      ->check(TimeScaleRange());
 }
 
 void AddCalibrate(CommandTable& table) {
@@ -240,6 +253,7 @@ void AddFitAndPlayback(CommandTable& table) {
   sub->add_option("--out", f.out, "Model file to write");
   sub->add_flag("--recover-response", f.recover_response,
                 "Recover the camera's response from the brackets and linearise every pixel");
+  sub->add_flag("--force", f.force, "Replace an existing model.yaml, features.csv and report");
 
   PlaybackArgs& p = table.args().playback;
   sub = table.Add("playback", table.handlers().playback, p);
@@ -247,6 +261,8 @@ void AddFitAndPlayback(CommandTable& table) {
   sub->add_option("--model", p.model, "model.yaml from a calibration");
   sub->add_option("--out", p.out_dir, "Folder for features.csv, estimates.csv, summary.yaml");
   sub->add_flag("--show", p.show, "Step through the frames in a window (needs a display)");
+  sub->add_flag("--force", p.force,
+                "Replace existing features.csv, estimates.csv, summary.yaml and report");
   sub->add_flag("--allow-model-mismatch", p.allow_model_mismatch,
                 "Use a model calibrated with another camera serial, pixel format or ROI");
 }
@@ -269,7 +285,8 @@ void AddCheckAndPlan(CommandTable& table) {
                   "With --suggest: the latest validation's summary.yaml (its best dt)");
   sub->add_option("--out", p.out_dir, "With --suggest: folder of the probe run");
   sub->add_option("--time-scale", p.time_scale,
-                  "With --suggest on a virtual rig: simulated seconds per second");
+                  "With --suggest on a virtual rig: simulated seconds per second")
+      ->check(TimeScaleRange());
   sub->add_flag("--quiet", p.quiet, "No progress output");
 }
 
@@ -279,7 +296,7 @@ void AddSimAndDevices(CommandTable& table) {
   sub->add_option("rig", s.rig, "Rig name or rig file of kind virtual")->capture_default_str();
   sub->add_option("--rig", s.rig, "Rig name or rig file of kind virtual");
   sub->add_option("--time-scale", s.time_scale, "Simulated seconds per host second")
-      ->check(CLI::PositiveNumber);
+      ->check(TimeScaleRange());
 
   DevicesArgs& d = table.args().devices;
   sub = table.Add("devices", table.handlers().devices, d);

@@ -37,6 +37,7 @@ struct FitArgs {
   std::string recording;  // recording folder
   std::string out;        // --out: model file to write ("" = RECORDING/../model.yaml)
   bool recover_response = false;  // --recover-response: the camera's inverse response first
+  bool force = false;             // --force: replace an existing model.yaml, features.csv, report
 };
 
 struct PlaybackArgs {
@@ -44,6 +45,7 @@ struct PlaybackArgs {
   std::string model;    // --model
   std::string out_dir;  // --out ("" = beside the recording)
   bool show = false;    // --show: step through the frames in an OpenCV window
+  bool force = false;   // --force: replace existing features.csv, estimates.csv, summary, report
   bool allow_model_mismatch = false;  // --allow-model-mismatch
 };
 

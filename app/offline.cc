@@ -66,6 +66,39 @@ void Normalise(double poly[4]) {
   }
 }
 
+// A recording with errors (what `irdist check` reports) is refused before anything is computed
+// from it: its first errors are listed with file:line.
+void RequireCleanRecording(const std::string& dir) {
+  const RecordingCheck check = CheckRecording(dir);
+  if (check.ok()) return;
+  std::ostringstream message;
+  message << dir << ": the recording has " << check.errors.size()
+          << " error(s); nothing is computed from it. First:";
+  for (size_t i = 0; i < check.errors.size() && i < 5; ++i) {
+    const RecordingCheck::Issue& issue = check.errors[i];
+    message << "\n  " << issue.file << (issue.line > 0 ? ":" + std::to_string(issue.line) : "")
+            << ": " << issue.message;
+  }
+  message << "\nRun `irdist check " << dir << "` for the full list, repair the recording (or "
+          << "restore it from a copy) and try again.";
+  throw CheckFailedError(message.str());
+}
+
+// Results are never replaced without being asked: refuses when one of `names` exists in `dir`.
+void RefuseExistingResults(const std::string& dir, const std::vector<std::string>& names,
+                           bool force, const std::string& command) {
+  if (force) return;
+  for (const std::string& name : names) {
+    const fs::path path = fs::path(dir) / name;
+    std::error_code ec;
+    if (fs::exists(path, ec)) {
+      throw RunFolderError(path.string() + " exists: irdist " + command +
+                           " does not replace results. Give a new folder with --out, or pass "
+                           "--force to replace them.");
+    }
+  }
+}
+
 std::string ParentOf(const std::string& dir) {
   fs::path path = fs::path(dir).lexically_normal();
   if (path.filename().empty()) path = path.parent_path();
@@ -580,6 +613,7 @@ ValidationSummary WriteValidation(const std::string& dir, const std::vector<Esti
 
 void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& options,
                           const FeatureMap& cache, std::ostream& out) {
+  RequireCleanRecording(run_dir + "/recording");
   const RecordingReader reader(run_dir + "/recording");
   const FeatureMap features = RecordingFeatures(reader, options, cache);
   WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
@@ -589,6 +623,7 @@ void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& opti
 
 void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
                         const FeatureMap& cache, std::ostream& out) {
+  RequireCleanRecording(run_dir + "/recording");
   const RecordingReader reader(run_dir + "/recording");
   bool recovered = false;
   const FeatureOptions fit_options = FitFeatureOptions(reader, options, false, out, &recovered);
@@ -602,6 +637,7 @@ void ProcessCalibration(const std::string& run_dir, const FeatureOptions& option
 void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,
                        const std::map<std::string, std::string>& context, const FeatureMap& cache,
                        std::ostream& out) {
+  RequireCleanRecording(run_dir + "/recording");
   const RecordingReader reader(run_dir + "/recording");
   const FeatureMap features = RecordingFeatures(reader, model.features, cache);
   WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
@@ -609,6 +645,7 @@ void ProcessValidation(const std::string& run_dir, const CalibrationModel& model
 }
 
 void RunFit(const FitArgs& args, CommandIo io) {
+  RequireCleanRecording(args.recording);
   const RecordingReader reader(args.recording);
   if (!reader.IsComplete()) {
     io.err << "warning: " << args.recording << " is " << CompletionName(reader.completion())
@@ -617,6 +654,8 @@ void RunFit(const FitArgs& args, CommandIo io) {
   const std::string model_path =
       args.out.empty() ? ParentOf(args.recording) + "/model.yaml" : args.out;
   const std::string out_dir = ParentOf(model_path);
+  RefuseExistingResults(out_dir, {fs::path(model_path).filename().string(), "features.csv", "report"},
+                        args.force, "fit");
   fs::create_directories(out_dir);
   const FeatureOptions options =
       FitFeatureOptions(reader, FeatureOptions{}, args.recover_response, io.out);
@@ -637,6 +676,7 @@ bool HasGroundTruth(const std::vector<EstimateRow>& rows) {
 }  // namespace
 
 void RunPlayback(const PlaybackArgs& args, CommandIo io) {
+  RequireCleanRecording(args.recording);
   const RecordingReader reader(args.recording);
   std::optional<CalibrationModel> model;
   if (!args.model.empty()) {
@@ -648,6 +688,8 @@ void RunPlayback(const PlaybackArgs& args, CommandIo io) {
   }
   const FeatureOptions options = model ? model->features : FeatureOptions{};
   const std::string out_dir = args.out_dir.empty() ? ParentOf(args.recording) : args.out_dir;
+  RefuseExistingResults(out_dir, {"features.csv", "estimates.csv", "summary.yaml", "report"},
+                        args.force, "playback");
   fs::create_directories(out_dir);
   const FeatureMap features = RecordingFeatures(reader, options);
   WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);

@@ -23,6 +23,8 @@ using yaml_fields::Fail;
 using yaml_fields::MapReader;
 
 constexpr int kMaxAxisValues = 100000;
+// Brackets of one plan: 1e6 is 11 days at 1 s a bracket, and a plan of ~100 MB.
+constexpr double kMaxPlanBrackets = 1e6;
 constexpr double kPi = 3.14159265358979323846;
 
 std::string Number(double value) {
@@ -260,51 +262,93 @@ std::string FindRigFile(const std::string& spec, const std::string& base_dir) {
   return "";
 }
 
-Recipe ParseRecipe(const std::string& text, const std::string& file, const std::string& base_dir) {
-  const YAML::Node root = yaml_fields::Parse(text, file);
-  if (!root || root.IsNull()) {
-    throw RecipeError(file, 1, 1, "the recipe is empty; it needs at least axes: and bracket:");
-  }
-  const MapReader map(root, file, "the recipe",
-                      {"name", "description", "rig", "output", "after", "calibration", "axes",
-                       "order", "serpentine", "bracket", "settle"});
-  Recipe recipe;
-  recipe.path = file;
-  recipe.name = map.String("name", fs::path(file).stem().string());
-  recipe.description = map.String("description", "");
-  recipe.output_dir = map.String("output", "runs/" + recipe.name);
-  if (recipe.output_dir.empty()) Fail(file, map.Get("output").Mark(), "output must not be empty");
+namespace {
 
+// name, description, output, after and calibration: what the recipe says about its run.
+void ReadRunKeys(const MapReader& map, const std::string& file, Recipe* recipe) {
+  recipe->path = file;
+  recipe->name = map.String("name", fs::path(file).stem().string());
+  recipe->description = map.String("description", "");
+  recipe->output_dir = map.String("output", "runs/" + recipe->name);
+  if (recipe->output_dir.empty()) Fail(file, map.Get("output").Mark(), "output must not be empty");
   const std::string after = map.String("after", "none");
   if (after == "none") {
-    recipe.after = AfterRecording::kNone;
+    recipe->after = AfterRecording::kNone;
   } else if (after == "fit") {
-    recipe.after = AfterRecording::kFit;
+    recipe->after = AfterRecording::kFit;
   } else if (after == "estimate") {
-    recipe.after = AfterRecording::kEstimate;
+    recipe->after = AfterRecording::kEstimate;
   } else {
     Fail(file, map.Get("after").Mark(),
-         "after '" + after +
-             "' is not known; valid: fit (calibration), estimate (validation), none");
+         "after '" + after + "' is not known; valid: fit (calibration), estimate (validation), none");
   }
+  recipe->camera_response = ReadCameraResponse(map, file);
+}
 
-  recipe.camera_response = ReadCameraResponse(map, file);
-
-  // The rig first: its limits check the axes.
+// The rig first: its limits check the axes.
+void ReadRigKey(const MapReader& map, const std::string& file, const std::string& base_dir,
+                Recipe* recipe) {
   const std::string rig_spec = map.String("rig", "virtual");
-  recipe.rig_path = FindRigFile(rig_spec, base_dir);
-  if (recipe.rig_path.empty()) {
+  recipe->rig_path = FindRigFile(rig_spec, base_dir);
+  if (recipe->rig_path.empty()) {
     const YAML::Node rig_node = map.Get("rig");
     Fail(file, rig_node ? rig_node.Mark() : map.Mark(),
          "rig '" + rig_spec +
              "' not found; give a rig name from recipes/rigs/ (e.g. virtual) "
              "or the path of a rig file");
   }
-  recipe.rig = LoadRig(recipe.rig_path);
-  recipe.motion = recipe.rig.station.motion;
-  const StationLimits& limits = recipe.rig.station.limits;
+  recipe->rig = LoadRig(recipe->rig_path);
+  recipe->motion = recipe->rig.station.motion;
+}
 
-  // Axes.
+// theta through pan at each tilt: cos(theta) = cos(pan) cos(tilt), within the pan limits.
+void CheckThetaRealisable(const ParsedAxis& angle, const ParsedAxis& tilt,
+                          const StationLimits& limits, const std::string& file,
+                          const std::string& rig_file) {
+  for (size_t i = 0; i < angle.values.values.size(); ++i) {
+    const double theta = angle.values.values[i];
+    if (!(std::abs(theta) < 90.0)) {
+      Fail(file, angle.marks[i], "axes.theta_deg " + Number(theta) + " must lie in (-90, 90)");
+    }
+    for (double tilt_deg : tilt.values.values) {
+      const double c = std::cos(Rad(theta)) / std::cos(Rad(tilt_deg));
+      if (c > 1.0 + 1e-12) {
+        Fail(file, angle.marks[i],
+             "axes.theta_deg " + Number(theta) + " cannot be realised with tilt_deg " +
+                 Number(tilt_deg) + ": cos(theta) = cos(pan) cos(tilt) needs |theta| >= |tilt|");
+      }
+      const double pan = std::acos(std::min(1.0, c)) * 180.0 / kPi;
+      if (!limits.pan_deg.Contains(theta < 0 ? -pan : pan)) {
+        Fail(file, angle.marks[i],
+             "axes.theta_deg " + Number(theta) + " needs pan " + Number(theta < 0 ? -pan : pan) +
+                 " deg at tilt " + Number(tilt_deg) + ", outside the rig's pan limits " +
+                 RangeText(limits.pan_deg) + " (station.limits in " + rig_file + ")");
+      }
+    }
+  }
+}
+
+void CheckAngleLimits(ParsedAxis* angle, const ParsedAxis& tilt, AngleMode mode,
+                      const StationLimits& limits, const std::string& file,
+                      const std::string& rig_file) {
+  if (mode == AngleMode::kPan) {
+    CheckLimits(angle, limits.pan_deg, file, "axes.pan_deg", rig_file);
+  } else if (angle->values.random.has_value() || tilt.values.random.has_value()) {
+    const bool tilt_zero = !tilt.values.random.has_value() &&
+                           std::all_of(tilt.values.values.begin(), tilt.values.values.end(),
+                                       [](double t) { return t == 0.0; });
+    if (!tilt_zero) {
+      Fail(file, angle->mark,
+           "random draws of theta_deg or tilt_deg need tilt_deg 0 (theta realised by pan); "
+           "draw pan_deg and tilt_deg instead");
+    }
+    CheckLimits(angle, limits.pan_deg, file, "axes.theta_deg", rig_file);
+  } else {
+    CheckThetaRealisable(*angle, tilt, limits, file, rig_file);
+  }
+}
+
+void ReadAxes(const MapReader& map, const std::string& file, Recipe* recipe) {
   const MapReader axes(map.Require("axes"), file, "axes",
                        {"slide_mm", "theta_deg", "pan_deg", "tilt_deg", "bias_ma"});
   if (axes.Has("theta_deg") && axes.Has("pan_deg")) {
@@ -314,7 +358,7 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
   if (!axes.Has("theta_deg") && !axes.Has("pan_deg")) {
     Fail(file, axes.Mark(), "axes is missing the key 'theta_deg' (or 'pan_deg')");
   }
-  SweepSpec& sweep = recipe.sweep;
+  SweepSpec& sweep = recipe->sweep;
   sweep.angle_mode = axes.Has("theta_deg") ? AngleMode::kTheta : AngleMode::kPan;
   const std::string angle_key = sweep.angle_mode == AngleMode::kTheta ? "theta_deg" : "pan_deg";
   ParsedAxis slide = ReadAxis(axes.Require("slide_mm"), file, "axes.slide_mm", true);
@@ -325,115 +369,117 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
                         ? ReadAxis(axes.Get("tilt_deg"), file, "axes.tilt_deg", true)
                         : ReadAxis(YAML::Node(0.0), file, "axes.tilt_deg", true);
   if (!axes.Has("tilt_deg")) tilt.marks = {axes.Mark()};  // errors about the default point at axes
-
-  const std::string& rig_file = recipe.rig_path;
+  const StationLimits& limits = recipe->rig.station.limits;
+  const std::string& rig_file = recipe->rig_path;
   CheckLimits(&slide, limits.slide_mm, file, "axes.slide_mm", rig_file);
   CheckLimits(&tilt, limits.tilt_deg, file, "axes.tilt_deg", rig_file);
   CheckLimits(&bias, limits.bias_ma, file, "axes.bias_ma", rig_file);
-  if (sweep.angle_mode == AngleMode::kPan) {
-    CheckLimits(&angle, limits.pan_deg, file, "axes.pan_deg", rig_file);
-  } else if (angle.values.random.has_value() || tilt.values.random.has_value()) {
-    const bool tilt_zero = !tilt.values.random.has_value() &&
-                           std::all_of(tilt.values.values.begin(), tilt.values.values.end(),
-                                       [](double t) { return t == 0.0; });
-    if (!tilt_zero) {
-      Fail(file, angle.mark,
-           "random draws of theta_deg or tilt_deg need tilt_deg 0 (theta realised by pan); "
-           "draw pan_deg and tilt_deg instead");
-    }
-    CheckLimits(&angle, limits.pan_deg, file, "axes.theta_deg", rig_file);
-  } else {
-    // theta through pan at each tilt: cos(theta) = cos(pan) cos(tilt).
-    for (size_t i = 0; i < angle.values.values.size(); ++i) {
-      const double theta = angle.values.values[i];
-      if (!(std::abs(theta) < 90.0)) {
-        Fail(file, angle.marks[i], "axes.theta_deg " + Number(theta) + " must lie in (-90, 90)");
-      }
-      for (double tilt_deg : tilt.values.values) {
-        const double c = std::cos(Rad(theta)) / std::cos(Rad(tilt_deg));
-        if (c > 1.0 + 1e-12) {
-          Fail(file, angle.marks[i],
-               "axes.theta_deg " + Number(theta) + " cannot be realised with tilt_deg " +
-                   Number(tilt_deg) + ": cos(theta) = cos(pan) cos(tilt) needs |theta| >= |tilt|");
-        }
-        const double pan = std::acos(std::min(1.0, c)) * 180.0 / kPi;
-        if (!limits.pan_deg.Contains(theta < 0 ? -pan : pan)) {
-          Fail(file, angle.marks[i],
-               "axes.theta_deg " + Number(theta) + " needs pan " + Number(theta < 0 ? -pan : pan) +
-                   " deg at tilt " + Number(tilt_deg) + ", outside the rig's pan limits " +
-                   RangeText(limits.pan_deg) + " (station.limits in " + rig_file + ")");
-        }
-      }
-    }
-  }
+  CheckAngleLimits(&angle, tilt, sweep.angle_mode, limits, file, rig_file);
   sweep.slide_mm = slide.values;
   sweep.angle_deg = angle.values;
   sweep.tilt_deg = tilt.values;
   sweep.bias_ma = bias.values;
+}
 
-  // Bracket.
+void ReadBracket(const MapReader& map, const std::string& file, BracketSpec* spec) {
   const MapReader bracket(map.Require("bracket"), file, "bracket",
                           {"t_ref_ms", "t_meas_ms", "repeats", "retake_reference"});
-  BracketSpec& spec = sweep.bracket;
-  spec.t_ref_ms = AsNumber(bracket.Require("t_ref_ms"), file, "bracket.t_ref_ms");
-  if (!(spec.t_ref_ms > 0.0)) {
+  spec->t_ref_ms = AsNumber(bracket.Require("t_ref_ms"), file, "bracket.t_ref_ms");
+  if (!(spec->t_ref_ms > 0.0)) {
     Fail(file, bracket.Get("t_ref_ms").Mark(), "bracket.t_ref_ms must be > 0 ms");
   }
   const ParsedAxis t_meas =
       ReadAxis(bracket.Require("t_meas_ms"), file, "bracket.t_meas_ms", false);
-  spec.t_meas_ms = t_meas.values.values;
-  for (size_t i = 0; i < spec.t_meas_ms.size(); ++i) {
-    if (!(spec.t_meas_ms[i] > spec.t_ref_ms)) {
+  spec->t_meas_ms = t_meas.values.values;
+  for (size_t i = 0; i < spec->t_meas_ms.size(); ++i) {
+    if (!(spec->t_meas_ms[i] > spec->t_ref_ms)) {
       Fail(file, t_meas.marks[i],
-           "bracket.t_meas_ms " + Number(spec.t_meas_ms[i]) + " must be longer than t_ref_ms " +
-               Number(spec.t_ref_ms) + " (the method differences t_n - t_r > 0)");
+           "bracket.t_meas_ms " + Number(spec->t_meas_ms[i]) + " must be longer than t_ref_ms " +
+               Number(spec->t_ref_ms) + " (the method differences t_n - t_r > 0)");
     }
   }
-  spec.repeats = bracket.Integer("repeats", 1);
-  if (spec.repeats < 1) Fail(file, bracket.Get("repeats").Mark(), "bracket.repeats must be >= 1");
-  spec.retake_reference = bracket.Boolean("retake_reference", false);
+  spec->repeats = bracket.Integer("repeats", 1);
+  if (spec->repeats < 1) Fail(file, bracket.Get("repeats").Mark(), "bracket.repeats must be >= 1");
+  spec->retake_reference = bracket.Boolean("retake_reference", false);
+}
 
-  // Settle.
-  if (map.Has("settle")) {
-    const MapReader settle(map.Get("settle"), file, "settle",
-                           {"after_move_ms", "after_current_ms"});
-    sweep.settle.after_move_ms = settle.Number("after_move_ms", sweep.settle.after_move_ms);
-    sweep.settle.after_current_ms =
-        settle.Number("after_current_ms", sweep.settle.after_current_ms);
-    for (const char* key : {"after_move_ms", "after_current_ms"}) {
-      if (settle.Has(key) && settle.Number(key, 0.0) < 0.0) {
-        Fail(file, settle.Get(key).Mark(), std::string("settle.") + key + " must be >= 0 ms");
-      }
+void ReadSettle(const MapReader& map, const std::string& file, SettleSpec* spec) {
+  if (!map.Has("settle")) return;
+  const MapReader settle(map.Get("settle"), file, "settle", {"after_move_ms", "after_current_ms"});
+  spec->after_move_ms = settle.Number("after_move_ms", spec->after_move_ms);
+  spec->after_current_ms = settle.Number("after_current_ms", spec->after_current_ms);
+  for (const char* key : {"after_move_ms", "after_current_ms"}) {
+    if (settle.Has(key) && settle.Number(key, 0.0) < 0.0) {
+      Fail(file, settle.Get(key).Mark(), std::string("settle.") + key + " must be >= 0 ms");
     }
   }
+}
 
-  // Serpentine: true (default axes), false (none) or a list of axes.
+// Serpentine: true (default axes), false (none) or a list of axes. Order: the listed axes
+// outermost, in that order; the others after them by step cost.
+void ReadSerpentineAndOrder(const MapReader& map, const std::string& file, const MotionModel& motion,
+                            SweepSpec* sweep) {
   if (map.Has("serpentine")) {
     const YAML::Node node = map.Get("serpentine");
     bool flag = false;
     if (node.IsScalar() && YAML::convert<bool>::decode(node, flag)) {
-      if (!flag) sweep.serpentine.clear();
+      if (!flag) sweep->serpentine.clear();
     } else if (node.IsSequence()) {
-      sweep.serpentine = ReadAxisList(node, file, "serpentine", sweep.angle_mode);
+      sweep->serpentine = ReadAxisList(node, file, "serpentine", sweep->angle_mode);
     } else {
       Fail(file, node.Mark(), "serpentine must be true, false or a list of axis names");
     }
   }
-
-  // Order: the listed axes outermost, in that order; the others after them by step cost.
-  std::vector<SweepAxis> listed;
+  std::vector<SweepAxis> order;
   if (map.Has("order")) {
-    listed = ReadAxisList(map.Get("order"), file, "order", sweep.angle_mode);
-    if (listed.empty()) Fail(file, map.Get("order").Mark(), "order is empty; list axis names");
+    order = ReadAxisList(map.Get("order"), file, "order", sweep->angle_mode);
+    if (order.empty()) Fail(file, map.Get("order").Mark(), "order is empty; list axis names");
   }
-  std::vector<SweepAxis> order = listed;
-  for (SweepAxis axis : ChooseAxisOrder(sweep, recipe.motion)) {
+  for (SweepAxis axis : ChooseAxisOrder(*sweep, motion)) {
     if (std::find(order.begin(), order.end(), axis) == order.end()) order.push_back(axis);
   }
-  sweep.order = order;
+  sweep->order = order;
+}
 
+// A plan that would not fit in memory (or in a lab's year) is refused before it is made.
+void CheckPlanSize(const MapReader& map, const std::string& file, const SweepSpec& sweep) {
+  const BracketSpec& b = sweep.bracket;
+  const double poses = static_cast<double>(sweep.slide_mm.Count()) * sweep.angle_deg.Count() *
+                       sweep.tilt_deg.Count() * sweep.bias_ma.Count() * b.repeats;
+  const double per_bracket = 1.0 + static_cast<double>(b.t_meas_ms.size()) *
+                                       (b.retake_reference ? 2.0 : 1.0);
+  if (poses > kMaxPlanBrackets) {
+    Fail(file, map.Mark(),
+         "the recipe asks for " + Number(poses) + " brackets (slide " +
+             std::to_string(sweep.slide_mm.Count()) + " x angle " +
+             std::to_string(sweep.angle_deg.Count()) + " x tilt " +
+             std::to_string(sweep.tilt_deg.Count()) + " x bias " +
+             std::to_string(sweep.bias_ma.Count()) + " x repeats " + std::to_string(b.repeats) +
+             ", " + Number(poses * per_bracket) + " frames); at most " +
+             Number(kMaxPlanBrackets) + " brackets: use fewer values or repeats");
+  }
+}
+
+}  // namespace
+
+Recipe ParseRecipe(const std::string& text, const std::string& file, const std::string& base_dir) {
+  const YAML::Node root = yaml_fields::Parse(text, file);
+  if (!root || root.IsNull()) {
+    throw RecipeError(file, 1, 1, "the recipe is empty; it needs at least axes: and bracket:");
+  }
+  const MapReader map(root, file, "the recipe",
+                      {"name", "description", "rig", "output", "after", "calibration", "axes",
+                       "order", "serpentine", "bracket", "settle"});
+  Recipe recipe;
+  ReadRunKeys(map, file, &recipe);
+  ReadRigKey(map, file, base_dir, &recipe);
+  ReadAxes(map, file, &recipe);
+  ReadBracket(map, file, &recipe.sweep.bracket);
+  CheckPlanSize(map, file, recipe.sweep);
+  ReadSettle(map, file, &recipe.sweep.settle);
+  ReadSerpentineAndOrder(map, file, recipe.motion, &recipe.sweep);
   std::string why;
-  if (!sweep.IsValid(&why)) Fail(file, map.Mark(), why);
+  if (!recipe.sweep.IsValid(&why)) Fail(file, map.Mark(), why);
   return recipe;
 }
 

@@ -21,6 +21,7 @@
 #include "app/offline.h"
 #include "app/provenance.h"
 #include "app/recipe.h"
+#include "app/resume.h"
 #include "app/suggest.h"
 #include "estimator/model_file.h"
 #include "sim/virtual_rig.h"
@@ -177,6 +178,10 @@ std::string KeepEarlierLog(const std::string& dir) {
   }
 }
 
+const char* CommandName(RunKind kind) {
+  return kind == RunKind::kCalibrate ? "calibrate" : "validate";
+}
+
 // The run folder: a new one, or the cut run to resume (its complete brackets in `done_ids`).
 // Returns false when the recording to resume is complete already.
 bool PrepareRunFolder(const RunRequest& request, const Recipe& recipe, const Plan& plan,
@@ -195,23 +200,9 @@ bool PrepareRunFolder(const RunRequest& request, const Recipe& recipe, const Pla
     return true;
   }
   recorded->dir = request.resume_dir;
-  const std::string recording_dir = recorded->dir + "/recording";
-  if (!fs::exists(recording_dir + "/recording.yaml")) {
-    throw RunFolderError(recording_dir +
-                         ": no recording to resume (recording.yaml missing); "
-                         "pass the folder of a cut run to --resume.");
-  }
-  const RecordingState state = ReadRecordingState(recording_dir);
-  if (state.recipe_text != recipe_text) {
-    throw RecipeError(recipe.path, 0, 0,
-                      "differs from the recipe recorded in " + recording_dir +
-                          "/recording.yaml (recipe " + state.recipe_path +
-                          "); resume with the recipe the run started with.");
-  }
-  if (state.complete) {
-    io.err << "The recording in " << recording_dir << " is complete; nothing to resume.\n";
-    return false;
-  }
+  const ResumeState state =
+      CheckResume(recorded->dir, CommandName(request.kind),
+                  ResumeExpectationOf(recipe, recipe_text, ReadText(recipe.rig_path)));
   *done_ids = state.complete_brackets;
   io.err << "Resuming " << recorded->dir << ": " << done_ids->size() << " of "
          << plan.poses.size() << " brackets already recorded.\n";
@@ -400,6 +391,8 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   if (!PrepareRunFolder(request, recipe, plan, recipe_text, io, &recorded, &done_ids)) {
     return recorded;
   }
+  const std::string command = CommandName(request.kind);
+  const RunFolderLock folder_lock(recorded.dir, command);  // one run per folder, for the whole run
   const std::vector<SweepPose> poses = SweepPoses(plan, done_ids);
   // Declared first: the camera and the station links are closed before a virtual rig stops.
   RigEndpoints rig = StartRig(request, recipe, io);
@@ -433,6 +426,9 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
     committer.Abandon(io.err);
     progress.Finish();
     recorder.Close(true);
+    io.err << "\nThe recording in " << recorded.dir << "/recording is closed as cut. Continue it "
+           << "with: " << ResumeCommand(command, recipe.path,
+                                        request.model_path, recorded.dir) << "\n";
     throw;
   }
   recorder.WaitCommitted();

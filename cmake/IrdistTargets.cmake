@@ -43,11 +43,13 @@ function(irdist_test test_name)
   endif()
   set_tests_properties(${test_name} PROPERTIES TIMEOUT ${ARG_TIMEOUT}
     WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
+  if(ARG_GIGE)
+    # Label gige: `ctest -LE gige` runs the tests without a camera (./irdist test --sanitize).
+    list(APPEND ARG_LABELS gige)
+    set_tests_properties(${test_name} PROPERTIES RESOURCE_LOCK ${IRDIST_GVCP_LOCK})
+  endif()
   if(ARG_LABELS)
     set_tests_properties(${test_name} PROPERTIES LABELS "${ARG_LABELS}")
-  endif()
-  if(ARG_GIGE)
-    set_tests_properties(${test_name} PROPERTIES RESOURCE_LOCK ${IRDIST_GVCP_LOCK})
   endif()
 endfunction()
 

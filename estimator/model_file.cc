@@ -1,7 +1,14 @@
 #include "estimator/model_file.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <yaml-cpp/yaml.h>
 
+#include <cerrno>
+#include <algorithm>
+#include <type_traits>
+#include <cmath>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -82,10 +89,42 @@ class Reader {
     const YAML::Node node = Child(parent, parent_key, name);
     const std::string key = parent_key.empty() ? name : parent_key + "." + name;
     if (!node.IsScalar()) Fail(node, key, "expected a scalar");
+    T value{};
     try {
-      return node.as<T>();
+      value = node.as<T>();
     } catch (const YAML::Exception&) {
       Fail(node, key, "cannot read '" + node.Scalar() + "' as a number");
+    }
+    if constexpr (std::is_floating_point_v<T>) {
+      if (!std::isfinite(value)) Fail(node, key, "'" + node.Scalar() + "' is not a finite number");
+    }
+    return value;
+  }
+
+  // A fit statistic: finite, or .inf / .nan where the fit could not say (a singular fit's
+  // condition number); it only describes the fit, no estimate uses it.
+  double Statistic(const YAML::Node& parent, const std::string& parent_key,
+                   const std::string& name) const {
+    const YAML::Node node = Child(parent, parent_key, name);
+    try {
+      return node.as<double>();
+    } catch (const YAML::Exception&) {
+      Fail(node, parent_key + "." + name, "cannot read '" + node.Scalar() + "' as a number");
+    }
+  }
+
+  // Every key of the map `node` is in `allowed` (a misspelt key is an error, not a default).
+  void Keys(const YAML::Node& node, const std::string& key,
+            const std::vector<std::string>& allowed) const {
+    if (!node.IsMap()) Fail(node, key, "expected a map");
+    for (const auto& entry : node) {
+      const std::string name = entry.first.Scalar();
+      if (std::find(allowed.begin(), allowed.end(), name) == allowed.end()) {
+        std::string valid;
+        for (const std::string& a : allowed) valid += (valid.empty() ? "" : ", ") + a;
+        Fail(entry.first, key.empty() ? name : key + "." + name,
+             "unknown key; valid keys here: " + valid);
+      }
     }
   }
 
@@ -98,11 +137,15 @@ class Reader {
     if (!node.IsSequence()) Fail(node, key, "expected a sequence of numbers");
     std::vector<double> out;
     for (size_t i = 0; i < node.size(); ++i) {
+      double value = 0.0;
       try {
-        out.push_back(node[i].as<double>());
+        value = node[i].as<double>();
       } catch (const YAML::Exception&) {
         Fail(node[i], key + "[" + std::to_string(i) + "]", "not a number");
       }
+      if (!std::isfinite(value))
+        Fail(node[i], key + "[" + std::to_string(i) + "]", "not a finite number");
+      out.push_back(value);
     }
     return out;
   }
@@ -119,6 +162,8 @@ class Reader {
   FitSummary Fit(const YAML::Node& parent, const std::string& parent_key) const {
     const std::string key = parent_key + ".fit";
     const YAML::Node node = Child(parent, parent_key, "fit");
+    Keys(node, key, {"termination", "message", "mean_relative_error", "max_relative_error",
+                     "condition_number", "samples", "iterations", "gauge_index"});
     FitSummary s;
     const std::string termination = Scalar<std::string>(node, key, "termination");
     bool known = false;
@@ -131,10 +176,12 @@ class Reader {
       }
     }
     if (!known) Fail(node["termination"], key + ".termination", "unknown termination");
-    s.message = node["message"] ? node["message"].as<std::string>() : std::string();
-    s.mean_relative_error = Scalar<double>(node, key, "mean_relative_error");
-    s.max_relative_error = Scalar<double>(node, key, "max_relative_error");
-    s.condition_number = Scalar<double>(node, key, "condition_number");
+    s.message = node["message"] && !node["message"].IsNull()
+                    ? Scalar<std::string>(node, key, "message")
+                    : std::string();
+    s.mean_relative_error = Statistic(node, key, "mean_relative_error");
+    s.max_relative_error = Statistic(node, key, "max_relative_error");
+    s.condition_number = Statistic(node, key, "condition_number");
     s.samples = Scalar<int>(node, key, "samples");
     s.iterations = Scalar<int>(node, key, "iterations");
     s.gauge_index = Scalar<int>(node, key, "gauge_index");
@@ -151,6 +198,9 @@ ModelProvenance ReadProvenance(const Reader& rd, const YAML::Node& root) {
   const YAML::Node n = root["provenance"];
   if (!n.IsDefined() || n.IsNull()) return p;
   const std::string k = "provenance";
+  rd.Keys(n, k, {"rig_name", "rig_path", "camera_vendor", "camera_model", "camera_serial",
+                 "pixel_format", "bit_depth", "roi_px", "recipe_path", "calibration_date",
+                 "t_ref_ms", "t_meas_ms", "retake_reference"});
   p.known = true;
   p.rig_name = rd.Scalar<std::string>(n, k, "rig_name");
   p.rig_path = rd.Scalar<std::string>(n, k, "rig_path");
@@ -179,13 +229,9 @@ ModelFileError::ModelFileError(const std::string& path, const std::string& key, 
                                const std::string& problem)
     : Error(Message(path, key, line, problem)), path_(path), key_(key), line_(line) {}
 
-std::string ModelToYaml(const CalibrationModel& model) {
-  YAML::Emitter out;
-  out.SetDoublePrecision(std::numeric_limits<double>::max_digits10);
-  out << YAML::BeginMap;
-  out << YAML::Key << "format_version" << YAML::Value << kModelFormatVersion;
+namespace {
 
-  const FeatureOptions& f = model.features;
+void EmitFeatures(YAML::Emitter& out, const FeatureOptions& f) {
   out << YAML::Key << "features" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "roi_policy" << YAML::Value << ToString(f.roi_policy);
   out << YAML::Key << "window_side_px" << YAML::Value << f.window_side_px;
@@ -201,8 +247,9 @@ std::string ModelToYaml(const CalibrationModel& model) {
   out << YAML::Key << "inverse_response_f" << YAML::Value << YAML::Flow << f.inverse_response.f;
   out << YAML::Key << "response_scope" << YAML::Value << ToString(f.response_scope);
   out << YAML::EndMap;
+}
 
-  const ModelScaling& s = model.scaling;
+void EmitScalingAndRanges(YAML::Emitter& out, const ModelScaling& s, const CalibratedRanges& r) {
   out << YAML::Key << "scaling" << YAML::Value << YAML::BeginMap;
   EmitDouble(out, "d_ref_mm", s.d_ref_mm);
   EmitDouble(out, "d_scale", s.d_scale);
@@ -210,8 +257,6 @@ std::string ModelToYaml(const CalibrationModel& model) {
   EmitDouble(out, "i0_scale_ma", s.i0_scale_ma);
   EmitDouble(out, "df_scale", s.df_scale);
   out << YAML::EndMap;
-
-  const CalibratedRanges& r = model.ranges;
   out << YAML::Key << "ranges" << YAML::Value << YAML::BeginMap;
   auto range = [&out](const char* key, double lo, double hi) {
     out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq << lo << hi
@@ -223,9 +268,11 @@ std::string ModelToYaml(const CalibrationModel& model) {
   range("t_ref_ms", r.t_ref_min_ms, r.t_ref_max_ms);
   range("bias_ma", r.bias_min_ma, r.bias_max_ma);
   out << YAML::EndMap;
+}
 
+void EmitModels(YAML::Emitter& out, const std::vector<FittedModel>& models) {
   out << YAML::Key << "models" << YAML::Value << YAML::BeginSeq;
-  for (const FittedModel& m : model.models) {
+  for (const FittedModel& m : models) {
     out << YAML::BeginMap;
     out << YAML::Key << "kind" << YAML::Value << ToString(m.kind);
     out << YAML::Key << "form" << YAML::Value << ToString(m.form);
@@ -236,53 +283,46 @@ std::string ModelToYaml(const CalibrationModel& model) {
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
-
-  out << YAML::Key << "geometric" << YAML::Value << YAML::BeginMap;
-  EmitDouble(out, "alpha_px2", model.geometric.alpha_px2);
-  EmitDouble(out, "beta_px2", model.geometric.beta_px2);
-  if (model.geometric.noise_rel_at_1m > 0.0) {
-    EmitDouble(out, "noise_rel_at_1m", model.geometric.noise_rel_at_1m);
-    EmitDouble(out, "noise_exponent", model.geometric.noise_exponent);
-  }
-  EmitFit(out, model.geometric.summary);
-  out << YAML::EndMap;
-
-  const ThetaCorrection& tc = model.theta_correction;
-  if (tc.fitted()) {
-    out << YAML::Key << "theta_correction" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "degree" << YAML::Value << tc.degree;
-    out << YAML::Key << "coefficients" << YAML::Value << YAML::Flow << tc.coefficients;
-    out << YAML::Key << "ratio_sq" << YAML::Value << YAML::Flow << YAML::BeginSeq
-        << tc.ratio_sq_min << tc.ratio_sq_max << YAML::EndSeq;
-    out << YAML::Key << "d_geometric_mm" << YAML::Value << YAML::Flow << YAML::BeginSeq
-        << tc.d_min_mm << tc.d_max_mm << YAML::EndSeq;
-    EmitFit(out, tc.summary);
-    out << YAML::EndMap;
-  }
-  EmitProvenance(out, model.provenance);
-  out << YAML::EndMap;
-  return std::string(out.c_str()) + "\n";
 }
 
-CalibrationModel ModelFromYaml(const std::string& text, const std::string& path) {
-  const Reader rd(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw ModelFileError(path, "", e.mark.line + 1, std::string("not valid YAML: ") + e.msg);
+void EmitGeometric(YAML::Emitter& out, const GeometricModel& g) {
+  out << YAML::Key << "geometric" << YAML::Value << YAML::BeginMap;
+  EmitDouble(out, "alpha_px2", g.alpha_px2);
+  EmitDouble(out, "beta_px2", g.beta_px2);
+  if (g.noise_rel_at_1m > 0.0) {
+    EmitDouble(out, "noise_rel_at_1m", g.noise_rel_at_1m);
+    EmitDouble(out, "noise_exponent", g.noise_exponent);
   }
-  if (!root.IsMap()) rd.Fail(root, "", "the document is not a map");
-  const int version = rd.Scalar<int>(root, "", "format_version");
-  if (version < kOldestModelFormatVersion || version > kModelFormatVersion) {
-    rd.Fail(root["format_version"], "format_version",
-            "version " + std::to_string(version) + " is not a supported version (" +
-                std::to_string(kOldestModelFormatVersion) + ".." +
-                std::to_string(kModelFormatVersion) + ")");
-  }
-  CalibrationModel model;
+  EmitFit(out, g.summary);
+  out << YAML::EndMap;
+}
+
+void EmitThetaCorrection(YAML::Emitter& out, const ThetaCorrection& tc) {
+  if (!tc.fitted()) return;
+  out << YAML::Key << "theta_correction" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "degree" << YAML::Value << tc.degree;
+  out << YAML::Key << "coefficients" << YAML::Value << YAML::Flow << tc.coefficients;
+  out << YAML::Key << "ratio_sq" << YAML::Value << YAML::Flow << YAML::BeginSeq << tc.ratio_sq_min
+      << tc.ratio_sq_max << YAML::EndSeq;
+  out << YAML::Key << "d_geometric_mm" << YAML::Value << YAML::Flow << YAML::BeginSeq
+      << tc.d_min_mm << tc.d_max_mm << YAML::EndSeq;
+  EmitFit(out, tc.summary);
+  out << YAML::EndMap;
+}
+
+// An optional key: present and not null.
+bool Present(const YAML::Node& parent, const char* name) {
+  return parent[name].IsDefined() && !parent[name].IsNull();
+}
+
+FeatureOptions ReadFeatures(const Reader& rd, const YAML::Node& root, int version) {
   const YAML::Node f = rd.Child(root, "", "features");
-  FeatureOptions& fo = model.features;
+  rd.Keys(f, "features",
+          {"roi_policy", "window_side_px", "threshold_fraction", "moment_threshold_fraction",
+           "moment_method", "aperture_margin_px", "psf_sigma_px", "detection_downsample",
+           "min_contrast_fraction", "ellipse_method", "inverse_response_m", "inverse_response_f",
+           "response_scope"});
+  FeatureOptions fo;
   if (!ParseRoiPolicy(rd.Scalar<std::string>(f, "features", "roi_policy"), &fo.roi_policy))
     rd.Fail(f["roi_policy"], "features.roi_policy", "unknown ROI policy");
   fo.window_side_px = rd.Scalar<int>(f, "features", "window_side_px");
@@ -292,13 +332,13 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   // Version 2 keys; absent (version 1): what version 1 files were made with (threshold moments,
   // the default then; the default is now aperture moments).
   fo.moment_method = MomentMethod::kThreshold;
-  if (f["moment_method"].IsDefined() && !f["moment_method"].IsNull()) {
-    if (!ParseMomentMethod(rd.Scalar<std::string>(f, "features", "moment_method"),
-                           &fo.moment_method))
-      rd.Fail(f["moment_method"], "features.moment_method",
-              "unknown moment method (threshold or aperture)");
+  if (Present(f, "moment_method") &&
+      !ParseMomentMethod(rd.Scalar<std::string>(f, "features", "moment_method"),
+                         &fo.moment_method)) {
+    rd.Fail(f["moment_method"], "features.moment_method",
+            "unknown moment method (threshold or aperture)");
   }
-  if (f["aperture_margin_px"].IsDefined() && !f["aperture_margin_px"].IsNull()) {
+  if (Present(f, "aperture_margin_px")) {
     fo.aperture_margin_px = rd.Scalar<double>(f, "features", "aperture_margin_px");
   }
   fo.detection_downsample = rd.Scalar<int>(f, "features", "detection_downsample");
@@ -310,7 +350,7 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   fo.inverse_response.f = rd.Doubles(f, "features", "inverse_response_f", true);
   // Version 3 key; absent (versions 1 and 2): the curve entered E_rel only.
   fo.response_scope = ResponseScope::kERelOnly;
-  if (f["response_scope"].IsDefined() && !f["response_scope"].IsNull()) {
+  if (Present(f, "response_scope")) {
     if (version < 3)
       rd.Fail(f["response_scope"], "features.response_scope",
               "response_scope is new in format_version 3; this file says " +
@@ -322,9 +362,13 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   }
   std::string why;
   if (!fo.IsValid(&why)) rd.Fail(f, "features", why);
+  return fo;
+}
 
+ModelScaling ReadScaling(const Reader& rd, const YAML::Node& root) {
   const YAML::Node s = rd.Child(root, "", "scaling");
-  ModelScaling& sc = model.scaling;
+  rd.Keys(s, "scaling", {"d_ref_mm", "d_scale", "t_scale_ms", "i0_scale_ma", "df_scale"});
+  ModelScaling sc;
   sc.d_ref_mm = rd.Scalar<double>(s, "scaling", "d_ref_mm");
   sc.d_scale = rd.Scalar<double>(s, "scaling", "d_scale");
   sc.t_scale_ms = rd.Scalar<double>(s, "scaling", "t_scale_ms");
@@ -333,82 +377,171 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   for (const char* key : {"d_ref_mm", "d_scale", "t_scale_ms", "i0_scale_ma", "df_scale"}) {
     if (!(s[key].as<double>() > 0.0)) rd.Fail(s[key], std::string("scaling.") + key, "must be > 0");
   }
+  return sc;
+}
 
+CalibratedRanges ReadRanges(const Reader& rd, const YAML::Node& root) {
   const YAML::Node r = rd.Child(root, "", "ranges");
-  CalibratedRanges& cr = model.ranges;
+  rd.Keys(r, "ranges", {"d_mm", "theta_deg", "t_ms", "t_ref_ms", "bias_ma"});
+  CalibratedRanges cr;
   rd.Range(r, "ranges", "d_mm", &cr.d_min_mm, &cr.d_max_mm);
   rd.Range(r, "ranges", "theta_deg", &cr.theta_min_deg, &cr.theta_max_deg);
   rd.Range(r, "ranges", "t_ms", &cr.t_min_ms, &cr.t_max_ms);
   rd.Range(r, "ranges", "t_ref_ms", &cr.t_ref_min_ms, &cr.t_ref_max_ms);
   rd.Range(r, "ranges", "bias_ma", &cr.bias_min_ma, &cr.bias_max_ma);
+  return cr;
+}
 
+FittedModel ReadFittedModel(const Reader& rd, const YAML::Node& m, const std::string& key) {
+  rd.Keys(m, key, {"kind", "form", "sigma_deg", "degenerate", "coefficients", "fit"});
+  FittedModel fm;
+  if (!ParseModelKind(rd.Scalar<std::string>(m, key, "kind"), &fm.kind))
+    rd.Fail(m["kind"], key + ".kind", "unknown model kind");
+  if (!ParseModelForm(rd.Scalar<std::string>(m, key, "form"), &fm.form))
+    rd.Fail(m["form"], key + ".form", "unknown model form (full or reduced)");
+  fm.sigma_deg = rd.Scalar<double>(m, key, "sigma_deg");
+  fm.degenerate = rd.Scalar<bool>(m, key, "degenerate");
+  fm.coefficients = rd.Doubles(m, key, "coefficients", false);
+  const int expected = GetModelSpec(fm.kind).num_coefficients();
+  if (static_cast<int>(fm.coefficients.size()) != expected) {
+    rd.Fail(m["coefficients"], key + ".coefficients",
+            "expected " + std::to_string(expected) + " coefficients for " + ToString(fm.kind) +
+                ", found " + std::to_string(fm.coefficients.size()));
+  }
+  fm.summary = rd.Fit(m, key);
+  return fm;
+}
+
+// The models; free_e (Eq. 17) and free_sigma (Eq. 18) must be there: every estimate uses both.
+std::vector<FittedModel> ReadModels(const Reader& rd, const YAML::Node& root) {
   const YAML::Node models = rd.Child(root, "", "models");
   if (!models.IsSequence()) rd.Fail(models, "models", "expected a sequence");
+  std::vector<FittedModel> out;
   for (size_t i = 0; i < models.size(); ++i) {
-    const std::string key = "models[" + std::to_string(i) + "]";
-    const YAML::Node m = models[i];
-    FittedModel fm;
-    if (!ParseModelKind(rd.Scalar<std::string>(m, key, "kind"), &fm.kind))
-      rd.Fail(m["kind"], key + ".kind", "unknown model kind");
-    if (!ParseModelForm(rd.Scalar<std::string>(m, key, "form"), &fm.form))
-      rd.Fail(m["form"], key + ".form", "unknown model form (full or reduced)");
-    fm.sigma_deg = rd.Scalar<double>(m, key, "sigma_deg");
-    fm.degenerate = rd.Scalar<bool>(m, key, "degenerate");
-    fm.coefficients = rd.Doubles(m, key, "coefficients", false);
-    const int expected = GetModelSpec(fm.kind).num_coefficients();
-    if (static_cast<int>(fm.coefficients.size()) != expected) {
-      rd.Fail(m["coefficients"], key + ".coefficients",
-              "expected " + std::to_string(expected) + " coefficients for " + ToString(fm.kind) +
-                  ", found " + std::to_string(fm.coefficients.size()));
-    }
-    fm.summary = rd.Fit(m, key);
-    model.models.push_back(std::move(fm));
+    out.push_back(ReadFittedModel(rd, models[i], "models[" + std::to_string(i) + "]"));
   }
+  for (ModelKind kind : {ModelKind::kFreeE, ModelKind::kFreeSigma}) {
+    const bool found = std::any_of(out.begin(), out.end(),
+                                   [kind](const FittedModel& m) { return m.kind == kind; });
+    if (!found) {
+      rd.Fail(models, "models",
+              std::string("no ") + ToString(kind) + " model; the estimate needs free_e and "
+              "free_sigma");
+    }
+  }
+  return out;
+}
+
+GeometricModel ReadGeometric(const Reader& rd, const YAML::Node& root) {
   const YAML::Node g = rd.Child(root, "", "geometric");
-  model.geometric.alpha_px2 = rd.Scalar<double>(g, "geometric", "alpha_px2");
-  model.geometric.beta_px2 = rd.Scalar<double>(g, "geometric", "beta_px2");
+  rd.Keys(g, "geometric", {"alpha_px2", "beta_px2", "noise_rel_at_1m", "noise_exponent", "fit"});
+  GeometricModel geometric;
+  geometric.alpha_px2 = rd.Scalar<double>(g, "geometric", "alpha_px2");
+  geometric.beta_px2 = rd.Scalar<double>(g, "geometric", "beta_px2");
   // Optional (absent in files written before the noise model): standard errors then stay in
   // units of the mean fit error.
-  if (g["noise_rel_at_1m"].IsDefined() && !g["noise_rel_at_1m"].IsNull()) {
-    model.geometric.noise_rel_at_1m = rd.Scalar<double>(g, "geometric", "noise_rel_at_1m");
-    model.geometric.noise_exponent = rd.Scalar<double>(g, "geometric", "noise_exponent");
-    if (!(model.geometric.noise_rel_at_1m > 0.0) ||
-        !std::isfinite(model.geometric.noise_exponent)) {
+  if (Present(g, "noise_rel_at_1m")) {
+    geometric.noise_rel_at_1m = rd.Scalar<double>(g, "geometric", "noise_rel_at_1m");
+    geometric.noise_exponent = rd.Scalar<double>(g, "geometric", "noise_exponent");
+    if (!(geometric.noise_rel_at_1m > 0.0)) {
       rd.Fail(g["noise_rel_at_1m"], "geometric.noise_rel_at_1m",
               "must be > 0 with a finite noise_exponent (or both absent)");
     }
   }
-  model.geometric.summary = rd.Fit(g, "geometric");
+  geometric.summary = rd.Fit(g, "geometric");
+  return geometric;
+}
 
+ThetaCorrection ReadThetaCorrection(const Reader& rd, const YAML::Node& root) {
+  ThetaCorrection tc;
   const YAML::Node t = root["theta_correction"];
-  if (t.IsDefined() && !t.IsNull()) {
-    ThetaCorrection& tc = model.theta_correction;
-    tc.degree = rd.Scalar<int>(t, "theta_correction", "degree");
-    if (tc.degree < 1 || tc.degree > 3)
-      rd.Fail(t["degree"], "theta_correction.degree", "must be 1, 2 or 3");
-    tc.coefficients = rd.Doubles(t, "theta_correction", "coefficients", false);
-    const int expected = ThetaCorrection::NumTerms(tc.degree);
-    if (static_cast<int>(tc.coefficients.size()) != expected) {
-      rd.Fail(t["coefficients"], "theta_correction.coefficients",
-              "expected " + std::to_string(expected) + " coefficients for degree " +
-                  std::to_string(tc.degree) + ", found " +
-                  std::to_string(tc.coefficients.size()));
-    }
-    rd.Range(t, "theta_correction", "ratio_sq", &tc.ratio_sq_min, &tc.ratio_sq_max);
-    rd.Range(t, "theta_correction", "d_geometric_mm", &tc.d_min_mm, &tc.d_max_mm);
-    tc.summary = rd.Fit(t, "theta_correction");
+  if (!t.IsDefined() || t.IsNull()) return tc;
+  rd.Keys(t, "theta_correction", {"degree", "coefficients", "ratio_sq", "d_geometric_mm", "fit"});
+  tc.degree = rd.Scalar<int>(t, "theta_correction", "degree");
+  if (tc.degree < 1 || tc.degree > 3)
+    rd.Fail(t["degree"], "theta_correction.degree", "must be 1, 2 or 3");
+  tc.coefficients = rd.Doubles(t, "theta_correction", "coefficients", false);
+  const int expected = ThetaCorrection::NumTerms(tc.degree);
+  if (static_cast<int>(tc.coefficients.size()) != expected) {
+    rd.Fail(t["coefficients"], "theta_correction.coefficients",
+            "expected " + std::to_string(expected) + " coefficients for degree " +
+                std::to_string(tc.degree) + ", found " + std::to_string(tc.coefficients.size()));
   }
+  rd.Range(t, "theta_correction", "ratio_sq", &tc.ratio_sq_min, &tc.ratio_sq_max);
+  rd.Range(t, "theta_correction", "d_geometric_mm", &tc.d_min_mm, &tc.d_max_mm);
+  tc.summary = rd.Fit(t, "theta_correction");
+  return tc;
+}
+
+YAML::Node ParseModelText(const std::string& text, const std::string& path) {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ModelFileError(path, "", e.mark.line + 1, std::string("not valid YAML: ") + e.msg);
+  }
+}
+
+}  // namespace
+
+std::string ModelToYaml(const CalibrationModel& model) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(std::numeric_limits<double>::max_digits10);
+  out << YAML::BeginMap;
+  out << YAML::Key << "format_version" << YAML::Value << kModelFormatVersion;
+  EmitFeatures(out, model.features);
+  EmitScalingAndRanges(out, model.scaling, model.ranges);
+  EmitModels(out, model.models);
+  EmitGeometric(out, model.geometric);
+  EmitThetaCorrection(out, model.theta_correction);
+  EmitProvenance(out, model.provenance);
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+CalibrationModel ModelFromYaml(const std::string& text, const std::string& path) {
+  const Reader rd(path);
+  const YAML::Node root = ParseModelText(text, path);
+  if (!root.IsMap()) rd.Fail(root, "", "the document is not a map");
+  rd.Keys(root, "", {"format_version", "features", "scaling", "ranges", "models", "geometric",
+                     "theta_correction", "provenance"});
+  const int version = rd.Scalar<int>(root, "", "format_version");
+  if (version < kOldestModelFormatVersion || version > kModelFormatVersion) {
+    rd.Fail(root["format_version"], "format_version",
+            "version " + std::to_string(version) + " is not a supported version (" +
+                std::to_string(kOldestModelFormatVersion) + ".." +
+                std::to_string(kModelFormatVersion) + ")");
+  }
+  CalibrationModel model;
+  model.features = ReadFeatures(rd, root, version);
+  model.scaling = ReadScaling(rd, root);
+  model.ranges = ReadRanges(rd, root);
+  model.models = ReadModels(rd, root);
+  model.geometric = ReadGeometric(rd, root);
+  model.theta_correction = ReadThetaCorrection(rd, root);
   model.provenance = ReadProvenance(rd, root);
   return model;
 }
 
+// Written to path.tmp, synced, then renamed: a crash leaves the old file or the new one, whole.
 void SaveModel(const CalibrationModel& model, const std::string& path) {
   const std::string text = ModelToYaml(model);
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) throw ModelFileError(path, "", 0, "cannot open for writing (check the folder exists)");
-  file << text;
-  file.close();
-  if (!file) throw ModelFileError(path, "", 0, "write failed (disk full?)");
+  const std::string tmp = path + ".tmp";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw ModelFileError(path, "", 0, "cannot open for writing (check the folder exists)");
+  size_t done = 0;
+  bool ok = true;
+  while (ok && done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    ok = n > 0;
+    if (ok) done += static_cast<size_t>(n);
+  }
+  ok = ok && ::fsync(fd) == 0;
+  ::close(fd);
+  if (!ok || ::rename(tmp.c_str(), path.c_str()) != 0) {
+    ::unlink(tmp.c_str());
+    throw ModelFileError(path, "", 0, "write failed (disk full?)");
+  }
 }
 
 CalibrationModel LoadModel(const std::string& path) {

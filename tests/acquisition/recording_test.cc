@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -11,6 +13,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <future>
+#include <regex>
+#include <sstream>
 #include <thread>
 
 namespace irdist {
@@ -238,7 +244,7 @@ TEST(Recording, CheckReportsCorruptPngBadRowGapAndOrphanByFileAndLine) {
   const std::string report = check.BriefReport();
   EXPECT_NE(report.find("frames.csv:4: bad row: bad actual_exposure_us 'twelve'"),
             std::string::npos) << report;
-  EXPECT_NE(report.find("frames/000004.png: missing or unreadable PNG (row at frames.csv:6)"),
+  EXPECT_NE(report.find("frames/000004.png: not a PNG file (no PNG signature and IHDR header) (row at frames.csv:6)"),
             std::string::npos) << report;
   EXPECT_NE(report.find("frames.csv:9: gap: indices 7..7 are missing"), std::string::npos)
       << report;
@@ -273,6 +279,247 @@ TEST(Recording, PartialLastLineAndTempFileAreWarningsNotErrors) {
   EXPECT_NE(report.find("frames/000007.png.tmp"), std::string::npos) << report;
   EXPECT_NE(report.find("bracket 1 is incomplete (1 of 5 frames)"), std::string::npos) << report;
   fs::remove_all(dir);
+}
+
+
+std::string Slurp(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << text;
+}
+
+// Rewrites line `line` (1-based) of frames.csv through `edit`.
+void EditCsvLine(const std::string& dir, int line, const std::function<std::string(std::string)>& edit) {
+  std::istringstream in(Slurp(fs::path(dir) / "frames.csv"));
+  std::string out, text;
+  for (int n = 1; std::getline(in, text); ++n) out += (n == line ? edit(text) : text) + "\n";
+  WriteText(fs::path(dir) / "frames.csv", out);
+}
+
+std::string CompleteRecording(const std::string& name, int frames) {
+  const std::string dir = TempDir(name);
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, frames);
+  writer->Close(Completion::kComplete);
+  return dir;
+}
+
+std::string ReaderError(const std::string& dir) {
+  try {
+    const RecordingReader reader(dir);
+    for (const FrameRecord& row : reader.rows()) reader.LoadImage(row);
+  } catch (const RecordingError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(RecordingSafety, RowPointingOutsideTheRecordingIsAnErrorInCheckAndReader) {
+  const std::string dir = CompleteRecording("traversal", kBracketSize);
+  WriteText(fs::path(dir) / ".." / "outside.png", Slurp(fs::path(dir) / "frames/000001.png"));
+  EditCsvLine(dir, 3, [](std::string line) {
+    return std::regex_replace(line, std::regex("frames/000001.png"), "frames/../../../outside.png");
+  });
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_FALSE(check.ok());
+  EXPECT_NE(check.BriefReport().find("frames.csv:3: bad row: file 'frames/../../../outside.png'"),
+            std::string::npos)
+      << check.BriefReport();
+  EXPECT_NE(ReaderError(dir).find("frames.csv:3"), std::string::npos) << ReaderError(dir);
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, DotSlashFileIsNotItsOwnFrameName) {
+  const std::string dir = CompleteRecording("dotslash", kBracketSize);
+  EditCsvLine(dir, 3, [](std::string line) {
+    return std::regex_replace(line, std::regex("frames/000001.png"), "frames/./000000.png");
+  });
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_NE(check.BriefReport().find("error: frames.csv:3: bad row: file 'frames/./000000.png'"),
+            std::string::npos)
+      << check.BriefReport();
+  EXPECT_FALSE(ReaderError(dir).empty());
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, FifoInPlaceOfAFrameIsRefusedWithoutBlocking) {
+  const std::string dir = CompleteRecording("fifo", kBracketSize);
+  const fs::path png = fs::path(dir) / "frames/000002.png";
+  fs::remove(png);
+  ASSERT_EQ(::mkfifo(png.c_str(), 0644), 0);
+  auto checked = std::async(std::launch::async, [&dir] { return CheckRecording(dir); });
+  ASSERT_EQ(checked.wait_for(std::chrono::seconds(20)), std::future_status::ready)
+      << "check blocked on a FIFO";
+  EXPECT_NE(checked.get().BriefReport().find("frames/000002.png: is not a regular file"),
+            std::string::npos);
+  EXPECT_NE(ReaderError(dir).find("000002.png (frames.csv:4): is not a regular file"),
+            std::string::npos)
+      << ReaderError(dir);
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, PngHeaderClaimingAHugeImageIsRefusedBeforeDecoding) {
+  const std::string dir = CompleteRecording("hugepng", kBracketSize);
+  const fs::path png = fs::path(dir) / "frames/000001.png";
+  std::string bytes = Slurp(png);
+  for (int offset : {16, 20}) {  // IHDR width and height: 50000 = 0x0000C350
+    bytes[offset] = 0;
+    bytes[offset + 1] = 0;
+    bytes[offset + 2] = static_cast<char>(0xC3);
+    bytes[offset + 3] = 0x50;
+  }
+  WriteText(png, bytes);
+  const std::string report = CheckRecording(dir).BriefReport();
+  EXPECT_NE(report.find("frames/000001.png: PNG header claims 50000 x 50000 px"), std::string::npos)
+      << report;
+  EXPECT_NE(ReaderError(dir).find("50000 x 50000"), std::string::npos) << ReaderError(dir);
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, ImpossibleOrMissingBitDepthIsAnErrorNamingRecordingYaml) {
+  const std::string dir = CompleteRecording("bitdepth", kBracketSize);
+  const fs::path yaml = fs::path(dir) / "recording.yaml";
+  const std::string text = Slurp(yaml);
+  WriteText(yaml, std::regex_replace(text, std::regex("bit_depth: 12"), "bit_depth: 40"));
+  EXPECT_NE(CheckRecording(dir).BriefReport().find("bit_depth 40 is impossible"),
+            std::string::npos)
+      << CheckRecording(dir).BriefReport();
+  WriteText(yaml, std::regex_replace(text, std::regex("\\s*bit_depth: 12"), ""));
+  const std::string error = ReaderError(dir);
+  EXPECT_NE(error.find("recording.yaml:"), std::string::npos) << error;
+  EXPECT_NE(error.find("missing the key 'bit_depth'"), std::string::npos) << error;
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, UnknownKeyInRecordingYamlIsAnError) {
+  const std::string dir = CompleteRecording("unknownkey", kBracketSize);
+  const fs::path yaml = fs::path(dir) / "recording.yaml";
+  WriteText(yaml, Slurp(yaml) + "completoin: cut\n");
+  EXPECT_NE(ReaderError(dir).find("unknown key 'completoin'"), std::string::npos)
+      << ReaderError(dir);
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, RecipeAndRigTextsAreKeptByteForByte) {
+  for (const std::string& recipe :
+       {std::string("name: crlf\r\nafter: fit\r\n"), std::string("name: no-final-newline"),
+        std::string("  name: indented\n  after: fit\n\n\n"), std::string("")}) {
+    const std::string dir = TempDir("bytes");
+    RecordingHeader header = TestHeader();
+    header.recipe_text = recipe;
+    header.rig_text = recipe + "# rig";
+    auto writer = RecordingWriter::Open(dir, header);
+    WriteFrames(*writer, 0, 1);
+    writer->Close(Completion::kCut);
+    const RecordingReader reader(dir);
+    EXPECT_EQ(reader.header().recipe_text, recipe);
+    EXPECT_EQ(reader.header().rig_text, recipe + "# rig");
+    EXPECT_EQ(RecordingWriter::Resume(dir)->header().recipe_text, recipe);
+    fs::remove_all(dir);
+  }
+}
+
+TEST(RecordingSafety, EditedRecipeBesideTheRecordingIsRefused) {
+  const std::string dir = CompleteRecording("editedrecipe", kBracketSize);
+  WriteText(fs::path(dir) / "recipe.yaml", "name: other\n");
+  EXPECT_NE(ReaderError(dir).find("recipe.yaml: its CRC-32"), std::string::npos)
+      << ReaderError(dir);
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, SecondWriterIsRefusedNamingThePidOfTheFirst) {
+  const std::string dir = TempDir("twowriters");
+  auto first = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*first, 0, 3);
+  try {
+    RecordingWriter::Resume(dir);
+    FAIL() << "a resume beside a live writer was accepted";
+  } catch (const RecordingError& error) {
+    EXPECT_NE(std::string(error.what()).find("being written by process " +
+                                             std::to_string(::getpid())),
+              std::string::npos)
+        << error.what();
+  }
+  WriteFrames(*first, 3, 5);  // the first writer goes on undisturbed
+  first.reset();              // its lock goes with it
+  EXPECT_EQ(RecordingWriter::Resume(dir)->next_index(), 5);
+  EXPECT_TRUE(CheckRecording(dir).ok()) << CheckRecording(dir).BriefReport();
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, ResumeOfACutFramesCsvMovesLeftoversAsideAndDeletesNothing) {
+  const std::string dir = TempDir("cutcsv");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, 20);
+  writer.reset();
+  std::istringstream in(Slurp(fs::path(dir) / "frames.csv"));
+  std::string kept, line;
+  for (int n = 0; n < 11 && std::getline(in, line); ++n) kept += line + "\n";  // header + 10 rows
+  WriteText(fs::path(dir) / "frames.csv", kept);
+  auto resumed = RecordingWriter::Resume(dir);
+  EXPECT_EQ(resumed->next_index(), 10);
+  ASSERT_EQ(resumed->set_aside().size(), 10u);
+  EXPECT_EQ(resumed->set_aside().front(), "frames/000010.png");
+  int pngs = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (entry.path().extension() == ".png") ++pngs;
+  }
+  EXPECT_EQ(pngs, 20) << "a frame was deleted";
+  EXPECT_TRUE(fs::exists(fs::path(resumed->set_aside_dir()) / "000019.png"));
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, FirstWriteErrorIsReportedAndTheRecordingClosesAsCut) {
+  const std::string dir = TempDir("writefail");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, 2);
+  // A file size limit below a PNG's size: the next frame's write fails like on a full disk.
+  struct rlimit saved {};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &saved), 0);
+  ::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit small = saved;
+  small.rlim_cur = 64 * 1024;
+  cv::Mat noise(512, 512, CV_16UC1);
+  cv::randu(noise, 0, 65535);  // a PNG of ~500 KB
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+  std::string first_error;
+  try {
+    writer->Append(noise, TestRecord(2));
+  } catch (const RecordingError& error) {
+    first_error = error.what();
+  }
+  EXPECT_NO_THROW(writer->Close(Completion::kComplete));
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &saved), 0);
+  EXPECT_NE(first_error.find("frames/000002.png.tmp"), std::string::npos) << first_error;
+  EXPECT_TRUE(writer->failed());
+  const RecordingReader reader(dir);
+  EXPECT_EQ(reader.completion(), Completion::kCut) << "a failed run must not read as complete";
+  EXPECT_EQ(reader.rows().size(), 2u);
+  EXPECT_FALSE(fs::exists(fs::path(dir) / "frames/000002.png.tmp"));
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, EmptySlideIsAnErrorNamingFramesCsvLine) {
+  const std::string dir = CompleteRecording("emptyslide", kBracketSize);
+  EditCsvLine(dir, 4, [](std::string line) {
+    return std::regex_replace(line, std::regex(",1500,10,"), ",,10,");
+  });
+  EXPECT_NE(ReaderError(dir).find("frames.csv:4: bad row: bad slide_mm ''"), std::string::npos)
+      << ReaderError(dir);
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, ParsersRefuseGarbageWithNamedErrors) {
+  EXPECT_FALSE(ParseFramesCsv("nonsense\n").errors.empty());
+  EXPECT_THROW(ParseRecordingHeader("format: [\n", "recording.yaml"), RecordingError);
+  std::string why;
+  EXPECT_TRUE(DecodeFramePng({0x89, 'P', 'N', 'G'}, &why).empty());
+  EXPECT_NE(why.find("not a PNG"), std::string::npos);
 }
 
 }  // namespace

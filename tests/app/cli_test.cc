@@ -393,5 +393,21 @@ TEST(CliTest, BinaryExitCodes) {
   EXPECT_EQ(RunBinary({"--help"}, &output), 0) << output;
 }
 
+
+TEST(CliSafety, TimeScaleZeroIsRefusedInPlainNumbers) {
+  for (const char* command : {"calibrate", "sim"}) {
+    try {
+      RunWords({command, kRecipes + "/smoke-calibration.yaml", "--time-scale", "0"},
+               DefaultHandlers());
+      FAIL() << command << " accepted --time-scale 0";
+    } catch (const UsageError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("0.01..1000"), std::string::npos) << what;
+      EXPECT_EQ(what.find("e+308"), std::string::npos) << what;
+      EXPECT_LT(what.size(), 300u) << what;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace irdist

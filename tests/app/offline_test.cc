@@ -11,6 +11,8 @@
 #include <sstream>
 
 #include "acquisition/recording.h"
+#include "app/errors.h"
+#include "app/run.h"
 
 namespace irdist {
 namespace {
@@ -215,6 +217,45 @@ TEST(OfflineResponse, RecoversTheCurveFromTheRecordingsBrackets) {
   }
   EXPECT_FALSE(RecipeAsksForResponse(RecordingReader((dir / "plain").string())));
   fs::remove_all(dir);
+}
+
+
+TEST_F(OfflineTest, PlaybackNeverReplacesResultsWithoutForce) {
+  const std::string recording = (dir_ / "recording").string();
+  std::ostringstream out, err;
+  PlaybackArgs args;
+  args.recording = recording;
+  RunPlayback(args, {out, err});  // the first playback writes features.csv beside the recording
+  const std::string first = ReadAll((dir_ / "features.csv").string());
+  std::ofstream(dir_ / "features.csv", std::ios::app) << "# the live run's\n";
+  EXPECT_THROW(RunPlayback(args, {out, err}), RunFolderError);
+  EXPECT_EQ(ReadAll((dir_ / "features.csv").string()), first + "# the live run's\n");
+  args.force = true;
+  RunPlayback(args, {out, err});
+  EXPECT_EQ(ReadAll((dir_ / "features.csv").string()), first);
+}
+
+TEST_F(OfflineTest, FitAndPlaybackRefuseARecordingWithErrors) {
+  const fs::path csv = dir_ / "recording" / "frames.csv";
+  std::string text = ReadAll(csv.string());
+  const size_t at = text.find("frames/000001.png");
+  text.replace(at, 17, "frames/../../x.png");
+  std::ofstream(csv, std::ios::binary | std::ios::trunc) << text;
+  std::ostringstream out, err;
+  PlaybackArgs playback;
+  playback.recording = (dir_ / "recording").string();
+  playback.out_dir = (dir_ / "pb").string();
+  try {
+    RunPlayback(playback, {out, err});
+    FAIL() << "playback of a recording with errors";
+  } catch (const CheckFailedError& e) {
+    EXPECT_NE(std::string(e.what()).find("frames.csv:3"), std::string::npos) << e.what();
+  }
+  FitArgs fit;
+  fit.recording = playback.recording;
+  fit.out = (dir_ / "fit" / "model.yaml").string();
+  EXPECT_THROW(RunFit(fit, {out, err}), CheckFailedError);
+  EXPECT_FALSE(fs::exists(dir_ / "fit" / "model.yaml"));
 }
 
 }  // namespace

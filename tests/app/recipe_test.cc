@@ -629,5 +629,42 @@ TEST(RecipeTest, FindRigFileLooksBesideTheRecipeThenInTheSourceTree) {
   EXPECT_EQ(FindRigFile("rigs/virtual.yaml", "/nonexistent"), "");  // paths: relative to base
 }
 
+
+// Sizes that would not fit in memory are refused while the recipe is read, with the numbers.
+TEST(RecipeSafety, PlansTooLargeForMemoryAreRefusedWithTheirNumbers) {
+  const std::string repeats = R"(axes:
+  slide_mm: 2000
+  pan_deg: 0
+  bias_ma: 500
+bracket:
+  t_ref_ms: 8
+  t_meas_ms: 30
+  repeats: 2000000000
+)";
+  try {
+    ParseRecipe(repeats, "big.yaml", kRecipes);
+    FAIL() << "2e9 repeats accepted";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.File(), "big.yaml");
+    EXPECT_NE(std::string(e.what()).find("asks for 2000000000 brackets"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("repeats 2000000000"), std::string::npos) << e.what();
+  }
+  const std::string grid = R"(axes:
+  slide_mm: {start: 1000, stop: 2999.98, step: 0.02}
+  pan_deg: {start: -20, stop: 19.9996, step: 0.0004}
+  bias_ma: 500
+bracket:
+  t_ref_ms: 8
+  t_meas_ms: 30
+)";
+  try {
+    ParseRecipe(grid, "grid.yaml", kRecipes);
+    FAIL() << "a 1e5 x 1e5 grid accepted";
+  } catch (const RecipeError& e) {
+    EXPECT_NE(std::string(e.what()).find("slide 100000 x angle 100000"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace irdist

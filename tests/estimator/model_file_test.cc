@@ -265,5 +265,60 @@ TEST(ModelFile, CorruptValuesNameTheKeyAndLine) {
   EXPECT_THROW(LoadModel("/nonexistent/model.yaml"), ModelFileError);
 }
 
+
+// The text with the first number after `key: [` (a flow list) replaced by `value`.
+std::string WithFirstListValue(std::string text, const std::string& key, const std::string& value) {
+  const size_t at = text.find(key + ": [") + key.size() + 3;
+  text.replace(at, text.find_first_of(",]", at) - at, value);
+  return text;
+}
+
+TEST(ModelFileSafety, NanOrInfNumbersAreRefusedWithFileAndLine) {
+  const std::string good = ModelToYaml(SmallModel());
+  for (const std::string& bad : {".nan", ".inf", "-.inf"}) {
+    try {
+      ModelFromYaml(WithFirstListValue(good, "coefficients", bad), "m.yaml");
+      FAIL() << "a model with a " << bad << " coefficient was accepted";
+    } catch (const ModelFileError& e) {
+      EXPECT_EQ(e.key(), "models[0].coefficients[0]");
+      EXPECT_GT(e.line(), 1);
+      EXPECT_NE(std::string(e.what()).find("m.yaml:"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("not a finite number"), std::string::npos) << e.what();
+    }
+  }
+  std::string text = good;
+  const size_t at = text.find("alpha_px2: ");
+  text.replace(at, text.find('\n', at) - at, "alpha_px2: .nan");
+  EXPECT_THROW(ModelFromYaml(text, "m.yaml"), ModelFileError);
+  EXPECT_THROW(ModelFromYaml(WithFirstListValue(good, "d_mm", ".inf"), "m.yaml"), ModelFileError);
+}
+
+TEST(ModelFileSafety, MissingModelBlockNamesTheFileNotTheEstimator) {
+  CalibrationModel model = SmallModel();
+  model.models.erase(model.models.begin() + 1);  // only free_e left
+  try {
+    ModelFromYaml(ModelToYaml(model), "lab/model.yaml");
+    FAIL() << "a model without free_sigma was accepted";
+  } catch (const ModelFileError& e) {
+    EXPECT_EQ(e.path(), "lab/model.yaml");
+    EXPECT_NE(std::string(e.what()).find("no free_sigma model"), std::string::npos) << e.what();
+  }
+  std::string text = ModelToYaml(SmallModel());
+  text.erase(text.find("geometric:"));
+  EXPECT_THROW(ModelFromYaml(text, "m.yaml"), ModelFileError);
+}
+
+TEST(ModelFileSafety, MisspeltKeyIsAnErrorNotADefault) {
+  std::string text = ModelToYaml(SmallModel());
+  text.replace(text.find("psf_sigma_px"), 12, "psf_sigma_pz");
+  try {
+    ModelFromYaml(text, "m.yaml");
+    FAIL();
+  } catch (const ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown key"), std::string::npos) << e.what();
+    EXPECT_GT(e.line(), 1);
+  }
+}
+
 }  // namespace
 }  // namespace irdist

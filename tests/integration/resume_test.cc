@@ -191,5 +191,19 @@ TEST_F(Resume, ResumeRefusesAnotherRecipe) {
   EXPECT_NE(output.find("differs from the recipe recorded"), std::string::npos) << output;
 }
 
+TEST_F(Resume, ResumeOfACompleteRunSaysSoAndRefitsNothing) {
+  ASSERT_EQ(reference_code_, 0);
+  const std::string model = *dir_ + "/whole/features.csv";  // the recipe's after: none
+  ASSERT_TRUE(fs::exists(model));
+  const auto written = fs::last_write_time(model);
+  std::string output;
+  EXPECT_EQ(RunIrdist({"calibrate", *dir_ + "/recipe.yaml", "--resume", *dir_ + "/whole"},
+                      *dir_ + "/again.log", &output),
+            1)
+      << output;
+  EXPECT_NE(output.find("nothing to resume"), std::string::npos) << output;
+  EXPECT_EQ(fs::last_write_time(model), written) << "the complete run was processed again";
+}
+
 }  // namespace
 }  // namespace irdist

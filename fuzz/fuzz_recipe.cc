@@ -1,0 +1,25 @@
+// libFuzzer target: the recipe and rig-file parsers (app/recipe.h, app/rig.h) on one input, read
+// both as a rig file and as a recipe (whose rig is looked up in the shipped recipes/rigs/). Every
+// refusal must be an InputError (RecipeError) with the file named.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "app/errors.h"
+#include "app/recipe.h"
+#include "app/rig.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+    irdist::ParseRig(text, "fuzz-rig.yaml");
+  } catch (const irdist::InputError& error) {
+    if (error.File() != "fuzz-rig.yaml") __builtin_trap();
+  }
+  try {
+    irdist::ParseRecipe(text, "fuzz-recipe.yaml", IRDIST_SOURCE_DIR "/recipes");
+  } catch (const irdist::InputError& error) {
+    if (error.File().empty()) __builtin_trap();
+  }
+  return 0;
+}
