@@ -123,6 +123,61 @@ class Reader {
   std::string path_;
 };
 
+// Format 4: the geometric blur's terms in u = 1000 / d (absent: a fixed blur).
+void EmitGeometricBlur(YAML::Emitter& out, const GeometricModel& g) {
+  if (!g.BlurVariesWithDistance()) return;
+  EmitDouble(out, "blur_u1_px2", g.blur_u1_px2);
+  EmitDouble(out, "blur_u2_px2", g.blur_u2_px2);
+}
+
+// Format 4 keys blur_u1_px2 / blur_u2_px2 (both or neither; absent: a fixed blur).
+void ReadGeometricBlur(const Reader& rd, const YAML::Node& g, int version, GeometricModel* geo) {
+  if (!g["blur_u1_px2"].IsDefined() && !g["blur_u2_px2"].IsDefined()) return;
+  if (version < 4) {
+    rd.Fail(g["blur_u1_px2"], "geometric.blur_u1_px2",
+            "is new in format_version 4; this file says " + std::to_string(version));
+  }
+  geo->blur_u1_px2 = rd.Scalar<double>(g, "geometric", "blur_u1_px2");
+  geo->blur_u2_px2 = rd.Scalar<double>(g, "geometric", "blur_u2_px2");
+  if (!std::isfinite(geo->blur_u1_px2) || !std::isfinite(geo->blur_u2_px2)) {
+    rd.Fail(g["blur_u1_px2"], "geometric.blur_u1_px2", "must be finite");
+  }
+}
+
+// Format 4: the calibrated blur of the health check (health.h); absent: no health check.
+void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
+  if (!b.fitted()) return;
+  out << YAML::Key << "blur_calibration" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "blur_var_px2" << YAML::Value << YAML::Flow << YAML::BeginSeq << b.c0_px2
+      << b.c1_px2 << b.c2_px2 << YAML::EndSeq;
+  EmitDouble(out, "noise_at_1m_px2", b.noise_at_1m_px2);
+  EmitDouble(out, "noise_exponent", b.noise_exponent);
+  out << YAML::Key << "frames" << YAML::Value << b.frames;
+  out << YAML::EndMap;
+}
+
+void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
+                         BlurCalibration* b) {
+  const YAML::Node node = root["blur_calibration"];
+  if (!node.IsDefined() || node.IsNull()) return;
+  if (version < 4) {
+    rd.Fail(node, "blur_calibration",
+            "is new in format_version 4; this file says " + std::to_string(version));
+  }
+  const std::vector<double> c = rd.Doubles(node, "blur_calibration", "blur_var_px2", false);
+  if (c.size() != 3) rd.Fail(node["blur_var_px2"], "blur_calibration.blur_var_px2", "expected 3 numbers");
+  b->c0_px2 = c[0];
+  b->c1_px2 = c[1];
+  b->c2_px2 = c[2];
+  b->noise_at_1m_px2 = rd.Scalar<double>(node, "blur_calibration", "noise_at_1m_px2");
+  b->noise_exponent = rd.Scalar<double>(node, "blur_calibration", "noise_exponent");
+  b->frames = rd.Scalar<int>(node, "blur_calibration", "frames");
+  if (!(b->noise_at_1m_px2 > 0.0) || !std::isfinite(b->noise_exponent)) {
+    rd.Fail(node["noise_at_1m_px2"], "blur_calibration.noise_at_1m_px2",
+            "must be > 0 with a finite noise_exponent");
+  }
+}
+
 }  // namespace
 
 ModelFileError::ModelFileError(const std::string& path, const std::string& key, int line,
@@ -194,6 +249,7 @@ std::string ModelToYaml(const CalibrationModel& model) {
     EmitDouble(out, "noise_rel_at_1m", model.geometric.noise_rel_at_1m);
     EmitDouble(out, "noise_exponent", model.geometric.noise_exponent);
   }
+  EmitGeometricBlur(out, model.geometric);
   EmitFit(out, model.geometric.summary);
   out << YAML::EndMap;
 
@@ -209,6 +265,7 @@ std::string ModelToYaml(const CalibrationModel& model) {
     EmitFit(out, tc.summary);
     out << YAML::EndMap;
   }
+  EmitBlurCalibration(out, model.blur_calibration);
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
@@ -327,6 +384,7 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
               "must be > 0 with a finite noise_exponent (or both absent)");
     }
   }
+  ReadGeometricBlur(rd, g, version, &model.geometric);
   model.geometric.summary = rd.Fit(g, "geometric");
 
   const YAML::Node t = root["theta_correction"];
@@ -347,6 +405,7 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
     rd.Range(t, "theta_correction", "d_geometric_mm", &tc.d_min_mm, &tc.d_max_mm);
     tc.summary = rd.Fit(t, "theta_correction");
   }
+  ReadBlurCalibration(rd, root, version, &model.blur_calibration);
   return model;
 }
 
