@@ -15,6 +15,7 @@
 #include "app/run.h"
 #include "app/tools.h"
 #include "estimator/estimate.h"
+#include "estimator/health.h"
 #include "estimator/model_file.h"
 #include "estimator/models.h"
 
@@ -354,10 +355,21 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
 namespace {
 
 // One method's rows for a bracket: the joint estimate (dt_ms = 0), then one row per t_n.
+// The health label of an estimate at d_mm from its measurement frames (estimator/health.h);
+// the first flagged check is kept in *first_flagged (when not null) for the run's one warning.
+std::string HealthOfFrames(const CalibrationModel& model, double d_mm,
+                           const std::vector<Features>& measurements, HealthCheck* first_flagged) {
+  std::vector<const Features*> frames;
+  for (const Features& f : measurements) frames.push_back(&f);
+  const HealthCheck h = CheckHealth(model, d_mm, frames);
+  if (h.flagged && first_flagged != nullptr && !first_flagged->flagged) *first_flagged = h;
+  return h.Label();
+}
+
 void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& options,
                         const std::string& method, const EstimateRow& base,
                         const std::vector<Pair>& pairs, const FeatureMap& features, bool all_usable,
-                        std::vector<EstimateRow>* out) {
+                        std::vector<EstimateRow>* out, HealthCheck* health = nullptr) {
   const FrameRecord& reference = *pairs.front().reference;
   std::vector<Features> measurements;
   std::vector<double> t_ms;
@@ -391,6 +403,7 @@ void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& op
       row->ok = std::isfinite(e.d_mm) && e.d_mm > 0.0 && e.converged;
     };
     fill(estimate.joint, &joint);
+    joint.health = HealthOfFrames(model, estimate.joint.d_mm, measurements, health);
     for (size_t k = 0; k < pairs.size(); ++k) {
       // Each t_n with the reference it is differenced with (interleaved brackets).
       if (pairs[k].reference == &reference) {
@@ -413,6 +426,7 @@ std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
                                            const FeatureMap& features,
                                            const CalibrationModel& model) {
   std::vector<EstimateRow> i0_free, paper, i0_dependent, geometric;
+  HealthCheck first_flagged;
   const EstimateOptions options;
   const EstimateOptions paper_options = PaperEstimateOptions();
   // The I0-dependent comparison assumes the calibration's mean current (the nominal one).
@@ -439,7 +453,8 @@ std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
       measurements.push_back(FeaturesOf(features, *pair.measurement));
       t_ms.push_back(pair.measurement->requested_exposure_us / 1000.0);
     }
-    EstimateMethodRows(model, options, "i0_free", base, pairs, features, all_usable, &i0_free);
+    EstimateMethodRows(model, options, "i0_free", base, pairs, features, all_usable, &i0_free,
+                       &first_flagged);
     EstimateMethodRows(model, paper_options, "paper", base, pairs, features, all_usable, &paper);
 
     if (model.Find(ModelKind::kDiffF) != nullptr) {
@@ -484,6 +499,10 @@ std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
   }
   for (const auto* block : {&paper, &i0_dependent, &geometric}) {
     i0_free.insert(i0_free.end(), block->begin(), block->end());
+  }
+  if (first_flagged.flagged) {  // once per recording
+    std::fprintf(stderr, "warning: calibration health: %s (estimates.csv column health).\n",
+                 first_flagged.Advice().c_str());
   }
   return i0_free;
 }

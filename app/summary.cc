@@ -16,8 +16,12 @@ namespace {
 
 constexpr const char* kEstimatesHeader =
     "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,bias_ma,d_mm,theta_deg,"
+    "outside_range,ok,health";
+constexpr int kEstimatesColumns = 13;
+// Files written before the health column (read with health "-").
+constexpr const char* kEstimatesHeaderNoHealth =
+    "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,bias_ma,d_mm,theta_deg,"
     "outside_range,ok";
-constexpr int kEstimatesColumns = 12;
 
 std::vector<std::string> SplitCsv(const std::string& line) {
   std::vector<std::string> out;
@@ -115,6 +119,10 @@ MethodSummary SummarizeMethod(const std::string& method, const std::vector<Estim
   }
   m.all = Figures(main_rows);
   for (const EstimateRow* r : main_rows) m.outside_calibrated_range += r->outside_range ? 1 : 0;
+  for (const EstimateRow* r : main_rows) {
+    m.health_assessed += r->health != "-" ? 1 : 0;
+    m.health_flagged += r->health != "-" && r->health != "ok" ? 1 : 0;
+  }
 
   std::map<PoseKey, std::map<long, std::vector<double>>> by_pose_current;
   for (const EstimateRow* r : main_rows) {
@@ -201,6 +209,11 @@ void EmitMethod(YAML::Emitter& out, const MethodSummary& m) {
   else
     out << YAML::Null;
   out << YAML::Key << "outside_calibrated_range" << YAML::Value << m.outside_calibrated_range;
+  if (m.health_assessed > 0) {
+    out << YAML::Key << "health" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+        << "assessed" << YAML::Value << m.health_assessed << YAML::Key << "flagged" << YAML::Value
+        << m.health_flagged << YAML::EndMap;
+  }
 }
 
 }  // namespace
@@ -225,7 +238,8 @@ void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& 
   for (const EstimateRow& r : rows) {
     out << r.bracket << ',' << r.pose << ',' << r.repeat << ',' << r.method << ',' << r.dt_ms << ','
         << r.true_d_mm << ',' << r.true_theta_deg << ',' << r.bias_ma << ',' << r.d_mm << ','
-        << r.theta_deg << ',' << (r.outside_range ? 1 : 0) << ',' << (r.ok ? 1 : 0) << '\n';
+        << r.theta_deg << ',' << (r.outside_range ? 1 : 0) << ',' << (r.ok ? 1 : 0) << ','
+        << r.health << '\n';
   }
   out.flush();
   if (!out) throw EstimatesFileError(path + ": write failed (disk full?); free space and rerun.");
@@ -235,7 +249,9 @@ std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw EstimatesFileError(path + ": cannot be opened; check the path.");
   std::string line;
-  if (!std::getline(in, line) || line != kEstimatesHeader) {
+  const bool has_line = static_cast<bool>(std::getline(in, line));
+  const int columns = line == kEstimatesHeaderNoHealth ? kEstimatesColumns - 1 : kEstimatesColumns;
+  if (!has_line || (line != kEstimatesHeader && line != kEstimatesHeaderNoHealth)) {
     throw EstimatesFileError(path + ":1: the header is not '" + std::string(kEstimatesHeader) +
                              "'; is this an irdist estimates.csv?");
   }
@@ -246,9 +262,9 @@ std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
     if (line.empty()) continue;
     const std::string where = path + ":" + std::to_string(line_no);
     const std::vector<std::string> c = SplitCsv(line);
-    if (static_cast<int>(c.size()) != kEstimatesColumns) {
+    if (static_cast<int>(c.size()) != columns) {
       throw EstimatesFileError(where + ": " + std::to_string(c.size()) + " columns, expected " +
-                               std::to_string(kEstimatesColumns) + "; fix or delete that row.");
+                               std::to_string(columns) + "; fix or delete that row.");
     }
     EstimateRow r;
     r.bracket = static_cast<int>(ParseNumber(c[0], where, "bracket"));
@@ -263,6 +279,7 @@ std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
     r.theta_deg = ParseNumber(c[9], where, "theta_deg");
     r.outside_range = ParseBool(c[10], where, "outside_range");
     r.ok = ParseBool(c[11], where, "ok");
+    if (columns == kEstimatesColumns) r.health = c[12];
     if (r.true_d_mm <= 0.0) {
       throw EstimatesFileError(where + ": true_d_mm must be positive; fix that row.");
     }

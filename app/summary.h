@@ -25,6 +25,9 @@ struct EstimateRow {
   double theta_deg = 0.0;      // estimate
   bool outside_range = false;  // the estimate lies outside the calibrated range
   bool ok = true;              // false: no estimate (no root, no blob): counted, not averaged
+  // Calibration health (estimator/health.h): "ok", "-" (not assessed), "blur_larger" or
+  // "blur_smaller" (the optics no longer match the calibration).
+  std::string health = "-";
 };
 
 class EstimatesFileError : public Error {
@@ -63,6 +66,8 @@ struct MethodSummary {
   std::map<double, ErrorFigures> by_dt;     // per exposure difference (dt_ms > 0 rows)
   std::optional<double> best_dt_ms;         // smallest median relative error among by_dt
   int outside_calibrated_range = 0;
+  int health_assessed = 0;  // default rows whose health was assessed
+  int health_flagged = 0;   // ... and flagged (the optics no longer match the calibration)
 };
 
 struct ValidationSummary {

@@ -18,6 +18,7 @@ CalibrationModel SmallModel() {
   options.sigma_scan_steps = 4;
   options.multi_starts = 1;
   options.max_iterations = 5;
+  options.geometric_blur_varies_with_distance = false;  // format 3 content: the old-version tests
   FeatureOptions features;
   features.roi_policy = RoiPolicy::kThreshold;
   features.window_side_px = 48;
