@@ -241,7 +241,7 @@ TEST_F(AccuracyTest, StandardErrorFollowsTheScatterAcrossDistance) {
     se[k] = mean_std;
     std::printf("%.0f mm, 20 deg: sd of d %.2f mm, mean reported standard error %.2f mm (%.2fx)\n",
                 distances[k], sd[k], se[k], se[k] / sd[k]);
-    // 30 repetitions estimate an sd to ~13%; the rest is the calibration's own noise model.
+    // 80 repetitions estimate an sd to ~8%; the rest is the calibration's own noise model.
     EXPECT_GT(se[k] / sd[k], 0.7) << distances[k];
     EXPECT_LT(se[k] / sd[k], 1.6) << distances[k];
   }
