@@ -3,11 +3,9 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
-#include <boost/math/tools/minima.hpp>
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 #include <map>
 #include <memory>
@@ -396,19 +394,34 @@ FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<Calibrati
   std::sort(starts.begin(), starts.end(),
             [](const Start& a, const Start& b) { return a.cost < b.cost; });
   if (sigma_free) {
-    // Brent's 1-D minimisation (Boost.Math) of the linear start's cost over ln sigma, between the
-    // best scan sigma's neighbours: the LM then starts next to the minimum.
+    // Golden-section refinement of the best scan sigma (between its scan neighbours) on the cost
+    // of the linear start: the LM then starts next to the minimum.
     const double ratio = std::pow(options.sigma_max_deg / options.sigma_min_deg,
                                   1.0 / (options.sigma_scan_steps - 1.0));
-    const double lo = std::log(starts[0].sigma / ratio), hi = std::log(starts[0].sigma * ratio);
+    double lo = std::log(starts[0].sigma / ratio), hi = std::log(starts[0].sigma * ratio);
     auto cost_at = [&](double log_sigma) {
       const double sigma = std::exp(log_sigma);
       return RelativeCost(spec, LinearStart(spec, active, sigma, obs), sigma, obs, nullptr);
     };
-    std::uintmax_t max_evaluations = 40;
-    const std::pair<double, double> best =
-        boost::math::tools::brent_find_minima(cost_at, lo, hi, 20, max_evaluations);
-    const double sigma = std::exp(best.first);
+    const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+    double f1 = cost_at(x1), f2 = cost_at(x2);
+    for (int k = 0; k < 24; ++k) {
+      if (f1 < f2) {
+        hi = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = hi - g * (hi - lo);
+        f1 = cost_at(x1);
+      } else {
+        lo = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = lo + g * (hi - lo);
+        f2 = cost_at(x2);
+      }
+    }
+    const double sigma = std::exp(0.5 * (lo + hi));
     std::vector<double> c = LinearStart(spec, active, sigma, obs);
     const double cost = RelativeCost(spec, c, sigma, obs, nullptr);
     starts.insert(starts.begin(), Start{cost, sigma, std::move(c)});
