@@ -16,6 +16,7 @@
 #include "app/recipe.h"
 #include "app/show.h"
 #include "estimator/estimate.h"
+#include "estimator/health.h"
 #include "estimator/model_file.h"
 #include "estimator/models.h"
 
@@ -391,10 +392,21 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
 namespace {
 
 // One method's rows for a bracket: the joint estimate (dt_ms = 0), then one row per t_n.
+// The health label of an estimate at d_mm from its measurement frames (estimator/health.h);
+// the first flagged check is kept in *first_flagged (when not null) for the run's one warning.
+std::string HealthOfFrames(const CalibrationModel& model, double d_mm,
+                           const std::vector<Features>& measurements, HealthCheck* first_flagged) {
+  std::vector<const Features*> frames;
+  for (const Features& f : measurements) frames.push_back(&f);
+  const HealthCheck h = CheckHealth(model, d_mm, frames);
+  if (h.flagged && first_flagged != nullptr && !first_flagged->flagged) *first_flagged = h;
+  return h.Label();
+}
+
 void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& options,
                         const std::string& method, const EstimateRow& base,
                         const std::vector<Pair>& pairs, const FeatureMap& features, bool all_usable,
-                        std::vector<EstimateRow>* out) {
+                        std::vector<EstimateRow>* out, HealthCheck* health = nullptr) {
   const FrameRecord& reference = *pairs.front().reference;
   std::vector<Features> measurements;
   std::vector<double> t_ms;
@@ -430,6 +442,7 @@ void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& op
       row->ok = std::isfinite(e.d_mm) && e.d_mm > 0.0 && e.converged;
     };
     fill(estimate.joint, &joint);
+    joint.health = HealthOfFrames(model, estimate.joint.d_mm, measurements, health);
     for (size_t k = 0; k < pairs.size(); ++k) {
       // Each t_n with the reference it is differenced with (interleaved brackets).
       if (pairs[k].reference == &reference) {
@@ -553,7 +566,7 @@ BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
                  FeaturesOf(features, *pair.measurement).Usable();
   }
   EstimateMethodRows(model, EstimateOptions{}, "i0_free", base, pairs, features, all_usable,
-                     &rows.i0_free);
+                     &rows.i0_free, &rows.health);
   EstimateMethodRows(model, PaperEstimateOptions(), "paper", base, pairs, features, all_usable,
                      &rows.paper);
   if (model.Find(ModelKind::kDiffF) != nullptr) {
@@ -591,7 +604,13 @@ std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
   BracketEstimateRows all;
   const CameraGeometry geometry = GeometryOfRecording(reader);
   for (const RecordedBracket& bracket : reader.Brackets()) {
-    AppendBracketRows(EstimateRecordedBracket(bracket, features, model, geometry), &all);
+    const BracketEstimateRows rows = EstimateRecordedBracket(bracket, features, model, geometry);
+    if (rows.health.flagged && !all.health.flagged) all.health = rows.health;
+    AppendBracketRows(rows, &all);
+  }
+  if (all.health.flagged) {  // once per recording
+    std::fprintf(stderr, "warning: calibration health: %s (estimates.csv column health).\n",
+                 all.health.Advice().c_str());
   }
   return FlattenRows(all);
 }

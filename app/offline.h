@@ -17,6 +17,7 @@
 #include "app/summary.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
+#include "estimator/health.h"
 #include "estimator/response.h"
 
 namespace irdist {
@@ -76,6 +77,7 @@ std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
 // The estimate rows of one bracket, by method (estimates.csv lists the methods in this order).
 struct BracketEstimateRows {
   std::vector<EstimateRow> i0_free, paper, i0_dependent, geometric;
+  HealthCheck health;  // the default method's calibration health (estimator/health.h)
 };
 // The rows of one complete bracket (none for an incomplete one): the single estimate path of
 // validate, playback and measure, so the same frames give the same rows everywhere.

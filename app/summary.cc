@@ -16,9 +16,12 @@ namespace {
 
 constexpr const char* kEstimatesHeader =
     "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,bias_ma,d_mm,theta_deg,"
-    "outside_range,ok,x_mm,y_mm,z_mm,x_se_mm,y_se_mm,z_se_mm,true_x_mm,true_y_mm,true_z_mm";
-constexpr int kEstimatesColumns = 21;
-constexpr int kEstimatesColumnsWithout3d = 12;  // files written before the 3D columns
+    "outside_range,ok,health,x_mm,y_mm,z_mm,x_se_mm,y_se_mm,z_se_mm,true_x_mm,true_y_mm,"
+    "true_z_mm";
+constexpr int kEstimatesColumns = 22;
+// Older files: without the 3D columns (13: health last), or without health too (12).
+constexpr int kEstimatesColumnsNo3d = 13;
+constexpr int kEstimatesColumnsNoHealth = 12;
 
 std::vector<std::string> SplitCsv(const std::string& line) {
   std::vector<std::string> out;
@@ -116,6 +119,10 @@ MethodSummary SummarizeMethod(const std::string& method, const std::vector<Estim
   }
   m.all = Figures(main_rows);
   for (const EstimateRow* r : main_rows) m.outside_calibrated_range += r->outside_range ? 1 : 0;
+  for (const EstimateRow* r : main_rows) {
+    m.health_assessed += r->health != "-" ? 1 : 0;
+    m.health_flagged += r->health != "-" && r->health != "ok" ? 1 : 0;
+  }
 
   std::map<PoseKey, std::map<long, std::vector<double>>> by_pose_current;
   for (const EstimateRow* r : main_rows) {
@@ -202,6 +209,11 @@ void EmitMethod(YAML::Emitter& out, const MethodSummary& m) {
   else
     out << YAML::Null;
   out << YAML::Key << "outside_calibrated_range" << YAML::Value << m.outside_calibrated_range;
+  if (m.health_assessed > 0) {
+    out << YAML::Key << "health" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+        << "assessed" << YAML::Value << m.health_assessed << YAML::Key << "flagged" << YAML::Value
+        << m.health_flagged << YAML::EndMap;
+  }
 }
 
 }  // namespace
@@ -231,14 +243,14 @@ std::string Truth(double value) {
 
 namespace {
 
-// The 3D columns (12..20) of a row; empty = NaN.
+// The 3D columns (13..21) of a row; empty = NaN.
 void Read3d(const std::vector<std::string>& c, const std::string& where, EstimateRow* r) {
   double* const fields[] = {&r->x_mm,    &r->y_mm,      &r->z_mm,      &r->x_se_mm,  &r->y_se_mm,
                             &r->z_se_mm, &r->true_x_mm, &r->true_y_mm, &r->true_z_mm};
   const char* const names[] = {"x_mm",    "y_mm",      "z_mm",      "x_se_mm",  "y_se_mm",
                                "z_se_mm", "true_x_mm", "true_y_mm", "true_z_mm"};
   for (int i = 0; i < 9; ++i) {
-    *fields[i] = c[12 + i].empty() ? NAN : ParseNumber(c[12 + i], where, names[i]);
+    *fields[i] = c[13 + i].empty() ? NAN : ParseNumber(c[13 + i], where, names[i]);
   }
 }
 
@@ -253,7 +265,8 @@ void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& 
   for (const EstimateRow& r : rows) {
     out << r.bracket << ',' << r.pose << ',' << r.repeat << ',' << r.method << ',' << r.dt_ms << ','
         << Truth(r.true_d_mm) << ',' << Truth(r.true_theta_deg) << ',' << Truth(r.bias_ma) << ','
-        << r.d_mm << ',' << r.theta_deg << ',' << (r.outside_range ? 1 : 0) << ',' << (r.ok ? 1 : 0);
+        << r.d_mm << ',' << r.theta_deg << ',' << (r.outside_range ? 1 : 0) << ',' << (r.ok ? 1 : 0)
+        << ',' << r.health;
     for (double v : {r.x_mm, r.y_mm, r.z_mm, r.x_se_mm, r.y_se_mm, r.z_se_mm, r.true_x_mm,
                      r.true_y_mm, r.true_z_mm}) {
       out << ',' << Truth(v);
@@ -268,13 +281,17 @@ std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw EstimatesFileError(path + ": cannot be opened; check the path.");
   std::string line;
-  const std::string old_header = std::string(kEstimatesHeader).substr(
-      0, std::string(kEstimatesHeader).find(",x_mm"));
-  if (!std::getline(in, line) || (line != kEstimatesHeader && line != old_header)) {
+  const std::string header(kEstimatesHeader);
+  const std::string no_3d = header.substr(0, header.find(",x_mm"));
+  const std::string no_health = header.substr(0, header.find(",health"));
+  const bool has_line = static_cast<bool>(std::getline(in, line));
+  if (!has_line || (line != header && line != no_3d && line != no_health)) {
     throw EstimatesFileError(path + ":1: the header is not '" + std::string(kEstimatesHeader) +
                              "'; is this an irdist estimates.csv?");
   }
-  const int columns = line == kEstimatesHeader ? kEstimatesColumns : kEstimatesColumnsWithout3d;
+  const int columns = line == header   ? kEstimatesColumns
+                      : line == no_3d ? kEstimatesColumnsNo3d
+                                      : kEstimatesColumnsNoHealth;
   std::vector<EstimateRow> rows;
   int line_no = 1;
   while (std::getline(in, line)) {
@@ -299,6 +316,7 @@ std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
     r.theta_deg = ParseNumber(c[9], where, "theta_deg");
     r.outside_range = ParseBool(c[10], where, "outside_range");
     r.ok = ParseBool(c[11], where, "ok");
+    if (columns >= kEstimatesColumnsNo3d) r.health = c[12];
     if (columns == kEstimatesColumns) Read3d(c, where, &r);
     if (r.true_d_mm <= 0.0) {
       throw EstimatesFileError(where + ": true_d_mm must be positive; fix that row.");

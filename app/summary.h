@@ -35,6 +35,9 @@ struct EstimateRow {
   double x_mm = NAN, y_mm = NAN, z_mm = NAN;
   double x_se_mm = NAN, y_se_mm = NAN, z_se_mm = NAN;
   double true_x_mm = NAN, true_y_mm = NAN, true_z_mm = NAN;
+  // Calibration health (estimator/health.h): "ok", "-" (not assessed), "blur_larger" or
+  // "blur_smaller" (the optics no longer match the calibration).
+  std::string health = "-";
 };
 
 class EstimatesFileError : public Error {
@@ -73,6 +76,8 @@ struct MethodSummary {
   std::map<double, ErrorFigures> by_dt;     // per exposure difference (dt_ms > 0 rows)
   std::optional<double> best_dt_ms;         // smallest median relative error among by_dt
   int outside_calibrated_range = 0;
+  int health_assessed = 0;  // default rows whose health was assessed
+  int health_flagged = 0;   // ... and flagged (the optics no longer match the calibration)
 };
 
 struct ValidationSummary {

@@ -424,7 +424,9 @@ double ThetaFromVariances(const CalibrationModel& model, double major_var_px2,
   if (options.theta_correction && model.theta_correction.fitted()) {
     return model.theta_correction.ThetaDeg(major_var_px2, minor_var_px2, model.geometric);
   }
-  const double beta = model.geometric.beta_px2;
+  const double d_geo_mm = model.geometric.DistanceMm(major_var_px2);
+  const double beta = std::isfinite(d_geo_mm) ? model.geometric.BlurVarPx2(d_geo_mm)
+                                              : model.geometric.beta_px2;
   const double major = major_var_px2 - beta;
   const double minor = minor_var_px2 - beta;
   if (!(major > 0.0)) return std::numeric_limits<double>::quiet_NaN();
@@ -476,10 +478,8 @@ double Theta0Combined(const CalibrationModel& model, const Features* const* fram
 // ln of the frame's geometric distance, NaN when there is none.
 double GeometricLnD(const CalibrationModel& model, const Features& f) {
   if (!model.geometric.fitted() || !f.blob_found) return std::numeric_limits<double>::quiet_NaN();
-  const double big_d =
-      (f.moment_major_var_px2 - model.geometric.beta_px2) / model.geometric.alpha_px2;
-  if (!(big_d > 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  return std::log(1000.0 / std::sqrt(big_d));
+  const double d_mm = model.geometric.DistanceMm(f.moment_major_var_px2);
+  return std::isfinite(d_mm) ? std::log(d_mm) : std::numeric_limits<double>::quiet_NaN();
 }
 
 // Weight of an equation: 1 / its calibration fit's mean relative error (floored).
@@ -646,10 +646,10 @@ GeometricEstimate EstimateGeometric(const CalibrationModel& model, const Feature
   const GeometricModel& g = model.geometric;
   IRDIST_CHECK(g.fitted(), "the model has no fitted geometric baseline");
   if (!features.blob_found) return out;
-  const double big_d = (features.moment_major_var_px2 - g.beta_px2) / g.alpha_px2;
-  if (!(big_d > 0.0)) return out;
+  const double d_mm = g.DistanceMm(features.moment_major_var_px2);
+  if (!std::isfinite(d_mm)) return out;
   out.valid = true;
-  out.d_mm = 1000.0 / std::sqrt(big_d);
+  out.d_mm = d_mm;
   out.outside_calibrated_range =
       out.d_mm < model.ranges.d_min_mm || out.d_mm > model.ranges.d_max_mm;
   return out;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -40,6 +41,7 @@ cv::Rect SquareAround(double cx, double cy, int side) {
 // Background-subtracted first and second moments of the pixels above `threshold` in `rect`.
 struct Moments {
   double weight = 0.0, cx = 0.0, cy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
+  double radius = 0.0, background = 0.0;  // kAperture: the aperture and its background
 };
 
 Moments WeightedMoments(const cv::Mat& image, const cv::Rect& rect, double background,
@@ -105,6 +107,8 @@ Moments ApertureMoments(const cv::Mat& image, const cv::Rect& rect, double cx, d
     }
   }
   if (m.weight <= 0.0) return m;
+  m.radius = radius;
+  m.background = background;
   const double mx = sx / m.weight, my = sy / m.weight;
   m.cx = cx + mx;
   m.cy = cy + my;
@@ -112,6 +116,41 @@ Moments ApertureMoments(const cv::Mat& image, const cv::Rect& rect, double cx, d
   m.syy = syy / m.weight - my * my;
   m.sxy = sxy / m.weight - mx * my;
   return m;
+}
+
+// The blur variance (px^2, per axis) from the 2nd and 4th cumulants of the aperture's intensity
+// along the blob's two principal axes. A uniformly bright disc (or its tilted image, an ellipse)
+// projects onto an axis as a semicircle law of cumulants k2 = a^2/4, k4 = -a^4/16 (a the semi-axis);
+// a Gaussian blur adds s^2 to k2 and nothing to k4 (the pixel's box adds 1/12 and -1/120). So
+// k2 - sqrt(-k4) = s^2 + 1/12 along either axis, whatever d and theta: a blur measured on the frame
+// itself. The mean of the two axes; NaN when the aperture or the cumulants do not allow it.
+double ApertureBlurVariance(const cv::Mat& image, const cv::Rect& rect, const Moments& m) {
+  if (!(m.radius > 0.0) || !(m.weight > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  const double angle = 0.5 * std::atan2(2.0 * m.sxy, m.sxx - m.syy);
+  const double c = std::cos(angle), s = std::sin(angle);
+  double w = 0.0, p2 = 0.0, p4 = 0.0, q2 = 0.0, q4 = 0.0;
+  const double r2 = m.radius * m.radius;
+  for (int y = rect.y; y < rect.y + rect.height; ++y) {
+    const uint16_t* row = image.ptr<uint16_t>(y);
+    const double dy = y - m.cy;
+    for (int x = rect.x; x < rect.x + rect.width; ++x) {
+      const double dx = x - m.cx;
+      if (dx * dx + dy * dy > r2) continue;
+      const double g = row[x] - m.background;
+      const double p = c * dx + s * dy, q = -s * dx + c * dy;
+      w += g;
+      p2 += g * p * p;
+      p4 += g * p * p * p * p;
+      q2 += g * q * q;
+      q4 += g * q * q * q * q;
+    }
+  }
+  if (!(w > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  auto blur = [w](double m2, double m4) {
+    const double k2 = m2 / w, k4 = m4 / w - 3.0 * (m2 / w) * (m2 / w);
+    return k4 < 0.0 ? k2 - std::sqrt(-k4) : std::numeric_limits<double>::quiet_NaN();
+  };
+  return 0.5 * (blur(p2, p4) + blur(q2, q4));
 }
 
 double Theta0FromAxes(double minor, double major) {
@@ -644,7 +683,10 @@ Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptio
     }
     const Moments a = ApertureMoments(image, window, m.cx, m.cy,
                                       std::sqrt(support2) + options.aperture_margin_px, background);
-    if (a.weight > 0.0 && a.sxx > 0.0 && a.syy > 0.0) m = a;
+    if (a.weight > 0.0 && a.sxx > 0.0 && a.syy > 0.0) {
+      m = a;
+      out.blur_var_px2 = ApertureBlurVariance(image, window, a);
+    }
   }
   {
     const double tr = m.sxx + m.syy;

@@ -11,6 +11,7 @@
 //  - Sigma = sqrt((1/A) sum_i (M_i - mean M)^2): population standard deviation of M over the ROI.
 
 #include <opencv2/core.hpp>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -136,6 +137,11 @@ struct Features {
   double moment_major_var_px2 =
       0.0;  // eigenvalues of the intensity-weighted covariance (no PSF removal)
   double moment_minor_var_px2 = 0.0;
+  // kAperture: the blur's variance (px^2, per axis, pixel area included) measured on the frame
+  // from the blob's 2nd and 4th cumulants along its axes (independent of d and theta for a
+  // uniformly bright disc); NaN when not measured. Calibration health compares it with the
+  // calibrated blur (health.h).
+  double blur_var_px2 = std::numeric_limits<double>::quiet_NaN();
   EllipseFit ellipse_moments;
   EllipseFit ellipse_contour;
   EllipseFit ellipse_model;     // kModelFit only (valid = false under the other methods)

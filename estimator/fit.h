@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "estimator/features.h"
+#include "estimator/health.h"
 #include "estimator/models.h"
 #include "estimator/provenance.h"
 
@@ -51,6 +52,10 @@ struct FitOptions {
   // theta_correction_degree (1..3) in (squared axis ratio, geometric distance).
   bool fit_theta_correction = true;
   int theta_correction_degree = 2;
+  // The geometric model's blur: one variance for every distance (the model before issue 12), or
+  // the thin lens's blur variance, a quadratic in 1/d (GeometricModel), fitted with the disc's
+  // scale from both axes of every calibration frame (default).
+  bool geometric_blur_varies_with_distance = true;
   bool IsValid(std::string* why) const;
 };
 
@@ -98,13 +103,21 @@ struct CalibratedRanges {
   double bias_min_ma = 0.0, bias_max_ma = 0.0;
 };
 
-// Geometric baseline: the blob's major-axis second moment (px^2) is alpha * D + beta, D = (1000 mm
-// / d)^2: the image of the disc scales as 1/d, its variance as 1/d^2, and the blur adds a constant.
-// Inverted: d = 1000 / sqrt((var - beta) / alpha). Fitted by linear least squares on relative
-// residuals, from the measurement frames (exposure does not change background-subtracted moments).
+// Geometric baseline: the blob's second moment along the disc's major axis (px^2) is
+// alpha u^2 + b(u), u = 1000 mm / d (so u^2 = D): the image of the disc scales as 1/d, its variance
+// as 1/d^2, and the blur adds b(u) = beta + blur_u1 u + blur_u2 u^2. A lens focused at s blurs an
+// object at d by a circle of confusion proportional to |1/s - 1/d|: its variance is quadratic in u,
+// so b(u) holds the lens PSF, the pixel's area and the defocus exactly. blur_u1 = blur_u2 = 0 is
+// the fixed blur (model files before format 3, or FitOptions::geometric_blur_varies_with_distance
+// off). Inverted: the positive root u of (alpha + blur_u2) u^2 + blur_u1 u + beta - var = 0.
+// Fitted by linear least squares on relative residuals, from the measurement frames (exposure does
+// not change background-subtracted moments); with the distance-dependent blur, the minor axis
+// (alpha cos^2(theta) u^2 + b(u), theta known at calibration) separates the disc from the blur.
 struct GeometricModel {
   double alpha_px2 = 0.0;
   double beta_px2 = 0.0;
+  double blur_u1_px2 = 0.0;
+  double blur_u2_px2 = 0.0;
   // Per-frame noise of the relative distance it implies, as a function of d:
   // sd(d) = noise_rel_at_1m * (d / 1000 mm)^noise_exponent, fitted to the calibration residuals'
   // rms at each calibrated distance (the apparent size's noise grows with d). 0 = not fitted
@@ -113,6 +126,13 @@ struct GeometricModel {
   double noise_exponent = 0.0;
   FitSummary summary;
   bool fitted() const { return alpha_px2 > 0.0; }
+  bool BlurVariesWithDistance() const { return blur_u1_px2 != 0.0 || blur_u2_px2 != 0.0; }
+  // Blur variance b(u) (px^2, per axis) at distance d_mm.
+  double BlurVarPx2(double d_mm) const;
+  // The major-axis variance the model expects at d_mm.
+  double MajorVarPx2(double d_mm) const { return alpha_px2 * 1e6 / (d_mm * d_mm) + BlurVarPx2(d_mm); }
+  // The distance (mm) whose expected major-axis variance is major_var_px2; NaN when none.
+  double DistanceMm(double major_var_px2) const;
   // sd(d) above; 0 when the noise model is not fitted.
   double NoiseRel(double d_mm) const {
     return noise_rel_at_1m > 0.0 ? noise_rel_at_1m * std::pow(d_mm / 1000.0, noise_exponent)
@@ -153,6 +173,7 @@ struct CalibrationModel {
   GeometricModel geometric;
   ThetaCorrection theta_correction;  // not fitted: theta from the blur-corrected ratio alone
   ModelProvenance provenance;        // filled by the app from the recording (estimator/provenance.h)
+  BlurCalibration blur_calibration;  // health.h; not fitted in model files before format 4
   const FittedModel* Find(ModelKind kind) const;  // nullptr if not fitted
   std::string BriefReport() const;
 };
@@ -168,7 +189,9 @@ FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<Calibrati
 // Scalings that bring every model input near 1 for these samples.
 ModelScaling ChooseScaling(const std::vector<CalibrationSample>& samples);
 
-GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples);
+// blur_varies_with_distance: GeometricModel's b(u) quadratic in u (else the constant beta).
+GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples,
+                            bool blur_varies_with_distance = false);
 
 // Fits the theta correction on the measurement frames of the usable samples (degree 1..3). Not
 // fitted (empty coefficients, summary message says why) without a fitted geometric model or with

@@ -223,6 +223,61 @@ ModelProvenance ReadProvenance(const Reader& rd, const YAML::Node& root) {
   return p;
 }
 
+// Format 4: the geometric blur's terms in u = 1000 / d (absent: a fixed blur).
+void EmitGeometricBlur(YAML::Emitter& out, const GeometricModel& g) {
+  if (!g.BlurVariesWithDistance()) return;
+  EmitDouble(out, "blur_u1_px2", g.blur_u1_px2);
+  EmitDouble(out, "blur_u2_px2", g.blur_u2_px2);
+}
+
+// Format 4 keys blur_u1_px2 / blur_u2_px2 (both or neither; absent: a fixed blur).
+void ReadGeometricBlur(const Reader& rd, const YAML::Node& g, int version, GeometricModel* geo) {
+  if (!g["blur_u1_px2"].IsDefined() && !g["blur_u2_px2"].IsDefined()) return;
+  if (version < 4) {
+    rd.Fail(g["blur_u1_px2"], "geometric.blur_u1_px2",
+            "is new in format_version 4; this file says " + std::to_string(version));
+  }
+  geo->blur_u1_px2 = rd.Scalar<double>(g, "geometric", "blur_u1_px2");
+  geo->blur_u2_px2 = rd.Scalar<double>(g, "geometric", "blur_u2_px2");
+  if (!std::isfinite(geo->blur_u1_px2) || !std::isfinite(geo->blur_u2_px2)) {
+    rd.Fail(g["blur_u1_px2"], "geometric.blur_u1_px2", "must be finite");
+  }
+}
+
+// Format 4: the calibrated blur of the health check (health.h); absent: no health check.
+void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
+  if (!b.fitted()) return;
+  out << YAML::Key << "blur_calibration" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "blur_var_px2" << YAML::Value << YAML::Flow << YAML::BeginSeq << b.c0_px2
+      << b.c1_px2 << b.c2_px2 << YAML::EndSeq;
+  EmitDouble(out, "noise_at_1m_px2", b.noise_at_1m_px2);
+  EmitDouble(out, "noise_exponent", b.noise_exponent);
+  out << YAML::Key << "frames" << YAML::Value << b.frames;
+  out << YAML::EndMap;
+}
+
+void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
+                         BlurCalibration* b) {
+  const YAML::Node node = root["blur_calibration"];
+  if (!node.IsDefined() || node.IsNull()) return;
+  if (version < 4) {
+    rd.Fail(node, "blur_calibration",
+            "is new in format_version 4; this file says " + std::to_string(version));
+  }
+  const std::vector<double> c = rd.Doubles(node, "blur_calibration", "blur_var_px2", false);
+  if (c.size() != 3) rd.Fail(node["blur_var_px2"], "blur_calibration.blur_var_px2", "expected 3 numbers");
+  b->c0_px2 = c[0];
+  b->c1_px2 = c[1];
+  b->c2_px2 = c[2];
+  b->noise_at_1m_px2 = rd.Scalar<double>(node, "blur_calibration", "noise_at_1m_px2");
+  b->noise_exponent = rd.Scalar<double>(node, "blur_calibration", "noise_exponent");
+  b->frames = rd.Scalar<int>(node, "blur_calibration", "frames");
+  if (!(b->noise_at_1m_px2 > 0.0) || !std::isfinite(b->noise_exponent)) {
+    rd.Fail(node["noise_at_1m_px2"], "blur_calibration.noise_at_1m_px2",
+            "must be > 0 with a finite noise_exponent");
+  }
+}
+
 }  // namespace
 
 ModelFileError::ModelFileError(const std::string& path, const std::string& key, int line,
@@ -293,6 +348,7 @@ void EmitGeometric(YAML::Emitter& out, const GeometricModel& g) {
     EmitDouble(out, "noise_rel_at_1m", g.noise_rel_at_1m);
     EmitDouble(out, "noise_exponent", g.noise_exponent);
   }
+  EmitGeometricBlur(out, g);
   EmitFit(out, g.summary);
   out << YAML::EndMap;
 }
@@ -432,9 +488,10 @@ std::vector<FittedModel> ReadModels(const Reader& rd, const YAML::Node& root) {
   return out;
 }
 
-GeometricModel ReadGeometric(const Reader& rd, const YAML::Node& root) {
+GeometricModel ReadGeometric(const Reader& rd, const YAML::Node& root, int version) {
   const YAML::Node g = rd.Child(root, "", "geometric");
-  rd.Keys(g, "geometric", {"alpha_px2", "beta_px2", "noise_rel_at_1m", "noise_exponent", "fit"});
+  rd.Keys(g, "geometric", {"alpha_px2", "beta_px2", "noise_rel_at_1m", "noise_exponent",
+                           "blur_u1_px2", "blur_u2_px2", "fit"});
   GeometricModel geometric;
   geometric.alpha_px2 = rd.Scalar<double>(g, "geometric", "alpha_px2");
   geometric.beta_px2 = rd.Scalar<double>(g, "geometric", "beta_px2");
@@ -448,6 +505,7 @@ GeometricModel ReadGeometric(const Reader& rd, const YAML::Node& root) {
               "must be > 0 with a finite noise_exponent (or both absent)");
     }
   }
+  ReadGeometricBlur(rd, g, version, &geometric);
   geometric.summary = rd.Fit(g, "geometric");
   return geometric;
 }
@@ -493,6 +551,7 @@ std::string ModelToYaml(const CalibrationModel& model) {
   EmitModels(out, model.models);
   EmitGeometric(out, model.geometric);
   EmitThetaCorrection(out, model.theta_correction);
+  EmitBlurCalibration(out, model.blur_calibration);
   EmitProvenance(out, model.provenance);
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
@@ -503,7 +562,7 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   const YAML::Node root = ParseModelText(text, path);
   if (!root.IsMap()) rd.Fail(root, "", "the document is not a map");
   rd.Keys(root, "", {"format_version", "features", "scaling", "ranges", "models", "geometric",
-                     "theta_correction", "provenance"});
+                     "theta_correction", "provenance", "blur_calibration"});
   const int version = rd.Scalar<int>(root, "", "format_version");
   if (version < kOldestModelFormatVersion || version > kModelFormatVersion) {
     rd.Fail(root["format_version"], "format_version",
@@ -516,9 +575,10 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   model.scaling = ReadScaling(rd, root);
   model.ranges = ReadRanges(rd, root);
   model.models = ReadModels(rd, root);
-  model.geometric = ReadGeometric(rd, root);
+  model.geometric = ReadGeometric(rd, root, version);
   model.theta_correction = ReadThetaCorrection(rd, root);
   model.provenance = ReadProvenance(rd, root);
+  ReadBlurCalibration(rd, root, version, &model.blur_calibration);
   return model;
 }
 

@@ -14,7 +14,7 @@ namespace irdist {
 // still load: those keys take their defaults and the model has no theta correction.
 // 3 adds features.response_scope (e_rel_only | all_pixels); version 1 and 2 files load as
 // e_rel_only (the inverse response entered E_rel only).
-constexpr int kModelFormatVersion = 3;
+constexpr int kModelFormatVersion = 4;  // 4: geometric blur varying with distance, health
 constexpr int kOldestModelFormatVersion = 1;
 
 // A model file that cannot be written, read or understood. what() names the file, the key and,

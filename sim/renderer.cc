@@ -90,6 +90,8 @@ GroundTruth Renderer::Describe(const PoseState& pose, double exposure_s, PixelFo
   truth.theta_deg = image.theta_deg;
   truth.major_px = image.major_px;
   truth.minor_px = image.minor_px;
+  truth.blur_sigma_px = scene_.BlurSigmaPx(pose.slide_mm);
+  truth.coc_px = scene_.CircleOfConfusionPx(pose.slide_mm);
   truth.intensity_mw_sr = scene_.OnAxisIntensityMwSr(pose.bias_ma, junction_rise_k);
   // Shape and peak at a unit intensity (the shape does not depend on it), then scaled.
   const SignalWindow w = scene_.RenderSignal(pose, 1.0, exposure_s);

@@ -30,6 +30,8 @@ struct GroundTruth {
   double theta_deg = 0.0;
   double major_px = 0.0;           // geometric ellipse axes of the emitter's image
   double minor_px = 0.0;
+  double blur_sigma_px = 0.0;      // total Gaussian blur (lens PSF and defocus) at this distance
+  double coc_px = 0.0;             // thin-lens circle of confusion (diameter) at this distance
   double width_px = 0.0;           // 2 * sqrt(second moment) along x and y after blur,
   double height_px = 0.0;          //   i.e. the blob's intensity-weighted size
   double intensity_mw_sr = 0.0;    // on-axis radiant intensity

@@ -142,6 +142,9 @@ bool OpticsOptions::IsValid(std::string* why) const {
   if (!std::isfinite(psf_sigma_px) || psf_sigma_px < 0.0 || psf_sigma_px > 20.0) {
     return Fail(why, "optics.psf_sigma_px must lie in [0, 20]");
   }
+  if (!std::isfinite(focus_mm) || (focus_mm != 0.0 && focus_mm <= 2.0 * focal_length_mm)) {
+    return Fail(why, "optics.focus_mm must be 0 (no defocus) or beyond twice the focal length");
+  }
   if (supersample < 1 || supersample > 32) return Fail(why, "optics.supersample must be 1..32");
   return true;
 }
@@ -263,6 +266,7 @@ RigPhysics LoadRigPhysics(const std::string& rig_path) {
       {"lens_transmission", op.Scalar(&o.lens_transmission)},
       {"filter_transmission", op.Scalar(&o.filter_transmission)},
       {"psf_sigma_px", op.Scalar(&o.psf_sigma_px)},
+      {"focus_mm", op.Scalar(&o.focus_mm)},
       {"vignetting", op.Scalar(&o.vignetting)},
       {"supersample", op.Scalar(&o.supersample)},
   };

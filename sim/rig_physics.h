@@ -52,7 +52,13 @@ struct OpticsOptions {
   double f_number = 8.0;              // working aperture N: irradiance ~ pi L / (4 N^2)
   double lens_transmission = 0.9;     // transmission of the lens at the emitter wavelength
   double filter_transmission = 1.6e-4;  // band-pass + neutral-density filter stack in front
-  double psf_sigma_px = 0.7;          // Gaussian blur (diffraction at N=8 plus defocus), pixels
+  // In-focus lens PSF: Gaussian sigma (diffraction at N = 8 plus residual aberrations), pixels.
+  double psf_sigma_px = 0.7;
+  // Thin-lens focus: the object distance (mm, along the optical axis) imaged sharply. An object at
+  // d is blurred by a circle of confusion of diameter c = (f / N) f |d - s| / (d (s - f)) on the
+  // sensor, added to the PSF as a Gaussian of the same per-axis variance c^2 / 16 (Scene::BlurSigmaPx).
+  // 0 = no defocus: the blur is psf_sigma_px at every distance (recipes/rigs/virtual-fixed-blur.yaml).
+  double focus_mm = 2000.0;
   bool vignetting = true;             // cos^4 of the field angle
   int supersample = 8;  // integration strips per pixel of the disc image's height (>= 32 in all)
   bool IsValid(std::string* why) const;

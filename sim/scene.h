@@ -20,6 +20,8 @@
 
 namespace irdist::sim {
 
+struct ImageStrip;  // one horizontal strip of the disc's image (scene.cc)
+
 // Mean signal photo-electrons per pixel over a window of the full sensor (no dark signal).
 struct SignalWindow {
   cv::Rect rect;     // in full-sensor pixel coordinates (may be empty)
@@ -51,6 +53,14 @@ class Scene {
 
   EmitterImage Project(const PoseState& pose) const;
 
+  // Thin-lens circle of confusion (diameter, px on the sensor) of an object at `distance_mm`
+  // along the optical axis: (f / N) f |d - s| / (d (s - f)) / pitch, s = optics.focus_mm; 0 when
+  // focus_mm is 0 (no defocus).
+  double CircleOfConfusionPx(double distance_mm) const;
+  // Gaussian sigma (px) of the total blur at `distance_mm`: the lens PSF and the defocus disc
+  // (a uniform disc of diameter c has per-axis variance c^2 / 16), variances added.
+  double BlurSigmaPx(double distance_mm) const;
+
   // Mean signal electrons per pixel for an exposure of `exposure_s` seconds at on-axis intensity
   // `intensity_mw_sr`, over a window around the emitter's image (clipped to the sensor).
   SignalWindow RenderSignal(const PoseState& pose, double intensity_mw_sr,
@@ -60,6 +70,12 @@ class Scene {
   double ElectronsPerRadianceSecond() const { return electrons_per_radiance_s_; }
 
  private:
+  // The window around the emitter's image holding its blur's reach, clipped to the sensor.
+  cv::Rect SignalRect(const EmitterImage& image, double blur_px) const;
+  // The disc's image as Chebyshev-spaced horizontal strips with their chords and radiance (W m^-2
+  // sr^-1, vignetting included); empty when the disc is not an ellipse in view.
+  std::vector<ImageStrip> DiscStrips(const PoseState& pose, double intensity_mw_sr) const;
+
   RigPhysics physics_;
   double electrons_per_radiance_s_ = 0.0;
 };

@@ -25,6 +25,7 @@
 #include "estimator/features.h"
 #include "bench/accuracy/crb.h"
 #include "estimator/fit.h"
+#include "estimator/health.h"
 #include "estimator/response.h"
 #include "sim/renderer.h"
 #include "sim/rig_physics.h"
@@ -224,7 +225,46 @@ struct Pipeline {
 
 struct Methods {
   std::map<std::string, std::vector<Row>> rows;
+  std::map<std::string, std::pair<int, int>> health;  // pipeline -> (assessed, flagged)
 };
+
+// How well the blur measured on each frame agrees with the calibrated blur: mean and sd of the
+// per-frame departure (px^2) and of its z-score.
+void PrintBlurCheck(const CalibrationModel& model, const std::vector<Bracket>& brackets,
+                    const char* experiment) {
+  double s = 0, ss = 0, z = 0, zz = 0, zmax = 0;
+  int n = 0;
+  const BlurCalibration& cal = model.blur_calibration;
+  if (!cal.fitted()) return;
+  for (const Bracket& b : brackets) {
+    for (const Features& f : b.measurements) {
+      if (!f.Usable() || !std::isfinite(f.blur_var_px2)) continue;
+      const double r = f.blur_var_px2 - cal.BlurVarPx2(b.pose.d_mm);
+      s += r;
+      ss += r * r;
+      z += r / cal.NoisePx2(b.pose.d_mm);
+      zz += std::pow(r / cal.NoisePx2(b.pose.d_mm), 2);
+      zmax = std::max(zmax, std::fabs(r / cal.NoisePx2(b.pose.d_mm)));
+      ++n;
+    }
+  }
+  if (n == 0) return;
+  std::printf("  %-8s blur per frame vs calibrated: mean %+.4f sd %.4f px^2; z mean %+.2f sd %.2f "
+              "max |z| %.2f (%d frames; calibration sd at 1 m %.4f px^2, exponent %.2f)\n",
+              experiment, s / n, std::sqrt(std::max(0.0, ss / n - (s / n) * (s / n))), z / n,
+              std::sqrt(std::max(0.0, zz / n - (z / n) * (z / n))), zmax, n, cal.noise_at_1m_px2,
+              cal.noise_exponent);
+}
+
+// Calibration health of one bracket's joint estimate (estimator/health.h).
+void CountHealth(const Pipeline& pl, const Bracket& b, double d_mm, Methods* m) {
+  std::vector<const Features*> frames;
+  for (const Features& f : b.measurements) frames.push_back(&f);
+  const HealthCheck h = CheckHealth(pl.model, d_mm, frames);
+  auto& counts = m->health[pl.name];
+  counts.first += h.assessed ? 1 : 0;
+  counts.second += h.flagged ? 1 : 0;
+}
 
 void Estimate(const Pipeline& pl, const std::vector<Bracket>& brackets, Methods* m,
               bool with_baselines, double nominal_ma) {
@@ -243,6 +283,7 @@ void Estimate(const Pipeline& pl, const std::vector<Bracket>& brackets, Methods*
     } else {
       m->rows[pl.name].push_back(
           {b.pose, 0, be.joint.d_mm, be.joint.theta_deg, true, be.joint.d_std_mm});
+      CountHealth(pl, b, be.joint.d_mm, m);
     }
     if (!with_baselines) continue;
     const I0DependentEstimate di =
@@ -258,6 +299,44 @@ void Estimate(const Pipeline& pl, const std::vector<Bracket>& brackets, Methods*
       }
     }
     m->rows["geometric"].push_back({b.pose, 0, ng ? g / ng : 0, 0, ng > 0});
+  }
+}
+
+struct Experiment {
+  const char* name;
+  std::vector<Pose> poses;
+  std::vector<double> t_ms;
+};
+
+// The lens PSF that changes the total blur (PSF and defocus) at 2250 mm, the middle of Table 3,
+// by the relative `change`: what a touched focus ring or a warmed lens does after calibration.
+sim::RigPhysics WithBlurChanged(const sim::RigPhysics& physics, double change) {
+  const sim::Scene scene(physics);
+  const double total = scene.BlurSigmaPx(2250.0) * (1.0 + change);
+  const double coc = scene.CircleOfConfusionPx(2250.0);
+  sim::RigPhysics out = physics;
+  out.optics.psf_sigma_px = std::sqrt(std::max(0.0, total * total - coc * coc / 16.0));
+  return out;
+}
+
+// Validation on a rig whose blur changed after calibration: the default pipeline's health flags
+// and distance errors (the model stays the unchanged rig's).
+void RunBlurChange(const sim::RigPhysics& physics, std::uint64_t seed, double change,
+                   const std::vector<Pipeline>& pipelines, const std::vector<Experiment>& experiments) {
+  const sim::RigPhysics changed = WithBlurChanged(physics, change);
+  std::printf("blur changed by %+.0f%% after calibration (lens PSF %.3f -> %.3f px):\n", 100 * change,
+              physics.optics.psf_sigma_px, changed.optics.psf_sigma_px);
+  for (const Pipeline& pl : pipelines) {
+    if (pl.name != "default") continue;
+    for (const Experiment& ex : experiments) {
+      Methods m;
+      SweepRenderer sr(changed, seed + 100);
+      Estimate(pl, sr.Run(ex.poses, ex.t_ms, pl.features), &m, false, 500.0);
+      const auto counts = m.health[pl.name];
+      Print(ex.name, "default", Summarise(m.rows[pl.name], true), true);
+      std::printf("  %-8s default          health: %d of %d estimates flagged\n", ex.name,
+                  counts.second, counts.first);
+    }
   }
 }
 
@@ -397,6 +476,8 @@ int Main(int argc, char** argv) {
   bool theta_variants = false;
   bool model_fit = false;  // pipeline model_fit: theta0 from EllipseMethod::kModelFit
   double nonlinearity = -1.0;  // --nonlinearity A: the rig's sensor nonlinearity replaced by A
+  std::vector<double> blur_changes;  // --blur-change X: validate with the blur changed by X
+  bool only_default = false;         // --only-default: the default and fixed_blur pipelines only
   std::string dump_theta;  // CSV of the calibration frames' moments and theta0 (default pipeline)
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--rig") && i + 1 < argc)
@@ -413,6 +494,10 @@ int Main(int argc, char** argv) {
       model_fit = true;
     else if (!std::strcmp(argv[i], "--theta-probe"))
       theta_probe = true;
+    else if (!std::strcmp(argv[i], "--blur-change") && i + 1 < argc)
+      blur_changes.push_back(std::stod(argv[++i]));
+    else if (!std::strcmp(argv[i], "--only-default"))
+      only_default = true;
     else if (!std::strcmp(argv[i], "--crb-only"))
       crb_only = true;
     else if (!std::strcmp(argv[i], "--help")) {
@@ -424,7 +509,10 @@ int Main(int argc, char** argv) {
           "   --theta-degree N adds the default with a correction of total degree N;\n"
           "   --model-fit adds pipeline model_fit: theta0 of EllipseMethod::kModelFit;\n"
           "   --theta-variants adds theta_bracket (ThetaSource::kBracketMoments) and threshold\n"
-          "   (MomentMethod::kThreshold); --theta-probe prints theta0's bias per pose and method)\n");
+          "   (MomentMethod::kThreshold); --theta-probe prints theta0's bias per pose and method;\n"
+          "   --blur-change X (repeatable) validates again with the blur changed by X (0.15 = 15%%)\n"
+          "   after calibration and prints the health flags; --only-default keeps the default\n"
+          "   and fixed_blur (the geometric model with one blur, the model before issue 12))\n");
       return 0;
     } else if (!std::strcmp(argv[i], "--verbose"))
       verbose = true;
@@ -556,6 +644,19 @@ int Main(int argc, char** argv) {
     pl.recover_response = true;
     pipelines.push_back(pl);
   }
+  {
+    // Today's default before issue 12: the geometric model with one blur for every distance.
+    Pipeline pl;
+    pl.name = "fixed_blur";
+    pl.fit.geometric_blur_varies_with_distance = false;
+    pipelines.push_back(pl);
+  }
+  if (only_default) {
+    std::vector<Pipeline> kept;
+    for (const Pipeline& pl : pipelines)
+      if (pl.name == "default" || pl.name == "fixed_blur") kept.push_back(pl);
+    pipelines = kept;
+  }
   if (model_fit) {
     Pipeline pl;
     pl.name = "model_fit";  // theta0 of the fitted blurred disc (features), no blur to remove
@@ -632,11 +733,6 @@ int Main(int argc, char** argv) {
   }
 
   // Validation grids.
-  struct Experiment {
-    const char* name;
-    std::vector<Pose> poses;
-    std::vector<double> t_ms;
-  };
   std::vector<Experiment> experiments;
   {
     Experiment e{"fig10", {}, Range(30, 40, 2)};
@@ -667,6 +763,7 @@ int Main(int argc, char** argv) {
       SweepRenderer sr(physics, seed + 100);
       const auto brackets = sr.Run(ex.poses, ex.t_ms, pipelines[p].features);
       Estimate(pipelines[p], brackets, &m, pipelines[p].name == "default", 500.0);
+      if (pipelines[p].name == "default") PrintBlurCheck(pipelines[p].model, brackets, ex.name);
     }
     std::printf("%s (%zu brackets, t_n", ex.name, ex.poses.size());
     for (double t : ex.t_ms) std::printf(" %g", t);
@@ -680,8 +777,13 @@ int Main(int argc, char** argv) {
       const bool th = name != "geometric";
       Print(ex.name, name.c_str(), Summarise(rows, th), th);
     }
+    for (const auto& [name, counts] : m.health) {
+      std::printf("  %-8s %-16s health: %d of %d estimates flagged\n", ex.name, name.c_str(),
+                  counts.second, counts.first);
+    }
     if (std::string(ex.name) == "fig14") PrintDispersion(m);
   }
+  for (double change : blur_changes) RunBlurChange(physics, seed, change, pipelines, experiments);
   std::printf("elapsed %.1f s\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   return 0;

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 namespace irdist {
 namespace {
@@ -139,6 +140,32 @@ TEST_F(SummaryTest, PositionColumnsRoundTripAndUnknownTruthIsEmpty) {
   EXPECT_EQ(again[0].x_mm, 12.5);
   EXPECT_EQ(again[0].true_x_mm, 12.0);
   EXPECT_TRUE(std::isnan(again[0].y_mm));
+}
+
+// The health column (calibration health, estimator/health.h) round-trips, files without it read
+// as "-", and the default method's summary counts the flagged estimates.
+TEST_F(SummaryTest, HealthColumnRoundTripsAndIsCounted) {
+  auto rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  for (const EstimateRow& r : rows) EXPECT_EQ(r.health, "-");
+  rows[0].health = "ok";
+  rows[1].health = "blur_larger";
+  rows[2].health = "ok";
+  const std::string path = (dir_ / "health.csv").string();
+  WriteEstimatesCsv(path, rows);
+  const auto again = ReadEstimatesCsv(path);
+  ASSERT_EQ(again.size(), rows.size());
+  EXPECT_EQ(again[1].health, "blur_larger");
+  EXPECT_EQ(again[3].health, "-");
+  const ValidationSummary summary = Summarize(again);
+  const MethodSummary* m = summary.Find("i0_free");
+  ASSERT_NE(m, nullptr);
+  EXPECT_EQ(m->health_assessed, 3);
+  EXPECT_EQ(m->health_flagged, 1);
+  const std::string yaml = (dir_ / "summary.yaml").string();
+  WriteSummaryYaml(yaml, summary);
+  std::ifstream in(yaml);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("health: {assessed: 3, flagged: 1}"), std::string::npos) << text;
 }
 
 TEST_F(SummaryTest, BadRowIsRefusedWithItsLine) {

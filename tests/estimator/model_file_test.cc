@@ -18,6 +18,7 @@ CalibrationModel SmallModel() {
   options.sigma_scan_steps = 4;
   options.multi_starts = 1;
   options.max_iterations = 5;
+  options.geometric_blur_varies_with_distance = false;  // format 3 content: the old-version tests
   FeatureOptions features;
   features.roi_policy = RoiPolicy::kThreshold;
   features.window_side_px = 48;
@@ -129,6 +130,38 @@ TEST(ModelFile, ProvenanceRoundTripsAndIsOptional) {
   EXPECT_FALSE(ModelFromYaml(ModelToYaml(SmallModel()), "old.yaml").provenance.known);
 }
 
+// Format 4: the distance-dependent geometric blur and the health check's calibrated blur round
+// trip bit-exactly, and are refused in a file that claims an older format.
+TEST(ModelFile, BlurTermsRoundTripAndNeedFormatFour) {
+  CalibrationModel model = SmallModel();
+  model.geometric.blur_u1_px2 = -0.3 / 7.0;
+  model.geometric.blur_u2_px2 = 0.05 / 3.0;
+  model.blur_calibration.c0_px2 = 0.6 / 7.0;
+  model.blur_calibration.c1_px2 = -0.1 / 3.0;
+  model.blur_calibration.c2_px2 = 0.2 / 9.0;
+  model.blur_calibration.noise_at_1m_px2 = 0.01 / 3.0;
+  model.blur_calibration.noise_exponent = 1.25;
+  model.blur_calibration.frames = 77;
+  const std::string text = ModelToYaml(model);
+  const CalibrationModel back = ModelFromYaml(text, "v4.yaml");
+  EXPECT_TRUE(BitEqual(back.geometric.blur_u1_px2, model.geometric.blur_u1_px2));
+  EXPECT_TRUE(BitEqual(back.geometric.blur_u2_px2, model.geometric.blur_u2_px2));
+  EXPECT_TRUE(BitEqual(back.blur_calibration.c1_px2, model.blur_calibration.c1_px2));
+  EXPECT_TRUE(BitEqual(back.blur_calibration.c2_px2, model.blur_calibration.c2_px2));
+  EXPECT_TRUE(BitEqual(back.blur_calibration.noise_at_1m_px2,
+                       model.blur_calibration.noise_at_1m_px2));
+  EXPECT_EQ(back.blur_calibration.frames, 77);
+  EXPECT_EQ(ModelToYaml(back), text);
+  std::string old = text;
+  old.replace(old.find("format_version: 4"), 17, "format_version: 3");
+  try {
+    ModelFromYaml(old, "v3.yaml");
+    FAIL() << "a format 3 file with format 4 keys was accepted";
+  } catch (const ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("format_version 4"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ModelFile, FileHoldsTheFitStatistics) {
   const std::string text = ModelToYaml(SmallModel());
   for (const char* key : {"format_version", "roi_policy", "mean_relative_error",
@@ -144,7 +177,7 @@ TEST(ModelFile, VersionOneFileLoadsAsThresholdMomentsWithoutThetaCorrection) {
   v1.theta_correction = ThetaCorrection();
   std::string text = ModelToYaml(v1);
   ASSERT_EQ(text.find("theta_correction"), std::string::npos);
-  text.replace(text.find("format_version: 3"), 17, "format_version: 1");
+  text.replace(text.find("format_version: 4"), 17, "format_version: 1");
   for (const char* key : {"moment_method", "aperture_margin_px", "response_scope"}) {
     const size_t at = text.find(std::string("  ") + key + ":");
     ASSERT_NE(at, std::string::npos) << key;
@@ -161,7 +194,7 @@ TEST(ModelFile, ResponseScopeRoundTripsAndOldVersionsMeanERelOnly) {
   CalibrationModel model = SmallModel();
   model.features.response_scope = ResponseScope::kAllPixels;
   const std::string text = ModelToYaml(model);
-  EXPECT_NE(text.find("format_version: 3"), std::string::npos);
+  EXPECT_NE(text.find("format_version: 4"), std::string::npos);
   EXPECT_NE(text.find("response_scope: all_pixels"), std::string::npos);
   const CalibrationModel back = ModelFromYaml(text, "v3.yaml");
   EXPECT_EQ(back.features.response_scope, ResponseScope::kAllPixels);
@@ -170,7 +203,7 @@ TEST(ModelFile, ResponseScopeRoundTripsAndOldVersionsMeanERelOnly) {
   // Versions 1 and 2 have no response_scope: the curve entered E_rel only.
   for (const char* version : {"format_version: 2", "format_version: 1"}) {
     std::string old = text;
-    old.replace(old.find("format_version: 3"), 17, version);
+    old.replace(old.find("format_version: 4"), 17, version);
     const size_t at = old.find("  response_scope:");
     std::string with_key = old;
     old.erase(at, old.find('\n', at) - at + 1);
@@ -218,7 +251,7 @@ TEST(ModelFile, BadThetaCorrectionNamesTheKey) {
 
 TEST(ModelFile, WrongVersionIsRejected) {
   std::string text = ModelToYaml(SmallModel());
-  text.replace(text.find("format_version: 3"), 17, "format_version: 9");
+  text.replace(text.find("format_version: 4"), 17, "format_version: 9");
   try {
     ModelFromYaml(text, "m.yaml");
     FAIL() << "accepted a wrong version";

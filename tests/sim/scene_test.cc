@@ -54,14 +54,14 @@ TEST(Scene, DiscImageIsResolvedAtThreeMetres) {
 // (psf^2 + 1/12 px^2 per axis). Tolerance 0.01 on the ratio (the pixel grid and perspective).
 TEST(Scene, EllipseAxisRatioIsCosTheta) {
   const Scene scene{RigPhysics{}};
-  const double psf = RigPhysics{}.optics.psf_sigma_px;
-  const double blur_var = psf * psf + 1.0 / 12.0;
   struct Case {
     double d, pan, tilt;
   };
   for (const Case& k : {Case{1500, 0, 0}, Case{1500, 30, 0}, Case{2000, 0, 20}, Case{2500, 20, 20},
                         Case{3000, 35, 0}, Case{3000, 10, 0}}) {
     const PoseState pose = Pose(k.d, k.pan, k.tilt);
+    const double blur = scene.BlurSigmaPx(k.d);
+    const double blur_var = blur * blur + 1.0 / 12.0;
     double major_var = 0, minor_var = 0;
     Moments(scene.RenderSignal(pose, 100.0, 0.01), &major_var, &minor_var);
     const double ratio = std::sqrt((minor_var - blur_var) / (major_var - blur_var));
@@ -80,8 +80,6 @@ TEST(Scene, EllipseAxisRatioIsCosTheta) {
 // total signal by 0.1 %.)
 TEST(Scene, ShapeAndSignalDoNotDependOnPixelPhase) {
   const Scene scene{RigPhysics{}};
-  const double psf = RigPhysics{}.optics.psf_sigma_px;
-  const double blur_var = psf * psf + 1.0 / 12.0;
   struct Case {
     double pan, tilt;
   };
@@ -89,6 +87,8 @@ TEST(Scene, ShapeAndSignalDoNotDependOnPixelPhase) {
     double first_flux = 0.0;
     for (double d = 2600; d <= 2800; d += 10) {
       const PoseState pose = Pose(d, k.pan, k.tilt);
+      const double blur = scene.BlurSigmaPx(d);
+      const double blur_var = blur * blur + 1.0 / 12.0;
       const SignalWindow w = scene.RenderSignal(pose, 100.0, 0.01);
       double major_var = 0, minor_var = 0;
       Moments(w, &major_var, &minor_var);
@@ -103,6 +103,37 @@ TEST(Scene, ShapeAndSignalDoNotDependOnPixelPhase) {
       EXPECT_NEAR(flux / first_flux, 1.0, 1e-4) << "d " << d << " pan " << k.pan;
     }
   }
+}
+
+// Thin-lens defocus: the circle of confusion equals the geometric one built from the image
+// distances (1/f = 1/d + 1/v; sensor at v_s, the point images at v_d, the cone of aperture f/N
+// cut by the sensor: c = (f/N) |v_d - v_s| / v_d), at three distances; the blob's rendered
+// variance grows over the in-focus render by exactly c^2 / 16 (a uniform disc's per-axis variance).
+TEST(Scene, DefocusFollowsThinLensCircleOfConfusion) {
+  RigPhysics physics;
+  physics.optics.focus_mm = 2000.0;
+  const Scene scene{physics};
+  RigPhysics fixed = physics;
+  fixed.optics.focus_mm = 0.0;
+  const Scene sharp{fixed};
+  const double f = physics.optics.focal_length_mm, aperture = f / physics.optics.f_number;
+  const double v_s = 1.0 / (1.0 / f - 1.0 / physics.optics.focus_mm);
+  const double pitch_mm = physics.sensor.pixel_pitch_um * 1e-3;
+  for (double d : {1500.0, 2000.0, 3000.0}) {
+    const double v_d = 1.0 / (1.0 / f - 1.0 / d);
+    const double coc_px = aperture * std::fabs(v_d - v_s) / v_d / pitch_mm;
+    EXPECT_NEAR(scene.CircleOfConfusionPx(d), coc_px, 1e-9 * (1.0 + coc_px)) << d;
+    double major = 0, minor = 0, major_sharp = 0, minor_sharp = 0;
+    Moments(scene.RenderSignal(Pose(d, 0, 0), 100.0, 0.01), &major, &minor);
+    Moments(sharp.RenderSignal(Pose(d, 0, 0), 100.0, 0.01), &major_sharp, &minor_sharp);
+    EXPECT_NEAR(major - major_sharp, coc_px * coc_px / 16.0, 2e-3) << d;
+    EXPECT_NEAR(minor - minor_sharp, coc_px * coc_px / 16.0, 2e-3) << d;
+  }
+  // The figure: a 16 mm f/8 lens focused at 2 m blurs 1.5 m and 3 m by ~one 5.3 um pixel.
+  EXPECT_NEAR(scene.CircleOfConfusionPx(1500.0), 1.01, 0.01);
+  EXPECT_NEAR(scene.CircleOfConfusionPx(3000.0), 1.01, 0.01);
+  EXPECT_EQ(scene.CircleOfConfusionPx(2000.0), 0.0);
+  EXPECT_EQ(sharp.CircleOfConfusionPx(1500.0), 0.0);
 }
 
 TEST(Scene, TotalSignalFallsAsInverseSquareOfDistance) {

@@ -1,0 +1,64 @@
+#pragma once
+// Calibration health: does a measurement still see the optics the calibration saw? The blob's
+// blur is measured on every frame (Features::blur_var_px2: 2nd and 4th cumulants along its axes,
+// independent of d and theta) and compared with the blur the calibration frames showed at the
+// estimated distance. A touched focus ring, a lens swap or a temperature change moves the blur;
+// the geometric (size) model then reads the wrong distance, silently. docs/estimator.md.
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace irdist {
+
+struct CalibrationSample;  // fit.h
+struct CalibrationModel;   // fit.h
+struct Features;           // features.h
+
+// The calibrated blur: blur_var(u) = c0 + c1 u + c2 u^2, u = 1000 mm / d (the thin lens's defocus
+// variance is quadratic in u), and the per-frame sd of the measurement around it,
+// sd(d) = noise_at_1m (d / 1000 mm)^noise_exponent, both from the calibration frames.
+struct BlurCalibration {
+  double c0_px2 = 0.0, c1_px2 = 0.0, c2_px2 = 0.0;
+  double noise_at_1m_px2 = 0.0;
+  double noise_exponent = 0.0;
+  int frames = 0;
+  bool fitted() const { return noise_at_1m_px2 > 0.0; }
+  double BlurVarPx2(double d_mm) const;
+  double NoisePx2(double d_mm) const;
+};
+
+// Fits it to the usable measurement frames of the samples (those with a measured blur); not
+// fitted (noise 0) with fewer than 12 such frames.
+BlurCalibration FitBlurCalibration(const std::vector<CalibrationSample>& samples);
+
+struct HealthOptions {
+  // Flag when the mean measured blur variance departs from the calibrated one by more than
+  // z_limit standard errors (per-frame sd / sqrt(frames)) AND by more than
+  // min_sigma_change of the blur's sigma (the second keeps a long bracket from flagging changes
+  // too small to matter). Chosen on the virtual rig (docs/estimator.md): 0 false flags over the
+  // three validation recipes, a 15% blur change flagged in >= 95% of estimates.
+  double z_limit = 5.0;
+  double min_sigma_change = 0.05;
+};
+
+struct HealthCheck {
+  bool assessed = false;         // a calibrated blur and at least one frame with a measured blur
+  int frames = 0;                // frames with a measured blur
+  double blur_var_px2 = 0.0;     // their mean measured blur variance
+  double calibrated_px2 = 0.0;   // the calibrated blur variance at the estimated distance
+  double sigma_change = 0.0;     // relative change of the blur's sigma (pixel area removed)
+  double z = 0.0;                // departure in standard errors
+  bool flagged = false;
+  // "ok", "-" (not assessed), "blur_larger" or "blur_smaller" (the estimates.csv health column).
+  const char* Label() const;
+  // What to do when flagged ("" when not): refocus to the calibration's focus, or recalibrate.
+  std::string Advice() const;
+};
+
+// The health of one estimate at distance d_mm from its measurement frames.
+HealthCheck CheckHealth(const CalibrationModel& model, double d_mm,
+                        const std::vector<const Features*>& frames,
+                        const HealthOptions& options = HealthOptions());
+
+}  // namespace irdist
