@@ -3,6 +3,7 @@
 // the sweep) and `irdist station-test` (the conformance suite of docs/station-protocol.md).
 
 #include "app/command_args.h"
+#include "app/errors.h"
 
 namespace irdist {
 
