@@ -269,9 +269,9 @@ TEST_F(Measure, ValidateWritesThePositionBesideItsTruth) {
     std::vector<std::string> c;
     std::stringstream fields(line);
     for (std::string f; std::getline(fields, f, ',');) c.push_back(f);
-    ASSERT_EQ(c.size(), 21u) << line;
-    const double x = std::stod(c[12]), y = std::stod(c[13]), z = std::stod(c[14]);
-    const double tx = std::stod(c[18]), ty = std::stod(c[19]), tz = std::stod(c[20]);
+    ASSERT_EQ(c.size(), 22u) << line;  // health at 12, then the 3D columns
+    const double x = std::stod(c[13]), y = std::stod(c[14]), z = std::stod(c[15]);
+    const double tx = std::stod(c[19]), ty = std::stod(c[20]), tz = std::stod(c[21]);
     EXPECT_EQ(tx, 40.0);
     EXPECT_EQ(ty, -30.0);
     const double range = std::sqrt(tx * tx + ty * ty + tz * tz);
