@@ -14,6 +14,50 @@
 
 namespace irdist {
 
+namespace {
+
+// The camera's TriggerSoftware command as the station's trigger role.
+class CameraSoftwareTrigger : public Trigger {
+ public:
+  explicit CameraSoftwareTrigger(AravisCamera& camera) : camera_(camera) {}
+  DeviceIdentity Identify() override {
+    const CameraIdentity id = camera_.Identity();
+    return {"camera_software", "camera", id.vendor, id.model, id.serial, id.firmware};
+  }
+  const char* CameraSource() const override { return "Software"; }
+  void Fire(int) override {
+    camera_.SoftwareTrigger();
+    ++fired_;
+  }
+  std::uint64_t Fired() const override { return fired_; }
+
+ private:
+  AravisCamera& camera_;
+  std::uint64_t fired_ = 0;
+};
+
+// Appends a bracket's frames to the recording (PNG and row each); returns their indices.
+std::vector<std::int64_t> AppendBracket(RecordingWriter& writer, const LivePose& pose,
+                                        const BracketResult& bracket, double measured_ma) {
+  const int size = static_cast<int>(bracket.frames.size());
+  std::vector<std::int64_t> indices;
+  for (const BracketFrame& frame : bracket.frames) {
+    FrameRecord record = RecordFromFrame(frame, size);
+    record.bracket_id = pose.bracket_id;
+    record.bias_ma_set = pose.bias_ma;
+    record.bias_ma_measured = measured_ma;
+    record.slide_mm = pose.slide_mm;
+    record.pan_deg = pose.pan_deg;
+    record.tilt_deg = pose.tilt_deg;
+    record.theta_deg = pose.theta_deg;
+    record.repeat = pose.repeat;
+    indices.push_back(writer.Append(frame.image, record).index);
+  }
+  return indices;
+}
+
+}  // namespace
+
 struct LiveRecorder::Impl {
   LiveCaptureSetup setup;
   std::unique_ptr<AravisCamera> camera;
@@ -27,6 +71,8 @@ struct LiveRecorder::Impl {
   BracketResult pending;
   double pending_measured_ma = 0.0;
   std::future<void> committing;  // the commit in flight
+  std::future<void> appended;    // its frames are in the recording
+  std::unique_ptr<CameraSoftwareTrigger> software_trigger;
 };
 
 RecordingState ReadRecordingState(const std::string& recording_dir) {
@@ -83,6 +129,7 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   options.trigger_source = setup.trigger_source;
   options.frame_timeout = std::chrono::milliseconds(setup.frame_timeout_ms);
   m.capture = std::make_unique<BracketCapture>(*m.camera, options);
+  m.software_trigger = std::make_unique<CameraSoftwareTrigger>(*m.camera);
 }
 
 LiveRecorder::~LiveRecorder() {
@@ -113,33 +160,37 @@ bool LiveRecorder::CommitPending(std::function<void()> on_committed) {
   m.has_pending = false;
   // The worker owns the bracket from here; the writer and the cache are only touched by it until
   // WaitCommitted().
+  auto appended = std::make_shared<std::promise<void>>();
+  m.appended = appended->get_future();
   auto task = [&m, pose = m.pending_pose, bracket = std::move(m.pending),
-               measured_ma = m.pending_measured_ma, done = std::move(on_committed)]() {
-    // PNG encoding and features yield to the capture path (camera, station, and on a virtual
-    // rig the renderer), which shares the host's cores: a nice of 10 for this thread only (Linux
-    // applies nice per thread). If the host refuses, the work only competes as before.
-    if (setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), 10) != 0) {
-      // Not an error: the commit still happens, at the default priority.
+               measured_ma = m.pending_measured_ma, done = std::move(on_committed), appended]() {
+    std::vector<std::int64_t> indices;
+    try {
+      indices = AppendBracket(*m.writer, pose, bracket, measured_ma);
+    } catch (...) {
+      appended->set_exception(std::current_exception());
+      throw;
     }
-    const int size = static_cast<int>(bracket.frames.size());
-    for (const BracketFrame& frame : bracket.frames) {
-      FrameRecord record = RecordFromFrame(frame, size);
-      record.bracket_id = pose.bracket_id;
-      record.bias_ma_set = pose.bias_ma;
-      record.bias_ma_measured = measured_ma;
-      record.slide_mm = pose.slide_mm;
-      record.pan_deg = pose.pan_deg;
-      record.tilt_deg = pose.tilt_deg;
-      record.theta_deg = pose.theta_deg;
-      record.repeat = pose.repeat;
-      const FrameRecord written = m.writer->Append(frame.image, record);
-      m.cache[written.index] = FrameFeatures(frame.image, m.bit_depth, m.setup.feature_options);
-    }
+    appended->set_value();
     if (done) done();
+    // Features yield to the capture path (camera, station, and on a virtual rig the renderer),
+    // which shares the host's cores: a nice of 10 for this thread only (Linux applies nice per
+    // thread). If the host refuses, the work only competes as before.
+    if (setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), 10) != 0) {
+      // Not an error: the features are still computed, at the default priority.
+    }
+    for (std::size_t i = 0; i < indices.size(); ++i) {
+      m.cache[indices[i]] =
+          FrameFeatures(bracket.frames[i].image, m.bit_depth, m.setup.feature_options);
+    }
   };
   m.pending = BracketResult{};
   m.committing = std::async(std::launch::async, std::move(task));
   return true;
+}
+
+void LiveRecorder::WaitAppended() {
+  if (impl_->appended.valid()) impl_->appended.get();
 }
 
 void LiveRecorder::WaitCommitted() {
@@ -160,5 +211,7 @@ void LiveRecorder::Close(bool cut) {
 std::string LiveRecorder::StatsReport() const { return impl_->capture->stats().BriefReport(); }
 
 const FeatureMap& LiveRecorder::FeatureCache() const { return impl_->cache; }
+
+Trigger& LiveRecorder::CameraTrigger() { return *impl_->software_trigger; }
 
 }  // namespace irdist

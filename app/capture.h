@@ -12,6 +12,7 @@
 
 #include "app/offline.h"
 #include "estimator/features.h"
+#include "station/trigger.h"
 
 namespace irdist {
 
@@ -72,15 +73,22 @@ class LiveRecorder {
   void CaptureBracket(const LivePose& pose, const std::function<void(int)>& trigger,
                       const std::function<double()>& measure_current_ma);
   // Appends the pending bracket's frames to the recording and computes their features, on a
-  // worker thread (PNG encoding and features take ~0.1 s per frame; they overlap the next move and
-  // capture). Waits for the previous commit first. `on_committed` runs on the worker after the
-  // append. Returns whether there was a pending bracket.
+  // worker thread. Waits for the previous commit first. `on_committed` runs on the worker after the
+  // append. Returns whether there was a pending bracket. The caller waits for WaitAppended()
+  // before anything moves again: the frames are then in the recording (a kill -9 during the next
+  // move cannot lose them) while the features still overlap the move.
   bool CommitPending(std::function<void()> on_committed = {});
+  // Waits until the committed bracket's frames are appended (rows written). Rethrows the append's
+  // error (RecordingError).
+  void WaitAppended();
   // Waits for the commit in flight; rethrows its error (RecordingError).
   void WaitCommitted();
   void DropPending();
   void Close(bool cut);  // stops the stream, closes the recording as complete or cut
   std::string StatsReport() const;
+  // The camera's own software trigger (GenICam TriggerSoftware) as the station's trigger role,
+  // for `station.roles.trigger: camera_software` (camera.trigger_source: Software).
+  Trigger& CameraTrigger();
   const FeatureMap& FeatureCache() const;  // after WaitCommitted()
 
  private:

@@ -8,6 +8,7 @@
 
 #include "app/recipe.h"
 #include "app/run.h"
+#include "app/station_cmd.h"
 #include "app/tools.h"
 #include "station/plan.h"
 
@@ -38,6 +39,10 @@ constexpr SubcommandInfo kSubcommands[] = {
      "the virtual rig (sim/)"},
     {"devices", "List the cameras and stations irdist can see",
      "camera discovery (acquisition/) and the station client (station/)"},
+    {"station", "Put the station at a pose and current by hand (move, current, off, home, status)",
+     "the station composition (station/)"},
+    {"station-test", "Check a station board against docs/station-protocol.md (pass/fail table)",
+     "the station conformance suite (station/)"},
 };
 
 const SubcommandInfo& Info(const std::string& name) {
@@ -95,6 +100,27 @@ void PrintPlan(const Recipe& recipe, const Plan& plan, int show_poses, std::ostr
   }
 }
 
+// `irdist station` and `irdist station-test`.
+void AddStationCommands(CLI::App& app, const Handlers& handlers, CommandIo io,
+                        StationArgs* station, StationTestArgs* test,
+                        std::vector<std::pair<CLI::App*, std::function<void()>>>* table) {
+  CLI::App* sub = app.add_subcommand("station", Info("station").summary);
+  sub->add_option("--rig", station->rig, "Rig name or rig file")->capture_default_str();
+  sub->add_option("action", station->action, "move | current | off | home | status")
+      ->required()
+      ->check(CLI::IsMember({"move", "current", "off", "home", "status"}));
+  sub->add_option("values", station->values,
+                  "move: SLIDE_MM PAN_DEG TILT_DEG; current: MA");
+  sub->add_option("--port", station->ports,
+                  "NAME=PATH: the port of station device NAME (default: the rig file's, or the "
+                  "running 'irdist sim' of a virtual rig)");
+  table->emplace_back(sub, [=] { Invoke(handlers.station, "station", *station, io); });
+  sub = app.add_subcommand("station-test", Info("station-test").summary);
+  sub->add_option("port", test->port, "Serial port of the board (e.g. /dev/ttyUSB0)")->required();
+  sub->add_option("--baud", test->baud, "Serial speed, bit/s")->capture_default_str();
+  table->emplace_back(sub, [=] { Invoke(handlers.station_test, "station-test", *test, io); });
+}
+
 }  // namespace
 
 std::vector<std::string> SubcommandNames() {
@@ -122,6 +148,8 @@ Handlers DefaultHandlers() {
   handlers.check = RunCheck;
   handlers.sim = RunSim;
   handlers.devices = RunDevices;
+  handlers.station = RunStation;
+  handlers.station_test = RunStationTest;
   return handlers;
 }
 
@@ -153,6 +181,8 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   PlanArgs plan;
   SimArgs sim;
   DevicesArgs devices;
+  StationArgs station;
+  StationTestArgs station_test;
 
   std::vector<std::pair<CLI::App*, std::function<void()>>> table;
   auto add = [&](const char* name) { return app.add_subcommand(name, Info(name).summary); };
@@ -224,6 +254,7 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
   sub->add_flag("--discover", devices.discover,
                 "Also discover GigE/USB cameras (broadcasts on every network interface)");
   table.emplace_back(sub, [&] { Invoke(handlers.devices, "devices", devices, io); });
+  AddStationCommands(app, handlers, io, &station, &station_test, &table);
 
   try {
     app.parse(argc, argv);

@@ -69,6 +69,20 @@ struct SimArgs {
   double time_scale = 0.0;      // --time-scale (0 = rig file's)
 };
 
+// `irdist station --rig RIG ACTION [VALUES]`: drive the station by hand (app/station_cmd.cc).
+struct StationArgs {
+  std::string rig = "virtual";      // rig name or rig file
+  std::string action;               // move | current | off | home | status
+  std::vector<double> values;       // move: SLIDE_MM PAN_DEG TILT_DEG; current: MA
+  std::vector<std::string> ports;   // --port NAME=PATH (overrides the rig file / a running sim)
+};
+
+// `irdist station-test PORT`: the conformance suite of docs/station-protocol.md against a board.
+struct StationTestArgs {
+  std::string port;
+  int baud = 115200;
+};
+
 struct DevicesArgs {
   bool discover = false;  // --discover: GigE/USB camera discovery (broadcasts on every interface)
 };
@@ -84,6 +98,8 @@ struct Handlers {
   std::function<void(const PlanArgs&, CommandIo)> plan;
   std::function<void(const SimArgs&, CommandIo)> sim;
   std::function<void(const DevicesArgs&, CommandIo)> devices;
+  std::function<void(const StationArgs&, CommandIo)> station;
+  std::function<void(const StationTestArgs&, CommandIo)> station_test;
 };
 
 // The handlers of this build: every command (app/run.h, app/tools.h).

@@ -118,37 +118,220 @@ AxisMotion ReadAxisMotion(const MapReader& motion, const std::string& key, AxisM
   return axis;
 }
 
+StationLimits ReadLimits(const MapReader& map, StationLimits limits_in) {
+  if (!map.Has("limits")) return limits_in;
+  const MapReader limits(map.Get("limits"), map.File(), "station.limits",
+                         {"slide_mm", "pan_deg", "tilt_deg", "bias_ma"});
+  StationLimits out;
+  out.slide_mm = ReadRange(limits, "slide_mm", limits_in.slide_mm);
+  out.pan_deg = ReadRange(limits, "pan_deg", limits_in.pan_deg);
+  out.tilt_deg = ReadRange(limits, "tilt_deg", limits_in.tilt_deg);
+  out.bias_ma = ReadRange(limits, "bias_ma", limits_in.bias_ma);
+  return out;
+}
+
+MotionModel ReadMotionModel(const MapReader& map, MotionModel model) {
+  if (!map.Has("motion")) return model;
+  const MapReader motion(
+      map.Get("motion"), map.File(), "station.motion",
+      {"slide", "pan", "tilt", "axes_move_together", "frame_overhead_ms", "pose_overhead_ms"});
+  model.slide = ReadAxisMotion(motion, "slide", model.slide);
+  model.pan = ReadAxisMotion(motion, "pan", model.pan);
+  model.tilt = ReadAxisMotion(motion, "tilt", model.tilt);
+  model.axes_move_together = motion.Boolean("axes_move_together", model.axes_move_together);
+  model.frame_overhead_ms = NonNegative(motion, "frame_overhead_ms", model.frame_overhead_ms);
+  model.pose_overhead_ms = NonNegative(motion, "pose_overhead_ms", model.pose_overhead_ms);
+  return model;
+}
+
+// A legacy `station: {port, baud, reply_timeout_ms}` is one irdist station filling every role.
+StationSpec LegacyComposition(const StationConfig& station, const std::string& file, int line) {
+  StationSpec spec;
+  DeviceSpec device;
+  device.name = kLegacyStationDevice;
+  device.driver = "irdist_station";
+  device.port = station.port;
+  device.baud = station.baud;
+  device.reply_timeout_ms = station.reply_timeout_ms;
+  device.file = file;
+  device.line = line;
+  spec.devices.push_back(device);
+  spec.motion = {device.name};
+  spec.source = device.name;
+  spec.trigger = device.name;
+  return spec;
+}
+
+std::map<Axis, std::string> ReadAxes(const YAML::Node& node, const std::string& file,
+                                     const std::string& context) {
+  const MapReader map(node, file, context, {"slide", "pan", "tilt"});
+  std::map<Axis, std::string> axes;
+  for (Axis axis : {Axis::kSlide, Axis::kPan, Axis::kTilt}) {
+    if (map.Has(AxisName(axis))) {
+      axes[axis] = yaml_fields::AsString(map.Get(AxisName(axis)), file, context);
+    }
+  }
+  return axes;
+}
+
+// One `station.devices.<name>:` entry; the driver's own keys are checked by its validate().
+DeviceSpec ReadDevice(const std::string& name, const YAML::Node& node, const std::string& file) {
+  const std::string context = "station.devices." + name;
+  if (!node.IsMap()) Fail(file, node.Mark(), context + " must be a map (driver, port, ...)");
+  DeviceSpec device;
+  device.name = name;
+  device.file = file;
+  device.line = node.Mark().line + 1;
+  for (const auto& entry : node) {
+    const std::string key = entry.first.as<std::string>();
+    const YAML::Node& value = entry.second;
+    const std::string what = context + "." + key;
+    if (key == "driver") {
+      device.driver = yaml_fields::AsString(value, file, what);
+    } else if (key == "port") {
+      device.port = yaml_fields::AsString(value, file, what);
+    } else if (key == "baud") {
+      device.baud = yaml_fields::AsInteger(value, file, what);
+    } else if (key == "reply_timeout_ms") {
+      device.reply_timeout_ms = yaml_fields::AsInteger(value, file, what);
+    } else if (key == "axes") {
+      device.axes = ReadAxes(value, file, what);
+    } else {
+      if (!value.IsScalar()) Fail(file, value.Mark(), what + " must be a single value");
+      device.settings[key] = {value.Scalar(), value.Mark().line + 1};
+    }
+  }
+  const DriverInfo* info = FindDriver(device.driver);
+  if (info == nullptr) {
+    Fail(file, node.Mark(),
+         context + ".driver '" + device.driver + "' is not a known driver; valid: " +
+             yaml_fields::JoinNames(DriverNames()));
+  }
+  if (device.baud < 0 || device.reply_timeout_ms < 0) {
+    Fail(file, node.Mark(), context + ": baud and reply_timeout_ms must be > 0");
+  }
+  if (info->validate) info->validate(device);
+  return device;
+}
+
+std::string DeviceName(const YAML::Node& node, const StationSpec& spec, const std::string& file,
+                       const std::string& role) {
+  const std::string name = yaml_fields::AsString(node, file, "station.roles." + role);
+  if (spec.Find(name) == nullptr && !(role == "trigger" && name == kCameraSoftwareTrigger)) {
+    std::vector<std::string> names;
+    for (const DeviceSpec& d : spec.devices) names.push_back(d.name);
+    Fail(file, node.Mark(),
+         "station.roles." + role + " names '" + name + "', which is not in station.devices (" +
+             yaml_fields::JoinNames(names) + ")" +
+             (role == "trigger" ? std::string(" nor camera_software") : std::string()));
+  }
+  return name;
+}
+
+void ReadRoles(const YAML::Node& node, const std::string& file, StationSpec* spec) {
+  const MapReader roles(node, file, "station.roles", {"motion", "source", "trigger"});
+  const YAML::Node motion = roles.Require("motion");
+  if (motion.IsSequence()) {
+    for (const YAML::Node& m : motion) spec->motion.push_back(DeviceName(m, *spec, file, "motion"));
+  } else {
+    spec->motion.push_back(DeviceName(motion, *spec, file, "motion"));
+  }
+  spec->source = DeviceName(roles.Require("source"), *spec, file, "source");
+  spec->trigger = DeviceName(roles.Require("trigger"), *spec, file, "trigger");
+}
+
+StationSpec ReadComposition(const MapReader& map) {
+  StationSpec spec;
+  const YAML::Node devices = map.Require("devices");
+  if (!devices.IsMap() || devices.size() == 0) {
+    Fail(map.File(), devices.Mark(), "station.devices must map device names to their entries");
+  }
+  for (const auto& entry : devices) {
+    spec.devices.push_back(ReadDevice(entry.first.as<std::string>(), entry.second, map.File()));
+  }
+  ReadRoles(map.Require("roles"), map.File(), &spec);
+  spec.current_tolerance_ma =
+      Positive(map, "current_tolerance_ma", spec.current_tolerance_ma);
+  return spec;
+}
+
 StationConfig ReadStation(const YAML::Node& node, const std::string& file) {
   const MapReader map(node, file, "station",
-                      {"port", "baud", "reply_timeout_ms", "limits", "motion"});
+                      {"port", "baud", "reply_timeout_ms", "limits", "motion", "roles", "devices",
+                       "current_tolerance_ma"});
   StationConfig station;
+  station.limits = ReadLimits(map, station.limits);
+  station.motion = ReadMotionModel(map, station.motion);
+  station.composed = map.Has("roles") || map.Has("devices");
+  if (station.composed) {
+    for (const char* key : {"port", "baud", "reply_timeout_ms"}) {
+      if (map.Has(key)) {
+        Fail(file, map.Get(key).Mark(),
+             std::string("station.") + key +
+                 " belongs to a device under station.devices when roles/devices are used");
+      }
+    }
+    station.composition = ReadComposition(map);
+    return station;
+  }
   station.port = map.String("port", station.port);
   station.baud = AtLeast(map, "baud", station.baud, 1);
   station.reply_timeout_ms = AtLeast(map, "reply_timeout_ms", station.reply_timeout_ms, 1);
-  if (map.Has("limits")) {
-    const MapReader limits(map.Get("limits"), file, "station.limits",
-                           {"slide_mm", "pan_deg", "tilt_deg", "bias_ma"});
-    station.limits.slide_mm = ReadRange(limits, "slide_mm", station.limits.slide_mm);
-    station.limits.pan_deg = ReadRange(limits, "pan_deg", station.limits.pan_deg);
-    station.limits.tilt_deg = ReadRange(limits, "tilt_deg", station.limits.tilt_deg);
-    station.limits.bias_ma = ReadRange(limits, "bias_ma", station.limits.bias_ma);
-  }
-  if (map.Has("motion")) {
-    const MapReader motion(
-        map.Get("motion"), file, "station.motion",
-        {"slide", "pan", "tilt", "axes_move_together", "frame_overhead_ms", "pose_overhead_ms"});
-    MotionModel& model = station.motion;
-    model.slide = ReadAxisMotion(motion, "slide", model.slide);
-    model.pan = ReadAxisMotion(motion, "pan", model.pan);
-    model.tilt = ReadAxisMotion(motion, "tilt", model.tilt);
-    model.axes_move_together = motion.Boolean("axes_move_together", model.axes_move_together);
-    model.frame_overhead_ms = NonNegative(motion, "frame_overhead_ms", model.frame_overhead_ms);
-    model.pose_overhead_ms = NonNegative(motion, "pose_overhead_ms", model.pose_overhead_ms);
-  }
+  station.composition = LegacyComposition(station, file, map.Mark().line + 1);
+  station.composition.current_tolerance_ma =
+      Positive(map, "current_tolerance_ma", station.composition.current_tolerance_ma);
   return station;
 }
 
+void CheckHardwarePorts(const Rig& rig, const MapReader& map) {
+  if (!rig.station.composed && rig.station.port == "auto") {
+    const YAML::Node station = map.Get("station");
+    const YAML::Node port = station ? station["port"] : YAML::Node();
+    Fail(rig.path, port ? port.Mark() : map.Mark(),
+         "station.port must name the serial device on a hardware rig (e.g. /dev/ttyUSB0), "
+         "not auto");
+  }
+  for (const DeviceSpec& d : rig.station.composition.devices) {
+    if (d.port == "auto") {
+      throw RecipeError(rig.path, d.line, 0,
+                        "station.devices." + d.name +
+                            ".port must name the serial device on a hardware rig (e.g. "
+                            "/dev/ttyUSB0), not auto");
+    }
+  }
+}
+
 }  // namespace
+
+void CheckTriggerSettings(const Rig& rig) {
+  const std::string& trigger = rig.station.composition.trigger;
+  const std::string& source = rig.camera.trigger_source;
+  if (trigger == kCameraSoftwareTrigger) {
+    if (source != "Software") {
+      throw RecipeError(rig.path, 0, 0,
+                        "station.roles.trigger is camera_software but camera.trigger_source is '" +
+                            source + "'; set camera.trigger_source: Software");
+    }
+    return;
+  }
+  const DeviceSpec* device = rig.station.composition.Find(trigger);
+  if (device != nullptr && device->driver == "irdist_station") {
+    if (source.rfind("Line", 0) != 0) {
+      throw RecipeError(rig.path, device->line, 0,
+                        "the trigger is the irdist station's output (device '" + trigger +
+                            "'), wired to a camera input line, but camera.trigger_source is '" +
+                            source + "'; set it to the line it is wired to (e.g. Line1), or use "
+                            "station.roles.trigger: camera_software with trigger_source: "
+                            "Software");
+    }
+    return;
+  }
+  throw RecipeError(rig.path, device != nullptr ? device->line : 0, 0,
+                    "station.roles.trigger '" + trigger +
+                        "' cannot trigger the camera; use camera_software (with "
+                        "camera.trigger_source: Software) or an irdist_station device wired to a "
+                        "camera line (camera.trigger_source: Line1)");
+}
 
 bool CameraConfig::IsValid(std::string* why) const {
   if (id.empty()) return Fail(why, "camera.id must not be empty (use auto)");
@@ -174,6 +357,13 @@ bool StationLimits::IsValid(std::string* why) const {
 }
 
 bool StationConfig::IsValid(std::string* why) const {
+  for (const DeviceSpec& d : composition.devices) {
+    if (d.port.empty()) return Fail(why, "station.devices." + d.name + ".port must not be empty");
+  }
+  if (!(composition.current_tolerance_ma > 0.0)) {
+    return Fail(why, "station.current_tolerance_ma must be > 0");
+  }
+  if (composed) return limits.IsValid(why) && motion.IsValid(why);
   if (port.empty()) return Fail(why, "station.port must not be empty (use auto)");
   if (baud < 1) return Fail(why, "station.baud must be >= 1");
   if (reply_timeout_ms < 1) return Fail(why, "station.reply_timeout_ms must be >= 1");
@@ -192,7 +382,11 @@ Rig ParseRig(const std::string& text, const std::string& file) {
   OneOf(map, "kind", kind, {"virtual", "hardware"});
   rig.kind = kind == "virtual" ? RigKind::kVirtual : RigKind::kHardware;
   if (map.Has("camera")) rig.camera = ReadCamera(map.Get("camera"), file);
-  if (map.Has("station")) rig.station = ReadStation(map.Get("station"), file);
+  if (map.Has("station")) {
+    rig.station = ReadStation(map.Get("station"), file);
+  } else {
+    rig.station.composition = LegacyComposition(rig.station, file, 0);
+  }
   rig.station.motion.readout_ms = rig.camera.readout_ms;
   rig.has_virtual_section = map.Has("virtual");
   if (rig.kind == RigKind::kHardware) {
@@ -200,16 +394,11 @@ Rig ParseRig(const std::string& text, const std::string& file) {
       Fail(file, map.Get("virtual").Mark(),
            "a virtual: section belongs to a rig of kind: virtual; remove it or set kind: virtual");
     }
-    if (rig.station.port == "auto") {
-      const YAML::Node station = map.Get("station");
-      const YAML::Node port = station ? station["port"] : YAML::Node();
-      Fail(file, port ? port.Mark() : map.Mark(),
-           "station.port must name the serial device on a hardware rig (e.g. /dev/ttyUSB0), "
-           "not auto");
-    }
+    CheckHardwarePorts(rig, map);
   }
   std::string why;
   if (!rig.IsValid(&why)) Fail(file, map.Mark(), why);
+  CheckTriggerSettings(rig);
   return rig;
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "station/plan.h"
+#include "station/station.h"
 
 namespace irdist {
 
@@ -48,14 +49,28 @@ struct StationLimits {
   bool IsValid(std::string* why) const;
 };
 
+// The `station:` section. Two spellings:
+// - legacy (one irdist station box): `port`, `baud`, `reply_timeout_ms`, `limits`, `motion`; it
+//   means one irdist_station device named "station" filling every role;
+// - composed: `roles: {motion: [names], source: name, trigger: camera_software | name}`,
+//   `devices: {<name>: {driver, port, baud, reply_timeout_ms, axes: {slide|pan|tilt: address},
+//   ...driver keys}}`, `current_tolerance_ma`, `limits`, `motion`.
+// Either way `composition` holds the devices and roles the run opens (station/station.h).
 struct StationConfig {
+  // Legacy spelling only (kept for the irdist box's rig files).
   std::string port = "auto";   // serial device (/dev/ttyUSB0); "auto": the virtual rig's pty
   int baud = 115200;           // serial speed, bit/s
   int reply_timeout_ms = 500;  // deadline of every reply
   StationLimits limits;
   MotionModel motion;  // optional `motion:` section; readout_ms comes from camera:
+  StationSpec composition;
+  bool composed = false;  // true when written with roles/devices
   bool IsValid(std::string* why) const;
 };
+
+// The name of the single device a legacy `station:` section stands for.
+constexpr const char* kLegacyStationDevice = "station";
+
 
 enum class RigKind { kVirtual, kHardware };
 
@@ -74,5 +89,10 @@ struct Rig {
 Rig LoadRig(const std::string& path);
 // Same, from text; `file` names it in errors.
 Rig ParseRig(const std::string& text, const std::string& file);
+
+// Plan-time check of the trigger against the camera: camera_software needs
+// camera.trigger_source Software; a device's trigger line needs a Line source. Throws RecipeError
+// naming the rig file and the fix.
+void CheckTriggerSettings(const Rig& rig);
 
 }  // namespace irdist

@@ -24,9 +24,9 @@
 #include "app/tools.h"
 #include "estimator/model_file.h"
 #include "sim/virtual_rig.h"
+#include "app/station_setup.h"
 #include "station/line_log.h"
-#include "station/serial_transport.h"
-#include "station/station_client.h"
+#include "station/station.h"
 #include "station/sweep.h"
 
 namespace irdist {
@@ -173,105 +173,100 @@ std::string KeepEarlierLog(const std::string& dir) {
   }
 }
 
-Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& plan,
-                const FeatureOptions& feature_options, CommandIo io) {
-  Recorded recorded;
-  const bool resume = !request.resume_dir.empty();
-  const std::string recipe_text = ReadText(recipe.path);
-
-  std::set<std::int64_t> done_ids;
-  if (resume) {
-    recorded.dir = request.resume_dir;
-    const std::string recording_dir = recorded.dir + "/recording";
-    if (!fs::exists(recording_dir + "/recording.yaml")) {
-      throw RunFolderError(recording_dir +
-                           ": no recording to resume (recording.yaml missing); "
-                           "pass the folder of a cut run to --resume.");
-    }
-    const RecordingState state = ReadRecordingState(recording_dir);
-    if (state.recipe_text != recipe_text) {
-      throw RecipeError(recipe.path, 0, 0,
-                        "differs from the recipe recorded in " + recording_dir +
-                            "/recording.yaml (recipe " + state.recipe_path +
-                            "); resume with the recipe the run started with.");
-    }
-    if (state.complete) {
-      io.err << "The recording in " << recording_dir << " is complete; nothing to resume.\n";
-      return recorded;
-    }
-    done_ids = state.complete_brackets;
-    io.err << "Resuming " << recorded.dir << ": " << done_ids.size() << " of " << plan.poses.size()
-           << " brackets already recorded.\n";
-  } else {
-    recorded.dir =
+// The run folder: a new one, or the cut run to resume (its complete brackets in `done_ids`).
+// Returns false when the recording to resume is complete already.
+bool PrepareRunFolder(const RunRequest& request, const Recipe& recipe, const Plan& plan,
+                      const std::string& recipe_text, CommandIo io, Recorded* recorded,
+                      std::set<std::int64_t>* done_ids) {
+  if (request.resume_dir.empty()) {
+    recorded->dir =
         request.out_dir.empty() ? recipe.output_dir + "-" + Timestamp() : request.out_dir;
-    if (fs::exists(recorded.dir + "/recording")) {
-      throw RunFolderError(recorded.dir +
+    if (fs::exists(recorded->dir + "/recording")) {
+      throw RunFolderError(recorded->dir +
                            "/recording exists already; choose another --out "
                            "folder, or continue that run with --resume " +
-                           recorded.dir + ".");
+                           recorded->dir + ".");
     }
+    fs::create_directories(recorded->dir);
+    return true;
   }
-  fs::create_directories(recorded.dir);
-  const std::vector<SweepPose> poses = SweepPoses(plan, done_ids);
+  recorded->dir = request.resume_dir;
+  const std::string recording_dir = recorded->dir + "/recording";
+  if (!fs::exists(recording_dir + "/recording.yaml")) {
+    throw RunFolderError(recording_dir +
+                         ": no recording to resume (recording.yaml missing); "
+                         "pass the folder of a cut run to --resume.");
+  }
+  const RecordingState state = ReadRecordingState(recording_dir);
+  if (state.recipe_text != recipe_text) {
+    throw RecipeError(recipe.path, 0, 0,
+                      "differs from the recipe recorded in " + recording_dir +
+                          "/recording.yaml (recipe " + state.recipe_path +
+                          "); resume with the recipe the run started with.");
+  }
+  if (state.complete) {
+    io.err << "The recording in " << recording_dir << " is complete; nothing to resume.\n";
+    return false;
+  }
+  *done_ids = state.complete_brackets;
+  io.err << "Resuming " << recorded->dir << ": " << done_ids->size() << " of "
+         << plan.poses.size() << " brackets already recorded.\n";
+  return true;
+}
 
-  // The rig: a virtual one is started here and stopped at the end, on every path (it is declared
-  // first, so the camera and the station link are closed before it).
+// Where the rig's devices and camera are: a virtual rig is started here (and stopped by the
+// caller's unique_ptr on every path); a hardware rig names them in its file.
+struct RigEndpoints {
   std::unique_ptr<sim::VirtualRig> virtual_rig;
   double time_scale = 1.0;
-  std::string port = recipe.rig.station.port;
-  LiveCaptureSetup setup;
-  setup.camera_name = recipe.rig.camera.id;
+  std::map<std::string, std::string> ports;  // device name -> port, overriding the rig file
+  std::string camera_name, camera_serial;
+};
+
+RigEndpoints StartRig(const RunRequest& request, const Recipe& recipe, CommandIo io) {
+  RigEndpoints rig;
+  rig.camera_name = recipe.rig.camera.id;
   if (recipe.rig.kind == RigKind::kVirtual) {
     sim::VirtualRigOverrides overrides;
     if (request.time_scale > 0.0) overrides.time_scale = request.time_scale;
-    virtual_rig = sim::VirtualRig::Start(recipe.rig_path, overrides);
-    const sim::VirtualRigInfo& info = virtual_rig->Info();
-    time_scale = info.time_scale;
-    port = info.station_port;
-    setup.camera_name = info.camera_address;
-    setup.camera_serial = info.serial;
+    rig.virtual_rig = sim::VirtualRig::Start(recipe.rig_path, overrides);
+    const sim::VirtualRigInfo& info = rig.virtual_rig->Info();
+    rig.time_scale = info.time_scale;
+    rig.ports = VirtualDevicePorts(recipe.rig, info);
+    rig.camera_name = info.camera_address;
+    rig.camera_serial = info.serial;
     if (!request.quiet)
-      io.err << "Virtual rig (time scale " << time_scale << "):\n" << info.BriefReport();
-  } else {
-    if (port == "auto") {
-      throw RecipeError(recipe.rig_path, 0, 0,
-                        "station.port is 'auto', which only a virtual rig can resolve; set it to "
-                        "the station's serial device (see 'irdist devices').");
-    }
-    // Discovery broadcasts on every network interface: a hardware run never starts it on its
-    // own, the rig file names the camera.
-    if (setup.camera_name == "auto") {
-      throw RecipeError(recipe.rig_path, 0, 0,
-                        "camera.id is 'auto', which only a virtual rig can resolve; set it to the "
-                        "camera's IP address, Aravis id or serial number ('irdist devices "
-                        "--discover' lists the cameras on the network).");
-    }
+      io.err << "Virtual rig (time scale " << rig.time_scale << "):\n" << info.BriefReport();
+    return rig;
   }
+  // Discovery broadcasts on every network interface: a hardware run never starts it on its own,
+  // the rig file names the camera.
+  if (rig.camera_name == "auto") {
+    throw RecipeError(recipe.rig_path, 0, 0,
+                      "camera.id is 'auto', which only a virtual rig can resolve; set it to the "
+                      "camera's IP address, Aravis id or serial number ('irdist devices "
+                      "--discover' lists the cameras on the network).");
+  }
+  return rig;
+}
 
-  const std::string earlier_log = KeepEarlierLog(recorded.dir);
-  if (!earlier_log.empty()) io.err << "Earlier station log kept as " << earlier_log << "\n";
-  LineLog log(recorded.dir + "/station.log");
-  SerialOptions serial_options;
-  serial_options.baud = static_cast<unsigned int>(recipe.rig.station.baud);
-  SerialTransport transport(port, serial_options, &log);
-  ClientOptions client_options;
-  client_options.reply_timeout = std::chrono::milliseconds(recipe.rig.station.reply_timeout_ms);
-  StationClient client(transport, client_options);
-  const StationIdentity identity = client.Identify();
-
+// The camera and recording settings of a live run.
+LiveCaptureSetup CaptureSetup(const Recipe& recipe, const RigEndpoints& rig,
+                              const std::string& trigger_source) {
+  LiveCaptureSetup setup;
+  const CameraConfig& camera = recipe.rig.camera;
+  setup.camera_name = rig.camera_name;
+  setup.camera_serial = rig.camera_serial;
+  setup.pixel_format = camera.pixel_format;
+  setup.trigger_source = trigger_source;
+  setup.trigger_activation = camera.trigger_activation;
+  setup.black_level = camera.black_level;
+  setup.packet_size = camera.packet_size;
+  setup.roi_offset_x = camera.roi_offset_x;
+  setup.roi_offset_y = camera.roi_offset_y;
+  setup.roi_width = camera.roi_width;
+  setup.roi_height = camera.roi_height;
   const BracketSpec& bracket = recipe.sweep.bracket;
-  setup.pixel_format = recipe.rig.camera.pixel_format;
-  // The virtual camera's frames come from the station's trigger output, on Line1.
-  setup.trigger_source =
-      recipe.rig.kind == RigKind::kVirtual ? "Line1" : recipe.rig.camera.trigger_source;
-  setup.trigger_activation = recipe.rig.camera.trigger_activation;
-  setup.black_level = recipe.rig.camera.black_level;
-  setup.packet_size = recipe.rig.camera.packet_size;
-  setup.roi_offset_x = recipe.rig.camera.roi_offset_x;
-  setup.roi_offset_y = recipe.rig.camera.roi_offset_y;
-  setup.roi_width = recipe.rig.camera.roi_width;
-  setup.roi_height = recipe.rig.camera.roi_height;
   setup.exposures_us.push_back(bracket.t_ref_ms * 1000.0);
   double longest_ms = bracket.t_ref_ms;
   for (double t : bracket.t_meas_ms) {
@@ -280,101 +275,160 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   }
   setup.interleave_reference = bracket.retake_reference;
   setup.frame_timeout_ms =
-      recipe.rig.camera.frame_timeout_ms + static_cast<int>(std::ceil(longest_ms / time_scale));
-  setup.recording_dir = recorded.dir + "/recording";
-  setup.resume = resume;
+      camera.frame_timeout_ms + static_cast<int>(std::ceil(longest_ms / rig.time_scale));
   setup.software_version = kSoftwareVersion;
-  setup.station_identity = identity.vendor + " " + identity.model + " serial " + identity.serial +
-                           " firmware " + identity.firmware + " boot " + identity.boot_id;
   setup.recipe_path = recipe.path;
-  setup.recipe_text = recipe_text;
   setup.rig_path = recipe.rig_path;
   setup.rig_text = ReadText(recipe.rig_path);
+  return setup;
+}
+
+// Commits each bracket as soon as the sweep confirms it (the station seen alive after it), before
+// anything moves again; a bracket whose pose is retaken, or that a failure interrupts, is dropped.
+// Drives a LiveRecorder; holds no camera or station of its own.
+class BracketCommitter {
+ public:
+  BracketCommitter(LiveRecorder& recorder, Progress& progress, int done_count)
+      : recorder_(recorder), progress_(progress), done_count_(done_count) {}
+  // A new capture for this pose begins: whatever is pending was never confirmed.
+  void Begin() { recorder_.DropPending(); }
+  void Captured(std::string what) { last_what_ = std::move(what); }
+  // The sweep confirmed the pose: append its frames and wait until they are in the recording.
+  void Confirmed() {
+    recorder_.CommitPending([this, what = last_what_]() {
+      ++done_count_;
+      progress_.Update(done_count_, what);
+    });
+    recorder_.WaitAppended();
+  }
+  // The sweep failed or stopped: the unconfirmed bracket is dropped, the commit in flight ends.
+  void Abandon(std::ostream& err) {
+    recorder_.DropPending();
+    try {
+      recorder_.WaitCommitted();
+    } catch (const Error& e) {
+      err << "\nirdist: also: " << e.what() << "\n";
+    }
+  }
+
+ private:
+  LiveRecorder& recorder_;
+  Progress& progress_;
+  std::atomic<int> done_count_;
+  std::string last_what_;
+};
+
+// The recipe's waits on top of the station's own settle. The move's wait starts now (settled);
+// the current's started when the sweep set it, before the move, so only what is left of it is
+// waited. Host waits are simulated waits divided by the time scale.
+void WaitSettle(const SettleSpec& settle, const Sweep::Transition& transition,
+                double time_scale) {
+  double wait_host_ms = 0.0;
+  if (transition.moved) wait_host_ms = settle.after_move_ms / time_scale;
+  if (transition.current_changed) {
+    const double since_change_ms = std::chrono::duration<double, std::milli>(
+                                       std::chrono::steady_clock::now() -
+                                       transition.current_changed_at)
+                                       .count();
+    wait_host_ms = std::max(wait_host_ms, settle.after_current_ms / time_scale - since_change_ms);
+  }
+  SleepHostMs(wait_host_ms);
+}
+
+LivePose LivePoseOf(const Pose& pose) {
+  LivePose live;
+  live.bracket_id = pose.index;
+  live.slide_mm = pose.slide_mm;
+  live.pan_deg = pose.pan_deg;
+  live.tilt_deg = pose.tilt_deg;
+  live.theta_deg = pose.theta_deg;
+  live.bias_ma = pose.bias_ma;
+  live.repeat = pose.repeat;
+  return live;
+}
+
+std::string PoseText(const Pose& pose) {
+  std::ostringstream what;
+  what << "d " << pose.slide_mm << " mm, theta " << pose.theta_deg << " deg, " << pose.bias_ma
+       << " mA";
+  return what.str();
+}
+
+// One live session's sweep: station, recorder and committer in place.
+struct LiveSession {
+  const Recipe& recipe;
+  const Plan& plan;
+  Station& station;
+  LiveRecorder& recorder;
+  BracketCommitter& committer;
+  double time_scale = 1.0;
+};
+
+SweepResult SweepAndCapture(LiveSession& s, const std::vector<SweepPose>& poses) {
+  Sweep sweep(s.station);
+  // Fires one frame (also the warm-up frame, -1) through the station's trigger role.
+  const auto fire = [&](int frame) { s.station.Fire(frame); };
+  // The measured current, checked against the set-point: an open IRED or a source in compliance
+  // stops the run (the bracket is not kept).
+  const auto measure = [&]() {
+    const SourceReading reading = s.station.MeasureCurrent();
+    s.station.CheckCurrent(reading);
+    return reading.current_ma;
+  };
+  const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int) {
+    const Pose& pose = s.plan.poses[static_cast<size_t>(sweep_pose.index)];
+    s.committer.Begin();
+    WaitSettle(s.recipe.sweep.settle, sweep.transition(), s.time_scale);
+    s.recorder.CaptureBracket(LivePoseOf(pose), fire, measure);
+    s.committer.Captured(PoseText(pose));
+  };
+  const ConfirmCallback confirmed = [&](const SweepPose&) { s.committer.Confirmed(); };
+  return sweep.Run(poses, at_pose, &StopRequested(), confirmed);
+}
+
+Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& plan,
+                const FeatureOptions& feature_options, CommandIo io) {
+  Recorded recorded;
+  const std::string recipe_text = ReadText(recipe.path);
+  std::set<std::int64_t> done_ids;
+  if (!PrepareRunFolder(request, recipe, plan, recipe_text, io, &recorded, &done_ids)) {
+    return recorded;
+  }
+  const std::vector<SweepPose> poses = SweepPoses(plan, done_ids);
+  // Declared first: the camera and the station links are closed before a virtual rig stops.
+  RigEndpoints rig = StartRig(request, recipe, io);
+  const std::string earlier_log = KeepEarlierLog(recorded.dir);
+  if (!earlier_log.empty()) io.err << "Earlier station log kept as " << earlier_log << "\n";
+  LineLog log(recorded.dir + "/station.log");
+  Station station(recipe.rig.station.composition, StationRunOptions(rig.ports, &log));
+  station.Identify();
+
+  LiveCaptureSetup setup = CaptureSetup(recipe, rig, RigTriggerSource(recipe.rig));
+  setup.recording_dir = recorded.dir + "/recording";
+  setup.resume = !request.resume_dir.empty();
+  setup.station_identity = station.IdentityBrief();
+  setup.recipe_text = recipe_text;
   setup.feature_options = feature_options;
   LiveRecorder recorder(setup);
-
-  // One pulse of the station's trigger output per frame (also for the warm-up frame, -1).
-  const auto fire = [&](int) {
-    client.Trigger(1, 100.0, 1000.0);
-    client.WaitTriggerDone();
-  };
-  const auto measure = [&]() { return client.MeasureCurrent(); };
+  if (recipe.rig.station.composition.trigger == kCameraSoftwareTrigger) {
+    station.SetCameraTrigger(&recorder.CameraTrigger());
+  }
 
   Progress progress(io.err, request.quiet, static_cast<int>(plan.poses.size()),
-                    plan.summary.total_s / time_scale);
-  int done_count = static_cast<int>(done_ids.size());
-  std::string last_what;
-  std::int64_t pending_index = -1;  // pose of the bracket held back by the recorder
-  const SettleSpec& settle = recipe.sweep.settle;
-
-  // A bracket is appended once the sweep has confirmed its pose (moved on to the next one, or
-  // returned): after a station reboot the sweep calls again for the same pose with attempt > 0,
-  // and the earlier capture is dropped unseen.
-  const auto commit = [&]() {
-    recorder.CommitPending([&progress, &done_count, what = last_what]() {
-      ++done_count;
-      progress.Update(done_count, what);
-    });
-  };
-  Sweep sweep(client);
-  const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int attempt) {
-    const Pose& pose = plan.poses[static_cast<size_t>(sweep_pose.index)];
-    // The pending bracket is confirmed when the sweep calls for another pose (even as a retake:
-    // a reboot seen while moving to pose i+1 retakes i+1, not i); a retake of its own pose
-    // means it is void.
-    if (attempt > 0 && pending_index == sweep_pose.index) {
-      recorder.DropPending();
-    } else {
-      commit();
-    }
-    pending_index = sweep_pose.index;
-    // The recipe's waits on top of the station's own settle. The move's wait starts now
-    // (settled); the current's started when the sweep set it, before the move, so only what is
-    // left of it is waited. Host waits are simulated waits divided by the time scale.
-    const Sweep::Transition& transition = sweep.transition();
-    double wait_host_ms = 0.0;
-    if (transition.moved) wait_host_ms = settle.after_move_ms / time_scale;
-    if (transition.current_changed) {
-      const double since_change_ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
-                                                    transition.current_changed_at)
-              .count();
-      wait_host_ms = std::max(wait_host_ms, settle.after_current_ms / time_scale - since_change_ms);
-    }
-    SleepHostMs(wait_host_ms);
-
-    LivePose live;
-    live.bracket_id = pose.index;
-    live.slide_mm = pose.slide_mm;
-    live.pan_deg = pose.pan_deg;
-    live.tilt_deg = pose.tilt_deg;
-    live.theta_deg = pose.theta_deg;
-    live.bias_ma = pose.bias_ma;
-    live.repeat = pose.repeat;
-    recorder.CaptureBracket(live, fire, measure);
-    std::ostringstream what;
-    what << "d " << pose.slide_mm << " mm, theta " << pose.theta_deg << " deg, " << pose.bias_ma
-         << " mA";
-    last_what = what.str();
-  };
-
+                    plan.summary.total_s / rig.time_scale);
+  BracketCommitter committer(recorder, progress, static_cast<int>(done_ids.size()));
+  LiveSession session{recipe, plan, station, recorder, committer, rig.time_scale};
   const auto t0 = std::chrono::steady_clock::now();
   SweepResult result;
   try {
-    result = sweep.Run(poses, at_pose, &StopRequested());
+    result = SweepAndCapture(session, poses);
   } catch (...) {
     // The pose in flight was not confirmed by the sweep: it is retaken on --resume.
-    recorder.DropPending();
-    try {
-      recorder.WaitCommitted();
-    } catch (const Error& e) {
-      io.err << "\nirdist: also: " << e.what() << "\n";
-    }
+    committer.Abandon(io.err);
     progress.Finish();
     recorder.Close(true);
     throw;
   }
-  commit();  // the sweep returned: its last pose is confirmed
   recorder.WaitCommitted();
   progress.Finish();
   const double wall_s =
@@ -384,11 +438,11 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   recorded.cache = recorder.FeatureCache();
   io.out << "Sweep: " << result.BriefReport() << "\n";
   io.out << "Capture: " << recorder.StatsReport() << "\n";
-  io.out << client.stats().BriefReport() << "\n";
   io.out << "Wall time " << FormatDuration(wall_s) << " for " << poses.size()
-         << " poses; plan estimate " << FormatDuration(plan.summary.total_s / time_scale)
-         << " and physical bound " << FormatDuration(plan.summary.physical_bound_s / time_scale)
-         << " for all " << plan.poses.size() << " poses at time scale " << time_scale << "\n";
+         << " poses; plan estimate " << FormatDuration(plan.summary.total_s / rig.time_scale)
+         << " and physical bound "
+         << FormatDuration(plan.summary.physical_bound_s / rig.time_scale) << " for all "
+         << plan.poses.size() << " poses at time scale " << rig.time_scale << "\n";
   return recorded;
 }
 

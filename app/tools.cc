@@ -1,4 +1,5 @@
 #include "app/tools.h"
+#include "app/station_setup.h"
 
 #include <signal.h>
 #include <unistd.h>
@@ -28,8 +29,6 @@ std::string SimStateDir() {
   return "/tmp";
 }
 
-namespace {
-
 std::string ResolveRig(const std::string& spec) {
   if (fs::exists(spec)) return spec;
   std::string found = FindRigFile(spec, fs::current_path().string());
@@ -40,6 +39,8 @@ std::string ResolveRig(const std::string& spec) {
   }
   return found;
 }
+
+namespace {
 
 // Removes a file when it goes out of scope.
 class RemoveOnExit {
@@ -58,6 +59,8 @@ class RemoveOnExit {
   std::string path_;
 };
 
+}  // namespace
+
 std::map<std::string, std::string> ReadFlatYaml(const std::string& path) {
   std::map<std::string, std::string> values;
   std::ifstream in(path);
@@ -73,7 +76,6 @@ std::map<std::string, std::string> ReadFlatYaml(const std::string& path) {
   return values;
 }
 
-}  // namespace
 
 void RunSim(const SimArgs& args, CommandIo io) {
   const std::string rig_path = ResolveRig(args.rig);
@@ -98,6 +100,9 @@ void RunSim(const SimArgs& args, CommandIo io) {
           << "\"\ncamera_id: \"" << info.camera_id << "\"\ncamera_address: \""
           << info.camera_address << "\"\nserial: \"" << info.serial << "\"\nstation_port: \""
           << info.station_port << "\"\ntime_scale: " << info.time_scale << "\n";
+    for (const auto& [name, port] : VirtualDevicePorts(rig, info)) {
+      state << "port." << name << ": \"" << port << "\"\n";
+    }
   }
   io.out << "camera: " << info.camera_id << " " << info.camera_address << " serial " << info.serial
          << "\n";

@@ -2,6 +2,7 @@
 // The smaller commands: `irdist sim` (run a virtual rig until Ctrl-C), `irdist devices` (what
 // irdist can connect to), and playback's `--show` window.
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,11 @@ void RunDevices(const DevicesArgs& args, CommandIo io);
 
 // Folder of the virtual rigs' state files.
 std::string SimStateDir();
+// The rig file a `--rig` value names: a path, or a name in recipes/rigs/. Throws RecipeError.
+std::string ResolveRig(const std::string& spec);
+// A state file's `key: value` lines (irdist sim writes `port.<device>: "<pty>"` for each station
+// device, and `station_port`).
+std::map<std::string, std::string> ReadFlatYaml(const std::string& path);
 
 // An OpenCV window stepping through the recording's frames with the ROI, the ellipse and the
 // bracket's estimate drawn (any key: next frame, q or Esc: quit). Throws CameraError-free

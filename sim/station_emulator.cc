@@ -8,6 +8,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <boost/crc.hpp>
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -17,6 +19,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <map>
 #include <mutex>
 #include <random>
 #include <sstream>
@@ -24,6 +27,7 @@
 #include <vector>
 
 #include "base/check.h"
+#include "base/yaml_fields.h"
 
 namespace irdist::sim {
 
@@ -54,15 +58,9 @@ bool AxisValid(const AxisOptions& a, const char* name, std::string* why) {
 // CRC-8, polynomial x^8 + x^2 + x + 1 (0x07), initial value 0, no reflection: the protocol's
 // per-line checksum (docs/station-protocol.md). CRC-8("123456789") = 0xF4.
 std::uint8_t Crc8(const std::string& text) {
-  std::uint8_t crc = 0;
-  for (unsigned char c : text) {
-    crc ^= c;
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = (crc & 0x80) ? static_cast<std::uint8_t>((crc << 1) ^ 0x07)
-                         : static_cast<std::uint8_t>(crc << 1);
-    }
-  }
-  return crc;
+  boost::crc_optimal<8, 0x07, 0x00, 0x00, false, false> crc;
+  crc.process_bytes(text.data(), text.size());
+  return static_cast<std::uint8_t>(crc.checksum());
 }
 
 // One axis moving along a trapezoidal (or triangular) profile from rest or from an initial speed
@@ -231,6 +229,10 @@ bool EmulatorOptions::IsValid(std::string* why) const {
     return fail("garble_rate, drop_rate, delay_rate and missed_pulse_rate must be in [0, 1]");
   }
   if (!(delay_s >= 0)) return fail("delay_s must be >= 0");
+  if (fault_at_move < 0) return fail("fault_at_move must be >= 0 (0 = off)");
+  if (!fault.empty() && fault != "refuse" && fault != "estop" && fault != "silent") {
+    return fail("fault must be empty, refuse, estop or silent");
+  }
   if (!stuck_axis.empty() && stuck_axis != "slide" && stuck_axis != "pan" &&
       stuck_axis != "tilt") {
     return fail("stuck_axis must be empty, slide, pan or tilt");
@@ -255,6 +257,10 @@ void ReadKey(const YAML::Node& node, const char* key, T* value, const std::strin
 
 void ReadAxis(const YAML::Node& node, AxisOptions* axis, const std::string& where) {
   if (!node) return;
+  // Strict: a misspelt key is an InputError with file:line, never silently ignored.
+  const yaml_fields::MapReader keys(node, where, "virtual.station axis",
+                                    {"min", "max", "home", "speed", "accel", "settle_s",
+                                     "power_on"});
   ReadKey(node, "min", &axis->min, where);
   ReadKey(node, "max", &axis->max, where);
   ReadKey(node, "home", &axis->home, where);
@@ -270,7 +276,7 @@ EmulatorOptions LoadEmulatorOptions(const std::string& rig_path) {
   EmulatorOptions options;
   YAML::Node root;
   try {
-    root = YAML::LoadFile(rig_path);
+    root = yaml_fields::Parse(yaml_fields::ReadFile(rig_path), rig_path);
   } catch (const YAML::Exception& e) {
     throw Error("cannot read rig file " + rig_path + ": " + e.what() +
                 "; fix the path or the YAML syntax");
@@ -307,6 +313,17 @@ EmulatorOptions LoadEmulatorOptions(const std::string& rig_path) {
   const YAML::Node virt = root["virtual"];
   const YAML::Node node = virt ? virt["station"] : YAML::Node();
   if (node) {
+    const yaml_fields::MapReader keys(
+        node, rig_path, "virtual.station",
+        {"slide", "pan", "tilt", "homing_speed_factor", "max_current_ma", "current_noise_ma",
+         "min_trigger_width_us", "min_trigger_period_us", "max_trigger_count", "reply_latency_s",
+         "seed", "garble_rate", "drop_rate", "delay_rate", "delay_s", "reboot_after_s",
+         "stuck_axis", "missed_pulse_rate", "open_circuit", "refuse_current_off_in_estop",
+         "fault_at_move", "fault"});
+    ReadKey(node, "fault_at_move", &options.fault_at_move, rig_path);
+    ReadKey(node, "fault", &options.fault, rig_path);
+    ReadKey(node, "open_circuit", &options.open_circuit, rig_path);
+    ReadKey(node, "refuse_current_off_in_estop", &options.refuse_current_off_in_estop, rig_path);
     ReadAxis(node["slide"], &options.slide, rig_path);
     ReadAxis(node["pan"], &options.pan, rig_path);
     ReadAxis(node["tilt"], &options.tilt, rig_path);
@@ -387,6 +404,8 @@ struct StationEmulator::Impl {
   double reboot_at_s = -1.0;  // scheduled reboot (simulated time), < 0 none
   double reboot_after_move_s = -1.0;
   std::uint64_t reboots = 0, lines = 0, dropped = 0;
+  int moves_started = 0;  // accepted MOVEs to a new target, for fault_at_move
+  bool silent = false;    // fault "silent": no reply any more
 
   Impl(World& w, EmulatorOptions o) : world(w), options(std::move(o)), rng(options.seed) {
     std::string why;
@@ -440,6 +459,20 @@ struct StationEmulator::Impl {
     pending.clear();
     reboot_at_s = -1.0;
     PublishPose();
+  }
+
+  // Immediate halt, IRED off, trigger aborted: the ESTOP command or the station's stop button.
+  void EStop(double now) {
+    for (Axis& a : axes) {
+      double v = 0.0;
+      a.profile.At(now - a.profile.start_s, &a.pos, &v);
+      a.profile = Profile::Make(a.pos, a.pos, now, 0.0, a.opt->speed, a.opt->accel);
+      a.moving = false;
+    }
+    trig_remaining = 0;
+    current_centi_ma = 0;
+    world.SetCurrent(0.0);
+    state = State::kEStop;
   }
 
   void Reboot(double now) {
@@ -549,17 +582,13 @@ struct StationEmulator::Impl {
   }
 
   // Executes one command (already unframed). Returns the reply body ("OK ..." or "ERR ...").
-  std::string Execute(const std::string& command, double now) {
-    const std::size_t space = command.find(' ');
-    const std::string header = Upper(command.substr(0, space));
-    const std::string args_text = space == std::string::npos ? "" : command.substr(space + 1);
-    const std::vector<std::string> args = SplitCommas(args_text);
-    auto fail = [&](int code) {
-      PushError(code);
-      const CommandError e = ErrorFor(code);
-      return "ERR " + std::to_string(code) + ",\"" + e.message + "\"";
-    };
-    auto ints = [&](std::size_t n, std::vector<long long>* out) -> int {
+  // One parsed command: its upper-case header, its comma-separated parameters and the time.
+  struct Request {
+    std::string header;
+    std::vector<std::string> args;
+    double now = 0.0;
+    // Exactly n integer parameters into *out; 0, or the error code (-109, -108, -104).
+    int Ints(std::size_t n, std::vector<long long>* out) const {
       if (args.size() < n) return -109;
       if (args.size() > n) return -108;
       for (const std::string& a : args) {
@@ -568,194 +597,263 @@ struct StationEmulator::Impl {
         out->push_back(v);
       }
       return 0;
-    };
-    auto no_args = [&]() { return args.empty() ? 0 : -108; };
-    char buf[160];
+    }
+    int NoArgs() const { return args.empty() ? 0 : -108; }
+  };
+  using Handler = std::string (Impl::*)(const Request&);
 
-    if (header == "*IDN?") {
-      if (int e = no_args()) return fail(e);
-      return "OK IRDIST,VSTATION,EMU0001,1.0," + boot_id;
+  // Queues the error and returns its ERR reply.
+  std::string Fail(int code) {
+    PushError(code);
+    const CommandError e = ErrorFor(code);
+    return "ERR " + std::to_string(code) + ",\"" + e.message + "\"";
+  }
+
+  // The command table of docs/station-protocol.md, section 5.
+  static const std::map<std::string, Handler>& Commands() {
+    static const std::map<std::string, Handler> table = {
+        {"*IDN?", &Impl::CmdIdnQuery},
+        {"*CLS", &Impl::CmdCls},
+        {"SYST:ERR?", &Impl::CmdSystErrQuery},
+        {"STAT?", &Impl::CmdStatQuery},
+        {"POS?", &Impl::CmdPosQuery},
+        {"LIM?", &Impl::CmdLimQuery},
+        {"LIM", &Impl::CmdLim},
+        {"HOME", &Impl::CmdHome},
+        {"MOVE", &Impl::CmdMove},
+        {"STOP", &Impl::CmdStop},
+        {"ESTOP", &Impl::CmdEstop},
+        {"ESTOP:CLR", &Impl::CmdEstopClr},
+        {"SOUR:CURR", &Impl::CmdSourCurr},
+        {"SOUR:CURR?", &Impl::CmdSourCurrQuery},
+        {"MEAS:CURR?", &Impl::CmdMeasCurrQuery},
+        {"TRIG:COUN", &Impl::CmdTrigSetting},
+        {"TRIG:WIDT", &Impl::CmdTrigSetting},
+        {"TRIG:PER", &Impl::CmdTrigSetting},
+        {"TRIG?", &Impl::CmdTrigQuery},
+        {"TRIG:FIRE", &Impl::CmdTrigFire},
+        {"TRIG:ABOR", &Impl::CmdTrigAbor},
+        {"TRIG:PULS?", &Impl::CmdTrigPulsQuery},
+    };
+    return table;
+  }
+
+  std::string Execute(const std::string& command, double now) {
+    const std::size_t space = command.find(' ');
+    Request r;
+    r.header = Upper(command.substr(0, space));
+    r.args = SplitCommas(space == std::string::npos ? "" : command.substr(space + 1));
+    r.now = now;
+    const auto it = Commands().find(r.header);
+    if (it == Commands().end()) return Fail(-113);
+    return (this->*(it->second))(r);
+  }
+
+  std::string CmdIdnQuery(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    return "OK IRDIST,VSTATION,EMU0001,1.0," + boot_id;
+  }
+
+  std::string CmdCls(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    errors.clear();
+    return "OK";
+  }
+
+  std::string CmdSystErrQuery(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    if (errors.empty()) return "OK 0,\"No error\"";
+    const CommandError e = errors.front();
+    errors.pop_front();
+    return "OK " + std::to_string(e.code) + ",\"" + e.message + "\"";
+  }
+
+  std::string CmdStatQuery(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    return std::string("OK ") + StateName(state) + "," + boot_id;
+  }
+
+  std::string CmdPosQuery(const Request& r) {
+    char buf[160];
+    if (int e = r.NoArgs()) return Fail(e);
+    std::snprintf(buf, sizeof(buf), "OK %lld,%lld,%lld", Reported(kSlide, r.now),
+                  Reported(kPan, r.now), Reported(kTilt, r.now));
+    return buf;
+  }
+
+  std::string CmdLimQuery(const Request& r) {
+    char buf[160];
+    if (int e = r.NoArgs()) return Fail(e);
+    std::snprintf(buf, sizeof(buf), "OK %lld,%lld,%lld,%lld,%lld,%lld", Centi(soft[0].first),
+                  Centi(soft[0].second), Centi(soft[1].first), Centi(soft[1].second),
+                  Centi(soft[2].first), Centi(soft[2].second));
+    return buf;
+  }
+
+  std::string CmdLim(const Request& r) {
+    if (r.args.size() != 3) return Fail(r.args.size() < 3 ? -109 : -108);
+    const std::string axis = Upper(r.args[0]);
+    int i = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (axis == kAxisNames[k]) i = k;
     }
-    if (header == "*CLS") {
-      if (int e = no_args()) return fail(e);
-      errors.clear();
-      return "OK";
+    long long lo = 0, hi = 0;
+    if (i < 0 || !ParseInt(r.args[1], &lo) || !ParseInt(r.args[2], &hi)) return Fail(-104);
+    if (lo >= hi || lo < Centi(axes[i].opt->min) || hi > Centi(axes[i].opt->max)) {
+      return Fail(-222);
     }
-    if (header == "SYST:ERR?") {
-      if (int e = no_args()) return fail(e);
-      if (errors.empty()) return "OK 0,\"No error\"";
-      const CommandError e = errors.front();
-      errors.pop_front();
-      return "OK " + std::to_string(e.code) + ",\"" + e.message + "\"";
+    soft[i] = {lo / 100.0, hi / 100.0};
+    return "OK";
+  }
+
+  std::string CmdHome(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    if (state == State::kEStop) return Fail(202);
+    if (state == State::kMoving || state == State::kSettling) return Fail(-221);
+    if (state == State::kHoming) return "OK";  // already homing: idempotent
+    StartMotion({options.slide.home, options.pan.home, options.tilt.home},
+                options.homing_speed_factor, r.now);
+    state = State::kHoming;
+    return "OK";
+  }
+
+  std::string CmdMove(const Request& r) {
+    std::vector<long long> v;
+    if (int e = r.Ints(3, &v)) return Fail(e);
+    if (state == State::kEStop) return Fail(202);
+    if (state == State::kUnhomed || state == State::kHoming) return Fail(201);
+    for (int i = 0; i < 3; ++i) {
+      if (v[i] < Centi(soft[i].first) || v[i] > Centi(soft[i].second)) return Fail(-222);
     }
-    if (header == "STAT?") {
-      if (int e = no_args()) return fail(e);
-      return std::string("OK ") + StateName(state) + "," + boot_id;
+    const std::array<double, 3> target = {v[0] / 100.0, v[1] / 100.0, v[2] / 100.0};
+    if (state == State::kMoving || state == State::kSettling) {
+      bool same = true;
+      for (int i = 0; i < 3; ++i) same = same && Centi(axes[i].profile.to) == v[i];
+      return same ? "OK" : Fail(-221);  // same target again: idempotent
     }
-    if (header == "POS?") {
-      if (int e = no_args()) return fail(e);
-      std::snprintf(buf, sizeof(buf), "OK %lld,%lld,%lld", Reported(kSlide, now),
-                    Reported(kPan, now), Reported(kTilt, now));
-      return buf;
+    if (++moves_started == options.fault_at_move && options.fault == "refuse") {
+      return Fail(-222);
     }
-    if (header == "LIM?") {
-      if (int e = no_args()) return fail(e);
-      std::snprintf(buf, sizeof(buf), "OK %lld,%lld,%lld,%lld,%lld,%lld", Centi(soft[0].first),
-                    Centi(soft[0].second), Centi(soft[1].first), Centi(soft[1].second),
-                    Centi(soft[2].first), Centi(soft[2].second));
-      return buf;
+    StartMotion(target, 1.0, r.now);
+    state = State::kMoving;
+    homing_ok = true;
+    if (moves_started == options.fault_at_move) {
+      if (options.fault == "estop") EStop(r.now);
+      if (options.fault == "silent") silent = true;
     }
-    if (header == "LIM") {
-      if (args.size() != 3) return fail(args.size() < 3 ? -109 : -108);
-      const std::string axis = Upper(args[0]);
-      int i = -1;
-      for (int k = 0; k < 3; ++k) {
-        if (axis == kAxisNames[k]) i = k;
-      }
-      long long lo = 0, hi = 0;
-      if (i < 0 || !ParseInt(args[1], &lo) || !ParseInt(args[2], &hi)) return fail(-104);
-      if (lo >= hi || lo < Centi(axes[i].opt->min) || hi > Centi(axes[i].opt->max)) {
-        return fail(-222);
-      }
-      soft[i] = {lo / 100.0, hi / 100.0};
-      return "OK";
+    if (reboot_after_move_s >= 0.0) {
+      reboot_at_s = r.now + reboot_after_move_s;
+      reboot_after_move_s = -1.0;
     }
-    if (header == "HOME") {
-      if (int e = no_args()) return fail(e);
-      if (state == State::kEStop) return fail(202);
-      if (state == State::kMoving || state == State::kSettling) return fail(-221);
-      if (state == State::kHoming) return "OK";  // already homing: idempotent
-      StartMotion({options.slide.home, options.pan.home, options.tilt.home},
-                  options.homing_speed_factor, now);
-      state = State::kHoming;
-      return "OK";
-    }
-    if (header == "MOVE") {
-      std::vector<long long> v;
-      if (int e = ints(3, &v)) return fail(e);
-      if (state == State::kEStop) return fail(202);
-      if (state == State::kUnhomed || state == State::kHoming) return fail(201);
-      for (int i = 0; i < 3; ++i) {
-        if (v[i] < Centi(soft[i].first) || v[i] > Centi(soft[i].second)) return fail(-222);
-      }
-      const std::array<double, 3> target = {v[0] / 100.0, v[1] / 100.0, v[2] / 100.0};
-      if (state == State::kMoving || state == State::kSettling) {
-        bool same = true;
-        for (int i = 0; i < 3; ++i) same = same && Centi(axes[i].profile.to) == v[i];
-        return same ? "OK" : fail(-221);  // same target again: idempotent
-      }
-      StartMotion(target, 1.0, now);
-      state = State::kMoving;
-      homing_ok = true;
-      if (reboot_after_move_s >= 0.0) {
-        reboot_at_s = now + reboot_after_move_s;
-        reboot_after_move_s = -1.0;
-      }
-      return "OK";
-    }
-    if (header == "STOP") {
-      if (int e = no_args()) return fail(e);
-      trig_remaining = 0;
-      if (state == State::kMoving || state == State::kHoming) {
-        const bool homing = state == State::kHoming;
-        for (Axis& a : axes) {
-          double speed = 0.0;
-          a.profile.At(now - a.profile.start_s, &a.pos, &speed);
-          const double dir = a.profile.to >= a.profile.from ? 1.0 : -1.0;
-          const double stop_at = a.pos + dir * speed * speed / (2.0 * a.opt->accel);
-          a.profile = Profile::Make(a.pos, stop_at, now, speed, speed, a.opt->accel);
-        }
-        state = State::kMoving;
-        homing_ok = !homing;
-      }
-      return "OK";
-    }
-    if (header == "ESTOP") {
-      if (int e = no_args()) return fail(e);
+    return "OK";
+  }
+
+  std::string CmdStop(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    trig_remaining = 0;
+    if (state == State::kMoving || state == State::kHoming) {
+      const bool homing = state == State::kHoming;
       for (Axis& a : axes) {
-        double v = 0.0;
-        a.profile.At(now - a.profile.start_s, &a.pos, &v);
-        a.profile = Profile::Make(a.pos, a.pos, now, 0.0, a.opt->speed, a.opt->accel);
-        a.moving = false;
+        double speed = 0.0;
+        a.profile.At(r.now - a.profile.start_s, &a.pos, &speed);
+        const double dir = a.profile.to >= a.profile.from ? 1.0 : -1.0;
+        const double stop_at = a.pos + dir * speed * speed / (2.0 * a.opt->accel);
+        a.profile = Profile::Make(a.pos, stop_at, r.now, speed, speed, a.opt->accel);
       }
-      trig_remaining = 0;
-      current_centi_ma = 0;
-      world.SetCurrent(0.0);
-      state = State::kEStop;
-      return "OK";
+      state = State::kMoving;
+      homing_ok = !homing;
     }
-    if (header == "ESTOP:CLR") {
-      if (int e = no_args()) return fail(e);
-      if (state == State::kEStop) state = State::kUnhomed;
-      return "OK";
+    return "OK";
+  }
+
+  std::string CmdEstop(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    EStop(r.now);
+    return "OK";
+  }
+
+  std::string CmdEstopClr(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    if (state == State::kEStop) state = State::kUnhomed;
+    return "OK";
+  }
+
+  std::string CmdSourCurr(const Request& r) {
+    std::vector<long long> v;
+    if (int e = r.Ints(1, &v)) return Fail(e);
+    // Turning the IRED off is always possible, also in ESTOP (docs/station-protocol.md).
+    const bool off_allowed = v[0] == 0 && !options.refuse_current_off_in_estop;
+    if (state == State::kEStop && !off_allowed) return Fail(202);
+    if (v[0] < 0 || v[0] > Centi(options.max_current_ma)) return Fail(-222);
+    if (v[0] != current_centi_ma) {
+      current_centi_ma = v[0];
+      world.SetCurrent(options.open_circuit ? 0.0 : v[0] / 100.0);
     }
-    if (header == "SOUR:CURR") {
-      std::vector<long long> v;
-      if (int e = ints(1, &v)) return fail(e);
-      if (state == State::kEStop) return fail(202);
-      if (v[0] < 0 || v[0] > Centi(options.max_current_ma)) return fail(-222);
-      if (v[0] != current_centi_ma) {
-        current_centi_ma = v[0];
-        world.SetCurrent(v[0] / 100.0);
+    return "OK";
+  }
+
+  std::string CmdSourCurrQuery(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    return "OK " + std::to_string(current_centi_ma);
+  }
+
+  std::string CmdMeasCurrQuery(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    // An open IRED circuit: the source's output cannot drive any current.
+    double ma = options.open_circuit ? 0.0 : current_centi_ma / 100.0;
+    if (current_centi_ma > 0 && options.current_noise_ma > 0 && !options.open_circuit) {
+      ma += std::normal_distribution<double>(0.0, options.current_noise_ma)(rng);
+    }
+    return "OK " + std::to_string(std::max(0LL, Centi(ma)));
+  }
+
+  std::string CmdTrigSetting(const Request& r) {
+    std::vector<long long> v;
+    if (int e = r.Ints(1, &v)) return Fail(e);
+    if (trig_remaining > 0) return Fail(-221);
+    if (r.header == "TRIG:COUN") {
+      if (v[0] < 1 || v[0] > static_cast<long long>(options.max_trigger_count)) return Fail(-222);
+      trig_count = v[0];
+    } else if (r.header == "TRIG:WIDT") {
+      if (v[0] < std::llround(options.min_trigger_width_us) || v[0] >= trig_period_us) {
+        return Fail(-222);
       }
-      return "OK";
-    }
-    if (header == "SOUR:CURR?") {
-      if (int e = no_args()) return fail(e);
-      return "OK " + std::to_string(current_centi_ma);
-    }
-    if (header == "MEAS:CURR?") {
-      if (int e = no_args()) return fail(e);
-      double ma = current_centi_ma / 100.0;
-      if (current_centi_ma > 0 && options.current_noise_ma > 0) {
-        ma += std::normal_distribution<double>(0.0, options.current_noise_ma)(rng);
+      trig_width_us = v[0];
+    } else {
+      if (v[0] < std::llround(options.min_trigger_period_us) || v[0] <= trig_width_us) {
+        return Fail(-222);
       }
-      return "OK " + std::to_string(std::max(0LL, Centi(ma)));
+      trig_period_us = v[0];
     }
-    if (header == "TRIG:COUN" || header == "TRIG:WIDT" || header == "TRIG:PER") {
-      std::vector<long long> v;
-      if (int e = ints(1, &v)) return fail(e);
-      if (trig_remaining > 0) return fail(-221);
-      if (header == "TRIG:COUN") {
-        if (v[0] < 1 || v[0] > static_cast<long long>(options.max_trigger_count)) return fail(-222);
-        trig_count = v[0];
-      } else if (header == "TRIG:WIDT") {
-        if (v[0] < std::llround(options.min_trigger_width_us) || v[0] >= trig_period_us) {
-          return fail(-222);
-        }
-        trig_width_us = v[0];
-      } else {
-        if (v[0] < std::llround(options.min_trigger_period_us) || v[0] <= trig_width_us) {
-          return fail(-222);
-        }
-        trig_period_us = v[0];
-      }
-      return "OK";
-    }
-    if (header == "TRIG?") {
-      if (int e = no_args()) return fail(e);
-      std::snprintf(buf, sizeof(buf), "OK %lld,%lld,%lld", trig_count, trig_width_us,
-                    trig_period_us);
-      return buf;
-    }
-    if (header == "TRIG:FIRE") {
-      if (int e = no_args()) return fail(e);
-      if (state == State::kEStop) return fail(202);
-      if (trig_remaining > 0) return fail(-221);
-      trig_remaining = trig_count;
-      trig_next_s = now;
-      return "OK";
-    }
-    if (header == "TRIG:ABOR") {
-      if (int e = no_args()) return fail(e);
-      trig_remaining = 0;
-      return "OK";
-    }
-    if (header == "TRIG:PULS?") {
-      if (int e = no_args()) return fail(e);
-      return "OK " + std::to_string(pulses_total) + "," + std::to_string(trig_remaining);
-    }
-    return fail(-113);
+    return "OK";
+  }
+
+  std::string CmdTrigQuery(const Request& r) {
+    char buf[160];
+    if (int e = r.NoArgs()) return Fail(e);
+    std::snprintf(buf, sizeof(buf), "OK %lld,%lld,%lld", trig_count, trig_width_us,
+                  trig_period_us);
+    return buf;
+  }
+
+  std::string CmdTrigFire(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    if (state == State::kEStop) return Fail(202);
+    if (trig_remaining > 0) return Fail(-221);
+    trig_remaining = trig_count;
+    trig_next_s = r.now;
+    return "OK";
+  }
+
+  std::string CmdTrigAbor(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    trig_remaining = 0;
+    return "OK";
+  }
+
+  std::string CmdTrigPulsQuery(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    return "OK " + std::to_string(pulses_total) + "," + std::to_string(trig_remaining);
   }
 
   // Handles one received line (without its line end).
@@ -795,7 +893,7 @@ struct StationEmulator::Impl {
   }
 
   void Send(std::string bytes, double now) {
-    if (Chance(options.drop_rate)) {
+    if (silent || Chance(options.drop_rate)) {
       ++dropped;
       return;
     }
@@ -953,6 +1051,10 @@ void StationEmulator::RebootDuringNextMove(double after_s) {
   IRDIST_CHECK(after_s >= 0.0, "after_s ", after_s);
   std::lock_guard<std::mutex> lock(impl_->mutex);
   impl_->reboot_after_move_s = after_s;
+}
+void StationEmulator::PressEmergencyStop() {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->EStop(impl_->Now());
 }
 void StationEmulator::Reboot() {
   std::lock_guard<std::mutex> lock(impl_->mutex);

@@ -47,14 +47,24 @@ struct EmulatorOptions {
   double reboot_after_s = -1.0;      // reboot once, this many simulated s into the first move (<0 off)
   std::string stuck_axis;            // "", "slide", "pan" or "tilt": this axis never moves
   double missed_pulse_rate = 0.0;    // probability that a trigger pulse is not emitted
+  // At the fault_at_move-th MOVE to a new target (1-based, 0 = off): `refuse` answers -222 (a
+  // refused move), `estop` accepts it and the emergency stop is pressed at once, `silent`
+  // accepts it and the station never answers again.
+  int fault_at_move = 0;
+  std::string fault;
+  bool open_circuit = false;         // the IRED's circuit is open: no current flows, MEAS:CURR? ~0
+  // A deliberately non-conforming station (for the conformance suite's own test): refuses
+  // `SOUR:CURR 0` in ESTOP (202), as protocol v1 drafts did.
+  bool refuse_current_off_in_estop = false;
 
   bool IsValid(std::string* why) const;
 };
 
 // Reads the `virtual.station:` subsection of a rig file (keys as the field names above, axes as
 // maps with min/max/home/speed/accel/settle_s/power_on); station.limits are used for the soft
-// limits when present. Missing file sections give the defaults; a malformed file throws
-// irdist::Error naming the file and key.
+// limits when present. Missing file sections give the defaults; an unknown (misspelt) key is an
+// InputError naming file:line (base/yaml_fields.h); a malformed value throws irdist::Error naming
+// the file and key.
 EmulatorOptions LoadEmulatorOptions(const std::string& rig_path);
 
 class StationEmulator {
@@ -78,6 +88,8 @@ class StationEmulator {
   void SetMissedPulseRate(double rate);
   // Reboots after `after_s` simulated seconds of the next move (0 = at the next move's start).
   void RebootDuringNextMove(double after_s);
+  // The station's emergency-stop button: as the ESTOP command (halt, IRED off, state ESTOP).
+  void PressEmergencyStop();
   // Power-cycles now: new boot id, unhomed, IRED off, motion and trigger stopped, errors cleared.
   void Reboot();
 

@@ -1,21 +1,17 @@
 #include "station/frame.h"
 
+#include <boost/crc.hpp>
 #include <cstdio>
 
 #include "base/check.h"
 
 namespace irdist {
 
+// CRC-8/SMBUS: width 8, polynomial 0x07, initial 0x00, no reflection, no final xor.
 std::uint8_t Crc8(std::string_view text) {
-  std::uint8_t crc = 0;
-  for (char ch : text) {
-    crc ^= static_cast<std::uint8_t>(ch);
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = (crc & 0x80) ? static_cast<std::uint8_t>((crc << 1) ^ 0x07)
-                         : static_cast<std::uint8_t>(crc << 1);
-    }
-  }
-  return crc;
+  boost::crc_optimal<8, 0x07, 0x00, 0x00, false, false> crc;
+  crc.process_bytes(text.data(), text.size());
+  return static_cast<std::uint8_t>(crc.checksum());
 }
 
 std::string EncodeRequest(int seq, std::string_view command) {

@@ -272,138 +272,139 @@ std::vector<SweepAxis> ChooseAxisOrder(const SweepSpec& spec, const MotionModel&
   return order;
 }
 
-Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
-  std::string why;
-  IRDIST_CHECK(spec.IsValid(&why), why);
-  IRDIST_CHECK(motion.IsValid(&why), why);
+namespace {
 
-  const std::vector<SweepAxis> order =
-      spec.order.empty() ? ChooseAxisOrder(spec, motion) : spec.order;
-  const int repeats = spec.bracket.repeats;
-
-  Plan plan;
-  plan.bracket = PlannedExposures(spec.bracket);
-  PlanSummary& summary = plan.summary;
-  for (SweepAxis axis : order) {
-    summary.order.push_back(SweepAxisName(axis, spec.angle_mode));
-    summary.axis_counts.push_back(AxisOf(spec, axis).Count());
+// A pose from the swept values (indexed by SweepAxis): pan and theta from the angle and the tilt.
+Pose PoseFromValues(const SweepSpec& spec, const std::array<double, 4>& value) {
+  Pose pose;
+  pose.slide_mm = value[static_cast<size_t>(SweepAxis::kSlide)];
+  pose.tilt_deg = value[static_cast<size_t>(SweepAxis::kTilt)];
+  pose.bias_ma = value[static_cast<size_t>(SweepAxis::kBias)];
+  const double angle = value[static_cast<size_t>(SweepAxis::kAngle)];
+  const double cos_tilt = std::cos(DegToRad(pose.tilt_deg));
+  if (spec.angle_mode == AngleMode::kTheta) {
+    const double c = std::cos(DegToRad(angle)) / cos_tilt;
+    IRDIST_CHECK(c <= 1.0 + 1e-12, "theta ", angle, " deg cannot be reached with tilt ",
+                 pose.tilt_deg, " deg: |theta| must be >= |tilt|");
+    const double pan = RadToDeg(std::acos(std::min(1.0, c)));
+    pose.theta_deg = angle;
+    // At tilt 0 the pan is theta itself, exactly (acos(cos x) is off by an ulp or two).
+    pose.pan_deg = pose.tilt_deg == 0.0 ? angle : (angle < 0.0 ? -pan : pan);
+  } else {
+    pose.pan_deg = angle;
+    pose.theta_deg = RadToDeg(std::acos(std::min(1.0, std::cos(DegToRad(angle)) * cos_tilt)));
   }
-  summary.repeats = repeats;
+  return pose;
+}
 
-  // Random axes: one generator per axis, sets drawn in sweep order.
-  std::array<std::optional<NormalSource>, 4> sources;
-  std::array<std::vector<double>, 4>
-      current_set;  // values of each axis for the current outer combination
-  std::array<long, 4> set_outer = {-1, -1, -1, -1};
-  for (size_t k = 0; k < order.size(); ++k) {
-    const AxisValues& values = AxisOf(spec, order[k]);
-    if (values.random.has_value()) {
-      sources[k].emplace(values.random->seed);
-    } else {
-      current_set[k] = values.values;
+// The axes' values in sweep order: a mixed-radix counter over the axes (outermost first), with
+// serpentine axes reversed on odd outer passes and random axes drawn per outer combination.
+class AxisOdometer {
+ public:
+  AxisOdometer(const SweepSpec& spec, const std::vector<SweepAxis>& order)
+      : spec_(spec), order_(order), counts_(order.size()), digit_(order.size(), 0) {
+    for (size_t k = 0; k < order.size(); ++k) {
+      const AxisValues& values = AxisOf(spec, order[k]);
+      counts_[k] = values.Count();
+      combinations_ *= counts_[k];
+      if (values.random.has_value()) {
+        sources_[k].emplace(values.random->seed);
+      } else {
+        current_set_[k] = values.values;
+      }
     }
   }
-
-  const size_t axes = order.size();
-  std::vector<int> counts(axes);
-  long total = repeats;
-  for (size_t k = 0; k < axes; ++k) {
-    counts[k] = AxisOf(spec, order[k]).Count();
-    total *= counts[k];
-  }
-  plan.poses.reserve(static_cast<size_t>(total));
-
-  std::vector<int> digit(axes, 0);  // mixed-radix counter over the axes, outermost first
-  for (long flat = 0; flat < total / repeats; ++flat) {
-    // Decode the counter.
+  long combinations() const { return combinations_; }
+  // The values (indexed by SweepAxis) of combination `flat`, visited in increasing order.
+  std::array<double, 4> Values(long flat) {
     long rest = flat;
-    for (size_t k = axes; k-- > 0;) {
-      digit[k] = static_cast<int>(rest % counts[k]);
-      rest /= counts[k];
+    for (size_t k = order_.size(); k-- > 0;) {
+      digit_[k] = static_cast<int>(rest % counts_[k]);
+      rest /= counts_[k];
     }
     std::array<double, 4> value{};
     long outer = 0;  // flattened index over the axes outside k
-    for (size_t k = 0; k < axes; ++k) {
-      const AxisValues& values = AxisOf(spec, order[k]);
+    for (size_t k = 0; k < order_.size(); ++k) {
+      const AxisValues& values = AxisOf(spec_, order_[k]);
       if (values.random.has_value()) {
         const long wanted = values.random->per_pose ? outer : 0;
-        if (set_outer[k] != wanted) {
-          current_set[k] = DrawSet(*values.random, &*sources[k]);
-          set_outer[k] = wanted;
+        if (set_outer_[k] != wanted) {
+          current_set_[k] = DrawSet(*values.random, &*sources_[k]);
+          set_outer_[k] = wanted;
         }
       }
       const bool snake = k > 0 && outer % 2 == 1 &&
-                         std::find(spec.serpentine.begin(), spec.serpentine.end(), order[k]) !=
-                             spec.serpentine.end();
-      const int i = snake ? counts[k] - 1 - digit[k] : digit[k];
-      value[static_cast<size_t>(order[k])] = current_set[k][static_cast<size_t>(i)];
-      outer = outer * counts[k] + digit[k];
+                         std::find(spec_.serpentine.begin(), spec_.serpentine.end(),
+                                   order_[k]) != spec_.serpentine.end();
+      const int i = snake ? counts_[k] - 1 - digit_[k] : digit_[k];
+      value[static_cast<size_t>(order_[k])] = current_set_[k][static_cast<size_t>(i)];
+      outer = outer * counts_[k] + digit_[k];
     }
-    Pose pose;
-    pose.slide_mm = value[static_cast<size_t>(SweepAxis::kSlide)];
-    pose.tilt_deg = value[static_cast<size_t>(SweepAxis::kTilt)];
-    pose.bias_ma = value[static_cast<size_t>(SweepAxis::kBias)];
-    const double angle = value[static_cast<size_t>(SweepAxis::kAngle)];
-    const double cos_tilt = std::cos(DegToRad(pose.tilt_deg));
-    if (spec.angle_mode == AngleMode::kTheta) {
-      const double c = std::cos(DegToRad(angle)) / cos_tilt;
-      IRDIST_CHECK(c <= 1.0 + 1e-12, "theta ", angle, " deg cannot be reached with tilt ",
-                   pose.tilt_deg, " deg: |theta| must be >= |tilt|");
-      const double pan = RadToDeg(std::acos(std::min(1.0, c)));
-      pose.theta_deg = angle;
-      // At tilt 0 the pan is theta itself, exactly (acos(cos x) is off by an ulp or two).
-      pose.pan_deg = pose.tilt_deg == 0.0 ? angle : (angle < 0.0 ? -pan : pan);
-    } else {
-      pose.pan_deg = angle;
-      pose.theta_deg = RadToDeg(std::acos(std::min(1.0, std::cos(DegToRad(angle)) * cos_tilt)));
-    }
-    for (int r = 0; r < repeats; ++r) {
-      pose.repeat = r;
-      pose.index = static_cast<int>(plan.poses.size());
-      plan.poses.push_back(pose);
-    }
+    return value;
   }
 
-  // Duration estimate.
-  summary.pose_count = static_cast<int>(plan.poses.size());
-  summary.frames_per_pose = static_cast<int>(plan.bracket.size());
+ private:
+  const SweepSpec& spec_;
+  const std::vector<SweepAxis>& order_;
+  std::vector<int> counts_;
+  std::vector<int> digit_;
+  long combinations_ = 1;
+  std::array<std::optional<NormalSource>, 4> sources_;
+  std::array<std::vector<double>, 4> current_set_;  // each axis's values for this outer pass
+  std::array<long, 4> set_outer_ = {-1, -1, -1, -1};
+};
+
+// The move from `previous` (nullptr: from where homing left the station) to `pose`: profile time
+// and the moved axes' settle, s. Returns whether any axis moves.
+bool MoveCost(const Pose* previous, const Pose& pose, const MotionModel& motion, double* move_s,
+              double* settle_s) {
+  const std::array<std::pair<double, const AxisMotion*>, 3> deltas = {
+      {{pose.slide_mm - (previous ? previous->slide_mm : motion.slide.home), &motion.slide},
+       {pose.pan_deg - (previous ? previous->pan_deg : motion.pan.home), &motion.pan},
+       {pose.tilt_deg - (previous ? previous->tilt_deg : motion.tilt.home), &motion.tilt}}};
+  bool moved = false;
+  *move_s = 0.0;
+  *settle_s = 0.0;
+  for (const auto& [delta, axis] : deltas) {
+    if (std::abs(delta) <= kSameValue) continue;
+    moved = true;
+    const double t = TrapezoidMoveS(delta, *axis);
+    if (motion.axes_move_together) {
+      *move_s = std::max(*move_s, t);
+      *settle_s = std::max(*settle_s, axis->settle_ms / 1000.0);
+    } else {
+      *move_s += t;
+      *settle_s += axis->settle_ms / 1000.0;
+    }
+  }
+  return moved;
+}
+
+void CountFrames(Plan* plan) {
+  PlanSummary& summary = plan->summary;
+  summary.pose_count = static_cast<int>(plan->poses.size());
+  summary.frames_per_pose = static_cast<int>(plan->bracket.size());
   summary.frame_count = summary.pose_count * summary.frames_per_pose;
   const int differences_per_pose =
-      static_cast<int>(std::count_if(plan.bracket.begin(), plan.bracket.end(),
+      static_cast<int>(std::count_if(plan->bracket.begin(), plan->bracket.end(),
                                      [](const PlannedExposure& f) { return !f.is_reference; }));
   summary.difference_count = summary.pose_count * differences_per_pose;
+}
 
+// The duration estimate and the physical bound, pose by pose.
+void EstimateDuration(const SweepSpec& spec, const MotionModel& motion, Plan* plan) {
+  PlanSummary& summary = plan->summary;
+  CountFrames(plan);
   double bracket_exposure_s = 0.0;
-  for (const PlannedExposure& frame : plan.bracket) bracket_exposure_s += frame.exposure_ms / 1000.0;
-  const double frames_per_pose = static_cast<double>(plan.bracket.size());
-
+  for (const PlannedExposure& f : plan->bracket) bracket_exposure_s += f.exposure_ms / 1000.0;
+  const double frames_per_pose = static_cast<double>(plan->bracket.size());
   const Pose* previous = nullptr;
-  for (const Pose& pose : plan.poses) {
-    bool moved = false;
-    double travel_s = 0.0;  // move, station settle and the recipe's wait after it
-    // The first pose is reached from where homing left the station (homing itself, from an
-    // unknown position, is not counted).
-    const std::array<std::pair<double, const AxisMotion*>, 3> deltas = {
-        {{pose.slide_mm - (previous ? previous->slide_mm : motion.slide.home), &motion.slide},
-         {pose.pan_deg - (previous ? previous->pan_deg : motion.pan.home), &motion.pan},
-         {pose.tilt_deg - (previous ? previous->tilt_deg : motion.tilt.home), &motion.tilt}}};
-    double move_s = 0.0;
-    double settle_s = 0.0;
-    for (const auto& [delta, axis] : deltas) {
-      if (std::abs(delta) <= kSameValue) continue;
-      moved = true;
-      const double t = TrapezoidMoveS(delta, *axis);
-      if (motion.axes_move_together) {
-        move_s = std::max(move_s, t);
-        settle_s = std::max(settle_s, axis->settle_ms / 1000.0);
-      } else {
-        move_s += t;
-        settle_s += axis->settle_ms / 1000.0;
-      }
-    }
+  for (const Pose& pose : plan->poses) {
+    double move_s = 0.0, settle_s = 0.0;
+    const bool moved = MoveCost(previous, pose, motion, &move_s, &settle_s);
     summary.motion_s += move_s;
     summary.station_settle_s += settle_s;
-    travel_s = move_s + settle_s;
+    double travel_s = move_s + settle_s;  // move, station settle and the recipe's wait after it
     if (moved) {
       ++summary.moves;
       summary.move_settle_s += spec.settle.after_move_ms / 1000.0;
@@ -427,6 +428,37 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
                     summary.overhead_s;
   summary.physical_bound_s =
       summary.motion_s + summary.station_settle_s + summary.exposure_s + summary.readout_s;
+}
+
+}  // namespace
+
+Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
+  std::string why;
+  IRDIST_CHECK(spec.IsValid(&why), why);
+  IRDIST_CHECK(motion.IsValid(&why), why);
+  const std::vector<SweepAxis> order =
+      spec.order.empty() ? ChooseAxisOrder(spec, motion) : spec.order;
+  const int repeats = spec.bracket.repeats;
+
+  Plan plan;
+  plan.bracket = PlannedExposures(spec.bracket);
+  for (SweepAxis axis : order) {
+    plan.summary.order.push_back(SweepAxisName(axis, spec.angle_mode));
+    plan.summary.axis_counts.push_back(AxisOf(spec, axis).Count());
+  }
+  plan.summary.repeats = repeats;
+
+  AxisOdometer odometer(spec, order);
+  plan.poses.reserve(static_cast<size_t>(odometer.combinations() * repeats));
+  for (long flat = 0; flat < odometer.combinations(); ++flat) {
+    Pose pose = PoseFromValues(spec, odometer.Values(flat));
+    for (int r = 0; r < repeats; ++r) {
+      pose.repeat = r;
+      pose.index = static_cast<int>(plan.poses.size());
+      plan.poses.push_back(pose);
+    }
+  }
+  EstimateDuration(spec, motion, &plan);
   return plan;
 }
 

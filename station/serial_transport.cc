@@ -75,7 +75,7 @@ SerialTransport::~SerialTransport() {
 const std::string& SerialTransport::port() const { return impl_->port_name; }
 
 void SerialTransport::WriteLine(std::string_view line) {
-  if (impl_->log) impl_->log->Sent(line);
+  if (impl_->log) impl_->log->Sent(impl_->options.log_prefix + std::string(line));
   std::string bytes(line);
   bytes += impl_->options.line_end;
   bool done = false;
@@ -120,7 +120,7 @@ std::string SerialTransport::ReadLine(std::chrono::milliseconds deadline) {
       for (char c : line) {
         if (c != '\r') clean.push_back(c);
       }
-      if (impl_->log) impl_->log->Received(clean);
+      if (impl_->log) impl_->log->Received(impl_->options.log_prefix + clean);
       return clean;
     }
     if (result == asio::error::not_found || impl_->buffer.size() > impl_->options.max_line_bytes) {
@@ -128,7 +128,7 @@ std::string SerialTransport::ReadLine(std::chrono::milliseconds deadline) {
       std::string junk(impl_->buffer.size(), '\0');
       std::istream in(&impl_->buffer);
       in.read(junk.data(), static_cast<std::streamsize>(junk.size()));
-      if (impl_->log) impl_->log->Received(junk);
+      if (impl_->log) impl_->log->Received(impl_->options.log_prefix + junk);
       return junk;
     }
     if (completed && result && result != asio::error::operation_aborted) {
@@ -137,7 +137,8 @@ std::string SerialTransport::ReadLine(std::chrono::milliseconds deadline) {
     }
     if (std::chrono::steady_clock::now() >= until) {
       if (impl_->log) {
-        impl_->log->Note("no line within " + std::to_string(deadline.count()) + " ms");
+        impl_->log->Note(impl_->options.log_prefix + "no line within " +
+                         std::to_string(deadline.count()) + " ms");
       }
       throw LinkError("no reply line within " + std::to_string(deadline.count()) + " ms",
                       impl_->port_name,

@@ -20,6 +20,9 @@ struct SerialOptions {
   // Appended to every written line: "\r\n" (irdist station), "\n" (Zaber ASCII, SCPI), " " or
   // "\n" (FLIR PTU). Received lines always end at '\n', a '\r' before it dropped.
   std::string line_end = "\r\n";
+  // Written before every line this transport logs ("slide: "), so that several devices can share
+  // one LineLog; empty for a station of one device.
+  std::string log_prefix;
   bool IsValid(std::string* why) const;
 };
 

@@ -290,33 +290,51 @@ void StationClient::Home() {
 }
 
 void StationClient::MoveTo(const StationPosition& target) {
+  StartMove(target);
+  WaitMoveSettled();
+}
+
+void StationClient::StartMove(const StationPosition& target) {
   IRDIST_CHECK(std::isfinite(target.slide_mm) && std::isfinite(target.pan_deg) &&
                    std::isfinite(target.tilt_deg),
                "non-finite move target");
-  const long long centi[3] = {ToCenti(target.slide_mm), ToCenti(target.pan_deg),
-                              ToCenti(target.tilt_deg)};
+  move_target_ = target;
+  move_centi_[0] = ToCenti(target.slide_mm);
+  move_centi_[1] = ToCenti(target.pan_deg);
+  move_centi_[2] = ToCenti(target.tilt_deg);
+  Command(MoveCommand());
+}
+
+std::string StationClient::MoveCommand() const {
   char command[96];
-  std::snprintf(command, sizeof(command), "MOVE %lld,%lld,%lld", centi[0], centi[1], centi[2]);
+  std::snprintf(command, sizeof(command), "MOVE %lld,%lld,%lld", move_centi_[0], move_centi_[1],
+                move_centi_[2]);
+  return command;
+}
+
+void StationClient::WaitMoveSettled() {
   for (int attempt = 1;; ++attempt) {
-    Command(command);
     try {
-      WaitMotionDone("move", centi);
+      WaitMotionDone("move", move_centi_);
       return;
     } catch (const StationError& e) {
-      if (e.code() != 0 || attempt >= options_.max_move_attempts) {
-        if (e.code() != 0) throw;
-        const StationPosition p = Position();
-        char detail[200];
-        std::snprintf(detail, sizeof(detail),
-                      "move to %.2f mm, %.2f deg, %.2f deg ended at %.2f mm, %.2f deg, %.2f deg "
-                      "after %d attempts",
-                      target.slide_mm, target.pan_deg, target.tilt_deg, p.slide_mm, p.pan_deg,
-                      p.tilt_deg, attempt);
-        throw StationError(0, std::string(detail) +
-                                  "; an axis is stuck or blocked: check the mechanics");
-      }
+      if (e.code() != 0) throw;
+      if (attempt >= options_.max_move_attempts) ThrowStuck(attempt);
     }
+    Command(MoveCommand());  // ended off target: reissue
   }
+}
+
+void StationClient::ThrowStuck(int attempts) {
+  const StationPosition p = Position();
+  const StationPosition& target = move_target_;
+  char detail[200];
+  std::snprintf(detail, sizeof(detail),
+                "move to %.2f mm, %.2f deg, %.2f deg ended at %.2f mm, %.2f deg, %.2f deg "
+                "after %d attempts",
+                target.slide_mm, target.pan_deg, target.tilt_deg, p.slide_mm, p.pan_deg,
+                p.tilt_deg, attempts);
+  throw StationError(0, std::string(detail) + "; an axis is stuck or blocked: check the mechanics");
 }
 
 StationPosition StationClient::Position() {

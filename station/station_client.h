@@ -9,7 +9,9 @@
 #include <string_view>
 #include <vector>
 
+#include "station/device.h"
 #include "station/frame.h"
+#include "station/motion.h"
 #include "station/transport.h"
 
 namespace irdist {
@@ -41,32 +43,24 @@ class StationError : public Error {
 // The station power-cycled (its boot id changed). When ClientOptions::recover_on_reboot is set the
 // client has already re-homed and restored the IRED current; the caller must retake the point
 // (whatever was captured since the last settled pose is not trustworthy).
-class StationRebooted : public Error {
+class StationRebooted : public DeviceRestarted {
  public:
   StationRebooted(std::string old_boot_id, std::string new_boot_id, bool recovered)
-      : Error("station rebooted (boot id " + old_boot_id + " -> " + new_boot_id + ")" +
+      : DeviceRestarted("station rebooted (boot id " + old_boot_id + " -> " + new_boot_id + ")" +
               (recovered ? "; re-homed and IRED current restored: retake the point"
-                         : "; home it and restore the current before continuing")),
+                         : "; home it and restore the current before continuing"),
+                        recovered),
         old_boot_id_(std::move(old_boot_id)),
-        new_boot_id_(std::move(new_boot_id)),
-        recovered_(recovered) {}
+        new_boot_id_(std::move(new_boot_id)) {}
   const std::string& old_boot_id() const { return old_boot_id_; }
   const std::string& new_boot_id() const { return new_boot_id_; }
-  bool recovered() const { return recovered_; }
 
  private:
   std::string old_boot_id_, new_boot_id_;
-  bool recovered_;
 };
 
 enum class StationState { kUnhomed, kHoming, kIdle, kMoving, kSettling, kEStop, kUnknown };
 std::string StationStateName(StationState state);
-
-struct StationPosition {
-  double slide_mm = 0.0;
-  double pan_deg = 0.0;
-  double tilt_deg = 0.0;
-};
 
 struct StationStatus {
   StationState state = StationState::kUnknown;
@@ -117,6 +111,11 @@ class StationClient {
   // and the station reports IDLE on settled_polls consecutive polls. Throws StationError (limits,
   // not homed, e-stop, an axis that does not arrive), StationRebooted, LinkError.
   void MoveTo(const StationPosition& target);
+  // MoveTo in two halves, so that other devices' moves overlap: StartMove sends MOVE (throws
+  // StationError on a refusal such as -222), WaitMoveSettled polls until settled at that target
+  // (reissuing it when it ended off target, as MoveTo).
+  void StartMove(const StationPosition& target);
+  void WaitMoveSettled();
   StationPosition Position();
   // STAT?; throws StationRebooted when the boot id changed (after recovery, see options).
   StationStatus Status();
@@ -154,6 +153,8 @@ class StationClient {
 
  private:
   void WaitMotionDone(const char* what, const long long* target_centi);
+  std::string MoveCommand() const;
+  [[noreturn]] void ThrowStuck(int attempts);
   void OnBootId(const std::string& seen);
   StationStatus StatusNoCheck();
 
@@ -165,6 +166,8 @@ class StationClient {
   // a bracket fires many one-pulse trains, and only the first needs COUN/WIDT/PER.
   std::string trigger_boot_id_;
   long long trigger_count_ = -1, trigger_width_us_ = -1, trigger_period_us_ = -1;
+  StationPosition move_target_;
+  long long move_centi_[3] = {0, 0, 0};
   bool homed_ = false;
   bool recovering_ = false;
   double current_ma_ = 0.0;

@@ -31,26 +31,55 @@ std::string SweepResult::BriefReport() const {
   return out.str();
 }
 
-Sweep::Sweep(StationClient& client, SweepOptions options) : client_(client), options_(options) {
+Sweep::Sweep(Station& station, SweepOptions options) : station_(station), options_(options) {
   std::string why;
   IRDIST_CHECK(options_.IsValid(&why), why);
 }
 
 void Sweep::Park() {
-  client_.SetCurrent(0.0);
-  if (!options_.park_at_end || !client_.homed()) return;
-  StationPosition park = client_.Position();
+  station_.Off();
+  if (!options_.park_at_end || !station_.homed()) return;
+  StationPosition park = station_.Position();
   park.pan_deg = 0.0;
   park.tilt_deg = 0.0;
   if (options_.park_slide_mm >= 0.0) park.slide_mm = options_.park_slide_mm;
-  client_.MoveTo(park);
+  station_.MoveTo(park);
+}
+
+// Before the first pose: every device identified, none in e-stop or moving, then homed.
+void Sweep::Start() {
+  station_.Identify();
+  station_.CheckReadyToStart();
+  if (options_.home_first || !station_.homed()) station_.Home();
+}
+
+// Sets the pose's current, then moves (the IRED's transient runs while the axes travel). A retake
+// follows a device restart: it always moves and sets the current again. Returns whether it moved.
+bool Sweep::GoTo(const std::vector<SweepPose>& poses, std::size_t i, int attempt) {
+  const SweepPose& pose = poses[i];
+  transition_.current_changed = attempt > 0;
+  if (attempt > 0 || !SameCenti(pose.bias_ma, station_.setpoint_ma())) {
+    station_.SetCurrent(pose.bias_ma);
+    transition_.current_changed = true;
+  }
+  if (transition_.current_changed) {
+    transition_.current_changed_at = std::chrono::steady_clock::now();
+  }
+  // A pose that only changes the current (or repeats) needs no move: the station is still where
+  // the previous pose confirmed it.
+  const bool same_place = i > 0 && attempt == 0 &&
+                          SameCenti(poses[i - 1].slide_mm, pose.slide_mm) &&
+                          SameCenti(poses[i - 1].pan_deg, pose.pan_deg) &&
+                          SameCenti(poses[i - 1].tilt_deg, pose.tilt_deg);
+  transition_.moved = !same_place;
+  if (!same_place) station_.MoveTo({pose.slide_mm, pose.pan_deg, pose.tilt_deg});
+  return transition_.moved;
 }
 
 SweepResult Sweep::Run(const std::vector<SweepPose>& poses, const PoseCallback& at_pose,
-                       const std::atomic<bool>* stop) {
+                       const std::atomic<bool>* stop, const ConfirmCallback& confirmed) {
   IRDIST_CHECK(static_cast<bool>(at_pose), "Sweep::Run needs a callback");
   SweepResult result;
-  const std::uint64_t reboots_before = client_.stats().reboots;
   try {
     for (std::size_t i = 0; i < poses.size(); ++i) {
       const SweepPose& pose = poses[i];
@@ -61,50 +90,25 @@ SweepResult Sweep::Run(const std::vector<SweepPose>& poses, const PoseCallback& 
       }
       for (int attempt = 0;; ++attempt) {
         try {
-          if (i == 0 && attempt == 0) {
-            client_.Identify();
-            const StationState s = client_.Status().state;
-            if (options_.home_first || s == StationState::kUnhomed || !client_.homed()) {
-              client_.Home();
-            }
-          }
-          // Current first: the IRED's thermal transient then overlaps the move. A retake follows
-          // a reboot, whose recovery has just restored the current.
-          transition_.current_changed = attempt > 0;
-          if (!SameCenti(pose.bias_ma, client_.current_setpoint_ma())) {
-            client_.SetCurrent(pose.bias_ma);
-            transition_.current_changed = true;
-          }
-          if (transition_.current_changed) {
-            transition_.current_changed_at = std::chrono::steady_clock::now();
-          }
-          // A pose that only changes the current (or repeats) needs no move: the station is
-          // still where the previous pose confirmed it (a retake always moves again).
-          const bool same_place = i > 0 && attempt == 0 &&
-                                  SameCenti(poses[i - 1].slide_mm, pose.slide_mm) &&
-                                  SameCenti(poses[i - 1].pan_deg, pose.pan_deg) &&
-                                  SameCenti(poses[i - 1].tilt_deg, pose.tilt_deg);
-          transition_.moved = !same_place;
-          if (!same_place) client_.MoveTo({pose.slide_mm, pose.pan_deg, pose.tilt_deg});
+          if (i == 0 && attempt == 0) Start();
+          GoTo(poses, i, attempt);
           at_pose(pose, attempt);
-          // The capture is only good if the station did not reboot meanwhile.
-          client_.Status();
+          // The capture is only good if no device restarted or stopped meanwhile.
+          station_.CheckAlive();
           break;
-        } catch (const StationRebooted&) {
+        } catch (const DeviceRestarted& restarted) {
+          ++result.reboots;
           if (attempt >= options_.max_retakes) throw;
           ++result.retakes;
+          if (!restarted.recovered()) station_.Home();
         }
       }
+      if (confirmed) confirmed(pose);
       ++result.poses_done;
     }
-    result.reboots = static_cast<std::size_t>(client_.stats().reboots - reboots_before);
     Park();
   } catch (...) {
-    try {
-      client_.SetCurrent(0.0);
-    } catch (const Error&) {
-      // The original failure is the one to report.
-    }
+    station_.Off();  // the original failure is the one to report
     throw;
   }
   return result;

@@ -1,8 +1,8 @@
 #pragma once
-// The sweep runner: moves the station through a list of poses and calls back at each settled pose
-// (the app captures frames there; station/ never sees the camera). It recovers from station
-// reboots by retaking the pose, and honours a stop flag (Ctrl-C): the pose in flight is finished,
-// then the station is parked with the IRED off.
+// The sweep runner: moves the composed station (station/station.h) through a list of poses and
+// calls back at each settled pose (the app captures frames there; station/ never sees the camera).
+// It recovers from device restarts by retaking the pose, and honours a stop flag (Ctrl-C): the
+// pose in flight is finished, then the station is parked with the IRED off.
 
 #include <atomic>
 #include <chrono>
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "station/station_client.h"
+#include "station/station.h"
 
 namespace irdist {
 
@@ -34,7 +34,7 @@ struct SweepOptions {
 struct SweepResult {
   std::size_t poses_done = 0;    // poses whose callback completed on a stable station
   std::size_t retakes = 0;       // poses taken again after a reboot
-  std::size_t reboots = 0;       // station reboots seen
+  std::size_t reboots = 0;       // device restarts seen
   bool stopped = false;          // the stop flag ended the sweep early
   std::int64_t next_index = -1;  // index of the first pose not done (-1 when all are done)
   std::string BriefReport() const;
@@ -42,25 +42,28 @@ struct SweepResult {
 
 // Called at each settled pose with the IRED at pose.bias_ma (set before the move, so that its
 // thermal transient runs while the axes travel: see Sweep::transition()). `attempt` is 0
-// the first time; a retake after a station reboot calls again with attempt > 0, and whatever the
-// caller recorded for this pose in earlier attempts must be discarded.
-// A pose is confirmed only when the station is seen alive with the same boot id AFTER the callback
-// returned: that is, when the callback for the next pose runs with attempt 0, or when Run()
-// returns. A reboot seen on the way to the next pose retakes that next pose, so a caller that
-// keeps what it captured pending until then never records a pose twice or loses one.
+// the first time; a retake after a device restart calls again with attempt > 0, and whatever the
+// caller captured for this pose in earlier attempts must be discarded.
 // Exceptions thrown here end the sweep (after the IRED is switched off) and propagate.
 using PoseCallback = std::function<void(const SweepPose& pose, int attempt)>;
+// Called once a pose's capture is confirmed: every device was seen alive and unchanged
+// (Station::CheckAlive) AFTER the pose's callback returned, and BEFORE anything moves again. The
+// caller commits what it captured here: a refused or failed next move, an e-stop, a silent device
+// or a kill during the next move can no longer lose it.
+using ConfirmCallback = std::function<void(const SweepPose& pose)>;
 
 class Sweep {
  public:
-  // `client` must outlive the sweep.
-  explicit Sweep(StationClient& client, SweepOptions options = {});
+  // `station` must outlive the sweep.
+  explicit Sweep(Station& station, SweepOptions options = {});
 
   // Runs the poses in order. `stop` (may be null) is polled between poses. On every exit the
   // IRED is switched off; on normal end or stop the station is parked (options). Throws
-  // StationError, LinkError, StationRebooted (after max_retakes), or what the callback throws.
+  // DeviceError, LinkError, StationNotReadyError, DeviceRestarted (after max_retakes), or what
+  // the callbacks throw.
   SweepResult Run(const std::vector<SweepPose>& poses, const PoseCallback& at_pose,
-                  const std::atomic<bool>* stop = nullptr);
+                  const std::atomic<bool>* stop = nullptr,
+                  const ConfirmCallback& confirmed = {});
 
   // How the station reached the pose of the callback in progress: whether the axes moved and the
   // current changed (a retake after a reboot counts as both), and when the current was set (host
@@ -74,7 +77,9 @@ class Sweep {
 
  private:
   void Park();
-  StationClient& client_;
+  void Start();
+  bool GoTo(const std::vector<SweepPose>& poses, std::size_t i, int attempt);
+  Station& station_;
   SweepOptions options_;
   Transition transition_;
 };

@@ -171,5 +171,89 @@ TEST(RigTest, MissingRigFileIsARecipeError) {
   EXPECT_THROW(LoadRig("/nonexistent/rig.yaml"), RecipeError);
 }
 
+// A legacy `station: {port, baud, ...}` is one irdist_station device filling every role.
+TEST(RigTest, ALegacyStationIsOneIrdistStationInEveryRole) {
+  const Rig rig = LoadRig(kRigs + "/example-hardware.yaml");
+  const StationSpec& spec = rig.station.composition;
+  ASSERT_EQ(spec.devices.size(), 1u);
+  EXPECT_EQ(spec.devices[0].name, "station");
+  EXPECT_EQ(spec.devices[0].driver, "irdist_station");
+  EXPECT_EQ(spec.devices[0].port, "/dev/ttyUSB0");
+  EXPECT_EQ(spec.devices[0].baud, 115200);
+  EXPECT_EQ(spec.motion, (std::vector<std::string>{"station"}));
+  EXPECT_EQ(spec.source, "station");
+  EXPECT_EQ(spec.trigger, "station");
+  EXPECT_FALSE(rig.station.composed);
+}
+
+constexpr const char* kComposed = R"(name: lab
+kind: hardware
+camera:
+  id: "192.168.1.20"
+  trigger_source: Line1
+station:
+  current_tolerance_ma: 2.5
+  roles:
+    motion: [box]
+    source: box
+    trigger: box
+  devices:
+    box:
+      driver: irdist_station
+      port: /dev/ttyUSB3
+      baud: 57600
+      trigger_width_us: 200
+)";
+
+TEST(RigTest, AComposedStationIsReadStrictly) {
+  const Rig rig = ParseRig(kComposed, "lab.yaml");
+  const StationSpec& spec = rig.station.composition;
+  EXPECT_TRUE(rig.station.composed);
+  ASSERT_EQ(spec.devices.size(), 1u);
+  EXPECT_EQ(spec.devices[0].port, "/dev/ttyUSB3");
+  EXPECT_EQ(spec.devices[0].baud, 57600);
+  EXPECT_EQ(spec.devices[0].settings.at("trigger_width_us").text, "200");
+  EXPECT_EQ(spec.devices[0].settings.at("trigger_width_us").line, 17);
+  EXPECT_DOUBLE_EQ(spec.current_tolerance_ma, 2.5);
+}
+
+TEST(RigTest, AMisspeltDriverKeyIsAnErrorWithItsLine) {
+  std::string text = kComposed;
+  text.replace(text.find("trigger_width_us"), 16, "trigger_widht_us");
+  try {
+    ParseRig(text, "lab.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.Line(), 17) << e.what();
+    EXPECT_NE(e.Message().find("trigger_width_us"), std::string::npos) << e.what();
+  }
+}
+
+TEST(RigTest, ARoleNamingNoDeviceIsAnError) {
+  std::string text = kComposed;
+  text.replace(text.find("source: box"), 11, "source: bx");
+  EXPECT_THROW(ParseRig(text, "lab.yaml"), RecipeError);
+}
+
+// Trigger settings are checked when the rig is loaded (plan time), with the fix.
+TEST(RigTest, TheTriggerMustMatchTheCamerasTriggerSource) {
+  std::string text = kComposed;
+  text.replace(text.find("trigger_source: Line1"), 21, "trigger_source: Software");
+  try {
+    ParseRig(text, "lab.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const RecipeError& e) {
+    EXPECT_NE(e.Message().find("Line1"), std::string::npos) << e.what();
+  }
+  text = kComposed;
+  text.replace(text.find("trigger: box"), 12, "trigger: camera_software");
+  try {
+    ParseRig(text, "lab.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const RecipeError& e) {
+    EXPECT_NE(e.Message().find("trigger_source: Software"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace irdist

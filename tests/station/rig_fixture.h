@@ -11,6 +11,7 @@
 #include "sim/world.h"
 #include "station/line_log.h"
 #include "station/serial_transport.h"
+#include "station/station.h"
 #include "station/station_client.h"
 
 namespace irdist::testing {
@@ -40,6 +41,42 @@ struct VirtualStation {
   std::unique_ptr<LineLog> log;
   std::unique_ptr<SerialTransport> transport;
   std::unique_ptr<StationClient> client;
+};
+
+// The emulator behind a composed Station of one irdist_station device filling every role (what a
+// legacy rig file means), logging to a file in the build tree.
+struct VirtualStationRig {
+  explicit VirtualStationRig(double time_scale, sim::EmulatorOptions emulator_options = {},
+                             double current_tolerance_ma = 5.0)
+      : world(time_scale), emulator(world, emulator_options) {
+    port = emulator.Start();
+    const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    log = std::make_unique<LineLog>(std::string(IRDIST_BINARY_DIR) + "/station_test_" + name +
+                                    ".log");
+    StationOptions options;
+    options.log = log.get();
+    station = std::make_unique<Station>(Spec(port, current_tolerance_ma), options);
+  }
+  static StationSpec Spec(const std::string& port, double current_tolerance_ma) {
+    DeviceSpec device;
+    device.name = "station";
+    device.driver = "irdist_station";
+    device.port = port;
+    device.reply_timeout_ms = 150;
+    device.settings["move_timeout_ms"] = {"20000", 1};
+    StationSpec spec;
+    spec.devices = {device};
+    spec.motion = {"station"};
+    spec.source = "station";
+    spec.trigger = "station";
+    spec.current_tolerance_ma = current_tolerance_ma;
+    return spec;
+  }
+  sim::World world;
+  sim::StationEmulator emulator;
+  std::string port;
+  std::unique_ptr<LineLog> log;
+  std::unique_ptr<Station> station;
 };
 
 // Duration of a trapezoidal move from rest to rest (simulated seconds).

@@ -10,7 +10,7 @@
 namespace irdist {
 namespace {
 
-using testing::VirtualStation;
+using testing::VirtualStationRig;
 
 std::vector<SweepPose> Grid() {
   std::vector<SweepPose> poses;
@@ -30,8 +30,8 @@ TEST(SweepOptions, DefaultsAreValid) {
 }
 
 TEST(Sweep, VisitsEveryPoseSettledAtItsCurrentThenParksIredOff) {
-  VirtualStation rig(100.0);
-  Sweep sweep(*rig.client);
+  VirtualStationRig rig(100.0);
+  Sweep sweep(*rig.station);
   std::vector<std::int64_t> seen;
   const std::vector<SweepPose> poses = Grid();
   const SweepResult r = sweep.Run(poses, [&](const SweepPose& p, int attempt) {
@@ -53,8 +53,8 @@ TEST(Sweep, VisitsEveryPoseSettledAtItsCurrentThenParksIredOff) {
 }
 
 TEST(Sweep, CurrentFirstAndNoMoveWhenOnlyTheCurrentChanges) {
-  VirtualStation rig(100.0);
-  Sweep sweep(*rig.client);
+  VirtualStationRig rig(100.0);
+  Sweep sweep(*rig.station);
   const std::vector<SweepPose> poses = {{0, 1800.0, 10.0, 0.0, 450.0},
                                         {1, 1800.0, 10.0, 0.0, 500.0},
                                         {2, 1800.0, 10.0, 0.0, 550.0},
@@ -63,7 +63,8 @@ TEST(Sweep, CurrentFirstAndNoMoveWhenOnlyTheCurrentChanges) {
     EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, p.bias_ma);
     EXPECT_NEAR(rig.world.Pose().slide_mm, p.slide_mm, 1e-6);
   });
-  rig.log.reset();  // flush
+  rig.station.reset();  // closes the link
+  rig.log.reset();      // flush
   std::ifstream in(std::string(IRDIST_BINARY_DIR) +
                    "/station_test_CurrentFirstAndNoMoveWhenOnlyTheCurrentChanges.log");
   std::string line;
@@ -84,8 +85,8 @@ TEST(Sweep, CurrentFirstAndNoMoveWhenOnlyTheCurrentChanges) {
 }
 
 TEST(Sweep, RebootDuringAPoseRetakesIt) {
-  VirtualStation rig(100.0);
-  Sweep sweep(*rig.client);
+  VirtualStationRig rig(100.0);
+  Sweep sweep(*rig.station);
   std::map<std::int64_t, int> attempts;
   const SweepResult r = sweep.Run(Grid(), [&](const SweepPose& p, int attempt) {
     attempts[p.index] = std::max(attempts[p.index], attempt);
@@ -101,8 +102,8 @@ TEST(Sweep, RebootDuringAPoseRetakesIt) {
 }
 
 TEST(Sweep, RebootMidMoveRetakesThePose) {
-  VirtualStation rig(100.0);
-  Sweep sweep(*rig.client);
+  VirtualStationRig rig(100.0);
+  Sweep sweep(*rig.station);
   int calls = 0;
   const std::vector<SweepPose> poses = Grid();
   const SweepResult r = sweep.Run(poses, [&](const SweepPose& p, int) {
@@ -116,8 +117,8 @@ TEST(Sweep, RebootMidMoveRetakesThePose) {
 }
 
 TEST(Sweep, StopFlagFinishesThePoseInFlightAndParks) {
-  VirtualStation rig(100.0);
-  Sweep sweep(*rig.client);
+  VirtualStationRig rig(100.0);
+  Sweep sweep(*rig.station);
   std::atomic<bool> stop{false};
   int calls = 0;
   const SweepResult r = sweep.Run(
@@ -134,11 +135,85 @@ TEST(Sweep, StopFlagFinishesThePoseInFlightAndParks) {
 }
 
 TEST(Sweep, CallbackFailureSwitchesIredOff) {
-  VirtualStation rig(100.0);
-  Sweep sweep(*rig.client);
+  VirtualStationRig rig(100.0);
+  Sweep sweep(*rig.station);
   EXPECT_THROW(sweep.Run(Grid(), [&](const SweepPose&, int) { throw Error("camera lost"); }),
                Error);
   EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, 0.0);
+}
+
+// Each pose is confirmed (every device seen alive after the callback) before anything moves again,
+// so what the caller commits there survives whatever happens during the next move.
+TEST(Sweep, ConfirmsEachPoseBeforeTheNextMove) {
+  VirtualStationRig rig(100.0);
+  Sweep sweep(*rig.station);
+  std::vector<std::int64_t> confirmed;
+  const std::vector<SweepPose> poses = Grid();
+  sweep.Run(
+      poses, [&](const SweepPose&, int) {}, nullptr,
+      [&](const SweepPose& p) {
+        const sim::PoseState truth = rig.world.Pose();
+        EXPECT_FALSE(truth.moving);
+        EXPECT_NEAR(truth.slide_mm, p.slide_mm, 1e-6);
+        EXPECT_NEAR(truth.pan_deg, p.pan_deg, 1e-6);
+        confirmed.push_back(p.index);
+      });
+  ASSERT_EQ(confirmed.size(), poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) EXPECT_EQ(confirmed[i], poses[i].index);
+}
+
+// The station refuses the move to the fifth pose (its own soft limit is below the recipe's):
+// the four poses before it were confirmed, the error names the refusal, the IRED is off.
+TEST(Sweep, ARefusedMoveKeepsThePosesConfirmedBeforeIt) {
+  sim::EmulatorOptions options;
+  options.slide.max = 2200.0;
+  VirtualStationRig rig(100.0, options);
+  Sweep sweep(*rig.station);
+  std::vector<std::int64_t> confirmed;
+  try {
+    sweep.Run(Grid(), [](const SweepPose&, int) {}, nullptr,
+              [&](const SweepPose& p) { confirmed.push_back(p.index); });
+    ADD_FAILURE() << "the refused move did not stop the sweep";
+  } catch (const DeviceError& e) {
+    EXPECT_EQ(e.device_code(), "-222") << e.what();
+  }
+  EXPECT_EQ(confirmed, (std::vector<std::int64_t>{100, 101, 102, 103}));
+  EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, 0.0);
+}
+
+// The e-stop is pressed while the third pose is captured: the sweep says so at once (before any
+// move) and does not confirm that pose.
+TEST(Sweep, AnEStopDuringABracketIsReportedBeforeAnyMove) {
+  VirtualStationRig rig(100.0);
+  Sweep sweep(*rig.station);
+  std::vector<std::int64_t> confirmed;
+  try {
+    sweep.Run(
+        Grid(),
+        [&](const SweepPose& p, int) {
+          if (p.index == 102) rig.emulator.PressEmergencyStop();
+        },
+        nullptr, [&](const SweepPose& p) { confirmed.push_back(p.index); });
+    ADD_FAILURE() << "the e-stop did not stop the sweep";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("emergency stop"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(confirmed, (std::vector<std::int64_t>{100, 101}));
+}
+
+// The station stops answering during the third pose: the two before it stay confirmed.
+TEST(Sweep, ASilentStationLosesOnlyThePoseInFlight) {
+  VirtualStationRig rig(100.0);
+  Sweep sweep(*rig.station);
+  std::vector<std::int64_t> confirmed;
+  EXPECT_THROW(sweep.Run(
+                   Grid(),
+                   [&](const SweepPose& p, int) {
+                     if (p.index == 102) rig.emulator.SetDropRate(1.0);
+                   },
+                   nullptr, [&](const SweepPose& p) { confirmed.push_back(p.index); }),
+               LinkError);
+  EXPECT_EQ(confirmed, (std::vector<std::int64_t>{100, 101}));
 }
 
 }  // namespace

@@ -1,0 +1,145 @@
+#include "app/station_cmd.h"
+
+#include <signal.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <ostream>
+
+#include "app/rig.h"
+#include "app/station_setup.h"
+#include "app/tools.h"
+#include "station/conformance.h"
+#include "station/serial_transport.h"
+
+namespace irdist {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The ports a running `irdist sim` of this rig file wrote in its state file.
+std::map<std::string, std::string> RunningSimPorts(const Rig& rig) {
+  std::error_code error;
+  const std::string wanted = fs::absolute(rig.path).string();
+  for (const auto& entry : fs::directory_iterator(SimStateDir(), error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("irdist-sim-", 0) != 0 || entry.path().extension() != ".yaml") continue;
+    const auto values = ReadFlatYaml(entry.path().string());
+    const auto pid = values.find("pid");
+    const auto rig_path = values.find("rig");
+    if (pid == values.end() || rig_path == values.end() || rig_path->second != wanted) continue;
+    if (kill(static_cast<pid_t>(std::atoll(pid->second.c_str())), 0) != 0) continue;
+    std::map<std::string, std::string> ports;
+    for (const auto& [key, value] : values) {
+      if (key.rfind("port.", 0) == 0) ports[key.substr(5)] = value;
+    }
+    const auto legacy = values.find("station_port");
+    if (ports.empty() && legacy != values.end()) ports[kLegacyStationDevice] = legacy->second;
+    return ports;
+  }
+  return {};
+}
+
+std::map<std::string, std::string> PortsFor(const Rig& rig, const StationArgs& args) {
+  std::map<std::string, std::string> ports;
+  if (rig.kind == RigKind::kVirtual) ports = RunningSimPorts(rig);
+  for (const auto& [name, port] : ParsePortOverrides(rig, args.ports)) ports[name] = port;
+  for (const DeviceSpec& d : rig.station.composition.devices) {
+    if (ports.count(d.name) == 0 && d.port == "auto") {
+      throw UsageError("the port of station device '" + d.name + "' is unknown: start the " +
+                       "virtual rig first ('irdist sim " + rig.path + "' in another terminal) " +
+                       "or pass --port " + d.name + "=PATH");
+    }
+  }
+  return ports;
+}
+
+void CheckCount(const StationArgs& args, std::size_t count, const char* usage) {
+  if (args.values.size() != count) {
+    throw UsageError(std::string("station ") + args.action + " takes " + usage);
+  }
+}
+
+void CheckWithin(const Rig& rig, const char* what, double value, const AxisRange& range) {
+  if (!range.Contains(value)) {
+    char text[200];
+    std::snprintf(text, sizeof(text), "%s %.2f is outside station.limits [%.2f, %.2f]", what,
+                  value, range.min, range.max);
+    throw RecipeError(rig.path, 0, 0, text);
+  }
+}
+
+void PrintStatus(Station& station, std::ostream& out) {
+  for (const auto& [name, state] : station.States()) {
+    out << name << ": " << MotionStateName(state) << "\n";
+  }
+  const StationPosition p = station.Position();
+  const SourceReading reading = station.MeasureCurrent();
+  char line[200];
+  std::snprintf(line, sizeof(line),
+                "position: slide %.2f mm, pan %.2f deg, tilt %.2f deg\ncurrent: %.2f mA "
+                "measured%s\n",
+                p.slide_mm, p.pan_deg, p.tilt_deg, reading.current_ma,
+                reading.in_compliance ? " (in compliance)" : "");
+  out << line;
+}
+
+void Move(const Rig& rig, const StationArgs& args, Station& station) {
+  CheckCount(args, 3, "SLIDE_MM PAN_DEG TILT_DEG");
+  const StationPosition target{args.values[0], args.values[1], args.values[2]};
+  CheckWithin(rig, "slide_mm", target.slide_mm, rig.station.limits.slide_mm);
+  CheckWithin(rig, "pan_deg", target.pan_deg, rig.station.limits.pan_deg);
+  CheckWithin(rig, "tilt_deg", target.tilt_deg, rig.station.limits.tilt_deg);
+  station.CheckReadyToStart();
+  if (!station.homed()) station.Home();
+  station.MoveTo(target);
+}
+
+void SetCurrent(const Rig& rig, const StationArgs& args, Station& station) {
+  CheckCount(args, 1, "MA");
+  CheckWithin(rig, "bias_ma", args.values[0], rig.station.limits.bias_ma);
+  station.SetCurrent(args.values[0]);
+  station.CheckCurrent(station.MeasureCurrent());
+}
+
+}  // namespace
+
+void RunStation(const StationArgs& args, CommandIo io) {
+  const Rig rig = LoadRig(ResolveRig(args.rig));
+  StationOptions options = StationRunOptions(PortsFor(rig, args), nullptr);
+  options.off_at_exit = false;  // `current` leaves the IRED on; `off` switches it off
+  Station station(rig.station.composition, options);
+  station.Identify();
+  io.err << station.IdentityBrief() << "\n";
+  if (args.action == "move") {
+    Move(rig, args, station);
+  } else if (args.action == "current") {
+    SetCurrent(rig, args, station);
+  } else if (args.action == "off") {
+    CheckCount(args, 0, "no value");
+    station.Off();
+    station.Stop();
+  } else if (args.action == "home") {
+    CheckCount(args, 0, "no value");
+    station.Home();
+  } else if (args.action != "status") {
+    throw UsageError("station: unknown action '" + args.action +
+                     "'; valid: move, current, off, home, status");
+  }
+  PrintStatus(station, io.out);
+}
+
+void RunStationTest(const StationTestArgs& args, CommandIo io) {
+  SerialOptions serial;
+  serial.baud = static_cast<unsigned int>(args.baud);
+  SerialTransport transport(args.port, serial);
+  const ConformanceReport report = RunConformance(transport, ConformanceOptions{});
+  io.out << report.Table();
+  if (!report.Passed()) {
+    throw CheckFailedError(args.port + ": " + std::to_string(report.Failures()) +
+                           " conformance check(s) failed (table above); see "
+                           "docs/station-protocol.md");
+  }
+}
+
+}  // namespace irdist

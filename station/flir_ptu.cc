@@ -1,0 +1,450 @@
+// The FLIR (formerly Directed Perception) PTU driver (docs/devices/flir_ptu.md): a PTU-E series
+// pan-tilt unit as the motion role for pan and tilt. Written from the "Pan-Tilt Unit (E Series)
+// Command Reference Manual" and the PTU-D46 user's manual's command reference: commands end with
+// a delimiter (CR, [ENTER]), replies start with '*' (done) or '!' (error); positions are integers in
+// the unit's native steps, whose size PR/TR report in seconds of arc.
+//
+// The protocol has no request ids: replies are matched by order, one per command. Echo is
+// switched off (ED) and feedback set terse (FT) at connection; the parser still takes the text
+// after the first '*' or '!' so an echoed command or verbose feedback parses the same.
+
+#include <algorithm>
+#include <cctype>
+#include <climits>
+#include <cmath>
+#include <sstream>
+#include <thread>
+
+#include "base/input_error.h"
+#include "station/driver.h"
+
+namespace irdist {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+constexpr char kName[] = "flir_ptu";
+constexpr double kArcsecPerDeg = 3600.0;
+constexpr milliseconds kPollPeriod{20};
+
+struct PtuAxis {
+  Axis axis = Axis::kPan;
+  char letter = 'P';            // command prefix: P (pan) or T (tilt)
+  double deg_per_position = 0;  // PR/TR (arc seconds) / 3600
+  long long min_pos = 0, max_pos = 0;
+  AxisSpeed speed;
+  long long target = 0;
+  bool has_target = false;
+  long long speed_pos_s = 0;  // PS/TS as read at Identify (a power cycle restores defaults)
+};
+
+// The first number among the words of `text` ("* 22", "* Current Pan position is 22").
+bool FirstNumber(const std::string& text, double* value) {
+  std::istringstream in(text);
+  for (std::string word; in >> word;) {
+    while (!word.empty() && (word.back() == ',' || word.back() == '.')) word.pop_back();
+    char* end = nullptr;
+    const double v = std::strtod(word.c_str(), &end);
+    if (!word.empty() && end == word.c_str() + word.size() && std::isfinite(v)) {
+      *value = v;
+      return true;
+    }
+  }
+  return false;
+}
+
+class FlirPtu : public DeviceDriver, public Motion {
+ public:
+  FlirPtu(const DeviceSpec& spec, std::unique_ptr<Transport> link)
+      : spec_(spec), link_(std::move(link)) {
+    identity_.kind = kName;
+    identity_.port = spec.port;
+    identity_.vendor = "FLIR";
+    timeout_ = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 1000);
+    attempts_ = 1 + static_cast<int>(spec.Number("retries", 4));
+    tolerance_ = static_cast<long long>(spec.Number("tolerance_positions", 0));
+    home_timeout_ = milliseconds(static_cast<long long>(spec.Number("home_timeout_s", 120) * 1000));
+    for (const auto& [axis, address] : spec.axes) {
+      PtuAxis a;
+      a.axis = axis;
+      a.letter = address == "pan" ? 'P' : 'T';
+      axes_.push_back(a);
+    }
+  }
+
+  Motion* motion() override { return this; }
+  DeviceIdentity Identify() override;
+  std::vector<Axis> Axes() const override {
+    std::vector<Axis> out;
+    for (const PtuAxis& a : axes_) out.push_back(a.axis);
+    return out;
+  }
+  MotionState State() override;
+  void Home() override;
+  void StartMove(const StationPosition& target) override;
+  void WaitSettled(milliseconds timeout) override;
+  void ReadPosition(StationPosition* position) override;
+  void Stop() noexcept override;
+  AxisSpeed Speed(Axis axis) const override {
+    for (const PtuAxis& a : axes_) {
+      if (a.axis == axis) return a.speed;
+    }
+    return {};
+  }
+  void CheckAlive() override;
+
+ private:
+  bool Exchange(const std::string& command, milliseconds wait, std::string* body);
+  std::string Query(const std::string& command);
+  double QueryNumber(const std::string& command);
+  bool Command(const std::string& command, milliseconds wait);
+  long long Position(const PtuAxis& a) {
+    return std::llround(QueryNumber(std::string(1, a.letter) + "P"));
+  }
+  long long StablePosition(const PtuAxis& a);
+  void ReadAxis(PtuAxis* a);
+  void ApplySpeed(PtuAxis* a);
+  void MoveAxis(PtuAxis* a, long long position);
+  void WaitAt(milliseconds timeout, const std::string& what);
+  std::string AxisText(const PtuAxis& a) const { return AxisName(a.axis); }
+  [[noreturn]] void Fail(const std::string& code, const std::string& message,
+                         const std::string& fix) const {
+    throw DeviceError(identity_, code, message, fix);
+  }
+
+  DeviceSpec spec_;
+  std::unique_ptr<Transport> link_;
+  DeviceIdentity identity_;
+  std::vector<PtuAxis> axes_;
+  milliseconds timeout_{1000};
+  milliseconds home_timeout_{120000};
+  int attempts_ = 3;
+  long long tolerance_ = 0;
+  bool homed_ = false;
+  bool moving_ = false;
+  std::string last_heard_;
+};
+
+// Sends one command and reads its reply. True with the text after '*'; false when no reply came
+// in `wait`. A '!' reply is a DeviceError carrying the unit's message.
+bool FlirPtu::Exchange(const std::string& command, milliseconds wait, std::string* body) {
+  // Replies carry no id: whatever arrived before this command (a late reply to an earlier one)
+  // is not its reply.
+  link_->Flush();
+  link_->WriteLine(command);
+  const auto deadline = Clock::now() + wait;
+  while (true) {
+    const auto left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now());
+    std::string line;
+    try {
+      if (left.count() <= 0) throw LinkError("timeout", spec_.port, "");
+      line = link_->ReadLine(left);
+    } catch (const LinkError&) {
+      return false;
+    }
+    const std::size_t mark = line.find_first_of("*!");
+    if (mark == std::string::npos) {  // a banner, a bare echo, noise
+      if (!line.empty()) last_heard_ = line;
+      continue;
+    }
+    std::string text = line.substr(mark + 1);
+    text.erase(0, text.find_first_not_of(' '));
+    if (line[mark] == '*') {
+      *body = text;
+      return true;
+    }
+    const bool limit_hit = text == "P" || text == "T";  // manual: "!P"/"!T" on a limit hit
+    Fail("!" + text,
+         limit_hit ? std::string(text == "P" ? "pan" : "tilt") + " axis hit its limit"
+                   : "refused '" + command + "': " + text,
+         limit_hit ? "the unit lost synchrony: home (reset) it before continuing"
+                   : "check the command's value against the unit's limits (PN/PX/TN/TX)");
+  }
+}
+
+// A query (changes nothing): retried after a lost or garbled reply.
+std::string FlirPtu::Query(const std::string& command) {
+  for (int attempt = 0; attempt < attempts_; ++attempt) {
+    std::string body;
+    if (Exchange(command, timeout_, &body)) return body;
+  }
+  throw LinkError("no reply to '" + command + "' from the PTU after " +
+                      std::to_string(attempts_) + " attempts" +
+                      (last_heard_.empty() ? "" : " (heard '" + last_heard_ + "')"),
+                  spec_.port, "check the cable, the baud rate (PTU default 9600) and power");
+}
+
+double FlirPtu::QueryNumber(const std::string& command) {
+  for (int attempt = 0; attempt < attempts_; ++attempt) {
+    const std::string body = Query(command);
+    double value = 0;
+    if (FirstNumber(body, &value)) return value;
+    last_heard_ = "* " + body;
+    link_->Flush();
+  }
+  Fail(last_heard_, "'" + command + "' did not answer a number",
+       "check that the unit is a PTU and in terse or verbose feedback mode");
+}
+
+// A command that changes state: sent once. False when its acknowledgement was lost.
+bool FlirPtu::Command(const std::string& command, milliseconds wait) {
+  std::string body;
+  return Exchange(command, wait, &body);
+}
+
+// The protocol has no checksum: a reported position is the same value read twice in a row.
+long long FlirPtu::StablePosition(const PtuAxis& a) {
+  long long last = Position(a);
+  for (int attempt = 0; attempt < attempts_; ++attempt) {
+    const long long now = Position(a);
+    if (now == last) return now;
+    last = now;
+  }
+  Fail("", AxisText(a) + " position does not read the same twice",
+       "the axis is moving or the link is damaged; check the cable");
+}
+
+void FlirPtu::ReadAxis(PtuAxis* a) {
+  const std::string p(1, a->letter);
+  a->deg_per_position = QueryNumber(p + "R") / kArcsecPerDeg;
+  if (!(a->deg_per_position > 0)) {
+    Fail(p + "R", AxisText(*a) + " resolution is not positive", "check the unit");
+  }
+  a->min_pos = std::llround(QueryNumber(p + "N"));
+  a->max_pos = std::llround(QueryNumber(p + "X"));
+  a->speed_pos_s = std::llround(QueryNumber(p + "S"));
+  a->speed.speed = static_cast<double>(a->speed_pos_s) * a->deg_per_position;
+  a->speed.acceleration = QueryNumber(p + "A") * a->deg_per_position;
+  a->speed.settle_ms = spec_.Number("settle_ms", 0.0);
+  a->speed.home = 0.0;
+}
+
+// Rig-file speed and acceleration, in positions per second (and per second squared).
+void FlirPtu::ApplySpeed(PtuAxis* a) {
+  const std::string p(1, a->letter);
+  if (spec_.settings.count("speed_deg_s")) {
+    const long long s = std::llround(spec_.Number("speed_deg_s", 0) / a->deg_per_position);
+    if (!Command(p + "S" + std::to_string(s), timeout_)) {
+      throw LinkError("no reply to " + p + "S", spec_.port, "check the cable");
+    }
+  }
+  if (spec_.settings.count("accel_deg_s2")) {
+    const long long s = std::llround(spec_.Number("accel_deg_s2", 0) / a->deg_per_position);
+    if (!Command(p + "A" + std::to_string(s), timeout_)) {
+      throw LinkError("no reply to " + p + "A", spec_.port, "check the cable");
+    }
+  }
+}
+
+DeviceIdentity FlirPtu::Identify() {
+  link_->Flush();
+  std::string version;
+  try {
+    Query("ED");  // echo off; the reply may still carry the echo of "ED"
+    Query("FT");  // terse feedback
+    version = Query("V");
+  } catch (const Error& e) {
+    Fail("", std::string("no PTU answers on this port: ") + e.what(),
+         "check that the port is the PTU's (ls -l /dev/serial/by-id) and its baud rate");
+  }
+  std::string upper = version;
+  for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  if (upper.find("PAN-TILT") == std::string::npos && upper.find("PTU") == std::string::npos) {
+    Fail(version, "the device on this port answered V with '" + version + "', not a pan-tilt "
+                  "unit's version", "connect the PTU to this port or fix the rig file's port");
+  }
+  identity_.model = "PTU";
+  identity_.firmware = version;
+  identity_.serial = "-";
+  Query("I");  // immediate execution mode: position commands start at once
+  for (PtuAxis& a : axes_) {
+    ReadAxis(&a);
+    ApplySpeed(&a);
+    ReadAxis(&a);  // read back what the unit accepted
+  }
+  homed_ = false;
+  moving_ = false;
+  return identity_;
+}
+
+MotionState FlirPtu::State() {
+  if (!homed_) return MotionState::kUnhomed;
+  for (const PtuAxis& a : axes_) {
+    if (a.has_target && std::llabs(Position(a) - a.target) > tolerance_) {
+      return MotionState::kMoving;
+    }
+  }
+  return MotionState::kIdle;
+}
+
+// Polls until every axis with a target stands at it (two equal polls). Throws on timeout.
+void FlirPtu::WaitAt(milliseconds timeout, const std::string& what) {
+  const auto deadline = Clock::now() + timeout;
+  std::vector<long long> last(axes_.size(), LLONG_MIN);
+  while (true) {
+    bool done = true;
+    for (std::size_t i = 0; i < axes_.size(); ++i) {
+      const long long pos = Position(axes_[i]);
+      if (axes_[i].has_target &&
+          (std::llabs(pos - axes_[i].target) > tolerance_ || pos != last[i])) {
+        done = false;
+      }
+      last[i] = pos;
+    }
+    if (done) return;
+    if (Clock::now() > deadline) {
+      Stop();
+      Fail("", what + " not done within " + std::to_string(timeout.count()) + " ms",
+           "check for an obstruction, an overload or a stalled axis; then home");
+    }
+    std::this_thread::sleep_for(kPollPeriod);
+  }
+}
+
+// Manual: R resets (calibrates) both axes; the '*' may come when the reset ends. Then the axes
+// are commanded to 0, where homing leaves them.
+void FlirPtu::Home() {
+  homed_ = false;
+  if (!Command("R", home_timeout_)) {
+    throw LinkError("no acknowledgement of the reset (R) within " +
+                        std::to_string(home_timeout_.count()) + " ms",
+                    spec_.port, "check the unit's power and cable; then home again");
+  }
+  for (PtuAxis& a : axes_) a.has_target = false;
+  for (PtuAxis& a : axes_) MoveAxis(&a, 0);
+  WaitAt(home_timeout_, "homing");
+  homed_ = true;
+  moving_ = false;
+}
+
+// One absolute position command. A lost '*' is followed by a check, never a blind resend: the
+// axis moving or at the target means it was accepted; otherwise it is sent again.
+void FlirPtu::MoveAxis(PtuAxis* a, long long position) {
+  const std::string command = std::string(1, a->letter) + "P" + std::to_string(position);
+  a->target = position;
+  a->has_target = true;
+  if (Command(command, timeout_)) return;
+  const long long first = Position(*a);
+  std::this_thread::sleep_for(kPollPeriod * 5);
+  const long long second = Position(*a);
+  if (first != second || std::llabs(second - position) <= tolerance_) return;
+  if (!Command(command, timeout_)) {
+    throw LinkError("no acknowledgement of '" + command + "' (sent twice, the axis stood still)",
+                    spec_.port, "check the cable and the unit's power");
+  }
+}
+
+void FlirPtu::StartMove(const StationPosition& target) {
+  for (PtuAxis& a : axes_) {
+    const double deg = a.axis == Axis::kPan ? target.pan_deg : target.tilt_deg;
+    const long long position = std::llround(deg / a.deg_per_position);
+    if (position < a.min_pos || position > a.max_pos) {
+      Fail("", AxisText(a) + " target " + std::to_string(deg) + " deg is outside the unit's [" +
+                   std::to_string(a.min_pos * a.deg_per_position) + ", " +
+                   std::to_string(a.max_pos * a.deg_per_position) + "] deg",
+           "narrow station.limits." + AxisText(a) + "_deg");
+    }
+  }
+  if (!homed_) Fail("", "the unit is not homed", "home the station first");
+  moving_ = true;
+  for (PtuAxis& a : axes_) {
+    const double deg = a.axis == Axis::kPan ? target.pan_deg : target.tilt_deg;
+    MoveAxis(&a, std::llround(deg / a.deg_per_position));
+  }
+}
+
+void FlirPtu::WaitSettled(milliseconds timeout) {
+  WaitAt(timeout, "move");
+  moving_ = false;
+}
+
+void FlirPtu::ReadPosition(StationPosition* position) {
+  for (const PtuAxis& a : axes_) {
+    const double deg = static_cast<double>(StablePosition(a)) * a.deg_per_position;
+    (a.axis == Axis::kPan ? position->pan_deg : position->tilt_deg) = deg;
+  }
+}
+
+void FlirPtu::Stop() noexcept {
+  try {
+    Command("H", timeout_);  // manual: halt both axes
+    moving_ = false;
+  } catch (...) {
+    // Best effort: the caller is already handling a failure.
+  }
+}
+
+// At rest, an axis away from its target or speeds back to their defaults: the unit restarted
+// (its power-up reset moves the axes and resets the settings).
+void FlirPtu::CheckAlive() {
+  for (const PtuAxis& a : axes_) {
+    const long long pos = (!homed_ || moving_ || !a.has_target) ? Position(a) : StablePosition(a);
+    if (!homed_ || moving_ || !a.has_target) continue;
+    const bool moved = std::llabs(pos - a.target) > tolerance_;
+    const bool reset = spec_.settings.count("speed_deg_s") &&
+                       std::llround(QueryNumber(std::string(1, a.letter) + "S")) != a.speed_pos_s;
+    if (moved || reset) {
+      homed_ = false;
+      throw DeviceRestarted(identity_.Brief() + ": " + AxisText(a) + " at " +
+                                std::to_string(pos) + " instead of " + std::to_string(a.target) +
+                                (reset ? " and its speed reset" : "") +
+                                ": the unit was power-cycled or reset; home it and retake",
+                            false);
+    }
+  }
+}
+
+[[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {
+  throw InputError(spec.file, spec.line, 0, "station.devices." + spec.name + " (flir_ptu): " +
+                                                message + "; see docs/devices/flir_ptu.md");
+}
+
+void Validate(const DeviceSpec& spec) {
+  spec.CheckKnown({"speed_deg_s", "accel_deg_s2", "tolerance_positions", "retries",
+                   "home_timeout_s", "settle_ms"});
+  if (spec.axes.empty()) Invalid(spec, "map pan and/or tilt in `axes:` ({pan: pan, tilt: tilt})");
+  std::vector<std::string> used;
+  for (const auto& [axis, address] : spec.axes) {
+    if (axis == Axis::kSlide) Invalid(spec, "a pan-tilt unit cannot drive the slide");
+    if (address != "pan" && address != "tilt") {
+      Invalid(spec, "the PTU's axes are named pan and tilt, not '" + address + "'");
+    }
+    if (std::find(used.begin(), used.end(), address) != used.end()) {
+      Invalid(spec, "the PTU axis '" + address + "' is mapped twice");
+    }
+    used.push_back(address);
+  }
+  for (const char* key : {"speed_deg_s", "accel_deg_s2", "home_timeout_s"}) {
+    if (spec.settings.count(key) && !(spec.Number(key, 0) > 0)) {
+      Invalid(spec, key + std::string(" must be > 0"));
+    }
+  }
+  if (spec.Number("tolerance_positions", 0) < 0) Invalid(spec, "tolerance_positions must be >= 0");
+  const double retries = spec.Number("retries", 4);
+  if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
+}
+
+DriverInfo MakePtuInfo() {
+  DriverInfo info;
+  info.name = kName;
+  // Manual: a command ends with a delimiter, [SPACE] or [ENTER]; a carriage return is [ENTER]
+  // and also ends the line for readers that execute whole lines only.
+  info.line_end = "\r";
+  info.default_baud = 9600;
+  info.default_reply_timeout_ms = 1000;
+  info.roles = {"motion"};
+  info.doc = "docs/devices/flir_ptu.md";
+  info.validate = Validate;
+  info.create = [](const DeviceSpec& spec, std::unique_ptr<Transport> link) {
+    Validate(spec);
+    return std::unique_ptr<DeviceDriver>(new FlirPtu(spec, std::move(link)));
+  };
+  return info;
+}
+
+}  // namespace
+
+IRDIST_REGISTER_DRIVER(flir_ptu, MakePtuInfo());
+
+}  // namespace irdist

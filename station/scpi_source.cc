@@ -1,0 +1,368 @@
+// The SCPI current source driver (docs/devices/scpi_source.md): an IEEE 488.2 / SCPI SourceMeter
+// with the Keithley 2400-series command set as the IRED's current source. Written from the
+// "Series 2400 SourceMeter User's Manual" (SCPI command reference, status structure, RS-232
+// interface) and IEEE 488.2 (*IDN?, *RST, the error queue).
+//
+// SCPI replies carry no request id: a reply is matched to its query by position in the stream.
+// After a lost reply the stream is resynchronised with *IDN? (whose answer is known after
+// Identify) before anything else is read, so a late reply is never taken for another's.
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "base/input_error.h"
+#include "station/driver.h"
+
+namespace irdist {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+constexpr char kName[] = "scpi_source";
+constexpr int kMaxErrorsRead = 32;  // the 2400's error queue holds 10; more = a stuck queue
+constexpr double kNan = 9.9e37;     // manual, FORMat:ELEMents: "NAN" reads as +9.91e37
+constexpr double kConfirmFraction = 0.01;  // a reading this far from the set-point is re-read
+
+std::string Upper(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string Trim(const std::string& s) {
+  const std::size_t b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
+}
+
+std::vector<std::string> SplitCommas(const std::string& s) {
+  std::vector<std::string> out;
+  std::string cur;
+  std::istringstream in(s);
+  while (std::getline(in, cur, ',')) out.push_back(Trim(cur));
+  return out;
+}
+
+bool ParseDouble(const std::string& text, double* value) {
+  char* end = nullptr;
+  *value = std::strtod(text.c_str(), &end);
+  return !text.empty() && end == text.c_str() + text.size() && std::isfinite(*value);
+}
+
+class ScpiSource : public DeviceDriver, public CurrentSource {
+ public:
+  ScpiSource(const DeviceSpec& spec, std::unique_ptr<Transport> link)
+      : spec_(spec), link_(std::move(link)) {
+    identity_.kind = kName;
+    identity_.port = spec.port;
+    timeout_ = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 1000);
+    attempts_ = 1 + static_cast<int>(spec.Number("retries", 3));
+    compliance_v_ = spec.Number("compliance_v", 0.0);
+  }
+  ~ScpiSource() override {
+    if (!idn_.empty()) Off();  // never write to a device that was not identified
+  }
+
+  CurrentSource* source() override { return this; }
+
+  DeviceIdentity Identify() override;
+  void SetCurrent(double bias_ma) override;
+  double setpoint_ma() const override { return setpoint_ma_; }
+  SourceReading Measure() override;
+  void Off() noexcept override;
+  void CheckAlive() override;
+
+ private:
+  std::string Query(const std::string& query,
+                    const std::function<bool(const std::string&)>& valid);
+  bool QueryBool(const std::string& query);
+  SourceReading ReadOnce();
+  void Set(const std::string& command);
+  void DrainErrors(const std::string& after);
+  void Resync();
+  void CheckIdentity(const std::string& idn);
+  void ApplySourceSettings();
+  bool OutputOn() { return QueryBool(":OUTP?"); }
+  void CheckOutputState();
+  [[noreturn]] void Fail(const std::string& code, const std::string& message,
+                         const std::string& fix) const {
+    throw DeviceError(identity_, code, message, fix);
+  }
+
+  DeviceSpec spec_;
+  std::unique_ptr<Transport> link_;
+  DeviceIdentity identity_;
+  std::string idn_;  // the full *IDN? answer, the resynchronisation marker
+  milliseconds timeout_{1000};
+  int attempts_ = 3;
+  double compliance_v_ = 0.0;
+  double setpoint_ma_ = 0.0;
+  bool output_on_ = false;
+  bool out_of_step_ = false;  // a reply was lost: resynchronise before the next query
+};
+
+// Sends a query and returns the first line `valid` accepts. A lost or invalid reply is retried
+// (queries change nothing) after a resynchronisation.
+std::string ScpiSource::Query(const std::string& query,
+                              const std::function<bool(const std::string&)>& valid) {
+  std::string heard;
+  for (int attempt = 0; attempt < attempts_; ++attempt) {
+    if (attempt > 0 || out_of_step_) Resync();
+    link_->WriteLine(query);
+    try {
+      heard = Trim(link_->ReadLine(timeout_));
+      if (valid(heard)) return heard;
+    } catch (const LinkError&) {
+      heard.clear();
+    }
+    out_of_step_ = true;  // a late or stray reply may still come
+  }
+  throw LinkError("no valid reply to '" + query + "' after " + std::to_string(attempts_) +
+                      " attempts" + (heard.empty() ? "" : " (last heard '" + heard + "')"),
+                  spec_.port,
+                  "check the RS-232 cable (straight-through), the baud rate, and that the instrument's "
+                  "terminator is LF");
+}
+
+// Reads away whatever is pending until the known *IDN? answer comes back.
+void ScpiSource::Resync() {
+  link_->Flush();
+  if (idn_.empty()) {  // before Identify: nothing known to wait for
+    out_of_step_ = false;
+    return;
+  }
+  link_->WriteLine("*IDN?");
+  const auto deadline = Clock::now() + timeout_ * 2;
+  while (Clock::now() < deadline) {
+    try {
+      if (Trim(link_->ReadLine(timeout_)) == idn_) {
+        out_of_step_ = false;
+        return;
+      }
+    } catch (const LinkError&) {
+      return;
+    }
+  }
+}
+
+bool ScpiSource::QueryBool(const std::string& query) {
+  const std::string reply =
+      Query(query, [](const std::string& r) { return r == "0" || r == "1"; });
+  return reply == "1";
+}
+
+// A setting: sent once (never repeated blindly), then the error queue is read (manual: the
+// 2400 reports a refused command only through the error queue).
+void ScpiSource::Set(const std::string& command) {
+  link_->WriteLine(command);
+  DrainErrors(command);
+}
+
+// Reads :SYST:ERR? until "0,..."; any error becomes a DeviceError naming the command.
+void ScpiSource::DrainErrors(const std::string& after) {
+  std::string first;
+  for (int i = 0; i < kMaxErrorsRead; ++i) {
+    const std::string reply = Query(":SYST:ERR?", [](const std::string& r) {
+      const std::size_t comma = r.find(',');
+      double code = 0;
+      return comma != std::string::npos && ParseDouble(Trim(r.substr(0, comma)), &code);
+    });
+    const int code = std::stoi(reply.substr(0, reply.find(',')));
+    if (code == 0) break;
+    if (first.empty()) first = reply;
+  }
+  if (!first.empty()) {
+    Fail(first, "refused '" + after + "'",
+         "check the command against the 2400 manual's SCPI reference and the value's range");
+  }
+}
+
+void ScpiSource::CheckIdentity(const std::string& idn) {
+  const std::vector<std::string> f = SplitCommas(idn);
+  if (f.size() < 4) {
+    Fail(idn, "the device on this port answered *IDN? with '" + idn +
+                  "', not an IEEE 488.2 identity (maker,model,serial,firmware)",
+         "check that the port is the SourceMeter's (ls -l /dev/serial/by-id) and its baud rate");
+  }
+  identity_.vendor = f[0];
+  identity_.model = f[1];
+  identity_.serial = f[2];
+  identity_.firmware = f[3];
+  const std::string vendor = spec_.Text("idn_vendor", "KEITHLEY");
+  const std::string model = spec_.Text("idn_model", "MODEL 24");
+  if (Upper(f[0]).find(Upper(vendor)) == std::string::npos ||
+      Upper(f[1]).find(Upper(model)) == std::string::npos) {
+    Fail(idn, "the device on this port is '" + f[0] + " " + f[1] + "', not a '" + vendor + " " +
+                  model + "..' SourceMeter",
+         "connect the SourceMeter to this port, or set idn_vendor/idn_model in the rig file if "
+         "this instrument really speaks the 2400 command set");
+  }
+  const std::string serial = spec_.Text("serial", "");
+  if (!serial.empty() && serial != f[2]) {
+    Fail(f[2], "serial " + f[2] + " is not the rig file's " + serial,
+         "two instruments may be swapped: check /dev/serial/by-id");
+  }
+}
+
+// Manual: current source, fixed level, voltage compliance; output off.
+void ScpiSource::ApplySourceSettings() {
+  char level[64];
+  std::snprintf(level, sizeof(level), ":SENS:VOLT:PROT %.6g", compliance_v_);
+  Set(":SOUR:FUNC CURR");
+  Set(level);
+  Set(":SOUR:CURR:LEV 0");
+}
+
+DeviceIdentity ScpiSource::Identify() {
+  link_->Flush();
+  std::string idn;
+  try {
+    idn = Query("*IDN?", [](const std::string& r) { return !r.empty(); });
+  } catch (const LinkError& e) {
+    Fail("", std::string("no answer to *IDN?: ") + e.what(),
+         "check that the port is the SourceMeter's, its RS-232 baud rate and terminator (LF)");
+  }
+  CheckIdentity(idn);
+  idn_ = idn;
+  link_->WriteLine("*CLS");  // IEEE 488.2: empties the error queue of older sessions
+  link_->WriteLine("*RST");  // manual: output off, power-on defaults
+  DrainErrors("*RST");
+  ApplySourceSettings();
+  Set(":OUTP OFF");
+  output_on_ = false;
+  setpoint_ma_ = 0.0;
+  return identity_;
+}
+
+void ScpiSource::SetCurrent(double bias_ma) {
+  if (!(bias_ma > 0.0)) {
+    Set(":OUTP OFF");
+    output_on_ = false;
+    setpoint_ma_ = 0.0;
+    Set(":SOUR:CURR:LEV 0");
+    return;
+  }
+  char level[64];
+  std::snprintf(level, sizeof(level), ":SOUR:CURR:LEV %.6E", bias_ma / 1000.0);
+  if (!output_on_) ApplySourceSettings();  // a power cycle while off loses them silently
+  Set(level);
+  setpoint_ma_ = bias_ma;
+  if (!output_on_) {
+    Set(":OUTP ON");
+    output_on_ = true;
+  }
+}
+
+// Output found off while it should be on: a power cycle (source function back to its power-on
+// default) or a trip (interlock, over-temperature: settings kept).
+void ScpiSource::CheckOutputState() {
+  if (!output_on_ || OutputOn()) return;
+  const std::string function = Upper(Query(":SOUR:FUNC?", [](const std::string& r) {
+    return !r.empty() && r.find(',') == std::string::npos;
+  }));
+  const double set_ma = setpoint_ma_;
+  output_on_ = false;
+  setpoint_ma_ = 0.0;
+  if (function.rfind("CURR", 0) != 0) {
+    throw DeviceRestarted(identity_.Brief() + ": the output is off and the source function is " +
+                              function + ": the instrument was power-cycled or reset; the IRED "
+                              "current (" + std::to_string(set_ma) + " mA) must be set again",
+                          false);
+  }
+  Fail("OUTP 0", "the output switched off by itself while sourcing " + std::to_string(set_ma) +
+                     " mA", "check the interlock, over-temperature and the front panel; then "
+                     "restart the run");
+}
+
+// One :READ?. Manual, FORMat:ELEMents: the answer is VOLT,CURR,RES,TIME,STAT (those enabled);
+// the current is the second element in the default format, in amperes.
+SourceReading ScpiSource::ReadOnce() {
+  const std::string data = Query(":READ?", [](const std::string& r) {
+    const std::vector<std::string> f = SplitCommas(r);
+    double v = 0;
+    return f.size() >= 2 && ParseDouble(f[0], &v) && ParseDouble(f[1], &v);
+  });
+  const std::vector<std::string> f = SplitCommas(data);
+  double volts = 0, amps = 0;
+  ParseDouble(f[0], &volts);
+  ParseDouble(f[1], &amps);
+  SourceReading reading;
+  reading.voltage_v = volts >= kNan ? 0.0 : volts;
+  reading.current_ma = amps >= kNan ? 0.0 : amps * 1000.0;
+  reading.output_on = true;
+  return reading;
+}
+
+SourceReading ScpiSource::Measure() {
+  CheckOutputState();
+  if (!output_on_) return SourceReading{};
+  SourceReading reading = ReadOnce();
+  // SCPI replies carry no checksum: a reading away from the set-point is confirmed by a second
+  // one (a real mismatch persists, a damaged digit does not).
+  if (std::abs(reading.current_ma - setpoint_ma_) > kConfirmFraction * setpoint_ma_) {
+    reading = ReadOnce();
+  }
+  reading.in_compliance = QueryBool(":SENS:VOLT:PROT:TRIP?");
+  return reading;
+}
+
+void ScpiSource::Off() noexcept {
+  try {
+    link_->WriteLine(":OUTP OFF");
+    output_on_ = false;
+    setpoint_ma_ = 0.0;
+  } catch (...) {
+    // Best effort on every exit path: nothing more can be done over a dead link.
+  }
+}
+
+void ScpiSource::CheckAlive() {
+  CheckOutputState();
+  if (!output_on_ && OutputOn()) {
+    Fail("OUTP 1", "the output is on while irdist set it off",
+         "someone is driving the instrument from elsewhere (front panel, another program)");
+  }
+}
+
+[[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {
+  throw InputError(spec.file, spec.line, 0, "station.devices." + spec.name + " (scpi_source): " +
+                                                message + "; see docs/devices/scpi_source.md");
+}
+
+void Validate(const DeviceSpec& spec) {
+  spec.CheckKnown({"compliance_v", "idn_vendor", "idn_model", "serial", "retries"});
+  if (!spec.axes.empty()) Invalid(spec, "a current source drives no axes: remove `axes:`");
+  if (!spec.settings.count("compliance_v")) {
+    Invalid(spec, "compliance_v (the voltage limit while sourcing current) is required: the "
+                  "IRED's maximum forward voltage plus the leads' drop");
+  }
+  const double v = spec.Number("compliance_v", 0.0);
+  if (!(v > 0.0 && v <= 210.0)) Invalid(spec, "compliance_v must be in (0, 210] V");
+  const double retries = spec.Number("retries", 3);
+  if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
+}
+
+DriverInfo MakeScpiInfo() {
+  DriverInfo info;
+  info.name = kName;
+  info.line_end = "\n";  // the instrument's RS-232 terminator must be set to LF
+  info.default_baud = 9600;
+  info.default_reply_timeout_ms = 1000;
+  info.roles = {"source"};
+  info.doc = "docs/devices/scpi_source.md";
+  info.validate = Validate;
+  info.create = [](const DeviceSpec& spec, std::unique_ptr<Transport> link) {
+    Validate(spec);
+    return std::unique_ptr<DeviceDriver>(new ScpiSource(spec, std::move(link)));
+  };
+  return info;
+}
+
+}  // namespace
+
+IRDIST_REGISTER_DRIVER(scpi_source, MakeScpiInfo());
+
+}  // namespace irdist

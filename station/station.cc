@@ -1,0 +1,232 @@
+#include "station/station.h"
+
+#include <cmath>
+#include <cstdio>
+#include <set>
+
+#include "base/input_error.h"
+#include "station/serial_transport.h"
+
+namespace irdist {
+
+const DeviceSpec* StationSpec::Find(const std::string& name) const {
+  for (const DeviceSpec& d : devices) {
+    if (d.name == name) return &d;
+  }
+  return nullptr;
+}
+
+Station::Station(const StationSpec& spec, StationOptions options)
+    : spec_(spec), options_(std::move(options)) {
+  for (const DeviceSpec& device : spec_.devices) OpenDevice(device);
+  BindRoles();
+}
+
+Station::~Station() {
+  if (options_.off_at_exit) Off();
+}
+
+void Station::OpenDevice(const DeviceSpec& device) {
+  const DriverInfo* info = FindDriver(device.driver);
+  if (info == nullptr) {
+    std::string known;
+    for (const std::string& n : DriverNames()) known += (known.empty() ? "" : ", ") + n;
+    throw InputError(device.file, device.line, 0,
+                     "station.devices." + device.name + ": unknown driver '" + device.driver +
+                         "'; known drivers: " + known);
+  }
+  DeviceSpec opened = device;
+  const auto port = options_.ports.find(device.name);
+  if (port != options_.ports.end()) opened.port = port->second;
+  if (opened.port == "auto") {
+    throw InputError(device.file, device.line, 0,
+                     "station.devices." + device.name +
+                         ".port is 'auto', which only a virtual rig resolves; name the serial "
+                         "device (e.g. /dev/ttyUSB0) or pass --port " + device.name + "=PATH");
+  }
+  if (opened.baud <= 0) opened.baud = static_cast<int>(info->default_baud);
+  if (opened.reply_timeout_ms <= 0) opened.reply_timeout_ms = info->default_reply_timeout_ms;
+  SerialOptions serial;
+  serial.baud = static_cast<unsigned int>(opened.baud);
+  serial.line_end = info->line_end;
+  if (spec_.devices.size() > 1) serial.log_prefix = device.name + ": ";
+  auto transport = std::make_unique<SerialTransport>(opened.port, serial, options_.log);
+  devices_.push_back({device.name, info->create(opened, std::move(transport)), {}});
+}
+
+Station::Device& Station::Named(const std::string& name) {
+  for (Device& d : devices_) {
+    if (d.name == name) return d;
+  }
+  throw InputError(spec_.devices.empty() ? "" : spec_.devices.front().file, 0, 0,
+                   "station.roles names '" + name + "', which is not in station.devices");
+}
+
+void Station::BindRoles() {
+  for (const std::string& name : spec_.motion) {
+    Motion* motion = Named(name).driver->motion();
+    IRDIST_CHECK(motion != nullptr, "device ", name, " cannot fill the motion role");
+    motion_.push_back(motion);
+  }
+  source_ = Named(spec_.source).driver->source();
+  IRDIST_CHECK(source_ != nullptr, "device ", spec_.source, " cannot fill the source role");
+  if (spec_.trigger == kCameraSoftwareTrigger) {
+    trigger_ = options_.camera_trigger;  // or SetCameraTrigger() once the camera is open
+  } else {
+    trigger_ = Named(spec_.trigger).driver->trigger();
+    IRDIST_CHECK(trigger_ != nullptr, "device ", spec_.trigger, " cannot fill the trigger role");
+  }
+}
+
+const std::vector<DeviceIdentity>& Station::Identify() {
+  identities_.clear();
+  for (Device& d : devices_) {
+    DeviceDriver& drv = *d.driver;
+    if (drv.motion() != nullptr) {
+      d.identity = drv.motion()->Identify();
+    } else if (drv.source() != nullptr) {
+      d.identity = drv.source()->Identify();
+    } else if (drv.trigger() != nullptr) {
+      d.identity = drv.trigger()->Identify();
+    }
+    identities_.push_back(d.identity);
+  }
+  std::map<Axis, int> drivers_of;
+  for (Motion* m : motion_) {
+    for (Axis axis : m->Axes()) ++drivers_of[axis];
+  }
+  for (Axis axis : {Axis::kSlide, Axis::kPan, Axis::kTilt}) {
+    if (drivers_of[axis] != 1) {
+      throw StationNotReadyError(std::string("axis ") + AxisName(axis) + " is driven by " +
+                                 std::to_string(drivers_of[axis]) +
+                                 " motion devices; map each axis to exactly one device in the "
+                                 "rig file's station.devices.<name>.axes");
+    }
+  }
+  return identities_;
+}
+
+std::string Station::IdentityBrief() const {
+  std::string out;
+  for (const Device& d : devices_) {
+    out += (out.empty() ? "" : "; ") + d.name + ": " + d.identity.Brief();
+  }
+  return out;
+}
+
+void Station::CheckReadyToStart() {
+  bool all_idle = true;
+  for (std::size_t i = 0; i < motion_.size(); ++i) {
+    const MotionState state = motion_[i]->State();
+    const std::string who = spec_.motion[i];
+    if (state == MotionState::kEStop) {
+      throw StationNotReadyError(
+          "station device '" + who +
+          "' is in emergency stop; release the stop button, clear it (irdist station home "
+          "--rig RIG) and start again");
+    }
+    if (state == MotionState::kMoving || state == MotionState::kHoming) {
+      throw StationNotReadyError("station device '" + who + "' is " + MotionStateName(state) +
+                                 " (another program is driving it?); wait until it stands "
+                                 "still, or stop it with 'irdist station off', and start again");
+    }
+    if (state == MotionState::kFault) {
+      throw StationNotReadyError("station device '" + who +
+                                 "' reports a fault; check it and home it (irdist station home)");
+    }
+    all_idle = all_idle && state == MotionState::kIdle;
+  }
+  // Idle means homed (an unhomed device says so); a sweep still homes first unless told not to.
+  homed_ = all_idle;
+}
+
+std::vector<std::pair<std::string, MotionState>> Station::States() {
+  std::vector<std::pair<std::string, MotionState>> states;
+  for (std::size_t i = 0; i < motion_.size(); ++i) {
+    states.emplace_back(spec_.motion[i], motion_[i]->State());
+  }
+  return states;
+}
+
+void Station::Home() {
+  homed_ = false;
+  for (Motion* m : motion_) m->Home();
+  homed_ = true;
+}
+
+void Station::MoveTo(const StationPosition& target) {
+  for (Motion* m : motion_) m->StartMove(target);
+  for (Motion* m : motion_) m->WaitSettled(options_.move_timeout);
+}
+
+StationPosition Station::Position() {
+  StationPosition position;
+  for (Motion* m : motion_) m->ReadPosition(&position);
+  return position;
+}
+
+void Station::SetCurrent(double bias_ma) { source_->SetCurrent(bias_ma); }
+
+double Station::setpoint_ma() const { return source_->setpoint_ma(); }
+
+SourceReading Station::MeasureCurrent() { return source_->Measure(); }
+
+void Station::CheckCurrent(const SourceReading& reading) const {
+  const double set_ma = source_->setpoint_ma();
+  const double off_ma = std::fabs(reading.current_ma - set_ma);
+  if (off_ma <= spec_.current_tolerance_ma && !reading.in_compliance) return;
+  char text[320];
+  std::snprintf(text, sizeof(text),
+                "IRED current measured %.2f mA where %.2f mA is set (tolerance %.2f mA%s): %s",
+                reading.current_ma, set_ma, spec_.current_tolerance_ma,
+                reading.in_compliance ? ", source in compliance" : "",
+                reading.current_ma < 0.5 * set_ma
+                    ? "the IRED circuit looks open, or the source's output tripped; check the "
+                      "IRED's wiring and the source's compliance voltage, then resume the run"
+                    : "the source cannot drive the set current; check the compliance voltage "
+                      "and the IRED, then resume the run");
+  throw CurrentMismatchError(text);
+}
+
+void Station::SetCameraTrigger(Trigger* trigger) {
+  IRDIST_CHECK(spec_.trigger == kCameraSoftwareTrigger, "the rig's trigger is ", spec_.trigger);
+  trigger_ = trigger;
+}
+
+void Station::Fire(int frame_in_bracket) {
+  IRDIST_CHECK(trigger_ != nullptr,
+               "roles.trigger is camera_software but no camera trigger was handed in");
+  trigger_->Fire(frame_in_bracket);
+}
+
+const char* Station::TriggerCameraSource() const {
+  return spec_.trigger == kCameraSoftwareTrigger ? "Software" : trigger_->CameraSource();
+}
+
+void Station::CheckAlive() {
+  for (Device& d : devices_) {
+    if (d.driver->motion() != nullptr) {
+      d.driver->motion()->CheckAlive();
+    } else if (d.driver->source() != nullptr) {
+      d.driver->source()->CheckAlive();
+    }
+  }
+}
+
+void Station::Off() noexcept {
+  if (source_ != nullptr) source_->Off();
+}
+
+void Station::Stop() noexcept {
+  for (Motion* m : motion_) m->Stop();
+}
+
+std::map<Axis, AxisSpeed> Station::Speeds() const {
+  std::map<Axis, AxisSpeed> speeds;
+  for (Motion* m : motion_) {
+    for (Axis axis : m->Axes()) speeds[axis] = m->Speed(axis);
+  }
+  return speeds;
+}
+
+}  // namespace irdist

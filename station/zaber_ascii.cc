@@ -1,0 +1,617 @@
+// The Zaber ASCII protocol driver (docs/devices/zaber_ascii.md): linear and rotary Zaber stages
+// (firmware 6 and 7) as the motion role. Written from Zaber's ASCII Protocol Manual: command and
+// reply structure ("/device axis id command:CC" -> "@device axis id flag status warning data:CC"),
+// message ids, the LRC checksum, reply flags (OK/RJ) and rejection reasons, warning flags, and the
+// physical units of `pos`, `maxspeed` and `accel`.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "base/input_error.h"
+#include "station/driver.h"
+
+namespace irdist {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+constexpr char kName[] = "zaber_ascii";
+// Manual, settings `maxspeed` and `accel` (same units as the A-Series Set Target Speed / Set
+// Acceleration): microsteps/s = maxspeed / 1.6384; microsteps/s^2 = accel x 10000 / 1.6384.
+constexpr double kSpeedDataPerMicrostepS = 1.6384;
+constexpr double kAccelDataPerMicrostepS2 = 1.6384 / 10000.0;
+constexpr milliseconds kPollPeriod{20};
+
+struct Address {
+  int device = 1;
+  int axis = 1;
+};
+
+// "1" = device 1 (its axis 1); "1 2" = device 1, axis 2. False on a bad address.
+bool ParseAddress(const std::string& text, Address* out) {
+  std::istringstream in(text);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  if (words.empty() || words.size() > 2) return false;
+  for (const std::string& w : words) {
+    if (w.size() > 2 || w.find_first_not_of("0123456789") != std::string::npos) return false;
+  }
+  Address a;
+  a.device = std::stoi(words[0]);
+  a.axis = words.size() == 2 ? std::stoi(words[1]) : 1;
+  if (a.device < 1 || a.device > 99 || a.axis < 1 || a.axis > 9) return false;
+  *out = a;
+  return true;
+}
+
+// Manual, "Checksumming": the bytes between the message type character and ':' summed modulo
+// 256, then two's complement, as two upper-case hex digits.
+std::string Lrc(const std::string& body) {
+  unsigned sum = 0;
+  for (unsigned char c : body) sum += c;
+  char hex[3];
+  std::snprintf(hex, sizeof(hex), "%02X", (256u - (sum & 0xFFu)) & 0xFFu);
+  return hex;
+}
+
+struct Reply {
+  char type = '@';  // '@' reply, '#' info, '!' alert
+  int device = 0, axis = 0, id = -1;
+  std::string flag, status, warning, data;
+};
+
+// Splits a received line; false when it is not a well-formed message (garbled, bad or missing
+// checksum when `need_checksum`). *checked tells whether it carried a valid checksum.
+bool ParseReply(std::string line, bool need_checksum, Reply* out, bool* checked) {
+  if (line.size() < 2 || (line[0] != '@' && line[0] != '#' && line[0] != '!')) return false;
+  const std::size_t colon = line.rfind(':');
+  *checked = colon != std::string::npos && colon + 3 == line.size();
+  if (*checked) {
+    const std::string body = line.substr(1, colon - 1);
+    if (Lrc(body) != line.substr(colon + 1)) return false;
+    line.resize(colon);
+  } else if (need_checksum) {
+    return false;
+  }
+  std::istringstream in(line.substr(1));
+  Reply r;
+  r.type = line[0];
+  if (!(in >> r.device >> r.axis)) return false;
+  std::string token;
+  if (!(in >> token)) return r.type == '!' ? (*out = r, true) : false;
+  if (token.size() <= 2 &&
+      std::all_of(token.begin(), token.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    r.id = std::stoi(token);
+    if (!(in >> token)) return false;
+  }
+  if (r.type == '@') {
+    r.flag = token;
+    if (r.flag != "OK" && r.flag != "RJ") return false;
+    if (!(in >> r.status >> r.warning)) return false;
+    if (r.status != "IDLE" && r.status != "BUSY") return false;
+  }
+  std::getline(in >> std::ws, r.data);
+  *out = r;
+  return true;
+}
+
+// Manual, "Warning Flags". Faults (F*) stop the axis; WR/WH mean no reference position.
+std::string FlagMeaning(const std::string& flag) {
+  static const std::pair<const char*, const char*> kFlags[] = {
+      {"FF", "critical system error"},      {"FD", "driver disabled"},
+      {"FQ", "encoder error"},              {"FS", "stalled and stopped"},
+      {"FT", "excessive twist"},            {"FE", "limit error"},
+      {"FB", "stream bounds error"},        {"FP", "interpolated path deviation"},
+      {"FM", "motor temperature error"},    {"FO", "driver over temperature/current"},
+      {"WR", "no reference position"},      {"WH", "device not homed"},
+      {"WL", "unexpected limit trigger"},   {"WV", "voltage out of range"},
+      {"WT", "system temperature high"},    {"WM", "displaced when stationary"},
+      {"WS", "stalled"},                    {"WP", "invalid calibration"},
+      {"NC", "manual control"},             {"NI", "command interrupted"},
+      {"ND", "stream discontinuity"},       {"NU", "setting update pending"},
+      {"NJ", "joystick calibrating"}};
+  for (const auto& [code, text] : kFlags) {
+    if (flag == code) return text;
+  }
+  return "flag not in the manual's table";
+}
+
+bool Unreferenced(const std::string& flag) { return flag == "WR" || flag == "WH"; }
+bool Fault(const std::string& flag) { return !flag.empty() && flag[0] == 'F'; }
+
+// Manual, "Reply Flags": why a command was rejected, and what to do.
+std::string RejectionFix(const std::string& reason) {
+  if (reason == "BADDATA") return "the value is out of the axis's range (check limit.min/max)";
+  if (reason == "BADCOMMAND") return "the firmware does not know the command; check its version";
+  if (reason == "BADAXIS" || reason == "DEVICEONLY")
+    return "check the axis numbers in the rig file's `axes:`";
+  if (reason == "PARKED") return "unpark the axis (`tools parking unpark`)";
+  if (reason == "DRIVERDISABLED") return "enable the driver (`driver enable`) and check power";
+  if (reason == "BADMESSAGEID") return "a firmware bug or a garbled id; retry";
+  if (reason == "AGAIN" || reason == "STATUSBUSY") return "the device is busy; retry later";
+  return "see the manual's list of rejection reasons";
+}
+
+struct AxisState {
+  Axis axis = Axis::kSlide;
+  Address address;
+  double unit_per_microstep = 0.0;  // mm (slide) or deg (pan/tilt) per microstep
+  double origin = 0.0;              // mm or deg at microstep 0
+  long long limit_min = 0, limit_max = 0;
+  AxisSpeed speed;
+  long long target = 0;
+  bool has_target = false;
+};
+
+class ZaberAscii : public DeviceDriver, public Motion {
+ public:
+  ZaberAscii(const DeviceSpec& spec, std::unique_ptr<Transport> link)
+      : spec_(spec), link_(std::move(link)) {
+    identity_.kind = kName;
+    identity_.port = spec.port;
+    identity_.vendor = "Zaber";
+    timeout_ = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 500);
+    attempts_ = 1 + static_cast<int>(spec.Number("retries", 4));
+    checksum_ = spec.Text("checksum", "true") == "true";
+    direction_ = spec.Number("direction", 1.0);
+    tolerance_ = static_cast<long long>(spec.Number("tolerance_microsteps", 2));
+    home_timeout_ = milliseconds(static_cast<long long>(spec.Number("home_timeout_s", 120) * 1000));
+    for (const auto& [axis, text] : spec.axes) {
+      AxisState s;
+      s.axis = axis;
+      ParseAddress(text, &s.address);
+      s.origin = spec.Number(axis == Axis::kSlide ? "origin_mm" : "origin_deg", 0.0);
+      axes_.push_back(s);
+    }
+  }
+  ~ZaberAscii() override = default;
+
+  Motion* motion() override { return this; }
+
+  DeviceIdentity Identify() override;
+  std::vector<Axis> Axes() const override {
+    std::vector<Axis> out;
+    for (const AxisState& s : axes_) out.push_back(s.axis);
+    return out;
+  }
+  MotionState State() override;
+  void Home() override;
+  void StartMove(const StationPosition& target) override;
+  void WaitSettled(milliseconds timeout) override;
+  void ReadPosition(StationPosition* position) override;
+  void Stop() noexcept override;
+  AxisSpeed Speed(Axis axis) const override {
+    for (const AxisState& s : axes_) {
+      if (s.axis == axis) return s.speed;
+    }
+    return {};
+  }
+  void CheckAlive() override;
+
+ private:
+  int Send(const Address& a, int axis, const std::string& command);
+  bool Await(const Address& a, int axis, int id, milliseconds wait, Reply* reply);
+  Reply Query(const Address& a, int axis, const std::string& command);
+  bool Command(const Address& a, const std::string& command, Reply* reply);
+  void ThrowIfRejected(const Reply& r, const std::string& command) const;
+  long long Number(const Reply& r, const std::string& command) const;
+  void IdentifyDevice(const Address& a);
+  void ReadAxis(AxisState* s);
+  void CheckFlag(const AxisState& s, const Reply& r) const;
+  void IssueMove(AxisState* s, long long microsteps);
+  bool Settled(AxisState* s);
+  void WaitIdle(AxisState* s, milliseconds timeout, const std::string& what);
+  double ToUnits(const AxisState& s, long long microsteps) const {
+    return s.origin + direction_ * static_cast<double>(microsteps) * s.unit_per_microstep;
+  }
+  long long ToMicrosteps(const AxisState& s, double value) const {
+    return std::llround((value - s.origin) / (direction_ * s.unit_per_microstep));
+  }
+  [[noreturn]] void Fail(const std::string& code, const std::string& message,
+                         const std::string& fix) const {
+    throw DeviceError(identity_, code, message, fix);
+  }
+
+  DeviceSpec spec_;
+  std::unique_ptr<Transport> link_;
+  DeviceIdentity identity_;
+  std::vector<AxisState> axes_;
+  milliseconds timeout_{500};
+  milliseconds home_timeout_{120000};
+  int attempts_ = 4;
+  bool checksum_ = true;
+  bool reply_checksums_ = false;  // the device checksums its replies (learnt from the first)
+  double direction_ = 1.0;
+  long long tolerance_ = 2;
+  int next_id_ = 0;
+  bool homed_ = false;
+  std::string last_unparsed_;  // the last line that was not a Zaber message (for errors)
+};
+
+// Writes "/device axis id command[:CC]" and returns the id used.
+int ZaberAscii::Send(const Address& a, int axis, const std::string& command) {
+  next_id_ = next_id_ % 99 + 1;  // manual: message ids 0-99
+  const std::string body = std::to_string(a.device) + " " + std::to_string(axis) + " " +
+                           std::to_string(next_id_) + " " + command;
+  link_->WriteLine("/" + body + (checksum_ ? ":" + Lrc(body) : ""));
+  return next_id_;
+}
+
+// Reads until the reply of (device, axis, id) arrives; other messages (alerts, info, stale
+// replies to timed-out requests) are skipped. False when none arrives in `wait`.
+bool ZaberAscii::Await(const Address& a, int axis, int id, milliseconds wait, Reply* reply) {
+  const auto deadline = Clock::now() + wait;
+  while (true) {
+    const auto left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now());
+    if (left.count() <= 0) return false;
+    std::string line;
+    try {
+      line = link_->ReadLine(left);
+    } catch (const LinkError&) {
+      return false;
+    }
+    Reply r;
+    bool checked = false;
+    if (!ParseReply(line, reply_checksums_, &r, &checked)) {
+      last_unparsed_ = line;
+      continue;
+    }
+    if (r.type == '@' && r.device == a.device && r.axis == axis && r.id == id) {
+      // A device that answered a checksummed command with a checksum always does: from then on
+      // a reply whose checksum was damaged away is not taken.
+      reply_checksums_ = reply_checksums_ || (checksum_ && checked);
+      *reply = r;
+      return true;
+    }
+  }
+}
+
+// A query: safe to repeat, so a lost or damaged reply is retried with a new message id.
+Reply ZaberAscii::Query(const Address& a, int axis, const std::string& command) {
+  for (int attempt = 0; attempt < attempts_; ++attempt) {
+    const int id = Send(a, axis, command);
+    Reply r;
+    if (Await(a, axis, id, timeout_, &r)) {
+      ThrowIfRejected(r, command);
+      return r;
+    }
+  }
+  throw LinkError("no valid reply to '" + command + "' from Zaber device " +
+                      std::to_string(a.device) + " after " + std::to_string(attempts_) +
+                      " attempts" + (last_unparsed_.empty() ? "" : " (heard '" + last_unparsed_ + "')"),
+                  spec_.port,
+                  "check the cable, the baud rate (Zaber ASCII default 115200) and the device "
+                  "address in the rig file");
+}
+
+// A motion command: sent once. False when its reply was lost (the caller checks the device's
+// state before deciding anything).
+bool ZaberAscii::Command(const Address& a, const std::string& command, Reply* reply) {
+  const int id = Send(a, a.axis, command);
+  if (!Await(a, a.axis, id, timeout_, reply)) return false;
+  ThrowIfRejected(*reply, command);
+  return true;
+}
+
+void ZaberAscii::ThrowIfRejected(const Reply& r, const std::string& command) const {
+  if (r.flag != "RJ") return;
+  Fail("RJ " + r.data, "device " + std::to_string(r.device) + " axis " + std::to_string(r.axis) +
+                           " rejected '" + command + "'",
+       RejectionFix(r.data));
+}
+
+long long ZaberAscii::Number(const Reply& r, const std::string& command) const {
+  std::size_t used = 0;
+  long long value = 0;
+  try {
+    value = std::stoll(r.data, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != r.data.size()) {
+    Fail(r.data, "'" + command + "' answered '" + r.data + "', not one integer",
+         "map one axis per address in `axes:` (\"device axis\")");
+  }
+  return value;
+}
+
+void ZaberAscii::IdentifyDevice(const Address& a) {
+  Reply id_reply;
+  try {
+    id_reply = Query(a, 0, "get deviceid");
+  } catch (const LinkError& e) {
+    Fail("", "no Zaber ASCII device answers at address " + std::to_string(a.device) +
+                 (last_unparsed_.empty() ? "" : " (heard '" + last_unparsed_ + "')"),
+         "check that the port is the Zaber's (ls -l /dev/serial/by-id), its baud rate and that "
+         "the device speaks the ASCII protocol");
+  }
+  identity_.model = "deviceid " + id_reply.data;
+  identity_.serial = Query(a, 0, "get system.serial").data;
+  identity_.firmware = Query(a, 0, "get version").data;
+  const std::string want_id = spec_.Text("deviceid", "");
+  if (!want_id.empty() && want_id != id_reply.data) {
+    Fail(id_reply.data, "device " + std::to_string(a.device) + " is deviceid " + id_reply.data +
+                            ", the rig file expects " + want_id,
+         "connect the right stage or correct station.devices." + spec_.name + ".deviceid");
+  }
+  const std::string want_serial = spec_.Text("serial", "");
+  if (!want_serial.empty() && want_serial != identity_.serial) {
+    Fail(identity_.serial, "device " + std::to_string(a.device) + " has serial " +
+                               identity_.serial + ", the rig file expects " + want_serial,
+         "two stages may be swapped: check /dev/serial/by-id and the rig file");
+  }
+}
+
+// Step size (rig file, or full step / the device's resolution), limits and speed of one axis.
+void ZaberAscii::ReadAxis(AxisState* s) {
+  const bool linear = s->axis == Axis::kSlide;
+  const std::string unit = linear ? "um" : "deg";
+  const double scale = linear ? 1e-3 : 1.0;  // um -> mm
+  if (spec_.settings.count("microstep_" + unit)) {
+    s->unit_per_microstep = spec_.Number("microstep_" + unit, 0.0) * scale;
+  } else {
+    const long long resolution = Number(Query(s->address, s->address.axis, "get resolution"),
+                                        "get resolution");
+    if (resolution <= 0) Fail(std::to_string(resolution), "resolution must be > 0", "set it");
+    s->unit_per_microstep = spec_.Number("fullstep_" + unit, 0.0) * scale / resolution;
+  }
+  const Address& a = s->address;
+  s->limit_min = Number(Query(a, a.axis, "get limit.min"), "get limit.min");
+  s->limit_max = Number(Query(a, a.axis, "get limit.max"), "get limit.max");
+  const double step = s->unit_per_microstep;
+  s->speed.speed = Number(Query(a, a.axis, "get maxspeed"), "get maxspeed") /
+                   kSpeedDataPerMicrostepS * step;
+  s->speed.acceleration = Number(Query(a, a.axis, "get accel"), "get accel") /
+                          kAccelDataPerMicrostepS2 * step;
+  s->speed.settle_ms = spec_.Number("settle_ms", 0.0);
+  s->speed.home = ToUnits(*s, 0);
+}
+
+DeviceIdentity ZaberAscii::Identify() {
+  link_->Flush();
+  std::set<int> seen;
+  for (AxisState& s : axes_) {
+    if (seen.insert(s.address.device).second) IdentifyDevice(s.address);
+    ReadAxis(&s);
+  }
+  homed_ = false;
+  return identity_;
+}
+
+// Faults and lost references, as typed errors. WR/WH after our own homing: a power cycle.
+void ZaberAscii::CheckFlag(const AxisState& s, const Reply& r) const {
+  const std::string where = std::string(AxisName(s.axis)) + " (device " +
+                            std::to_string(s.address.device) + " axis " +
+                            std::to_string(s.address.axis) + ")";
+  if (Fault(r.warning)) {
+    Fail(r.warning, where + " reports fault: " + FlagMeaning(r.warning),
+         "clear the cause, then `warnings clear` and home again");
+  }
+  if (homed_ && Unreferenced(r.warning)) {
+    throw DeviceRestarted(identity_.Brief() + ": " + where + " lost its home reference (" +
+                              r.warning + ": " + FlagMeaning(r.warning) +
+                              "): the device was power-cycled or reset; home it and retake",
+                          false);
+  }
+}
+
+MotionState ZaberAscii::State() {
+  MotionState state = MotionState::kIdle;
+  for (const AxisState& s : axes_) {
+    const Reply r = Query(s.address, s.address.axis, "get pos");
+    if (Fault(r.warning)) return MotionState::kFault;
+    if (Unreferenced(r.warning)) state = MotionState::kUnhomed;
+    if (r.status == "BUSY" && state == MotionState::kIdle) state = MotionState::kMoving;
+  }
+  return state;
+}
+
+void ZaberAscii::WaitIdle(AxisState* s, milliseconds timeout, const std::string& what) {
+  const auto deadline = Clock::now() + timeout;
+  while (true) {
+    const Reply r = Query(s->address, s->address.axis, "get pos");
+    CheckFlag(*s, r);
+    if (r.status == "IDLE") return;
+    if (Clock::now() > deadline) {
+      Stop();
+      Fail("", std::string(AxisName(s->axis)) + " still busy " + what + " after " +
+                   std::to_string(timeout.count()) + " ms",
+           "check for an obstruction or a stalled axis");
+    }
+    std::this_thread::sleep_for(kPollPeriod);
+  }
+}
+
+void ZaberAscii::Home() {
+  homed_ = false;
+  for (AxisState& s : axes_) {
+    Query(s.address, s.address.axis, "warnings clear");
+    Reply r;
+    if (!Command(s.address, "home", &r)) {
+      // Reply lost: homing is safe to repeat (manual), but only once we know it did not start.
+      const Reply state = Query(s.address, s.address.axis, "get pos");
+      if (state.status == "IDLE") Command(s.address, "home", &r);
+    }
+  }
+  for (AxisState& s : axes_) {
+    WaitIdle(&s, home_timeout_, "homing");
+    const Reply r = Query(s.address, s.address.axis, "get pos");
+    if (Unreferenced(r.warning) || Fault(r.warning)) {
+      Fail(r.warning, std::string(AxisName(s.axis)) + " did not home: " + FlagMeaning(r.warning),
+           "check the home sensor and that nothing blocks the travel");
+    }
+    s.target = Number(r, "get pos");
+    s.has_target = true;
+  }
+  homed_ = true;
+}
+
+// Sends one absolute move. A lost reply is never answered by a blind resend: the device's
+// state says whether the move started (BUSY), is done (at target) or never arrived (resend).
+void ZaberAscii::IssueMove(AxisState* s, long long microsteps) {
+  const std::string command = "move abs " + std::to_string(microsteps);
+  Reply r;
+  if (Command(s->address, command, &r)) return;
+  const Reply state = Query(s->address, s->address.axis, "get pos");
+  CheckFlag(*s, state);
+  if (state.status == "BUSY" || std::llabs(Number(state, "get pos") - microsteps) <= tolerance_)
+    return;
+  if (!Command(s->address, command, &r)) {
+    throw LinkError("no reply to '" + command + "' (sent twice, the device stayed idle)",
+                    spec_.port, "check the cable and the device's power");
+  }
+}
+
+void ZaberAscii::StartMove(const StationPosition& target) {
+  for (AxisState& s : axes_) {
+    const double value = s.axis == Axis::kSlide ? target.slide_mm
+                         : s.axis == Axis::kPan ? target.pan_deg
+                                                : target.tilt_deg;
+    const long long microsteps = ToMicrosteps(s, value);
+    if (microsteps < s.limit_min || microsteps > s.limit_max) {
+      const double a = ToUnits(s, s.limit_min), b = ToUnits(s, s.limit_max);
+      Fail("", std::string(AxisName(s.axis)) + " target " + std::to_string(value) +
+                   " is outside the stage's travel [" + std::to_string(std::min(a, b)) + ", " +
+                   std::to_string(std::max(a, b)) + "]",
+           "narrow station.limits or correct origin_" +
+               std::string(s.axis == Axis::kSlide ? "mm" : "deg") + "/direction");
+    }
+    IssueMove(&s, microsteps);
+    s.target = microsteps;
+    s.has_target = true;
+  }
+}
+
+// One poll of one axis: true when it is idle within tolerance of its target.
+bool ZaberAscii::Settled(AxisState* s) {
+  const Reply r = Query(s->address, s->address.axis, "get pos");
+  CheckFlag(*s, r);
+  if (Unreferenced(r.warning)) {
+    Fail(r.warning, std::string(AxisName(s->axis)) + " is not homed", "home the station first");
+  }
+  if (r.status == "BUSY") return false;
+  const long long pos = Number(r, "get pos");
+  if (std::llabs(pos - s->target) <= tolerance_) return true;
+  Fail(r.warning, std::string(AxisName(s->axis)) + " stopped at " +
+                      std::to_string(ToUnits(*s, pos)) + " short of " +
+                      std::to_string(ToUnits(*s, s->target)) +
+                      (r.warning == "--" ? "" : " (" + FlagMeaning(r.warning) + ")"),
+       "check for an obstruction, the manual knob, or a stop from elsewhere; then home");
+}
+
+void ZaberAscii::WaitSettled(milliseconds timeout) {
+  const auto deadline = Clock::now() + timeout;
+  for (AxisState& s : axes_) {
+    if (!s.has_target) continue;
+    while (!Settled(&s)) {
+      if (Clock::now() > deadline) {
+        Stop();
+        Fail("", std::string(AxisName(s.axis)) + " did not arrive within " +
+                     std::to_string(timeout.count()) + " ms",
+             "check for a stalled or blocked axis");
+      }
+      std::this_thread::sleep_for(kPollPeriod);
+    }
+  }
+}
+
+void ZaberAscii::ReadPosition(StationPosition* position) {
+  for (const AxisState& s : axes_) {
+    const Reply r = Query(s.address, s.address.axis, "get pos");
+    CheckFlag(s, r);
+    const double value = ToUnits(s, Number(r, "get pos"));
+    if (s.axis == Axis::kSlide) position->slide_mm = value;
+    if (s.axis == Axis::kPan) position->pan_deg = value;
+    if (s.axis == Axis::kTilt) position->tilt_deg = value;
+  }
+}
+
+void ZaberAscii::Stop() noexcept {
+  for (AxisState& s : axes_) {
+    try {
+      Reply r;
+      Command(s.address, "stop", &r);
+      const auto deadline = Clock::now() + std::chrono::seconds(5);
+      while (Query(s.address, s.address.axis, "get pos").status == "BUSY" &&
+             Clock::now() < deadline) {
+        std::this_thread::sleep_for(kPollPeriod);
+      }
+    } catch (...) {
+      // Best effort: the caller is already handling a failure.
+    }
+  }
+}
+
+void ZaberAscii::CheckAlive() {
+  for (const AxisState& s : axes_) CheckFlag(s, Query(s.address, s.address.axis, "get pos"));
+}
+
+[[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {
+  throw InputError(spec.file, spec.line, 0, "station.devices." + spec.name + " (zaber_ascii): " +
+                                                message + "; see docs/devices/zaber_ascii.md");
+}
+
+void CheckStepKeys(const DeviceSpec& spec, const std::string& unit) {
+  const bool micro = spec.settings.count("microstep_" + unit) > 0;
+  const bool full = spec.settings.count("fullstep_" + unit) > 0;
+  if (micro == full) {
+    Invalid(spec, "give exactly one of microstep_" + unit + " and fullstep_" + unit +
+                      " (the stage's datasheet step size)");
+  }
+  const std::string key = (micro ? "microstep_" : "fullstep_") + unit;
+  if (spec.Number(key, 0.0) <= 0.0) Invalid(spec, key + " must be > 0");
+}
+
+void Validate(const DeviceSpec& spec) {
+  spec.CheckKnown({"microstep_um", "fullstep_um", "microstep_deg", "fullstep_deg", "origin_mm",
+                   "origin_deg", "direction", "deviceid", "serial", "tolerance_microsteps",
+                   "retries", "home_timeout_s", "settle_ms", "checksum"});
+  if (spec.axes.empty()) Invalid(spec, "map at least one axis in `axes:` (e.g. {slide: \"1\"})");
+  bool linear = false, angular = false;
+  std::set<std::pair<int, int>> used;
+  for (const auto& [axis, text] : spec.axes) {
+    Address a;
+    if (!ParseAddress(text, &a)) {
+      Invalid(spec, "axis address '" + text + "' of " + AxisName(axis) +
+                        " must be \"device\" or \"device axis\" (device 1-99, axis 1-9)");
+    }
+    if (!used.insert({a.device, a.axis}).second) Invalid(spec, "address '" + text + "' used twice");
+    (axis == Axis::kSlide ? linear : angular) = true;
+  }
+  if (linear) CheckStepKeys(spec, "um");
+  if (angular) CheckStepKeys(spec, "deg");
+  const double direction = spec.Number("direction", 1.0);
+  if (direction != 1.0 && direction != -1.0) Invalid(spec, "direction must be 1 or -1");
+  if (spec.Number("tolerance_microsteps", 2) < 0) Invalid(spec, "tolerance_microsteps >= 0");
+  if (spec.Number("retries", 4) < 0 || spec.Number("retries", 4) > 20) Invalid(spec, "retries 0-20");
+  if (spec.Number("home_timeout_s", 120) <= 0) Invalid(spec, "home_timeout_s must be > 0");
+  const std::string checksum = spec.Text("checksum", "true");
+  if (checksum != "true" && checksum != "false") Invalid(spec, "checksum must be true or false");
+}
+
+DriverInfo MakeZaberInfo() {
+  DriverInfo info;
+  info.name = kName;
+  info.line_end = "\n";  // manual: CR, LF or both end a command; replies end with CR LF
+  info.default_baud = 115200;
+  info.default_reply_timeout_ms = 500;
+  info.roles = {"motion"};
+  info.doc = "docs/devices/zaber_ascii.md";
+  info.validate = Validate;
+  info.create = [](const DeviceSpec& spec, std::unique_ptr<Transport> link) {
+    Validate(spec);
+    return std::unique_ptr<DeviceDriver>(new ZaberAscii(spec, std::move(link)));
+  };
+  return info;
+}
+
+}  // namespace
+
+IRDIST_REGISTER_DRIVER(zaber_ascii, MakeZaberInfo());
+
+}  // namespace irdist

@@ -1,0 +1,151 @@
+// Data safety of a live run (app/run.cc, app/capture.cc): a bracket is committed to the recording
+// as soon as it is complete and the station confirmed alive, before anything moves again. For a
+// refused move, an emergency stop, a silent station and a kill -9 during the move after a bracket:
+// the brackets taken before are in the recording, and `--resume` completes the run with no frame
+// twice. An open IRED stops the run with the message.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <map>
+#include <set>
+
+#include "acquisition/recording.h"
+#include "tests/integration/run_helpers.h"
+#include "tests/loopback_gvcp.h"
+
+namespace irdist {
+namespace {
+
+// Three poses of two frames: the moves are home -> 1500 (MOVE 1), -> 2000 (2), -> 2500 (3).
+constexpr const char* kRecipe = R"(name: it-safety
+rig: rig.yaml
+after: none
+axes:
+  slide_mm: [1500, 2000, 2500]
+  theta_deg: [0]
+  bias_ma: [500]
+bracket:
+  t_ref_ms: 8
+  t_meas_ms: [30]
+)";
+constexpr const char* kTimeScale = "50";
+
+// The virtual rig with `extra` added to its station emulator's options and a short reply timeout.
+std::string RigWith(const std::string& extra) {
+  std::string rig =
+      testing::ReadAll(std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml");
+  const std::string key = "    reboot_after_s: -1.0";
+  const std::size_t at = rig.find(key);
+  if (at == std::string::npos) return "";
+  rig.insert(rig.find('\n', at) + 1, extra);
+  const std::string timeout = "reply_timeout_ms: 500";
+  rig.replace(rig.find(timeout), timeout.size(), "reply_timeout_ms: 100");
+  return rig;
+}
+
+// Rows per (bracket, frame in bracket) of a recording.
+std::map<std::pair<std::int64_t, int>, int> Rows(const std::string& recording) {
+  std::map<std::pair<std::int64_t, int>, int> seen;
+  const RecordingReader reader(recording);
+  for (const FrameRecord& row : reader.rows()) ++seen[{row.bracket_id, row.frame_in_bracket}];
+  return seen;
+}
+
+void ExpectEveryFrameOnce(const std::string& recording) {
+  const std::map<std::pair<std::int64_t, int>, int> rows = Rows(recording);
+  EXPECT_EQ(rows.size(), 6u);
+  for (const auto& [position, count] : rows) {
+    EXPECT_EQ(count, 1) << "bracket " << position.first << " frame " << position.second;
+  }
+  EXPECT_TRUE(RecordingReader(recording).IsComplete());
+}
+
+class DataSafety : public ::testing::TestWithParam<std::string> {};
+
+// The third move fails (refused, e-stop, silent station): the two brackets before it are in the
+// recording; with the fault gone, --resume records the third one only.
+TEST_P(DataSafety, AFaultDuringAMoveKeepsTheBracketsBeforeIt) {
+  const std::string fault = GetParam();
+  const std::string dir = testing::ScratchDir("data-safety-" + fault);
+  const std::string rig = RigWith("    fault_at_move: 3\n    fault: " + fault + "\n");
+  ASSERT_FALSE(rig.empty()) << "recipes/rigs/virtual.yaml changed; update this test";
+  testing::WriteAll(dir + "/rig.yaml", rig);
+  testing::WriteAll(dir + "/recipe.yaml", kRecipe);
+  testing::LoopbackGvcpLock lock;
+  std::string output;
+  const int code = testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--out", dir + "/run",
+                                       "--time-scale", kTimeScale, "--quiet"},
+                                      dir + "/run.log", &output);
+  EXPECT_EQ(code, 1) << output;
+  const std::map<std::pair<std::int64_t, int>, int> kept = Rows(dir + "/run/recording");
+  EXPECT_EQ(kept.size(), 4u) << output;  // brackets 0 and 1, two frames each
+  EXPECT_EQ(kept.count({0, 0}) + kept.count({0, 1}) + kept.count({1, 0}) + kept.count({1, 1}),
+            4u);
+  if (fault == "estop") EXPECT_NE(output.find("emergency stop"), std::string::npos) << output;
+  if (fault == "refuse") EXPECT_NE(output.find("-222"), std::string::npos) << output;
+
+  testing::WriteAll(dir + "/rig.yaml", RigWith(""));
+  ASSERT_EQ(testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--resume", dir + "/run",
+                                "--time-scale", kTimeScale, "--quiet"},
+                               dir + "/resume.log", &output),
+            0)
+      << output;
+  ExpectEveryFrameOnce(dir + "/run/recording");
+}
+
+INSTANTIATE_TEST_SUITE_P(Faults, DataSafety, ::testing::Values("refuse", "estop", "silent"));
+
+// kill -9 while the slide travels to the second pose (a slow slide: 500 mm at 5 mm/s): the first
+// bracket is already in the recording; --resume completes the run with no frame twice.
+TEST(DataSafetyKill, AKillDuringTheMoveAfterABracketKeepsIt) {
+  const std::string dir = testing::ScratchDir("data-safety-kill");
+  std::string rig = RigWith("");
+  const std::string slide = "speed: 200.0, accel: 400.0";
+  ASSERT_NE(rig.find(slide), std::string::npos) << "recipes/rigs/virtual.yaml changed";
+  rig.replace(rig.find(slide), slide.size(), "speed: 5.0, accel: 400.0");
+  testing::WriteAll(dir + "/rig.yaml", rig);
+  testing::WriteAll(dir + "/recipe.yaml", kRecipe);
+  testing::LoopbackGvcpLock lock;
+  {
+    testing::Child child({"calibrate", dir + "/recipe.yaml", "--out", dir + "/run",
+                          "--time-scale", kTimeScale, "--quiet"},
+                         dir + "/run.log");
+    const std::string csv = dir + "/run/recording/frames.csv";
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (child.Running() && testing::CountLines(csv) < 1 + 2 &&
+           std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    child.Signal(SIGKILL);
+    EXPECT_EQ(child.Wait(std::chrono::seconds(30)), 128 + SIGKILL);
+  }
+  const std::map<std::pair<std::int64_t, int>, int> kept = Rows(dir + "/run/recording");
+  EXPECT_EQ(kept.size(), 2u) << testing::ReadAll(dir + "/run.log");
+  std::string output;
+  ASSERT_EQ(testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--resume", dir + "/run",
+                                "--time-scale", kTimeScale, "--quiet"},
+                               dir + "/resume.log", &output, std::chrono::seconds(180)),
+            0)
+      << output;
+  ExpectEveryFrameOnce(dir + "/run/recording");
+}
+
+// An open IRED circuit on irdist's own station: the run stops at the first bracket with the
+// measured and set currents, and nothing is recorded at the wrong current.
+TEST(DataSafetyCurrent, AnOpenIredStopsTheRunWithTheMessage) {
+  const std::string dir = testing::ScratchDir("data-safety-open");
+  testing::WriteAll(dir + "/rig.yaml", RigWith("    open_circuit: true\n"));
+  testing::WriteAll(dir + "/recipe.yaml", kRecipe);
+  testing::LoopbackGvcpLock lock;
+  std::string output;
+  EXPECT_EQ(testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--out", dir + "/run",
+                                "--time-scale", kTimeScale, "--quiet"},
+                               dir + "/run.log", &output),
+            1);
+  EXPECT_NE(output.find("IRED circuit looks open"), std::string::npos) << output;
+  EXPECT_NE(output.find("500.00 mA is set"), std::string::npos) << output;
+  EXPECT_TRUE(Rows(dir + "/run/recording").empty());
+}
+
+}  // namespace
+}  // namespace irdist

@@ -1,0 +1,301 @@
+// The flir_ptu driver against a scripted PTU-E unit (replies shaped as the command reference's
+// examples: "* 22" in terse mode, "! Maximum allowable Pan position is 3090" on an error).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "base/input_error.h"
+#include "station/driver.h"
+#include "tests/station/fake_transport.h"
+
+namespace irdist {
+namespace {
+
+// One axis of the unit: moves 100 positions per poll of its position.
+struct PtuAxisModel {
+  long long pos = 0, target = 0, min = -3090, max = 3090;
+  double resolution_arcsec = 185.1428;
+  long long speed = 1000, accel = 2000;
+  bool stuck = false;
+  void Step() {
+    if (stuck) return;
+    const long long d = target - pos;
+    pos += std::abs(d) <= 100 ? d : (d > 0 ? 100 : -100);
+  }
+};
+
+struct Ptu {
+  PtuAxisModel pan, tilt;
+  bool echo = true, terse = false;
+  std::string version = "Pan-Tilt Controller v3.2.0, (C)2010 FLIR Motion Control Systems, Inc.";
+  std::vector<std::string> commands;
+  int drop_next = 0;
+  int wrong_positions = 0;  // position replies with a damaged digit
+
+  PtuAxisModel& Of(char c) { return c == 'P' ? pan : tilt; }
+  std::string Value(long long v, const std::string& what) const {
+    return terse ? "* " + std::to_string(v) : "* " + what + " is " + std::to_string(v);
+  }
+  std::string Answer(const std::string& c) {
+    if (c == "ED") { echo = false; return "*"; }
+    if (c == "FT") { terse = true; return "*"; }
+    if (c == "V") return "* " + version;
+    if (c == "I" || c == "H") return "*";
+    if (c == "R") {
+      pan.target = tilt.target = 0;
+      pan.pos = 1500;  // the reset swept the axes to their limits; they come back on polls
+      return "*";
+    }
+    if (c.size() < 2 || (c[0] != 'P' && c[0] != 'T')) return "! Illegal command";
+    PtuAxisModel& a = Of(c[0]);
+    const std::string rest = c.substr(2);
+    switch (c[1]) {
+      case 'R': return terse ? "* " + std::to_string(a.resolution_arcsec)
+                             : "* resolution is " + std::to_string(a.resolution_arcsec);
+      case 'N': return Value(a.min, "Minimum position");
+      case 'X': return Value(a.max, "Maximum position");
+      case 'S':
+        if (rest.empty()) return Value(a.speed, "speed");
+        a.speed = std::stoll(rest);
+        return "*";
+      case 'A':
+        if (rest.empty()) return Value(a.accel, "acceleration");
+        a.accel = std::stoll(rest);
+        return "*";
+      case 'P': {
+        if (rest.empty()) {
+          a.Step();
+          if (wrong_positions > 0) {
+            --wrong_positions;
+            return Value(a.pos + 1000, "Current position");
+          }
+          return Value(a.pos, "Current position");
+        }
+        const long long t = std::stoll(rest);
+        if (t > a.max || t < a.min) return "! Maximum allowable position is " + std::to_string(a.max);
+        a.target = t;
+        return "*";
+      }
+    }
+    return "! Illegal command";
+  }
+  std::vector<std::string> Respond(const std::string& c) {
+    commands.push_back(c);
+    std::string reply = Answer(c);
+    if (echo) reply = c + " " + reply;
+    if (drop_next > 0) {
+      --drop_next;
+      return {};
+    }
+    return {reply};
+  }
+  void PowerCycle() {  // power-up reset: back at 0, default speed, echo on, verbose
+    pan = PtuAxisModel{};
+    tilt = PtuAxisModel{};
+    echo = true;
+    terse = false;
+  }
+};
+
+DeviceSpec HeadSpec() {
+  DeviceSpec spec;
+  spec.name = "head";
+  spec.driver = "flir_ptu";
+  spec.port = "/dev/ttyUSB1";
+  spec.file = "rig.yaml";
+  spec.line = 10;
+  spec.axes[Axis::kPan] = "pan";
+  spec.axes[Axis::kTilt] = "tilt";
+  return spec;
+}
+
+struct Head {
+  std::shared_ptr<FakeWire> wire = std::make_shared<FakeWire>();
+  Ptu ptu;
+  std::unique_ptr<DeviceDriver> driver;
+  Motion* motion = nullptr;
+  explicit Head(const DeviceSpec& spec = HeadSpec()) {
+    wire->respond = [this](const std::string& c) { return ptu.Respond(c); };
+    driver = FindDriver("flir_ptu")->create(spec, std::make_unique<FakeTransport>(wire));
+    motion = driver->motion();
+  }
+  int Count(const std::string& command) const {
+    return static_cast<int>(std::count(ptu.commands.begin(), ptu.commands.end(), command));
+  }
+};
+
+constexpr double kDegPerPos = 185.1428 / 3600.0;
+
+TEST(FlirPtu, RegistersAsMotionDriverWithEnterDelimiter) {
+  const DriverInfo* info = FindDriver("flir_ptu");
+  ASSERT_NE(info, nullptr);
+  EXPECT_EQ(info->line_end, "\r");
+  EXPECT_EQ(info->roles, std::vector<std::string>{"motion"});
+}
+
+TEST(FlirPtu, IdentifyReadsVersionResolutionLimitsAndSpeed) {
+  Head h;
+  const DeviceIdentity id = h.motion->Identify();
+  EXPECT_NE(id.firmware.find("Pan-Tilt Controller v3.2.0"), std::string::npos);
+  EXPECT_FALSE(h.ptu.echo);
+  EXPECT_TRUE(h.ptu.terse);
+  const AxisSpeed pan = h.motion->Speed(Axis::kPan);
+  EXPECT_NEAR(pan.speed, 1000 * kDegPerPos, 1e-9);
+  EXPECT_NEAR(pan.acceleration, 2000 * kDegPerPos, 1e-9);
+  EXPECT_EQ(h.motion->Axes().size(), 2u);
+}
+
+TEST(FlirPtu, WrongDeviceIsADeviceErrorBeforeAnythingMoves) {
+  Head h;
+  h.wire->respond = [](const std::string&) {
+    return std::vector<std::string>{"@01 0 OK IDLE -- 0"};
+  };
+  EXPECT_THROW(h.motion->Identify(), DeviceError);
+  Head other;
+  other.ptu.version = "Some Other Controller 1.0";
+  EXPECT_THROW(other.motion->Identify(), DeviceError);
+  EXPECT_EQ(other.Count("R"), 0);
+}
+
+TEST(FlirPtu, RigSpeedIsSetInPositionsPerSecond) {
+  DeviceSpec spec = HeadSpec();
+  spec.settings["speed_deg_s"] = {"30", 12};
+  Head h(spec);
+  h.motion->Identify();
+  EXPECT_EQ(h.ptu.pan.speed, std::llround(30 / kDegPerPos));
+  EXPECT_NEAR(h.motion->Speed(Axis::kPan).speed, std::llround(30 / kDegPerPos) * kDegPerPos, 1e-9);
+}
+
+TEST(FlirPtu, HomesThenMovesInDegrees) {
+  Head h;
+  h.motion->Identify();
+  EXPECT_EQ(h.motion->State(), MotionState::kUnhomed);
+  h.motion->Home();
+  EXPECT_EQ(h.Count("R"), 1);
+  EXPECT_EQ(h.ptu.pan.pos, 0);
+  StationPosition target;
+  target.pan_deg = 20.0;
+  target.tilt_deg = -10.0;
+  h.motion->StartMove(target);
+  EXPECT_EQ(h.ptu.pan.target, std::llround(20.0 / kDegPerPos));
+  EXPECT_EQ(h.ptu.tilt.target, std::llround(-10.0 / kDegPerPos));
+  h.motion->WaitSettled(std::chrono::milliseconds(10000));
+  StationPosition now;
+  h.motion->ReadPosition(&now);
+  EXPECT_NEAR(now.pan_deg, 20.0, kDegPerPos);
+  EXPECT_NEAR(now.tilt_deg, -10.0, kDegPerPos);
+  EXPECT_EQ(h.motion->State(), MotionState::kIdle);
+  h.motion->CheckAlive();
+}
+
+TEST(FlirPtu, TargetBeyondTheLimitsIsRefusedBeforeSending) {
+  Head h;
+  h.motion->Identify();
+  h.motion->Home();
+  StationPosition target;
+  target.pan_deg = 170.0;  // beyond 3090 positions = 158.9 deg
+  EXPECT_THROW(h.motion->StartMove(target), DeviceError);
+  EXPECT_EQ(h.Count("PP" + std::to_string(std::llround(170.0 / kDegPerPos))), 0);
+}
+
+TEST(FlirPtu, ErrorReplyIsADeviceErrorWithTheUnitsText) {
+  Head h;
+  h.motion->Identify();
+  h.motion->Home();
+  h.ptu.pan.max = 100;  // the unit's limits narrowed behind the driver's back
+  StationPosition target;
+  target.pan_deg = 20.0;
+  try {
+    h.motion->StartMove(target);
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    EXPECT_EQ(e.device_code(), "!Maximum allowable position is 100");
+  }
+}
+
+TEST(FlirPtu, DroppedQueryRepliesAreRetried) {
+  Head h;
+  h.motion->Identify();
+  h.ptu.drop_next = 2;
+  StationPosition now;
+  h.motion->ReadPosition(&now);
+  EXPECT_NEAR(now.pan_deg, 0.0, 1e-12);
+}
+
+TEST(FlirPtu, ReportedPositionIsReadTwiceAlike) {
+  Head h;
+  h.motion->Identify();
+  h.ptu.wrong_positions = 1;
+  StationPosition now;
+  h.motion->ReadPosition(&now);
+  EXPECT_NEAR(now.pan_deg, 0.0, 1e-12);
+}
+
+TEST(FlirPtu, LateReplyIsNotTakenForTheNextCommands) {
+  Head h;
+  h.motion->Identify();
+  h.motion->Home();
+  StationPosition target;
+  target.pan_deg = 20.0;
+  target.tilt_deg = 5.0;
+  h.motion->StartMove(target);
+  h.motion->WaitSettled(std::chrono::milliseconds(10000));
+  // A reply to an earlier query arrives late, before the next command is sent.
+  h.wire->pending.push_back("* 9999");
+  EXPECT_EQ(h.motion->State(), MotionState::kIdle);  // one position read per axis
+}
+
+TEST(FlirPtu, LostMoveAcknowledgementIsNotResentWhenTheAxisMoves) {
+  Head h;
+  h.motion->Identify();
+  h.motion->Home();
+  h.ptu.drop_next = 1;
+  StationPosition target;
+  target.pan_deg = 30.0;
+  h.motion->StartMove(target);
+  h.motion->WaitSettled(std::chrono::milliseconds(10000));
+  EXPECT_EQ(h.Count("PP" + std::to_string(std::llround(30.0 / kDegPerPos))), 1);
+}
+
+TEST(FlirPtu, StuckAxisTimesOutWithADeviceError) {
+  Head h;
+  h.motion->Identify();
+  h.motion->Home();
+  h.ptu.tilt.stuck = true;
+  StationPosition target;
+  target.tilt_deg = 10.0;
+  h.motion->StartMove(target);
+  EXPECT_THROW(h.motion->WaitSettled(std::chrono::milliseconds(300)), DeviceError);
+  EXPECT_GE(h.Count("H"), 1);  // halted
+}
+
+TEST(FlirPtu, PowerCycleIsARestart) {
+  Head h;
+  h.motion->Identify();
+  h.motion->Home();
+  StationPosition target;
+  target.pan_deg = 10.0;
+  h.motion->StartMove(target);
+  h.motion->WaitSettled(std::chrono::milliseconds(10000));
+  h.ptu.PowerCycle();
+  EXPECT_THROW(h.motion->CheckAlive(), DeviceRestarted);
+  EXPECT_EQ(h.motion->State(), MotionState::kUnhomed);
+}
+
+TEST(FlirPtu, ValidateRejectsBadAxesAndUnknownKeys) {
+  const DriverInfo* info = FindDriver("flir_ptu");
+  EXPECT_NO_THROW(info->validate(HeadSpec()));
+  DeviceSpec slide = HeadSpec();
+  slide.axes[Axis::kSlide] = "pan";
+  EXPECT_THROW(info->validate(slide), InputError);
+  DeviceSpec twice = HeadSpec();
+  twice.axes[Axis::kTilt] = "pan";
+  EXPECT_THROW(info->validate(twice), InputError);
+  DeviceSpec unknown = HeadSpec();
+  unknown.settings["speed"] = {"3", 11};
+  EXPECT_THROW(info->validate(unknown), InputError);
+}
+
+}  // namespace
+}  // namespace irdist

@@ -1,0 +1,261 @@
+// The scpi_source driver against a scripted Keithley 2400 (replies shaped as the 2400 manual's:
+// *IDN? "KEITHLEY INSTRUMENTS INC.,MODEL 2400,...", :READ? "V,I,R,T,STAT", :SYST:ERR? "0,...").
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "base/input_error.h"
+#include "station/driver.h"
+#include "tests/station/fake_transport.h"
+
+namespace irdist {
+namespace {
+
+constexpr char kIdn[] = "KEITHLEY INSTRUMENTS INC.,MODEL 2400,1234567,C30 Mar 17 2006 09:29:29/A02 /K/J";
+
+struct SourceMeter {
+  std::string idn = kIdn;
+  std::string function = "VOLT";
+  double level_a = 0.0, compliance_v = 21.0;
+  bool output = false;
+  double load_ohm = 4.0;           // the IRED as a resistor; <= 0: open circuit
+  std::vector<std::string> errors;  // the error queue
+  std::vector<std::string> commands;
+  int drop_next = 0;
+  int wrong_readings = 0;  // :READ? answers with a damaged current digit
+
+  double Volts() const {
+    if (load_ohm <= 0) return compliance_v;
+    return std::min(level_a * load_ohm, compliance_v);
+  }
+  bool Compliance() const { return output && (load_ohm <= 0 || level_a * load_ohm > compliance_v); }
+
+  std::vector<std::string> Respond(const std::string& line) {
+    commands.push_back(line);
+    std::string reply;
+    if (line == "*IDN?") {
+      reply = idn;
+    } else if (line == "*CLS") {
+      errors.clear();
+    } else if (line == "*RST") {
+      function = "VOLT";
+      level_a = 0;
+      output = false;
+    } else if (line == ":SOUR:FUNC CURR") {
+      function = "CURR";
+    } else if (line == ":SOUR:FUNC?") {
+      reply = function;
+    } else if (line.rfind(":SENS:VOLT:PROT ", 0) == 0) {
+      compliance_v = std::stod(line.substr(16));
+    } else if (line.rfind(":SOUR:CURR:LEV ", 0) == 0) {
+      level_a = std::stod(line.substr(15));
+      if (level_a > 1.05) {
+        errors.push_back("-222,\"Parameter data out of range\"");
+        level_a = 0;
+      }
+    } else if (line == ":OUTP ON") {
+      output = true;
+    } else if (line == ":OUTP OFF") {
+      output = false;
+    } else if (line == ":OUTP?") {
+      reply = output ? "1" : "0";
+    } else if (line == ":READ?") {
+      double amps = Compliance() ? (load_ohm <= 0 ? 0.0 : compliance_v / load_ohm) : level_a;
+      if (wrong_readings > 0) {
+        --wrong_readings;
+        amps += 0.1;
+      }
+      char buf[160];
+      std::snprintf(buf, sizeof(buf), "%+.6E,%+.6E,+9.910000E+37,+1.234560E+02,%+.6E", Volts(),
+                    amps, Compliance() ? 8.0 : 0.0);
+      reply = buf;
+    } else if (line == ":SENS:VOLT:PROT:TRIP?") {
+      reply = Compliance() ? "1" : "0";
+    } else if (line == ":SYST:ERR?") {
+      if (errors.empty()) {
+        reply = "0,\"No error\"";
+      } else {
+        reply = errors.front();
+        errors.erase(errors.begin());
+      }
+    } else {
+      errors.push_back("-113,\"Undefined header\"");
+    }
+    if (reply.empty()) return {};
+    if (drop_next > 0) {
+      --drop_next;
+      return {};
+    }
+    return {reply};
+  }
+  void PowerCycle() {
+    function = "VOLT";
+    level_a = 0;
+    output = false;
+  }
+};
+
+DeviceSpec SourceSpec() {
+  DeviceSpec spec;
+  spec.name = "source";
+  spec.driver = "scpi_source";
+  spec.port = "/dev/ttyUSB2";
+  spec.file = "rig.yaml";
+  spec.line = 20;
+  spec.settings["compliance_v"] = {"3.0", 24};
+  return spec;
+}
+
+struct Bench {
+  std::shared_ptr<FakeWire> wire = std::make_shared<FakeWire>();
+  SourceMeter meter;
+  std::unique_ptr<DeviceDriver> driver;
+  CurrentSource* source = nullptr;
+  explicit Bench(const DeviceSpec& spec = SourceSpec()) {
+    wire->respond = [this](const std::string& line) { return meter.Respond(line); };
+    driver = FindDriver("scpi_source")->create(spec, std::make_unique<FakeTransport>(wire));
+    source = driver->source();
+  }
+};
+
+TEST(ScpiSource, RegistersAsSourceDriver) {
+  const DriverInfo* info = FindDriver("scpi_source");
+  ASSERT_NE(info, nullptr);
+  EXPECT_EQ(info->roles, std::vector<std::string>{"source"});
+  EXPECT_EQ(info->line_end, "\n");
+}
+
+TEST(ScpiSource, IdentifyChecksTheIdentityAndLeavesTheOutputOff) {
+  Bench b;
+  const DeviceIdentity id = b.source->Identify();
+  EXPECT_EQ(id.vendor, "KEITHLEY INSTRUMENTS INC.");
+  EXPECT_EQ(id.model, "MODEL 2400");
+  EXPECT_EQ(id.serial, "1234567");
+  EXPECT_EQ(b.meter.function, "CURR");
+  EXPECT_DOUBLE_EQ(b.meter.compliance_v, 3.0);
+  EXPECT_FALSE(b.meter.output);
+  EXPECT_EQ(b.meter.commands.at(1), "*CLS");
+  EXPECT_EQ(b.meter.commands.at(2), "*RST");
+}
+
+TEST(ScpiSource, WrongInstrumentIsADeviceErrorBeforeAnyOutput) {
+  Bench b;
+  b.meter.idn = "Agilent Technologies,34401A,0,11-5-2";
+  EXPECT_THROW(b.source->Identify(), DeviceError);
+  for (const std::string& c : b.meter.commands) EXPECT_EQ(c.find(":OUTP ON"), std::string::npos);
+  EXPECT_EQ(b.meter.commands.size(), 1u);  // nothing but *IDN?
+
+  Bench silent;
+  silent.wire->respond = nullptr;
+  EXPECT_THROW(silent.source->Identify(), DeviceError);
+}
+
+TEST(ScpiSource, SetsAndMeasuresTheCurrentInMilliamps) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(500.0);
+  EXPECT_TRUE(b.meter.output);
+  EXPECT_NEAR(b.meter.level_a, 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ(b.source->setpoint_ma(), 500.0);
+  const SourceReading r = b.source->Measure();
+  EXPECT_NEAR(r.current_ma, 500.0, 1e-6);
+  EXPECT_NEAR(r.voltage_v, 2.0, 1e-6);
+  EXPECT_FALSE(r.in_compliance);
+  EXPECT_TRUE(r.output_on);
+  b.source->SetCurrent(0.0);
+  EXPECT_FALSE(b.meter.output);
+}
+
+TEST(ScpiSource, OpenCircuitShowsAsComplianceAndNoCurrent) {
+  Bench b;
+  b.meter.load_ohm = 0;  // open IRED
+  b.source->Identify();
+  b.source->SetCurrent(500.0);
+  const SourceReading r = b.source->Measure();
+  EXPECT_TRUE(r.in_compliance);
+  EXPECT_NEAR(r.current_ma, 0.0, 1e-9);
+}
+
+TEST(ScpiSource, ErrorQueueEntryIsADeviceError) {
+  Bench b;
+  b.source->Identify();
+  try {
+    b.source->SetCurrent(2000.0);  // above the 2400's 1.05 A
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    EXPECT_EQ(e.device_code(), "-222,\"Parameter data out of range\"");
+    EXPECT_NE(std::string(e.what()).find("/dev/ttyUSB2"), std::string::npos);
+  }
+}
+
+TEST(ScpiSource, LostQueryReplyIsRetriedAfterResync) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(100.0);
+  b.meter.drop_next = 1;  // the :OUTP? reply of Measure is lost
+  const SourceReading r = b.source->Measure();
+  EXPECT_NEAR(r.current_ma, 100.0, 1e-6);
+}
+
+TEST(ScpiSource, ReadingAwayFromTheSetpointIsConfirmed) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(400.0);
+  b.meter.wrong_readings = 1;
+  EXPECT_NEAR(b.source->Measure().current_ma, 400.0, 1e-6);
+  b.meter.load_ohm = 10.0;  // a real mismatch: 400 mA x 10 ohm is over 3 V, compliance
+  const SourceReading r = b.source->Measure();
+  EXPECT_NEAR(r.current_ma, 300.0, 1e-6);
+  EXPECT_TRUE(r.in_compliance);
+}
+
+TEST(ScpiSource, OffSwitchesTheOutputOffAndNeverThrows) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(300.0);
+  b.source->Off();
+  EXPECT_FALSE(b.meter.output);
+  EXPECT_DOUBLE_EQ(b.source->setpoint_ma(), 0.0);
+  b.wire->respond = nullptr;  // a dead link
+  EXPECT_NO_THROW(b.source->Off());
+}
+
+TEST(ScpiSource, DestructionSwitchesTheOutputOff) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(300.0);
+  b.driver.reset();
+  EXPECT_FALSE(b.meter.output);
+}
+
+TEST(ScpiSource, PowerCycleIsARestartAndTripIsADeviceError) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(300.0);
+  b.source->CheckAlive();
+  b.meter.PowerCycle();
+  EXPECT_THROW(b.source->CheckAlive(), DeviceRestarted);
+  b.source->SetCurrent(300.0);  // the settings are applied again
+  EXPECT_EQ(b.meter.function, "CURR");
+  EXPECT_TRUE(b.meter.output);
+  b.meter.output = false;  // tripped: settings kept
+  EXPECT_THROW(b.source->CheckAlive(), DeviceError);
+}
+
+TEST(ScpiSource, ValidateRequiresComplianceAndKnownKeys) {
+  const DriverInfo* info = FindDriver("scpi_source");
+  EXPECT_NO_THROW(info->validate(SourceSpec()));
+  DeviceSpec none = SourceSpec();
+  none.settings.clear();
+  EXPECT_THROW(info->validate(none), InputError);
+  DeviceSpec unknown = SourceSpec();
+  unknown.settings["compliance"] = {"3", 25};
+  EXPECT_THROW(info->validate(unknown), InputError);
+  DeviceSpec high = SourceSpec();
+  high.settings["compliance_v"] = {"500", 24};
+  EXPECT_THROW(info->validate(high), InputError);
+}
+
+}  // namespace
+}  // namespace irdist

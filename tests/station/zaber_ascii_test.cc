@@ -1,0 +1,361 @@
+// The zaber_ascii driver against a scripted Zaber device (replies shaped as the ASCII Protocol
+// Manual's examples: "@01 1 12 OK IDLE -- 0").
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <sstream>
+
+#include "base/input_error.h"
+#include "station/driver.h"
+#include "tests/station/fake_transport.h"
+
+namespace irdist {
+namespace {
+
+std::string Lrc(const std::string& body) {
+  unsigned sum = 0;
+  for (unsigned char c : body) sum += c;
+  char hex[3];
+  std::snprintf(hex, sizeof(hex), "%02X", (256u - (sum & 0xFFu)) & 0xFFu);
+  return hex;
+}
+
+// A one-axis Zaber stage: device 1, axis 1.
+struct Stage {
+  long long pos = 0, target = 0;
+  int busy_polls = 0;     // `get pos` polls still answering BUSY
+  bool referenced = false;
+  std::string warning = "--";
+  long long limit_max = 4199475;  // ~200 mm at 0.047625 um
+  int drop_next = 0;      // replies to drop
+  int garble_next = 0;    // replies to corrupt
+  bool reject_moves = false;
+  bool stall = false;     // moves end short of the target
+  std::vector<std::string> commands;
+
+  std::string Data(const std::string& cmd) {
+    if (cmd == "get deviceid") return "50081";
+    if (cmd == "get system.serial") return "12345";
+    if (cmd == "get version") return "7.25";
+    if (cmd == "get resolution") return "64";
+    if (cmd == "get limit.min") return "0";
+    if (cmd == "get limit.max") return std::to_string(limit_max);
+    if (cmd == "get maxspeed") return "153600";
+    if (cmd == "get accel") return "205";
+    return "0";
+  }
+
+  std::vector<std::string> Respond(const std::string& line) {
+    std::string body = line.substr(1);
+    const std::size_t colon = body.rfind(':');
+    EXPECT_NE(colon, std::string::npos) << line;
+    EXPECT_EQ(body.substr(colon + 1), Lrc(body.substr(0, colon))) << line;
+    body.resize(colon);
+    std::istringstream in(body);
+    int device = 0, axis = 0, id = 0;
+    in >> device >> axis >> id;
+    std::string cmd;
+    std::getline(in >> std::ws, cmd);
+    commands.push_back(cmd);
+    std::string flag = "OK", data = Data(cmd);
+    if (cmd == "home") {
+      referenced = true;
+      target = 0;
+      busy_polls = 2;
+      warning = "--";
+    } else if (cmd.rfind("move abs ", 0) == 0) {
+      const long long t = std::stoll(cmd.substr(9));
+      if (reject_moves || t > limit_max) {
+        flag = "RJ";
+        data = "BADDATA";
+      } else {
+        target = t;
+        busy_polls = 3;
+      }
+    } else if (cmd == "warnings clear") {
+      warning = "--";
+    } else if (cmd == "stop") {
+      busy_polls = 0;
+      target = pos;
+    } else if (cmd == "get pos") {
+      if (busy_polls > 0) --busy_polls;
+      if (busy_polls == 0) pos = stall ? target / 2 : target;
+      data = std::to_string(pos);
+    }
+    const std::string status = busy_polls > 0 ? "BUSY" : "IDLE";
+    const std::string flags = referenced ? warning : "WR";
+    std::string reply = "01 " + std::to_string(axis) + " " + std::to_string(id) + " " + flag +
+                        " " + status + " " + flags + " " + data;
+    reply = "@" + reply + ":" + Lrc(reply);
+    if (drop_next > 0) {
+      --drop_next;
+      return {};
+    }
+    if (garble_next > 0) {
+      --garble_next;
+      reply[5] = reply[5] == '9' ? '8' : '9';  // the id changes, the checksum no longer matches
+    }
+    return {reply};
+  }
+  // A power cycle: the stage keeps its position counter at 0 and has no reference.
+  void PowerCycle() {
+    referenced = false;
+    pos = target = 0;
+    busy_polls = 0;
+  }
+};
+
+DeviceSpec SlideSpec() {
+  DeviceSpec spec;
+  spec.name = "slide";
+  spec.driver = "zaber_ascii";
+  spec.port = "/dev/ttyUSB0";
+  spec.file = "rig.yaml";
+  spec.line = 3;
+  spec.axes[Axis::kSlide] = "1 1";
+  spec.settings["fullstep_um"] = {"3.048", 5};
+  spec.settings["origin_mm"] = {"1000", 6};
+  spec.settings["retries"] = {"2", 7};
+  return spec;
+}
+
+struct Rig {
+  std::shared_ptr<FakeWire> wire = std::make_shared<FakeWire>();
+  Stage stage;
+  std::unique_ptr<DeviceDriver> driver;
+  Motion* motion = nullptr;
+  explicit Rig(const DeviceSpec& spec = SlideSpec()) {
+    wire->respond = [this](const std::string& line) { return stage.Respond(line); };
+    const DriverInfo* info = FindDriver("zaber_ascii");
+    EXPECT_NE(info, nullptr);
+    driver = info->create(spec, std::make_unique<FakeTransport>(wire));
+    motion = driver->motion();
+  }
+  int Count(const std::string& prefix) const {
+    int n = 0;
+    for (const std::string& c : stage.commands) n += c.rfind(prefix, 0) == 0;
+    return n;
+  }
+};
+
+TEST(ZaberAscii, RegistersAsMotionDriver) {
+  const DriverInfo* info = FindDriver("zaber_ascii");
+  ASSERT_NE(info, nullptr);
+  EXPECT_EQ(info->roles, std::vector<std::string>{"motion"});
+  EXPECT_EQ(info->line_end, "\n");
+  EXPECT_EQ(info->default_baud, 115200u);
+}
+
+TEST(ZaberAscii, IdentifyReadsIdentityUnitsAndSpeed) {
+  Rig rig;
+  const DeviceIdentity id = rig.motion->Identify();
+  EXPECT_EQ(id.vendor, "Zaber");
+  EXPECT_EQ(id.model, "deviceid 50081");
+  EXPECT_EQ(id.serial, "12345");
+  EXPECT_EQ(id.firmware, "7.25");
+  EXPECT_EQ(id.port, "/dev/ttyUSB0");
+  const AxisSpeed speed = rig.motion->Speed(Axis::kSlide);
+  // 153600 / 1.6384 = 93750 microsteps/s of 3.048/64 um.
+  EXPECT_NEAR(speed.speed, 93750 * 3.048e-3 / 64, 1e-9);
+  // 205 x 10000 / 1.6384 = 1251221 microsteps/s^2.
+  EXPECT_NEAR(speed.acceleration, 205 * 10000 / 1.6384 * 3.048e-3 / 64, 1e-6);
+  EXPECT_DOUBLE_EQ(speed.home, 1000.0);
+  EXPECT_EQ(rig.motion->Axes(), std::vector<Axis>{Axis::kSlide});
+}
+
+TEST(ZaberAscii, WrongDeviceOnThePortIsADeviceErrorBeforeAnythingMoves) {
+  Rig rig;
+  rig.wire->respond = [](const std::string&) {
+    return std::vector<std::string>{"* Pan-Tilt Controller v3.2"};
+  };
+  try {
+    rig.motion->Identify();
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("/dev/ttyUSB0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("Pan-Tilt"), std::string::npos) << e.what();
+  }
+  for (const std::string& line : rig.wire->written) {
+    EXPECT_EQ(line.find("move"), std::string::npos);
+    EXPECT_EQ(line.find("home"), std::string::npos);
+  }
+}
+
+TEST(ZaberAscii, ExpectedDeviceidMismatchIsADeviceError) {
+  DeviceSpec spec = SlideSpec();
+  spec.settings["deviceid"] = {"30221", 8};
+  Rig rig(spec);
+  EXPECT_THROW(rig.motion->Identify(), DeviceError);
+}
+
+TEST(ZaberAscii, HomesThenMovesInMillimetres) {
+  Rig rig;
+  rig.motion->Identify();
+  EXPECT_EQ(rig.motion->State(), MotionState::kUnhomed);
+  rig.motion->Home();
+  EXPECT_EQ(rig.Count("home"), 1);
+  StationPosition target;
+  target.slide_mm = 1100.0;
+  rig.motion->StartMove(target);
+  // 100 mm / 0.047625 um = 2099738 microsteps.
+  EXPECT_EQ(rig.stage.commands.back(), "move abs 2099738");
+  rig.motion->WaitSettled(std::chrono::milliseconds(5000));
+  StationPosition now;
+  rig.motion->ReadPosition(&now);
+  EXPECT_NEAR(now.slide_mm, 1100.0, 1e-4);
+  EXPECT_EQ(rig.motion->State(), MotionState::kIdle);
+}
+
+TEST(ZaberAscii, DirectionMinusOneMirrorsTheAxis) {
+  DeviceSpec spec = SlideSpec();
+  spec.settings["direction"] = {"-1", 9};
+  spec.settings["origin_mm"] = {"1200", 6};
+  Rig rig(spec);
+  rig.motion->Identify();
+  rig.motion->Home();
+  StationPosition target;
+  target.slide_mm = 1100.0;
+  rig.motion->StartMove(target);
+  EXPECT_EQ(rig.stage.commands.back(), "move abs 2099738");
+}
+
+TEST(ZaberAscii, TargetOutsideTheTravelIsRefusedBeforeSending) {
+  Rig rig;
+  rig.motion->Identify();
+  rig.motion->Home();
+  StationPosition target;
+  target.slide_mm = 1300.0;  // 300 mm on a 200 mm stage
+  EXPECT_THROW(rig.motion->StartMove(target), DeviceError);
+  EXPECT_EQ(rig.Count("move abs"), 0);
+}
+
+TEST(ZaberAscii, RejectedMoveIsADeviceErrorWithTheReason) {
+  Rig rig;
+  rig.motion->Identify();
+  rig.motion->Home();
+  rig.stage.reject_moves = true;
+  StationPosition target;
+  target.slide_mm = 1050.0;
+  try {
+    rig.motion->StartMove(target);
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    EXPECT_EQ(e.device_code(), "RJ BADDATA");
+  }
+}
+
+TEST(ZaberAscii, GarbledAndDroppedQueryRepliesAreRetried) {
+  Rig rig;
+  rig.motion->Identify();
+  rig.stage.garble_next = 1;
+  rig.stage.drop_next = 1;
+  StationPosition now;
+  rig.motion->ReadPosition(&now);  // third attempt answers
+  EXPECT_NEAR(now.slide_mm, 1000.0, 1e-9);
+  EXPECT_EQ(rig.Count("get pos"), 3);
+}
+
+TEST(ZaberAscii, ReplyWhoseChecksumWasDamagedAwayIsNotTaken) {
+  Rig rig;
+  rig.motion->Identify();
+  int damaged = 1;
+  rig.wire->respond = [&rig, &damaged](const std::string& line) {
+    std::vector<std::string> replies = rig.stage.Respond(line);
+    if (damaged > 0 && !replies.empty()) {
+      --damaged;
+      std::string& r = replies.front();
+      r = r.substr(0, r.rfind(':')) + "7";  // ':' garbled: "...-- 0" -> "...-- 07"
+    }
+    return replies;
+  };
+  StationPosition now;
+  rig.motion->ReadPosition(&now);
+  EXPECT_NEAR(now.slide_mm, 1000.0, 1e-9);
+  EXPECT_EQ(rig.Count("get pos"), 2);
+}
+
+TEST(ZaberAscii, SilentDeviceIsALinkErrorAfterTheRetries) {
+  Rig rig;
+  rig.motion->Identify();
+  rig.stage.drop_next = 100;
+  StationPosition now;
+  EXPECT_THROW(rig.motion->ReadPosition(&now), LinkError);
+  EXPECT_EQ(rig.Count("get pos"), 3);  // 1 + retries
+}
+
+TEST(ZaberAscii, LostMoveReplyIsNotResentWhenTheStageStarted) {
+  Rig rig;
+  rig.motion->Identify();
+  rig.motion->Home();
+  rig.stage.drop_next = 1;
+  StationPosition target;
+  target.slide_mm = 1010.0;
+  rig.motion->StartMove(target);
+  rig.motion->WaitSettled(std::chrono::milliseconds(5000));
+  EXPECT_EQ(rig.Count("move abs"), 1);
+}
+
+TEST(ZaberAscii, StalledAxisStopsShortIsADeviceError) {
+  Rig rig;
+  rig.motion->Identify();
+  rig.motion->Home();
+  rig.stage.stall = true;
+  StationPosition target;
+  target.slide_mm = 1010.0;
+  rig.motion->StartMove(target);
+  EXPECT_THROW(rig.motion->WaitSettled(std::chrono::milliseconds(5000)), DeviceError);
+}
+
+TEST(ZaberAscii, FaultFlagIsADeviceErrorNamingTheFlag) {
+  Rig rig;
+  rig.motion->Identify();
+  rig.motion->Home();
+  rig.stage.warning = "FS";
+  try {
+    rig.motion->CheckAlive();
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    EXPECT_EQ(e.device_code(), "FS");
+    EXPECT_NE(std::string(e.what()).find("stalled"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(rig.motion->State(), MotionState::kFault);
+}
+
+TEST(ZaberAscii, LostReferenceAfterHomingIsARestart) {
+  Rig rig;
+  rig.motion->Identify();
+  rig.motion->Home();
+  rig.motion->CheckAlive();
+  rig.stage.PowerCycle();
+  EXPECT_THROW(rig.motion->CheckAlive(), DeviceRestarted);
+  EXPECT_EQ(rig.motion->State(), MotionState::kUnhomed);
+  rig.motion->Home();  // homing again recovers
+  rig.motion->CheckAlive();
+}
+
+TEST(ZaberAscii, ValidateRejectsUnknownKeysAndMissingStepSize) {
+  const DriverInfo* info = FindDriver("zaber_ascii");
+  ASSERT_NE(info, nullptr);
+  EXPECT_NO_THROW(info->validate(SlideSpec()));
+  DeviceSpec unknown = SlideSpec();
+  unknown.settings["origin"] = {"1000", 12};
+  try {
+    info->validate(unknown);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Line(), 12);
+  }
+  DeviceSpec no_step = SlideSpec();
+  no_step.settings.erase("fullstep_um");
+  EXPECT_THROW(info->validate(no_step), InputError);
+  DeviceSpec bad_address = SlideSpec();
+  bad_address.axes[Axis::kSlide] = "1 x";
+  EXPECT_THROW(info->validate(bad_address), InputError);
+  DeviceSpec bad_direction = SlideSpec();
+  bad_direction.settings["direction"] = {"2", 4};
+  EXPECT_THROW(info->validate(bad_direction), InputError);
+}
+
+}  // namespace
+}  // namespace irdist
