@@ -75,13 +75,18 @@ int ExpectFramesMatchThePlan(const std::string& run_dir) {
     const int count = ++seen[{row.bracket_id, row.frame_in_bracket}];
     EXPECT_EQ(count, 1) << "bracket " << row.bracket_id << " frame " << row.frame_in_bracket;
     brackets.insert(row.bracket_id);
-    ASSERT_GE(row.bracket_id, 0);
-    ASSERT_LT(row.bracket_id, static_cast<std::int64_t>(plan.poses.size()));
+    if (row.bracket_id < 0 || row.bracket_id >= static_cast<std::int64_t>(plan.poses.size())) {
+      ADD_FAILURE() << "frames.csv line " << row.line << ": bracket " << row.bracket_id;
+      continue;
+    }
     const Pose& pose = plan.poses[static_cast<std::size_t>(row.bracket_id)];
     EXPECT_NEAR(row.slide_mm, pose.slide_mm, 0.05) << "frames.csv line " << row.line;
     EXPECT_NEAR(row.theta_deg, pose.theta_deg, 0.05) << "frames.csv line " << row.line;
     EXPECT_DOUBLE_EQ(row.bias_ma_set, pose.bias_ma) << "frames.csv line " << row.line;
-    ASSERT_LT(row.frame_in_bracket, static_cast<int>(exposures.size()));
+    if (row.frame_in_bracket < 0 || row.frame_in_bracket >= static_cast<int>(exposures.size())) {
+      ADD_FAILURE() << "frames.csv line " << row.line << ": frame " << row.frame_in_bracket;
+      continue;
+    }
     const double planned_us =
         1000.0 * exposures[static_cast<std::size_t>(row.frame_in_bracket)].exposure_ms;
     EXPECT_DOUBLE_EQ(row.requested_exposure_us, planned_us) << "frames.csv line " << row.line;
