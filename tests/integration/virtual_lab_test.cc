@@ -124,13 +124,13 @@ TEST(VirtualLab, AnOpenCircuitIredStopsTheRunNamingTheSource) {
   EXPECT_EQ(ExpectFramesMatchThePlan(run.dir + "/run"), 0);  // nothing taken at 0 mA
 }
 
-// The Zaber loses power 0.5 simulated s into its first move after homing: the run re-homes and
+// The Zaber loses power 12 simulated s after its first move began (homing): mid-sweep: the run re-homes and
 // completes, or stops cleanly (exit 1, resumable); either way no frame is lost, doubled or
 // mislabelled, and a resume completes it.
 TEST(VirtualLab, AZaberPowerCycleMidSweepLosesNoFrame) {
   const std::string key = "      power_on_mm: 2000.0";
   const std::string rig =
-      LabRigWith({{key, "      power_cycle_after_s: 0.5\n" + key}});
+      LabRigWith({{key, "      power_cycle_after_s: 12.0\n" + key}});
   ASSERT_FALSE(rig.empty()) << "recipes/rigs/virtual-lab.yaml changed; update this test";
   LabRun run = RunLab("lab-zaber-power-cycle", rig);
   ASSERT_TRUE(run.code == 0 || run.code == 1) << run.output;
