@@ -67,9 +67,10 @@ class LiveRecorder {
 
   // Captures one bracket (`trigger` fires one pulse; called with -1 for a warm-up frame), retaking
   // an incomplete bracket once, and measures the current. The bracket is held back (pending) until
-  // CommitPending(): the sweep checks the station after the pose's callback and retakes the pose
-  // if it rebooted meanwhile, so a bracket is only good once the sweep has moved on. A pending
-  // bracket is replaced by the next capture. Throws CameraError when it stays incomplete.
+  // CommitPending(): the sweep checks every device alive after the pose's callback (a restart
+  // retakes the pose) and confirms the pose before anything moves again; app/run.cc commits
+  // there. A pending bracket is replaced by the next capture. Throws CameraError when it stays
+  // incomplete, and what `measure_current_ma` throws (a current off its set-point).
   void CaptureBracket(const LivePose& pose, const std::function<void(int)>& trigger,
                       const std::function<double()>& measure_current_ma);
   // Appends the pending bracket's frames to the recording and computes their features, on a

@@ -299,8 +299,12 @@ class BracketCommitter {
       ++done_count_;
       progress_.Update(done_count_, what);
     });
+    const auto t0 = std::chrono::steady_clock::now();
     recorder_.WaitAppended();
+    waited_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+  // Host time the sweep waited for brackets to reach the recording, s.
+  double waited_s() const { return waited_s_; }
   // The sweep failed or stopped: the unconfirmed bracket is dropped, the commit in flight ends.
   void Abandon(std::ostream& err) {
     recorder_.DropPending();
@@ -316,6 +320,7 @@ class BracketCommitter {
   Progress& progress_;
   std::atomic<int> done_count_;
   std::string last_what_;
+  double waited_s_ = 0.0;
 };
 
 // The recipe's waits on top of the station's own settle. The move's wait starts now (settled);
@@ -369,12 +374,8 @@ SweepResult SweepAndCapture(LiveSession& s, const std::vector<SweepPose>& poses)
   // Fires one frame (also the warm-up frame, -1) through the station's trigger role.
   const auto fire = [&](int frame) { s.station.Fire(frame); };
   // The measured current, checked against the set-point: an open IRED or a source in compliance
-  // stops the run (the bracket is not kept).
-  const auto measure = [&]() {
-    const SourceReading reading = s.station.MeasureCurrent();
-    s.station.CheckCurrent(reading);
-    return reading.current_ma;
-  };
+  // stops the run (the bracket is not kept); a device restart retakes the pose.
+  const auto measure = [&]() { return s.station.MeasureCheckedCurrent().current_ma; };
   const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int) {
     const Pose& pose = s.plan.poses[static_cast<size_t>(sweep_pose.index)];
     s.committer.Begin();
@@ -438,6 +439,8 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   recorded.cache = recorder.FeatureCache();
   io.out << "Sweep: " << result.BriefReport() << "\n";
   io.out << "Capture: " << recorder.StatsReport() << "\n";
+  io.out << "Commit: every bracket in the recording before the next move; waited "
+         << FormatDuration(committer.waited_s()) << " in all\n";
   io.out << "Wall time " << FormatDuration(wall_s) << " for " << poses.size()
          << " poses; plan estimate " << FormatDuration(plan.summary.total_s / rig.time_scale)
          << " and physical bound "

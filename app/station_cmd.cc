@@ -99,7 +99,7 @@ void SetCurrent(const Rig& rig, const StationArgs& args, Station& station) {
   CheckCount(args, 1, "MA");
   CheckWithin(rig, "bias_ma", args.values[0], rig.station.limits.bias_ma);
   station.SetCurrent(args.values[0]);
-  station.CheckCurrent(station.MeasureCurrent());
+  station.MeasureCheckedCurrent();
 }
 
 }  // namespace

@@ -76,7 +76,6 @@ std::map<std::string, std::string> ReadFlatYaml(const std::string& path) {
   return values;
 }
 
-
 void RunSim(const SimArgs& args, CommandIo io) {
   const std::string rig_path = ResolveRig(args.rig);
   const Rig rig = LoadRig(rig_path);

@@ -163,6 +163,7 @@ CommandError ErrorFor(int code) {
     case 203: return {code, "Checksum mismatch"};
     case 204: return {code, "Homing failed"};
     case 205: return {code, "Line too long"};
+    case 206: return {code, "Link lost"};
     default: return {code, "Execution error"};
   }
 }
@@ -272,15 +273,11 @@ void ReadAxis(const YAML::Node& node, AxisOptions* axis, const std::string& wher
 
 }  // namespace
 
-EmulatorOptions LoadEmulatorOptions(const std::string& rig_path) {
-  EmulatorOptions options;
-  YAML::Node root;
-  try {
-    root = yaml_fields::Parse(yaml_fields::ReadFile(rig_path), rig_path);
-  } catch (const YAML::Exception& e) {
-    throw Error("cannot read rig file " + rig_path + ": " + e.what() +
-                "; fix the path or the YAML syntax");
-  }
+namespace {
+
+// The rig's station.limits become the emulator's soft limits (and current range).
+void ApplyStationLimits(const YAML::Node& root, const std::string& rig_path,
+                        EmulatorOptions* options) {
   auto limit = [&](const YAML::Node& limits, const char* key, AxisOptions* axis) {
     const YAML::Node pair = limits[key];
     if (!pair) return;
@@ -297,52 +294,69 @@ EmulatorOptions LoadEmulatorOptions(const std::string& rig_path) {
     }
   };
   const YAML::Node station = root["station"];
-  if (station && station["limits"]) {
-    const YAML::Node limits = station["limits"];
-    limit(limits, "slide_mm", &options.slide);
-    limit(limits, "pan_deg", &options.pan);
-    limit(limits, "tilt_deg", &options.tilt);
-    AxisOptions bias;
-    limit(limits, "bias_ma", &bias);
-    if (limits["bias_ma"]) options.max_current_ma = bias.max;
-    for (AxisOptions* a : {&options.slide, &options.pan, &options.tilt}) {
-      a->home = std::clamp(a->home, a->min, a->max);
-      a->power_on = std::clamp(a->power_on, a->min, a->max);
-    }
+  if (!station || !station["limits"]) return;
+  const YAML::Node limits = station["limits"];
+  limit(limits, "slide_mm", &options->slide);
+  limit(limits, "pan_deg", &options->pan);
+  limit(limits, "tilt_deg", &options->tilt);
+  AxisOptions bias;
+  limit(limits, "bias_ma", &bias);
+  if (limits["bias_ma"]) options->max_current_ma = bias.max;
+  for (AxisOptions* a : {&options->slide, &options->pan, &options->tilt}) {
+    a->home = std::clamp(a->home, a->min, a->max);
+    a->power_on = std::clamp(a->power_on, a->min, a->max);
   }
+}
+
+// `virtual.station:`, strictly: an unknown key is an InputError with file:line.
+void ReadVirtualStation(const YAML::Node& node, const std::string& rig_path,
+                        EmulatorOptions* o) {
+  const yaml_fields::MapReader keys(
+      node, rig_path, "virtual.station",
+      {"slide", "pan", "tilt", "homing_speed_factor", "max_current_ma", "current_noise_ma",
+       "min_trigger_width_us", "min_trigger_period_us", "max_trigger_count", "reply_latency_s",
+       "seed", "garble_rate", "drop_rate", "delay_rate", "delay_s", "reboot_after_s",
+       "stuck_axis", "missed_pulse_rate", "open_circuit", "refuse_current_off_in_estop",
+       "fault_at_move", "fault"});
+  ReadAxis(node["slide"], &o->slide, rig_path);
+  ReadAxis(node["pan"], &o->pan, rig_path);
+  ReadAxis(node["tilt"], &o->tilt, rig_path);
+  ReadKey(node, "homing_speed_factor", &o->homing_speed_factor, rig_path);
+  ReadKey(node, "max_current_ma", &o->max_current_ma, rig_path);
+  ReadKey(node, "current_noise_ma", &o->current_noise_ma, rig_path);
+  ReadKey(node, "min_trigger_width_us", &o->min_trigger_width_us, rig_path);
+  ReadKey(node, "min_trigger_period_us", &o->min_trigger_period_us, rig_path);
+  ReadKey(node, "max_trigger_count", &o->max_trigger_count, rig_path);
+  ReadKey(node, "reply_latency_s", &o->reply_latency_s, rig_path);
+  ReadKey(node, "seed", &o->seed, rig_path);
+  ReadKey(node, "garble_rate", &o->garble_rate, rig_path);
+  ReadKey(node, "drop_rate", &o->drop_rate, rig_path);
+  ReadKey(node, "delay_rate", &o->delay_rate, rig_path);
+  ReadKey(node, "delay_s", &o->delay_s, rig_path);
+  ReadKey(node, "reboot_after_s", &o->reboot_after_s, rig_path);
+  ReadKey(node, "stuck_axis", &o->stuck_axis, rig_path);
+  ReadKey(node, "missed_pulse_rate", &o->missed_pulse_rate, rig_path);
+  ReadKey(node, "open_circuit", &o->open_circuit, rig_path);
+  ReadKey(node, "refuse_current_off_in_estop", &o->refuse_current_off_in_estop, rig_path);
+  ReadKey(node, "fault_at_move", &o->fault_at_move, rig_path);
+  ReadKey(node, "fault", &o->fault, rig_path);
+}
+
+}  // namespace
+
+EmulatorOptions LoadEmulatorOptions(const std::string& rig_path) {
+  EmulatorOptions options;
+  YAML::Node root;
+  try {
+    root = yaml_fields::Parse(yaml_fields::ReadFile(rig_path), rig_path);
+  } catch (const YAML::Exception& e) {
+    throw Error("cannot read rig file " + rig_path + ": " + e.what() +
+                "; fix the path or the YAML syntax");
+  }
+  ApplyStationLimits(root, rig_path, &options);
   const YAML::Node virt = root["virtual"];
   const YAML::Node node = virt ? virt["station"] : YAML::Node();
-  if (node) {
-    const yaml_fields::MapReader keys(
-        node, rig_path, "virtual.station",
-        {"slide", "pan", "tilt", "homing_speed_factor", "max_current_ma", "current_noise_ma",
-         "min_trigger_width_us", "min_trigger_period_us", "max_trigger_count", "reply_latency_s",
-         "seed", "garble_rate", "drop_rate", "delay_rate", "delay_s", "reboot_after_s",
-         "stuck_axis", "missed_pulse_rate", "open_circuit", "refuse_current_off_in_estop",
-         "fault_at_move", "fault"});
-    ReadKey(node, "fault_at_move", &options.fault_at_move, rig_path);
-    ReadKey(node, "fault", &options.fault, rig_path);
-    ReadKey(node, "open_circuit", &options.open_circuit, rig_path);
-    ReadKey(node, "refuse_current_off_in_estop", &options.refuse_current_off_in_estop, rig_path);
-    ReadAxis(node["slide"], &options.slide, rig_path);
-    ReadAxis(node["pan"], &options.pan, rig_path);
-    ReadAxis(node["tilt"], &options.tilt, rig_path);
-    ReadKey(node, "homing_speed_factor", &options.homing_speed_factor, rig_path);
-    ReadKey(node, "max_current_ma", &options.max_current_ma, rig_path);
-    ReadKey(node, "current_noise_ma", &options.current_noise_ma, rig_path);
-    ReadKey(node, "min_trigger_width_us", &options.min_trigger_width_us, rig_path);
-    ReadKey(node, "min_trigger_period_us", &options.min_trigger_period_us, rig_path);
-    ReadKey(node, "max_trigger_count", &options.max_trigger_count, rig_path);
-    ReadKey(node, "reply_latency_s", &options.reply_latency_s, rig_path);
-    ReadKey(node, "seed", &options.seed, rig_path);
-    ReadKey(node, "garble_rate", &options.garble_rate, rig_path);
-    ReadKey(node, "drop_rate", &options.drop_rate, rig_path);
-    ReadKey(node, "delay_rate", &options.delay_rate, rig_path);
-    ReadKey(node, "delay_s", &options.delay_s, rig_path);
-    ReadKey(node, "reboot_after_s", &options.reboot_after_s, rig_path);
-    ReadKey(node, "stuck_axis", &options.stuck_axis, rig_path);
-    ReadKey(node, "missed_pulse_rate", &options.missed_pulse_rate, rig_path);
-  }
+  if (node) ReadVirtualStation(node, rig_path, &options);
   std::string why;
   if (!options.IsValid(&why)) {
     throw Error(rig_path + ": " + why + "; fix the rig file");
@@ -405,6 +419,8 @@ struct StationEmulator::Impl {
   double reboot_after_move_s = -1.0;
   std::uint64_t reboots = 0, lines = 0, dropped = 0;
   int moves_started = 0;  // accepted MOVEs to a new target, for fault_at_move
+  long long link_watchdog_s = 0;      // SYST:WDOG: link lost after this long without a request
+  double last_valid_request_s = 0.0;
   bool silent = false;    // fault "silent": no reply any more
 
   Impl(World& w, EmulatorOptions o) : world(w), options(std::move(o)), rng(options.seed) {
@@ -433,6 +449,7 @@ struct StationEmulator::Impl {
 
   // Power-up: new boot id, unhomed, IRED off, trigger idle, deaf for kBootTimeS.
   void PowerUp(double now) {
+    link_watchdog_s = 0;  // power-on: no link watchdog
     std::uniform_int_distribution<std::uint32_t> dist;
     char id[16];
     std::snprintf(id, sizeof(id), "%08X", dist(entropy) ^ static_cast<std::uint32_t>(reboots));
@@ -473,6 +490,24 @@ struct StationEmulator::Impl {
     current_centi_ma = 0;
     world.SetCurrent(0.0);
     state = State::kEStop;
+  }
+
+  // No valid request within SYST:WDOG seconds: IRED off, motion and trigger stopped, error 206.
+  void OnLinkLost(double now) {
+    link_watchdog_s = 0;
+    current_centi_ma = 0;
+    world.SetCurrent(0.0);
+    trig_remaining = 0;
+    if (state == State::kMoving || state == State::kHoming || state == State::kSettling) {
+      for (Axis& a : axes) {
+        double v = 0.0;
+        a.profile.At(now - a.profile.start_s, &a.pos, &v);
+        a.profile = Profile::Make(a.pos, a.pos, now, 0.0, a.opt->speed, a.opt->accel);
+        a.moving = false;
+      }
+      state = homing_ok ? State::kIdle : State::kUnhomed;
+    }
+    PushError(206);
   }
 
   void Reboot(double now) {
@@ -516,6 +551,7 @@ struct StationEmulator::Impl {
   // Advances motion, settling, homing, booting, scheduled reboots and the trigger train to `now`.
   void Advance(double now) {
     if (reboot_at_s >= 0.0 && now >= reboot_at_s) Reboot(reboot_at_s);
+    if (link_watchdog_s > 0 && now - last_valid_request_s > link_watchdog_s) OnLinkLost(now);
     if (state == State::kBooting) {
       if (now >= boot_done_s) state = after_boot;
       else return;
@@ -634,6 +670,8 @@ struct StationEmulator::Impl {
         {"TRIG:FIRE", &Impl::CmdTrigFire},
         {"TRIG:ABOR", &Impl::CmdTrigAbor},
         {"TRIG:PULS?", &Impl::CmdTrigPulsQuery},
+        {"SYST:WDOG", &Impl::CmdSystWdog},
+        {"SYST:WDOG?", &Impl::CmdSystWdogQuery},
     };
     return table;
   }
@@ -851,6 +889,19 @@ struct StationEmulator::Impl {
     return "OK";
   }
 
+  std::string CmdSystWdog(const Request& r) {
+    std::vector<long long> v;
+    if (int e = r.Ints(1, &v)) return Fail(e);
+    if (v[0] < 0 || v[0] > 3600) return Fail(-222);
+    link_watchdog_s = v[0];
+    return "OK";
+  }
+
+  std::string CmdSystWdogQuery(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    return "OK " + std::to_string(link_watchdog_s);
+  }
+
   std::string CmdTrigPulsQuery(const Request& r) {
     if (int e = r.NoArgs()) return Fail(e);
     return "OK " + std::to_string(pulses_total) + "," + std::to_string(trig_remaining);
@@ -882,6 +933,7 @@ struct StationEmulator::Impl {
       return;
     }
     std::string reply;
+    last_valid_request_s = now;  // the link is alive (docs/station-protocol.md, link loss)
     if (text == last_request && !last_reply.empty()) {
       reply = last_reply;  // retransmission: answer again, do not execute again
     } else {

@@ -183,6 +183,19 @@ void TriggerChecks(Suite& s) {
     const std::uint64_t after = s.client.WaitTriggerDone();
     Expect(after == before + 1, std::to_string(after - before) + " pulses for one FIRE");
   });
+  s.Run("link-loss", "7c SYST:WDOG: IRED off when the link is lost", [&] {
+    s.client.DrainErrors();
+    ExpectCode(s.client, "SYST:WDOG 1", 0);
+    s.client.SetCurrent(100.0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // > 1 s without a request
+    const double measured_ma = s.client.MeasureCurrent();
+    bool queued = false;
+    for (const StationErrorEntry& e : s.client.DrainErrors()) queued = queued || e.code == 206;
+    s.client.SetCurrent(0.0);
+    Expect(measured_ma < 1.0, "IRED still at " + std::to_string(measured_ma) + " mA");
+    Expect(queued, "error 206 not queued");
+    ExpectCode(s.client, "SYST:WDOG 0", 0);
+  });
   s.Run("current", "5 SOUR:CURR / MEAS:CURR?", [&] {
     s.client.SetCurrent(100.0);
     const double measured_ma = s.client.MeasureCurrent();

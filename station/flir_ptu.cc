@@ -27,6 +27,7 @@ using std::chrono::milliseconds;
 constexpr char kName[] = "flir_ptu";
 constexpr double kArcsecPerDeg = 3600.0;
 constexpr milliseconds kPollPeriod{20};
+constexpr int kStillPolls = 15;  // polls standing still, away from the target: stopped short
 
 struct PtuAxis {
   Axis axis = Axis::kPan;
@@ -107,6 +108,7 @@ class FlirPtu : public DeviceDriver, public Motion {
   void ApplySpeed(PtuAxis* a);
   void MoveAxis(PtuAxis* a, long long position);
   void WaitAt(milliseconds timeout, const std::string& what);
+  [[noreturn]] void StoppedShort(const std::string& what, const std::vector<long long>& positions);
   std::string AxisText(const PtuAxis& a) const { return AxisName(a.axis); }
   [[noreturn]] void Fail(const std::string& code, const std::string& message,
                          const std::string& fix) const {
@@ -123,6 +125,7 @@ class FlirPtu : public DeviceDriver, public Motion {
   long long tolerance_ = 0;
   bool homed_ = false;
   bool moving_ = false;
+  bool was_away_ = false;  // an axis stood or was seen away from 0 since the move began
   std::string last_heard_;
 };
 
@@ -282,17 +285,22 @@ MotionState FlirPtu::State() {
 void FlirPtu::WaitAt(milliseconds timeout, const std::string& what) {
   const auto deadline = Clock::now() + timeout;
   std::vector<long long> last(axes_.size(), LLONG_MIN);
+  int still_polls = 0;  // consecutive polls with every axis standing still short of its target
   while (true) {
-    bool done = true;
+    bool done = true, still = true;
     for (std::size_t i = 0; i < axes_.size(); ++i) {
       const long long pos = Position(axes_[i]);
       if (axes_[i].has_target &&
           (std::llabs(pos - axes_[i].target) > tolerance_ || pos != last[i])) {
         done = false;
       }
+      still = still && pos == last[i];
+      was_away_ = was_away_ || pos != 0;
       last[i] = pos;
     }
     if (done) return;
+    still_polls = still ? still_polls + 1 : 0;
+    if (still_polls >= kStillPolls) StoppedShort(what, last);
     if (Clock::now() > deadline) {
       Stop();
       Fail("", what + " not done within " + std::to_string(timeout.count()) + " ms",
@@ -302,8 +310,39 @@ void FlirPtu::WaitAt(milliseconds timeout, const std::string& what) {
   }
 }
 
-// Manual: R resets (calibrates) both axes; the '*' may come when the reset ends. Then the axes
-// are commanded to 0, where homing leaves them.
+// Every axis stands still and one is away from its target. Back at 0/0 (where the power-up reset
+// leaves the unit) after being elsewhere, or with the rig's speed gone back to the default: the
+// unit restarted. An axis stuck at 0 since the move began is not told apart from it.
+void FlirPtu::StoppedShort(const std::string& what, const std::vector<long long>& positions) {
+  Stop();
+  bool at_power_up_pose = was_away_, speed_reset = false;
+  std::string short_axes;
+  for (std::size_t i = 0; i < axes_.size(); ++i) {
+    at_power_up_pose = at_power_up_pose && positions[i] == 0;
+    if (std::llabs(positions[i] - axes_[i].target) > tolerance_) {
+      short_axes += (short_axes.empty() ? "" : ", ") + AxisText(axes_[i]) + " at " +
+                    std::to_string(positions[i]) + " (target " +
+                    std::to_string(axes_[i].target) + ")";
+    }
+    if (spec_.settings.count("speed_deg_s")) {
+      const std::string p(1, axes_[i].letter);
+      speed_reset = speed_reset || std::llround(QueryNumber(p + "S")) != axes_[i].speed_pos_s;
+    }
+  }
+  if (homed_ && (at_power_up_pose || speed_reset)) {
+    homed_ = false;
+    moving_ = false;
+    throw DeviceRestarted(identity_.Brief() + ": " + what + " ended with " + short_axes +
+                              (speed_reset ? ", speeds reset" : ", at the power-up pose 0/0") +
+                              ": the unit was power-cycled or reset; home it and retake",
+                          false);
+  }
+  Fail("", what + " stopped short: " + short_axes,
+       "check for an obstruction, an overload or a stalled axis; then home");
+}
+
+// Manual: R resets (calibrates) both axes; the '*' may come when the reset ends. The rig's speeds
+// are set again, then the axes commanded to 0, where homing leaves them.
 void FlirPtu::Home() {
   homed_ = false;
   if (!Command("R", home_timeout_)) {
@@ -311,7 +350,12 @@ void FlirPtu::Home() {
                         std::to_string(home_timeout_.count()) + " ms",
                     spec_.port, "check the unit's power and cable; then home again");
   }
-  for (PtuAxis& a : axes_) a.has_target = false;
+  for (PtuAxis& a : axes_) {
+    a.has_target = false;
+    ApplySpeed(&a);  // a power cycle restored the unit's defaults
+    ReadAxis(&a);
+  }
+  was_away_ = false;
   for (PtuAxis& a : axes_) MoveAxis(&a, 0);
   WaitAt(home_timeout_, "homing");
   homed_ = true;
@@ -348,6 +392,8 @@ void FlirPtu::StartMove(const StationPosition& target) {
   }
   if (!homed_) Fail("", "the unit is not homed", "home the station first");
   moving_ = true;
+  was_away_ = false;
+  for (const PtuAxis& a : axes_) was_away_ = was_away_ || (a.has_target && a.target != 0);
   for (PtuAxis& a : axes_) {
     const double deg = a.axis == Axis::kPan ? target.pan_deg : target.tilt_deg;
     MoveAxis(&a, std::llround(deg / a.deg_per_position));

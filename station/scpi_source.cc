@@ -309,14 +309,20 @@ SourceReading ScpiSource::Measure() {
   return reading;
 }
 
+// Writes :OUTP OFF, then reads :OUTP? once (no retries: exit paths must stay quick) and writes
+// it again if the output still reads on (the first one damaged on the wire).
 void ScpiSource::Off() noexcept {
+  output_on_ = false;
+  setpoint_ma_ = 0.0;
   try {
     link_->WriteLine(":OUTP OFF");
-    output_on_ = false;
-    setpoint_ma_ = 0.0;
+    link_->Flush();
+    link_->WriteLine(":OUTP?");
+    if (Trim(link_->ReadLine(timeout_)) != "0") link_->WriteLine(":OUTP OFF");
   } catch (...) {
     // Best effort on every exit path: nothing more can be done over a dead link.
   }
+  out_of_step_ = true;  // whatever is still in flight is not the next query's answer
 }
 
 void ScpiSource::CheckAlive() {

@@ -193,6 +193,17 @@ void Station::SetCameraTrigger(Trigger* trigger) {
   trigger_ = trigger;
 }
 
+SourceReading Station::MeasureCheckedCurrent() {
+  const SourceReading reading = MeasureCurrent();
+  try {
+    CheckCurrent(reading);
+  } catch (const CurrentMismatchError&) {
+    CheckAlive();
+    throw;
+  }
+  return reading;
+}
+
 void Station::Fire(int frame_in_bracket) {
   IRDIST_CHECK(trigger_ != nullptr,
                "roles.trigger is camera_software but no camera trigger was handed in");

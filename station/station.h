@@ -91,6 +91,9 @@ class Station {
   // Throws CurrentMismatchError when `reading` is off the set-point by more than the tolerance,
   // or in compliance.
   void CheckCurrent(const SourceReading& reading) const;
+  // One measurement, checked: on a mismatch every device is checked alive first (a device that
+  // restarted lost its current: DeviceRestarted, the pose is retaken), then CurrentMismatchError.
+  SourceReading MeasureCheckedCurrent();
 
   // camera_software: the camera's trigger, once the camera is open (must outlive the station's
   // use of it).

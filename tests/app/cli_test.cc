@@ -38,7 +38,8 @@ TEST(CliTest, DefaultArgsAreUsable) {
 
 TEST(CliTest, EverySubcommandIsInTheTable) {
   EXPECT_EQ(SubcommandNames(), (std::vector<std::string>{"calibrate", "validate", "fit", "playback",
-                                                         "check", "plan", "sim", "devices"}));
+                                                         "check", "plan", "sim", "devices",
+                                                         "station", "station-test"}));
 }
 
 TEST(CliTest, UnknownOrMissingCommandIsAUsageError) {
@@ -133,6 +134,26 @@ TEST(CliTest, HandlersReceiveTheirArguments) {
   EXPECT_TRUE(devices.discover);
   // An empty handler is "not available".
   EXPECT_THROW(RunWords({"plan", "r.yaml"}, handlers), NotAvailableError);
+}
+
+TEST(CliTest, StationCommandsParseTheirArguments) {
+  Handlers handlers;
+  StationArgs station;
+  handlers.station = [&](const StationArgs& args, CommandIo) { station = args; };
+  EXPECT_EQ(RunWords({"station", "--rig", "virtual-lab", "move", "2000", "10", "-5", "--port",
+                      "slide=/dev/pts/3", "--port", "head=/dev/pts/4"},
+                     handlers),
+            0);
+  EXPECT_EQ(station.rig, "virtual-lab");
+  EXPECT_EQ(station.action, "move");
+  EXPECT_EQ(station.values, (std::vector<double>{2000.0, 10.0, -5.0}));
+  EXPECT_EQ(station.ports, (std::vector<std::string>{"slide=/dev/pts/3", "head=/dev/pts/4"}));
+  EXPECT_THROW(RunWords({"station", "jump"}, handlers), UsageError);
+  StationTestArgs test;
+  handlers.station_test = [&](const StationTestArgs& args, CommandIo) { test = args; };
+  EXPECT_EQ(RunWords({"station-test", "/dev/ttyUSB0", "--baud", "57600"}, handlers), 0);
+  EXPECT_EQ(test.port, "/dev/ttyUSB0");
+  EXPECT_EQ(test.baud, 57600);
 }
 
 TEST(CliTest, PlanPrintsCountsOrderAndDuration) {

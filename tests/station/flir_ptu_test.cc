@@ -266,8 +266,44 @@ TEST(FlirPtu, StuckAxisTimesOutWithADeviceError) {
   StationPosition target;
   target.tilt_deg = 10.0;
   h.motion->StartMove(target);
-  EXPECT_THROW(h.motion->WaitSettled(std::chrono::milliseconds(300)), DeviceError);
+  try {
+    h.motion->WaitSettled(std::chrono::milliseconds(60000));  // ends early: it stands still
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("stopped short: tilt"), std::string::npos) << e.what();
+  }
   EXPECT_GE(h.Count("H"), 1);  // halted
+}
+
+TEST(FlirPtu, HomingAfterAPowerCycleRestoresTheRigSpeed) {
+  DeviceSpec spec = HeadSpec();
+  spec.settings["speed_deg_s"] = {"30", 12};
+  Head h(spec);
+  h.motion->Identify();
+  h.motion->Home();
+  h.ptu.PowerCycle();
+  EXPECT_THROW(h.motion->CheckAlive(), DeviceRestarted);
+  h.motion->Home();
+  EXPECT_EQ(h.ptu.pan.speed, std::llround(30 / kDegPerPos));
+  StationPosition target;
+  target.pan_deg = 10.0;
+  h.motion->StartMove(target);
+  h.motion->WaitSettled(std::chrono::milliseconds(10000));
+  h.motion->CheckAlive();
+}
+
+TEST(FlirPtu, PowerCycleDuringAMoveIsARestart) {
+  Head h;
+  h.motion->Identify();
+  h.motion->Home();
+  StationPosition target;
+  target.pan_deg = 20.0;
+  h.motion->StartMove(target);
+  h.motion->WaitSettled(std::chrono::milliseconds(10000));
+  target.pan_deg = 40.0;
+  h.motion->StartMove(target);
+  h.ptu.PowerCycle();  // the power-up reset leaves the unit at 0/0
+  EXPECT_THROW(h.motion->WaitSettled(std::chrono::milliseconds(60000)), DeviceRestarted);
 }
 
 TEST(FlirPtu, PowerCycleIsARestart) {

@@ -198,6 +198,22 @@ TEST(ScpiSource, LostQueryReplyIsRetriedAfterResync) {
   EXPECT_NEAR(r.current_ma, 100.0, 1e-6);
 }
 
+TEST(ScpiSource, GarbledReplyIsRetriedAfterResync) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(250.0);
+  int garbled = 1;
+  b.wire->respond = [&b, &garbled](const std::string& line) {
+    std::vector<std::string> replies = b.meter.Respond(line);
+    if (line == ":READ?" && garbled-- > 0) replies = {"+2.1#0000E+00,+2.5?0000E-01"};
+    return replies;
+  };
+  EXPECT_NEAR(b.source->Measure().current_ma, 250.0, 1e-6);
+  int resyncs = 0;
+  for (const std::string& c : b.meter.commands) resyncs += c == "*IDN?";
+  EXPECT_EQ(resyncs, 2);  // Identify's and the resynchronisation's
+}
+
 TEST(ScpiSource, ReadingAwayFromTheSetpointIsConfirmed) {
   Bench b;
   b.source->Identify();
@@ -219,6 +235,19 @@ TEST(ScpiSource, OffSwitchesTheOutputOffAndNeverThrows) {
   EXPECT_DOUBLE_EQ(b.source->setpoint_ma(), 0.0);
   b.wire->respond = nullptr;  // a dead link
   EXPECT_NO_THROW(b.source->Off());
+}
+
+TEST(ScpiSource, OffIsRepeatedWhenTheOutputStillReadsOn) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(300.0);
+  int lost = 1;
+  b.wire->respond = [&b, &lost](const std::string& line) {
+    if (line == ":OUTP OFF" && lost-- > 0) return std::vector<std::string>{};  // damaged
+    return b.meter.Respond(line);
+  };
+  b.source->Off();
+  EXPECT_FALSE(b.meter.output);
 }
 
 TEST(ScpiSource, DestructionSwitchesTheOutputOff) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "base/input_error.h"
 #include "tests/station/rig_fixture.h"
 
@@ -81,6 +83,16 @@ TEST(Station, AnOpenIredStopsWithTheMessage) {
   }
 }
 
+// A device that restarted lost its current: that is a restart (retake), not an open IRED.
+TEST(Station, ACurrentLostToARestartIsARestart) {
+  VirtualStationRig rig(100.0);
+  rig.station->Identify();
+  rig.station->Home();
+  rig.station->SetCurrent(500.0);
+  rig.emulator.Reboot();
+  EXPECT_THROW(rig.station->MeasureCheckedCurrent(), DeviceRestarted);
+}
+
 TEST(Station, AGoodIredPassesTheCurrentCheck) {
   VirtualStationRig rig(100.0);
   rig.station->Identify();
@@ -103,6 +115,62 @@ TEST(Station, ReportsTheSpeedOfEveryAxis) {
   ASSERT_EQ(speeds.size(), 3u);
   EXPECT_GT(speeds.at(Axis::kSlide).speed, 0.0);
   EXPECT_GT(speeds.at(Axis::kPan).speed, 0.0);
+}
+
+// Two boxes composed: one moves, the other sources the current; one log, lines prefixed by the
+// device's name.
+TEST(Station, ComposesRolesAcrossDevicesWithOneLog) {
+  sim::World world_a(100.0), world_b(100.0);
+  sim::StationEmulator emulator_a(world_a, {}), emulator_b(world_b, {});
+  StationSpec spec = VirtualStationRig::Spec(emulator_a.Start(), 5.0);
+  DeviceSpec b = spec.devices[0];
+  spec.devices[0].name = "a";
+  b.name = "b";
+  b.port = emulator_b.Start();
+  spec.devices.push_back(b);
+  spec.motion = {"a"};
+  spec.source = "b";
+  spec.trigger = "a";
+  const std::string log_path = std::string(IRDIST_BINARY_DIR) + "/station_test_composed.log";
+  {
+    LineLog log(log_path);
+    StationOptions options;
+    options.log = &log;
+    Station station(spec, options);
+    EXPECT_EQ(station.Identify().size(), 2u);
+    station.Home();
+    station.SetCurrent(250.0);
+    station.MoveTo({1700.0, 0.0, 0.0});
+    EXPECT_NEAR(world_a.Pose().slide_mm, 1700.0, 1e-6);
+    EXPECT_DOUBLE_EQ(world_a.Pose().bias_ma, 0.0);
+    EXPECT_DOUBLE_EQ(world_b.Pose().bias_ma, 250.0);
+  }
+  EXPECT_DOUBLE_EQ(world_b.Pose().bias_ma, 0.0);  // off when the station closed
+  std::ifstream in(log_path);
+  std::string line;
+  int a_lines = 0, b_lines = 0;
+  while (std::getline(in, line)) {
+    a_lines += line.find(" a: ") != std::string::npos ? 1 : 0;
+    b_lines += line.find(" b: ") != std::string::npos ? 1 : 0;
+  }
+  EXPECT_GT(a_lines, 0);
+  EXPECT_GT(b_lines, 0);
+}
+
+TEST(Station, AnAxisDrivenTwiceIsRefusedBeforeAnythingMoves) {
+  sim::World world_a(100.0), world_b(100.0);
+  sim::StationEmulator emulator_a(world_a, {}), emulator_b(world_b, {});
+  StationSpec spec = VirtualStationRig::Spec(emulator_a.Start(), 5.0);
+  DeviceSpec b = spec.devices[0];
+  spec.devices[0].name = "a";
+  b.name = "b";
+  b.port = emulator_b.Start();
+  spec.devices.push_back(b);
+  spec.motion = {"a", "b"};
+  spec.source = "a";
+  spec.trigger = "a";
+  Station station(spec, {});
+  EXPECT_THROW(station.Identify(), StationNotReadyError);
 }
 
 }  // namespace
