@@ -27,7 +27,9 @@
 namespace irdist {
 namespace {
 
-std::string LabRigPath() { return std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual-lab.yaml"; }
+std::string LabRigPath() {
+  return std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual-lab.yaml";
+}
 
 // The three emulators of virtual-lab on a fast World, and a Station over their ptys.
 class LabDevices : public ::testing::Test {

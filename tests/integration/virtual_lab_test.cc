@@ -125,8 +125,8 @@ TEST(VirtualLab, AnOpenCircuitIredStopsTheRunNamingTheSource) {
 }
 
 // The Zaber loses power 12 simulated s after its first move (homing) began, mid-sweep: the run
-// re-homes and completes, or stops cleanly (exit 1, resumable); either way no frame is lost, doubled or
-// mislabelled, and a resume completes it.
+// re-homes and completes, or stops cleanly (exit 1, resumable); either way no frame is lost,
+// doubled or mislabelled, and a resume completes it.
 TEST(VirtualLab, AZaberPowerCycleMidSweepLosesNoFrame) {
   const std::string key = "      power_on_mm: 2000.0";
   const std::string rig =
