@@ -185,7 +185,17 @@ void Station::CheckCurrent(const SourceReading& reading) const {
                       "IRED's wiring and the source's compliance voltage, then resume the run"
                     : "the source cannot drive the set current; check the compliance voltage "
                       "and the IRED, then resume the run");
-  throw CurrentMismatchError(text);
+  throw CurrentMismatchError(SourceBrief() + ": " + text);
+}
+
+std::string Station::SourceBrief() const {
+  for (const Device& d : devices_) {
+    if (d.name == spec_.source) {
+      return "station.devices." + d.name + " (" +
+             (d.identity.kind.empty() ? spec_.Find(d.name)->driver : d.identity.Brief()) + ")";
+    }
+  }
+  return "station.devices." + spec_.source;
 }
 
 void Station::SetCameraTrigger(Trigger* trigger) {

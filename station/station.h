@@ -117,6 +117,8 @@ class Station {
     DeviceIdentity identity;
   };
   Device& Named(const std::string& name);
+  // "station.devices.source (scpi_source on /dev/ttyUSB2: KEITHLEY ...)": errors of the source.
+  std::string SourceBrief() const;
   void OpenDevice(const DeviceSpec& device);
   void BindRoles();
 
