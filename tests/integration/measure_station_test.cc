@@ -71,6 +71,13 @@ std::string WaitForSim(testing::Child& sim, const std::string& log_path) {
   return "";
 }
 
+struct Pose {
+  const char* slide_mm;
+  const char* pan_deg;
+  const char* tilt_deg;
+  double d_mm, theta_deg;
+};
+
 class MeasureStation : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -86,14 +93,43 @@ class MeasureStation : public ::testing::Test {
     return RunIrdist(args, dir_ + "/" + name + ".log", output);
   }
 
-  std::string dir_;
-};
+  // `irdist station` move + current 500, then 10 brackets of `irdist measure --json` on the sim's
+  // camera: every estimate within the validation goals of the pose.
+  void PlaceAndMeasure(const Pose& pose, const std::string& model) {
+    std::string output;
+    const std::string name = std::string("pose-") + pose.slide_mm;
+    ASSERT_EQ(
+        Run(name + "-move",
+            {"station", "--rig", "virtual", "move", pose.slide_mm, pose.pan_deg, pose.tilt_deg},
+            &output),
+        0)
+        << output;
+    ASSERT_EQ(Run(name + "-current", {"station", "--rig", "virtual", "current", "500"}, &output), 0)
+        << output;
+    ASSERT_EQ(
+        Run(name + "-measure",
+            {"measure", "--model", model, "--rig", "virtual", "--count", "10", "--json"}, &output),
+        0)
+        << output;
+    EXPECT_NE(output.find("using the running virtual rig of pid "), std::string::npos) << output;
+    EXPECT_EQ(output.find("Virtual rig (time scale"), std::string::npos) << output;  // none started
+    const std::vector<YAML::Node> objects = JsonLines(output);
+    ASSERT_EQ(objects.size(), 10u) << output;
+    double sum_d_mm = 0.0, sum_theta_deg = 0.0;
+    for (const YAML::Node& j : objects) {
+      ASSERT_TRUE(j["ok"].as<bool>()) << output;
+      EXPECT_NEAR(j["d_mm"].as<double>(), pose.d_mm, 0.01 * pose.d_mm) << name << "\n" << output;
+      EXPECT_NEAR(j["theta_deg"].as<double>(), pose.theta_deg, 1.0) << name << "\n" << output;
+      sum_d_mm += j["d_mm"].as<double>();
+      sum_theta_deg += j["theta_deg"].as<double>();
+    }
+    std::cout << "pose slide " << pose.slide_mm << " mm, pan " << pose.pan_deg << ", tilt "
+              << pose.tilt_deg << " deg: mean d " << sum_d_mm / 10.0 << " mm (truth " << pose.d_mm
+              << "), mean theta " << sum_theta_deg / 10.0 << " deg (truth " << pose.theta_deg
+              << ")\n";
+  }
 
-struct Pose {
-  const char* slide_mm;
-  const char* pan_deg;
-  const char* tilt_deg;
-  double d_mm, theta_deg;
+  std::string dir_;
 };
 
 TEST_F(MeasureStation, EstimatesAgreeWithThePosesSetByIrdistStation) {
@@ -126,36 +162,9 @@ TEST_F(MeasureStation, EstimatesAgreeWithThePosesSetByIrdistStation) {
   for (const Pose& pose :
        {Pose{"1500", "15", "0", 1500.0, 15.0}, Pose{"2000", "0", "5", 2000.0, 5.0},
         Pose{"2500", "25", "0", 2500.0, 25.0}}) {
-    const std::string name = std::string("pose-") + pose.slide_mm;
-    ASSERT_EQ(
-        Run(name + "-move",
-            {"station", "--rig", "virtual", "move", pose.slide_mm, pose.pan_deg, pose.tilt_deg},
-            &output),
-        0)
-        << output;
-    ASSERT_EQ(Run(name + "-current", {"station", "--rig", "virtual", "current", "500"}, &output), 0)
-        << output;
-    ASSERT_EQ(
-        Run(name + "-measure",
-            {"measure", "--model", model, "--rig", "virtual", "--count", "10", "--json"}, &output),
-        0)
-        << output;
-    EXPECT_NE(output.find("using the running virtual rig of pid "), std::string::npos) << output;
-    EXPECT_EQ(output.find("Virtual rig (time scale"), std::string::npos) << output;  // none started
-    const std::vector<YAML::Node> objects = JsonLines(output);
-    ASSERT_EQ(objects.size(), 10u) << output;
-    double sum_d_mm = 0.0, sum_theta_deg = 0.0;
-    for (const YAML::Node& j : objects) {
-      ASSERT_TRUE(j["ok"].as<bool>()) << output;
-      EXPECT_NEAR(j["d_mm"].as<double>(), pose.d_mm, 0.01 * pose.d_mm) << name << "\n" << output;
-      EXPECT_NEAR(j["theta_deg"].as<double>(), pose.theta_deg, 1.0) << name << "\n" << output;
-      sum_d_mm += j["d_mm"].as<double>();
-      sum_theta_deg += j["theta_deg"].as<double>();
-    }
-    std::cout << "pose slide " << pose.slide_mm << " mm, pan " << pose.pan_deg << ", tilt "
-              << pose.tilt_deg << " deg: mean d " << sum_d_mm / 10.0 << " mm (truth " << pose.d_mm
-              << "), mean theta " << sum_theta_deg / 10.0 << " deg (truth " << pose.theta_deg
-              << ")\n";
+    SCOPED_TRACE(std::string("slide ") + pose.slide_mm + " mm");
+    PlaceAndMeasure(pose, model);
+    if (HasFatalFailure()) return;
   }
 
   // snap sees the same camera: the blob of the last pose.
