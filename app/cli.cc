@@ -306,7 +306,8 @@ void AddSimAndDevices(CommandTable& table) {
 
 void AddAt(CLI::App* sub, std::vector<double>& at) {
   sub->add_option("--at", at,
-                  "Virtual rig only: place the IRED through the station at "
+                  "Virtual rig started by this command only (not with 'irdist sim' running: use "
+                  "'irdist station'): place the IRED through the station at "
                   "SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA first")
       ->delimiter(',')
       ->expected(4);

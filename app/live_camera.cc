@@ -1,13 +1,16 @@
 #include "app/live_camera.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <ostream>
 
 #include "acquisition/aravis_camera.h"
 #include "app/errors.h"
 #include "app/offline.h"
 #include "app/recipe.h"
+#include "app/tools.h"
 #include "sim/virtual_rig.h"
 #include "station/serial_transport.h"
 #include "station/station_client.h"
@@ -28,17 +31,6 @@ struct LiveCamera::Impl {
 };
 
 namespace {
-
-std::string ResolveRigSpec(const std::string& spec) {
-  if (fs::exists(spec)) return spec;
-  const std::string found = FindRigFile(spec, fs::current_path().string());
-  if (found.empty()) {
-    throw RecipeError(spec, 0, 0,
-                      "no such rig: give a rig file (recipes/rigs/virtual.yaml) or the name of "
-                      "one in recipes/rigs/ (e.g. virtual).");
-  }
-  return found;
-}
 
 // Places the IRED through the virtual station: home, move, current (the sweep's calls).
 void PlaceThroughStation(const std::string& port, const std::vector<double>& at) {
@@ -67,47 +59,100 @@ CameraSettings SettingsOf(const CameraConfig& c, const std::string& trigger_sour
   return s;
 }
 
+// Where the camera is (its name for Aravis: address or id, and the serial expected there), how
+// its frames are fired, and the virtual rig's time scale (1 on hardware).
+struct CameraRoute {
+  std::string name;
+  std::string serial;
+  std::string trigger_source;
+  double time_scale = 1.0;
+};
+
+// A virtual rig of this command's own (stopped with it); --at places the IRED through its station.
+CameraRoute StartOwnVirtualRig(const std::string& rig_path, const LiveCameraOptions& options,
+                               std::ostream& err, std::unique_ptr<sim::VirtualRig>* virtual_rig) {
+  sim::VirtualRigOverrides overrides;
+  if (options.time_scale > 0.0) overrides.time_scale = options.time_scale;
+  *virtual_rig = sim::VirtualRig::Start(rig_path, overrides);
+  const sim::VirtualRigInfo& info = (*virtual_rig)->Info();
+  if (!options.quiet) {
+    err << "Virtual rig (time scale " << info.time_scale << "):\n" << info.BriefReport();
+  }
+  if (!options.at.empty()) {
+    PlaceThroughStation(info.station_port, options.at);
+  } else if (!options.quiet) {
+    err << "note: the virtual station's IRED is off until placed; give --at "
+           "SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA\n";
+  }
+  return {info.camera_address, info.serial, "Line1", info.time_scale};  // the rig's trigger line
+}
+
+// The camera of a running `irdist sim` of the same rig file, fired by software trigger as on a
+// bench: the station belongs to the sim (`irdist station` places the IRED), so --at is refused.
+CameraRoute UseRunningSim(const RunningSim& sim, const LiveCameraOptions& options,
+                          std::ostream& err) {
+  const std::string pid = std::to_string(sim.pid);
+  if (!options.at.empty()) {
+    const std::string station = "'irdist station --rig " + options.rig_spec;
+    throw UsageError("--at places the IRED through a virtual rig this command starts, but the "
+                     "virtual rig of pid " + pid + " ('irdist sim', " + sim.state_path +
+                     ") is running: place the IRED with " + station +
+                     " move SLIDE_MM PAN_DEG TILT_DEG' and " + station +
+                     " current MA', or stop that sim first.");
+  }
+  const auto value = [&sim](const char* key) {
+    const auto found = sim.values.find(key);
+    return found == sim.values.end() ? std::string() : found->second;
+  };
+  const double read_scale = std::atof(value("time_scale").c_str());
+  const double time_scale = read_scale > 0.0 ? read_scale : 1.0;
+  err << "using the running virtual rig of pid " << pid << " (camera " << value("camera_address")
+      << " serial " << value("serial") << ", time scale " << time_scale
+      << "); place the IRED with 'irdist station --rig " << options.rig_spec << "'\n";
+  if (options.time_scale > 0.0 && options.time_scale != time_scale) {
+    err << "note: --time-scale " << options.time_scale << " ignored: that rig runs at "
+        << time_scale << "\n";
+  }
+  // The sim's trigger line belongs to its station: the host fires each frame, as on a bench.
+  return {value("camera_address"), value("serial"), "Software", time_scale};
+}
+
+CameraRoute UseHardwareCamera(const Rig& rig, const std::string& rig_path,
+                              const LiveCameraOptions& options) {
+  if (!options.at.empty()) {
+    throw RecipeError(rig_path, 0, 0,
+                      "--at places the IRED on a virtual rig only; on hardware place it by hand "
+                      "or with 'irdist station'.");
+  }
+  if (rig.camera.id == "auto") {
+    throw RecipeError(rig_path, 0, 0,
+                      "camera.id is 'auto', which only a virtual rig can resolve; set it to the "
+                      "camera's IP address, Aravis id or serial number.");
+  }
+  return {rig.camera.id, "", "Software", 1.0};  // no station: the host fires each frame
+}
+
 }  // namespace
 
 LiveCamera::LiveCamera(const LiveCameraOptions& options, std::ostream& err) : impl_(new Impl) {
   Impl& m = *impl_;
-  m.rig_path = ResolveRigSpec(options.rig_spec);
+  m.rig_path = ResolveRig(options.rig_spec);
   m.rig = LoadRig(m.rig_path);
-  std::string name = m.rig.camera.id;
-  std::string serial;
-  if (m.rig.kind == RigKind::kVirtual) {
-    sim::VirtualRigOverrides overrides;
-    if (options.time_scale > 0.0) overrides.time_scale = options.time_scale;
-    m.virtual_rig = sim::VirtualRig::Start(m.rig_path, overrides);
-    const sim::VirtualRigInfo& info = m.virtual_rig->Info();
-    m.time_scale = info.time_scale;
-    name = info.camera_address;
-    serial = info.serial;
-    if (!options.quiet) err << "Virtual rig (time scale " << m.time_scale << "):\n" << info.BriefReport();
-    if (!options.at.empty()) {
-      PlaceThroughStation(info.station_port, options.at);
-    } else if (!options.quiet) {
-      err << "note: the virtual station's IRED is off until placed; give --at "
-             "SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA\n";
-    }
-    m.trigger_source = "Line1";  // the rig's trigger line
+  CameraRoute route;
+  if (m.rig.kind != RigKind::kVirtual) {
+    route = UseHardwareCamera(m.rig, m.rig_path, options);
+  } else if (const std::optional<RunningSim> sim = FindRunningSim(m.rig_path)) {
+    route = UseRunningSim(*sim, options, err);
   } else {
-    if (!options.at.empty()) {
-      throw RecipeError(m.rig_path, 0, 0,
-                        "--at places the IRED on a virtual rig only; on hardware place it by hand "
-                        "or with 'irdist station'.");
-    }
-    if (name == "auto") {
-      throw RecipeError(m.rig_path, 0, 0,
-                        "camera.id is 'auto', which only a virtual rig can resolve; set it to the "
-                        "camera's IP address, Aravis id or serial number.");
-    }
-    m.trigger_source = "Software";  // no station: the host fires each frame
+    route = StartOwnVirtualRig(m.rig_path, options, err, &m.virtual_rig);
   }
-  m.camera = AravisCamera::Open(name, serial);
+  m.trigger_source = route.trigger_source;
+  m.time_scale = route.time_scale;
+  m.camera = AravisCamera::Open(route.name, route.serial);
   m.camera->Configure(SettingsOf(m.rig.camera, m.trigger_source, options));
-  m.frame_timeout_ms = m.rig.camera.frame_timeout_ms +
-                       static_cast<int>(std::ceil(options.longest_exposure_us / 1000.0 / m.time_scale));
+  m.frame_timeout_ms =
+      m.rig.camera.frame_timeout_ms +
+      static_cast<int>(std::ceil(options.longest_exposure_us / 1000.0 / m.time_scale));
 }
 
 LiveCamera::~LiveCamera() {

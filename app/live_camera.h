@@ -1,9 +1,11 @@
 #pragma once
 // The camera alone, for the commands without a station sweep (measure, snap, view): the rig file's
-// camera opened and configured; on a virtual rig the rig itself is started first (and stopped at
-// the end), its camera fired through the rig's trigger line, and `--at` places the IRED through
-// the virtual station (the station protocol, as a sweep does). On hardware the camera is fired by
-// software trigger.
+// camera opened and configured. On a virtual rig with an `irdist sim` of the same rig file running
+// (app/tools.h FindRunningSim), its camera is used as a bench camera: fired by software trigger,
+// the IRED placed by `irdist station` (`--at` is refused). Otherwise on a virtual rig the rig
+// itself is started first (and stopped at the end), its camera fired through the rig's trigger
+// line, and `--at` places the IRED through the virtual station (the station protocol, as a sweep
+// does). On hardware the camera is fired by software trigger.
 
 #include <functional>
 #include <iosfwd>
@@ -21,7 +23,7 @@ struct CameraIdentity;
 struct LiveCameraOptions {
   std::string rig_spec = "virtual";  // rig name or file
   double time_scale = 0.0;           // virtual rig: simulated s per host s (0 = rig file's)
-  std::vector<double> at;            // SLIDE_MM, PAN_DEG, TILT_DEG, BIAS_MA (virtual only)
+  std::vector<double> at;            // SLIDE_MM, PAN_DEG, TILT_DEG, BIAS_MA (own virtual rig only)
   double first_exposure_us = 8000.0;
   double longest_exposure_us = 8000.0;  // sizes the frame timeout
   int buffer_count = 16;
@@ -30,7 +32,8 @@ struct LiveCameraOptions {
 
 class LiveCamera {
  public:
-  // Throws RecipeError (rig file, --at on hardware), CameraError, StationError, LinkError.
+  // Throws RecipeError (rig file, --at on hardware), UsageError (--at with a running sim),
+  // CameraError, StationError, LinkError.
   LiveCamera(const LiveCameraOptions& options, std::ostream& err);
   ~LiveCamera();
   LiveCamera(const LiveCamera&) = delete;

@@ -1,9 +1,7 @@
 #include "app/station_cmd.h"
 
-#include <signal.h>
-
 #include <cstdio>
-#include <filesystem>
+#include <optional>
 #include <ostream>
 
 #include "app/rig.h"
@@ -15,29 +13,17 @@
 namespace irdist {
 namespace {
 
-namespace fs = std::filesystem;
-
 // The ports a running `irdist sim` of this rig file wrote in its state file.
 std::map<std::string, std::string> RunningSimPorts(const Rig& rig) {
-  std::error_code error;
-  const std::string wanted = fs::absolute(rig.path).string();
-  for (const auto& entry : fs::directory_iterator(SimStateDir(), error)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind("irdist-sim-", 0) != 0 || entry.path().extension() != ".yaml") continue;
-    const auto values = ReadFlatYaml(entry.path().string());
-    const auto pid = values.find("pid");
-    const auto rig_path = values.find("rig");
-    if (pid == values.end() || rig_path == values.end() || rig_path->second != wanted) continue;
-    if (kill(static_cast<pid_t>(std::atoll(pid->second.c_str())), 0) != 0) continue;
-    std::map<std::string, std::string> ports;
-    for (const auto& [key, value] : values) {
-      if (key.rfind("port.", 0) == 0) ports[key.substr(5)] = value;
-    }
-    const auto legacy = values.find("station_port");
-    if (ports.empty() && legacy != values.end()) ports[kLegacyStationDevice] = legacy->second;
-    return ports;
+  const std::optional<RunningSim> sim = FindRunningSim(rig.path);
+  if (!sim) return {};
+  std::map<std::string, std::string> ports;
+  for (const auto& [key, value] : sim->values) {
+    if (key.rfind("port.", 0) == 0) ports[key.substr(5)] = value;
   }
-  return {};
+  const auto legacy = sim->values.find("station_port");
+  if (ports.empty() && legacy != sim->values.end()) ports[kLegacyStationDevice] = legacy->second;
+  return ports;
 }
 
 std::map<std::string, std::string> PortsFor(const Rig& rig, const StationArgs& args) {

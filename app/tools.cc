@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -74,6 +75,25 @@ std::map<std::string, std::string> ReadFlatYaml(const std::string& path) {
     values[line.substr(0, colon)] = value;
   }
   return values;
+}
+
+std::optional<RunningSim> FindRunningSim(const std::string& rig_path) {
+  std::error_code error;
+  for (const auto& entry : fs::directory_iterator(SimStateDir(), error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("irdist-sim-", 0) != 0 || entry.path().extension() != ".yaml") continue;
+    RunningSim sim{0, entry.path().string(), ReadFlatYaml(entry.path().string())};
+    const auto pid = sim.values.find("pid");
+    const auto rig = sim.values.find("rig");
+    if (pid == sim.values.end() || rig == sim.values.end()) continue;
+    std::error_code same_error;
+    if (!fs::equivalent(rig->second, rig_path, same_error)) continue;
+    sim.pid = std::atol(pid->second.c_str());
+    const bool alive = sim.pid > 0 && (kill(static_cast<pid_t>(sim.pid), 0) == 0 || errno == EPERM);
+    if (!alive) continue;  // the stale file of a rig that died
+    return sim;
+  }
+  return std::nullopt;
 }
 
 void RunSim(const SimArgs& args, CommandIo io) {

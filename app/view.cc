@@ -67,7 +67,8 @@ std::string LevelLine(const Features& f) {
 
 void PrintSnap(const Features& f, const Rig& rig, std::ostream& out) {
   if (!f.blob_found) {
-    out << "No blob found: is the IRED in view and on (on a virtual rig: --at)?\n";
+    out << "No blob found: is the IRED in view and on (on a virtual rig: --at, or 'irdist "
+           "station' with 'irdist sim' running)?\n";
     return;
   }
   const double x = f.centroid_px.x + rig.camera.roi_offset_x;

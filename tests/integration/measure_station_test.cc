@@ -1,0 +1,185 @@
+// The bench workflow on the virtual rig, through the built binary: `irdist sim` runs the rig on its
+// own, `irdist station` places the IRED, and `irdist measure` / `irdist snap` use the sim's camera
+// (they start no rig of their own). A small calibration first (3 distances x 4 angles x 2
+// currents), then three poses set by `irdist station`: every estimate within the validation goals
+// (distance 1%, theta 1 deg); `--at` is refused while the sim runs; at the end the IRED is switched
+// off and the sim stops on SIGINT, removing its state file.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tests/integration/run_helpers.h"
+#include "tests/loopback_gvcp.h"
+
+namespace irdist {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::ReadAll;
+using testing::RunIrdist;
+using testing::WriteAll;
+
+constexpr const char* kCalibrationRecipe = R"(name: measure-station-calibration
+rig: virtual
+after: fit
+axes:
+  slide_mm: [1500, 2000, 2500]
+  theta_deg: [0, 10, 20, 30]
+  bias_ma: [475, 500]
+bracket:
+  t_ref_ms: 8
+  t_meas_ms: [30, 33, 36]
+settle:
+  after_move_ms: 200
+  after_current_ms: 500
+)";
+
+// The JSON objects of an output (lines starting with '{'), parsed.
+std::vector<YAML::Node> JsonLines(const std::string& output) {
+  std::vector<YAML::Node> objects;
+  std::istringstream in(output);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] == '{') objects.push_back(YAML::Load(line));
+  }
+  return objects;
+}
+
+// Waits until `irdist sim` announced its state file and runs; returns the file ("" on failure).
+std::string WaitForSim(testing::Child& sim, const std::string& log_path) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  std::smatch state;
+  while (sim.Running() && std::chrono::steady_clock::now() < deadline) {
+    const std::string log = ReadAll(log_path);
+    if (log.find("Running until") != std::string::npos &&
+        std::regex_search(log, state, std::regex(R"(state: (\S+\.yaml))")) &&
+        fs::exists(state[1].str())) {
+      return state[1].str();
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return "";
+}
+
+struct Pose {
+  const char* slide_mm;
+  const char* pan_deg;
+  const char* tilt_deg;
+  double d_mm, theta_deg;
+};
+
+class MeasureStation : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = testing::ScratchDir("measure-station");
+    // The sim's state file in a folder of this test's own: no other rig is ever found.
+    fs::create_directories(dir_ + "/runtime");
+    ASSERT_EQ(setenv("XDG_RUNTIME_DIR", (dir_ + "/runtime").c_str(), 1), 0);
+    WriteAll(dir_ + "/calibration.yaml", kCalibrationRecipe);
+  }
+
+  // irdist with `args`, its output in *output; returns the exit code.
+  int Run(const std::string& name, const std::vector<std::string>& args, std::string* output) {
+    return RunIrdist(args, dir_ + "/" + name + ".log", output);
+  }
+
+  // `irdist station` move + current 500, then 10 brackets of `irdist measure --json` on the sim's
+  // camera: every estimate within the validation goals of the pose.
+  void PlaceAndMeasure(const Pose& pose, const std::string& model) {
+    std::string output;
+    const std::string name = std::string("pose-") + pose.slide_mm;
+    ASSERT_EQ(
+        Run(name + "-move",
+            {"station", "--rig", "virtual", "move", pose.slide_mm, pose.pan_deg, pose.tilt_deg},
+            &output),
+        0)
+        << output;
+    ASSERT_EQ(Run(name + "-current", {"station", "--rig", "virtual", "current", "500"}, &output), 0)
+        << output;
+    ASSERT_EQ(
+        Run(name + "-measure",
+            {"measure", "--model", model, "--rig", "virtual", "--count", "10", "--json"}, &output),
+        0)
+        << output;
+    EXPECT_NE(output.find("using the running virtual rig of pid "), std::string::npos) << output;
+    EXPECT_EQ(output.find("Virtual rig (time scale"), std::string::npos) << output;  // none started
+    const std::vector<YAML::Node> objects = JsonLines(output);
+    ASSERT_EQ(objects.size(), 10u) << output;
+    double sum_d_mm = 0.0, sum_theta_deg = 0.0;
+    for (const YAML::Node& j : objects) {
+      ASSERT_TRUE(j["ok"].as<bool>()) << output;
+      EXPECT_NEAR(j["d_mm"].as<double>(), pose.d_mm, 0.01 * pose.d_mm) << name << "\n" << output;
+      EXPECT_NEAR(j["theta_deg"].as<double>(), pose.theta_deg, 1.0) << name << "\n" << output;
+      sum_d_mm += j["d_mm"].as<double>();
+      sum_theta_deg += j["theta_deg"].as<double>();
+    }
+    std::cout << "pose slide " << pose.slide_mm << " mm, pan " << pose.pan_deg << ", tilt "
+              << pose.tilt_deg << " deg: mean d " << sum_d_mm / 10.0 << " mm (truth " << pose.d_mm
+              << "), mean theta " << sum_theta_deg / 10.0 << " deg (truth " << pose.theta_deg
+              << ")\n";
+  }
+
+  std::string dir_;
+};
+
+TEST_F(MeasureStation, EstimatesAgreeWithThePosesSetByIrdistStation) {
+  testing::LoopbackGvcpLock lock;
+  std::string output;
+  ASSERT_EQ(Run("calibrate",
+                {"calibrate", dir_ + "/calibration.yaml", "--out", dir_ + "/cal", "--time-scale",
+                 "50", "--quiet"},
+                &output),
+            0)
+      << output;
+  const std::string model = dir_ + "/cal/model.yaml";
+
+  const std::string sim_log = dir_ + "/sim.log";
+  testing::Child sim({"sim", "virtual", "--time-scale", "10"}, sim_log);
+  const std::string state = WaitForSim(sim, sim_log);
+  ASSERT_FALSE(state.empty()) << ReadAll(sim_log);
+  EXPECT_EQ(fs::path(state).parent_path(), fs::path(dir_ + "/runtime"));
+  ASSERT_EQ(Run("home", {"station", "--rig", "virtual", "home"}, &output), 0) << output;
+
+  // --at would place the IRED behind the running sim's back: refused, naming irdist station.
+  EXPECT_EQ(
+      Run("at-refused",
+          {"measure", "--model", model, "--rig", "virtual", "--at", "2000,0,0,500", "--count", "1"},
+          &output),
+      2)
+      << output;
+  EXPECT_NE(output.find("irdist station --rig virtual move"), std::string::npos) << output;
+
+  for (const Pose& pose :
+       {Pose{"1500", "15", "0", 1500.0, 15.0}, Pose{"2000", "0", "5", 2000.0, 5.0},
+        Pose{"2500", "25", "0", 2500.0, 25.0}}) {
+    SCOPED_TRACE(std::string("slide ") + pose.slide_mm + " mm");
+    PlaceAndMeasure(pose, model);
+    if (HasFatalFailure()) return;
+  }
+
+  // snap sees the same camera: the blob of the last pose.
+  ASSERT_EQ(Run("snap", {"snap", "--rig", "virtual", "--out", dir_ + "/snap.png"}, &output), 0)
+      << output;
+  EXPECT_NE(output.find("using the running virtual rig of pid "), std::string::npos) << output;
+  EXPECT_NE(output.find("Blob at ("), std::string::npos) << output;
+  EXPECT_TRUE(fs::exists(dir_ + "/snap.png"));
+
+  ASSERT_EQ(Run("off", {"station", "--rig", "virtual", "off"}, &output), 0) << output;
+  sim.Signal(SIGINT);
+  const int code = sim.Wait(std::chrono::seconds(30));
+  EXPECT_TRUE(code == 0 || code == 130) << "exit " << code << "\n" << ReadAll(sim_log);
+  EXPECT_FALSE(fs::exists(state)) << state;
+}
+
+}  // namespace
+}  // namespace irdist
