@@ -176,6 +176,10 @@ bool SensorOptions::IsValid(std::string* why) const {
     return Fail(why, "sensor.background_e_per_s must be >= 0");
   }
   if (!std::isfinite(temperature_c)) return Fail(why, "sensor.temperature_c must be finite");
+  if (!std::isfinite(prnu_percent) || prnu_percent < 0.0 || prnu_percent > 10.0) {
+    return Fail(why, "sensor.prnu_percent must lie in [0, 10]");
+  }
+  if (!std::isfinite(dsnu_e) || dsnu_e < 0.0) return Fail(why, "sensor.dsnu_e must be >= 0");
   return true;
 }
 
@@ -284,6 +288,8 @@ RigPhysics LoadRigPhysics(const std::string& rig_path) {
       {"nonlinearity", se.Scalar(&s.nonlinearity)},
       {"background_e_per_s", se.Scalar(&s.background_e_per_s)},
       {"temperature_c", se.Scalar(&s.temperature_c)},
+      {"prnu_percent", se.Scalar(&s.prnu_percent)},
+      {"dsnu_e", se.Scalar(&s.dsnu_e)},
   };
   const std::map<std::string, SectionReader::Setter> camera_keys = {
       {"readout_ms", ca.Scalar(&c.readout_ms)},

@@ -80,6 +80,10 @@ struct SensorOptions {
   double nonlinearity = 0.0;          // y = x - nonlinearity * x^2 / x_max (0 = linear)
   double background_e_per_s = 0.0;    // uniform background photo-electrons per pixel
   double temperature_c = 40.0;        // sensor temperature, reported as DeviceTemperature
+  // Fixed-pattern noise (EMVA 1288), drawn once per camera from `seed` (its own stream): PRNU, the
+  // per-pixel gain's sd in percent; DSNU, the per-pixel dark offset's sd in electrons. 0 = off.
+  double prnu_percent = 0.0;
+  double dsnu_e = 0.0;
   std::uint64_t seed = 1;             // noise of frame n is drawn from (seed, n)
   bool IsValid(std::string* why) const;
   int AdcMax() const { return (1 << adc_bits) - 1; }

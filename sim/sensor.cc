@@ -60,6 +60,58 @@ int FormatCvType(PixelFormat format) {
 Sensor::Sensor(const SensorOptions& options) : options_(options) {
   std::string why;
   IRDIST_CHECK(options_.IsValid(&why), why);
+  DrawFixedPattern();
+}
+
+void Sensor::DrawFixedPattern() {
+  const SensorOptions& s = options_;
+  // Stream 4 of frame "index" ~0: independent of every frame's temporal noise.
+  std::mt19937_64 rng(FrameSeed(s.seed, ~0ull, 4));
+  std::normal_distribution<float> unit(0.0f, 1.0f);
+  if (s.prnu_percent > 0.0) {
+    gain_.create(s.height_px, s.width_px);
+    const float sd = static_cast<float>(s.prnu_percent / 100.0);
+    for (auto& g : gain_) g = std::max(0.0f, 1.0f + sd * unit(rng));
+  }
+  if (s.dsnu_e > 0.0) {
+    offset_e_.create(s.height_px, s.width_px);
+    const float sd = static_cast<float>(s.dsnu_e);
+    for (auto& o : offset_e_) o = sd * unit(rng);
+  }
+}
+
+double Sensor::PixelGain(int x, int y) const {
+  return gain_.empty() ? 1.0 : static_cast<double>(gain_(y, x));
+}
+
+double Sensor::PixelDarkOffsetE(int x, int y) const {
+  return offset_e_.empty() ? 0.0 : static_cast<double>(offset_e_(y, x));
+}
+
+void Sensor::FillWithDarkOffsets(double dark_e, std::uint64_t frame_index, PixelFormat format,
+                                 cv::Point roi_origin, double black_dn, cv::Mat& out) const {
+  const SensorOptions& s = options_;
+  std::mt19937_64 table_rng(FrameSeed(s.seed, frame_index, 1));
+  std::vector<float> dark(kTableSize), read(kTableSize);
+  std::poisson_distribution<long> dark_draw(dark_e > 0.0 ? dark_e : 1.0);
+  std::normal_distribution<double> read_draw(0.0, s.read_noise_e);
+  for (int k = 0; k < kTableSize; ++k) {
+    dark[k] = dark_e > 0.0 ? static_cast<float>(dark_draw(table_rng)) : 0.0f;
+    read[k] = static_cast<float>(read_draw(table_rng));
+  }
+  std::uint64_t state = FrameSeed(s.seed, frame_index, 2);
+  for (int row = 0; row < out.rows; ++row) {
+    const float* offset = offset_e_[row + roi_origin.y] + roi_origin.x;
+    for (int col = 0; col < out.cols; ++col) {
+      const std::uint64_t k = SplitMix64(state) & (kTableSize - 1);
+      const std::uint16_t value = Pack(ToAdc(dark[k], read[k] + offset[col], black_dn), format);
+      if (out.depth() == CV_8U) {
+        out.at<std::uint8_t>(row, col) = static_cast<std::uint8_t>(value);
+      } else {
+        out.at<std::uint16_t>(row, col) = value;
+      }
+    }
+  }
 }
 
 std::uint16_t Sensor::Pack(int adc, PixelFormat format) const {
@@ -96,7 +148,25 @@ void Sensor::Expose(const SignalWindow& signal, double exposure_s, std::uint64_t
   const double black_dn = s.black_level_dn + black_offset_dn;
   const double dark_e = (s.dark_current_e_per_s + s.background_e_per_s) * exposure_s;
 
-  // The background's distribution, as 65536 exact draws for this frame.
+  const cv::Rect roi(roi_origin, out.size());
+  if (!gain_.empty() || !offset_e_.empty()) {  // the maps cover the sensor only
+    IRDIST_CHECK((roi & cv::Rect(0, 0, s.width_px, s.height_px)) == roi,
+                 "region outside the sensor");
+  }
+  if (!offset_e_.empty()) {
+    FillWithDarkOffsets(dark_e, frame_index, format, roi_origin, black_dn, out);
+  } else {
+    FillBackground(dark_e, frame_index, format, black_dn, out);
+  }
+  const cv::Rect window = signal.rect & roi;
+  if (window.empty()) return;
+  ExposeWindow(signal, window, dark_e, frame_index, format, roi, black_dn, out);
+}
+
+void Sensor::FillBackground(double dark_e, std::uint64_t frame_index, PixelFormat format,
+                            double black_dn, cv::Mat& out) const {
+  const SensorOptions& s = options_;
+  // The background's distribution, as 16384 exact draws for this frame.
   std::mt19937_64 table_rng(FrameSeed(s.seed, frame_index, 1));
   std::vector<std::uint16_t> table(kTableSize);
   {
@@ -108,30 +178,33 @@ void Sensor::Expose(const SignalWindow& signal, double exposure_s, std::uint64_t
     }
   }
 
-  const cv::Rect roi(roi_origin, out.size());
-  const cv::Rect window = signal.rect & roi;
   const std::uint64_t fill_state = FrameSeed(s.seed, frame_index, 2);
   if (out.depth() == CV_8U) {
     FillFromTable<std::uint8_t>(out, table, fill_state);
   } else {
     FillFromTable<std::uint16_t>(out, table, fill_state);
   }
-  if (window.empty()) return;
+}
 
-  // Exact draws inside the emitter's window.
+void Sensor::ExposeWindow(const SignalWindow& signal, cv::Rect window, double dark_e,
+                          std::uint64_t frame_index, PixelFormat format, cv::Rect roi,
+                          double black_dn, cv::Mat& out) const {
+  const SensorOptions& s = options_;
+  // Exact draws inside the emitter's window, each pixel with its own PRNU gain and DSNU offset.
   std::mt19937_64 rng(FrameSeed(s.seed, frame_index, 3));
   std::normal_distribution<double> read(0.0, s.read_noise_e);
   for (int row = window.y; row < window.y + window.height; ++row) {
     const float* src = signal.electrons[row - signal.rect.y];
     for (int col = window.x; col < window.x + window.width; ++col) {
-      const double mean = src[col - signal.rect.x] + dark_e;
+      const double mean = src[col - signal.rect.x] * PixelGain(col, row) + dark_e;
       double electrons = 0.0;
       if (mean > 1e7) {
         electrons = std::normal_distribution<double>(mean, std::sqrt(mean))(rng);
       } else if (mean > 0.0) {
         electrons = static_cast<double>(std::poisson_distribution<long>(mean)(rng));
       }
-      const std::uint16_t value = Pack(ToAdc(electrons, read(rng), black_dn), format);
+      const double read_e = read(rng) + PixelDarkOffsetE(col, row);
+      const std::uint16_t value = Pack(ToAdc(electrons, read_e, black_dn), format);
       if (out.depth() == CV_8U) {
         out.at<std::uint8_t>(row - roi.y, col - roi.x) = static_cast<std::uint8_t>(value);
       } else {

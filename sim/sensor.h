@@ -8,6 +8,11 @@
 // has the same distribution (dark + background), so each frame draws 16384 exact samples of it
 // and fills the rest of the frame by indexing that table with a fast generator; a full
 // 1280x1024 frame takes a few milliseconds. Noise depends only on (seed, frame_index).
+//
+// Fixed-pattern noise (EMVA 1288, off unless prnu_percent/dsnu_e > 0): each pixel's photo-response
+// is scaled by its own gain 1 + prnu_percent/100 x N(0,1) (PRNU) and its dark signal shifted by
+// dsnu_e x N(0,1) electrons (DSNU). Both maps are drawn once, in the constructor, from the seed's
+// own stream: the same camera (seed) shows the same pattern in every frame and every run.
 
 #include <cstdint>
 
@@ -28,6 +33,9 @@ class Sensor {
   explicit Sensor(const SensorOptions& options);
 
   const SensorOptions& options() const { return options_; }
+  // The per-pixel gain (1 + PRNU) and dark offset (DSNU, electrons) at full-sensor pixel (x, y).
+  double PixelGain(int x, int y) const;
+  double PixelDarkOffsetE(int x, int y) const;
 
   // Fills `out` (CV_8UC1 for Mono8, CV_16UC1 otherwise) with the frame seen through the region
   // whose top-left corner is `roi_origin` (full-sensor pixels; out's size is the region's size).
@@ -49,8 +57,22 @@ class Sensor {
  private:
   // ADC value for `electrons` collected (clipped at the full well) plus read noise (electrons).
   int ToAdc(double electrons, double read_noise_e, double black_dn) const;
+  // The table-drawn background of a frame (no DSNU).
+  void FillBackground(double dark_e, std::uint64_t frame_index, PixelFormat format, double black_dn,
+                      cv::Mat& out) const;
+  // The exactly drawn pixels of `window` (full-sensor pixels, inside `roi`).
+  void ExposeWindow(const SignalWindow& signal, cv::Rect window, double dark_e,
+                    std::uint64_t frame_index, PixelFormat format, cv::Rect roi, double black_dn,
+                    cv::Mat& out) const;
+  // Draws the PRNU/DSNU maps (left empty when off).
+  void DrawFixedPattern();
+  // The table-drawn background, each pixel shifted by its DSNU (used when dsnu_e > 0).
+  void FillWithDarkOffsets(double dark_e, std::uint64_t frame_index, PixelFormat format,
+                           cv::Point roi_origin, double black_dn, cv::Mat& out) const;
 
   SensorOptions options_;
+  cv::Mat1f gain_;       // full sensor; empty = 1 everywhere
+  cv::Mat1f offset_e_;   // full sensor; empty = 0 everywhere
 };
 
 }  // namespace irdist::sim

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
 #include "estimator/features.h"
 #include "bench/accuracy/crb.h"
@@ -57,8 +58,11 @@ class SweepRenderer {
       : physics_(physics), renderer_(physics), seed_(seed) {}
 
   // With `recoverer`, every bracket's frames (reference first) also go to it as one stack.
+  // refine: when set, each measurement frame's moments are replaced by the blob fit with this
+  // model's calibrated blur (RefineWithBlobFit).
   std::vector<Bracket> Run(const std::vector<Pose>& poses, const std::vector<double>& t_ms,
-                           const FeatureOptions& fo, ResponseRecoverer* recoverer = nullptr) {
+                           const FeatureOptions& fo, ResponseRecoverer* recoverer = nullptr,
+                           const CalibrationModel* refine = nullptr) {
     std::vector<sim::CurrentStep> history;
     double now = 0.0;
     double current = -1.0;
@@ -88,6 +92,7 @@ class SweepRenderer {
         renderer_.Render(c, ++frame_index_ + seed_ * 1000003ull, sim::PixelFormat::kMono12, origin,
                          frame);
         Features f = ComputeFeatures(frame, 12, fo);
+        if (refine != nullptr && k > 0) RefineWithBlobFit(frame, 12, *refine, &f);
         if (recoverer != nullptr) {
           stack.push_back(frame.clone());
           stack_us.push_back(all[k] * 1000.0);
@@ -220,6 +225,7 @@ struct Pipeline {
   FitOptions fit;
   EstimateOptions estimate;
   bool per_exposure = false;  // report each t_n (the paper) rather than the joint estimate
+  bool blob_fit = false;      // validation frames' moments from the blob fit (estimator/blob_fit.h)
   CalibrationModel model;
 };
 
@@ -331,7 +337,8 @@ void RunBlurChange(const sim::RigPhysics& physics, std::uint64_t seed, double ch
     for (const Experiment& ex : experiments) {
       Methods m;
       SweepRenderer sr(changed, seed + 100);
-      Estimate(pl, sr.Run(ex.poses, ex.t_ms, pl.features), &m, false, 500.0);
+      Estimate(pl, sr.Run(ex.poses, ex.t_ms, pl.features, nullptr, pl.blob_fit ? &pl.model : nullptr),
+               &m, false, 500.0);
       const auto counts = m.health[pl.name];
       Print(ex.name, "default", Summarise(m.rows[pl.name], true), true);
       std::printf("  %-8s default          health: %d of %d estimates flagged\n", ex.name,
@@ -651,10 +658,19 @@ int Main(int argc, char** argv) {
     pl.fit.geometric_blur_varies_with_distance = false;
     pipelines.push_back(pl);
   }
+  {
+    // The default with the blob's size and orientation from the likelihood fit with the
+    // calibrated blur (estimator/blob_fit.h) instead of the second moments.
+    Pipeline pl;
+    pl.name = "blob_fit";
+    pl.blob_fit = true;
+    pipelines.push_back(pl);
+  }
   if (only_default) {
     std::vector<Pipeline> kept;
     for (const Pipeline& pl : pipelines)
-      if (pl.name == "default" || pl.name == "fixed_blur") kept.push_back(pl);
+      if (pl.name == "default" || pl.name == "fixed_blur" || pl.name == "blob_fit")
+        kept.push_back(pl);
     pipelines = kept;
   }
   if (model_fit) {
@@ -761,7 +777,9 @@ int Main(int argc, char** argv) {
     Methods m;
     for (size_t p = 0; p < pipelines.size(); ++p) {
       SweepRenderer sr(physics, seed + 100);
-      const auto brackets = sr.Run(ex.poses, ex.t_ms, pipelines[p].features);
+      const Pipeline& pl = pipelines[p];
+      const auto brackets =
+          sr.Run(ex.poses, ex.t_ms, pl.features, nullptr, pl.blob_fit ? &pl.model : nullptr);
       Estimate(pipelines[p], brackets, &m, pipelines[p].name == "default", 500.0);
       if (pipelines[p].name == "default") PrintBlurCheck(pipelines[p].model, brackets, ex.name);
     }

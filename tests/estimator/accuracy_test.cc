@@ -6,11 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
@@ -29,6 +29,13 @@ struct Bracket {
   std::vector<Features> measurements;
   std::vector<double> t_ms;
 };
+
+double SampleSd(const std::vector<double>& x) {
+  double mean = 0.0, var = 0.0;
+  for (double v : x) mean += v / x.size();
+  for (double v : x) var += (v - mean) * (v - mean) / (x.size() - 1);
+  return std::sqrt(var);
+}
 
 class AccuracyTest : public ::testing::Test {
  protected:
@@ -53,7 +60,8 @@ class AccuracyTest : public ::testing::Test {
       c.junction_rise_k = rise_k;
       (changed_ ? *changed_ : renderer_)
           .Render(c, ++frame_index_, sim::PixelFormat::kMono12, origin, frame);
-      const Features f = ComputeFeatures(frame, 12, fo);
+      Features f = ComputeFeatures(frame, 12, fo);
+      if (refine_ != nullptr && k > 0) RefineWithBlobFit(frame, 12, *refine_, &f);
       if (k == 0) {
         b.reference = f;
       } else {
@@ -104,6 +112,7 @@ class AccuracyTest : public ::testing::Test {
   sim::RigPhysics physics_;
   sim::Renderer renderer_;
   std::unique_ptr<sim::Renderer> changed_;
+  const CalibrationModel* refine_ = nullptr;  // measurement frames through RefineWithBlobFit
   std::uint64_t frame_index_ = 0;
 };
 
@@ -130,6 +139,49 @@ TEST_F(AccuracyTest, DefocusedRigMeetsTheDistanceGoal) {
   }
   std::printf("defocused rig: worst relative error %.3f%%, theta (>= 15 deg) %.2f deg\n",
               100 * worst, worst_theta);
+}
+
+// The blob fit with the calibrated blur (estimator/blob_fit.h) on the Fig. 14 pose (2.7 m, 500 mA,
+// pair 8/35 ms, 100 repetitions) at 20 and 30 deg: the distance's and theta's dispersion within
+// 1.3x the Cramer-Rao bound of the same pair (d 1.81 / 2.10 mm, theta 0.163 / 0.122 deg,
+// `irdist_accuracy_study --crb-only`), and the distance's below the second moments' on the same
+// noise. (The theta goal "max <= 0.5 deg" over 100 repetitions is not asserted: at 20 deg an
+// estimator AT the bound exceeds it in ~19% of runs, docs/estimator.md.)
+TEST_F(AccuracyTest, BlobFitMeetsTheDispersionGoalAtFig14) {
+  const FeatureOptions fo;
+  const CalibrationModel model = Calibrate(fo, FitOptions());
+  const EstimateOptions eo;
+  struct Bound {
+    double theta_deg, d_mm, theta_sd_deg;
+  };
+  for (const Bound& bound : {Bound{20.0, 1.81, 0.163}, Bound{30.0, 2.10, 0.122}}) {
+    const double th = bound.theta_deg;
+    double sd_mm[2] = {0.0, 0.0}, sd_theta[2] = {0.0, 0.0}, worst_theta[2] = {0.0, 0.0};
+    for (int method = 0; method < 2; ++method) {  // 0: second moments, 1: blob fit
+      refine_ = method == 1 ? &model : nullptr;
+      frame_index_ = 100000;  // the same noise for both methods
+      std::vector<double> d, t;
+      for (int k = 0; k < 100; ++k) {
+        const Bracket b = Render(2700.0, th, 500.0, {35.0}, fo);
+        const BracketEstimate e =
+            EstimateBracket(model, b.reference, kTRefMs, b.measurements, b.t_ms, eo);
+        ASSERT_TRUE(std::isfinite(e.joint.d_mm));
+        d.push_back(e.joint.d_mm);
+        t.push_back(e.joint.theta_deg);
+        worst_theta[method] = std::max(worst_theta[method], std::abs(e.joint.theta_deg - th));
+      }
+      sd_mm[method] = SampleSd(d);
+      sd_theta[method] = SampleSd(t);
+    }
+    refine_ = nullptr;
+    std::printf("2700 mm theta %g: sd d moments %.2f / blob fit %.2f mm (CRB %.2f); sd theta "
+                "%.3f / %.3f deg (CRB %.3f); theta max %.2f / %.2f deg\n", th, sd_mm[0], sd_mm[1],
+                bound.d_mm, sd_theta[0], sd_theta[1], bound.theta_sd_deg, worst_theta[0],
+                worst_theta[1]);
+    EXPECT_LE(sd_mm[1], 1.3 * bound.d_mm) << th;
+    EXPECT_LT(sd_mm[1], sd_mm[0]) << th;
+    EXPECT_LE(sd_theta[1], 1.3 * bound.theta_sd_deg) << th;
+  }
 }
 
 // Calibration health: the blur measured on each frame against the calibrated blur at the

@@ -112,6 +112,18 @@ TEST(RigPhysics, BadValueNamesFileAndLine) {
   ExpectError("virtual:\n  sensor:\n    quantum_efficiency: 2\n", "range", "", "quantum_efficiency");
 }
 
+// The sensor's fixed-pattern noise: off by default, on in virtual-fpn.yaml, range-checked.
+TEST(RigPhysics, FixedPatternNoiseKeys) {
+  EXPECT_EQ(RigPhysics{}.sensor.prnu_percent, 0.0);
+  EXPECT_EQ(RigPhysics{}.sensor.dsnu_e, 0.0);
+  const RigPhysics p =
+      LoadRigPhysics(std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual-fpn.yaml");
+  EXPECT_EQ(p.sensor.prnu_percent, 1.0);
+  EXPECT_EQ(p.sensor.dsnu_e, 3.0);
+  ExpectError("virtual:\n  sensor:\n    dsnu_e: -1\n", "dsnu", "", "dsnu_e");
+  ExpectError("virtual:\n  sensor:\n    prnu_percent: 50\n", "prnu", "", "prnu_percent");
+}
+
 TEST(RigPhysics, MissingFileIsATypedError) {
   EXPECT_THROW(LoadRigPhysics("/nonexistent/rig.yaml"), RigFileError);
 }

@@ -1,0 +1,48 @@
+#pragma once
+// A likelihood fit of the IRED's blob with the CALIBRATED blur (issue 12): the blob is a uniformly
+// bright elliptical disc {p : (p - c)^T P (p - c) <= 1}, blurred by a Gaussian whose variance is
+// the calibration's blur b(u) at the frame's distance less the pixel area (1/12 px^2, modelled by
+// integrating each pixel on 4x4 sub-samples), on the frame's background. Unknowns: centre, P (3),
+// amplitude. Residuals are weighted by the sensor's noise model, var = read + k x signal (EMVA
+// 1288: read noise plus shot noise through the system gain), with read measured on the frame's
+// background and k regressed from the residuals of a first pass (iteratively reweighted least
+// squares = maximum likelihood for Gaussian noise). Second moments weight the noise in the blob's
+// wings by r^2; this fit weights each pixel by its information, and fixing the blur removes the
+// size-blur correlation that a free-blur fit (EllipseMethod::kModelFit) pays for.
+//
+// The result replaces the blob's second-moment variances by the fitted disc's (A^2/4, B^2/4 for
+// semi-axes A, B) plus the same calibrated blur b(u): quantities with the moments' expectation,
+// so the calibrated geometric model, theta (kCalibratedBlur) and the fused solve use them as they
+// are. The distance for b(u) is the moments' geometric distance (b(u) changes slowly with d).
+
+#include <opencv2/core.hpp>
+
+#include "estimator/features.h"
+#include "estimator/fit.h"
+
+namespace irdist {
+
+struct BlobFitResult {
+  bool ok = false;
+  cv::Point2d center_px;
+  double major_var_px2 = 0.0;  // the disc's variance along its axes (no blur): A^2/4, B^2/4
+  double minor_var_px2 = 0.0;
+  double angle_deg = 0.0;      // major axis direction, degrees from +x
+  double blur_var_px2 = 0.0;   // the calibrated blur variance used (pixel area included)
+  double chi2_per_pixel = 0.0; // weighted residual sum of squares / pixels (~1 when the model fits)
+  int pixels = 0;
+};
+
+// Fits one frame's blob. image: the CV_16UC1 frame the features were computed on (bit_depth
+// significant bits); blur_var_px2: the blur variance per axis, pixel area included (> 1/12).
+// Returns ok = false when the features have no usable blob or the fit fails.
+BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& features,
+                      double blur_var_px2);
+
+// The default path's hook: the calibrated blur b(u) at the moments' geometric distance, FitBlob,
+// and the features' moment variances replaced by the fit's (disc + b(u)). Leaves the features
+// unchanged when the model has no geometric fit or the blob fit fails. Returns whether it replaced.
+bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
+                       Features* features);
+
+}  // namespace irdist

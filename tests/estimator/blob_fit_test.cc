@@ -1,0 +1,116 @@
+#include "estimator/blob_fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+namespace irdist {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kSide = 96;
+constexpr int kSuper = 16;
+
+// A uniformly bright elliptical disc (semi-axes a, b px, major axis at angle_deg), blurred by a
+// Gaussian of sigma blur_px before the pixels integrate it (rendered on a 16x finer grid), peak
+// `amplitude` electrons over `background` electrons.
+cv::Mat1d RenderDisc(double cx, double cy, double a, double b, double angle_deg, double blur_px,
+                     double amplitude, double background) {
+  cv::Mat1f fine(kSide * kSuper, kSide * kSuper, 0.0f);
+  const double c = std::cos(angle_deg * kPi / 180.0), s = std::sin(angle_deg * kPi / 180.0);
+  for (int row = 0; row < fine.rows; ++row) {
+    for (int col = 0; col < fine.cols; ++col) {
+      const double x = (col + 0.5) / kSuper - 0.5 - cx, y = (row + 0.5) / kSuper - 0.5 - cy;
+      const double u = c * x + s * y, v = -s * x + c * y;
+      if ((u * u) / (a * a) + (v * v) / (b * b) <= 1.0) fine(row, col) = 1.0f;
+    }
+  }
+  cv::GaussianBlur(fine, fine, cv::Size(0, 0), blur_px * kSuper);
+  cv::Mat1f coarse;
+  cv::resize(fine, coarse, cv::Size(kSide, kSide), 0, 0, cv::INTER_AREA);
+  cv::Mat1d out;
+  coarse.convertTo(out, CV_64F, amplitude, background);
+  return out;
+}
+
+// Electrons -> a Mono12 frame (K 0.39 DN/e-, black 16 DN), with Poisson-like shot and 7 e- read
+// noise when rng is set.
+cv::Mat Frame(const cv::Mat1d& electrons, std::mt19937_64* rng) {
+  cv::Mat out(electrons.size(), CV_16UC1);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  for (int row = 0; row < out.rows; ++row) {
+    for (int col = 0; col < out.cols; ++col) {
+      double e = electrons(row, col);
+      if (rng != nullptr) e += std::sqrt(e + 49.0) * unit(*rng);
+      out.at<std::uint16_t>(row, col) =
+          static_cast<std::uint16_t>(std::clamp(std::round(0.39 * e + 16.0), 0.0, 4095.0));
+    }
+  }
+  return out;
+}
+
+const double kBlurPx = 0.75;
+const double kBlurVar = kBlurPx * kBlurPx + 1.0 / 12.0;  // pixel area included
+
+// Noise-free, the fit returns the rendered disc: variances a^2/4 and b^2/4, its centre and angle.
+TEST(BlobFit, RecoversTheDiscOfANoiseFreeBlob) {
+  const double a = 5.5, b = 4.2;
+  const cv::Mat frame = Frame(RenderDisc(47.3, 48.6, a, b, 25.0, kBlurPx, 5000.0, 10.0), nullptr);
+  const Features f = ComputeFeatures(frame, 12, FeatureOptions());
+  ASSERT_TRUE(f.Usable()) << f.BriefReport();
+  const BlobFitResult fit = FitBlob(frame, 12, f, kBlurVar);
+  ASSERT_TRUE(fit.ok);
+  EXPECT_NEAR(fit.major_var_px2 / (a * a / 4.0), 1.0, 0.003);
+  EXPECT_NEAR(fit.minor_var_px2 / (b * b / 4.0), 1.0, 0.003);
+  EXPECT_NEAR(fit.center_px.x, 47.3, 0.01);
+  EXPECT_NEAR(fit.center_px.y, 48.6, 0.01);
+  EXPECT_NEAR(fit.angle_deg, 25.0, 0.3);
+  EXPECT_NEAR(fit.blur_var_px2, kBlurVar, 1e-12);
+}
+
+// On noisy frames, the fit's size scatters less than the second moments' (they weight the noise
+// of the wings by r^2), and its mean stays on the truth.
+TEST(BlobFit, ScattersLessThanTheSecondMoments) {
+  const double a = 5.5, b = 4.8;
+  const cv::Mat1d electrons = RenderDisc(48.2, 47.7, a, b, -40.0, kBlurPx, 5000.0, 10.0);
+  std::mt19937_64 rng(3);
+  std::vector<double> fit_var, moment_var;
+  for (int n = 0; n < 40; ++n) {
+    const cv::Mat frame = Frame(electrons, &rng);
+    const Features f = ComputeFeatures(frame, 12, FeatureOptions());
+    ASSERT_TRUE(f.Usable());
+    const BlobFitResult fit = FitBlob(frame, 12, f, kBlurVar);
+    ASSERT_TRUE(fit.ok);
+    fit_var.push_back(fit.major_var_px2);
+    moment_var.push_back(f.moment_major_var_px2 - kBlurVar);
+  }
+  const auto mean_sd = [](const std::vector<double>& x, double* sd) {
+    double m = 0, s = 0;
+    for (double v : x) m += v / x.size();
+    for (double v : x) s += (v - m) * (v - m) / (x.size() - 1);
+    *sd = std::sqrt(s);
+    return m;
+  };
+  double sd_fit = 0, sd_moments = 0;
+  const double mean_fit = mean_sd(fit_var, &sd_fit);
+  mean_sd(moment_var, &sd_moments);
+  EXPECT_LT(sd_fit, 0.92 * sd_moments) << "fit " << sd_fit << " moments " << sd_moments;
+  EXPECT_NEAR(mean_fit / (a * a / 4.0), 1.0, 0.004);
+}
+
+// Without a calibrated geometric model there is no blur to fit with: the features stay as they are.
+TEST(BlobFit, RefineNeedsACalibratedBlur) {
+  const cv::Mat frame = Frame(RenderDisc(48, 48, 5, 4, 0, kBlurPx, 5000, 10), nullptr);
+  Features f = ComputeFeatures(frame, 12, FeatureOptions());
+  const double before = f.moment_major_var_px2;
+  EXPECT_FALSE(RefineWithBlobFit(frame, 12, CalibrationModel(), &f));
+  EXPECT_EQ(f.moment_major_var_px2, before);
+  EXPECT_FALSE(FitBlob(frame, 12, f, 0.05).ok);  // a blur below the pixel's own area
+}
+
+}  // namespace
+}  // namespace irdist
