@@ -420,6 +420,32 @@ void ReportTiming(const SweepResult& result, const PoseTiming& timing, double co
   out << std::defaultfloat;
 }
 
+// The run's report: the sweep, the capture, the commit waits, where the time went, and the wall
+// time beside the plan and the physical bound. A composed rig's devices report their own speeds
+// (read at connection and homing): its plan and bound are on those; a legacy station's are the
+// rig file's (its protocol has no speed query).
+void ReportRun(LiveSession& s, const SweepResult& result, double wall_s, std::size_t pose_count,
+               std::ostream& out) {
+  const double scale = s.time_scale;
+  const Plan timed =
+      s.recipe.rig.station.composed
+          ? MakePlan(s.recipe.sweep, WithDeviceSpeeds(s.recipe.motion, s.station.Speeds()))
+          : s.plan;
+  out << "Sweep: " << result.BriefReport() << "\n";
+  out << "Capture: " << s.recorder.StatsReport() << "\n";
+  out << "Commit: every bracket in the recording before the next move; waited "
+      << FormatDuration(s.committer.waited_s()) << " in all\n";
+  ReportTiming(result, s.timing, s.committer.waited_s(), out);
+  out << "Wall time " << FormatDuration(wall_s) << " for " << pose_count << " poses; plan estimate "
+      << FormatDuration(timed.summary.total_s / scale) << " and physical bound "
+      << FormatDuration(timed.summary.physical_bound_s / scale) << " for all "
+      << s.plan.poses.size() << " poses at time scale " << scale
+      << (s.recipe.rig.station.composed ? " (axes at the devices' speeds)" : "") << "\n";
+  out << std::fixed << std::setprecision(3) << "Bound: physical "
+      << timed.summary.physical_bound_s / scale << " s, plan " << timed.summary.total_s / scale
+      << " s\n" << std::defaultfloat;
+}
+
 Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& plan,
                 const FeatureOptions& feature_options, CommandIo io) {
   Recorded recorded;
@@ -453,7 +479,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   Progress progress(io.err, request.quiet, static_cast<int>(plan.poses.size()),
                     plan.summary.total_s / rig.time_scale);
   BracketCommitter committer(recorder, progress, static_cast<int>(done_ids.size()));
-  LiveSession session{recipe, plan, station, recorder, committer, rig.time_scale};
+  LiveSession session{recipe, plan, station, recorder, committer, rig.time_scale, {}};
   const auto t0 = std::chrono::steady_clock::now();
   SweepResult result;
   try {
@@ -475,16 +501,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   recorded.cut = result.stopped || result.next_index >= 0;
   recorder.Close(recorded.cut);
   recorded.cache = recorder.FeatureCache();
-  io.out << "Sweep: " << result.BriefReport() << "\n";
-  io.out << "Capture: " << recorder.StatsReport() << "\n";
-  io.out << "Commit: every bracket in the recording before the next move; waited "
-         << FormatDuration(committer.waited_s()) << " in all\n";
-  ReportTiming(result, session.timing, committer.waited_s(), io.out);
-  io.out << "Wall time " << FormatDuration(wall_s) << " for " << poses.size()
-         << " poses; plan estimate " << FormatDuration(plan.summary.total_s / rig.time_scale)
-         << " and physical bound "
-         << FormatDuration(plan.summary.physical_bound_s / rig.time_scale) << " for all "
-         << plan.poses.size() << " poses at time scale " << rig.time_scale << "\n";
+  ReportRun(session, result, wall_s, poses.size(), io.out);
   return recorded;
 }
 

@@ -113,8 +113,14 @@ int main(int argc, char** argv) {
     // The time scale the run used (the rig's own unless given), from its "Wall time" line.
     const std::size_t at = run_out.find("at time scale ");
     const double scale = at == std::string::npos ? 1.0 : std::stod(run_out.substr(at + 14));
-    const double plan_s = plan.summary.total_s / scale;
-    const double bound_s = plan.summary.physical_bound_s / scale;
+    // The run's own plan and bound (a composed rig's on its devices' speeds), else the recipe's.
+    double plan_s = plan.summary.total_s / scale;
+    double bound_s = plan.summary.physical_bound_s / scale;
+    const std::size_t bound_at = run_out.find("Bound: physical ");
+    if (bound_at != std::string::npos) {
+      std::sscanf(run_out.c_str() + bound_at, "Bound: physical %lf s, plan %lf s", &bound_s,
+                  &plan_s);
+    }
     std::printf("recipe            %s on rig %s (%d poses, %d frames, time scale %g)\n",
                 args.recipe_path.c_str(), recipe.rig.name.c_str(), plan.summary.pose_count,
                 plan.summary.frame_count, scale);
