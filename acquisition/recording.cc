@@ -999,6 +999,9 @@ void RecordingWriter::DropStaged() {
 
 FrameRecord RecordingWriter::Append(const cv::Mat& image, FrameRecord record) {
   IRDIST_CHECK(staged_.empty(), "Append() with staged frames: commit or drop them first");
+  record.index = next_index_;
+  record.file = FrameFileName(record.index);
+  CheckRowReadable(FormatRow(record), record.index);  // before anything reaches the disk
   Stage(image);
   return CommitStaged({std::move(record)}).front();
 }

@@ -78,11 +78,13 @@ struct LiveRecorder::Impl {
   std::future<void> committing;  // the commit in flight
   std::future<void> appended;    // its frames are in the recording
   std::future<void> staging;     // the last frame handed to the writer (each waits for the one before)
+  bool has_staged = false;       // frames staged for the pending bracket (a commit takes them over)
   std::unique_ptr<CameraSoftwareTrigger> software_trigger;
 
   // Hands a frame to the writer on a worker (encode, write, sync under a temporary name) while the
   // next one is exposed; frames are staged in arrival order.
   void StageAsync(const cv::Mat& image) {
+    has_staged = true;
     staging = std::async(std::launch::async,
                          [this, previous = std::move(staging), image]() mutable {
                            if (previous.valid()) previous.get();
@@ -92,6 +94,8 @@ struct LiveRecorder::Impl {
   // Waits for the staging in flight and removes the staged frames (a bracket not kept). A staging
   // error is not rethrown here: the writer keeps it and refuses the next write with it.
   void DropStaged() {
+    if (!has_staged) return;  // none, or a commit owns them (it alone touches the writer then)
+    has_staged = false;
     if (staging.valid()) {
       try {
         staging.get();
@@ -198,6 +202,7 @@ bool LiveRecorder::CommitPending(std::function<void()> on_committed) {
   WaitCommitted();
   if (!m.has_pending) return false;
   m.has_pending = false;
+  m.has_staged = false;  // the commit takes the staged frames over
   // The worker owns the bracket from here; the writer and the cache are only touched by it until
   // WaitCommitted().
   auto appended = std::make_shared<std::promise<void>>();
