@@ -152,18 +152,10 @@ void IrdistStationDriver::CheckAlive() {
   }
 }
 
-// One pulse, without waiting for its end (a TRIG:PULS? round trip per frame): the next Fire comes
-// after the camera delivered this pulse's frame, long after a pulse of trigger_width_us. Should a
-// train still run, the station refuses TRIG:FIRE (-221, nothing fired): then wait for it and fire.
 void IrdistStationDriver::Fire(int) {
   Guarded([&] {
-    try {
-      client_.Trigger(1, trigger_width_us_, trigger_period_us_);
-    } catch (const StationError& e) {
-      if (e.code() != -221) throw;
-      client_.WaitTriggerDone();
-      client_.Trigger(1, trigger_width_us_, trigger_period_us_);
-    }
+    client_.Trigger(1, trigger_width_us_, trigger_period_us_);
+    client_.WaitTriggerDone();
   });
   ++fired_;
 }
