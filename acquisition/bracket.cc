@@ -272,7 +272,7 @@ void BracketCapture::PrepareStream(const Trigger& trigger) {
   stats_.stray += camera_.Flush();
 }
 
-BracketResult BracketCapture::Capture(const Trigger& trigger) {
+BracketResult BracketCapture::Capture(const Trigger& trigger, const FrameSink& on_frame) {
   IRDIST_CHECK(static_cast<bool>(trigger), "Capture() needs a trigger callable");
   ++stats_.brackets;
   PrepareStream(trigger);
@@ -296,6 +296,7 @@ BracketResult BracketCapture::Capture(const Trigger& trigger) {
     if (next_programmed) ++stats_.pipelined_frames;
     ++stats_.received;
     result.frames.push_back(std::move(frame));
+    if (on_frame) on_frame(result.frames.back());
   }
   result.complete = true;
   stats_.transfer = camera_.Transfer();

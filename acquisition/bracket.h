@@ -124,7 +124,11 @@ class BracketCapture {
   // max_retries ends the bracket with complete == false (the caller decides to stop the sweep).
   // Camera failures (clamped exposure, dead link) throw CameraError; exceptions from `trigger`
   // propagate.
-  BracketResult Capture(const Trigger& trigger);
+  // `on_frame`, when given, sees each frame as soon as it is accepted, before the next one is
+  // triggered (so it must return quickly: e.g. hand the frame to a worker that stores it while the
+  // next one is exposed). Frames of a bracket that ends incomplete are seen too.
+  using FrameSink = std::function<void(const BracketFrame& frame)>;
+  BracketResult Capture(const Trigger& trigger, const FrameSink& on_frame = {});
 
   const BracketOptions& options() const { return options_; }
   const CaptureStats& stats() const { return stats_; }

@@ -109,9 +109,22 @@ class RecordingWriter {
   RecordingWriter(const RecordingWriter&) = delete;
   RecordingWriter& operator=(const RecordingWriter&) = delete;
 
-  // Writes the frame's PNG (CV_16UC1 or CV_8UC1, values as delivered) crash-safely, then appends and
-  // flushes its row. Returns the record with index and file filled in. Throws RecordingError.
+  // Writes the frame's PNG (CV_16UC1 or CV_8UC1, values as delivered) crash-safely, then appends
+  // its row and syncs frames.csv (Stage + CommitStaged of one frame; nothing may be staged).
+  // Returns the record with index and file filled in. Throws RecordingError.
   FrameRecord Append(const cv::Mat& image, FrameRecord record);
+  // A bracket in two steps, so that encoding and writing overlap the capture of the next frames.
+  // Stage encodes the frame's PNG and writes it, synced, under a temporary name (frames/N.png.tmp,
+  // not part of the recording: a resume moves it aside); returns the index it will have.
+  // CommitStaged makes every staged frame part of the recording at once: renames them, syncs
+  // frames/ once, then appends their rows (one record per staged frame, in order; index and file
+  // are filled in) and syncs frames.csv. A crash at any point leaves whole brackets only: rows
+  // are written last. DropStaged removes the staged files (a bracket not kept). Throw
+  // RecordingError; after one, the writer refuses further writes.
+  std::int64_t Stage(const cv::Mat& image);
+  std::vector<FrameRecord> CommitStaged(std::vector<FrameRecord> records);
+  void DropStaged();
+  std::size_t staged_count() const { return staged_.size(); }
   // Rewrites recording.yaml with the completion state, end time and frame count. Idempotent.
   // After a failed Append (the first error is what the caller reports), Close never throws: if
   // recording.yaml cannot be rewritten the recording stays "running", which reads as cut.
@@ -128,6 +141,8 @@ class RecordingWriter {
  private:
   RecordingWriter(std::string dir, RecordingHeader header, std::int64_t next_index);
   void WriteHeader();
+  void ThrowIfFailed() const;
+  std::vector<std::string> StagedRows(std::vector<FrameRecord>* records) const;
 
   std::string dir_;
   RecordingHeader header_;
@@ -136,6 +151,7 @@ class RecordingWriter {
   int lock_fd_ = -1;
   bool closed_ = false;
   std::string first_error_;
+  std::vector<std::string> staged_;  // temporary paths of the staged frames, in index order
   std::vector<std::string> set_aside_;
   std::string set_aside_dir_;
 };

@@ -37,11 +37,11 @@ class CameraSoftwareTrigger : public Trigger {
   std::uint64_t fired_ = 0;
 };
 
-// Appends a bracket's frames to the recording (PNG and row each); returns their indices.
-std::vector<std::int64_t> AppendBracket(RecordingWriter& writer, const LivePose& pose,
+// Commits a bracket's staged frames (PNGs already written) with their rows; returns their indices.
+std::vector<std::int64_t> CommitBracket(RecordingWriter& writer, const LivePose& pose,
                                         const BracketResult& bracket, double measured_ma) {
   const int size = static_cast<int>(bracket.frames.size());
-  std::vector<std::int64_t> indices;
+  std::vector<FrameRecord> records;
   for (const BracketFrame& frame : bracket.frames) {
     FrameRecord record = RecordFromFrame(frame, size);
     record.bracket_id = pose.bracket_id;
@@ -52,7 +52,11 @@ std::vector<std::int64_t> AppendBracket(RecordingWriter& writer, const LivePose&
     record.tilt_deg = pose.tilt_deg;
     record.theta_deg = pose.theta_deg;
     record.repeat = pose.repeat;
-    indices.push_back(writer.Append(frame.image, record).index);
+    records.push_back(std::move(record));
+  }
+  std::vector<std::int64_t> indices;
+  for (const FrameRecord& record : writer.CommitStaged(std::move(records))) {
+    indices.push_back(record.index);
   }
   return indices;
 }
@@ -73,7 +77,33 @@ struct LiveRecorder::Impl {
   double pending_measured_ma = 0.0;
   std::future<void> committing;  // the commit in flight
   std::future<void> appended;    // its frames are in the recording
+  std::future<void> staging;     // the last frame handed to the writer (each waits for the one before)
+  bool has_staged = false;       // frames staged for the pending bracket (a commit takes them over)
   std::unique_ptr<CameraSoftwareTrigger> software_trigger;
+
+  // Hands a frame to the writer on a worker (encode, write, sync under a temporary name) while the
+  // next one is exposed; frames are staged in arrival order.
+  void StageAsync(const cv::Mat& image) {
+    has_staged = true;
+    staging = std::async(std::launch::async,
+                         [this, previous = std::move(staging), image]() mutable {
+                           if (previous.valid()) previous.get();
+                           writer->Stage(image);
+                         });
+  }
+  // Waits for the staging in flight and removes the staged frames (a bracket not kept). A staging
+  // error is not rethrown here: the writer keeps it and refuses the next write with it.
+  void DropStaged() {
+    if (!has_staged) return;  // none, or a commit owns them (it alone touches the writer then)
+    has_staged = false;
+    if (staging.valid()) {
+      try {
+        staging.get();
+      } catch (const Error&) {
+      }
+    }
+    writer->DropStaged();
+  }
 };
 
 RecordingState ReadRecordingState(const std::string& recording_dir) {
@@ -138,15 +168,24 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
 }
 
 LiveRecorder::~LiveRecorder() {
+  if (impl_->staging.valid()) impl_->staging.wait();
   if (impl_->committing.valid()) impl_->committing.wait();
 }
 
 void LiveRecorder::CaptureBracket(const LivePose& pose, const std::function<void(int)>& trigger,
                                   const std::function<double()>& measure_current_ma) {
   Impl& m = *impl_;
-  BracketResult result = m.capture->Capture(trigger);
-  if (!result.complete) result = m.capture->Capture(trigger);
+  m.DropStaged();  // frames of a bracket never committed
+  const BracketCapture::FrameSink stage = [&m](const BracketFrame& frame) {
+    m.StageAsync(frame.image);
+  };
+  BracketResult result = m.capture->Capture(trigger, stage);
   if (!result.complete) {
+    m.DropStaged();
+    result = m.capture->Capture(trigger, stage);
+  }
+  if (!result.complete) {
+    m.DropStaged();
     throw CameraError("bracket " + std::to_string(pose.bracket_id) + " incomplete twice (" +
                       result.failure + "; " + m.capture->stats().BriefReport() +
                       "). Check the trigger wiring (camera " + m.setup.trigger_source +
@@ -163,15 +202,18 @@ bool LiveRecorder::CommitPending(std::function<void()> on_committed) {
   WaitCommitted();
   if (!m.has_pending) return false;
   m.has_pending = false;
+  m.has_staged = false;  // the commit takes the staged frames over
   // The worker owns the bracket from here; the writer and the cache are only touched by it until
   // WaitCommitted().
   auto appended = std::make_shared<std::promise<void>>();
   m.appended = appended->get_future();
   auto task = [&m, pose = m.pending_pose, bracket = std::move(m.pending),
-               measured_ma = m.pending_measured_ma, done = std::move(on_committed), appended]() {
+               measured_ma = m.pending_measured_ma, done = std::move(on_committed), appended,
+               staging = std::move(m.staging)]() mutable {
     std::vector<std::int64_t> indices;
     try {
-      indices = AppendBracket(*m.writer, pose, bracket, measured_ma);
+      if (staging.valid()) staging.get();
+      indices = CommitBracket(*m.writer, pose, bracket, measured_ma);
     } catch (...) {
       appended->set_exception(std::current_exception());
       throw;
@@ -203,12 +245,14 @@ void LiveRecorder::WaitCommitted() {
 }
 
 void LiveRecorder::DropPending() {
+  impl_->DropStaged();
   impl_->has_pending = false;
   impl_->pending = BracketResult{};
 }
 
 void LiveRecorder::Close(bool cut) {
   if (impl_->committing.valid()) impl_->committing.wait();  // its error, if any, is already known
+  impl_->DropStaged();
   if (impl_->camera->streaming()) impl_->camera->StopStream();
   impl_->writer->Close(cut ? Completion::kCut : Completion::kComplete);
 }

@@ -9,6 +9,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <memory>
 #include <optional>
 #include <ostream>
@@ -355,6 +356,21 @@ std::string PoseText(const Pose& pose) {
   return what.str();
 }
 
+// Host seconds spent in each step of the poses (added up over the sweep), for the run's report.
+struct PoseTiming {
+  double settle_s = 0.0;      // the recipe's settle waits
+  double capture_s = 0.0;     // the bracket's frames (triggers, exposures, readouts)
+  double current_s = 0.0;     // the measured-current query after each bracket
+};
+
+// Runs `step` and adds its host time to `*total_s`.
+template <typename F>
+void Timed(double* total_s, F&& step) {
+  const auto t0 = std::chrono::steady_clock::now();
+  step();
+  *total_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 // One live session's sweep: station, recorder and committer in place.
 struct LiveSession {
   const Recipe& recipe;
@@ -363,6 +379,7 @@ struct LiveSession {
   LiveRecorder& recorder;
   BracketCommitter& committer;
   double time_scale = 1.0;
+  PoseTiming timing;
 };
 
 SweepResult SweepAndCapture(LiveSession& s, const std::vector<SweepPose>& poses) {
@@ -371,16 +388,62 @@ SweepResult SweepAndCapture(LiveSession& s, const std::vector<SweepPose>& poses)
   const auto fire = [&](int frame) { s.station.Fire(frame); };
   // The measured current, checked against the set-point: an open IRED or a source in compliance
   // stops the run (the bracket is not kept); a device restart retakes the pose.
-  const auto measure = [&]() { return s.station.MeasureCheckedCurrent().current_ma; };
+  const auto measure = [&]() {
+    double ma = 0.0;
+    Timed(&s.timing.current_s, [&] { ma = s.station.MeasureCheckedCurrent().current_ma; });
+    return ma;
+  };
   const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int) {
     const Pose& pose = s.plan.poses[static_cast<size_t>(sweep_pose.index)];
     s.committer.Begin();
-    WaitSettle(s.recipe.sweep.settle, sweep.transition(), s.time_scale);
-    s.recorder.CaptureBracket(LivePoseOf(pose), fire, measure);
+    Timed(&s.timing.settle_s,
+          [&] { WaitSettle(s.recipe.sweep.settle, sweep.transition(), s.time_scale); });
+    Timed(&s.timing.capture_s,
+          [&] { s.recorder.CaptureBracket(LivePoseOf(pose), fire, measure); });
     s.committer.Captured(PoseText(pose));
   };
   const ConfirmCallback confirmed = [&](const SweepPose&) { s.committer.Confirmed(); };
   return sweep.Run(poses, at_pose, &StopRequested(), confirmed);
+}
+
+// Where the sweep's host time went (sums over the poses, s; capture includes the current query).
+void ReportTiming(const SweepResult& result, const PoseTiming& timing, double commit_wait_s,
+                  std::ostream& out) {
+  out << std::fixed << std::setprecision(3) << "Timing: homing " << result.homing_s
+      << " s; sweep " << result.sweep_s << " s after homing = current set + moves "
+      << result.goto_s << " s, settle " << timing.settle_s << " s, brackets "
+      << timing.capture_s - timing.current_s << " s, current queries " << timing.current_s
+      << " s, alive checks " << result.check_alive_s << " s, commit wait " << commit_wait_s
+      << " s, other " << result.sweep_s - result.goto_s - timing.settle_s - timing.capture_s -
+                             result.check_alive_s - commit_wait_s
+      << " s\n";
+  out << std::defaultfloat;
+}
+
+// The run's report: the sweep, the capture, the commit waits, where the time went, and the wall
+// time beside the plan and the physical bound. A composed rig's devices report their own speeds
+// (read at connection and homing): its plan and bound are on those; a legacy station's are the
+// rig file's (its protocol has no speed query).
+void ReportRun(LiveSession& s, const SweepResult& result, double wall_s, std::size_t pose_count,
+               std::ostream& out) {
+  const double scale = s.time_scale;
+  const Plan timed =
+      s.recipe.rig.station.composed
+          ? MakePlan(s.recipe.sweep, WithDeviceSpeeds(s.recipe.motion, s.station.Speeds()))
+          : s.plan;
+  out << "Sweep: " << result.BriefReport() << "\n";
+  out << "Capture: " << s.recorder.StatsReport() << "\n";
+  out << "Commit: every bracket in the recording before the next move; waited "
+      << FormatDuration(s.committer.waited_s()) << " in all\n";
+  ReportTiming(result, s.timing, s.committer.waited_s(), out);
+  out << "Wall time " << FormatDuration(wall_s) << " for " << pose_count << " poses; plan estimate "
+      << FormatDuration(timed.summary.total_s / scale) << " and physical bound "
+      << FormatDuration(timed.summary.physical_bound_s / scale) << " for all "
+      << s.plan.poses.size() << " poses at time scale " << scale
+      << (s.recipe.rig.station.composed ? " (axes at the devices' speeds)" : "") << "\n";
+  out << std::fixed << std::setprecision(3) << "Bound: physical "
+      << timed.summary.physical_bound_s / scale << " s, plan " << timed.summary.total_s / scale
+      << " s\n" << std::defaultfloat;
 }
 
 Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& plan,
@@ -416,7 +479,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   Progress progress(io.err, request.quiet, static_cast<int>(plan.poses.size()),
                     plan.summary.total_s / rig.time_scale);
   BracketCommitter committer(recorder, progress, static_cast<int>(done_ids.size()));
-  LiveSession session{recipe, plan, station, recorder, committer, rig.time_scale};
+  LiveSession session{recipe, plan, station, recorder, committer, rig.time_scale, {}};
   const auto t0 = std::chrono::steady_clock::now();
   SweepResult result;
   try {
@@ -438,15 +501,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   recorded.cut = result.stopped || result.next_index >= 0;
   recorder.Close(recorded.cut);
   recorded.cache = recorder.FeatureCache();
-  io.out << "Sweep: " << result.BriefReport() << "\n";
-  io.out << "Capture: " << recorder.StatsReport() << "\n";
-  io.out << "Commit: every bracket in the recording before the next move; waited "
-         << FormatDuration(committer.waited_s()) << " in all\n";
-  io.out << "Wall time " << FormatDuration(wall_s) << " for " << poses.size()
-         << " poses; plan estimate " << FormatDuration(plan.summary.total_s / rig.time_scale)
-         << " and physical bound "
-         << FormatDuration(plan.summary.physical_bound_s / rig.time_scale) << " for all "
-         << plan.poses.size() << " poses at time scale " << rig.time_scale << "\n";
+  ReportRun(session, result, wall_s, poses.size(), io.out);
   return recorded;
 }
 

@@ -432,6 +432,20 @@ void EstimateDuration(const SweepSpec& spec, const MotionModel& motion, Plan* pl
 
 }  // namespace
 
+MotionModel WithDeviceSpeeds(MotionModel model, const std::map<Axis, AxisSpeed>& speeds) {
+  const std::pair<Axis, AxisMotion*> axes[] = {
+      {Axis::kSlide, &model.slide}, {Axis::kPan, &model.pan}, {Axis::kTilt, &model.tilt}};
+  for (const auto& [axis, motion] : axes) {
+    const auto found = speeds.find(axis);
+    if (found == speeds.end()) continue;
+    const AxisSpeed& device = found->second;
+    if (device.speed > 0.0 && device.acceleration > 0.0) {
+      *motion = {device.speed, device.acceleration, device.settle_ms, device.home};
+    }
+  }
+  return model;
+}
+
 Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
   std::string why;
   IRDIST_CHECK(spec.IsValid(&why), why);

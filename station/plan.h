@@ -9,9 +9,12 @@
 // station's sweep consumes the Pose list.
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "station/motion.h"
 
 namespace irdist {
 
@@ -173,6 +176,11 @@ struct Plan {
 // Expands the spec. Throws CheckError when !spec.IsValid() or !motion.IsValid(), or when a theta
 // cannot be reached with the given tilt (|cos theta| > |cos tilt|).
 Plan MakePlan(const SweepSpec& spec, const MotionModel& motion);
+
+// `model` with each axis's speed, acceleration, settle and home as its device reports them
+// (Station::Speeds(), read from the devices once connected and homed): the plan of a composed rig
+// on what its devices are actually set to. Axes absent from `speeds` keep the model's values.
+MotionModel WithDeviceSpeeds(MotionModel model, const std::map<Axis, AxisSpeed>& speeds);
 
 // "1h 02m 03s", "4m 05.2s", "12.3 s".
 std::string FormatDuration(double seconds);

@@ -1,5 +1,6 @@
 #include "station/sweep.h"
 
+#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -8,6 +9,14 @@ namespace {
 
 // Two set-points the station cannot tell apart (its resolution is 0.01 mm, deg or mA).
 bool SameCenti(double a, double b) { return std::llround(a * 100.0) == std::llround(b * 100.0); }
+
+// Host seconds since `t0`, added to `*total_s`; returns now.
+std::chrono::steady_clock::time_point AddSince(std::chrono::steady_clock::time_point t0,
+                                               double* total_s) {
+  const auto now = std::chrono::steady_clock::now();
+  *total_s += std::chrono::duration<double>(now - t0).count();
+  return now;
+}
 
 }  // namespace
 
@@ -80,6 +89,7 @@ SweepResult Sweep::Run(const std::vector<SweepPose>& poses, const PoseCallback& 
                        const std::atomic<bool>* stop, const ConfirmCallback& confirmed) {
   IRDIST_CHECK(static_cast<bool>(at_pose), "Sweep::Run needs a callback");
   SweepResult result;
+  const auto t_start = std::chrono::steady_clock::now();
   try {
     for (std::size_t i = 0; i < poses.size(); ++i) {
       const SweepPose& pose = poses[i];
@@ -90,11 +100,18 @@ SweepResult Sweep::Run(const std::vector<SweepPose>& poses, const PoseCallback& 
       }
       for (int attempt = 0;; ++attempt) {
         try {
-          if (i == 0 && attempt == 0) Start();
+          auto t = std::chrono::steady_clock::now();
+          if (i == 0 && attempt == 0) {
+            Start();
+            t = AddSince(t, &result.homing_s);
+          }
           GoTo(poses, i, attempt);
+          AddSince(t, &result.goto_s);
           at_pose(pose, attempt);
+          t = std::chrono::steady_clock::now();
           // The capture is only good if no device restarted or stopped meanwhile.
           station_.CheckAlive();
+          AddSince(t, &result.check_alive_s);
           break;
         } catch (const DeviceRestarted& restarted) {
           ++result.reboots;
@@ -107,6 +124,9 @@ SweepResult Sweep::Run(const std::vector<SweepPose>& poses, const PoseCallback& 
       ++result.poses_done;
     }
     Park();
+    result.sweep_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count() -
+        result.homing_s;
   } catch (...) {
     station_.Off();  // the original failure is the one to report
     throw;

@@ -37,6 +37,13 @@ struct SweepResult {
   std::size_t reboots = 0;       // device restarts seen
   bool stopped = false;          // the stop flag ended the sweep early
   std::int64_t next_index = -1;  // index of the first pose not done (-1 when all are done)
+  // Host time, s: identify and home (Start), then the sweep from the end of homing to the end of
+  // parking; inside the sweep, the current set + move of each pose (GoTo) and the station's
+  // alive checks after each capture.
+  double homing_s = 0.0;
+  double sweep_s = 0.0;
+  double goto_s = 0.0;
+  double check_alive_s = 0.0;
   std::string BriefReport() const;
 };
 

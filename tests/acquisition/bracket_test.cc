@@ -152,6 +152,26 @@ TEST(BracketCapture, CleanBracketCarriesRequestedExposuresInOrder) {
   EXPECT_EQ(capture.stats().lost, 0);
 }
 
+TEST(BracketCapture, EachFrameIsHandedOverBeforeTheNextTrigger) {
+  ScriptedCamera camera;
+  BracketCapture capture(camera, FastOptions());
+  int fired = 0;
+  std::vector<int> fired_when_seen;
+  std::vector<double> seen_exposures_us;
+  const BracketResult result = capture.Capture(
+      [&](int) {
+        ++fired;
+        camera.SoftwareTrigger();
+      },
+      [&](const BracketFrame& frame) {
+        fired_when_seen.push_back(fired);
+        seen_exposures_us.push_back(frame.actual_exposure_us);
+      });
+  ASSERT_TRUE(result.complete) << result.BriefReport();
+  EXPECT_EQ(fired_when_seen, (std::vector<int>{1, 2, 3, 4, 5}));
+  EXPECT_EQ(seen_exposures_us, FastOptions().exposures_us);
+}
+
 TEST(BracketCapture, RetriesDroppedAndDamagedFramesAndDiscardsDuplicates) {
   using Act = ScriptedCamera::Act;
   ScriptedCamera camera;

@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -135,6 +136,81 @@ TEST(Recording, RoundTripGivesBackBracketsAndTheHeaderVerbatim) {
   EXPECT_EQ(check.complete_brackets, 3);
   EXPECT_THROW(RecordingWriter::Open(dir, TestHeader()), RecordingError);  // not empty
   EXPECT_THROW(RecordingWriter::Resume(dir), RecordingError);             // complete
+  fs::remove_all(dir);
+}
+
+// The PNG and temporary files in frames/.
+std::vector<std::string> FramesDirNames(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(fs::path(dir) / "frames")) {
+    names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST(Recording, StagedBracketIsInvisibleUntilCommittedThenWhole) {
+  const std::string dir = TempDir("staged");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, kBracketSize);
+  std::vector<FrameRecord> records;
+  for (std::int64_t i = kBracketSize; i < 2 * kBracketSize; ++i) {
+    EXPECT_EQ(writer->Stage(TestImage(i)), i);
+    records.push_back(TestRecord(i));
+  }
+  EXPECT_EQ(writer->staged_count(), static_cast<std::size_t>(kBracketSize));
+  EXPECT_EQ(CountCsvRows(dir), kBracketSize);
+  EXPECT_EQ(RecordingReader(dir).rows().size(), static_cast<std::size_t>(kBracketSize));
+  EXPECT_EQ(FramesDirNames(dir).back(), "000009.png.tmp");
+  EXPECT_FALSE(fs::exists(fs::path(dir) / "frames/000005.png"));
+  EXPECT_THROW(writer->CommitStaged({TestRecord(5)}), CheckError);  // one record per frame
+  EXPECT_THROW(writer->Append(TestImage(5), TestRecord(5)), CheckError);
+
+  const std::vector<FrameRecord> committed = writer->CommitStaged(records);
+  ASSERT_EQ(committed.size(), static_cast<std::size_t>(kBracketSize));
+  EXPECT_EQ(committed.back().file, "frames/000009.png");
+  EXPECT_EQ(writer->next_index(), 2 * kBracketSize);
+  writer->Close(Completion::kComplete);
+  RecordingReader reader(dir);
+  ASSERT_EQ(reader.rows().size(), static_cast<std::size_t>(2 * kBracketSize));
+  for (const FrameRecord& row : reader.rows()) {
+    EXPECT_EQ(cv::norm(reader.LoadImage(row), TestImage(row.index), cv::NORM_INF), 0.0);
+  }
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_TRUE(check.ok() && check.warnings.empty()) << check.BriefReport();
+  fs::remove_all(dir);
+}
+
+TEST(Recording, DroppedStagedFramesLeaveNoFileAndTheirIndicesAreReused) {
+  const std::string dir = TempDir("dropstaged");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  for (int i = 0; i < 3; ++i) writer->Stage(TestImage(100 + i));
+  writer->DropStaged();
+  EXPECT_TRUE(FramesDirNames(dir).empty());
+  WriteFrames(*writer, 0, 2);
+  writer->Close(Completion::kComplete);
+  RecordingReader reader(dir);
+  ASSERT_EQ(reader.rows().size(), 2u);
+  EXPECT_EQ(reader.rows()[1].file, "frames/000001.png");
+  EXPECT_EQ(cv::norm(reader.LoadImage(reader.rows()[1]), TestImage(1), cv::NORM_INF), 0.0);
+  fs::remove_all(dir);
+}
+
+TEST(RecordingSafety, KilledWhileStagingLosesOnlyTheStagedBracketAndResumeSetsItAside) {
+  const std::string dir = TempDir("killstaged");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, kBracketSize);
+  for (std::int64_t i = kBracketSize; i < kBracketSize + 3; ++i) writer->Stage(TestImage(i));
+  writer.reset();  // no Close, no commit: as after a kill
+  EXPECT_EQ(CountCsvRows(dir), kBracketSize);
+  auto resumed = RecordingWriter::Resume(dir);
+  EXPECT_EQ(resumed->next_index(), kBracketSize);
+  ASSERT_EQ(resumed->set_aside().size(), 3u);
+  EXPECT_EQ(resumed->set_aside().front(), "frames/000005.png.tmp");
+  resumed->Close(Completion::kComplete);
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_TRUE(check.ok()) << check.BriefReport();
+  EXPECT_EQ(check.complete_brackets, 1);
   fs::remove_all(dir);
 }
 

@@ -4,6 +4,7 @@
 
 #include <sstream>
 
+#include "app/errors.h"
 #include "sim/station_emulator.h"
 #include "sim/world.h"
 

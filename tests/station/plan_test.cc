@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -114,6 +115,28 @@ TEST(PlanTest, CountsFramesAndDifferences) {
   EXPECT_NE(report.find("1536 in all"), std::string::npos) << report;
   EXPECT_NE(report.find("768 differences"), std::string::npos) << report;
   EXPECT_NE(report.find("Physical bound"), std::string::npos) << report;
+}
+
+TEST(PlanTest, DeviceSpeedsReplaceTheModelsAxesAndMoveTheBound) {
+  MotionModel model;
+  const std::map<Axis, AxisSpeed> speeds = {{Axis::kSlide, {100.0, 200.0, 30.0, 1000.0}},
+                                            {Axis::kPan, {50.0, 100.0, 0.0, 0.0}},
+                                            {Axis::kTilt, {0.0, 0.0, 0.0, 0.0}}};  // unknown
+  const MotionModel on_devices = WithDeviceSpeeds(model, speeds);
+  EXPECT_DOUBLE_EQ(on_devices.slide.speed, 100.0);
+  EXPECT_DOUBLE_EQ(on_devices.slide.acceleration, 200.0);
+  EXPECT_DOUBLE_EQ(on_devices.slide.settle_ms, 30.0);
+  EXPECT_DOUBLE_EQ(on_devices.pan.speed, 50.0);
+  EXPECT_DOUBLE_EQ(on_devices.pan.settle_ms, 0.0);
+  EXPECT_DOUBLE_EQ(on_devices.tilt.speed, model.tilt.speed);  // a zero speed is not a report
+  EXPECT_DOUBLE_EQ(on_devices.readout_ms, model.readout_ms);
+
+  SweepSpec spec;
+  spec.slide_mm.values = {1500, 3000};
+  spec.angle_deg.values = {0, 35};
+  const double bound_s = MakePlan(spec, model).summary.physical_bound_s;
+  const double slower_slide_s = MakePlan(spec, on_devices).summary.physical_bound_s;
+  EXPECT_GT(slower_slide_s, bound_s);
 }
 
 TEST(PlanTest, SlowestAxisOutermostAndSerpentine) {
