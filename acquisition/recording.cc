@@ -23,6 +23,7 @@
 #include <boost/crc.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "base/regular_file.h"
 #include "base/yaml_fields.h"
 
 namespace irdist {
@@ -123,44 +124,6 @@ void WriteFileAtomically(const std::string& path, const void* data, size_t size)
   WriteSynced(tmp, data, size);
   RenameOrThrow(tmp, path);
   SyncFolder(fs::path(path).parent_path().string());
-}
-
-// Reads a regular file inside a recording, never blocking: a FIFO, a device or a symbolic link
-// is refused. Returns false and sets `why` when refused or unreadable.
-bool ReadRegularFile(const std::string& path, std::int64_t max_bytes, std::string* bytes,
-                     std::string* why) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) {
-    *why = errno == ELOOP ? "is a symbolic link (a recording holds its own files)"
-                          : std::string("cannot be opened: ") + Errno();
-    return false;
-  }
-  struct stat st {};
-  bool ok = ::fstat(fd, &st) == 0;
-  if (ok && !S_ISREG(st.st_mode)) {
-    *why = "is not a regular file (a FIFO, device or folder)";
-    ok = false;
-  } else if (ok && st.st_size > max_bytes) {
-    *why = "is " + std::to_string(st.st_size) + " bytes, over the limit of " +
-           std::to_string(max_bytes);
-    ok = false;
-  }
-  if (ok) {
-    bytes->resize(static_cast<size_t>(st.st_size));
-    size_t got = 0;
-    while (ok && got < bytes->size()) {
-      const ssize_t n = ::read(fd, bytes->data() + got, bytes->size() - got);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) {
-        *why = std::string("cannot be read: ") + (n < 0 ? Errno() : "shorter than its size");
-        ok = false;
-      } else {
-        got += static_cast<size_t>(n);
-      }
-    }
-  }
-  ::close(fd);
-  return ok;
 }
 
 constexpr std::int64_t kMaxPngBytes = std::int64_t{1} << 28;

@@ -1,5 +1,7 @@
 #include "base/yaml_fields.h"
 
+#include "base/regular_file.h"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -56,15 +58,13 @@ YAML::Node Parse(const std::string& text, const std::string& file) {
 }
 
 std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
+  std::string text, why;
+  if (!ReadRegularFile(path, kMaxInputTextBytes, &text, &why)) {
     throw InputError(path, 0, 0,
-                      "cannot open the file; check the path (relative paths are "
-                      "taken from the current directory)");
+                     why + "; check the path (relative paths are taken from the current "
+                           "directory) and give a regular file");
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  return text;
 }
 
 std::string ClosestMatch(const std::string& word, const std::vector<std::string>& candidates) {

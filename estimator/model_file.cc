@@ -13,6 +13,8 @@
 #include <limits>
 #include <sstream>
 
+#include "base/regular_file.h"
+
 namespace irdist {
 namespace {
 
@@ -605,11 +607,12 @@ void SaveModel(const CalibrationModel& model, const std::string& path) {
 }
 
 CalibrationModel LoadModel(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw ModelFileError(path, "", 0, "cannot open for reading (check the path)");
-  std::ostringstream text;
-  text << file.rdbuf();
-  return ModelFromYaml(text.str(), path);
+  std::string text, why;
+  if (!ReadRegularFile(path, kMaxInputTextBytes, &text, &why)) {
+    throw ModelFileError(path, "", 0, why + "; give the path of a model.yaml that calibrate or "
+                                            "fit wrote");
+  }
+  return ModelFromYaml(text, path);
 }
 
 }  // namespace irdist

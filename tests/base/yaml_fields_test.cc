@@ -1,6 +1,8 @@
 #include "base/yaml_fields.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <string>
 
@@ -75,3 +77,18 @@ TEST(YamlFieldsTest, InputErrorFormatsItsPosition) {
 
 }  // namespace
 }  // namespace irdist::yaml_fields
+
+// A FIFO given as a recipe or rig file is refused at once, naming the file.
+TEST(YamlFieldsTest, ReadFileRefusesAFifoWithoutBlocking) {
+  const std::string path = ::testing::TempDir() + "recipe_fifo_" + std::to_string(::getpid());
+  ::unlink(path.c_str());
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  try {
+    irdist::yaml_fields::ReadFile(path);
+    ADD_FAILURE() << "a FIFO was read as a recipe";
+  } catch (const irdist::InputError& e) {
+    EXPECT_EQ(e.File(), path);
+    EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+  }
+  ::unlink(path.c_str());
+}

@@ -1,6 +1,8 @@
 #include "estimator/model_file.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstring>
@@ -355,3 +357,18 @@ TEST(ModelFileSafety, MisspeltKeyIsAnErrorNotADefault) {
 
 }  // namespace
 }  // namespace irdist
+
+// A FIFO given as the model path is refused at once, naming the file (a read would block forever).
+TEST(ModelFileSafety, FifoInPlaceOfAModelIsRefusedWithoutBlocking) {
+  const std::string path = ::testing::TempDir() + "model_fifo_" + std::to_string(::getpid());
+  ::unlink(path.c_str());
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  try {
+    irdist::LoadModel(path);
+    ADD_FAILURE() << "a FIFO was read as a model";
+  } catch (const irdist::ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+  }
+  ::unlink(path.c_str());
+}
