@@ -333,6 +333,23 @@ double Vote(const Problem& p, double scaled_d, double theta0_deg) {
   return std::isfinite(s) ? s : std::numeric_limits<double>::infinity();
 }
 
+// RootTieBreaker::kGeometric: the mean of the frames' geometric ln d (NaN when there is none, or
+// under the other tie-breaker).
+double TieBreakingLnD(const Problem& p, const EstimateOptions& options) {
+  if (options.tie_breaker != RootTieBreaker::kGeometric || p.geo_ln_d == nullptr) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  double sum = 0.0;
+  int count = 0;
+  for (int i = 0; i < p.count; ++i) {
+    if (std::isfinite(p.geo_ln_d[i])) {
+      sum += p.geo_ln_d[i];
+      ++count;
+    }
+  }
+  return count > 0 ? sum / count : std::numeric_limits<double>::quiet_NaN();
+}
+
 // Root selection: real, positive D, inside the calibrated range, smallest residual in the
 // equations that vote (Eq. 25 first, then each equation alone, then mid-range).
 void ChooseStart(const Problem& p, double theta0_deg, const EstimateOptions& options,
@@ -341,19 +358,7 @@ void ChooseStart(const Problem& p, double theta0_deg, const EstimateOptions& opt
   const CalibratedRanges& cr = p.model->ranges;
   const double d_lo = cr.d_min_mm / (1.0 + options.range_margin);
   const double d_hi = cr.d_max_mm * (1.0 + options.range_margin);
-  // kGeometric: the mean of the frames' geometric ln d (NaN when there is none).
-  double tie_geo_ln_d = std::numeric_limits<double>::quiet_NaN();
-  if (options.tie_breaker == RootTieBreaker::kGeometric && p.geo_ln_d != nullptr) {
-    double sum = 0.0;
-    int count = 0;
-    for (int i = 0; i < p.count; ++i) {
-      if (std::isfinite(p.geo_ln_d[i])) {
-        sum += p.geo_ln_d[i];
-        ++count;
-      }
-    }
-    if (count > 0) tie_geo_ln_d = sum / count;
-  }
+  const double tie_geo_ln_d = TieBreakingLnD(p, options);
   // Polynomials in scaled D from the first difference (Eq. 21, 23), each normalised to unit norm.
   const Difference& df = p.diffs[0];
   double vars[kNumModelVars] = {0.0, 0.0, 0.0, 0.0, df.dt, df.df};
