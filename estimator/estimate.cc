@@ -1,12 +1,16 @@
 #include "estimator/estimate.h"
 
 #include <ceres/jet.h>
+#include <ceres/tiny_solver.h>
 
 #include <Eigen/Dense>
+#include <unsupported/Eigen/Polynomials>
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 #include "base/check.h"
 
@@ -44,7 +48,9 @@ struct Problem {
 
 // The residual whose square is the Huber loss (x2) of r with threshold k: r itself within k,
 // sign(r) sqrt(k (2 |r| - k)) beyond (continuous with its first derivative). Jets compare by
-// value, so one template serves the solve and its derivatives.
+// value, so one template serves the solve and its derivatives. ceres::TinySolver takes no loss
+// function (ceres::HuberLoss belongs to a ceres::Problem, whose set-up costs more than this
+// whole solve), so the loss rides in the residual itself.
 template <typename T>
 T Robust(const T& r, double k) {
   using std::sqrt;
@@ -112,192 +118,200 @@ int Linearise(const Problem& p, double ln_d, double theta_rad, double* r, double
   return n;
 }
 
-double SumSquares(const double* r, int n) {
-  double s = 0.0;
-  for (int i = 0; i < n; ++i) s += r[i] * r[i];
-  return s;
+// Eq. 26 for ceres::TinySolver: the residuals in (ln d, theta rad), or in ln d alone with theta
+// held at its start (kParams 1: theta from the ellipse, the E equation degenerate). Derivatives
+// come from the same Residuals template through Jets.
+template <int kParams>
+struct EstimateCost {
+  using Scalar = double;
+  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = kParams };
+
+  const Problem* p;
+  double theta_fixed_rad;
+  int num_residuals;
+
+  int NumResiduals() const { return num_residuals; }
+
+  bool operator()(const double* x, double* r, double* jacobian) const {
+    const double theta_rad = kParams == 2 ? x[1] : theta_fixed_rad;
+    if (jacobian == nullptr) {
+      Residuals(*p, x[0], theta_rad, r);
+      return true;
+    }
+    Jet2 rj[kMaxResiduals];
+    const int n = Residuals(*p, Jet2(x[0], 0), Jet2(theta_rad, 1), rj);
+    for (int i = 0; i < n; ++i) {
+      r[i] = rj[i].a;
+      jacobian[i] = rj[i].v[0];  // column-major: the ln d column, then the theta column
+      if (kParams == 2) jacobian[n + i] = rj[i].v[1];
+    }
+    return true;
+  }
+};
+
+// Runs TinySolver's Levenberg-Marquardt from x = (ln d0, theta0 rad); returns whether it stopped
+// on a tolerance (not on the iteration budget) at a finite cost.
+template <int kParams>
+bool RunTinySolver(const Problem& p, const EstimateOptions& options, double x[2],
+                   int* iterations) {
+  double r[kMaxResiduals];
+  const EstimateCost<kParams> cost{&p, x[1], Residuals(p, x[0], x[1], r)};
+  ceres::TinySolver<EstimateCost<kParams>> solver;
+  solver.options.max_num_iterations = options.max_iterations + 1;  // it counts from 1
+  solver.options.parameter_tolerance = options.step_tolerance;
+  solver.options.gradient_tolerance = 1e-30;
+  solver.options.function_tolerance = 1e-30;
+  solver.options.cost_threshold = 0.5e-30;
+  typename ceres::TinySolver<EstimateCost<kParams>>::Parameters params;
+  for (int k = 0; k < kParams; ++k) params(k) = x[k];
+  const auto& summary = solver.Solve(cost, &params);
+  for (int k = 0; k < kParams; ++k) x[k] = params(k);
+  *iterations = std::min(summary.iterations, options.max_iterations);  // steps tried
+  return summary.status != decltype(solver)::HIT_MAX_ITERATIONS &&
+         std::isfinite(summary.final_cost);
 }
 
-// Hand-rolled Levenberg-Marquardt on 2 (or 1, theta fixed) unknowns.
-void SolveLm(const Problem& p, bool solve_theta, const EstimateOptions& options,
-             DistanceEstimate* out) {
-  double x[2] = {std::log(out->d0_mm), out->theta0_deg * kRad};
+// Unweighted relative residuals of the model equations alone (rms of E and of Sigma), for the
+// report.
+void ReportPlainResiduals(const Problem& p, const double x[2], DistanceEstimate* out) {
+  Problem plain = p;
+  plain.fused = false;
+  plain.e_weight = plain.s_weight = 1.0;
+  plain.geo_weight = plain.theta_prior_weight = 0.0;
+  plain.huber = 0.0;
+  double rp[kMaxResiduals];
+  const int np = Residuals(plain, x[0], x[1], rp);
+  double se = 0.0, ss = 0.0;
+  int ne = 0, ns = 0;
+  for (int i = 0; i < np; ++i) {
+    const bool is_e = p.use_e && (i % 2 == 0);
+    (is_e ? se : ss) += rp[i] * rp[i];
+    ++(is_e ? ne : ns);
+  }
+  out->residual_e = ne > 0 ? std::sqrt(se / ne) : 0.0;
+  out->residual_sigma = ns > 0 ? std::sqrt(ss / ns) : 0.0;
+}
+
+// J^T J at x of the equations and of the theta prior (the last row when there is one) apart: the
+// covariance rescales the equations only.
+void NormalMatrices(const Problem& p, const double x[2], Eigen::Matrix2d* h_equations,
+                    Eigen::Matrix2d* h_prior) {
   double r[kMaxResiduals], j[kMaxResiduals][2];
-  int n = Linearise(p, x[0], x[1], r, j);
-  double cost = SumSquares(r, n);
-  double lambda = 1e-4;
-  out->converged = false;
-  int it = 0;
-  for (; it < options.max_iterations; ++it) {
-    Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
-    Eigen::Vector2d g = Eigen::Vector2d::Zero();
-    for (int i = 0; i < n; ++i) {
-      const Eigen::Vector2d row(j[i][0], j[i][1]);
-      h += row * row.transpose();
-      g += row * r[i];
-    }
-    if (!solve_theta) {
-      h(0, 1) = h(1, 0) = 0.0;
-      h(1, 1) = 1.0;
-      g(1) = 0.0;
-    }
-    if (cost < 1e-30 || g.norm() < 1e-30) {
-      out->converged = true;
-      break;
-    }
-    bool accepted = false;
-    for (int attempt = 0; attempt < 20 && !accepted; ++attempt) {
-      Eigen::Matrix2d damped = h;
-      damped(0, 0) += lambda * std::max(h(0, 0), 1e-12);
-      damped(1, 1) += lambda * std::max(h(1, 1), 1e-12);
-      const Eigen::Vector2d step = -damped.inverse() * g;
-      const double trial[2] = {x[0] + step(0), x[1] + step(1)};
-      double rt[kMaxResiduals];
-      Residuals(p, trial[0], trial[1], rt);
-      const double trial_cost = SumSquares(rt, n);
-      if (std::isfinite(trial_cost) && trial_cost <= cost) {
-        // Gain ratio: the actual decrease over the one the linear model predicts. With large
-        // residuals (a Sigma equation that the calibration cannot meet exactly) Gauss-Newton
-        // steps overshoot and alternate in sign; lowering the damping after such a step kept
-        // them bouncing for the whole iteration budget. Lower it only after good steps.
-        const double predicted = -(2.0 * g.dot(step) + step.dot(h * step));
-        const double ratio = predicted > 0.0 ? (cost - trial_cost) / predicted : 0.0;
-        const double decrease = cost - trial_cost;
-        x[0] = trial[0];
-        x[1] = trial[1];
-        cost = trial_cost;
-        if (ratio > 0.75) {
-          lambda = std::max(lambda / 5.0, 1e-12);
-        } else if (ratio < 0.25) {
-          lambda = std::min(lambda * 4.0, 1e12);
-        }
-        accepted = true;
-        if (step.norm() < options.step_tolerance || decrease <= 1e-15 * (cost + decrease)) {
-          out->converged = true;
-        }
-      } else {
-        lambda *= 8.0;
-      }
-    }
-    if (!accepted) {
-      out->converged = true;  // no descent left at machine precision
-      break;
-    }
-    n = Linearise(p, x[0], x[1], r, j);
-    if (out->converged) break;
-  }
-  out->iterations = it;
-  n = Linearise(p, x[0], x[1], r, j);
-  out->d_mm = std::exp(x[0]);
-  out->theta_deg = std::abs(x[1]) / kRad;  // rho is even: the sign is not observable
-  out->theta_solved = solve_theta;
-  {
-    // Unweighted relative residuals of the model equations alone, for the report.
-    Problem plain = p;
-    plain.fused = false;
-    plain.e_weight = plain.s_weight = 1.0;
-    plain.geo_weight = plain.theta_prior_weight = 0.0;
-    plain.huber = 0.0;
-    double rp[kMaxResiduals];
-    const int np = Residuals(plain, x[0], x[1], rp);
-    double se = 0.0, ss = 0.0;
-    int ne = 0, ns = 0;
-    for (int i = 0; i < np; ++i) {
-      const bool is_e = p.use_e && (i % 2 == 0);
-      (is_e ? se : ss) += rp[i] * rp[i];
-      ++(is_e ? ne : ns);
-    }
-    out->residual_e = ne > 0 ? std::sqrt(se / ne) : 0.0;
-    out->residual_sigma = ns > 0 ? std::sqrt(ss / ns) : 0.0;
-  }
-  // J^T J of the equations and of the theta prior (the last row when there is one) apart: the
-  // covariance below rescales the equations only.
+  const int n = Linearise(p, x[0], x[1], r, j);
   const int equations = n - (p.theta_prior_weight > 0.0 ? 1 : 0);
-  Eigen::Matrix2d h_equations = Eigen::Matrix2d::Zero(), h_prior = Eigen::Matrix2d::Zero();
+  h_equations->setZero();
+  h_prior->setZero();
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector2d row(j[i][0], j[i][1]);
-    (i < equations ? h_equations : h_prior) += row * row.transpose();
+    (i < equations ? *h_equations : *h_prior) += row * row.transpose();
   }
+}
+
+// kFused: residuals are in units of their calibration errors. Where the geometric fit has a noise
+// model, the equations' rows are rescaled from the mean fit error to the noise expected at this d
+// (one factor for all: their ratios stay as weighted); the theta prior's row keeps its own sd.
+// Then the covariance is (J^T J)^-1.
+void FusedUncertainty(const Problem& p, const Eigen::Matrix2d& h_equations,
+                      const Eigen::Matrix2d& h_prior, bool solve_theta, DistanceEstimate* out) {
   Eigen::Matrix2d h = h_equations + h_prior;
+  const GeometricModel& geo = p.model->geometric;
+  const double noise = geo.NoiseRel(out->d_mm);
+  if (noise > 0.0 && geo.summary.mean_relative_error > 0.0) {
+    const double scale = geo.summary.mean_relative_error / noise;
+    h = scale * scale * h_equations + h_prior;
+  }
+  if (solve_theta && h.determinant() > 0.0) {
+    const Eigen::Matrix2d cov = h.inverse();
+    out->d_std_mm = out->d_mm * std::sqrt(cov(0, 0));
+    out->theta_std_deg = std::sqrt(cov(1, 1)) / kRad;
+  } else if (h(0, 0) > 0.0) {
+    out->d_std_mm = out->d_mm / std::sqrt(h(0, 0));
+  }
+}
+
+// Condition number and (kFused) uncertainties from the Jacobian at the solution.
+void ReportConditioning(const Problem& p, const double x[2], bool solve_theta,
+                        DistanceEstimate* out) {
+  Eigen::Matrix2d h_equations, h_prior;
+  NormalMatrices(p, x, &h_equations, &h_prior);
   if (solve_theta) {
-    const Eigen::Vector2d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(h).eigenvalues();
+    const Eigen::Vector2d ev =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(h_equations + h_prior).eigenvalues();
     out->condition_number =
         ev(0) > 0.0 ? std::sqrt(ev(1) / ev(0)) : std::numeric_limits<double>::infinity();
   } else {
     out->condition_number = 1.0;
   }
-  if (p.fused) {
-    // Residuals are in units of their calibration errors. Where the geometric fit has a noise
-    // model, the equations' rows are rescaled from the mean fit error to the noise expected at
-    // this d (one factor for all: their ratios stay as weighted); the theta prior's row keeps its
-    // own sd. Then the covariance is (J^T J)^-1.
-    const GeometricModel& geo = p.model->geometric;
-    const double noise = geo.NoiseRel(out->d_mm);
-    if (noise > 0.0 && geo.summary.mean_relative_error > 0.0) {
-      const double scale = geo.summary.mean_relative_error / noise;
-      h = scale * scale * h_equations + h_prior;
-    }
-    if (solve_theta && h.determinant() > 0.0) {
-      const Eigen::Matrix2d cov = h.inverse();
-      out->d_std_mm = out->d_mm * std::sqrt(cov(0, 0));
-      out->theta_std_deg = std::sqrt(cov(1, 1)) / kRad;
-    } else if (h(0, 0) > 0.0) {
-      out->d_std_mm = out->d_mm / std::sqrt(h(0, 0));
-    }
-  }
-  const CalibratedRanges& cr = p.model->ranges;
-  // Tolerances: 1e-6 relative in d, 1e-4 deg in theta (the solver's own precision).
-  out->outside_calibrated_range =
-      out->d_mm < cr.d_min_mm * (1.0 - 1e-6) || out->d_mm > cr.d_max_mm * (1.0 + 1e-6) ||
-      (solve_theta &&
-       (out->theta_deg < cr.theta_min_deg - 1e-4 || out->theta_deg > cr.theta_max_deg + 1e-4));
+  if (p.fused) FusedUncertainty(p, h_equations, h_prior, solve_theta, out);
 }
 
-// Real roots of poly[0] + poly[1] x + poly[2] x^2 + poly[3] x^3, ascending. Returns the count.
+// Tolerances: 1e-6 relative in d, 1e-4 deg in theta (the solver's own precision).
+bool OutsideCalibratedRange(const CalibratedRanges& cr, const DistanceEstimate& e,
+                            bool solve_theta) {
+  return e.d_mm < cr.d_min_mm * (1.0 - 1e-6) || e.d_mm > cr.d_max_mm * (1.0 + 1e-6) ||
+         (solve_theta &&
+          (e.theta_deg < cr.theta_min_deg - 1e-4 || e.theta_deg > cr.theta_max_deg + 1e-4));
+}
+
+// Eq. 26 by ceres::TinySolver on 2 (or 1, theta fixed) unknowns, from out->d0_mm, theta0_deg.
+void SolveLm(const Problem& p, bool solve_theta, const EstimateOptions& options,
+             DistanceEstimate* out) {
+  double x[2] = {std::log(out->d0_mm), out->theta0_deg * kRad};
+  out->converged = solve_theta ? RunTinySolver<2>(p, options, x, &out->iterations)
+                               : RunTinySolver<1>(p, options, x, &out->iterations);
+  out->d_mm = std::exp(x[0]);
+  out->theta_deg = std::abs(x[1]) / kRad;  // rho is even: the sign is not observable
+  out->theta_solved = solve_theta;
+  ReportPlainResiduals(p, x, out);
+  ReportConditioning(p, x, solve_theta, out);
+  out->outside_calibrated_range = OutsideCalibratedRange(p.model->ranges, *out, solve_theta);
+}
+
+// Real roots of the polynomial c[0] + c[1] x + ... + c[kDegree] x^kDegree by Eigen's
+// PolynomialSolver (eigenvalues of the companion matrix). A root counts as real when its
+// imaginary part is below 1e-9 (1 + |real part|): a double root comes out of the eigen solver as
+// a pair with imaginary parts of about sqrt(machine epsilon) times its size.
+template <int kDegree>
+int RealRootsOfDegree(const double* c, double* roots) {
+  Eigen::Matrix<double, kDegree + 1, 1> coefficients;
+  for (int k = 0; k <= kDegree; ++k) coefficients(k) = c[k];
+  Eigen::PolynomialSolver<double, kDegree> solver(coefficients);
+  int n = 0;
+  for (int i = 0; i < kDegree; ++i) {
+    const std::complex<double> z = solver.roots()(i);
+    if (std::abs(z.imag()) <= 1e-9 * (1.0 + std::abs(z.real()))) roots[n++] = z.real();
+  }
+  return n;
+}
+
+// Real roots of poly[0] + poly[1] x + poly[2] x^2 + poly[3] x^3, ascending, each polished by
+// three Newton steps. Leading coefficients below 1e-12 of the largest are taken as zero (a lower
+// degree). Returns the count.
 int RealRoots(const double poly[4], double roots[3]) {
   double scale = 0.0;
   for (int k = 0; k < 4; ++k) scale = std::max(scale, std::abs(poly[k]));
   if (scale == 0.0) return 0;
-  const double c0 = poly[0] / scale, c1 = poly[1] / scale, c2 = poly[2] / scale,
-               c3 = poly[3] / scale;
+  double c[4];
+  for (int k = 0; k < 4; ++k) c[k] = poly[k] / scale;
   int n = 0;
-  if (std::abs(c3) > 1e-12) {
-    // Depressed cubic by the trigonometric / Cardano formulas, then Newton polish.
-    const double a = c2 / c3, b = c1 / c3, c = c0 / c3;
-    const double q = (a * a - 3.0 * b) / 9.0;
-    const double r = (2.0 * a * a * a - 9.0 * a * b + 27.0 * c) / 54.0;
-    if (r * r < q * q * q) {
-      const double t = std::acos(std::clamp(r / std::sqrt(q * q * q), -1.0, 1.0));
-      const double m = -2.0 * std::sqrt(q);
-      roots[0] = m * std::cos(t / 3.0) - a / 3.0;
-      roots[1] = m * std::cos((t + 2.0 * kPi) / 3.0) - a / 3.0;
-      roots[2] = m * std::cos((t - 2.0 * kPi) / 3.0) - a / 3.0;
-      n = 3;
-    } else {
-      const double big_a = -std::copysign(std::cbrt(std::abs(r) + std::sqrt(r * r - q * q * q)), r);
-      const double big_b = big_a != 0.0 ? q / big_a : 0.0;
-      roots[0] = big_a + big_b - a / 3.0;
-      n = 1;
-    }
-  } else if (std::abs(c2) > 1e-12) {
-    const double disc = c1 * c1 - 4.0 * c2 * c0;
-    if (disc >= 0.0) {
-      const double q = -0.5 * (c1 + std::copysign(std::sqrt(disc), c1));
-      roots[n++] = q / c2;
-      if (q != 0.0) roots[n++] = c0 / q;
-    }
-  } else if (std::abs(c1) > 1e-12) {
-    roots[n++] = -c0 / c1;
+  if (std::abs(c[3]) > 1e-12) {
+    n = RealRootsOfDegree<3>(c, roots);
+  } else if (std::abs(c[2]) > 1e-12) {
+    n = RealRootsOfDegree<2>(c, roots);
+  } else if (std::abs(c[1]) > 1e-12) {
+    roots[n++] = -c[0] / c[1];
   }
   for (int i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) {
       const double x = roots[i];
-      const double f = ((c3 * x + c2) * x + c1) * x + c0;
-      const double df = (3.0 * c3 * x + 2.0 * c2) * x + c1;
+      const double f = ((c[3] * x + c[2]) * x + c[1]) * x + c[0];
+      const double df = (3.0 * c[3] * x + 2.0 * c[2]) * x + c[1];
       if (df != 0.0) roots[i] = x - f / df;
     }
   }
-  std::sort(roots, roots + n);
+  for (int i = 1; i < n; ++i) {  // ascending (insertion sort of at most three)
+    for (int j = i; j > 0 && roots[j - 1] > roots[j]; --j) std::swap(roots[j - 1], roots[j]);
+  }
   return n;
 }
 
@@ -319,6 +333,23 @@ double Vote(const Problem& p, double scaled_d, double theta0_deg) {
   return std::isfinite(s) ? s : std::numeric_limits<double>::infinity();
 }
 
+// RootTieBreaker::kGeometric: the mean of the frames' geometric ln d (NaN when there is none, or
+// under the other tie-breaker).
+double TieBreakingLnD(const Problem& p, const EstimateOptions& options) {
+  if (options.tie_breaker != RootTieBreaker::kGeometric || p.geo_ln_d == nullptr) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  double sum = 0.0;
+  int count = 0;
+  for (int i = 0; i < p.count; ++i) {
+    if (std::isfinite(p.geo_ln_d[i])) {
+      sum += p.geo_ln_d[i];
+      ++count;
+    }
+  }
+  return count > 0 ? sum / count : std::numeric_limits<double>::quiet_NaN();
+}
+
 // Root selection: real, positive D, inside the calibrated range, smallest residual in the
 // equations that vote (Eq. 25 first, then each equation alone, then mid-range).
 void ChooseStart(const Problem& p, double theta0_deg, const EstimateOptions& options,
@@ -327,19 +358,7 @@ void ChooseStart(const Problem& p, double theta0_deg, const EstimateOptions& opt
   const CalibratedRanges& cr = p.model->ranges;
   const double d_lo = cr.d_min_mm / (1.0 + options.range_margin);
   const double d_hi = cr.d_max_mm * (1.0 + options.range_margin);
-  // kGeometric: the mean of the frames' geometric ln d (NaN when there is none).
-  double tie_geo_ln_d = std::numeric_limits<double>::quiet_NaN();
-  if (options.tie_breaker == RootTieBreaker::kGeometric && p.geo_ln_d != nullptr) {
-    double sum = 0.0;
-    int count = 0;
-    for (int i = 0; i < p.count; ++i) {
-      if (std::isfinite(p.geo_ln_d[i])) {
-        sum += p.geo_ln_d[i];
-        ++count;
-      }
-    }
-    if (count > 0) tie_geo_ln_d = sum / count;
-  }
+  const double tie_geo_ln_d = TieBreakingLnD(p, options);
   // Polynomials in scaled D from the first difference (Eq. 21, 23), each normalised to unit norm.
   const Difference& df = p.diffs[0];
   double vars[kNumModelVars] = {0.0, 0.0, 0.0, 0.0, df.dt, df.df};

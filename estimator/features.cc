@@ -246,22 +246,23 @@ bool DiscIsValid(const DiscVector& v) {
          v(5) < 20.0 && v(6) > 0.0;
 }
 
-// Fits the disc model to the pixels of `rect` (normalised gray levels); start from the moment
-// ellipse (centre, covariance) with blur s0. Returns false when the fit fails.
-bool FitDisc(const cv::Mat& image, const cv::Rect& rect, double max_gray, const Moments& m,
-             const EllipseFit& contour, double background, double peak, double s0,
-             EllipseFit* fit, double* blur_px, double* rms) {
-  const double ox = m.cx, oy = m.cy;
-  std::vector<cv::Vec3d> samples;  // (x - ox, y - oy, value)
+// The pixels of `rect` as (x - ox, y - oy, normalised gray level).
+std::vector<cv::Vec3d> DiscSamples(const cv::Mat& image, const cv::Rect& rect, double max_gray,
+                                   double ox, double oy) {
+  std::vector<cv::Vec3d> samples;
   samples.reserve(static_cast<size_t>(rect.area()));
   for (int y = rect.y; y < rect.y + rect.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
     for (int x = rect.x; x < rect.x + rect.width; ++x)
       samples.emplace_back(x - ox, y - oy, row[x] / max_gray);
   }
-  if (samples.size() < 4 * kDiscParams) return false;
-  // Start: the disc whose covariance is the moments' minus blur and pixel variance (a uniform
-  // ellipse of semi-axis a has variance a^2 / 4 along it).
+  return samples;
+}
+
+// Start: the disc whose covariance is the moments' minus blur and pixel variance (a uniform
+// ellipse of semi-axis a has variance a^2 / 4 along it), or the half-maximum contour's ellipse.
+DiscVector DiscStart(double max_gray, const Moments& m, const EllipseFit& contour,
+                     double background, double peak, double s0) {
   const double remove = s0 * s0 + 1.0 / 12.0;
   const double tr = m.sxx + m.syy;
   const double root = std::sqrt(0.25 * (m.sxx - m.syy) * (m.sxx - m.syy) + m.sxy * m.sxy);
@@ -286,56 +287,68 @@ bool FitDisc(const cv::Mat& image, const cv::Rect& rect, double max_gray, const 
   v(5) = s0;
   v(6) = std::max((peak - background) / max_gray, 1e-6);
   v(7) = background / max_gray;
+  return v;
+}
 
-  auto cost_of = [&samples](const DiscVector& p) {
-    double cost = 0.0;
-    for (const cv::Vec3d& s : samples) {
-      const double r = DiscPixel(p, s[0], s[1], nullptr) - s[2];
-      cost += r * r;
-    }
-    return cost;
-  };
-  double cost = cost_of(v);
-  double lambda = 1e-3;
-  for (int iteration = 0; iteration < 20; ++iteration) {
-    DiscMatrix jtj = DiscMatrix::zeros();
-    DiscVector jtr = DiscVector::zeros();
-    DiscVector jac;
-    for (const cv::Vec3d& s : samples) {
-      const double r = DiscPixel(v, s[0], s[1], &jac) - s[2];
-      for (int a = 0; a < kDiscParams; ++a) {
-        if (jac(a) == 0.0) continue;
-        jtr(a) += jac(a) * r;
-        for (int b = a; b < kDiscParams; ++b) jtj(a, b) += jac(a) * jac(b);
-      }
-    }
-    for (int a = 0; a < kDiscParams; ++a)
-      for (int b = 0; b < a; ++b) jtj(a, b) = jtj(b, a);
-    bool improved = false;
-    double relative_change = 0.0;
-    for (int attempt = 0; attempt < 10 && !improved; ++attempt) {
-      DiscMatrix damped = jtj;
-      for (int a = 0; a < kDiscParams; ++a) damped(a, a) += lambda * (jtj(a, a) + 1e-12);
-      DiscVector step;
-      if (!cv::solve(damped, -jtr, step, cv::DECOMP_CHOLESKY)) {
-        lambda *= 10.0;
-        continue;
-      }
-      const DiscVector next = v + step;
-      const double next_cost = DiscIsValid(next) ? cost_of(next) : HUGE_VAL;
-      if (next_cost < cost) {
-        relative_change = (cost - next_cost) / std::max(cost, 1e-300);
-        v = next;
-        cost = next_cost;
-        lambda = std::max(lambda * 0.3, 1e-9);
-        improved = true;
-      } else {
-        lambda *= 10.0;
-      }
-    }
-    if (!improved || relative_change < 1e-5) break;
+double DiscCost(const std::vector<cv::Vec3d>& samples, const DiscVector& p) {
+  double cost = 0.0;
+  for (const cv::Vec3d& s : samples) {
+    const double r = DiscPixel(p, s[0], s[1], nullptr) - s[2];
+    cost += r * r;
   }
-  if (!DiscIsValid(v)) return false;
+  return cost;
+}
+
+// J^T J and J^T r of the disc model at v.
+void DiscNormalEquations(const std::vector<cv::Vec3d>& samples, const DiscVector& v,
+                         DiscMatrix* jtj, DiscVector* jtr) {
+  *jtj = DiscMatrix::zeros();
+  *jtr = DiscVector::zeros();
+  DiscVector jac;
+  for (const cv::Vec3d& s : samples) {
+    const double r = DiscPixel(v, s[0], s[1], &jac) - s[2];
+    for (int a = 0; a < kDiscParams; ++a) {
+      if (jac(a) == 0.0) continue;
+      (*jtr)(a) += jac(a) * r;
+      for (int b = a; b < kDiscParams; ++b) (*jtj)(a, b) += jac(a) * jac(b);
+    }
+  }
+  for (int a = 0; a < kDiscParams; ++a)
+    for (int b = 0; b < a; ++b) (*jtj)(a, b) = (*jtj)(b, a);
+}
+
+// One damped step from v (up to 10 tries with growing lambda); returns the relative decrease of
+// the cost, or a negative value when no try decreased it. The disc model's validity region
+// (positive definite shape, bounded blur) is enforced by rejecting steps that leave it.
+double DiscStep(const std::vector<cv::Vec3d>& samples, DiscVector* v, double* cost,
+                double* lambda) {
+  DiscMatrix jtj;
+  DiscVector jtr;
+  DiscNormalEquations(samples, *v, &jtj, &jtr);
+  for (int attempt = 0; attempt < 10; ++attempt) {
+    DiscMatrix damped = jtj;
+    for (int a = 0; a < kDiscParams; ++a) damped(a, a) += *lambda * (jtj(a, a) + 1e-12);
+    DiscVector step;
+    if (!cv::solve(damped, -jtr, step, cv::DECOMP_CHOLESKY)) {
+      *lambda *= 10.0;
+      continue;
+    }
+    const DiscVector next = *v + step;
+    const double next_cost = DiscIsValid(next) ? DiscCost(samples, next) : HUGE_VAL;
+    if (next_cost < *cost) {
+      const double relative_change = (*cost - next_cost) / std::max(*cost, 1e-300);
+      *v = next;
+      *cost = next_cost;
+      *lambda = std::max(*lambda * 0.3, 1e-9);
+      return relative_change;
+    }
+    *lambda *= 10.0;
+  }
+  return -1.0;
+}
+
+// The fitted disc's ellipse (centre offset by (ox, oy)); false when its shape is not an ellipse.
+bool DiscEllipse(const DiscVector& v, double ox, double oy, EllipseFit* fit) {
   // Axes of the fitted disc: eigenvalues of P are 1 / semi-axis^2.
   const double pt = v(2) + v(4);
   const double pr = std::sqrt(0.25 * (v(2) - v(4)) * (v(2) - v(4)) + v(3) * v(3));
@@ -350,6 +363,23 @@ bool FitDisc(const cv::Mat& image, const cv::Rect& rect, double max_gray, const 
   if (angle > 90.0) angle -= 180.0;
   fit->angle_deg = angle;
   fit->theta0_deg = Theta0FromAxes(fit->minor_px, fit->major_px);
+  return true;
+}
+
+// Fits the disc model to the pixels of `rect` (normalised gray levels); start from the moment
+// ellipse (centre, covariance) with blur s0. Returns false when the fit fails.
+bool FitDisc(const cv::Mat& image, const cv::Rect& rect, double max_gray, const Moments& m,
+             const EllipseFit& contour, double background, double peak, double s0,
+             EllipseFit* fit, double* blur_px, double* rms) {
+  const std::vector<cv::Vec3d> samples = DiscSamples(image, rect, max_gray, m.cx, m.cy);
+  if (samples.size() < 4 * kDiscParams) return false;
+  DiscVector v = DiscStart(max_gray, m, contour, background, peak, s0);
+  double cost = DiscCost(samples, v);
+  double lambda = 1e-3;
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    if (DiscStep(samples, &v, &cost, &lambda) < 1e-5) break;  // no decrease, or too small
+  }
+  if (!DiscIsValid(v) || !DiscEllipse(v, m.cx, m.cy, fit)) return false;
   *blur_px = v(5);
   *rms = std::sqrt(cost / samples.size());
   return true;
@@ -535,42 +565,47 @@ cv::Mat LineariseFrame(const cv::Mat& image, int bit_depth, const InverseRespons
   return out;
 }
 
-Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options) {
-  std::string why;
-  IRDIST_CHECK(options.IsValid(&why), why);
-  IRDIST_CHECK(image.type() == CV_16UC1, "ComputeFeatures needs a CV_16UC1 image, got type ",
-               image.type());
-  IRDIST_CHECK(bit_depth >= 8 && bit_depth <= 16, "bit_depth must be in [8,16], got ", bit_depth);
-  if (options.response_scope == ResponseScope::kAllPixels &&
-      !options.inverse_response.IsIdentity()) {
-    FeatureOptions linear_options = options;
-    linear_options.inverse_response = InverseResponse();
-    linear_options.response_scope = ResponseScope::kERelOnly;
-    Features out = ComputeFeatures(LineariseFrame(image, bit_depth, options.inverse_response), 16,
-                                   linear_options);
-    out.bit_depth = bit_depth;
-    if (out.blob_found) {
-      // Saturation is a property of the raw frame: pixels at the format's maximum in the ROI (the
-      // threshold ROI's brightest pixels always lie inside its bounding box).
-      const int saturated_level = (1 << bit_depth) - 1;
-      int saturated = 0;
-      const cv::Rect roi = out.roi & cv::Rect(0, 0, image.cols, image.rows);
-      for (int y = roi.y; y < roi.y + roi.height; ++y) {
-        const std::uint16_t* row = image.ptr<std::uint16_t>(y);
-        for (int x = roi.x; x < roi.x + roi.width; ++x) saturated += row[x] >= saturated_level;
-      }
-      out.saturated_pixels = saturated;
-    }
-    return out;
-  }
-  IRDIST_CHECK(image.rows >= options.window_side_px && image.cols >= options.window_side_px,
-               "image smaller than the ROI window");
-  Features out;
-  out.bit_depth = bit_depth;
-  const double max_gray = static_cast<double>((1 << bit_depth) - 1);
-  const cv::Rect frame(0, 0, image.cols, image.rows);
+namespace {
 
-  // 1. Coarse pass: area-average downsampling, robust background, brightest coarse cell.
+// Pixels at the format's maximum inside `roi` of the raw frame.
+int CountSaturated(const cv::Mat& image, const cv::Rect& roi, int bit_depth) {
+  const int saturated_level = (1 << bit_depth) - 1;
+  int saturated = 0;
+  const cv::Rect clipped = roi & cv::Rect(0, 0, image.cols, image.rows);
+  for (int y = clipped.y; y < clipped.y + clipped.height; ++y) {
+    const std::uint16_t* row = image.ptr<std::uint16_t>(y);
+    for (int x = clipped.x; x < clipped.x + clipped.width; ++x) saturated += row[x] >= saturated_level;
+  }
+  return saturated;
+}
+
+// ResponseScope::kAllPixels: the features of the linearised frame, with the raw frame's saturation.
+Features FeaturesOfLinearisedFrame(const cv::Mat& image, int bit_depth,
+                                   const FeatureOptions& options) {
+  FeatureOptions linear_options = options;
+  linear_options.inverse_response = InverseResponse();
+  linear_options.response_scope = ResponseScope::kERelOnly;
+  Features out = ComputeFeatures(LineariseFrame(image, bit_depth, options.inverse_response), 16,
+                                 linear_options);
+  out.bit_depth = bit_depth;
+  // Saturation is a property of the raw frame: pixels at the format's maximum in the ROI (the
+  // threshold ROI's brightest pixels always lie inside its bounding box).
+  if (out.blob_found) out.saturated_pixels = CountSaturated(image, out.roi, bit_depth);
+  return out;
+}
+
+// Where the blob is: the robust background, the peak and the intensity centroid.
+struct BlobLocation {
+  double background = 0.0;  // gray levels
+  double peak = 0.0;        // gray levels
+  double cx = 0.0, cy = 0.0;
+};
+
+// Coarse pass: area-average downsampling, robust background, brightest coarse cell. Returns false
+// when its contrast is below the options' minimum (no blob); sets the background and the coarse
+// peak's position (full-resolution pixels) either way.
+bool DetectCoarse(const cv::Mat& image, double max_gray, const FeatureOptions& options,
+                  BlobLocation* at) {
   const int k = options.detection_downsample;
   cv::Mat coarse;
   if (k > 1) {
@@ -578,48 +613,42 @@ Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptio
   } else {
     coarse = image;
   }
-  double background = 0.0, mad = 0.0;
-  RobustBackground(coarse, &background, &mad);
+  double mad = 0.0;
+  RobustBackground(coarse, &at->background, &mad);
   double coarse_peak = 0.0;
   cv::Point coarse_at;
   cv::minMaxLoc(coarse, nullptr, &coarse_peak, nullptr, &coarse_at);
   const double min_contrast =
       std::max(options.min_contrast_fraction * max_gray, 8.0 * 1.4826 * mad);
-  out.background = background / max_gray;
-  if (coarse_peak - background < min_contrast) return out;  // no blob
+  at->cx = coarse_at.x * k + 0.5 * (k - 1);
+  at->cy = coarse_at.y * k + 0.5 * (k - 1);
+  return coarse_peak - at->background >= min_contrast;
+}
 
-  // 2. Full resolution, in a window around the coarse peak: peak and intensity centroid.
-  const int side = options.window_side_px;
-  double cx = coarse_at.x * k + 0.5 * (k - 1);
-  double cy = coarse_at.y * k + 0.5 * (k - 1);
-  double peak = 0.0;
-  cv::Rect window;
+// Full resolution, in a window around the coarse peak: peak and intensity centroid (up to four
+// re-centred passes). Returns false when no pixel is above the moment threshold.
+bool LocateCentroid(const cv::Mat& image, const FeatureOptions& options, BlobLocation* at) {
+  const cv::Rect frame(0, 0, image.cols, image.rows);
   for (int iteration = 0; iteration < 4; ++iteration) {
-    window = SquareAround(cx, cy, side) & frame;
-    cv::Point at;
-    cv::minMaxLoc(image(window), nullptr, &peak, nullptr, &at);
-    const double threshold = background + options.moment_threshold_fraction * (peak - background);
-    const Moments m = WeightedMoments(image, window, background, threshold);
-    if (m.weight <= 0.0) return out;
-    const double shift = std::hypot(m.cx - cx, m.cy - cy);
-    cx = m.cx;
-    cy = m.cy;
+    const cv::Rect window = SquareAround(at->cx, at->cy, options.window_side_px) & frame;
+    cv::minMaxLoc(image(window), nullptr, &at->peak, nullptr, nullptr);
+    const double threshold =
+        at->background + options.moment_threshold_fraction * (at->peak - at->background);
+    const Moments m = WeightedMoments(image, window, at->background, threshold);
+    if (m.weight <= 0.0) return false;
+    const double shift = std::hypot(m.cx - at->cx, m.cy - at->cy);
+    at->cx = m.cx;
+    at->cy = m.cy;
     if (shift < 0.25) break;
   }
-  out.blob_found = true;
-  out.peak = peak / max_gray;
-  out.centroid_px = cv::Point2d(cx, cy);
+  return true;
+}
 
-  const cv::Rect full_window = SquareAround(cx, cy, side);
-  window = full_window & frame;
-  const double moment_threshold =
-      background + options.moment_threshold_fraction * (peak - background);
-  const double roi_threshold = background + options.threshold_fraction * (peak - background);
-  const double half_threshold = background + 0.5 * (peak - background);
-
-  // 3. Border flags: a clipped window, or blob pixels on the outermost image rows/columns, or on
-  // the edge of the fixed window.
-  out.touches_border = window != full_window;
+// Border flags: a clipped window, or blob pixels on the outermost image rows/columns, or on the
+// edge of the fixed window.
+void FlagBorders(const cv::Mat& image, const cv::Rect& window, const cv::Rect& full_window,
+                 double roi_threshold, const FeatureOptions& options, Features* out) {
+  out->touches_border = window != full_window;
   for (int y = window.y; y < window.y + window.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
     for (int x = window.x; x < window.x + window.width; ++x) {
@@ -628,13 +657,17 @@ Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptio
       const bool on_window_edge = x == window.x || y == window.y ||
                                   x == window.x + window.width - 1 ||
                                   y == window.y + window.height - 1;
-      if (on_image_edge) out.touches_border = true;
+      if (on_image_edge) out->touches_border = true;
       if (on_window_edge && options.roi_policy == RoiPolicy::kFixedWindow)
-        out.blob_clipped_by_roi = true;
+        out->blob_clipped_by_roi = true;
     }
   }
+}
 
-  // 4. ROI statistics: E_rel, F(0,0), Sigma, saturation.
+// ROI statistics: E_rel, F(0,0), Sigma, saturation, the ROI itself. Returns false when the ROI is
+// empty.
+bool RoiStatistics(const cv::Mat& image, const cv::Rect& window, double roi_threshold,
+                   double max_gray, const FeatureOptions& options, Features* out) {
   const bool fixed = options.roi_policy == RoiPolicy::kFixedWindow;
   const InverseResponse& f = options.inverse_response;
   const uint16_t saturated_level = static_cast<uint16_t>(max_gray);
@@ -657,115 +690,175 @@ Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptio
       max_y = std::max(max_y, y);
     }
   }
-  if (area == 0) {
-    out.blob_found = false;
-    return out;
-  }
-  out.roi = fixed ? window : cv::Rect(min_x, min_y, max_x - min_x + 1, max_y - min_y + 1);
-  out.roi_area_px = area;
-  out.saturated_pixels = saturated;
-  out.f00 = sum;
-  out.e_rel = sum_f / area;
+  if (area == 0) return false;
+  out->roi = fixed ? window : cv::Rect(min_x, min_y, max_x - min_x + 1, max_y - min_y + 1);
+  out->roi_area_px = area;
+  out->saturated_pixels = saturated;
+  out->f00 = sum;
+  out->e_rel = sum_f / area;
   const double mean = sum / area;
-  out.sigma = std::sqrt(std::max(0.0, sum_sq / area - mean * mean));
+  out->sigma = std::sqrt(std::max(0.0, sum_sq / area - mean * mean));
+  return true;
+}
 
-  // 5. Ellipse from background-subtracted second moments.
-  Moments m = WeightedMoments(image, window, background, moment_threshold);
-  if (options.moment_method == MomentMethod::kAperture && m.weight > 0.0) {
-    // Support: the farthest pixel above the moment threshold from the thresholded centroid.
-    double support2 = 0.0;
-    for (int y = window.y; y < window.y + window.height; ++y) {
-      const uint16_t* row = image.ptr<uint16_t>(y);
-      for (int x = window.x; x < window.x + window.width; ++x) {
-        if (row[x] <= moment_threshold) continue;
-        support2 = std::max(support2, (x - m.cx) * (x - m.cx) + (y - m.cy) * (y - m.cy));
-      }
-    }
-    const Moments a = ApertureMoments(image, window, m.cx, m.cy,
-                                      std::sqrt(support2) + options.aperture_margin_px, background);
-    if (a.weight > 0.0 && a.sxx > 0.0 && a.syy > 0.0) {
-      m = a;
-      out.blur_var_px2 = ApertureBlurVariance(image, window, a);
+// Squared distance from (cx, cy) of the farthest pixel of `window` above `threshold`.
+double FarthestAbove2(const cv::Mat& image, const cv::Rect& window, double threshold, double cx,
+                      double cy) {
+  double farthest2 = 0.0;
+  for (int y = window.y; y < window.y + window.height; ++y) {
+    const uint16_t* row = image.ptr<uint16_t>(y);
+    for (int x = window.x; x < window.x + window.width; ++x) {
+      if (row[x] <= threshold) continue;
+      farthest2 = std::max(farthest2, (x - cx) * (x - cx) + (y - cy) * (y - cy));
     }
   }
-  {
-    const double tr = m.sxx + m.syy;
-    const double det_root =
-        std::sqrt(std::max(0.0, 0.25 * (m.sxx - m.syy) * (m.sxx - m.syy) + m.sxy * m.sxy));
-    const double l1 = 0.5 * tr + det_root;
-    const double l2 = 0.5 * tr - det_root;
-    out.moment_major_var_px2 = l1;
-    out.moment_minor_var_px2 = l2;
-    const double blur2 = options.psf_sigma_px * options.psf_sigma_px;
-    EllipseFit& e = out.ellipse_moments;
-    if (l1 - blur2 > 0.0) {
-      e.valid = true;
-      e.center_px = cv::Point2d(m.cx, m.cy);
-      // A uniform ellipse of semi-axis a has variance a^2/4 along it: full axis = 4 sqrt(var).
-      e.major_px = 4.0 * std::sqrt(l1 - blur2);
-      e.minor_px = 4.0 * std::sqrt(std::max(0.0, l2 - blur2));
-      e.angle_deg = 0.5 * std::atan2(2.0 * m.sxy, m.sxx - m.syy) * 180.0 / kPi;
-      e.theta0_deg = Theta0FromAxes(e.minor_px, e.major_px);
-    }
-  }
+  return farthest2;
+}
 
-  // 6. Ellipse from the half-maximum contour (cv::fitEllipse).
-  {
-    cv::Mat mask;
-    cv::Mat window_image = image(window);
-    cv::compare(window_image, cv::Scalar(half_threshold), mask, cv::CMP_GT);
-    std::vector<std::vector<cv::Point>> contours;
-    cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
-    size_t best = contours.size();
-    double best_area = -1.0;
-    for (size_t i = 0; i < contours.size(); ++i) {
-      const double a = cv::contourArea(contours[i]);
-      if (a > best_area) {
-        best_area = a;
-        best = i;
-      }
-    }
-    if (best < contours.size() && contours[best].size() >= 5) {
-      const cv::RotatedRect r = cv::fitEllipse(contours[best]);
-      EllipseFit& e = out.ellipse_contour;
-      e.valid = true;
-      e.center_px = cv::Point2d(r.center.x + window.x, r.center.y + window.y);
-      e.major_px = std::max(r.size.width, r.size.height);
-      e.minor_px = std::min(r.size.width, r.size.height);
-      e.angle_deg = r.size.width >= r.size.height ? r.angle : r.angle + 90.0;
-      e.theta0_deg = Theta0FromAxes(e.minor_px, e.major_px);
+// Background-subtracted second moments of the window (MomentMethod::kAperture: inside an aperture
+// reaching the thresholded support plus a margin, which also measures the blur).
+Moments BlobMoments(const cv::Mat& image, const cv::Rect& window, double background,
+                    double moment_threshold, const FeatureOptions& options, Features* out) {
+  const Moments m = WeightedMoments(image, window, background, moment_threshold);
+  if (options.moment_method != MomentMethod::kAperture || !(m.weight > 0.0)) return m;
+  // Support: the farthest pixel above the moment threshold from the thresholded centroid.
+  const double support2 = FarthestAbove2(image, window, moment_threshold, m.cx, m.cy);
+  const Moments a = ApertureMoments(image, window, m.cx, m.cy,
+                                    std::sqrt(support2) + options.aperture_margin_px, background);
+  if (!(a.weight > 0.0 && a.sxx > 0.0 && a.syy > 0.0)) return m;
+  out->blur_var_px2 = ApertureBlurVariance(image, window, a);
+  return a;
+}
+
+// The moments' principal variances, and the ellipse they give with the PSF blur removed.
+void MomentEllipse(const Moments& m, const FeatureOptions& options, Features* out) {
+  const double tr = m.sxx + m.syy;
+  const double det_root =
+      std::sqrt(std::max(0.0, 0.25 * (m.sxx - m.syy) * (m.sxx - m.syy) + m.sxy * m.sxy));
+  const double l1 = 0.5 * tr + det_root;
+  const double l2 = 0.5 * tr - det_root;
+  out->moment_major_var_px2 = l1;
+  out->moment_minor_var_px2 = l2;
+  const double blur2 = options.psf_sigma_px * options.psf_sigma_px;
+  EllipseFit& e = out->ellipse_moments;
+  if (!(l1 - blur2 > 0.0)) return;
+  e.valid = true;
+  e.center_px = cv::Point2d(m.cx, m.cy);
+  // A uniform ellipse of semi-axis a has variance a^2/4 along it: full axis = 4 sqrt(var).
+  e.major_px = 4.0 * std::sqrt(l1 - blur2);
+  e.minor_px = 4.0 * std::sqrt(std::max(0.0, l2 - blur2));
+  e.angle_deg = 0.5 * std::atan2(2.0 * m.sxy, m.sxx - m.syy) * 180.0 / kPi;
+  e.theta0_deg = Theta0FromAxes(e.minor_px, e.major_px);
+}
+
+// Ellipse fitted (cv::fitEllipse) to the largest contour above `half_threshold` in the window.
+EllipseFit ContourEllipse(const cv::Mat& image, const cv::Rect& window, double half_threshold) {
+  EllipseFit e;
+  cv::Mat mask;
+  cv::compare(image(window), cv::Scalar(half_threshold), mask, cv::CMP_GT);
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  size_t best = contours.size();
+  double best_area = -1.0;
+  for (size_t i = 0; i < contours.size(); ++i) {
+    const double a = cv::contourArea(contours[i]);
+    if (a > best_area) {
+      best_area = a;
+      best = i;
     }
   }
-  // 7. Ellipse from the blurred, pixel-integrated disc model (kModelFit), started from the
-  // moments; the fitted box reaches the moment support's extent plus the blur's reach.
+  if (best == contours.size() || contours[best].size() < 5) return e;
+  const cv::RotatedRect r = cv::fitEllipse(contours[best]);
+  e.valid = true;
+  e.center_px = cv::Point2d(r.center.x + window.x, r.center.y + window.y);
+  e.major_px = std::max(r.size.width, r.size.height);
+  e.minor_px = std::min(r.size.width, r.size.height);
+  e.angle_deg = r.size.width >= r.size.height ? r.angle : r.angle + 90.0;
+  e.theta0_deg = Theta0FromAxes(e.minor_px, e.major_px);
+  return e;
+}
+
+// Ellipse from the blurred, pixel-integrated disc model (kModelFit), started from the moments; the
+// fitted box reaches the farthest pixel above half maximum (far above the noise) from the centroid
+// plus the blur's reach.
+void ModelFitEllipse(const cv::Mat& image, const cv::Rect& window, double max_gray,
+                     const Moments& m, const BlobLocation& at, double half_threshold,
+                     const FeatureOptions& options, Features* out) {
+  const double s0 = options.psf_sigma_px > 0.0 ? options.psf_sigma_px : 0.7;
+  const double half_max2 = FarthestAbove2(image, window, half_threshold, m.cx, m.cy);
+  const double half = std::sqrt(half_max2) + 4.0 * s0 + 1.5;
+  const int x0 = static_cast<int>(std::floor(m.cx - half));
+  const int y0 = static_cast<int>(std::floor(m.cy - half));
+  const int x1 = static_cast<int>(std::ceil(m.cx + half));
+  const int y1 = static_cast<int>(std::ceil(m.cy + half));
+  const cv::Rect box = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1) & window;
+  FitDisc(image, box, max_gray, m, out->ellipse_contour, at.background, at.peak, s0,
+          &out->ellipse_model, &out->model_blur_px, &out->model_rms);
+}
+
+const EllipseFit& ChosenEllipse(const Features& f, EllipseMethod method) {
+  switch (method) {
+    case EllipseMethod::kMoments:
+      return f.ellipse_moments;
+    case EllipseMethod::kContour:
+      return f.ellipse_contour;
+    case EllipseMethod::kModelFit:
+      break;
+  }
+  return f.ellipse_model.valid ? f.ellipse_model : f.ellipse_moments;
+}
+
+// Steps 3-7 of ComputeFeatures on a located blob: borders, ROI statistics, the three ellipses.
+void MeasureBlob(const cv::Mat& image, double max_gray, const BlobLocation& at,
+                 const FeatureOptions& options, Features* out) {
+  const cv::Rect full_window = SquareAround(at.cx, at.cy, options.window_side_px);
+  const cv::Rect window = full_window & cv::Rect(0, 0, image.cols, image.rows);
+  const double contrast = at.peak - at.background;
+  const double moment_threshold = at.background + options.moment_threshold_fraction * contrast;
+  const double roi_threshold = at.background + options.threshold_fraction * contrast;
+  const double half_threshold = at.background + 0.5 * contrast;
+  FlagBorders(image, window, full_window, roi_threshold, options, out);
+  if (!RoiStatistics(image, window, roi_threshold, max_gray, options, out)) {
+    out->blob_found = false;
+    return;
+  }
+  const Moments m = BlobMoments(image, window, at.background, moment_threshold, options, out);
+  MomentEllipse(m, options, out);
+  out->ellipse_contour = ContourEllipse(image, window, half_threshold);
   if (options.ellipse_method == EllipseMethod::kModelFit && m.weight > 0.0 &&
-      out.moment_major_var_px2 > 0.0) {
-    const double s0 = options.psf_sigma_px > 0.0 ? options.psf_sigma_px : 0.7;
-    // Extent: the farthest pixel above half maximum (far above the noise) from the centroid.
-    double half_max2 = 0.0;
-    for (int y = window.y; y < window.y + window.height; ++y) {
-      const uint16_t* row = image.ptr<uint16_t>(y);
-      for (int x = window.x; x < window.x + window.width; ++x) {
-        if (row[x] <= half_threshold) continue;
-        half_max2 = std::max(half_max2, (x - m.cx) * (x - m.cx) + (y - m.cy) * (y - m.cy));
-      }
-    }
-    const double half = std::sqrt(half_max2) + 4.0 * s0 + 1.5;
-    const int x0 = static_cast<int>(std::floor(m.cx - half));
-    const int y0 = static_cast<int>(std::floor(m.cy - half));
-    const int x1 = static_cast<int>(std::ceil(m.cx + half));
-    const int y1 = static_cast<int>(std::ceil(m.cy + half));
-    const cv::Rect box = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1) & window;
-    FitDisc(image, box, max_gray, m, out.ellipse_contour, background, peak, s0, &out.ellipse_model,
-            &out.model_blur_px, &out.model_rms);
+      out->moment_major_var_px2 > 0.0) {
+    ModelFitEllipse(image, window, max_gray, m, at, half_threshold, options, out);
   }
-  const EllipseFit& chosen = options.ellipse_method == EllipseMethod::kMoments
-                                 ? out.ellipse_moments
-                             : options.ellipse_method == EllipseMethod::kContour
-                                 ? out.ellipse_contour
-                                 : (out.ellipse_model.valid ? out.ellipse_model
-                                                            : out.ellipse_moments);
-  out.theta0_deg = chosen.theta0_deg;
+  out->theta0_deg = ChosenEllipse(*out, options.ellipse_method).theta0_deg;
+}
+
+}  // namespace
+
+Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), why);
+  IRDIST_CHECK(image.type() == CV_16UC1, "ComputeFeatures needs a CV_16UC1 image, got type ",
+               image.type());
+  IRDIST_CHECK(bit_depth >= 8 && bit_depth <= 16, "bit_depth must be in [8,16], got ", bit_depth);
+  if (options.response_scope == ResponseScope::kAllPixels &&
+      !options.inverse_response.IsIdentity()) {
+    return FeaturesOfLinearisedFrame(image, bit_depth, options);
+  }
+  IRDIST_CHECK(image.rows >= options.window_side_px && image.cols >= options.window_side_px,
+               "image smaller than the ROI window");
+  Features out;
+  out.bit_depth = bit_depth;
+  const double max_gray = static_cast<double>((1 << bit_depth) - 1);
+  // 1. Coarse detection; 2. the centroid at full resolution.
+  BlobLocation at;
+  const bool detected = DetectCoarse(image, max_gray, options, &at);
+  out.background = at.background / max_gray;
+  if (!detected || !LocateCentroid(image, options, &at)) return out;  // no blob
+  out.blob_found = true;
+  out.peak = at.peak / max_gray;
+  out.centroid_px = cv::Point2d(at.cx, at.cy);
+  // 3-7. Borders, ROI statistics, ellipses, theta0.
+  MeasureBlob(image, max_gray, at, options, &out);
   return out;
 }
 

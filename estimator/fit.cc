@@ -2,10 +2,13 @@
 
 #include <ceres/ceres.h>
 
+#include <boost/math/tools/minima.hpp>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <memory>
@@ -346,171 +349,218 @@ ModelScaling ChooseScaling(const std::vector<CalibrationSample>& samples) {
   return s;
 }
 
-FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<CalibrationSample>& samples,
-                     const ModelScaling& scaling, const FitOptions& options) {
-  std::string why;
-  IRDIST_CHECK(options.IsValid(&why), why);
-  const ModelSpec& spec = GetModelSpec(kind);
-  FittedModel model;
-  model.kind = kind;
-  model.form = form;
-  const std::vector<Observation> obs = MakeObservations(kind, samples, scaling, options);
+namespace {
+
+// A linear start of the LM: its relative cost, sigma (deg) and coefficients.
+struct Start {
+  double cost;
+  double sigma;
+  std::vector<double> c;
+};
+
+// What FitModel fits: the observations of one model in one form, its active terms, and whether
+// sigma is free (the calibration spans more than one theta).
+struct FitInput {
+  const ModelSpec* spec;
+  ModelForm form;
+  std::vector<Observation> obs;
   std::vector<int> active;
-  for (int j = 0; j < spec.num_coefficients(); ++j) {
-    if (IsTermActive(spec, form, j)) active.push_back(j);
+  bool sigma_free;
+};
+
+FitInput MakeFitInput(ModelKind kind, ModelForm form, const std::vector<CalibrationSample>& samples,
+                      const ModelScaling& scaling, const FitOptions& options) {
+  FitInput in{&GetModelSpec(kind), form, MakeObservations(kind, samples, scaling, options), {},
+              false};
+  for (int j = 0; j < in.spec->num_coefficients(); ++j) {
+    if (IsTermActive(*in.spec, form, j)) in.active.push_back(j);
   }
-  IRDIST_CHECK(obs.size() > active.size(), ToString(kind), ": ", obs.size(),
-               " usable observations for ", active.size() + 1, " unknowns");
-  for (const Observation& o : obs) {
+  IRDIST_CHECK(in.obs.size() > in.active.size(), ToString(kind), ": ", in.obs.size(),
+               " usable observations for ", in.active.size() + 1, " unknowns");
+  double theta_min = in.obs.front().theta_deg, theta_max = theta_min;
+  for (const Observation& o : in.obs) {
     IRDIST_CHECK(o.y != 0.0 && std::isfinite(o.y), ToString(kind),
                  ": a target of 0 makes the relative residual undefined");
-  }
-  double theta_min = obs.front().theta_deg, theta_max = theta_min;
-  for (const Observation& o : obs) {
     theta_min = std::min(theta_min, o.theta_deg);
     theta_max = std::max(theta_max, o.theta_deg);
   }
-  const bool sigma_free = theta_max - theta_min > 1e-9;
+  in.sigma_free = theta_max - theta_min > 1e-9;
+  return in;
+}
 
-  // 1. Linear starts on the sigma scan.
-  struct Start {
-    double cost;
-    double sigma;
-    std::vector<double> c;
-  };
+Start StartAt(const FitInput& in, double sigma) {
+  std::vector<double> c = LinearStart(*in.spec, in.active, sigma, in.obs);
+  const double cost = RelativeCost(*in.spec, c, sigma, in.obs, nullptr);
+  return Start{cost, sigma, std::move(c)};
+}
+
+// Linear starts on the sigma scan (geometric steps), best first.
+std::vector<Start> ScanStarts(const FitInput& in, const FitOptions& options) {
   std::vector<Start> starts;
-  const int steps = sigma_free ? options.sigma_scan_steps : 1;
+  const int steps = in.sigma_free ? options.sigma_scan_steps : 1;
   for (int k = 0; k < steps; ++k) {
     const double sigma =
         steps == 1 ? options.sigma_max_deg
                    : options.sigma_min_deg *
                          std::pow(options.sigma_max_deg / options.sigma_min_deg, k / (steps - 1.0));
-    std::vector<double> c = LinearStart(spec, active, sigma, obs);
-    starts.push_back({RelativeCost(spec, c, sigma, obs, nullptr), sigma, std::move(c)});
+    starts.push_back(StartAt(in, sigma));
   }
   std::sort(starts.begin(), starts.end(),
             [](const Start& a, const Start& b) { return a.cost < b.cost; });
-  if (sigma_free) {
-    // Golden-section refinement of the best scan sigma (between its scan neighbours) on the cost
-    // of the linear start: the LM then starts next to the minimum.
-    const double ratio = std::pow(options.sigma_max_deg / options.sigma_min_deg,
-                                  1.0 / (options.sigma_scan_steps - 1.0));
-    double lo = std::log(starts[0].sigma / ratio), hi = std::log(starts[0].sigma * ratio);
-    auto cost_at = [&](double log_sigma) {
-      const double sigma = std::exp(log_sigma);
-      return RelativeCost(spec, LinearStart(spec, active, sigma, obs), sigma, obs, nullptr);
-    };
-    const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
-    double f1 = cost_at(x1), f2 = cost_at(x2);
-    for (int k = 0; k < 24; ++k) {
-      if (f1 < f2) {
-        hi = x2;
-        x2 = x1;
-        f2 = f1;
-        x1 = hi - g * (hi - lo);
-        f1 = cost_at(x1);
-      } else {
-        lo = x1;
-        x1 = x2;
-        f1 = f2;
-        x2 = lo + g * (hi - lo);
-        f2 = cost_at(x2);
-      }
-    }
-    const double sigma = std::exp(0.5 * (lo + hi));
-    std::vector<double> c = LinearStart(spec, active, sigma, obs);
-    const double cost = RelativeCost(spec, c, sigma, obs, nullptr);
-    starts.insert(starts.begin(), Start{cost, sigma, std::move(c)});
-  }
+  return starts;
+}
 
+// The minimum in ln sigma of the linear start's cost between the best scan sigma's neighbours,
+// by Brent's method (boost::math::tools::brent_find_minima) to half the double's bits: the LM
+// then starts next to the minimum.
+Start RefineScanSigma(const FitInput& in, const FitOptions& options, double best_sigma) {
+  const double ratio = std::pow(options.sigma_max_deg / options.sigma_min_deg,
+                                1.0 / (options.sigma_scan_steps - 1.0));
+  auto cost_at = [&in](double log_sigma) {
+    const double sigma = std::exp(log_sigma);
+    return RelativeCost(*in.spec, LinearStart(*in.spec, in.active, sigma, in.obs), sigma, in.obs,
+                        nullptr);
+  };
+  std::uintmax_t max_iterations = 100;
+  const std::pair<double, double> minimum = boost::math::tools::brent_find_minima(
+      cost_at, std::log(best_sigma / ratio), std::log(best_sigma * ratio),
+      std::numeric_limits<double>::digits / 2, max_iterations);
+  return StartAt(in, std::exp(minimum.first));
+}
+
+// Ratio models: divides c by its largest active denominator coefficient, which the LM then holds
+// at 1 (the gauge). Returns its index, -1 without a denominator, -2 when no active one is nonzero.
+int FixGauge(const ModelSpec& spec, ModelForm form, std::vector<double>* c) {
+  if (!spec.has_denominator()) return -1;
+  int gauge = -2;
+  double biggest = 0.0;
+  for (int j = spec.num_numerator; j < spec.num_coefficients(); ++j) {
+    if (IsTermActive(spec, form, j) && std::abs((*c)[j]) > biggest) {
+      biggest = std::abs((*c)[j]);
+      gauge = j;
+    }
+  }
+  if (gauge < 0) return gauge;
+  const double g = (*c)[gauge];
+  for (double& v : *c) v /= g;
+  return gauge;
+}
+
+// The relative-residual problem on (c, sigma): the gauge and inactive terms held, sigma bounded
+// (or held when the calibration has one theta only).
+void BuildFitProblem(const FitInput& in, const FitOptions& options, int gauge,
+                     std::vector<double>* c, double* sigma, ceres::Problem* problem) {
+  const ModelSpec& spec = *in.spec;
+  for (const Observation& o : in.obs) {
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<RelativeResidual, 8>(
+        new RelativeResidual{&spec, o});
+    cost->AddParameterBlock(spec.num_coefficients());
+    cost->AddParameterBlock(1);
+    cost->SetNumResiduals(1);
+    problem->AddResidualBlock(cost, nullptr, c->data(), sigma);
+  }
+  std::vector<int> constant;
+  for (int j = 0; j < spec.num_coefficients(); ++j) {
+    if (j == gauge || !IsTermActive(spec, in.form, j)) constant.push_back(j);
+  }
+  if (!constant.empty()) {
+    problem->SetManifold(c->data(), new ceres::SubsetManifold(spec.num_coefficients(), constant));
+  }
+  if (in.sigma_free) {
+    problem->SetParameterLowerBound(sigma, 0, 0.5);
+    // Bounded above by the scan's end: where the model barely depends on sigma it would
+    // otherwise drift for the whole iteration budget (no_convergence at 1000 iterations).
+    problem->SetParameterUpperBound(sigma, 0, options.sigma_max_deg);
+  } else {
+    problem->SetParameterBlockConstant(sigma);
+  }
+}
+
+ceres::Solver::Options FitSolverOptions(const FitOptions& options) {
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.max_num_iterations = options.max_iterations;
+  solver.function_tolerance = options.function_tolerance;
+  solver.gradient_tolerance = options.gradient_tolerance;
+  solver.parameter_tolerance = options.parameter_tolerance;
+  solver.num_threads = 1;
+  solver.logging_type = ceres::SILENT;
+  return solver;
+}
+
+FitSummary::Termination TerminationOf(const ceres::Solver::Summary& summary) {
+  return summary.termination_type == ceres::CONVERGENCE      ? FitSummary::Termination::kConverged
+         : summary.termination_type == ceres::NO_CONVERGENCE ? FitSummary::Termination::kNoConvergence
+                                                             : FitSummary::Termination::kFailed;
+}
+
+// The summary of a refined start (number `index` of `count`) except residuals and errors.
+void SummariseRefinement(const FitInput& in, const FitOptions& options,
+                         const ceres::Solver::Summary& summary, const Start& start, int index,
+                         int count, FittedModel* model) {
+  FitSummary& fs = model->summary;
+  fs.termination = TerminationOf(summary);
+  fs.message = "start " + std::to_string(index + 1) + " of " + std::to_string(count) +
+               " from sigma " + std::to_string(start.sigma) + " deg";
+  if (in.sigma_free && model->sigma_deg >= options.sigma_max_deg * (1.0 - 1e-6)) {
+    // The I0-free ratios barely see the emission pattern (I0 rho cancels): sigma drifts along
+    // a flat direction until the bound stops it. The fit error does not depend on it.
+    fs.message += "; sigma at its upper bound (" + std::to_string(options.sigma_max_deg) +
+                  " deg): the model barely depends on it";
+  }
+  fs.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  fs.samples = static_cast<int>(in.obs.size());
+}
+
+// LM (Ceres) from one start; replaces *best when its cost is lower than *best_cost.
+void RefineStart(const FitInput& in, const FitOptions& options, const Start& start, int index,
+                 int count, double* best_cost, FittedModel* best) {
+  std::vector<double> c = start.c;
+  double sigma = start.sigma;
+  const int gauge = FixGauge(*in.spec, in.form, &c);
+  if (gauge == -2) return;
+  ceres::Problem problem;
+  BuildFitProblem(in, options, gauge, &c, &sigma, &problem);
+  ceres::Solver::Summary summary;
+  ceres::Solve(FitSolverOptions(options), &problem, &summary);
+  const double cost = RelativeCost(*in.spec, c, sigma, in.obs, nullptr);
+  if (!(cost < *best_cost)) return;
+  *best_cost = cost;
+  best->coefficients = c;
+  best->sigma_deg = sigma;
+  SummariseRefinement(in, options, summary, start, index, count, best);
+  best->summary.gauge_index = gauge;
+  std::vector<double*> free_blocks{c.data()};
+  if (in.sigma_free) free_blocks.push_back(&sigma);
+  ApplyConditioning(
+      ConditioningOf(&problem, free_blocks,
+                     FreeParameterNames(*in.spec, in.form, gauge, in.sigma_free)),
+      &best->summary);
+}
+
+}  // namespace
+
+FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<CalibrationSample>& samples,
+                     const ModelScaling& scaling, const FitOptions& options) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), why);
+  const FitInput in = MakeFitInput(kind, form, samples, scaling, options);
+  FittedModel model;
+  model.kind = kind;
+  model.form = form;
+  // 1. Linear starts on the sigma scan, the refined best first.
+  std::vector<Start> starts = ScanStarts(in, options);
+  if (in.sigma_free) starts.insert(starts.begin(), RefineScanSigma(in, options, starts[0].sigma));
   // 2. LM from the best starts.
   double best_cost = std::numeric_limits<double>::infinity();
-  for (int s = 0; s < std::min<int>(options.multi_starts, starts.size()); ++s) {
-    std::vector<double> c = starts[s].c;
-    double sigma = starts[s].sigma;
-    int gauge = -1;
-    if (spec.has_denominator()) {
-      double biggest = 0.0;
-      for (int j = spec.num_numerator; j < spec.num_coefficients(); ++j) {
-        if (IsTermActive(spec, form, j) && std::abs(c[j]) > biggest) {
-          biggest = std::abs(c[j]);
-          gauge = j;
-        }
-      }
-      if (gauge < 0) continue;
-      const double g = c[gauge];
-      for (double& v : c) v /= g;
-    }
-    ceres::Problem problem;
-    for (const Observation& o : obs) {
-      auto* cost = new ceres::DynamicAutoDiffCostFunction<RelativeResidual, 8>(
-          new RelativeResidual{&spec, o});
-      cost->AddParameterBlock(spec.num_coefficients());
-      cost->AddParameterBlock(1);
-      cost->SetNumResiduals(1);
-      problem.AddResidualBlock(cost, nullptr, c.data(), &sigma);
-    }
-    std::vector<int> constant;
-    for (int j = 0; j < spec.num_coefficients(); ++j) {
-      if (j == gauge || !IsTermActive(spec, form, j)) constant.push_back(j);
-    }
-    if (!constant.empty()) {
-      problem.SetManifold(c.data(), new ceres::SubsetManifold(spec.num_coefficients(), constant));
-    }
-    if (sigma_free) {
-      problem.SetParameterLowerBound(&sigma, 0, 0.5);
-      // Bounded above by the scan's end: where the model barely depends on sigma it would
-      // otherwise drift for the whole iteration budget (no_convergence at 1000 iterations).
-      problem.SetParameterUpperBound(&sigma, 0, options.sigma_max_deg);
-    } else {
-      problem.SetParameterBlockConstant(&sigma);
-    }
-    ceres::Solver::Options solver;
-    solver.linear_solver_type = ceres::DENSE_QR;
-    solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    solver.max_num_iterations = options.max_iterations;
-    solver.function_tolerance = options.function_tolerance;
-    solver.gradient_tolerance = options.gradient_tolerance;
-    solver.parameter_tolerance = options.parameter_tolerance;
-    solver.num_threads = 1;
-    solver.logging_type = ceres::SILENT;
-    ceres::Solver::Summary summary;
-    ceres::Solve(solver, &problem, &summary);
-    const double cost = RelativeCost(spec, c, sigma, obs, nullptr);
-    if (!(cost < best_cost)) continue;
-    best_cost = cost;
-    model.coefficients = c;
-    model.sigma_deg = sigma;
-    FitSummary& fs = model.summary;
-    fs.termination = summary.termination_type == ceres::CONVERGENCE
-                         ? FitSummary::Termination::kConverged
-                     : summary.termination_type == ceres::NO_CONVERGENCE
-                         ? FitSummary::Termination::kNoConvergence
-                         : FitSummary::Termination::kFailed;
-    fs.message = "start " + std::to_string(s + 1) + " of " +
-                 std::to_string(std::min<int>(options.multi_starts, starts.size())) +
-                 " from sigma " + std::to_string(starts[s].sigma) + " deg";
-    if (sigma_free && sigma >= options.sigma_max_deg * (1.0 - 1e-6)) {
-      // The I0-free ratios barely see the emission pattern (I0 rho cancels): sigma drifts along
-      // a flat direction until the bound stops it. The fit error does not depend on it.
-      fs.message += "; sigma at its upper bound (" + std::to_string(options.sigma_max_deg) +
-                    " deg): the model barely depends on it";
-    }
-    fs.iterations = static_cast<int>(summary.iterations.size()) - 1;
-    fs.gauge_index = gauge;
-    fs.samples = static_cast<int>(obs.size());
-    std::vector<double*> free_blocks{c.data()};
-    if (sigma_free) free_blocks.push_back(&sigma);
-    ApplyConditioning(
-        ConditioningOf(&problem, free_blocks, FreeParameterNames(spec, form, gauge, sigma_free)),
-        &fs);
-  }
+  const int count = std::min<int>(options.multi_starts, starts.size());
+  for (int s = 0; s < count; ++s) RefineStart(in, options, starts[s], s, count, &best_cost, &model);
   if (model.coefficients.empty()) {
     model.summary.message = "no start could be refined";
     return model;
   }
-  RelativeCost(spec, model.coefficients, model.sigma_deg, obs, &model.summary.residuals);
+  RelativeCost(*in.spec, model.coefficients, model.sigma_deg, in.obs, &model.summary.residuals);
   FillErrors(&model.summary);
   if (kind == ModelKind::kDirectE || kind == ModelKind::kDiffE || kind == ModelKind::kFreeE) {
     model.degenerate = EProportionalToF(kind, samples, scaling, options);

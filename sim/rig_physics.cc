@@ -3,9 +3,11 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
-#include <functional>
-#include <map>
-#include <sstream>
+#include <cstdint>
+#include <string>
+
+#include "base/input_error.h"
+#include "base/yaml_fields.h"
 
 namespace irdist::sim {
 namespace {
@@ -17,73 +19,6 @@ bool Fail(std::string* why, const std::string& message) {
 
 bool Positive(double value) { return std::isfinite(value) && value > 0.0; }
 bool Fraction(double value) { return std::isfinite(value) && value >= 0.0 && value <= 1.0; }
-
-class SectionReader {
- public:
-  using Setter = std::function<void(const YAML::Node&, const std::string& key)>;
-
-  SectionReader(std::string path, std::string section) : path_(std::move(path)),
-                                                         section_(std::move(section)) {}
-
-  std::string Where(const YAML::Node& node) const {
-    std::ostringstream out;
-    out << path_;
-    if (!node.Mark().is_null()) out << ":" << node.Mark().line + 1;
-    return out.str();
-  }
-  [[noreturn]] void Throw(const YAML::Node& node, const std::string& message) const {
-    throw RigFileError(Where(node) + ": " + section_ + ": " + message);
-  }
-
-  template <typename T>
-  Setter Scalar(T* target) const {
-    return [this, target](const YAML::Node& node, const std::string& key) {
-      if (!node.IsScalar()) Throw(node, key + ": expected a scalar value");
-      try {
-        *target = node.as<T>();
-      } catch (const YAML::Exception&) {
-        Throw(node, key + ": cannot read '" + node.Scalar() + "' as a number or flag");
-      }
-    };
-  }
-  Setter String(std::string* target) const {
-    return [this, target](const YAML::Node& node, const std::string& key) {
-      if (!node.IsScalar()) Throw(node, key + ": expected a string");
-      *target = node.Scalar();
-    };
-  }
-
-  // Applies every key of `node` through `setters`; unknown keys are errors (except `skip`).
-  void Read(const YAML::Node& node, const std::map<std::string, Setter>& setters,
-            const std::string& skip = "") const {
-    if (!node.IsMap()) Throw(node, "expected a map of keys");
-    for (const auto& item : node) {
-      const std::string key = item.first.as<std::string>();
-      if (!skip.empty() && key == skip) continue;
-      const auto it = setters.find(key);
-      if (it == setters.end()) {
-        std::string known;
-        for (const auto& [name, unused] : setters) known += (known.empty() ? "" : ", ") + name;
-        Throw(item.first, "unknown key '" + key + "' (known keys: " + known + ")");
-      }
-      try {
-        it->second(item.second, key);
-      } catch (const RigFileError&) {
-        throw;
-      } catch (const std::exception& e) {
-        Throw(item.second, "bad value for '" + key + "': " + e.what());
-      }
-    }
-  }
-
-  SectionReader Sub(const std::string& name) const {
-    return SectionReader(path_, section_ + "." + name);
-  }
-
- private:
-  std::string path_;
-  std::string section_;
-};
 
 }  // namespace
 
@@ -212,111 +147,145 @@ bool RigPhysics::IsValid(std::string* why) const {
          camera.IsValid(why);
 }
 
-RigPhysics LoadRigPhysics(const std::string& rig_path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(rig_path);
-  } catch (const YAML::BadFile&) {
-    throw RigFileError(rig_path + ": cannot open the rig file; check the path (e.g. "
-                       "recipes/rigs/virtual.yaml)");
-  } catch (const YAML::Exception& e) {
-    throw RigFileError(rig_path + ":" + std::to_string(e.mark.line + 1) +
-                       ": not valid YAML: " + e.msg);
+namespace {
+
+using yaml_fields::MapReader;
+
+// The `seed` key: a whole number in [0, 2^64).
+std::uint64_t ReadSeed(const MapReader& keys, const std::string& key, std::uint64_t fallback) {
+  if (!keys.Has(key)) return fallback;
+  const YAML::Node node = keys.Get(key);
+  std::uint64_t value = 0;
+  if (!node.IsScalar() || node.Scalar().find('-') != std::string::npos ||
+      !YAML::convert<std::uint64_t>::decode(node, value)) {
+    yaml_fields::Fail(keys.File(), node.Mark(), key + " must be a whole number >= 0");
   }
+  return value;
+}
+
+EmissionPattern ReadPattern(const MapReader& keys, EmissionPattern fallback) {
+  if (!keys.Has("pattern")) return fallback;
+  const YAML::Node node = keys.Get("pattern");
+  const std::string name = yaml_fields::AsString(node, keys.File(), "virtual.emitter.pattern");
+  if (name == "gaussian") return EmissionPattern::kGaussian;
+  if (name == "cos_power") return EmissionPattern::kCosPower;
+  yaml_fields::Fail(keys.File(), node.Mark(),
+                    "virtual.emitter.pattern must be 'gaussian' or 'cos_power', not '" + name + "'");
+}
+
+void ReadEmitter(const YAML::Node& node, const std::string& file, EmitterOptions* e) {
+  const MapReader k(node, file, "virtual.emitter",
+                    {"diameter_mm", "threshold_ma", "slope_mw_sr_per_ma", "sublinear_per_ma",
+                     "pattern", "pattern_sigma_deg", "pattern_cos_power", "wavelength_nm",
+                     "temp_coeff_per_k", "ambient_c", "forward_voltage_v",
+                     "thermal_resistance_k_per_w", "thermal_time_constant_s", "offset_x_mm",
+                     "offset_y_mm"});
+  e->diameter_mm = k.Number("diameter_mm", e->diameter_mm);
+  e->threshold_ma = k.Number("threshold_ma", e->threshold_ma);
+  e->slope_mw_sr_per_ma = k.Number("slope_mw_sr_per_ma", e->slope_mw_sr_per_ma);
+  e->sublinear_per_ma = k.Number("sublinear_per_ma", e->sublinear_per_ma);
+  e->pattern = ReadPattern(k, e->pattern);
+  e->pattern_sigma_deg = k.Number("pattern_sigma_deg", e->pattern_sigma_deg);
+  e->pattern_cos_power = k.Number("pattern_cos_power", e->pattern_cos_power);
+  e->wavelength_nm = k.Number("wavelength_nm", e->wavelength_nm);
+  e->temp_coeff_per_k = k.Number("temp_coeff_per_k", e->temp_coeff_per_k);
+  e->ambient_c = k.Number("ambient_c", e->ambient_c);
+  e->forward_voltage_v = k.Number("forward_voltage_v", e->forward_voltage_v);
+  e->thermal_resistance_k_per_w =
+      k.Number("thermal_resistance_k_per_w", e->thermal_resistance_k_per_w);
+  e->thermal_time_constant_s = k.Number("thermal_time_constant_s", e->thermal_time_constant_s);
+  e->offset_x_mm = k.Number("offset_x_mm", e->offset_x_mm);
+  e->offset_y_mm = k.Number("offset_y_mm", e->offset_y_mm);
+}
+
+void ReadOptics(const YAML::Node& node, const std::string& file, OpticsOptions* o) {
+  const MapReader k(node, file, "virtual.optics",
+                    {"focal_length_mm", "f_number", "lens_transmission", "filter_transmission",
+                     "psf_sigma_px", "focus_mm", "vignetting", "supersample"});
+  o->focal_length_mm = k.Number("focal_length_mm", o->focal_length_mm);
+  o->f_number = k.Number("f_number", o->f_number);
+  o->lens_transmission = k.Number("lens_transmission", o->lens_transmission);
+  o->filter_transmission = k.Number("filter_transmission", o->filter_transmission);
+  o->psf_sigma_px = k.Number("psf_sigma_px", o->psf_sigma_px);
+  o->focus_mm = k.Number("focus_mm", o->focus_mm);
+  o->vignetting = k.Boolean("vignetting", o->vignetting);
+  o->supersample = k.Integer("supersample", o->supersample);
+}
+
+void ReadSensor(const YAML::Node& node, const std::string& file, SensorOptions* s) {
+  const MapReader k(node, file, "virtual.sensor",
+                    {"width_px", "height_px", "pixel_pitch_um", "quantum_efficiency",
+                     "full_well_e", "system_gain_dn_per_e", "read_noise_e",
+                     "dark_current_e_per_s", "black_level_dn", "adc_bits", "nonlinearity",
+                     "background_e_per_s", "temperature_c", "prnu_percent", "dsnu_e"});
+  s->width_px = k.Integer("width_px", s->width_px);
+  s->height_px = k.Integer("height_px", s->height_px);
+  s->pixel_pitch_um = k.Number("pixel_pitch_um", s->pixel_pitch_um);
+  s->quantum_efficiency = k.Number("quantum_efficiency", s->quantum_efficiency);
+  s->full_well_e = k.Number("full_well_e", s->full_well_e);
+  s->system_gain_dn_per_e = k.Number("system_gain_dn_per_e", s->system_gain_dn_per_e);
+  s->read_noise_e = k.Number("read_noise_e", s->read_noise_e);
+  s->dark_current_e_per_s = k.Number("dark_current_e_per_s", s->dark_current_e_per_s);
+  s->black_level_dn = k.Number("black_level_dn", s->black_level_dn);
+  s->adc_bits = k.Integer("adc_bits", s->adc_bits);
+  s->nonlinearity = k.Number("nonlinearity", s->nonlinearity);
+  s->background_e_per_s = k.Number("background_e_per_s", s->background_e_per_s);
+  s->temperature_c = k.Number("temperature_c", s->temperature_c);
+  s->prnu_percent = k.Number("prnu_percent", s->prnu_percent);
+  s->dsnu_e = k.Number("dsnu_e", s->dsnu_e);
+}
+
+void ReadCamera(const YAML::Node& node, const std::string& file, CameraOptions* c) {
+  const MapReader k(node, file, "virtual.camera",
+                    {"readout_ms", "trigger_frequency_hz", "drop_frame_rate",
+                     "lost_packet_ratio", "exposure_write_delay_ms"});
+  c->readout_ms = k.Number("readout_ms", c->readout_ms);
+  c->trigger_frequency_hz = k.Number("trigger_frequency_hz", c->trigger_frequency_hz);
+  c->drop_frame_rate = k.Number("drop_frame_rate", c->drop_frame_rate);
+  c->lost_packet_ratio = k.Number("lost_packet_ratio", c->lost_packet_ratio);
+  c->exposure_write_delay_ms = k.Number("exposure_write_delay_ms", c->exposure_write_delay_ms);
+}
+
+// The `virtual:` section. `devices` (the device emulators', sim/line_device.cc) and `station`
+// (the station emulator's, LoadEmulatorOptions) are skipped here: their owners read them strictly.
+RigPhysics ReadVirtualSection(const YAML::Node& section, const std::string& file) {
   RigPhysics physics;
-  const YAML::Node section = root.IsMap() ? root["virtual"] : YAML::Node();
-  if (!section || section.IsNull()) return physics;
-
-  SectionReader top(rig_path, "virtual");
-  SectionReader em = top.Sub("emitter");
-  SectionReader op = top.Sub("optics");
-  SectionReader se = top.Sub("sensor");
-  SectionReader ca = top.Sub("camera");
-  EmitterOptions& e = physics.emitter;
-  OpticsOptions& o = physics.optics;
-  SensorOptions& s = physics.sensor;
-  CameraOptions& c = physics.camera;
-
-  const std::map<std::string, SectionReader::Setter> emitter_keys = {
-      {"diameter_mm", em.Scalar(&e.diameter_mm)},
-      {"threshold_ma", em.Scalar(&e.threshold_ma)},
-      {"slope_mw_sr_per_ma", em.Scalar(&e.slope_mw_sr_per_ma)},
-      {"sublinear_per_ma", em.Scalar(&e.sublinear_per_ma)},
-      {"pattern",
-       [&em, &e](const YAML::Node& node, const std::string&) {
-         const std::string name = node.IsScalar() ? node.Scalar() : "";
-         if (name == "gaussian") {
-           e.pattern = EmissionPattern::kGaussian;
-         } else if (name == "cos_power") {
-           e.pattern = EmissionPattern::kCosPower;
-         } else {
-           em.Throw(node, "pattern must be 'gaussian' or 'cos_power', not '" + name + "'");
-         }
-       }},
-      {"pattern_sigma_deg", em.Scalar(&e.pattern_sigma_deg)},
-      {"pattern_cos_power", em.Scalar(&e.pattern_cos_power)},
-      {"wavelength_nm", em.Scalar(&e.wavelength_nm)},
-      {"temp_coeff_per_k", em.Scalar(&e.temp_coeff_per_k)},
-      {"ambient_c", em.Scalar(&e.ambient_c)},
-      {"forward_voltage_v", em.Scalar(&e.forward_voltage_v)},
-      {"thermal_resistance_k_per_w", em.Scalar(&e.thermal_resistance_k_per_w)},
-      {"thermal_time_constant_s", em.Scalar(&e.thermal_time_constant_s)},
-      {"offset_x_mm", em.Scalar(&e.offset_x_mm)},
-      {"offset_y_mm", em.Scalar(&e.offset_y_mm)},
-  };
-  const std::map<std::string, SectionReader::Setter> optics_keys = {
-      {"focal_length_mm", op.Scalar(&o.focal_length_mm)},
-      {"f_number", op.Scalar(&o.f_number)},
-      {"lens_transmission", op.Scalar(&o.lens_transmission)},
-      {"filter_transmission", op.Scalar(&o.filter_transmission)},
-      {"psf_sigma_px", op.Scalar(&o.psf_sigma_px)},
-      {"focus_mm", op.Scalar(&o.focus_mm)},
-      {"vignetting", op.Scalar(&o.vignetting)},
-      {"supersample", op.Scalar(&o.supersample)},
-  };
-  const std::map<std::string, SectionReader::Setter> sensor_keys = {
-      {"width_px", se.Scalar(&s.width_px)},
-      {"height_px", se.Scalar(&s.height_px)},
-      {"pixel_pitch_um", se.Scalar(&s.pixel_pitch_um)},
-      {"quantum_efficiency", se.Scalar(&s.quantum_efficiency)},
-      {"full_well_e", se.Scalar(&s.full_well_e)},
-      {"system_gain_dn_per_e", se.Scalar(&s.system_gain_dn_per_e)},
-      {"read_noise_e", se.Scalar(&s.read_noise_e)},
-      {"dark_current_e_per_s", se.Scalar(&s.dark_current_e_per_s)},
-      {"black_level_dn", se.Scalar(&s.black_level_dn)},
-      {"adc_bits", se.Scalar(&s.adc_bits)},
-      {"nonlinearity", se.Scalar(&s.nonlinearity)},
-      {"background_e_per_s", se.Scalar(&s.background_e_per_s)},
-      {"temperature_c", se.Scalar(&s.temperature_c)},
-      {"prnu_percent", se.Scalar(&s.prnu_percent)},
-      {"dsnu_e", se.Scalar(&s.dsnu_e)},
-  };
-  const std::map<std::string, SectionReader::Setter> camera_keys = {
-      {"readout_ms", ca.Scalar(&c.readout_ms)},
-      {"trigger_frequency_hz", ca.Scalar(&c.trigger_frequency_hz)},
-      {"drop_frame_rate", ca.Scalar(&c.drop_frame_rate)},
-      {"lost_packet_ratio", ca.Scalar(&c.lost_packet_ratio)},
-      {"exposure_write_delay_ms", ca.Scalar(&c.exposure_write_delay_ms)},
-  };
-  const std::map<std::string, SectionReader::Setter> top_keys = {
-      {"time_scale", top.Scalar(&physics.time_scale)},
-      {"seed", top.Scalar(&s.seed)},
-      {"serial", top.String(&c.serial)},
-      {"emitter", [&](const YAML::Node& node, const std::string&) { em.Read(node, emitter_keys); }},
-      {"optics", [&](const YAML::Node& node, const std::string&) { op.Read(node, optics_keys); }},
-      {"sensor", [&](const YAML::Node& node, const std::string&) { se.Read(node, sensor_keys); }},
-      {"camera", [&](const YAML::Node& node, const std::string&) { ca.Read(node, camera_keys); }},
-      // The device emulators' own entries, read strictly by each emulator (sim/line_device.cc).
-      {"devices", [](const YAML::Node&, const std::string&) {}},
-  };
-  top.Read(section, top_keys, "station");
-
+  const MapReader k(section, file, "virtual",
+                    {"time_scale", "seed", "serial", "emitter", "optics", "sensor", "camera",
+                     "devices", "station"});
+  physics.time_scale = k.Number("time_scale", physics.time_scale);
+  physics.sensor.seed = ReadSeed(k, "seed", physics.sensor.seed);
+  physics.camera.serial = k.String("serial", physics.camera.serial);
+  if (k.Has("emitter")) ReadEmitter(k.Get("emitter"), file, &physics.emitter);
+  if (k.Has("optics")) ReadOptics(k.Get("optics"), file, &physics.optics);
+  if (k.Has("sensor")) ReadSensor(k.Get("sensor"), file, &physics.sensor);
+  if (k.Has("camera")) ReadCamera(k.Get("camera"), file, &physics.camera);
   std::string why;
   if (!physics.IsValid(&why)) {
-    throw RigFileError(top.Where(section) + ": virtual: " + why +
-                       "; fix the value in the rig file (docs/virtual-rig.md lists the ranges)");
+    yaml_fields::Fail(file, section.Mark(),
+                      "virtual: " + why +
+                          "; fix the value in the rig file (docs/virtual-rig.md lists the ranges)");
   }
   return physics;
+}
+
+RigPhysics ReadRigPhysics(const std::string& rig_path) {
+  const YAML::Node root = yaml_fields::Parse(yaml_fields::ReadFile(rig_path), rig_path);
+  const YAML::Node section = root.IsMap() ? root["virtual"] : YAML::Node();
+  if (!section || section.IsNull()) return RigPhysics();
+  return ReadVirtualSection(section, rig_path);
+}
+
+}  // namespace
+
+RigPhysics LoadRigPhysics(const std::string& rig_path) {
+  try {
+    return ReadRigPhysics(rig_path);
+  } catch (const RigFileError&) {
+    throw;
+  } catch (const InputError& e) {
+    throw RigFileError(e.File(), e.Line(), e.Column(), e.Message());
+  }
 }
 
 }  // namespace irdist::sim

@@ -8,14 +8,15 @@
 #include <string>
 
 #include "base/check.h"
+#include "base/input_error.h"
 
 namespace irdist::sim {
 
-// A rig file that cannot be read or holds a bad `virtual:` key or value. The message names the
-// file and line and says what to change.
-class RigFileError : public Error {
+// A rig file that cannot be read or holds a bad `virtual:` key or value: an InputError naming the
+// file and line and saying what to change.
+class RigFileError : public InputError {
  public:
-  using Error::Error;
+  using InputError::InputError;
 };
 
 enum class EmissionPattern {

@@ -203,6 +203,22 @@ TEST(Estimate, CalibratedThetaCorrectionFormsTheta0) {
   EXPECT_FALSE(PaperEstimateOptions().theta_correction);
 }
 
+TEST(Estimate, ConvergedOnlyWhenTheSolverStoppedOnATolerance) {
+  const testing::SyntheticRig rig;
+  const CalibrationModel model = rig.ExactModel();
+  const Bracket b = MakeBracket(rig, 500.0, 2300.0, 20.0, 26.0);
+  EstimateOptions options = PaperEstimateOptions();
+  const BracketEstimate full =
+      EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, options);
+  EXPECT_TRUE(full.per_exposure[0].converged) << full.BriefReport();
+  EXPECT_NEAR(full.per_exposure[0].d_mm, 2300.0, 1e-6 * 2300.0);
+  options.max_iterations = 1;  // one step from a start 6 degrees off cannot meet the tolerances
+  const BracketEstimate cut =
+      EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, options);
+  EXPECT_FALSE(cut.per_exposure[0].converged) << cut.BriefReport();
+  EXPECT_LE(cut.per_exposure[0].iterations, 1);
+}
+
 TEST(Estimate, BracketPreconditions) {
   const testing::SyntheticRig rig;
   const CalibrationModel model = rig.ExactModel();

@@ -124,6 +124,29 @@ TEST(RigPhysics, FixedPatternNoiseKeys) {
   ExpectError("virtual:\n  sensor:\n    prnu_percent: 50\n", "prnu", "", "prnu_percent");
 }
 
+TEST(RigPhysics, OwnersSubsectionsAreLeftToTheirOwners) {
+  // virtual.devices and virtual.station are read strictly by the emulators, not here.
+  const RigPhysics p = LoadRigPhysics(WriteRig(
+      "owners", "virtual:\n  devices:\n    anything: 1\n  station:\n    whatever: 2\n"
+                "  sensor:\n    adc_bits: 10\n"));
+  EXPECT_EQ(p.sensor.adc_bits, 10);
+}
+
+TEST(RigPhysics, ErrorsAreInputErrorsWithTheLine) {
+  const std::string path =
+      WriteRig("input_error", "virtual:\n  camera:\n    readout_ms: 3\n    readout_ms: 4\n");
+  try {
+    LoadRigPhysics(path);
+    ADD_FAILURE() << "a duplicate key was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.File(), path);
+    EXPECT_EQ(e.Line(), 4);
+    EXPECT_NE(e.Message().find("readout_ms"), std::string::npos) << e.what();
+  }
+  ExpectError("virtual:\n  sensor:\n    adc_bits: 10.5\n", "integer", "3", "adc_bits");
+  ExpectError("virtual:\n  seed: -3\n", "seed", "2", "seed");
+}
+
 TEST(RigPhysics, MissingFileIsATypedError) {
   EXPECT_THROW(LoadRigPhysics("/nonexistent/rig.yaml"), RigFileError);
 }
