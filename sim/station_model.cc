@@ -738,6 +738,7 @@ StationModel::~StationModel() = default;
 void StationModel::PowerOn(double now_s) {
   impl_->PowerUp(now_s);
   impl_->boot_done_s = now_s;  // the first power-up happened before anyone listened
+  impl_->Advance(now_s);       // out of BOOTING at once
 }
 std::string StationModel::Execute(const std::string& command, double now_s) {
   return impl_->Execute(command, now_s);

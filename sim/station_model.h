@@ -89,6 +89,7 @@ class StationModel {
   void PowerOn(double now_s);
   // Executes one unframed command ("MOVE 150000,0,0") at simulated time now_s and returns the
   // reply body ("OK ..." or "ERR <code>,\"<message>\""); a failed command also queues its error.
+  // Not to be called while Booting(): a booting station hears nothing (the link layer discards).
   std::string Execute(const std::string& command, double now_s);
   // Advances motion, settling, homing, booting, scheduled reboots, the link watchdog and the
   // trigger train to now_s (at most one trigger pulse per call).
