@@ -38,13 +38,13 @@ class CameraSoftwareTrigger : public Trigger {
 };
 
 // Commits a bracket's staged frames (PNGs already written) with their rows; returns their indices.
-std::vector<std::int64_t> CommitBracket(RecordingWriter& writer, const LivePose& pose,
+std::vector<std::int64_t> CommitBracket(RecordingWriter& writer, const Pose& pose,
                                         const BracketResult& bracket, double measured_ma) {
   const int size = static_cast<int>(bracket.frames.size());
   std::vector<FrameRecord> records;
   for (const BracketFrame& frame : bracket.frames) {
     FrameRecord record = RecordFromFrame(frame, size);
-    record.bracket_id = pose.bracket_id;
+    record.bracket_id = pose.index;
     record.bias_ma_set = pose.bias_ma;
     record.bias_ma_measured = measured_ma;
     record.slide_mm = pose.slide_mm;
@@ -72,7 +72,7 @@ struct LiveRecorder::Impl {
   int bit_depth = 16;
   // The last bracket captured, not yet appended.
   bool has_pending = false;
-  LivePose pending_pose;
+  Pose pending_pose;
   BracketResult pending;
   double pending_measured_ma = 0.0;
   std::future<void> committing;  // the commit in flight
@@ -172,7 +172,7 @@ LiveRecorder::~LiveRecorder() {
   if (impl_->committing.valid()) impl_->committing.wait();
 }
 
-void LiveRecorder::CaptureBracket(const LivePose& pose, const std::function<void(int)>& trigger,
+void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int)>& trigger,
                                   const std::function<double()>& measure_current_ma) {
   Impl& m = *impl_;
   m.DropStaged();  // frames of a bracket never committed
@@ -186,7 +186,7 @@ void LiveRecorder::CaptureBracket(const LivePose& pose, const std::function<void
   }
   if (!result.complete) {
     m.DropStaged();
-    throw CameraError("bracket " + std::to_string(pose.bracket_id) + " incomplete twice (" +
+    throw CameraError("bracket " + std::to_string(pose.index) + " incomplete twice (" +
                       result.failure + "; " + m.capture->stats().BriefReport() +
                       "). Check the trigger wiring (camera " + m.setup.trigger_source +
                       ") and the camera link, then resume the run.");

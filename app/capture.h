@@ -10,8 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "app/bracket_committer.h"
 #include "app/offline.h"
 #include "estimator/features.h"
+#include "station/pose.h"
 #include "station/trigger.h"
 
 namespace irdist {
@@ -38,13 +40,6 @@ struct LiveCaptureSetup {
   FeatureOptions feature_options;  // features of every frame, computed while it is in memory
 };
 
-// The pose a bracket belongs to, as the recording stores it.
-struct LivePose {
-  std::int64_t bracket_id = 0;
-  double slide_mm = 0.0, pan_deg = 0.0, tilt_deg = 0.0, theta_deg = 0.0, bias_ma = 0.0;
-  int repeat = 0;
-};
-
 // What is already in a recording: its recipe text, whether it is complete, its complete brackets.
 struct RecordingState {
   std::string recipe_text;
@@ -54,7 +49,7 @@ struct RecordingState {
 };
 RecordingState ReadRecordingState(const std::string& recording_dir);  // throws RecordingError
 
-class LiveRecorder {
+class LiveRecorder : public PendingBrackets {
  public:
   // Opens and configures the camera, opens (or resumes) the recording. Throws CameraError,
   // RecordingError.
@@ -71,20 +66,20 @@ class LiveRecorder {
   // retakes the pose) and confirms the pose before anything moves again; app/run.cc commits
   // there. A pending bracket is replaced by the next capture. Throws CameraError when it stays
   // incomplete, and what `measure_current_ma` throws (a current off its set-point).
-  void CaptureBracket(const LivePose& pose, const std::function<void(int)>& trigger,
+  void CaptureBracket(const Pose& pose, const std::function<void(int)>& trigger,
                       const std::function<double()>& measure_current_ma);
   // Appends the pending bracket's frames to the recording and computes their features, on a
   // worker thread. Waits for the previous commit first. `on_committed` runs on the worker after the
   // append. Returns whether there was a pending bracket. The caller waits for WaitAppended()
   // before anything moves again: the frames are then in the recording (a kill -9 during the next
   // move cannot lose them) while the features still overlap the move.
-  bool CommitPending(std::function<void()> on_committed = {});
+  bool CommitPending(std::function<void()> on_committed = {}) override;
   // Waits until the committed bracket's frames are appended (rows written). Rethrows the append's
   // error (RecordingError).
-  void WaitAppended();
+  void WaitAppended() override;
   // Waits for the commit in flight; rethrows its error (RecordingError).
-  void WaitCommitted();
-  void DropPending();
+  void WaitCommitted() override;
+  void DropPending() override;
   void Close(bool cut);  // stops the stream, closes the recording as complete or cut
   std::string StatsReport() const;
   // The camera's own software trigger (GenICam TriggerSoftware) as the station's trigger role,

@@ -103,8 +103,9 @@ void PrintPlan(const Recipe& recipe, const Plan& plan, int show_poses, std::ostr
   for (int i = 0; i < shown; ++i) {
     const Pose& p = plan.poses[static_cast<size_t>(i)];
     char line[160];
-    std::snprintf(line, sizeof(line), "  %5d %9.2f %9.2f %9.2f %9.2f %9.2f %7d\n", p.index,
-                  p.slide_mm, p.pan_deg, p.tilt_deg, p.theta_deg, p.bias_ma, p.repeat);
+    std::snprintf(line, sizeof(line), "  %5lld %9.2f %9.2f %9.2f %9.2f %9.2f %7d\n",
+                  static_cast<long long>(p.index), p.slide_mm, p.pan_deg, p.tilt_deg, p.theta_deg,
+                  p.bias_ma, p.repeat);
     out << line;
   }
 }

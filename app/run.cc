@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "acquisition/recording.h"
+#include "app/bracket_committer.h"
 #include "app/capture.h"
 #include "app/offline.h"
 #include "app/provenance.h"
@@ -147,17 +148,10 @@ struct Recorded {
   bool cut = false;
 };
 
-std::vector<SweepPose> SweepPoses(const Plan& plan, const std::set<std::int64_t>& done) {
-  std::vector<SweepPose> poses;
+std::vector<Pose> SweepPoses(const Plan& plan, const std::set<std::int64_t>& done) {
+  std::vector<Pose> poses;
   for (const Pose& p : plan.poses) {
-    if (done.count(p.index) > 0) continue;
-    SweepPose s;
-    s.index = p.index;
-    s.slide_mm = p.slide_mm;
-    s.pan_deg = p.pan_deg;
-    s.tilt_deg = p.tilt_deg;
-    s.bias_ma = p.bias_ma;
-    poses.push_back(s);
+    if (done.count(p.index) == 0) poses.push_back(p);
   }
   return poses;
 }
@@ -280,46 +274,6 @@ LiveCaptureSetup CaptureSetup(const Recipe& recipe, const RigEndpoints& rig,
   return setup;
 }
 
-// Commits each bracket as soon as the sweep confirms it (the station seen alive after it), before
-// anything moves again; a bracket whose pose is retaken, or that a failure interrupts, is dropped.
-// Drives a LiveRecorder; holds no camera or station of its own.
-class BracketCommitter {
- public:
-  BracketCommitter(LiveRecorder& recorder, Progress& progress, int done_count)
-      : recorder_(recorder), progress_(progress), done_count_(done_count) {}
-  // A new capture for this pose begins: whatever is pending was never confirmed.
-  void Begin() { recorder_.DropPending(); }
-  void Captured(std::string what) { last_what_ = std::move(what); }
-  // The sweep confirmed the pose: append its frames and wait until they are in the recording.
-  void Confirmed() {
-    recorder_.CommitPending([this, what = last_what_]() {
-      ++done_count_;
-      progress_.Update(done_count_, what);
-    });
-    const auto t0 = std::chrono::steady_clock::now();
-    recorder_.WaitAppended();
-    waited_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
-  // Host time the sweep waited for brackets to reach the recording, s.
-  double waited_s() const { return waited_s_; }
-  // The sweep failed or stopped: the unconfirmed bracket is dropped, the commit in flight ends.
-  void Abandon(std::ostream& err) {
-    recorder_.DropPending();
-    try {
-      recorder_.WaitCommitted();
-    } catch (const Error& e) {
-      err << "\nirdist: also: " << e.what() << "\n";
-    }
-  }
-
- private:
-  LiveRecorder& recorder_;
-  Progress& progress_;
-  std::atomic<int> done_count_;
-  std::string last_what_;
-  double waited_s_ = 0.0;
-};
-
 // The recipe's waits on top of the station's own settle. The move's wait starts now (settled);
 // the current's started when the sweep set it, before the move, so only what is left of it is
 // waited. Host waits are simulated waits divided by the time scale.
@@ -335,18 +289,6 @@ void WaitSettle(const SettleSpec& settle, const Sweep::Transition& transition,
     wait_host_ms = std::max(wait_host_ms, settle.after_current_ms / time_scale - since_change_ms);
   }
   SleepHostMs(wait_host_ms);
-}
-
-LivePose LivePoseOf(const Pose& pose) {
-  LivePose live;
-  live.bracket_id = pose.index;
-  live.slide_mm = pose.slide_mm;
-  live.pan_deg = pose.pan_deg;
-  live.tilt_deg = pose.tilt_deg;
-  live.theta_deg = pose.theta_deg;
-  live.bias_ma = pose.bias_ma;
-  live.repeat = pose.repeat;
-  return live;
 }
 
 std::string PoseText(const Pose& pose) {
@@ -382,7 +324,7 @@ struct LiveSession {
   PoseTiming timing;
 };
 
-SweepResult SweepAndCapture(LiveSession& s, const std::vector<SweepPose>& poses) {
+SweepResult SweepAndCapture(LiveSession& s, const std::vector<Pose>& poses) {
   Sweep sweep(s.station);
   // Fires one frame (also the warm-up frame, -1) through the station's trigger role.
   const auto fire = [&](int frame) { s.station.Fire(frame); };
@@ -393,16 +335,14 @@ SweepResult SweepAndCapture(LiveSession& s, const std::vector<SweepPose>& poses)
     Timed(&s.timing.current_s, [&] { ma = s.station.MeasureCheckedCurrent().current_ma; });
     return ma;
   };
-  const PoseCallback at_pose = [&](const SweepPose& sweep_pose, int) {
-    const Pose& pose = s.plan.poses[static_cast<size_t>(sweep_pose.index)];
+  const PoseCallback at_pose = [&](const Pose& pose, int) {
     s.committer.Begin();
     Timed(&s.timing.settle_s,
           [&] { WaitSettle(s.recipe.sweep.settle, sweep.transition(), s.time_scale); });
-    Timed(&s.timing.capture_s,
-          [&] { s.recorder.CaptureBracket(LivePoseOf(pose), fire, measure); });
+    Timed(&s.timing.capture_s, [&] { s.recorder.CaptureBracket(pose, fire, measure); });
     s.committer.Captured(PoseText(pose));
   };
-  const ConfirmCallback confirmed = [&](const SweepPose&) { s.committer.Confirmed(); };
+  const ConfirmCallback confirmed = [&](const Pose&) { s.committer.Confirmed(); };
   return sweep.Run(poses, at_pose, &StopRequested(), confirmed);
 }
 
@@ -456,7 +396,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   }
   const std::string command = CommandName(request.kind);
   const RunFolderLock folder_lock(recorded.dir, command);  // one run per folder, for the whole run
-  const std::vector<SweepPose> poses = SweepPoses(plan, done_ids);
+  const std::vector<Pose> poses = SweepPoses(plan, done_ids);
   // Declared first: the camera and the station links are closed before a virtual rig stops.
   RigEndpoints rig = StartRig(request, recipe, io);
   const std::string earlier_log = KeepEarlierLog(recorded.dir);
@@ -478,7 +418,10 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
 
   Progress progress(io.err, request.quiet, static_cast<int>(plan.poses.size()),
                     plan.summary.total_s / rig.time_scale);
-  BracketCommitter committer(recorder, progress, static_cast<int>(done_ids.size()));
+  BracketCommitter committer(recorder, static_cast<int>(done_ids.size()),
+                             [&progress](int done, const std::string& what) {
+                               progress.Update(done, what);
+                             });
   LiveSession session{recipe, plan, station, recorder, committer, rig.time_scale, {}};
   const auto t0 = std::chrono::steady_clock::now();
   SweepResult result;

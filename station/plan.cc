@@ -468,7 +468,7 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
     Pose pose = PoseFromValues(spec, odometer.Values(flat));
     for (int r = 0; r < repeats; ++r) {
       pose.repeat = r;
-      pose.index = static_cast<int>(plan.poses.size());
+      pose.index = static_cast<std::int64_t>(plan.poses.size());
       plan.poses.push_back(pose);
     }
   }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "station/motion.h"
+#include "station/pose.h"
 
 namespace irdist {
 
@@ -115,17 +116,7 @@ struct MotionModel {
 // Duration of a trapezoidal (or, for short moves, triangular) profile covering `distance`, in s.
 double TrapezoidMoveS(double distance, const AxisMotion& motion);
 
-// A station pose of the plan. theta_deg is the IRED orientation, cos(theta) = cos(pan) cos(tilt):
-// as given in kTheta mode (pan carries its sign), acos(cos(pan) cos(tilt)) >= 0 in kPan mode.
-struct Pose {
-  int index = 0;  // position in the plan, 0-based
-  double slide_mm = 0.0;
-  double pan_deg = 0.0;
-  double tilt_deg = 0.0;
-  double theta_deg = 0.0;
-  double bias_ma = 0.0;
-  int repeat = 0;  // 0 .. repeats-1: brackets repeated without moving
-};
+// A station pose of the plan: Pose, station/pose.h.
 
 // One frame of the bracket taken at each pose, in trigger order.
 struct PlannedExposure {

@@ -64,8 +64,8 @@ void Sweep::Start() {
 
 // Sets the pose's current, then moves (the IRED's transient runs while the axes travel). A retake
 // follows a device restart: it always moves and sets the current again. Returns whether it moved.
-bool Sweep::GoTo(const std::vector<SweepPose>& poses, std::size_t i, int attempt) {
-  const SweepPose& pose = poses[i];
+bool Sweep::GoTo(const std::vector<Pose>& poses, std::size_t i, int attempt) {
+  const Pose& pose = poses[i];
   transition_.current_changed = attempt > 0;
   if (attempt > 0 || !SameCenti(pose.bias_ma, station_.setpoint_ma())) {
     station_.SetCurrent(pose.bias_ma);
@@ -85,14 +85,14 @@ bool Sweep::GoTo(const std::vector<SweepPose>& poses, std::size_t i, int attempt
   return transition_.moved;
 }
 
-SweepResult Sweep::Run(const std::vector<SweepPose>& poses, const PoseCallback& at_pose,
+SweepResult Sweep::Run(const std::vector<Pose>& poses, const PoseCallback& at_pose,
                        const std::atomic<bool>* stop, const ConfirmCallback& confirmed) {
   IRDIST_CHECK(static_cast<bool>(at_pose), "Sweep::Run needs a callback");
   SweepResult result;
   const auto t_start = std::chrono::steady_clock::now();
   try {
     for (std::size_t i = 0; i < poses.size(); ++i) {
-      const SweepPose& pose = poses[i];
+      const Pose& pose = poses[i];
       if (stop != nullptr && stop->load()) {
         result.stopped = true;
         result.next_index = pose.index;

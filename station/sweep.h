@@ -11,17 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "station/pose.h"
 #include "station/station.h"
 
 namespace irdist {
-
-struct SweepPose {
-  std::int64_t index = 0;  // opaque to the sweep: the caller's pose number, handed back as is
-  double slide_mm = 0.0;
-  double pan_deg = 0.0;
-  double tilt_deg = 0.0;
-  double bias_ma = 0.0;  // IRED current at this pose (0 = off)
-};
 
 struct SweepOptions {
   bool home_first = true;       // home before the first pose (always done if unhomed)
@@ -52,12 +45,12 @@ struct SweepResult {
 // the first time; a retake after a device restart calls again with attempt > 0, and whatever the
 // caller captured for this pose in earlier attempts must be discarded.
 // Exceptions thrown here end the sweep (after the IRED is switched off) and propagate.
-using PoseCallback = std::function<void(const SweepPose& pose, int attempt)>;
+using PoseCallback = std::function<void(const Pose& pose, int attempt)>;
 // Called once a pose's capture is confirmed: every device was seen alive and unchanged
 // (Station::CheckAlive) AFTER the pose's callback returned, and BEFORE anything moves again. The
 // caller commits what it captured here: a refused or failed next move, an e-stop, a silent device
 // or a kill during the next move can no longer lose it.
-using ConfirmCallback = std::function<void(const SweepPose& pose)>;
+using ConfirmCallback = std::function<void(const Pose& pose)>;
 
 class Sweep {
  public:
@@ -68,7 +61,7 @@ class Sweep {
   // IRED is switched off; on normal end or stop the station is parked (options). Throws
   // DeviceError, LinkError, StationNotReadyError, DeviceRestarted (after max_retakes), or what
   // the callbacks throw.
-  SweepResult Run(const std::vector<SweepPose>& poses, const PoseCallback& at_pose,
+  SweepResult Run(const std::vector<Pose>& poses, const PoseCallback& at_pose,
                   const std::atomic<bool>* stop = nullptr,
                   const ConfirmCallback& confirmed = {});
 
@@ -85,7 +78,7 @@ class Sweep {
  private:
   void Park();
   void Start();
-  bool GoTo(const std::vector<SweepPose>& poses, std::size_t i, int attempt);
+  bool GoTo(const std::vector<Pose>& poses, std::size_t i, int attempt);
   Station& station_;
   SweepOptions options_;
   Transition transition_;

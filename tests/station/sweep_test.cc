@@ -12,8 +12,8 @@ namespace {
 
 using testing::VirtualStationRig;
 
-std::vector<SweepPose> Grid() {
-  std::vector<SweepPose> poses;
+std::vector<Pose> Grid() {
+  std::vector<Pose> poses;
   std::int64_t index = 100;
   for (double slide : {1500.0, 2000.0, 2500.0}) {
     for (double pan : {0.0, 10.0}) poses.push_back({index++, slide, pan, 0.0, 500.0});
@@ -33,8 +33,8 @@ TEST(Sweep, VisitsEveryPoseSettledAtItsCurrentThenParksIredOff) {
   VirtualStationRig rig(100.0);
   Sweep sweep(*rig.station);
   std::vector<std::int64_t> seen;
-  const std::vector<SweepPose> poses = Grid();
-  const SweepResult r = sweep.Run(poses, [&](const SweepPose& p, int attempt) {
+  const std::vector<Pose> poses = Grid();
+  const SweepResult r = sweep.Run(poses, [&](const Pose& p, int attempt) {
     const sim::PoseState truth = rig.world.Pose();
     EXPECT_FALSE(truth.moving);
     EXPECT_NEAR(truth.slide_mm, p.slide_mm, 1e-6);
@@ -55,11 +55,11 @@ TEST(Sweep, VisitsEveryPoseSettledAtItsCurrentThenParksIredOff) {
 TEST(Sweep, CurrentFirstAndNoMoveWhenOnlyTheCurrentChanges) {
   VirtualStationRig rig(100.0);
   Sweep sweep(*rig.station);
-  const std::vector<SweepPose> poses = {{0, 1800.0, 10.0, 0.0, 450.0},
+  const std::vector<Pose> poses = {{0, 1800.0, 10.0, 0.0, 450.0},
                                         {1, 1800.0, 10.0, 0.0, 500.0},
                                         {2, 1800.0, 10.0, 0.0, 550.0},
                                         {3, 2000.0, 10.0, 0.0, 450.0}};
-  sweep.Run(poses, [&](const SweepPose& p, int) {
+  sweep.Run(poses, [&](const Pose& p, int) {
     EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, p.bias_ma);
     EXPECT_NEAR(rig.world.Pose().slide_mm, p.slide_mm, 1e-6);
   });
@@ -88,7 +88,7 @@ TEST(Sweep, RebootDuringAPoseRetakesIt) {
   VirtualStationRig rig(100.0);
   Sweep sweep(*rig.station);
   std::map<std::int64_t, int> attempts;
-  const SweepResult r = sweep.Run(Grid(), [&](const SweepPose& p, int attempt) {
+  const SweepResult r = sweep.Run(Grid(), [&](const Pose& p, int attempt) {
     attempts[p.index] = std::max(attempts[p.index], attempt);
     EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, p.bias_ma);  // restored on the retake too
     EXPECT_NEAR(rig.world.Pose().slide_mm, p.slide_mm, 1e-6);
@@ -105,8 +105,8 @@ TEST(Sweep, RebootMidMoveRetakesThePose) {
   VirtualStationRig rig(100.0);
   Sweep sweep(*rig.station);
   int calls = 0;
-  const std::vector<SweepPose> poses = Grid();
-  const SweepResult r = sweep.Run(poses, [&](const SweepPose& p, int) {
+  const std::vector<Pose> poses = Grid();
+  const SweepResult r = sweep.Run(poses, [&](const Pose& p, int) {
     if (++calls == 2) rig.emulator.RebootDuringNextMove(0.5);
     EXPECT_NEAR(rig.world.Pose().slide_mm, p.slide_mm, 1e-6);
   });
@@ -123,7 +123,7 @@ TEST(Sweep, StopFlagFinishesThePoseInFlightAndParks) {
   int calls = 0;
   const SweepResult r = sweep.Run(
       Grid(),
-      [&](const SweepPose&, int) {
+      [&](const Pose&, int) {
         if (++calls == 3) stop = true;  // Ctrl-C while capturing the third pose
       },
       &stop);
@@ -137,7 +137,7 @@ TEST(Sweep, StopFlagFinishesThePoseInFlightAndParks) {
 TEST(Sweep, CallbackFailureSwitchesIredOff) {
   VirtualStationRig rig(100.0);
   Sweep sweep(*rig.station);
-  EXPECT_THROW(sweep.Run(Grid(), [&](const SweepPose&, int) { throw Error("camera lost"); }),
+  EXPECT_THROW(sweep.Run(Grid(), [&](const Pose&, int) { throw Error("camera lost"); }),
                Error);
   EXPECT_DOUBLE_EQ(rig.world.Pose().bias_ma, 0.0);
 }
@@ -148,10 +148,10 @@ TEST(Sweep, ConfirmsEachPoseBeforeTheNextMove) {
   VirtualStationRig rig(100.0);
   Sweep sweep(*rig.station);
   std::vector<std::int64_t> confirmed;
-  const std::vector<SweepPose> poses = Grid();
+  const std::vector<Pose> poses = Grid();
   sweep.Run(
-      poses, [&](const SweepPose&, int) {}, nullptr,
-      [&](const SweepPose& p) {
+      poses, [&](const Pose&, int) {}, nullptr,
+      [&](const Pose& p) {
         const sim::PoseState truth = rig.world.Pose();
         EXPECT_FALSE(truth.moving);
         EXPECT_NEAR(truth.slide_mm, p.slide_mm, 1e-6);
@@ -171,8 +171,8 @@ TEST(Sweep, ARefusedMoveKeepsThePosesConfirmedBeforeIt) {
   Sweep sweep(*rig.station);
   std::vector<std::int64_t> confirmed;
   try {
-    sweep.Run(Grid(), [](const SweepPose&, int) {}, nullptr,
-              [&](const SweepPose& p) { confirmed.push_back(p.index); });
+    sweep.Run(Grid(), [](const Pose&, int) {}, nullptr,
+              [&](const Pose& p) { confirmed.push_back(p.index); });
     ADD_FAILURE() << "the refused move did not stop the sweep";
   } catch (const DeviceError& e) {
     EXPECT_EQ(e.device_code(), "-222") << e.what();
@@ -190,10 +190,10 @@ TEST(Sweep, AnEStopDuringABracketIsReportedBeforeAnyMove) {
   try {
     sweep.Run(
         Grid(),
-        [&](const SweepPose& p, int) {
+        [&](const Pose& p, int) {
           if (p.index == 102) rig.emulator.PressEmergencyStop();
         },
-        nullptr, [&](const SweepPose& p) { confirmed.push_back(p.index); });
+        nullptr, [&](const Pose& p) { confirmed.push_back(p.index); });
     ADD_FAILURE() << "the e-stop did not stop the sweep";
   } catch (const DeviceError& e) {
     EXPECT_NE(std::string(e.what()).find("emergency stop"), std::string::npos) << e.what();
@@ -208,10 +208,10 @@ TEST(Sweep, ASilentStationLosesOnlyThePoseInFlight) {
   std::vector<std::int64_t> confirmed;
   EXPECT_THROW(sweep.Run(
                    Grid(),
-                   [&](const SweepPose& p, int) {
+                   [&](const Pose& p, int) {
                      if (p.index == 102) rig.emulator.SetDropRate(1.0);
                    },
-                   nullptr, [&](const SweepPose& p) { confirmed.push_back(p.index); }),
+                   nullptr, [&](const Pose& p) { confirmed.push_back(p.index); }),
                LinkError);
   EXPECT_EQ(confirmed, (std::vector<std::int64_t>{100, 101}));
 }
