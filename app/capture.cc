@@ -228,7 +228,8 @@ bool LiveRecorder::CommitPending(std::function<void()> on_committed) {
     }
     for (std::size_t i = 0; i < indices.size(); ++i) {
       m.cache[indices[i]] =
-          FrameFeatures(bracket.frames[i].image, m.bit_depth, m.setup.feature_options);
+          FrameFeatures(bracket.frames[i].image, m.bit_depth, m.setup.feature_options,
+                        m.setup.blob_fit_model);
     }
   };
   m.pending = BracketResult{};

@@ -38,6 +38,9 @@ struct LiveCaptureSetup {
   std::string station_identity;
   std::string recipe_path, recipe_text, rig_path, rig_text;
   FeatureOptions feature_options;  // features of every frame, computed while it is in memory
+  // The model FrameFeatures refines them with (app/offline.h BlobFitModelOf); null = moments.
+  // Must outlive the recorder.
+  const CalibrationModel* blob_fit_model = nullptr;
 };
 
 // What is already in a recording: its recipe text, whether it is complete, its complete brackets.

@@ -299,7 +299,8 @@ std::vector<FrameRecord> Session::Records(const BracketResult& result,
     } else {
       record.index = next_index_++;
     }
-    (*features)[record.index] = FrameFeatures(frame.image, live_->bit_depth(), model_.features);
+    (*features)[record.index] = FrameFeatures(frame.image, live_->bit_depth(), model_.features,
+                                              BlobFitModelOf(model_));
     records.push_back(record);
   }
   return records;

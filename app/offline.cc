@@ -15,6 +15,7 @@
 #include "app/provenance.h"
 #include "app/recipe.h"
 #include "app/show.h"
+#include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
 #include "estimator/health.h"
 #include "estimator/model_file.h"
@@ -117,12 +118,19 @@ int BitDepthOfPixelFormat(const std::string& pixel_format) {
   return 16;
 }
 
-Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options) {
-  return ComputeFeatures(image, bit_depth, options);
+Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
+                       const CalibrationModel* blob_fit_model) {
+  Features features = ComputeFeatures(image, bit_depth, options);
+  if (blob_fit_model != nullptr) RefineWithBlobFit(image, bit_depth, *blob_fit_model, &features);
+  return features;
+}
+
+const CalibrationModel* BlobFitModelOf(const CalibrationModel& model) {
+  return model.features.blob_fit ? &model : nullptr;
 }
 
 FeatureMap RecordingFeatures(const RecordingReader& reader, const FeatureOptions& options,
-                             const FeatureMap& cache) {
+                             const FeatureMap& cache, const CalibrationModel* blob_fit_model) {
   FeatureMap features;
   const int bit_depth = reader.header().bit_depth;
   for (const FrameRecord& row : reader.rows()) {
@@ -130,7 +138,8 @@ FeatureMap RecordingFeatures(const RecordingReader& reader, const FeatureOptions
     if (cached != cache.end()) {
       features[row.index] = cached->second;
     } else {
-      features[row.index] = FrameFeatures(reader.LoadImage(row), bit_depth, options);
+      features[row.index] =
+          FrameFeatures(reader.LoadImage(row), bit_depth, options, blob_fit_model);
     }
   }
   return features;
@@ -658,7 +667,8 @@ void ProcessValidation(const std::string& run_dir, const CalibrationModel& model
                        std::ostream& out) {
   RequireCleanRecording(run_dir + "/recording");
   const RecordingReader reader(run_dir + "/recording");
-  const FeatureMap features = RecordingFeatures(reader, model.features, cache);
+  const FeatureMap features =
+      RecordingFeatures(reader, model.features, cache, BlobFitModelOf(model));
   WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
   WriteValidation(run_dir, EstimateRecording(reader, features, model), context, out);
 }
@@ -710,7 +720,8 @@ void RunPlayback(const PlaybackArgs& args, CommandIo io) {
   RefuseExistingResults(out_dir, {"features.csv", "estimates.csv", "summary.yaml", "report"},
                         args.force, "playback");
   fs::create_directories(out_dir);
-  const FeatureMap features = RecordingFeatures(reader, options);
+ const FeatureMap features =
+      RecordingFeatures(reader, options, {}, model ? BlobFitModelOf(*model) : nullptr);
   WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
   io.out << "Features: " << out_dir << "/features.csv (" << features.size() << " frames)\n";
   std::vector<EstimateRow> rows;

@@ -32,13 +32,23 @@ int BitDepthOfPixelFormat(const std::string& pixel_format);
 // Features of every row of a recording, by frame index.
 using FeatureMap = std::map<std::int64_t, Features>;
 
-// The features of one frame: the single function live and playback runs use.
-Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options);
+// The features of one frame: the single function live and playback runs use. With a model
+// (`blob_fit_model` non-null: the estimation default), the blob's moment variances are replaced by
+// the likelihood fit with the calibrated blur (estimator/blob_fit.h, RefineWithBlobFit); without
+// one (calibration, or the moments path chosen), they stay the intensity-weighted moments.
+Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
+                       const CalibrationModel* blob_fit_model = nullptr);
+
+// The model FrameFeatures refines with (the blob fit): `model` unless its features.blob_fit is
+// false (the moments path), then nullptr.
+const CalibrationModel* BlobFitModelOf(const CalibrationModel& model);
 
 // Features of every row of `reader` (rows() order). Rows whose index is in `cache` (frames still
-// in memory from a live run) are taken from it; the others are computed from their PNG.
+// in memory from a live run, computed with the same model) are taken from it; the others are
+// computed from their PNG.
 FeatureMap RecordingFeatures(const RecordingReader& reader, const FeatureOptions& options,
-                             const FeatureMap& cache = {});
+                             const FeatureMap& cache = {},
+                             const CalibrationModel* blob_fit_model = nullptr);
 
 // features.csv: one row per frame of the recording, in rows() order (columns in docs/reports.md).
 void WriteFeaturesCsv(const std::string& path, const std::vector<FrameRecord>& rows,

@@ -387,7 +387,8 @@ void ReportRun(LiveSession& s, const SweepResult& result, double wall_s, std::si
 }
 
 Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& plan,
-                const FeatureOptions& feature_options, CommandIo io) {
+                const FeatureOptions& feature_options, const CalibrationModel* blob_fit_model,
+                CommandIo io) {
   Recorded recorded;
   const std::string recipe_text = ReadText(recipe.path);
   std::set<std::int64_t> done_ids;
@@ -411,6 +412,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   setup.station_identity = station.IdentityBrief();
   setup.recipe_text = recipe_text;
   setup.feature_options = feature_options;
+  setup.blob_fit_model = blob_fit_model;
   LiveRecorder recorder(setup);
   if (recipe.rig.station.composition.trigger == kCameraSoftwareTrigger) {
     station.SetCameraTrigger(&recorder.CameraTrigger());
@@ -482,7 +484,8 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
   {
     // Ctrl-C stops the sweep cleanly; after the recording it ends the process as usual.
     SignalGuard guard;
-    recorded = Record(checked, recipe, plan, feature_options, io);
+    recorded = Record(checked, recipe, plan, feature_options,
+                      model ? BlobFitModelOf(*model) : nullptr, io);
   }
   if (recorded.cut) {
     throw InterruptedError(
@@ -599,7 +602,7 @@ void RunSuggest(const PlanArgs& args, CommandIo io) {
   Recorded recorded;
   {
     SignalGuard guard;
-    recorded = Record(request, probe_recipe, probe_plan, FeatureOptions{}, io);
+    recorded = Record(request, probe_recipe, probe_plan, FeatureOptions{}, nullptr, io);
   }
   if (recorded.cut) throw InterruptedError("probe stopped; nothing suggested.");
   const RecordingReader reader(dir + "/recording");

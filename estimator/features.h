@@ -107,6 +107,10 @@ struct FeatureOptions {
   InverseResponse inverse_response;  // identity by default
   // Which features inverse_response linearises (no effect while it is the identity).
   ResponseScope response_scope = ResponseScope::kERelOnly;
+  // Estimation only (a model known): the blob's moment variances are replaced by the likelihood
+  // fit with the calibrated blur (estimator/blob_fit.h). false = the moments path. Calibration
+  // always uses the moments. model.yaml key features.blob_fit (absent = true).
+  bool blob_fit = true;
   bool IsValid(std::string* why) const;
 };
 

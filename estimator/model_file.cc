@@ -303,6 +303,8 @@ void EmitFeatures(YAML::Emitter& out, const FeatureOptions& f) {
   out << YAML::Key << "inverse_response_m" << YAML::Value << YAML::Flow << f.inverse_response.m;
   out << YAML::Key << "inverse_response_f" << YAML::Value << YAML::Flow << f.inverse_response.f;
   out << YAML::Key << "response_scope" << YAML::Value << ToString(f.response_scope);
+  // Written only when the moments path is chosen: files without it keep the default (blob fit).
+  if (!f.blob_fit) out << YAML::Key << "blob_fit" << YAML::Value << false;
   out << YAML::EndMap;
 }
 
@@ -379,7 +381,7 @@ FeatureOptions ReadFeatures(const Reader& rd, const YAML::Node& root, int versio
           {"roi_policy", "window_side_px", "threshold_fraction", "moment_threshold_fraction",
            "moment_method", "aperture_margin_px", "psf_sigma_px", "detection_downsample",
            "min_contrast_fraction", "ellipse_method", "inverse_response_m", "inverse_response_f",
-           "response_scope"});
+           "response_scope", "blob_fit"});
   FeatureOptions fo;
   if (!ParseRoiPolicy(rd.Scalar<std::string>(f, "features", "roi_policy"), &fo.roi_policy))
     rd.Fail(f["roi_policy"], "features.roi_policy", "unknown ROI policy");
@@ -418,6 +420,7 @@ FeatureOptions ReadFeatures(const Reader& rd, const YAML::Node& root, int versio
       rd.Fail(f["response_scope"], "features.response_scope",
               "unknown response scope (e_rel_only or all_pixels)");
   }
+  if (Present(f, "blob_fit")) fo.blob_fit = rd.Scalar<bool>(f, "features", "blob_fit");
   std::string why;
   if (!fo.IsValid(&why)) rd.Fail(f, "features", why);
   return fo;

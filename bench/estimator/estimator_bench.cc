@@ -1,8 +1,10 @@
 // Speed of the estimator's per-frame work: features on a 1280x1024 16-bit frame, and one
-// Algorithm 1 estimate (one pair, and a 4-exposure bracket).
+// Algorithm 1 estimate (one pair, and a 4-exposure bracket); the estimation default's features
+// (moments, then the blob's likelihood fit with the calibrated blur), against the moments alone.
 #include <benchmark/benchmark.h>
 #include <opencv2/imgproc.hpp>
 
+#include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
 #include "estimator/features.h"
 #include "tests/estimator/synthetic.h"
@@ -30,6 +32,20 @@ void BM_ComputeFeatures(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(ComputeFeatures(frame, 12, options));
 }
 BENCHMARK(BM_ComputeFeatures)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// What the app's estimation default costs per frame (app/offline.cc FrameFeatures with a model):
+// the moments, then FitBlob with the frame's blur (sigma 1 px, pixel area added). Compare with
+// BM_ComputeFeatures/0 of the same run.
+void BM_FeaturesWithBlobFit(benchmark::State& state) {
+  const cv::Mat frame = Frame();
+  const FeatureOptions options;
+  const double blur_var_px2 = 1.0 + 1.0 / 12.0;
+  for (auto _ : state) {
+    const Features features = ComputeFeatures(frame, 12, options);
+    benchmark::DoNotOptimize(FitBlob(frame, 12, features, blur_var_px2));
+  }
+}
+BENCHMARK(BM_FeaturesWithBlobFit)->Unit(benchmark::kMicrosecond);
 
 void BM_EstimatePair(benchmark::State& state) {
   const testing::SyntheticRig rig;

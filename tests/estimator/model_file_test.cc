@@ -226,6 +226,23 @@ TEST(ModelFile, ResponseScopeRoundTripsAndOldVersionsMeanERelOnly) {
   EXPECT_THROW(ModelFromYaml(bad, "m.yaml"), ModelFileError);
 }
 
+// features.blob_fit: absent = the blob fit (estimation default); false round-trips (moments path).
+TEST(ModelFile, BlobFitFlagRoundTripsAndDefaultsToTheFit) {
+  CalibrationModel model = SmallModel();
+  const std::string default_text = ModelToYaml(model);
+  EXPECT_EQ(default_text.find("blob_fit"), std::string::npos);
+  EXPECT_TRUE(ModelFromYaml(default_text, "m.yaml").features.blob_fit);
+  model.features.blob_fit = false;
+  const std::string text = ModelToYaml(model);
+  EXPECT_NE(text.find("blob_fit: false"), std::string::npos);
+  const CalibrationModel back = ModelFromYaml(text, "m.yaml");
+  EXPECT_FALSE(back.features.blob_fit);
+  EXPECT_EQ(ModelToYaml(back), text);
+  std::string bad = text;
+  bad.replace(bad.find("blob_fit: false"), 15, "blob_fit: maybe");
+  EXPECT_THROW(ModelFromYaml(bad, "m.yaml"), Error);
+}
+
 TEST(ModelFile, BadThetaCorrectionNamesTheKey) {
   std::string text = ModelToYaml(SmallModel());
   const size_t section = text.find("theta_correction:");
