@@ -61,8 +61,8 @@ std::string ReadFile(const std::string& path) {
   std::string text, why;
   if (!ReadRegularFile(path, kMaxInputTextBytes, &text, &why)) {
     throw InputError(path, 0, 0,
-                     why + "; check the path (relative paths are taken from the current "
-                           "directory) and give a regular file");
+                     "cannot open the file (it " + why + "); check the path (relative paths are "
+                     "taken from the current directory) and give a regular file");
   }
   return text;
 }
