@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "tests/integration/measure_helpers.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
 
@@ -27,33 +28,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing::ReadAll;
 using testing::RunIrdist;
+using testing::JsonLines;
 using testing::WriteAll;
-
-constexpr const char* kCalibrationRecipe = R"(name: measure-station-calibration
-rig: virtual
-after: fit
-axes:
-  slide_mm: [1500, 2000, 2500]
-  theta_deg: [0, 10, 20, 30]
-  bias_ma: [475, 500]
-bracket:
-  t_ref_ms: 8
-  t_meas_ms: [30, 33, 36]
-settle:
-  after_move_ms: 200
-  after_current_ms: 500
-)";
-
-// The JSON objects of an output (lines starting with '{'), parsed.
-std::vector<YAML::Node> JsonLines(const std::string& output) {
-  std::vector<YAML::Node> objects;
-  std::istringstream in(output);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line[0] == '{') objects.push_back(YAML::Load(line));
-  }
-  return objects;
-}
 
 // Waits until `irdist sim` announced its state file and runs; returns the file ("" on failure).
 std::string WaitForSim(testing::Child& sim, const std::string& log_path) {
@@ -85,7 +61,8 @@ class MeasureStation : public ::testing::Test {
     // The sim's state file in a folder of this test's own: no other rig is ever found.
     fs::create_directories(dir_ + "/runtime");
     ASSERT_EQ(setenv("XDG_RUNTIME_DIR", (dir_ + "/runtime").c_str(), 1), 0);
-    WriteAll(dir_ + "/calibration.yaml", kCalibrationRecipe);
+    WriteAll(dir_ + "/calibration.yaml",
+             testing::MeasureCalibrationRecipe("measure-station-calibration"));
   }
 
   // irdist with `args`, its output in *output; returns the exit code.

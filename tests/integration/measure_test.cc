@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/integration/measure_helpers.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
 
@@ -23,22 +24,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing::ReadAll;
 using testing::RunIrdist;
+using testing::JsonLines;
 using testing::WriteAll;
-
-constexpr const char* kCalibrationRecipe = R"(name: measure-calibration
-rig: virtual
-after: fit
-axes:
-  slide_mm: [1500, 2000, 2500]
-  theta_deg: [0, 10, 20, 30]
-  bias_ma: [475, 500]
-bracket:
-  t_ref_ms: 8
-  t_meas_ms: [30, 33, 36]
-settle:
-  after_move_ms: 200
-  after_current_ms: 500
-)";
 
 constexpr const char* kTimeScale = "50";
 
@@ -52,22 +39,12 @@ std::string RigWith(const std::string& from, const std::string& to) {
   return text.replace(at, from.size(), to);
 }
 
-// The JSON objects of an output (lines starting with '{'), parsed.
-std::vector<YAML::Node> JsonLines(const std::string& output) {
-  std::vector<YAML::Node> objects;
-  std::istringstream in(output);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line[0] == '{') objects.push_back(YAML::Load(line));
-  }
-  return objects;
-}
-
 class Measure : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new std::string(testing::ScratchDir("measure"));
-    WriteAll(*dir_ + "/calibration.yaml", kCalibrationRecipe);
+    WriteAll(*dir_ + "/calibration.yaml",
+             testing::MeasureCalibrationRecipe("measure-calibration"));
     testing::LoopbackGvcpLock lock;
     calibrate_code_ = RunIrdist({"calibrate", *dir_ + "/calibration.yaml", "--out", *dir_ + "/cal",
                                  "--time-scale", kTimeScale, "--quiet"},
