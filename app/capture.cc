@@ -130,6 +130,7 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   settings.offset_y = setup.roi_offset_y;
   settings.width = setup.roi_width;
   settings.height = setup.roi_height;
+  settings.trigger_overlap_readout = setup.trigger_in_readout;
   IRDIST_CHECK(!setup.exposures_us.empty(), "a bracket needs exposures");
   settings.exposure_us = setup.exposures_us.front();
   settings.buffer_count =
@@ -163,6 +164,7 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   options.interleave_reference = setup.interleave_reference;
   options.trigger_source = setup.trigger_source;
   options.frame_timeout = std::chrono::milliseconds(setup.frame_timeout_ms);
+  options.trigger_in_readout = setup.trigger_in_readout;
   m.capture = std::make_unique<BracketCapture>(*m.camera, options);
   m.software_trigger = std::make_unique<CameraSoftwareTrigger>(*m.camera);
 }

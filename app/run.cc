@@ -251,6 +251,7 @@ LiveCaptureSetup CaptureSetup(const Recipe& recipe, const RigEndpoints& rig,
   setup.pixel_format = camera.pixel_format;
   setup.trigger_source = trigger_source;
   setup.trigger_activation = camera.trigger_activation;
+  setup.trigger_in_readout = camera.trigger_in_readout;
   setup.black_level = camera.black_level;
   setup.packet_size = camera.packet_size;
   setup.roi_offset_x = camera.roi_offset_x;
