@@ -325,6 +325,17 @@ struct LiveSession {
   PoseTiming timing;
 };
 
+// The message of the exception being handled ("" when it is not a std::exception).
+std::string CurrentErrorText() {
+  try {
+    throw;
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "";
+  }
+}
+
 SweepResult SweepAndCapture(LiveSession& s, const std::vector<Pose>& poses) {
   Sweep sweep(s.station);
   // Fires one frame (also the warm-up frame, -1) through the station's trigger role.
@@ -432,7 +443,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
     result = SweepAndCapture(session, poses);
   } catch (...) {
     // The pose in flight was not confirmed by the sweep: it is retaken on --resume.
-    committer.Abandon(io.err);
+    committer.Abandon(io.err, CurrentErrorText());
     progress.Finish();
     recorder.Close(true);
     io.err << "\nThe recording in " << recorded.dir << "/recording is closed as cut. Continue it "
