@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <boost/math/tools/roots.hpp>
 #include <opencv2/core.hpp>
 #include <sstream>
 
@@ -241,7 +242,23 @@ struct RmsSums {
   int d_rows = 0;
   double theta_err2 = 0.0, theta_bound2 = 0.0, theta_z2 = 0.0;
   int theta_rows = 0;
+  std::vector<double> theta_bounds_deg;  // one per row
 };
+
+// The p-quantile of max_i |e_i| for independent e_i ~ N(0, sd_i^2): the x where
+// prod_i erf(x / (sd_i sqrt 2)) = p.
+double MaxAbsQuantile(const std::vector<double>& sd, double p) {
+  if (sd.empty()) return NAN;
+  const auto cdf_minus_p = [&sd, p](double x) {
+    double log_cdf = 0.0;
+    for (double s : sd) log_cdf += std::log(std::max(std::erf(x / (s * std::sqrt(2.0))), 1e-300));
+    return std::exp(log_cdf) - p;
+  };
+  const double hi = 20.0 * *std::max_element(sd.begin(), sd.end());
+  const auto bracket = boost::math::tools::bisect(
+      cdf_minus_p, 0.0, hi, boost::math::tools::eps_tolerance<double>(40));
+  return 0.5 * (bracket.first + bracket.second);
+}
 
 void AddRows(const ConditionErrors& c, const CrbResult& bound, RmsSums* sums) {
   for (double e : c.d_error_mm) {
@@ -254,6 +271,7 @@ void AddRows(const ConditionErrors& c, const CrbResult& bound, RmsSums* sums) {
     sums->theta_bound2 += bound.theta_sd_deg * bound.theta_sd_deg;
     sums->theta_z2 += (e / bound.theta_sd_deg) * (e / bound.theta_sd_deg);
     ++sums->theta_rows;
+    sums->theta_bounds_deg.push_back(bound.theta_sd_deg);
   }
 }
 
@@ -295,6 +313,8 @@ CrbFigures MethodCrb(const RecordingCrbSource& source, const MethodSummary& meth
     out.theta_ge15_error_rms_deg = std::sqrt(sums.theta_err2 / sums.theta_rows);
     out.theta_ge15_sd_bound_rms_deg = std::sqrt(sums.theta_bound2 / sums.theta_rows);
     out.theta_ge15_error_over_bound_rms = std::sqrt(sums.theta_z2 / sums.theta_rows);
+    out.theta_ge15_max_at_bound_deg_median = MaxAbsQuantile(sums.theta_bounds_deg, 0.5);
+    out.theta_ge15_max_at_bound_deg_p95 = MaxAbsQuantile(sums.theta_bounds_deg, 0.95);
   }
   return out;
 }

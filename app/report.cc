@@ -723,7 +723,8 @@ std::string CrbFiguresText(const CrbFigures& c) {
     out << std::setprecision(3) << "; theta (>= 15 deg) sd bound " << c.theta_ge15_sd_bound_deg_min
         << "-" << c.theta_ge15_sd_bound_deg_max << " deg, error rms "
         << c.theta_ge15_error_rms_deg << " deg = " << std::setprecision(2)
-        << c.theta_ge15_error_over_bound_rms << "x bound";
+        << c.theta_ge15_error_over_bound_rms << "x bound; max at the bound (median of runs) "
+        << std::setprecision(3) << c.theta_ge15_max_at_bound_deg_median << " deg";
   }
   if (c.dispersion_ratio_max) {
     out << "; dispersion / bound max " << *c.dispersion_ratio_max;

@@ -256,6 +256,8 @@ void EmitCrb(YAML::Emitter& out, const CrbFigures& c) {
       EmitOptional(out, "error_rms_deg", Finite(c.theta_ge15_error_rms_deg));
       EmitOptional(out, "sd_bound_rms_deg", Finite(c.theta_ge15_sd_bound_rms_deg));
       EmitOptional(out, "error_over_bound_rms", Finite(c.theta_ge15_error_over_bound_rms));
+      EmitOptional(out, "max_at_bound_deg_median", Finite(c.theta_ge15_max_at_bound_deg_median));
+      EmitOptional(out, "max_at_bound_deg_p95", Finite(c.theta_ge15_max_at_bound_deg_p95));
     }
     out << YAML::EndMap;
     EmitOptional(out, "dispersion_ratio_max", c.dispersion_ratio_max);

@@ -83,6 +83,11 @@ TEST(Crb, MethodCrbComparesEachRepeatedConditionWithItsBound) {
   EXPECT_EQ(f.theta_ge15_count, 3);  // the 10 deg condition is not counted
   EXPECT_NEAR(f.theta_ge15_error_rms_deg, std::sqrt((0.01 + 0.04 + 0.01) / 3.0), 1e-12);
   EXPECT_GT(f.distance_sd_bound_mm_max, f.distance_sd_bound_mm_min);  // 2.7 m above 1.7 m
+  // Three rows at the bound's sd s: P(max |e| <= x) = erf(x / (s sqrt 2))^3.
+  const double s = bound.theta_sd_deg;
+  const auto max_cdf = [s](double x) { return std::pow(std::erf(x / (s * std::sqrt(2.0))), 3); };
+  EXPECT_NEAR(max_cdf(f.theta_ge15_max_at_bound_deg_median), 0.5, 1e-6);
+  EXPECT_NEAR(max_cdf(f.theta_ge15_max_at_bound_deg_p95), 0.95, 1e-6);
 }
 
 TEST(Crb, RecordingWithoutAVirtualRigHasNoBoundAndSaysWhy) {
