@@ -727,7 +727,7 @@ std::string CrbFiguresText(const CrbFigures& c) {
         << std::setprecision(3) << c.theta_ge15_max_at_bound_deg_median << " deg";
   }
   if (c.dispersion_ratio_max) {
-    out << "; dispersion / bound max " << *c.dispersion_ratio_max;
+    out << std::setprecision(2) << "; dispersion / bound max " << *c.dispersion_ratio_max;
     if (c.theta_dispersion_ratio_max) out << " (theta " << *c.theta_dispersion_ratio_max << ")";
     for (const CrbPoseRatio& p : c.dispersion) {
       out << std::setprecision(0) << "; " << p.d_mm << " mm " << p.theta_deg << " deg "

@@ -690,6 +690,11 @@ int Main(int argc, char** argv) {
     pl.estimate.theta_source = ThetaSource::kCalibratedBlur;
     pl.features.moment_method = MomentMethod::kThreshold;
     pipelines.push_back(pl);
+    Pipeline fit_bracket;  // the blob fit, with theta from every frame's fitted shape (reference too)
+    fit_bracket.name = "blob_fit_bracket";
+    fit_bracket.blob_fit = true;
+    fit_bracket.estimate.theta_source = ThetaSource::kBracketMoments;
+    pipelines.push_back(fit_bracket);
   }
 
   // Calibration: Table 3.
