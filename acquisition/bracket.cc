@@ -211,12 +211,17 @@ BracketCapture::Outcome BracketCapture::Attempt(const PlannedFrame& plan, double
                                                 const Trigger& trigger, const PlannedFrame* next,
                                                 BracketFrame* out) {
   const auto started = StartFrame(plan, trigger);
+  const auto exposure_end = started + std::chrono::microseconds(std::llround(plan.exposure_us)) +
+                            options_.pipeline_margin;
   std::optional<std::chrono::steady_clock::time_point> fired_next_at;
+  if (next == nullptr && plan.frame_in_bracket == last_frame_ && during_last_readout_) {
+    std::this_thread::sleep_until(exposure_end);
+    during_last_readout_();
+  }
   if (next != nullptr) {
     // The frame latched its exposure when it started: the next one can be written now, while
     // this frame is read out (and, with trigger_in_readout, the next frame triggered).
-    const auto exposure = std::chrono::microseconds(std::llround(plan.exposure_us));
-    std::this_thread::sleep_until(started + exposure + options_.pipeline_margin);
+    std::this_thread::sleep_until(exposure_end);
     camera_.WriteExposureUs(next->exposure_us);
     if (FiresAhead(plan, *next)) {
       trigger(next->frame_in_bracket);
@@ -316,12 +321,15 @@ void BracketCapture::PrepareStream(const Trigger& trigger) {
   stats_.stray += camera_.Flush();
 }
 
-BracketResult BracketCapture::Capture(const Trigger& trigger, const FrameSink& on_frame) {
+BracketResult BracketCapture::Capture(const Trigger& trigger, const FrameSink& on_frame,
+                                      std::function<void()> during_last_readout) {
   IRDIST_CHECK(static_cast<bool>(trigger), "Capture() needs a trigger callable");
+  during_last_readout_ = std::move(during_last_readout);
   ++stats_.brackets;
   PrepareStream(trigger);
   const std::vector<PlannedFrame> plan = PlanBracket(options_);
   started_ahead_.reset();
+  last_frame_ = static_cast<int>(plan.size()) - 1;
   // Pipelined, the first exposure is programmed (and read back) while the camera is idle.
   if (Pipelining()) ProgramExposure(plan.front().exposure_us);
   BracketResult result;

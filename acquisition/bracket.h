@@ -138,7 +138,11 @@ class BracketCapture {
   // triggered (so it must return quickly: e.g. hand the frame to a worker that stores it while the
   // next one is exposed). Frames of a bracket that ends incomplete are seen too.
   using FrameSink = std::function<void(const BracketFrame& frame)>;
-  BracketResult Capture(const Trigger& trigger, const FrameSink& on_frame = {});
+  // `during_last_readout`, when given, runs once the last frame's exposure has ended, while it is
+  // read out (again if that frame is retaken): host work that needs the bracket's light to be
+  // over (the IRED current's read-back) costs no time there. Its exceptions propagate.
+  BracketResult Capture(const Trigger& trigger, const FrameSink& on_frame = {},
+                        std::function<void()> during_last_readout = {});
 
   const BracketOptions& options() const { return options_; }
   const CaptureStats& stats() const { return stats_; }
@@ -178,6 +182,8 @@ class BracketCapture {
   // Set when the frame just taken had its successor's trigger fired in its readout: a time no
   // earlier than the successor's start (the later of that trigger and the frame's arrival).
   std::optional<std::chrono::steady_clock::time_point> started_ahead_;
+  std::function<void()> during_last_readout_;  // of the Capture() in progress
+  int last_frame_ = -1;                        // frame_in_bracket of its last frame
 };
 
 }  // namespace irdist

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <future>
 #include <iostream>
+#include <optional>
 
 #include "acquisition/aravis_camera.h"
 #include "acquisition/bracket.h"
@@ -181,10 +182,13 @@ void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int
   const BracketCapture::FrameSink stage = [&m](const BracketFrame& frame) {
     m.StageAsync(frame.image);
   };
-  BracketResult result = m.capture->Capture(trigger, stage);
+  // The current is read back while the last frame is read out (its light is over by then).
+  std::optional<double> measured_ma;
+  const auto measure = [&] { measured_ma = measure_current_ma(); };
+  BracketResult result = m.capture->Capture(trigger, stage, measure);
   if (!result.complete) {
     m.DropStaged();
-    result = m.capture->Capture(trigger, stage);
+    result = m.capture->Capture(trigger, stage, measure);
   }
   if (!result.complete) {
     m.DropStaged();
@@ -193,7 +197,7 @@ void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int
                       "). Check the trigger wiring (camera " + m.setup.trigger_source +
                       ") and the camera link, then resume the run.");
   }
-  m.pending_measured_ma = measure_current_ma();
+  m.pending_measured_ma = measured_ma ? *measured_ma : measure_current_ma();
   m.pending = std::move(result);
   m.pending_pose = pose;
   m.has_pending = true;

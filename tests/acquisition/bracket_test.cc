@@ -346,6 +346,27 @@ TEST(BracketCapture, InReadoutEqualNeighbourExposuresAreTriggeredInTurn) {
   EXPECT_EQ(capture.stats().fired_in_readout, 2);  // not between the two equal exposures
 }
 
+TEST(BracketCapture, DuringLastReadoutRunsOnceAfterTheLastTriggerBeforeItsFrameIsSeen) {
+  for (const bool in_readout : {false, true}) {
+    BusySensorCamera camera;
+    BracketOptions options = InReadoutOptions();
+    options.trigger_in_readout = in_readout;
+    BracketCapture capture(camera, options);
+    int seen = 0, calls = 0, seen_at_call = -1, fired_at_call = -1;
+    const BracketResult result = capture.Capture(
+        [&](int) { camera.SoftwareTrigger(); }, [&](const BracketFrame&) { ++seen; },
+        [&] {
+          ++calls;
+          seen_at_call = seen;
+          fired_at_call = camera.triggers;
+        });
+    ExpectFramesCarryTheirExposures(result, options);
+    EXPECT_EQ(calls, 1);
+    EXPECT_EQ(seen_at_call, 4) << "the last frame is not handed over yet";
+    EXPECT_EQ(fired_at_call, 5) << "every trigger fired";
+  }
+}
+
 // The fake camera's Mono8 pattern: pixel (x, y) = ((x + frame_id + y) % 255) * s with
 // s = 1 + log10(exposure_us / 10000). Reads the exposure back from the pixel whose base value is 200.
 double ExposureFromFakePattern(const BracketFrame& frame) {
