@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <future>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -236,7 +237,8 @@ class Session {
   void CheckModel(CommandIo io);
   void OpenRecording();
   // Captures one bracket (retaken once if incomplete); each frame's features are computed as it
-  // arrives, while the next frame is exposed. `last_frame_at` = when the last frame was handed over.
+  // arrives, on a worker, while the next frame is exposed. `last_frame_at` = when the last frame
+  // was handed over.
   BracketResult CaptureWithFeatures(std::vector<Features>* arrived,
                                     std::chrono::steady_clock::time_point* last_frame_at);
   std::vector<FrameRecord> Records(const BracketResult& result,
@@ -318,14 +320,21 @@ std::vector<FrameRecord> Session::Records(const BracketResult& result,
 
 BracketResult Session::CaptureWithFeatures(std::vector<Features>* arrived,
                                            std::chrono::steady_clock::time_point* last_frame_at) {
+  // Each frame's features on a thread of its own as it arrives: the capture never waits for them
+  // (the blob fit may take longer than the next exposure), and frames overlap on the host's cores.
+  std::vector<std::future<Features>> pending;
+  const int bit_depth = live_->bit_depth();
+  const CalibrationModel* blob_fit_model = BlobFitModelOf(model_);
   const BracketCapture::FrameSink on_frame = [&](const BracketFrame& frame) {
     *last_frame_at = std::chrono::steady_clock::now();
-    arrived->push_back(
-        FrameFeatures(frame.image, live_->bit_depth(), model_.features, BlobFitModelOf(model_)));
+    pending.push_back(std::async(std::launch::async, [this, image = frame.image, bit_depth,
+                                                      blob_fit_model] {
+      return FrameFeatures(image, bit_depth, model_.features, blob_fit_model);
+    }));
   };
   BracketResult result = capture_->Capture(live_->Trigger(), on_frame);
   if (!result.complete) {
-    arrived->clear();
+    pending.clear();  // waits for the frames of the incomplete bracket
     result = capture_->Capture(live_->Trigger(), on_frame);
   }
   if (!result.complete) {
@@ -333,6 +342,7 @@ BracketResult Session::CaptureWithFeatures(std::vector<Features>* arrived,
                       result.failure + "; " + capture_->stats().BriefReport() +
                       "). Check the camera link and its trigger.");
   }
+  for (std::future<Features>& f : pending) arrived->push_back(f.get());
   return result;
 }
 

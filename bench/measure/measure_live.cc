@@ -1,5 +1,7 @@
 // Whole-run timing of `irdist measure` on the virtual rig: calibrates Table 3 (at time scale 10,
-// for the model), then measures N brackets live at time scale 1 and sets, side by side,
+// for the model), then measures N brackets live at time scale 1, once with the model as fitted
+// (features refined by the blob's likelihood fit, the default) and once with the same model on the
+// moments alone (features.blob_fit: false), and sets, side by side,
 //   - the bracket rate against its physical bound (sum of exposures + one readout per frame,
 //     the camera's own readout_ms): brackets per second / bound >= 0.9 is the goal;
 //   - the latency from a bracket's last frame to its estimate (each JSON line's latency_ms):
@@ -13,6 +15,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <numeric>
 #include <sstream>
@@ -57,6 +60,46 @@ LiveRun ParseJsonLines(const std::string& text) {
   return run;
 }
 
+// model.yaml with `features.blob_fit: false` added (the moments path), written beside it.
+std::string MomentsModel(const std::string& model_path) {
+  std::ifstream in(model_path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::string model = text.str();
+  const std::size_t at = model.find("\nfeatures:\n");
+  if (at == std::string::npos) return "";
+  model.insert(at + 11, "  blob_fit: false\n");
+  const std::string out = model_path.substr(0, model_path.size() - 5) + "-moments.yaml";
+  std::ofstream(out) << model;
+  return out;
+}
+
+// One live run: its per-bracket period against the bound and its latency.
+bool MeasureAndPrint(const std::string& label, const std::string& model, const std::string& rig,
+                     int count, double bound_ms) {
+  std::string out;
+  if (Run({"irdist", "measure", "--model", model, "--rig", rig, "--time-scale", "1", "--at",
+           "2000,20,0,490", "--count", std::to_string(count), "--json"},
+          &out) != 0) {
+    std::cerr << "bench_measure_live: measure failed\n" << out;
+    return false;
+  }
+  const LiveRun run = ParseJsonLines(out);
+  if (run.time_s.size() < 3) {
+    std::cerr << "bench_measure_live: fewer than 3 JSON lines\n" << out;
+    return false;
+  }
+  const double per_bracket_ms = 1000.0 * (run.time_s.back() - run.time_s.front()) /
+                                static_cast<double>(run.time_s.size() - 1);
+  std::printf("%-10s bracket period %8.2f ms, bound %7.2f ms, rate / bound %.3f; latency median "
+              "%.3f ms, p95 %.3f ms, max %.3f ms, median / 2 ms %.3f\n",
+              label.c_str(), per_bracket_ms, bound_ms, bound_ms / per_bracket_ms,
+              Quantile(run.latency_ms, 0.5), Quantile(run.latency_ms, 0.95),
+              *std::max_element(run.latency_ms.begin(), run.latency_ms.end()),
+              Quantile(run.latency_ms, 0.5) / 2.0);
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -80,33 +123,18 @@ int main(int argc, char** argv) {
     std::cerr << "bench_measure_live: the calibration failed\n" << out;
     return 1;
   }
-  if (Run({"irdist", "measure", "--model", dir + "/cal/model.yaml", "--rig", rig, "--time-scale",
-           "1", "--at", "2000,20,0,490", "--count", std::to_string(count), "--json"},
-          &out) != 0) {
-    std::cerr << "bench_measure_live: measure failed\n" << out;
-    return 1;
-  }
-  const LiveRun run = ParseJsonLines(out);
-  if (run.time_s.size() < 3) {
-    std::cerr << "bench_measure_live: fewer than 3 JSON lines\n" << out;
-    return 1;
-  }
   const irdist::Recipe r = irdist::LoadRecipe(recipe);
   double bound_ms = r.sweep.bracket.t_ref_ms;
   for (double t : r.sweep.bracket.t_meas_ms) bound_ms += t;
   bound_ms += static_cast<double>(1 + r.sweep.bracket.t_meas_ms.size()) * r.rig.camera.readout_ms;
-  const double per_bracket_ms = 1000.0 * (run.time_s.back() - run.time_s.front()) /
-                                static_cast<double>(run.time_s.size() - 1);
-  std::printf("rig %s, %zu brackets of %zu frames at time scale 1\n", rig.c_str(),
-              run.time_s.size(), 1 + r.sweep.bracket.t_meas_ms.size());
-  std::printf("bracket period    %8.2f ms   bound (exposures + readouts) %8.2f ms   "
-              "rate / bound %.3f\n",
-              per_bracket_ms, bound_ms, bound_ms / per_bracket_ms);
-  std::printf("latency last frame -> estimate: median %.3f ms, p95 %.3f ms, max %.3f ms; "
-              "median / 2 ms %.3f\n",
-              Quantile(run.latency_ms, 0.5), Quantile(run.latency_ms, 0.95),
-              *std::max_element(run.latency_ms.begin(), run.latency_ms.end()),
-              Quantile(run.latency_ms, 0.5) / 2.0);
+  const std::string model = dir + "/cal/model.yaml";
+  const std::string moments = MomentsModel(model);
+  std::printf("rig %s, %d brackets of %zu frames at time scale 1, 256 x 256 ROI\n", rig.c_str(),
+              count, 1 + r.sweep.bracket.t_meas_ms.size());
+  if (moments.empty() || !MeasureAndPrint("blob fit", model, rig, count, bound_ms) ||
+      !MeasureAndPrint("moments", moments, rig, count, bound_ms)) {
+    return 1;
+  }
   std::filesystem::remove_all(dir);
   return 0;
 }
