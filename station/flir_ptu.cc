@@ -133,12 +133,9 @@ class FlirPtu : public DeviceDriver, public Motion {
 };
 
 LineQueryOptions FlirPtu::QueryOptions(const DeviceSpec& spec) {
-  LineQueryOptions options;
+  LineQueryOptions options = QueryOptionsOf(spec, 4, 1000);
   options.device = "the PTU";
-  options.port = spec.port;
   options.fix = "check the cable, the baud rate (PTU default 9600) and power";
-  options.attempts = 1 + static_cast<int>(spec.Number("retries", 4));
-  options.reply_timeout = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 1000);
   // Replies carry no id: whatever arrived before a command (a late reply to an earlier one) is
   // not its reply.
   options.before_send = [this](int) { link_->Flush(); };

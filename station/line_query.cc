@@ -2,6 +2,8 @@
 
 #include <utility>
 
+#include "station/driver.h"
+
 namespace irdist {
 namespace {
 
@@ -34,6 +36,16 @@ bool LineQueryOptions::IsValid(std::string* why) const {
   else if (fix.empty()) problem = "fix must say what to do when no reply comes";
   if (why != nullptr) *why = problem;
   return problem.empty();
+}
+
+LineQueryOptions QueryOptionsOf(const DeviceSpec& spec, int default_retries,
+                                int default_timeout_ms) {
+  LineQueryOptions options;
+  options.port = spec.port;
+  options.attempts = 1 + static_cast<int>(spec.Number("retries", default_retries));
+  options.reply_timeout =
+      milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : default_timeout_ms);
+  return options;
 }
 
 LineQuery::LineQuery(Transport* link, LineQueryOptions options)

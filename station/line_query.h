@@ -67,6 +67,14 @@ struct LineRequest {
   std::string device;  // who is asked, for errors; empty: the options' device
 };
 
+struct DeviceSpec;  // station/driver.h
+
+// A driver's query options from its rig-file entry: its port, its reply_timeout_ms
+// (`default_timeout_ms` when not given) and 1 + its `retries` setting (`default_retries`).
+// The driver adds who answers, the fix and its hooks.
+LineQueryOptions QueryOptionsOf(const DeviceSpec& spec, int default_retries,
+                                int default_timeout_ms);
+
 class LineQuery {
  public:
   // `link` is the driver's transport and outlives this object.

@@ -106,14 +106,11 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
 };
 
 LineQueryOptions ScpiSource::QueryOptions(const DeviceSpec& spec) {
-  LineQueryOptions options;
+  LineQueryOptions options = QueryOptionsOf(spec, 3, 1000);
   options.device = "the SourceMeter";
-  options.port = spec.port;
   options.fix =
       "check the RS-232 cable (straight-through), the baud rate, and that the instrument's "
       "terminator is LF";
-  options.attempts = 1 + static_cast<int>(spec.Number("retries", 3));
-  options.reply_timeout = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 1000);
   options.before_send = [this](int attempt) {
     if (attempt > 0 || out_of_step_) Resync();
   };

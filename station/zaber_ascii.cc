@@ -236,14 +236,11 @@ class ZaberAscii : public DeviceDriver, public Motion {
 };
 
 LineQueryOptions ZaberAscii::QueryOptions(const DeviceSpec& spec) {
-  LineQueryOptions options;
+  LineQueryOptions options = QueryOptionsOf(spec, 4, 500);
   options.device = "the Zaber device";
-  options.port = spec.port;
   options.fix =
       "check the cable, the baud rate (Zaber ASCII default 115200) and the device address in the "
       "rig file";
-  options.attempts = 1 + static_cast<int>(spec.Number("retries", 4));
-  options.reply_timeout = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 500);
   return options;
 }
 

@@ -1,5 +1,5 @@
-// The drivers' query-with-retry helper against a fake line that drops, garbles and delays
-// replies. The device behind it answers "<id> OK" to "<id> ask" (a message id, as Zaber's
+// The drivers' query-with-retry helper against a fake line (tests/station/fake_transport.h)
+// that drops, garbles and delays replies. The device behind it answers "<id> OK" to "<id> ask" (a message id, as Zaber's
 // protocol carries); a delayed reply comes one read later than it should, after the attempt that
 // sent it has given up.
 
@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/station/fake_transport.h"
+
 namespace irdist {
 namespace {
 
@@ -19,45 +21,45 @@ using std::chrono::milliseconds;
 
 enum class Fault { kNone, kDrop, kGarble, kDelay };
 
-struct Line {
-  std::vector<std::string> written;
-  std::deque<std::string> pending;
-  std::deque<std::string> delayed;  // delivered after the next read timed out
-  std::deque<Fault> faults;         // one per written line; kNone once empty
-  std::vector<milliseconds> read_deadlines;
+// The device: answers "<id> OK" to "<id> ask" unless the next fault (one per written line) drops
+// the reply, damages it, or holds it back until the next read has timed out.
+struct Device {
+  std::deque<Fault> faults;
+  std::deque<std::string> delayed;
+  std::vector<std::string> Respond(const std::string& line) {
+    const Fault fault = faults.empty() ? Fault::kNone : faults.front();
+    if (!faults.empty()) faults.pop_front();
+    const std::string id = line.substr(0, line.find(' '));
+    if (fault == Fault::kDrop) return {};
+    if (fault == Fault::kGarble) return {id + " O\x7f"};
+    if (fault == Fault::kDelay) {
+      delayed.push_back(id + " OK");
+      return {};
+    }
+    return {id + " OK"};
+  }
 };
 
-class FaultyTransport : public Transport {
+// The fake wire of the drivers' tests, with the deadline of every read kept and the delayed
+// replies delivered just after a read gave up.
+class DelayingTransport : public FakeTransport {
  public:
-  explicit FaultyTransport(std::shared_ptr<Line> line) : line_(std::move(line)) {}
-  void WriteLine(std::string_view text) override {
-    line_->written.emplace_back(text);
-    const Fault fault = line_->faults.empty() ? Fault::kNone : line_->faults.front();
-    if (!line_->faults.empty()) line_->faults.pop_front();
-    const std::string id = std::string(text.substr(0, text.find(' ')));
-    const std::string reply = id + " OK";
-    if (fault == Fault::kNone) line_->pending.push_back(reply);
-    if (fault == Fault::kGarble) line_->pending.push_back(id + " O\x7f");
-    if (fault == Fault::kDelay) line_->delayed.push_back(reply);
-  }
+  DelayingTransport(std::shared_ptr<FakeWire> wire, Device* device)
+      : FakeTransport(wire), wire_(std::move(wire)), device_(device) {}
   std::string ReadLine(milliseconds deadline) override {
-    line_->read_deadlines.push_back(deadline);
-    if (line_->pending.empty()) {
-      // The delayed reply arrives just after this read gave up.
-      while (!line_->delayed.empty()) {
-        line_->pending.push_back(line_->delayed.front());
-        line_->delayed.pop_front();
-      }
+    read_deadlines.push_back(deadline);
+    if (wire_->pending.empty()) {
+      wire_->pending.insert(wire_->pending.end(), device_->delayed.begin(), device_->delayed.end());
+      device_->delayed.clear();
       throw LinkError("no reply", "fake", "test");
     }
-    std::string text = line_->pending.front();
-    line_->pending.pop_front();
-    return text;
+    return FakeTransport::ReadLine(deadline);
   }
-  void Flush() override { line_->pending.clear(); }
+  std::vector<milliseconds> read_deadlines;
 
  private:
-  std::shared_ptr<Line> line_;
+  std::shared_ptr<FakeWire> wire_;
+  Device* device_;
 };
 
 LineQueryOptions TestOptions() {
@@ -73,8 +75,9 @@ LineQueryOptions TestOptions() {
 // "<id> ask" with a fresh id per attempt; the reply must carry the attempt's id and say OK. A
 // reply with the right id and anything but OK is damaged; another id is a late reply.
 struct Asker {
-  std::shared_ptr<Line> line = std::make_shared<Line>();
-  FaultyTransport transport{line};
+  std::shared_ptr<FakeWire> wire = std::make_shared<FakeWire>();
+  Device device;
+  DelayingTransport transport{wire, &device};
   int next_id = 0;
   int id = 0;
   std::vector<int> before_send_attempts;
@@ -84,6 +87,7 @@ struct Asker {
   explicit Asker(LineQueryOptions options = TestOptions()) {
     options.before_send = [this](int attempt) { before_send_attempts.push_back(attempt); };
     options.after_miss = [this] { ++misses; };
+    wire->respond = [this](const std::string& line) { return device.Respond(line); };
     query = std::make_unique<LineQuery>(&transport, std::move(options));
   }
   LineRequest Request() {
@@ -116,43 +120,43 @@ TEST(LineQueryOptions, DefaultsNeedOnlyTheDeviceAndTheFix) {
 TEST(LineQuery, AnsweredQueryIsSentOnce) {
   Asker a;
   EXPECT_EQ(a.query->Ask(a.Request()), "1 OK");
-  EXPECT_EQ(a.line->written, std::vector<std::string>({"1 ask"}));
+  EXPECT_EQ(a.wire->written, std::vector<std::string>({"1 ask"}));
   EXPECT_EQ(a.before_send_attempts, std::vector<int>({0}));
   EXPECT_EQ(a.misses, 0);
 }
 
 TEST(LineQuery, DroppedReplyIsAskedAgainAfterTheTimeout) {
   Asker a;
-  a.line->faults = {Fault::kDrop, Fault::kDrop};
+  a.device.faults = {Fault::kDrop, Fault::kDrop};
   EXPECT_EQ(a.query->Ask(a.Request()), "3 OK");
-  EXPECT_EQ(a.line->written, std::vector<std::string>({"1 ask", "2 ask", "3 ask"}));
+  EXPECT_EQ(a.wire->written, std::vector<std::string>({"1 ask", "2 ask", "3 ask"}));
   EXPECT_EQ(a.before_send_attempts, std::vector<int>({0, 1, 2}));
   EXPECT_EQ(a.misses, 2);
 }
 
 TEST(LineQuery, GarbledReplyEndsTheAttemptAtOnce) {
   Asker a;
-  a.line->faults = {Fault::kGarble};
+  a.device.faults = {Fault::kGarble};
   EXPECT_EQ(a.query->Ask(a.Request()), "2 OK");
-  EXPECT_EQ(a.line->written.size(), 2u);
+  EXPECT_EQ(a.wire->written.size(), 2u);
   // One read for the garbled line, one for the good reply: no waiting after the damage.
-  EXPECT_EQ(a.line->read_deadlines.size(), 2u);
+  EXPECT_EQ(a.transport.read_deadlines.size(), 2u);
 }
 
 TEST(LineQuery, LateReplyToAnEarlierAttemptIsPassedOver) {
   Asker a;
-  a.line->faults = {Fault::kDelay};
+  a.device.faults = {Fault::kDelay};
   EXPECT_EQ(a.query->Ask(a.Request()), "2 OK");
   // Attempt 2 first reads the late "1 OK" (skipped), then its own reply.
-  EXPECT_EQ(a.line->written, std::vector<std::string>({"1 ask", "2 ask"}));
-  EXPECT_EQ(a.line->read_deadlines.size(), 3u);
+  EXPECT_EQ(a.wire->written, std::vector<std::string>({"1 ask", "2 ask"}));
+  EXPECT_EQ(a.transport.read_deadlines.size(), 3u);
 }
 
 TEST(LineQuery, EveryReadWaitsAtMostTheReplyTimeout) {
   Asker a;
-  a.line->faults = {Fault::kDelay, Fault::kGarble};
+  a.device.faults = {Fault::kDelay, Fault::kGarble};
   a.query->Ask(a.Request());
-  for (const milliseconds deadline : a.line->read_deadlines) {
+  for (const milliseconds deadline : a.transport.read_deadlines) {
     EXPECT_GT(deadline.count(), 0);
     EXPECT_LE(deadline.count(), 200);
   }
@@ -160,7 +164,7 @@ TEST(LineQuery, EveryReadWaitsAtMostTheReplyTimeout) {
 
 TEST(LineQuery, AfterTheLastAttemptATypedErrorNamesTheDeviceAndTheFix) {
   Asker a;
-  a.line->faults = {Fault::kDrop, Fault::kGarble, Fault::kDrop, Fault::kNone};
+  a.device.faults = {Fault::kDrop, Fault::kGarble, Fault::kDrop, Fault::kNone};
   try {
     a.query->Ask(a.Request());
     FAIL() << "expected NoReplyError";
@@ -176,13 +180,13 @@ TEST(LineQuery, AfterTheLastAttemptATypedErrorNamesTheDeviceAndTheFix) {
     EXPECT_NE(what.find("/dev/ttyTEST"), std::string::npos) << what;
     EXPECT_NE(what.find("check the test cable"), std::string::npos) << what;
   }
-  EXPECT_EQ(a.line->written.size(), 3u);  // exactly `attempts` sends, never a fourth
+  EXPECT_EQ(a.wire->written.size(), 3u);  // exactly `attempts` sends, never a fourth
   EXPECT_EQ(a.misses, 3);
 }
 
 TEST(LineQuery, RequestMayNameWhoIsAsked) {
   Asker a;
-  a.line->faults = {Fault::kDrop, Fault::kDrop, Fault::kDrop};
+  a.device.faults = {Fault::kDrop, Fault::kDrop, Fault::kDrop};
   LineRequest request = a.Request();
   request.device = "Zaber device 2";
   try {
@@ -197,19 +201,19 @@ TEST(LineQuery, RetriesFollowTheOptions) {
   LineQueryOptions options = TestOptions();
   options.attempts = 1;
   Asker a(options);
-  a.line->faults = {Fault::kDrop};
+  a.device.faults = {Fault::kDrop};
   EXPECT_THROW(a.query->Ask(a.Request()), NoReplyError);
-  EXPECT_EQ(a.line->written.size(), 1u);
+  EXPECT_EQ(a.wire->written.size(), 1u);
 }
 
 TEST(LineQuery, AskOnceNeverSendsTwice) {
   Asker a;
-  a.line->faults = {Fault::kDrop};
+  a.device.faults = {Fault::kDrop};
   EXPECT_FALSE(a.query->AskOnce(a.Request(), milliseconds(50)).has_value());
-  EXPECT_EQ(a.line->written.size(), 1u);
+  EXPECT_EQ(a.wire->written.size(), 1u);
   EXPECT_EQ(a.misses, 1);
   EXPECT_EQ(a.query->AskOnce(a.Request(), milliseconds(50)).value_or(""), "2 OK");
-  EXPECT_LE(a.line->read_deadlines.back().count(), 50);
+  EXPECT_LE(a.transport.read_deadlines.back().count(), 50);
 }
 
 TEST(LineQuery, AnErrorFromTheJudgeIsNotRetried) {
@@ -217,7 +221,7 @@ TEST(LineQuery, AnErrorFromTheJudgeIsNotRetried) {
   LineRequest request = a.Request();
   request.judge = [](const std::string&) -> ReplyVerdict { throw Error("refused"); };
   EXPECT_THROW(a.query->Ask(request), Error);
-  EXPECT_EQ(a.line->written.size(), 1u);
+  EXPECT_EQ(a.wire->written.size(), 1u);
 }
 
 TEST(LineQuery, WithoutComposeTheQueryIsSentAsItIs) {
@@ -227,9 +231,9 @@ TEST(LineQuery, WithoutComposeTheQueryIsSentAsItIs) {
   request.judge = [](const std::string& reply) {
     return reply == "7 OK" ? ReplyVerdict::kMatch : ReplyVerdict::kSkip;
   };
-  a.line->faults = {Fault::kDrop};
+  a.device.faults = {Fault::kDrop};
   EXPECT_EQ(a.query->Ask(request), "7 OK");
-  EXPECT_EQ(a.line->written, std::vector<std::string>({"7 ask", "7 ask"}));
+  EXPECT_EQ(a.wire->written, std::vector<std::string>({"7 ask", "7 ask"}));
 }
 
 }  // namespace
