@@ -133,9 +133,9 @@ class FlirPtu : public DeviceDriver, public Motion {
 };
 
 LineQueryOptions FlirPtu::QueryOptions(const DeviceSpec& spec) {
-  LineQueryOptions options = QueryOptionsOf(spec, 4, 1000);
-  options.device = "the PTU";
-  options.fix = "check the cable, the baud rate (PTU default 9600) and power";
+  LineQueryOptions options =
+      QueryOptionsOf(spec, 4, 1000, "the PTU",
+                     "check the cable, the baud rate (PTU default 9600) and power");
   // Replies carry no id: whatever arrived before a command (a late reply to an earlier one) is
   // not its reply.
   options.before_send = [this](int) { link_->Flush(); };

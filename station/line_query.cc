@@ -39,8 +39,10 @@ bool LineQueryOptions::IsValid(std::string* why) const {
 }
 
 LineQueryOptions QueryOptionsOf(const DeviceSpec& spec, int default_retries,
-                                int default_timeout_ms) {
+                                int default_timeout_ms, std::string device, std::string fix) {
   LineQueryOptions options;
+  options.device = std::move(device);
+  options.fix = std::move(fix);
   options.port = spec.port;
   options.attempts = 1 + static_cast<int>(spec.Number("retries", default_retries));
   options.reply_timeout =

@@ -70,10 +70,10 @@ struct LineRequest {
 struct DeviceSpec;  // station/driver.h
 
 // A driver's query options from its rig-file entry: its port, its reply_timeout_ms
-// (`default_timeout_ms` when not given) and 1 + its `retries` setting (`default_retries`).
-// The driver adds who answers, the fix and its hooks.
+// (`default_timeout_ms` when not given) and 1 + its `retries` setting (`default_retries`);
+// `device` and `fix` as in LineQueryOptions. The driver adds its hooks.
 LineQueryOptions QueryOptionsOf(const DeviceSpec& spec, int default_retries,
-                                int default_timeout_ms);
+                                int default_timeout_ms, std::string device, std::string fix);
 
 class LineQuery {
  public:

@@ -106,11 +106,10 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
 };
 
 LineQueryOptions ScpiSource::QueryOptions(const DeviceSpec& spec) {
-  LineQueryOptions options = QueryOptionsOf(spec, 3, 1000);
-  options.device = "the SourceMeter";
-  options.fix =
+  LineQueryOptions options = QueryOptionsOf(
+      spec, 3, 1000, "the SourceMeter",
       "check the RS-232 cable (straight-through), the baud rate, and that the instrument's "
-      "terminator is LF";
+      "terminator is LF");
   options.before_send = [this](int attempt) {
     if (attempt > 0 || out_of_step_) Resync();
   };

@@ -28,6 +28,9 @@ constexpr char kName[] = "zaber_ascii";
 constexpr double kSpeedDataPerMicrostepS = 1.6384;
 constexpr double kAccelDataPerMicrostepS2 = 1.6384 / 10000.0;
 constexpr milliseconds kPollPeriod{20};
+constexpr char kNoReplyFix[] =
+    "check the cable, the baud rate (Zaber ASCII default 115200) and the device address in the "
+    "rig file";
 
 struct Address {
   int device = 1;
@@ -153,7 +156,9 @@ struct AxisState {
 class ZaberAscii : public DeviceDriver, public Motion {
  public:
   ZaberAscii(const DeviceSpec& spec, std::unique_ptr<Transport> link)
-      : spec_(spec), link_(std::move(link)), query_(link_.get(), QueryOptions(spec)) {
+      : spec_(spec),
+        link_(std::move(link)),
+        query_(link_.get(), QueryOptionsOf(spec, 4, 500, "the Zaber device", kNoReplyFix)) {
     identity_.kind = kName;
     identity_.port = spec.port;
     identity_.vendor = "Zaber";
@@ -195,7 +200,6 @@ class ZaberAscii : public DeviceDriver, public Motion {
   void CheckAlive() override;
 
  private:
-  LineQueryOptions QueryOptions(const DeviceSpec& spec);
   std::string Compose(const Address& a, int axis, const std::string& command, int* id);
   ReplyVerdict Judge(const Address& a, int axis, int id, const std::string& line, Reply* reply);
   LineRequest Request(const Address& a, int axis, const std::string& command, Reply* reply);
@@ -234,15 +238,6 @@ class ZaberAscii : public DeviceDriver, public Motion {
   int next_id_ = 0;
   bool homed_ = false;
 };
-
-LineQueryOptions ZaberAscii::QueryOptions(const DeviceSpec& spec) {
-  LineQueryOptions options = QueryOptionsOf(spec, 4, 500);
-  options.device = "the Zaber device";
-  options.fix =
-      "check the cable, the baud rate (Zaber ASCII default 115200) and the device address in the "
-      "rig file";
-  return options;
-}
 
 // "/device axis id command[:CC]" with the next message id (manual: ids 0-99), kept in *id.
 std::string ZaberAscii::Compose(const Address& a, int axis, const std::string& command, int* id) {

@@ -117,6 +117,21 @@ TEST(LineQueryOptions, DefaultsNeedOnlyTheDeviceAndTheFix) {
   EXPECT_NE(why.find("attempts"), std::string::npos);
 }
 
+TEST(LineQueryOptions, FromTheRigFileEntryWithTheDriversDefaults) {
+  DeviceSpec spec = FakeDeviceSpec("head", "flir_ptu", "/dev/ttyUSB1", 10);
+  LineQueryOptions options = QueryOptionsOf(spec, 4, 1000, "the PTU", "check the cable");
+  EXPECT_EQ(options.attempts, 5);
+  EXPECT_EQ(options.reply_timeout, milliseconds(1000));
+  EXPECT_EQ(options.port, "/dev/ttyUSB1");
+  EXPECT_EQ(options.device, "the PTU");
+  EXPECT_EQ(options.fix, "check the cable");
+  spec.settings["retries"] = {"0", 12};
+  spec.reply_timeout_ms = 250;
+  options = QueryOptionsOf(spec, 4, 1000, "the PTU", "check the cable");
+  EXPECT_EQ(options.attempts, 1);
+  EXPECT_EQ(options.reply_timeout, milliseconds(250));
+}
+
 TEST(LineQuery, AnsweredQueryIsSentOnce) {
   Asker a;
   EXPECT_EQ(a.query->Ask(a.Request()), "1 OK");
