@@ -15,8 +15,8 @@
 #include <sstream>
 #include <thread>
 
-#include "base/input_error.h"
 #include "station/driver.h"
+#include "station/serial_driver.h"
 #include "station/line_query.h"
 
 namespace irdist {
@@ -443,8 +443,7 @@ void FlirPtu::CheckAlive() {
 }
 
 [[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {
-  throw InputError(spec.file, spec.line, 0, "station.devices." + spec.name + " (flir_ptu): " +
-                                                message + "; see docs/devices/flir_ptu.md");
+  InvalidEntry(spec, kName, message);
 }
 
 void Validate(const DeviceSpec& spec) {
@@ -472,22 +471,11 @@ void Validate(const DeviceSpec& spec) {
   if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
 }
 
+// Lines end with "\r" (manual: a command ends with a delimiter, [SPACE] or [ENTER]; a carriage
+// return is [ENTER] and also ends the line for readers that execute whole lines only); 9600 baud,
+// replies within 1000 ms.
 DriverInfo MakePtuInfo() {
-  DriverInfo info;
-  info.name = kName;
-  // Manual: a command ends with a delimiter, [SPACE] or [ENTER]; a carriage return is [ENTER]
-  // and also ends the line for readers that execute whole lines only.
-  info.line_end = "\r";
-  info.default_baud = 9600;
-  info.default_reply_timeout_ms = 1000;
-  info.roles = {"motion"};
-  info.doc = "docs/devices/flir_ptu.md";
-  info.validate = Validate;
-  info.create = [](const DeviceSpec& spec, std::unique_ptr<Transport> link) {
-    Validate(spec);
-    return std::unique_ptr<DeviceDriver>(new FlirPtu(spec, std::move(link)));
-  };
-  return info;
+  return SerialDriverInfo<FlirPtu>(kName, "\r", 9600, 1000, {"motion"}, Validate);
 }
 
 }  // namespace

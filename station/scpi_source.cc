@@ -13,8 +13,8 @@
 #include <cstdio>
 #include <sstream>
 
-#include "base/input_error.h"
 #include "station/driver.h"
+#include "station/serial_driver.h"
 #include "station/line_query.h"
 
 namespace irdist {
@@ -336,8 +336,7 @@ void ScpiSource::CheckAlive() {
 }
 
 [[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {
-  throw InputError(spec.file, spec.line, 0, "station.devices." + spec.name + " (scpi_source): " +
-                                                message + "; see docs/devices/scpi_source.md");
+  InvalidEntry(spec, kName, message);
 }
 
 void Validate(const DeviceSpec& spec) {
@@ -353,20 +352,10 @@ void Validate(const DeviceSpec& spec) {
   if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
 }
 
+// Lines end with "\n" (the instrument's RS-232 terminator must be set to LF); 9600 baud,
+// replies within 1000 ms.
 DriverInfo MakeScpiInfo() {
-  DriverInfo info;
-  info.name = kName;
-  info.line_end = "\n";  // the instrument's RS-232 terminator must be set to LF
-  info.default_baud = 9600;
-  info.default_reply_timeout_ms = 1000;
-  info.roles = {"source"};
-  info.doc = "docs/devices/scpi_source.md";
-  info.validate = Validate;
-  info.create = [](const DeviceSpec& spec, std::unique_ptr<Transport> link) {
-    Validate(spec);
-    return std::unique_ptr<DeviceDriver>(new ScpiSource(spec, std::move(link)));
-  };
-  return info;
+  return SerialDriverInfo<ScpiSource>(kName, "\n", 9600, 1000, {"source"}, Validate);
 }
 
 }  // namespace

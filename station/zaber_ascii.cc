@@ -12,8 +12,8 @@
 #include <sstream>
 #include <thread>
 
-#include "base/input_error.h"
 #include "station/driver.h"
+#include "station/serial_driver.h"
 #include "station/line_query.h"
 
 namespace irdist {
@@ -551,8 +551,7 @@ void ZaberAscii::CheckAlive() {
 }
 
 [[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {
-  throw InputError(spec.file, spec.line, 0, "station.devices." + spec.name + " (zaber_ascii): " +
-                                                message + "; see docs/devices/zaber_ascii.md");
+  InvalidEntry(spec, kName, message);
 }
 
 void CheckStepKeys(const DeviceSpec& spec, const std::string& unit) {
@@ -593,20 +592,10 @@ void Validate(const DeviceSpec& spec) {
   if (checksum != "true" && checksum != "false") Invalid(spec, "checksum must be true or false");
 }
 
+// Lines end with "\n" (manual: CR, LF or both end a command; replies end with CR LF); 115200
+// baud, replies within 500 ms.
 DriverInfo MakeZaberInfo() {
-  DriverInfo info;
-  info.name = kName;
-  info.line_end = "\n";  // manual: CR, LF or both end a command; replies end with CR LF
-  info.default_baud = 115200;
-  info.default_reply_timeout_ms = 500;
-  info.roles = {"motion"};
-  info.doc = "docs/devices/zaber_ascii.md";
-  info.validate = Validate;
-  info.create = [](const DeviceSpec& spec, std::unique_ptr<Transport> link) {
-    Validate(spec);
-    return std::unique_ptr<DeviceDriver>(new ZaberAscii(spec, std::move(link)));
-  };
-  return info;
+  return SerialDriverInfo<ZaberAscii>(kName, "\n", 115200, 500, {"motion"}, Validate);
 }
 
 }  // namespace
