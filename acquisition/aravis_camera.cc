@@ -326,15 +326,17 @@ struct AravisCamera::Impl {
                  "socket-buffer-size", socket_bytes, "packet-resend",
                  resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS : ARV_GV_STREAM_PACKET_RESEND_NEVER,
                  "frame-retention", static_cast<guint>(settings.frame_retention_ms * 1000),
-                 nullptr);
+                 "packet-request-ratio", settings.packet_request_ratio, nullptr);
     gint size_back = 0;
     guint retention_back = 0;
+    double ratio_back = 0.0;
     g_object_get(raw_stream, "socket-buffer-size", &size_back, "frame-retention",
-                 &retention_back, nullptr);
+                 &retention_back, "packet-request-ratio", &ratio_back, nullptr);
     if (size_back != socket_bytes ||
-        retention_back != static_cast<guint>(settings.frame_retention_ms * 1000)) {
+        retention_back != static_cast<guint>(settings.frame_retention_ms * 1000) ||
+        std::fabs(ratio_back - settings.packet_request_ratio) > 1e-9) {
       throw CameraError("camera " + Name() +
-                        ": the stream did not keep its socket buffer / frame retention "
+                        ": the stream did not keep its socket buffer / frame retention / packet request ratio "
                         "settings; this Aravis version is not supported (need 0.8.x).");
     }
   }
@@ -425,6 +427,11 @@ struct AravisCamera::Impl {
       if (s.trigger_source != "Software" && Has("TriggerActivation")) {
         SetEnum("TriggerActivation", s.trigger_activation,
                 "Set camera.trigger_activation in the rig file to a value the camera offers.");
+      }
+      if (s.trigger_overlap_readout && Has("TriggerOverlap")) {
+        SetEnum("TriggerOverlap", "ReadOut",
+                "Set camera.trigger_overlap: off in the rig file: this camera has no ReadOut "
+                "overlap.");
       }
     }
     if (!s.triggered && s.frame_rate_hz > 0.0) {

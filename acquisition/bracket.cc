@@ -1,5 +1,6 @@
 #include "acquisition/bracket.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <thread>
@@ -82,7 +83,7 @@ std::string CaptureStats::BriefReport() const {
       << " [timeouts " << timeouts << ", damaged " << damaged << ", wrong exposure "
       << wrong_exposure << ", duplicates " << duplicates << ", late " << late << ", stray "
       << stray << ", id gaps " << id_gaps << ", warm-up " << warmup << ", pipelined "
-      << pipelined_frames << ", exposure re-reads " << exposure_rereads << "], packets resent "
+      << pipelined_frames << ", fired in readout " << fired_in_readout << ", exposure re-reads " << exposure_rereads << "], packets resent "
       << transfer.resent_packets << " of " << transfer.resend_requests << " asked, missing "
       << transfer.missing_packets;
   return out.str();
@@ -189,19 +190,67 @@ BracketCapture::Outcome BracketCapture::AwaitFrame(const PlannedFrame& plan, dou
   }
 }
 
+std::chrono::steady_clock::time_point BracketCapture::StartFrame(const PlannedFrame& plan,
+                                                                 const Trigger& trigger) {
+  if (started_ahead_) {
+    const auto started = *started_ahead_;
+    started_ahead_.reset();
+    return started;
+  }
+  trigger(plan.frame_in_bracket);
+  return std::chrono::steady_clock::now();
+}
+
+bool BracketCapture::FiresAhead(const PlannedFrame& plan, const PlannedFrame& next) const {
+  const double tolerance = options_.exposure_tolerance * std::max(plan.exposure_us, next.exposure_us);
+  return options_.trigger_in_readout &&
+         std::fabs(next.exposure_us - plan.exposure_us) > std::max(2.0 * tolerance, 1e-6);
+}
+
 BracketCapture::Outcome BracketCapture::Attempt(const PlannedFrame& plan, double readback_us,
                                                 const Trigger& trigger, const PlannedFrame* next,
                                                 BracketFrame* out) {
-  trigger(plan.frame_in_bracket);
-  const auto triggered = std::chrono::steady_clock::now();
+  const auto started = StartFrame(plan, trigger);
+  const auto exposure_end = started + std::chrono::microseconds(std::llround(plan.exposure_us)) +
+                            options_.pipeline_margin;
+  std::optional<std::chrono::steady_clock::time_point> fired_next_at;
+  if (next == nullptr && plan.frame_in_bracket == last_frame_ && during_last_readout_) {
+    std::this_thread::sleep_until(exposure_end);
+    during_last_readout_();
+  }
   if (next != nullptr) {
     // The frame latched its exposure when it started: the next one can be written now, while
-    // this frame is read out.
-    const auto exposure = std::chrono::microseconds(std::llround(plan.exposure_us));
-    std::this_thread::sleep_until(triggered + exposure + options_.pipeline_margin);
+    // this frame is read out (and, with trigger_in_readout, the next frame triggered).
+    std::this_thread::sleep_until(exposure_end);
     camera_.WriteExposureUs(next->exposure_us);
+    if (FiresAhead(plan, *next)) {
+      trigger(next->frame_in_bracket);
+      fired_next_at = std::chrono::steady_clock::now();
+      ++stats_.fired_in_readout;
+    }
   }
-  return AwaitFrame(plan, readback_us, triggered + options_.frame_timeout, out);
+  const Outcome outcome = AwaitFrame(plan, readback_us, started + options_.frame_timeout, out);
+  if (fired_next_at) {
+    if (outcome == Outcome::kOk) {
+      started_ahead_ = std::max(*fired_next_at, std::chrono::steady_clock::now());
+    } else {
+      // The successor's frame is on its way: it must not be taken for this frame's retry.
+      DiscardFrameFiredAhead(*next);
+    }
+  }
+  return outcome;
+}
+
+void BracketCapture::DiscardFrameFiredAhead(const PlannedFrame& next) {
+  const auto exposure = std::chrono::microseconds(std::llround(next.exposure_us));
+  if (auto frame = camera_.WaitFrame(
+          std::chrono::duration_cast<std::chrono::milliseconds>(exposure) + options_.frame_timeout)) {
+    if (AcceptId(frame->frame_id, frame->timestamp_ns)) {
+      ++stats_.late;
+    } else {
+      ++stats_.duplicates;
+    }
+  }
 }
 
 void BracketCapture::CountFailure(Outcome outcome, BracketFrame* frame) {
@@ -272,11 +321,15 @@ void BracketCapture::PrepareStream(const Trigger& trigger) {
   stats_.stray += camera_.Flush();
 }
 
-BracketResult BracketCapture::Capture(const Trigger& trigger, const FrameSink& on_frame) {
+BracketResult BracketCapture::Capture(const Trigger& trigger, const FrameSink& on_frame,
+                                      std::function<void()> during_last_readout) {
   IRDIST_CHECK(static_cast<bool>(trigger), "Capture() needs a trigger callable");
+  during_last_readout_ = std::move(during_last_readout);
   ++stats_.brackets;
   PrepareStream(trigger);
   const std::vector<PlannedFrame> plan = PlanBracket(options_);
+  started_ahead_.reset();
+  last_frame_ = static_cast<int>(plan.size()) - 1;
   // Pipelined, the first exposure is programmed (and read back) while the camera is idle.
   if (Pipelining()) ProgramExposure(plan.front().exposure_us);
   BracketResult result;

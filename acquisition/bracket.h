@@ -14,6 +14,11 @@
 //   pipeline_margin), without a read-back; the frame's own chunk says what it was taken with, so a
 //   write that came late or early makes a wrong-exposure frame that is retried, never a mislabelled
 //   one. The per-frame cost beyond exposure + readout is the trigger and the transfer.
+//   With trigger_in_readout (a camera that takes a trigger during readout: GenICam TriggerOverlap
+//   ReadOut, or one that queues it), frame N+1 is triggered right after its exposure is written,
+//   still in frame N's readout, so it starts as the sensor frees: the trigger latency and the
+//   transfer leave the frame period too. A frame N that fails then waits for N+1's frame and
+//   discards it before the retry; each frame is still checked against its own chunk.
 // - serial (no chunks): exposure N+1 is written after frame N has arrived and read back until the
 //   camera reports it (a camera may apply a write late), then the trigger fires; the read-back is
 //   the frame's exposure.
@@ -21,6 +26,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +58,9 @@ struct BracketOptions {
   bool pipelined = true;
   // Time after trigger + exposure before the next exposure is written (covers the trigger latency).
   std::chrono::microseconds pipeline_margin{500};
+  // Pipelined only: the camera accepts a trigger while it reads the previous frame out (see above).
+  // The rig file's camera.trigger_overlap: readout. false = trigger after the frame arrived.
+  bool trigger_in_readout = false;
   // Serial mode: how long a written exposure may take to read back before it is a CameraError.
   std::chrono::milliseconds exposure_settle_timeout{500};
   bool IsValid(std::string* why) const;
@@ -108,6 +117,7 @@ struct CaptureStats {
   std::int64_t id_gaps = 0;            // frame ids skipped by the camera
   std::int64_t warmup = 0;             // warm-up frames fired and discarded
   std::int64_t pipelined_frames = 0;   // frames whose successor's exposure was written in readout
+  std::int64_t fired_in_readout = 0;   // triggers fired during the previous frame's readout
   std::int64_t exposure_rereads = 0;   // read-backs that still showed the old value
   TransferStats transfer;              // the camera's packet counters (resends, missing packets)
   std::string BriefReport() const;
@@ -128,7 +138,11 @@ class BracketCapture {
   // triggered (so it must return quickly: e.g. hand the frame to a worker that stores it while the
   // next one is exposed). Frames of a bracket that ends incomplete are seen too.
   using FrameSink = std::function<void(const BracketFrame& frame)>;
-  BracketResult Capture(const Trigger& trigger, const FrameSink& on_frame = {});
+  // `during_last_readout`, when given, runs once the last frame's exposure has ended, while it is
+  // read out (again if that frame is retaken): host work that needs the bracket's light to be
+  // over (the IRED current's read-back) costs no time there. Its exceptions propagate.
+  BracketResult Capture(const Trigger& trigger, const FrameSink& on_frame = {},
+                        std::function<void()> during_last_readout = {});
 
   const BracketOptions& options() const { return options_; }
   const CaptureStats& stats() const { return stats_; }
@@ -144,6 +158,14 @@ class BracketCapture {
                  BracketFrame* frame, bool* next_programmed);
   Outcome Attempt(const PlannedFrame& plan, double readback_us, const Trigger& trigger,
                   const PlannedFrame* next, BracketFrame* out);
+  // Fires `plan`'s trigger unless it was fired during the previous frame's readout; returns a
+  // time no earlier than the frame's start.
+  std::chrono::steady_clock::time_point StartFrame(const PlannedFrame& plan,
+                                                   const Trigger& trigger);
+  // Whether `next` may be triggered during `plan`'s readout (its frame is told apart by its chunk).
+  bool FiresAhead(const PlannedFrame& plan, const PlannedFrame& next) const;
+  // Waits for the frame of `next`'s trigger fired in a failed frame's readout and discards it.
+  void DiscardFrameFiredAhead(const PlannedFrame& next);
   Outcome AwaitFrame(const PlannedFrame& plan, double readback_us,
                      std::chrono::steady_clock::time_point deadline, BracketFrame* out);
   void CountFailure(Outcome outcome, BracketFrame* frame);
@@ -157,6 +179,11 @@ class BracketCapture {
   bool have_last_ = false;
   std::uint64_t last_id_ = 0;
   std::uint64_t last_timestamp_ns_ = 0;
+  // Set when the frame just taken had its successor's trigger fired in its readout: a time no
+  // earlier than the successor's start (the later of that trigger and the frame's arrival).
+  std::optional<std::chrono::steady_clock::time_point> started_ahead_;
+  std::function<void()> during_last_readout_;  // of the Capture() in progress
+  int last_frame_ = -1;                        // frame_in_bracket of its last frame
 };
 
 }  // namespace irdist

@@ -23,6 +23,9 @@ bool CameraSettings::IsValid(std::string* why) const {
   if (buffer_count < 2) return fail("buffer_count must be >= 2");
   if (warmup_frames < 0) return fail("warmup_frames must be >= 0");
   if (frame_retention_ms < 1) return fail("frame_retention_ms must be >= 1");
+  if (!(packet_request_ratio > 0.0 && packet_request_ratio <= 2.0)) {
+    return fail("packet_request_ratio must be in (0, 2]");
+  }
   if (!(readback_tolerance >= 0.0 && readback_tolerance < 0.5)) {
     return fail("readback_tolerance must be in [0, 0.5)");
   }

@@ -25,12 +25,13 @@ void BracketCommitter::Confirmed() {
   waited_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-void BracketCommitter::Abandon(std::ostream& err) {
+void BracketCommitter::Abandon(std::ostream& err, const std::string& stopped_by) {
   recorder_.DropPending();
   try {
     recorder_.WaitCommitted();
   } catch (const Error& e) {
-    err << "\nirdist: also: " << e.what() << "\n";
+    // The commit's own error is often the one that stopped the sweep: said once.
+    if (stopped_by != e.what()) err << "\nirdist: also: " << e.what() << "\n";
   }
 }
 

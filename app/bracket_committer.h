@@ -41,8 +41,9 @@ class BracketCommitter {
   // The sweep confirmed the pose: append its frames and wait until they are in the recording.
   void Confirmed();
   // The sweep failed or stopped: the unconfirmed bracket is dropped, the commit in flight ends
-  // (its error, if any, is written to `err` after the one that stopped the sweep).
-  void Abandon(std::ostream& err);
+  // (its error, if any, is written to `err` after the one that stopped the sweep, the text
+  // `stopped_by`, unless it is that one).
+  void Abandon(std::ostream& err, const std::string& stopped_by = "");
 
   int done_count() const { return done_count_; }
   // Host time the sweep waited for brackets to reach the recording, s.

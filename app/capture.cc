@@ -8,6 +8,7 @@
 #include <chrono>
 #include <future>
 #include <iostream>
+#include <optional>
 
 #include "acquisition/aravis_camera.h"
 #include "acquisition/bracket.h"
@@ -130,6 +131,7 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   settings.offset_y = setup.roi_offset_y;
   settings.width = setup.roi_width;
   settings.height = setup.roi_height;
+  settings.trigger_overlap_readout = setup.trigger_in_readout;
   IRDIST_CHECK(!setup.exposures_us.empty(), "a bracket needs exposures");
   settings.exposure_us = setup.exposures_us.front();
   settings.buffer_count =
@@ -163,6 +165,7 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   options.interleave_reference = setup.interleave_reference;
   options.trigger_source = setup.trigger_source;
   options.frame_timeout = std::chrono::milliseconds(setup.frame_timeout_ms);
+  options.trigger_in_readout = setup.trigger_in_readout;
   m.capture = std::make_unique<BracketCapture>(*m.camera, options);
   m.software_trigger = std::make_unique<CameraSoftwareTrigger>(*m.camera);
 }
@@ -179,10 +182,13 @@ void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int
   const BracketCapture::FrameSink stage = [&m](const BracketFrame& frame) {
     m.StageAsync(frame.image);
   };
-  BracketResult result = m.capture->Capture(trigger, stage);
+  // The current is read back while the last frame is read out (its light is over by then).
+  std::optional<double> measured_ma;
+  const auto measure = [&] { measured_ma = measure_current_ma(); };
+  BracketResult result = m.capture->Capture(trigger, stage, measure);
   if (!result.complete) {
     m.DropStaged();
-    result = m.capture->Capture(trigger, stage);
+    result = m.capture->Capture(trigger, stage, measure);
   }
   if (!result.complete) {
     m.DropStaged();
@@ -191,7 +197,7 @@ void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int
                       "). Check the trigger wiring (camera " + m.setup.trigger_source +
                       ") and the camera link, then resume the run.");
   }
-  m.pending_measured_ma = measure_current_ma();
+  m.pending_measured_ma = measured_ma ? *measured_ma : measure_current_ma();
   m.pending = std::move(result);
   m.pending_pose = pose;
   m.has_pending = true;

@@ -31,6 +31,7 @@ struct LiveCaptureSetup {
   std::vector<double> exposures_us;  // t_r first, then the t_n
   bool interleave_reference = false;
   int frame_timeout_ms = 1000;
+  bool trigger_in_readout = false;  // the rig's camera.trigger_overlap is readout
   // The recording: a new one (header from these) or a cut one to continue.
   std::string recording_dir;
   bool resume = false;

@@ -54,6 +54,7 @@ CameraSettings SettingsOf(const CameraConfig& c, const std::string& trigger_sour
   s.offset_y = c.roi_offset_y;
   s.width = c.roi_width;
   s.height = c.roi_height;
+  s.trigger_overlap_readout = c.trigger_in_readout;
   s.exposure_us = options.first_exposure_us;
   s.buffer_count = std::max(s.buffer_count, options.buffer_count);
   return s;

@@ -70,7 +70,8 @@ std::string MeasureJson(const MeasureSample& s) {
   const bool ok = s.have_estimate && e.ok;
   std::ostringstream out;
   out << "{\"schema\":\"irdist.measure/" << kMeasureJsonVersion << "\",\"bracket\":" << s.bracket
-      << ",\"time_s\":" << JsonNumber(s.time_s) << ",\"ok\":" << JsonBool(ok)
+      << ",\"time_s\":" << JsonNumber(s.time_s)
+      << ",\"latency_ms\":" << JsonNumber(s.latency_ms) << ",\"ok\":" << JsonBool(ok)
       << ",\"d_mm\":" << JsonNumber(ok ? e.d_mm : NAN)
       << ",\"d_se_mm\":" << JsonNumber(ok ? Se(e.d_std_mm) : NAN)
       << ",\"theta_deg\":" << JsonNumber(ok ? e.theta_deg : NAN)
@@ -122,6 +123,7 @@ double MeasureStats::Moments::Sd() const { return n > 1 ? std::sqrt(m2 / (n - 1)
 
 void MeasureStats::Add(const MeasureSample& s) {
   ++count_;
+  if (std::isfinite(s.latency_ms)) latency_.Add(s.latency_ms);
   if (!s.have_estimate || !s.estimate.ok) return;
   ++estimated_;
   d_.Add(s.estimate.d_mm);
@@ -147,6 +149,7 @@ std::string MeasureStats::Report(double wall_s) const {
   line("x", x_, "mm", 2);
   line("y", y_, "mm", 2);
   line("z", z_, "mm", 2);
+  line("latency (last frame to estimate)", latency_, "ms", 3);
   return out.str();
 }
 
@@ -217,6 +220,7 @@ class Session {
     capture.interleave_reference = bracket.retake_reference;
     capture.trigger_source = live_->trigger_source();
     capture.frame_timeout = std::chrono::milliseconds(live_->frame_timeout_ms());
+    capture.trigger_in_readout = live_->rig().camera.trigger_in_readout;
     capture_ = std::make_unique<BracketCapture>(live_->camera(), capture);
     if (args.record) OpenRecording();
   }
@@ -231,7 +235,12 @@ class Session {
  private:
   void CheckModel(CommandIo io);
   void OpenRecording();
-  std::vector<FrameRecord> Records(const BracketResult& result, FeatureMap* features);
+  // Captures one bracket (retaken once if incomplete); each frame's features are computed as it
+  // arrives, while the next frame is exposed. `last_frame_at` = when the last frame was handed over.
+  BracketResult CaptureWithFeatures(std::vector<Features>* arrived,
+                                    std::chrono::steady_clock::time_point* last_frame_at);
+  std::vector<FrameRecord> Records(const BracketResult& result,
+                                   const std::vector<Features>& arrived, FeatureMap* features);
   MeasureSample SampleOf(const RecordedBracket& bracket, const FeatureMap& features,
                          const BracketEstimateRows& rows);
 
@@ -282,10 +291,12 @@ void Session::OpenRecording() {
 }
 
 std::vector<FrameRecord> Session::Records(const BracketResult& result,
-                                                 FeatureMap* features) {
+                                          const std::vector<Features>& arrived,
+                                          FeatureMap* features) {
   std::vector<FrameRecord> records;
   const int size = static_cast<int>(result.frames.size());
-  for (const BracketFrame& frame : result.frames) {
+  for (std::size_t i = 0; i < result.frames.size(); ++i) {
+    const BracketFrame& frame = result.frames[i];
     FrameRecord record = RecordFromFrame(frame, size);
     record.bracket_id = next_bracket_;
     record.bias_ma_set = truth_.bias_ma;
@@ -299,24 +310,39 @@ std::vector<FrameRecord> Session::Records(const BracketResult& result,
     } else {
       record.index = next_index_++;
     }
-    (*features)[record.index] = FrameFeatures(frame.image, live_->bit_depth(), model_.features,
-                                              BlobFitModelOf(model_));
+    (*features)[record.index] = arrived[i];
     records.push_back(record);
   }
   return records;
 }
 
-MeasureSample Session::Next(double time_s) {
-  BracketResult result = capture_->Capture(live_->Trigger());
-  if (!result.complete) result = capture_->Capture(live_->Trigger());
+BracketResult Session::CaptureWithFeatures(std::vector<Features>* arrived,
+                                           std::chrono::steady_clock::time_point* last_frame_at) {
+  const BracketCapture::FrameSink on_frame = [&](const BracketFrame& frame) {
+    *last_frame_at = std::chrono::steady_clock::now();
+    arrived->push_back(
+        FrameFeatures(frame.image, live_->bit_depth(), model_.features, BlobFitModelOf(model_)));
+  };
+  BracketResult result = capture_->Capture(live_->Trigger(), on_frame);
+  if (!result.complete) {
+    arrived->clear();
+    result = capture_->Capture(live_->Trigger(), on_frame);
+  }
   if (!result.complete) {
     throw CameraError("bracket " + std::to_string(next_bracket_) + " incomplete twice (" +
                       result.failure + "; " + capture_->stats().BriefReport() +
                       "). Check the camera link and its trigger.");
   }
+  return result;
+}
+
+MeasureSample Session::Next(double time_s) {
+  std::vector<Features> arrived;
+  std::chrono::steady_clock::time_point last_frame_at;
+  const BracketResult result = CaptureWithFeatures(&arrived, &last_frame_at);
   FeatureMap features;
   RecordedBracket bracket;
-  bracket.frames = Records(result, &features);
+  bracket.frames = Records(result, arrived, &features);
   bracket.bracket_id = next_bracket_++;
   bracket.bracket_size = static_cast<int>(bracket.frames.size());
   bracket.complete = true;
@@ -324,6 +350,9 @@ MeasureSample Session::Next(double time_s) {
   AppendBracketRows(rows, &all_);
   MeasureSample sample = SampleOf(bracket, features, rows);
   sample.time_s = time_s;
+  sample.latency_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
+                                                                last_frame_at)
+                          .count();
   last_image_ = result.frames.back().image;
   last_features_ = features.at(bracket.frames.back().index);
   return sample;

@@ -7,6 +7,7 @@
 // `--out DIR` writes DIR/estimates.csv (validate's columns; ground truth empty unless --at) and,
 // with --record, DIR/recording/ that `irdist playback` turns into the same estimates.csv.
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -26,6 +27,10 @@ constexpr int kMeasureJsonVersion = 1;
 struct MeasureSample {
   std::int64_t bracket = 0;
   double time_s = 0.0;  // host seconds since the first bracket started
+  // Host ms from the bracket's last frame (handed over by the grabber) to its estimate; the frames'
+  // features are computed as they arrive, so this is the last frame's features and the solve
+  // (and, with --record, the recording's writes).
+  double latency_ms = std::nan("");
   EstimateRow estimate;  // the i0_free joint row
   bool have_estimate = false;
   double blob_x_px = 0.0, blob_y_px = 0.0;  // centroid in the sensor's pixels
@@ -60,7 +65,7 @@ class MeasureStats {
   };
   int count_ = 0;
   int estimated_ = 0;
-  Moments d_, theta_, x_, y_, z_;
+  Moments d_, theta_, x_, y_, z_, latency_;
 };
 
 struct CalibrationModel;

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "acquisition/recording.h"
+#include "app/crb.h"
 #include "base/process.h"
 
 #ifndef IRDIST_VERSION
@@ -707,6 +708,38 @@ ReportFields CalibrationReportFields(const std::string& recording_dir,
   return fields;
 }
 
+namespace {
+
+// The Cramer-Rao bound beside a method's figures, in one line of the header.
+std::string CrbFiguresText(const CrbFigures& c) {
+  if (!c.available) return c.source;
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(2) << "distance sd bound " << c.distance_sd_bound_mm_min
+      << "-" << c.distance_sd_bound_mm_max << " mm";
+  if (std::isfinite(c.distance_error_over_bound_rms)) {
+    out << ", error/bound rms " << c.distance_error_over_bound_rms;
+  }
+  if (c.theta_ge15_count > 0) {
+    out << std::setprecision(3) << "; theta (>= 15 deg) sd bound " << c.theta_ge15_sd_bound_deg_min
+        << "-" << c.theta_ge15_sd_bound_deg_max << " deg, error rms "
+        << c.theta_ge15_error_rms_deg << " deg = " << std::setprecision(2)
+        << c.theta_ge15_error_over_bound_rms << "x bound; max at the bound (median of runs) "
+        << std::setprecision(3) << c.theta_ge15_max_at_bound_deg_median << " deg";
+  }
+  if (c.dispersion_ratio_max) {
+    out << std::setprecision(2) << "; dispersion / bound max " << *c.dispersion_ratio_max;
+    if (c.theta_dispersion_ratio_max) out << " (theta " << *c.theta_dispersion_ratio_max << ")";
+    for (const CrbPoseRatio& p : c.dispersion) {
+      out << std::setprecision(0) << "; " << p.d_mm << " mm " << p.theta_deg << " deg "
+          << p.bias_ma << " mA: " << std::setprecision(2) << p.distance_sd_mm << " / "
+          << p.distance_sd_bound_mm << " mm";
+    }
+  }
+  return out.str();
+}
+
+}  // namespace
+
 ReportFields ValidationReportFields(const std::map<std::string, std::string>& context,
                                     const ValidationSummary& summary) {
   ReportFields fields;
@@ -723,6 +756,11 @@ ReportFields ValidationReportFields(const std::map<std::string, std::string>& co
   }
   for (const MethodSummary& m : summary.methods) {
     fields.push_back({"method " + m.method, ErrorFiguresText(m.all)});
+  }
+  const std::map<std::string, CrbFigures> crb = ValidationCrb(context, summary);
+  for (const MethodSummary& m : summary.methods) {
+    const auto it = crb.find(m.method);
+    if (it != crb.end()) fields.push_back({"CRB " + m.method, CrbFiguresText(it->second)});
   }
   return fields;
 }

@@ -79,7 +79,8 @@ CameraIntrinsics ReadIntrinsics(const YAML::Node& node, const std::string& file)
 CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   const MapReader map(node, file, "camera",
                       {"id", "pixel_format", "trigger_source", "trigger_activation", "black_level",
-                       "packet_size", "frame_timeout_ms", "readout_ms", "roi_px", "intrinsics"});
+                       "packet_size", "frame_timeout_ms", "readout_ms", "trigger_overlap", "roi_px",
+                       "intrinsics"});
   CameraConfig camera;
   camera.id = map.String("id", camera.id);
   camera.pixel_format = map.String("pixel_format", camera.pixel_format);
@@ -91,6 +92,9 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   camera.packet_size = AtLeast(map, "packet_size", camera.packet_size, 0);
   camera.frame_timeout_ms = AtLeast(map, "frame_timeout_ms", camera.frame_timeout_ms, 1);
   camera.readout_ms = NonNegative(map, "readout_ms", camera.readout_ms);
+  const std::string overlap = map.String("trigger_overlap", "off");
+  OneOf(map, "trigger_overlap", overlap, {"off", "readout"});
+  camera.trigger_in_readout = overlap == "readout";
   if (map.Has("roi_px")) {
     const YAML::Node node = map.Get("roi_px");
     const std::string shape =

@@ -34,6 +34,10 @@ struct CameraConfig {
   int packet_size = 0;                            // GigE Vision packet size, bytes; 0 = negotiate
   int frame_timeout_ms = 1000;  // a frame later than this after its trigger is lost
   double readout_ms = 25.0;     // sensor readout + transfer of one frame (plan estimate)
+  // `trigger_overlap: readout` = the camera takes a trigger while it reads the previous frame out
+  // (GenICam TriggerOverlap ReadOut, or a camera that queues it): brackets trigger each frame
+  // during its predecessor's readout. `off` (the default) = trigger after the frame arrived.
+  bool trigger_in_readout = false;
   // Region of interest `roi_px: [offset_x, offset_y, width, height]` (sensor pixels); width 0 =
   // the full sensor. A region around the IRED's image cuts each frame's transfer, the recording
   // and the host's work by the ratio of areas (docs/recipes.md).

@@ -251,6 +251,7 @@ LiveCaptureSetup CaptureSetup(const Recipe& recipe, const RigEndpoints& rig,
   setup.pixel_format = camera.pixel_format;
   setup.trigger_source = trigger_source;
   setup.trigger_activation = camera.trigger_activation;
+  setup.trigger_in_readout = camera.trigger_in_readout;
   setup.black_level = camera.black_level;
   setup.packet_size = camera.packet_size;
   setup.roi_offset_x = camera.roi_offset_x;
@@ -323,6 +324,17 @@ struct LiveSession {
   double time_scale = 1.0;
   PoseTiming timing;
 };
+
+// The message of the exception being handled ("" when it is not a std::exception).
+std::string CurrentErrorText() {
+  try {
+    throw;
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "";
+  }
+}
 
 SweepResult SweepAndCapture(LiveSession& s, const std::vector<Pose>& poses) {
   Sweep sweep(s.station);
@@ -442,7 +454,7 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
     result = SweepAndCapture(session, poses);
   } catch (...) {
     // The pose in flight was not confirmed by the sweep: it is retaken on --resume.
-    committer.Abandon(io.err);
+    committer.Abandon(io.err, CurrentErrorText());
     progress.Finish();
     recorder.Close(true);
     io.err << "\nThe recording in " << recorded.dir << "/recording is closed as cut. Continue it "

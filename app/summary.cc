@@ -11,6 +11,8 @@
 #include <sstream>
 #include <tuple>
 
+#include "app/crb.h"
+
 namespace irdist {
 namespace {
 
@@ -101,6 +103,28 @@ double Mean(const std::vector<double>& v) {
   return s / static_cast<double>(v.size());
 }
 
+// The ok rows grouped by pose (ground truth) and current, in order of first appearance.
+std::vector<ConditionErrors> ConditionsOf(const std::vector<const EstimateRow*>& rows) {
+  std::vector<ConditionErrors> out;
+  std::map<std::tuple<long, long, long>, size_t> index;
+  for (const EstimateRow* r : rows) {
+    if (!r->ok) continue;
+    const auto key = std::tuple_cat(KeyOf(*r), std::make_tuple(CurrentKey(*r)));
+    auto [it, inserted] = index.emplace(key, out.size());
+    if (inserted) {
+      ConditionErrors c;
+      c.d_mm = r->true_d_mm;
+      c.theta_deg = r->true_theta_deg;
+      c.bias_ma = r->bias_ma;
+      out.push_back(c);
+    }
+    ConditionErrors& c = out[it->second];
+    c.d_error_mm.push_back(r->d_mm - r->true_d_mm);
+    c.theta_error_deg.push_back(std::abs(r->theta_deg) - std::abs(r->true_theta_deg));
+  }
+  return out;
+}
+
 MethodSummary SummarizeMethod(const std::string& method, const std::vector<EstimateRow>& rows) {
   MethodSummary m;
   m.method = method;
@@ -118,6 +142,7 @@ MethodSummary SummarizeMethod(const std::string& method, const std::vector<Estim
     if (r->dt_ms > 0.0) per_dt[r->dt_ms].push_back(r);
   }
   m.all = Figures(main_rows);
+  m.conditions = ConditionsOf(main_rows);
   for (const EstimateRow* r : main_rows) m.outside_calibrated_range += r->outside_range ? 1 : 0;
   for (const EstimateRow* r : main_rows) {
     m.health_assessed += r->health != "-" ? 1 : 0;
@@ -183,7 +208,68 @@ void EmitFigures(YAML::Emitter& out, const ErrorFigures& f) {
   out << YAML::EndMap;
 }
 
-void EmitMethod(YAML::Emitter& out, const MethodSummary& m) {
+void EmitOptional(YAML::Emitter& out, const char* key, std::optional<double> value) {
+  out << YAML::Key << key << YAML::Value;
+  if (value && std::isfinite(*value))
+    out << *value;
+  else
+    out << YAML::Null;
+}
+
+std::optional<double> Finite(double value) {
+  return std::isfinite(value) ? std::optional<double>(value) : std::nullopt;
+}
+
+void EmitCrbPose(YAML::Emitter& out, const CrbPoseRatio& p) {
+  out << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "d_mm" << YAML::Value << p.d_mm << YAML::Key << "theta_deg" << YAML::Value
+      << p.theta_deg << YAML::Key << "bias_ma" << YAML::Value << p.bias_ma << YAML::Key
+      << "repeats" << YAML::Value << p.repeats;
+  out << YAML::Key << "distance_sd_mm" << YAML::Value << p.distance_sd_mm << YAML::Key
+      << "distance_sd_bound_mm" << YAML::Value << p.distance_sd_bound_mm;
+  EmitOptional(out, "ratio", p.distance_sd_mm / p.distance_sd_bound_mm);
+  out << YAML::Key << "theta_sd_deg" << YAML::Value << p.theta_sd_deg;
+  const bool theta_bounded = p.theta_sd_bound_deg > 0.0;
+  EmitOptional(out, "theta_sd_bound_deg",
+               theta_bounded ? std::optional<double>(p.theta_sd_bound_deg) : std::nullopt);
+  EmitOptional(out, "theta_ratio",
+               theta_bounded ? Finite(p.theta_sd_deg / p.theta_sd_bound_deg) : std::nullopt);
+  out << YAML::EndMap;
+}
+
+// `crb:` of one method: the bound's range over the recipe's conditions, the errors in units of
+// the bound, and each repeated condition's dispersion against its bound.
+void EmitCrb(YAML::Emitter& out, const CrbFigures& c) {
+  out << YAML::Key << "crb" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "source" << YAML::Value << c.source;
+  if (c.available) {
+    out << YAML::Key << "conditions" << YAML::Value << c.conditions;
+    out << YAML::Key << "distance_sd_bound_mm" << YAML::Value << YAML::Flow << YAML::BeginMap
+        << YAML::Key << "min" << YAML::Value << c.distance_sd_bound_mm_min << YAML::Key << "max"
+        << YAML::Value << c.distance_sd_bound_mm_max << YAML::EndMap;
+    EmitOptional(out, "distance_error_over_bound_rms", Finite(c.distance_error_over_bound_rms));
+    out << YAML::Key << "theta_ge_15" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "count" << YAML::Value << c.theta_ge15_count;
+    if (c.theta_ge15_count > 0) {
+      out << YAML::Key << "theta_sd_bound_deg_min" << YAML::Value << c.theta_ge15_sd_bound_deg_min
+          << YAML::Key << "theta_sd_bound_deg_max" << YAML::Value << c.theta_ge15_sd_bound_deg_max;
+      EmitOptional(out, "error_rms_deg", Finite(c.theta_ge15_error_rms_deg));
+      EmitOptional(out, "sd_bound_rms_deg", Finite(c.theta_ge15_sd_bound_rms_deg));
+      EmitOptional(out, "error_over_bound_rms", Finite(c.theta_ge15_error_over_bound_rms));
+      EmitOptional(out, "max_at_bound_deg_median", Finite(c.theta_ge15_max_at_bound_deg_median));
+      EmitOptional(out, "max_at_bound_deg_p95", Finite(c.theta_ge15_max_at_bound_deg_p95));
+    }
+    out << YAML::EndMap;
+    EmitOptional(out, "dispersion_ratio_max", c.dispersion_ratio_max);
+    EmitOptional(out, "theta_dispersion_ratio_max", c.theta_dispersion_ratio_max);
+    out << YAML::Key << "dispersion" << YAML::Value << YAML::BeginSeq;
+    for (const CrbPoseRatio& p : c.dispersion) EmitCrbPose(out, p);
+    out << YAML::EndSeq;
+  }
+  out << YAML::EndMap;
+}
+
+void EmitMethod(YAML::Emitter& out, const MethodSummary& m, const CrbFigures* crb) {
   out << YAML::Key << "method" << YAML::Value << m.method;
   EmitFigures(out, m.all);
   out << YAML::Key << "current_shift_pct" << YAML::Value;
@@ -214,6 +300,7 @@ void EmitMethod(YAML::Emitter& out, const MethodSummary& m) {
         << "assessed" << YAML::Value << m.health_assessed << YAML::Key << "flagged" << YAML::Value
         << m.health_flagged << YAML::EndMap;
   }
+  if (crb) EmitCrb(out, *crb);
 }
 
 }  // namespace
@@ -380,10 +467,17 @@ void WriteSummaryYaml(const std::string& path, const ValidationSummary& summary,
   out.SetDoublePrecision(6);
   out << YAML::BeginMap;
   for (const auto& [key, value] : context) out << YAML::Key << key << YAML::Value << value;
-  if (!summary.methods.empty()) EmitMethod(out, summary.methods.front());
+  const std::map<std::string, CrbFigures> crb = ValidationCrb(context, summary);
+  const auto crb_of = [&crb](const MethodSummary& m) -> const CrbFigures* {
+    const auto it = crb.find(m.method);
+    return it == crb.end() ? nullptr : &it->second;
+  };
+  if (!summary.methods.empty()) {
+    EmitMethod(out, summary.methods.front(), crb_of(summary.methods.front()));
+  }
   for (size_t i = 1; i < summary.methods.size(); ++i) {
     out << YAML::Key << summary.methods[i].method << YAML::Value << YAML::BeginMap;
-    EmitMethod(out, summary.methods[i]);
+    EmitMethod(out, summary.methods[i], crb_of(summary.methods[i]));
     out << YAML::EndMap;
   }
   out << YAML::EndMap;

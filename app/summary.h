@@ -68,6 +68,48 @@ struct ErrorFigures {
   int theta_lt15_count = 0;
 };
 
+// The estimates of one pose at one current: every repetition's error (ok rows only).
+struct ConditionErrors {
+  double d_mm = 0.0;  // ground truth
+  double theta_deg = 0.0;
+  double bias_ma = 0.0;
+  std::vector<double> d_error_mm;       // estimate - truth
+  std::vector<double> theta_error_deg;  // |estimate| - |truth|
+};
+
+// One repeated condition's dispersion against its Cramer-Rao bound.
+struct CrbPoseRatio {
+  double d_mm = 0.0, theta_deg = 0.0, bias_ma = 0.0;
+  int repeats = 0;
+  double distance_sd_mm = 0.0, distance_sd_bound_mm = 0.0;
+  double theta_sd_deg = 0.0;
+  double theta_sd_bound_deg = -1.0;  // < 0: theta not identifiable to first order (theta = 0)
+};
+
+// The Cramer-Rao bound beside one method's figures (computed by app/crb.h; summary.yaml `crb:`).
+struct CrbFigures {
+  bool available = false;
+  std::string source;  // what the bound knows, or why it was not computed
+  int conditions = 0;  // distinct (pose, current) bounded
+  double distance_sd_bound_mm_min = 0.0, distance_sd_bound_mm_max = 0.0;
+  // sqrt(mean((error / bound)^2)) over the rows: 1 for an unbiased estimator at the bound; the
+  // error includes any bias, so it is >= the dispersion's ratio.
+  double distance_error_over_bound_rms = NAN;
+  int theta_ge15_count = 0;
+  double theta_ge15_sd_bound_deg_min = 0.0, theta_ge15_sd_bound_deg_max = 0.0;
+  double theta_ge15_error_rms_deg = NAN;
+  double theta_ge15_sd_bound_rms_deg = NAN;
+  double theta_ge15_error_over_bound_rms = NAN;
+  // The largest |theta error| over those rows that an unbiased estimator exactly at the bound
+  // shows (Gaussian errors, sd = each row's bound): its median and 95th percentile over runs.
+  // A goal on the maximum below the median is missed by most runs at the bound itself.
+  double theta_ge15_max_at_bound_deg_median = NAN;
+  double theta_ge15_max_at_bound_deg_p95 = NAN;
+  std::vector<CrbPoseRatio> dispersion;            // the conditions with >= 2 repetitions
+  std::optional<double> dispersion_ratio_max;        // max distance_sd / bound over them
+  std::optional<double> theta_dispersion_ratio_max;  // max theta_sd / bound (theta > 0)
+};
+
 struct MethodSummary {
   std::string method;
   ErrorFigures all;                         // the default rows (joint over t_n when present)
@@ -78,6 +120,7 @@ struct MethodSummary {
   int outside_calibrated_range = 0;
   int health_assessed = 0;  // default rows whose health was assessed
   int health_flagged = 0;   // ... and flagged (the optics no longer match the calibration)
+  std::vector<ConditionErrors> conditions;  // the default rows by pose and current
 };
 
 struct ValidationSummary {
@@ -97,6 +140,9 @@ std::optional<double> ReadBestDtMs(const std::string& summary_yaml_path);
 
 // summary.yaml: `count`, `distance_rel_error_pct: {median, p95, max}`, ... for the first method at
 // top level (the default pipeline), and one block per other method (`i0_dependent:`, `geometric:`).
+// With context["recording"] (a validation's recording), each method's block carries `crb:`, the
+// Cramer-Rao bound beside its figures (app/crb.h: computed from the virtual rig's physics; on a
+// hardware rig the block says why there is none).
 void WriteSummaryYaml(const std::string& path, const ValidationSummary& summary,
                       const std::map<std::string, std::string>& context = {});
 

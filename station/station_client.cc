@@ -225,6 +225,9 @@ void StationClient::OnBootId(const std::string& seen) {
   throw StationRebooted(old, now, true);
 }
 
+// An IDLE off the target on this many consecutive polls is a failed move (the protocol's section 4).
+constexpr int kOffTargetPolls = 2;
+
 void StationClient::WaitMotionDone(const char* what, const long long* target_centi) {
   const auto give_up = std::chrono::steady_clock::now() + options_.move_timeout;
   int good = 0;
@@ -248,7 +251,7 @@ void StationClient::WaitMotionDone(const char* what, const long long* target_cen
           if (++good >= options_.settled_polls) return;
         } else {
           good = 0;
-          if (++idle_off_target >= options_.settled_polls) {
+          if (++idle_off_target >= kOffTargetPolls) {
             throw StationError(0, std::string(what) + " ended off target");
           }
         }

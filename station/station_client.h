@@ -23,7 +23,9 @@ struct ClientOptions {
   std::chrono::milliseconds move_timeout{300000};  // a move or homing not settled by then fails
   double slide_tolerance_mm = 0.01;      // |position - target| accepted as arrived
   double angle_tolerance_deg = 0.01;
-  int settled_polls = 2;                 // consecutive IDLE + in-tolerance polls that end a move
+  // Consecutive IDLE + in-tolerance polls that end a move: IDLE means settled (the protocol's
+  // section 4), so one is enough; an IDLE off the target fails the move on its second poll.
+  int settled_polls = 1;
   int max_move_attempts = 2;             // a move that ends out of tolerance is reissued this often
   bool recover_on_reboot = true;         // after a reboot: re-home and restore the IRED current
   bool IsValid(std::string* why) const;

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
 
@@ -230,6 +231,140 @@ TEST(BracketCapture, ChunkExposureMismatchIsRetried) {
   EXPECT_EQ(result.frames[0].retries, 1);
   EXPECT_TRUE(result.frames[0].exposure_from_chunk);
   EXPECT_EQ(capture.stats().wrong_exposure, 1);
+}
+
+// A camera with a sensor that is busy from a frame's start until the host has its frame: a trigger
+// while busy waits, and the frame it starts latches the exposure register when the sensor frees
+// (as the virtual camera and cameras with TriggerOverlap ReadOut do). Frames carry exposure chunks;
+// `drop` names the triggers (0-based) whose frame never arrives.
+class BusySensorCamera : public ScriptedCamera {
+ public:
+  std::vector<int> drop;
+  int triggers = 0;
+  int triggers_while_busy = 0;
+
+  double SetExposureUs(double exposure_us) override { return register_us_ = exposure_us; }
+  double ExposureUs() override { return register_us_; }
+  bool HasExposureChunks() const override { return true; }
+  void SoftwareTrigger() override {
+    const int index = triggers++;
+    if (in_progress_) {
+      ++triggers_while_busy;
+      waiting_.push_back(index);
+    } else {
+      Start(index);
+    }
+  }
+  std::optional<RawFrame> WaitFrame(std::chrono::milliseconds) override {
+    if (!in_progress_) return std::nullopt;
+    std::optional<RawFrame> frame = std::move(in_progress_);
+    in_progress_.reset();
+    if (!waiting_.empty()) {  // the sensor frees: the waiting trigger starts its frame
+      Start(waiting_.front());
+      waiting_.pop_front();
+    }
+    if (frame->status == FrameStatus::kTimeout) return std::nullopt;  // dropped
+    return frame;
+  }
+
+ private:
+  void Start(int index) {
+    RawFrame frame;
+    const bool dropped = std::find(drop.begin(), drop.end(), index) != drop.end();
+    frame.status = dropped ? FrameStatus::kTimeout : FrameStatus::kOk;
+    frame.image = cv::Mat(4, 4, CV_16UC1, cv::Scalar(register_us_ / 100.0));
+    frame.chunk_exposure_us = register_us_;
+    frame.frame_id = static_cast<std::uint64_t>(index + 1);
+    frame.timestamp_ns = static_cast<std::uint64_t>(index + 1) * 1000;
+    in_progress_ = frame;
+  }
+  double register_us_ = 1000.0;
+  std::optional<RawFrame> in_progress_;
+  std::deque<int> waiting_;
+};
+
+BracketOptions InReadoutOptions() {
+  BracketOptions options = FastOptions();
+  options.pipeline_margin = std::chrono::microseconds(0);
+  options.exposures_us = {80.0, 300.0, 320.0, 340.0, 360.0};  // short: the test sleeps through them
+  options.trigger_in_readout = true;
+  return options;
+}
+
+// Each frame's exposure as the image says it was taken (the camera paints exposure / 100).
+void ExpectFramesCarryTheirExposures(const BracketResult& result, const BracketOptions& options) {
+  ASSERT_TRUE(result.complete) << result.BriefReport();
+  ASSERT_EQ(result.frames.size(), options.exposures_us.size());
+  for (size_t i = 0; i < result.frames.size(); ++i) {
+    EXPECT_DOUBLE_EQ(result.frames[i].actual_exposure_us, options.exposures_us[i]) << i;
+    EXPECT_NEAR(result.frames[i].image.at<std::uint16_t>(0, 0), options.exposures_us[i] / 100.0,
+                0.5)
+        << "frame " << i;
+  }
+}
+
+TEST(BracketCapture, InReadoutTheNextTriggerFiresBeforeTheFrameArrives) {
+  BusySensorCamera camera;
+  const BracketOptions options = InReadoutOptions();
+  BracketCapture capture(camera, options);
+  int fired = 0;
+  std::vector<int> fired_when_seen;
+  const BracketResult result = capture.Capture(
+      [&](int) {
+        ++fired;
+        camera.SoftwareTrigger();
+      },
+      [&](const BracketFrame&) { fired_when_seen.push_back(fired); });
+  ExpectFramesCarryTheirExposures(result, options);
+  EXPECT_EQ(fired_when_seen, (std::vector<int>{2, 3, 4, 5, 5}));
+  EXPECT_EQ(camera.triggers_while_busy, 4);
+  EXPECT_EQ(capture.stats().fired_in_readout, 4);
+  EXPECT_EQ(capture.stats().lost, 0);
+}
+
+TEST(BracketCapture, InReadoutAFailedFrameNeverTakesItsSuccessorsFrame) {
+  for (int dropped = 0; dropped < 4; ++dropped) {
+    BusySensorCamera camera;
+    camera.drop = {dropped};
+    const BracketOptions options = InReadoutOptions();
+    BracketCapture capture(camera, options);
+    const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+    ExpectFramesCarryTheirExposures(result, options);
+    EXPECT_EQ(result.frames[static_cast<size_t>(dropped)].retries, 1) << "dropped " << dropped;
+    EXPECT_EQ(capture.stats().late, 1) << capture.stats().BriefReport();
+    EXPECT_EQ(capture.stats().wrong_exposure, 0) << capture.stats().BriefReport();
+  }
+}
+
+TEST(BracketCapture, InReadoutEqualNeighbourExposuresAreTriggeredInTurn) {
+  BusySensorCamera camera;
+  BracketOptions options = InReadoutOptions();
+  options.exposures_us = {80.0, 300.0, 300.0, 340.0};
+  BracketCapture capture(camera, options);
+  const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+  ExpectFramesCarryTheirExposures(result, options);
+  EXPECT_EQ(capture.stats().fired_in_readout, 2);  // not between the two equal exposures
+}
+
+TEST(BracketCapture, DuringLastReadoutRunsOnceAfterTheLastTriggerBeforeItsFrameIsSeen) {
+  for (const bool in_readout : {false, true}) {
+    BusySensorCamera camera;
+    BracketOptions options = InReadoutOptions();
+    options.trigger_in_readout = in_readout;
+    BracketCapture capture(camera, options);
+    int seen = 0, calls = 0, seen_at_call = -1, fired_at_call = -1;
+    const BracketResult result = capture.Capture(
+        [&](int) { camera.SoftwareTrigger(); }, [&](const BracketFrame&) { ++seen; },
+        [&] {
+          ++calls;
+          seen_at_call = seen;
+          fired_at_call = camera.triggers;
+        });
+    ExpectFramesCarryTheirExposures(result, options);
+    EXPECT_EQ(calls, 1);
+    EXPECT_EQ(seen_at_call, 4) << "the last frame is not handed over yet";
+    EXPECT_EQ(fired_at_call, 5) << "every trigger fired";
+  }
 }
 
 // The fake camera's Mono8 pattern: pixel (x, y) = ((x + frame_id + y) % 255) * s with

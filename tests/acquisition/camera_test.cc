@@ -33,6 +33,7 @@ TEST(CameraSettings, EveryInvalidFieldIsRefusedByName) {
       {[](CameraSettings& s) { s.warmup_frames = -1; }, "warmup_frames"},
       {[](CameraSettings& s) { s.frame_retention_ms = 0; }, "frame_retention_ms"},
       {[](CameraSettings& s) { s.readback_tolerance = 0.5; }, "readback_tolerance"},
+      {[](CameraSettings& s) { s.packet_request_ratio = 0.0; }, "packet_request_ratio"},
   };
   for (const BadSetting& bad : cases) {
     CameraSettings settings;

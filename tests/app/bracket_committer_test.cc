@@ -115,6 +115,16 @@ TEST_F(BracketCommitterTest, AbandonDropsTheUnconfirmedBracketAndReportsTheCommi
   EXPECT_EQ(committer_.done_count(), 4);
 }
 
+TEST_F(BracketCommitterTest, AbandonDoesNotRepeatTheErrorThatStoppedTheSweep) {
+  TakePose("b0", false);
+  recorder_.commit_error = "disk full";
+  std::ostringstream err;
+  committer_.Abandon(err, "disk full");
+  EXPECT_EQ(err.str(), "");
+  committer_.Abandon(err, "station silent");
+  EXPECT_NE(err.str().find("also: disk full"), std::string::npos) << err.str();
+}
+
 TEST_F(BracketCommitterTest, AConfirmationWithNothingPendingCommitsNothing) {
   committer_.Confirmed();
   EXPECT_TRUE(recorder_.committed.empty());

@@ -15,6 +15,7 @@ MeasureSample Good() {
   MeasureSample s;
   s.bracket = 7;
   s.time_s = 1.5;
+  s.latency_ms = 0.75;
   s.have_estimate = true;
   s.estimate.ok = true;
   s.estimate.d_mm = 2001.25;
@@ -42,6 +43,7 @@ TEST(MeasureJson, ParsesWithEveryDocumentedField) {
   EXPECT_DOUBLE_EQ(j["theta_deg"].as<double>(), 12.5);
   EXPECT_DOUBLE_EQ(j["theta_se_deg"].as<double>(), 0.25);
   EXPECT_DOUBLE_EQ(j["blob_x_px"].as<double>(), 640.25);
+  EXPECT_DOUBLE_EQ(j["latency_ms"].as<double>(), 0.75);
   EXPECT_FALSE(j["flags"]["saturated"].as<bool>());
   EXPECT_DOUBLE_EQ(j["position"]["x_mm"].as<double>(), 10.0);
   EXPECT_DOUBLE_EQ(j["position"]["z_mm"].as<double>(), 2001.0);

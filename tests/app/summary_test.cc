@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <vector>
 
 namespace irdist {
 namespace {
@@ -101,6 +102,35 @@ TEST_F(SummaryTest, SummaryYamlHasTheDocumentedKeys) {
   EXPECT_EQ(y["outside_calibrated_range"].as<int>(), 1);
   EXPECT_EQ(y["geometric"]["count"].as<int>(), 1);
   EXPECT_TRUE(y["geometric"]["dispersion_mm"].IsNull());
+}
+
+// The rows by pose and current keep every repetition's error (the Cramer-Rao comparison's input).
+TEST_F(SummaryTest, ConditionsGroupTheRepetitionsOfEachPoseAndCurrent) {
+  const auto s = Summarize(ReadEstimatesCsv((dir_ / "estimates.csv").string()));
+  const MethodSummary& m = s.methods[0];
+  ASSERT_EQ(m.conditions.size(), 3u);
+  EXPECT_EQ(m.conditions[0].bias_ma, 475.0);
+  EXPECT_EQ(m.conditions[0].d_error_mm, (std::vector<double>{10.0, -10.0}));
+  EXPECT_EQ(m.conditions[0].theta_error_deg, (std::vector<double>{1.0, -0.5}));
+  EXPECT_EQ(m.conditions[1].d_error_mm, (std::vector<double>{20.0, 0.0}));
+  EXPECT_EQ(m.conditions[2].d_mm, 1500.0);
+  EXPECT_EQ(m.conditions[2].d_error_mm, (std::vector<double>{30.0}));  // the joint row only
+  EXPECT_TRUE(s.methods[1].conditions.size() == 1u);  // the failed geometric row is left out
+}
+
+// A validation whose recording has no virtual rig: each method's `crb:` says why there is no
+// bound; without a recording in the context there is no block at all.
+TEST_F(SummaryTest, CrbBlockSaysWhyWithoutAVirtualRig) {
+  const auto s = Summarize(ReadEstimatesCsv((dir_ / "estimates.csv").string()));
+  const std::string path = (dir_ / "summary.yaml").string();
+  WriteSummaryYaml(path, s, {{"recording", (dir_ / "no-recording").string()}});
+  YAML::Node y = YAML::LoadFile(path);
+  ASSERT_TRUE(y["crb"].IsMap());
+  EXPECT_EQ(y["crb"]["source"].as<std::string>().rfind("not computed: ", 0), 0u);
+  EXPECT_TRUE(y["geometric"]["crb"].IsMap());
+  WriteSummaryYaml(path, s, {{"recipe", "hand-made"}});
+  y = YAML::LoadFile(path);
+  EXPECT_FALSE(y["crb"].IsDefined());
 }
 
 TEST_F(SummaryTest, RoundTripKeepsEveryRow) {

@@ -173,6 +173,31 @@ TEST_F(CalibrateValidate, ValidationWritesEstimatesSummaryAndReport) {
   EXPECT_NE(validate_output_[0].find("i0_free"), std::string::npos);
 }
 
+// The virtual rig's Cramer-Rao bound sits beside each method's figures (app/crb.h): the bound of
+// every pose of the recipe, the errors in units of it, and the report's header says the same.
+TEST_F(CalibrateValidate, ValidationSummaryCarriesTheCramerRaoBound) {
+  ASSERT_EQ(validate_code_, 0) << validate_output_[0];
+  const std::string run = *dir_ + "/val";
+  const YAML::Node summary = YAML::LoadFile(run + "/summary.yaml");
+  for (const YAML::Node& block : {summary, summary["geometric"]}) {
+    const YAML::Node crb = block["crb"];
+    ASSERT_TRUE(crb.IsMap()) << ReadAll(run + "/summary.yaml");
+    EXPECT_NE(crb["source"].as<std::string>().find("virtual rig physics"), std::string::npos);
+    EXPECT_EQ(crb["conditions"].as<int>(), 8);  // 2 distances x 2 angles x 2 currents
+    const double lo = crb["distance_sd_bound_mm"]["min"].as<double>();
+    const double hi = crb["distance_sd_bound_mm"]["max"].as<double>();
+    // A few mm per estimate at 1.7-2.3 m with two frames (the Fig. 14 pose at 2.7 m: 1.8 mm).
+    EXPECT_GT(lo, 0.1);
+    EXPECT_LT(hi, 10.0);
+    EXPECT_GT(crb["distance_error_over_bound_rms"].as<double>(), 0.0);
+    EXPECT_EQ(crb["theta_ge_15"]["count"].as<int>(), 4);  // the 25 deg poses
+    EXPECT_GT(crb["theta_ge_15"]["theta_sd_bound_deg_min"].as<double>(), 0.0);
+    EXPECT_TRUE(crb["dispersion"].IsSequence());
+    EXPECT_EQ(crb["dispersion"].size(), 0u);  // no repetitions in this recipe
+  }
+  EXPECT_NE(ReadAll(run + "/report/index.html").find("CRB i0_free"), std::string::npos);
+}
+
 TEST_F(CalibrateValidate, PlaybackReproducesTheLiveFilesByteForByte) {
   ASSERT_EQ(validate_code_, 0) << validate_output_[0];
   const std::string run = *dir_ + "/val";

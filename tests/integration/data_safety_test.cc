@@ -2,9 +2,16 @@
 // as soon as it is complete and the station confirmed alive, before anything moves again. For a
 // refused move, an emergency stop, a silent station and a kill -9 during the move after a bracket:
 // the brackets taken before are in the recording, and `--resume` completes the run with no frame
-// twice. An open IRED stops the run with the message.
+// twice. An open IRED stops the run with the message. A real full disk (a small tmpfs) stops the
+// run with the first error, keeps the brackets before it and leaves a run that resumes.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/mount.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 
 #include <map>
 #include <set>
@@ -146,6 +153,71 @@ TEST(DataSafetyCurrent, AnOpenIredStopsTheRunWithTheMessage) {
   EXPECT_NE(output.find("IRED circuit looks open"), std::string::npos) << output;
   EXPECT_NE(output.find("500.00 mA is set"), std::string::npos) << output;
   EXPECT_TRUE(Rows(dir + "/run/recording").empty());
+}
+
+
+// A small tmpfs mounted at `dir` for the test's life (root only: the test is skipped otherwise).
+class SmallDisk {
+ public:
+  SmallDisk(const std::string& dir, const char* size) : dir_(dir) {
+    std::filesystem::create_directories(dir);
+    const std::string options = std::string("size=") + size;
+    mounted_ = ::mount("tmpfs", dir.c_str(), "tmpfs", MS_NOSUID | MS_NODEV, options.c_str()) == 0;
+    if (!mounted_) why_ = std::strerror(errno);
+  }
+  ~SmallDisk() {
+    if (mounted_) ::umount2(dir_.c_str(), MNT_DETACH);
+  }
+  bool mounted() const { return mounted_; }
+  const std::string& why() const { return why_; }
+  // Grows the disk in place (the files stay).
+  bool Grow(const char* size) {
+    const std::string options = std::string("size=") + size;
+    return ::mount("tmpfs", dir_.c_str(), "tmpfs", MS_REMOUNT | MS_NOSUID | MS_NODEV,
+                   options.c_str()) == 0;
+  }
+
+ private:
+  std::string dir_, why_;
+  bool mounted_ = false;
+};
+
+// The disk fills during the sweep (room for a few of its 46 KB frames): the run stops with the
+// write's own error (ENOSPC), the recording is closed as cut with its complete brackets, and the
+// resume command is printed; with room again, --resume completes it with every frame once.
+TEST(DataSafetyDisk, AFullDiskStopsWithTheFirstErrorAndTheRunResumes) {
+  const std::string dir = testing::ScratchDir("data-safety-full");
+  SmallDisk disk(dir + "/disk", "200k");
+  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs (" << disk.why() << "): needs root";
+  testing::WriteAll(dir + "/rig.yaml", RigWith(""));
+  testing::WriteAll(dir + "/recipe.yaml", kRecipe);
+  testing::LoopbackGvcpLock lock;
+  std::string output;
+  const std::string run = dir + "/disk/run";
+  EXPECT_EQ(testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--out", run, "--time-scale",
+                                kTimeScale, "--quiet"},
+                               dir + "/run.log", &output),
+            1);
+  const std::size_t first = output.find("No space left on device");
+  EXPECT_NE(first, std::string::npos) << output;
+  EXPECT_EQ(output.find("also: "), std::string::npos) << "the first error, once: " << output;
+  EXPECT_NE(output.find("--resume " + run), std::string::npos) << output;
+  const RecordingReader cut(run + "/recording");
+  EXPECT_EQ(cut.completion(), Completion::kCut) << output;
+  const std::map<std::pair<std::int64_t, int>, int> kept = Rows(run + "/recording");
+  EXPECT_LT(kept.size(), 6u) << output;
+  EXPECT_EQ(kept.size() % 2, 0u) << "only whole brackets are kept";
+  for (const FrameRecord& row : cut.rows()) {
+    EXPECT_FALSE(cut.LoadImage(row).empty()) << row.file;
+  }
+
+  ASSERT_TRUE(disk.Grow("4m"));
+  ASSERT_EQ(testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--resume", run,
+                                "--time-scale", kTimeScale, "--quiet"},
+                               dir + "/resume.log", &output),
+            0)
+      << output;
+  ExpectEveryFrameOnce(run + "/recording");
 }
 
 }  // namespace

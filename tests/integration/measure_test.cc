@@ -127,12 +127,13 @@ TEST_F(Measure, JsonFollowsTheSchema) {
     const YAML::Node& j = objects[i];
     EXPECT_EQ(j["schema"].as<std::string>(), "irdist.measure/1");
     EXPECT_EQ(j["bracket"].as<int>(), static_cast<int>(i));
-    for (const char* key : {"time_s", "d_mm", "d_se_mm", "theta_deg", "theta_se_deg", "blob_x_px",
+    for (const char* key : {"time_s", "latency_ms", "d_mm", "d_se_mm", "theta_deg", "theta_se_deg", "blob_x_px",
                             "blob_y_px"}) {
       ASSERT_TRUE(j[key].IsScalar()) << key << " in " << output;
       EXPECT_TRUE(std::isfinite(j[key].as<double>())) << key;
     }
     EXPECT_GT(j["d_se_mm"].as<double>(), 0.0);
+    EXPECT_GT(j["latency_ms"].as<double>(), 0.0);  // measured, not a placeholder
     for (const char* flag : {"no_blob", "saturated", "touches_border", "clipped", "outside_range"}) {
       EXPECT_FALSE(j["flags"][flag].as<bool>()) << flag << " in " << output;
     }

@@ -114,7 +114,8 @@ TEST_F(PtuEmulatorTest, HaltStopsAndResetReturnsHome) {
   EXPECT_EQ(Ask("PP3000"), "*");
   EXPECT_TRUE(WaitFor([this] { return world_.Pose().pan_deg > 5.0; }));
   EXPECT_EQ(Ask("H"), "*");
-  EXPECT_FALSE(world_.Pose().moving);
+  // The world sees the halt at the emulator's next motion tick, not with the reply.
+  EXPECT_TRUE(WaitFor([this] { return !world_.Pose().moving; }));
   const double halted_deg = world_.Pose().pan_deg;
   EXPECT_LT(halted_deg, 3000 * 90.0 / 3600.0);
   EXPECT_EQ(Ask("R", 5000), "*");

@@ -1,0 +1,112 @@
+// Whole-run timing of `irdist measure` on the virtual rig: calibrates Table 3 (at time scale 10,
+// for the model), then measures N brackets live at time scale 1 and sets, side by side,
+//   - the bracket rate against its physical bound (sum of exposures + one readout per frame,
+//     the camera's own readout_ms): brackets per second / bound >= 0.9 is the goal;
+//   - the latency from a bracket's last frame to its estimate (each JSON line's latency_ms):
+//     median, p95 and max against 2 ms.
+//   bench_measure_live [COUNT] [--rig RIG]     (default 60 brackets on rig virtual)
+// Run it inside a private network namespace (it starts the virtual rig's camera on 127.0.0.1).
+// Not a Google Benchmark: one live run is the unit.
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <numeric>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "app/cli.h"
+#include "app/recipe.h"
+
+namespace {
+
+// Runs the irdist command line in process; returns its exit code, stdout in `*out`.
+int Run(const std::vector<std::string>& words, std::string* out) {
+  std::vector<const char*> args;
+  for (const std::string& w : words) args.push_back(w.c_str());
+  std::ostringstream run_out, run_err;
+  const int code = irdist::RunIrdist(static_cast<int>(args.size()), args.data(), {run_out, run_err});
+  *out = run_out.str();
+  if (code != 0) std::cerr << run_err.str();
+  return code;
+}
+
+double Quantile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
+}
+
+struct LiveRun {
+  std::vector<double> time_s, latency_ms;
+};
+
+LiveRun ParseJsonLines(const std::string& text) {
+  LiveRun run;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] != '{') continue;
+    const YAML::Node j = YAML::Load(line);
+    run.time_s.push_back(j["time_s"].as<double>());
+    run.latency_ms.push_back(j["latency_ms"].as<double>());
+  }
+  return run;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int count = 60;
+  std::string rig = "virtual";
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word == "--rig" && i + 1 < argc) {
+      rig = argv[++i];
+    } else {
+      count = std::max(3, std::stoi(word));
+    }
+  }
+  const std::string dir = (std::filesystem::temp_directory_path() /
+                           ("irdist-measure-live-" + std::to_string(::getpid())))
+                              .string();
+  const std::string recipe = std::string(IRDIST_SOURCE_DIR) + "/recipes/table3-calibration.yaml";
+  std::string out;
+  if (Run({"irdist", "calibrate", recipe, "--out", dir + "/cal", "--time-scale", "10", "--quiet"},
+          &out) != 0) {
+    std::cerr << "bench_measure_live: the calibration failed\n" << out;
+    return 1;
+  }
+  if (Run({"irdist", "measure", "--model", dir + "/cal/model.yaml", "--rig", rig, "--time-scale",
+           "1", "--at", "2000,20,0,490", "--count", std::to_string(count), "--json"},
+          &out) != 0) {
+    std::cerr << "bench_measure_live: measure failed\n" << out;
+    return 1;
+  }
+  const LiveRun run = ParseJsonLines(out);
+  if (run.time_s.size() < 3) {
+    std::cerr << "bench_measure_live: fewer than 3 JSON lines\n" << out;
+    return 1;
+  }
+  const irdist::Recipe r = irdist::LoadRecipe(recipe);
+  double bound_ms = r.sweep.bracket.t_ref_ms;
+  for (double t : r.sweep.bracket.t_meas_ms) bound_ms += t;
+  bound_ms += static_cast<double>(1 + r.sweep.bracket.t_meas_ms.size()) * r.rig.camera.readout_ms;
+  const double per_bracket_ms = 1000.0 * (run.time_s.back() - run.time_s.front()) /
+                                static_cast<double>(run.time_s.size() - 1);
+  std::printf("rig %s, %zu brackets of %zu frames at time scale 1\n", rig.c_str(),
+              run.time_s.size(), 1 + r.sweep.bracket.t_meas_ms.size());
+  std::printf("bracket period    %8.2f ms   bound (exposures + readouts) %8.2f ms   "
+              "rate / bound %.3f\n",
+              per_bracket_ms, bound_ms, bound_ms / per_bracket_ms);
+  std::printf("latency last frame -> estimate: median %.3f ms, p95 %.3f ms, max %.3f ms; "
+              "median / 2 ms %.3f\n",
+              Quantile(run.latency_ms, 0.5), Quantile(run.latency_ms, 0.95),
+              *std::max_element(run.latency_ms.begin(), run.latency_ms.end()),
+              Quantile(run.latency_ms, 0.5) / 2.0);
+  std::filesystem::remove_all(dir);
+  return 0;
+}
