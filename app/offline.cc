@@ -319,10 +319,11 @@ FeatureOptions FitFeatureOptions(const RecordingReader& reader, const FeatureOpt
 // between them (docs/estimator.md).
 constexpr size_t kDenseDistances = 4;
 
-CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
-                              const FeatureOptions& feature_options, const std::string& model_path,
-                              const std::string& report_dir, std::ostream& out) {
-  const std::vector<CalibrationSample> samples = SamplesFromRecording(reader, features);
+namespace {
+
+// Differences with a clean blob in both frames; throws when there is none.
+int CountUsableSamples(const RecordingReader& reader,
+                       const std::vector<CalibrationSample>& samples) {
   int usable = 0;
   for (const CalibrationSample& s : samples)
     usable += s.reference.Usable() && s.measurement.Usable();
@@ -332,8 +333,10 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
                          " differences, none with a clean blob in both frames); check the "
                          "exposures and the IRED current of the recipe.");
   }
-  out << "Fitting " << samples.size() << " differences (" << usable << " usable) from "
-      << reader.dir() << "\n";
+  return usable;
+}
+
+void NoteSparseDistances(const std::vector<CalibrationSample>& samples, std::ostream& out) {
   std::set<double> distances;
   for (const CalibrationSample& s : samples) distances.insert(s.d_mm);
   if (distances.size() < kDenseDistances) {
@@ -343,9 +346,10 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
         << "Table 3's 4); the estimates lean on the apparent size there. Calibrate at "
         << kDenseDistances << " or more distances for the full accuracy.\n";
   }
-  // Models with more unknowns (coefficients + sigma) than observations are left out (a small
-  // recipe with fewer than 25 differences cannot determine the 24-term direct Sigma model).
-  FitOptions fit_options;
+}
+
+// Usable frames of the usable differences: each measurement, and each distinct reference once.
+int CountUsableFrames(const std::vector<CalibrationSample>& samples) {
   std::set<std::tuple<double, double, double, double>> references;
   int usable_frames = 0;
   for (const CalibrationSample& s : samples) {
@@ -353,17 +357,33 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
     usable_frames +=
         1 + (references.insert({s.d_mm, s.theta_deg, s.bias_ma, s.t_ref_ms}).second ? 1 : 0);
   }
+  return usable_frames;
+}
+
+// Unknowns of a model in its fitted form: its active coefficients and sigma.
+int ModelUnknowns(ModelKind kind, const FitOptions& fit_options) {
+  const bool free = kind == ModelKind::kFreeE || kind == ModelKind::kFreeSigma;
+  const ModelSpec& spec = GetModelSpec(kind);
+  int unknowns = 1;  // sigma
+  for (int i = 0; i < spec.num_coefficients(); ++i) {
+    unknowns += IsTermActive(spec, free ? fit_options.free_form : ModelForm::kFull, i) ? 1 : 0;
+  }
+  return unknowns;
+}
+
+// Models with more unknowns (coefficients + sigma) than observations are left out (a small
+// recipe with fewer than 25 differences cannot determine the 24-term direct Sigma model); an
+// undetermined I0-free model (Algorithm 1 needs both) is a RecordingError.
+std::vector<ModelKind> DeterminedModels(const RecordingReader& reader,
+                                        const std::vector<CalibrationSample>& samples, int usable,
+                                        const FitOptions& fit_options, std::ostream& out) {
+  const int usable_frames = CountUsableFrames(samples);
   std::vector<ModelKind> kept;
   for (ModelKind kind : fit_options.models) {
     const bool direct = kind == ModelKind::kDirectE || kind == ModelKind::kDirectF ||
                         kind == ModelKind::kDirectSigma;
     const int observations = direct ? usable_frames : usable;
-    const bool free = kind == ModelKind::kFreeE || kind == ModelKind::kFreeSigma;
-    const ModelSpec& spec = GetModelSpec(kind);
-    int unknowns = 1;  // sigma
-    for (int i = 0; i < spec.num_coefficients(); ++i) {
-      unknowns += IsTermActive(spec, free ? fit_options.free_form : ModelForm::kFull, i) ? 1 : 0;
-    }
+    const int unknowns = ModelUnknowns(kind, fit_options);
     if (observations > unknowns) {
       kept.push_back(kind);
     } else if (kind == ModelKind::kFreeE || kind == ModelKind::kFreeSigma) {
@@ -376,24 +396,50 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
           << unknowns << " unknowns)\n";
     }
   }
-  fit_options.models = kept;
-  CalibrationModel model = Fit(samples, feature_options, fit_options);
-  model.provenance = ProvenanceOfRecording(reader);
-  SaveModel(model, model_path);
+  return kept;
+}
+
+void PrintFitSummaries(const CalibrationModel& model, const std::string& model_path,
+                       std::ostream& out) {
   for (const FittedModel& m : model.models) {
     out << "  " << ToString(m.kind) << " (" << ToString(m.form) << "): " << m.summary.BriefReport()
         << "\n";
   }
   out << "  geometric: " << model.geometric.summary.BriefReport() << "\n";
   out << "Model: " << model_path << "\n";
+}
+
+// The calibration report; returns its index page.
+std::string WriteCalibrationReport(const RecordingReader& reader,
+                                   const std::vector<CalibrationSample>& samples,
+                                   const CalibrationModel& model, const std::string& model_path,
+                                   const std::string& report_dir) {
+  std::ostringstream text;
+  text << "Calibration from " << reader.dir() << "\n" << model.BriefReport() << "\n";
+  return WriteReport(report_dir, "irdist calibration",
+                     CalibrationReportFields(reader.dir(), model_path, model), text.str(),
+                     CalibrationPlots(CalibrationPointsOf(model, samples), model));
+}
+
+}  // namespace
+
+CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
+                              const FeatureOptions& feature_options, const std::string& model_path,
+                              const std::string& report_dir, std::ostream& out) {
+  const std::vector<CalibrationSample> samples = SamplesFromRecording(reader, features);
+  const int usable = CountUsableSamples(reader, samples);
+  out << "Fitting " << samples.size() << " differences (" << usable << " usable) from "
+      << reader.dir() << "\n";
+  NoteSparseDistances(samples, out);
+  FitOptions fit_options;
+  fit_options.models = DeterminedModels(reader, samples, usable, fit_options, out);
+  CalibrationModel model = Fit(samples, feature_options, fit_options);
+  model.provenance = ProvenanceOfRecording(reader);
+  SaveModel(model, model_path);
+  PrintFitSummaries(model, model_path, out);
   if (!report_dir.empty()) {
-    std::ostringstream text;
-    text << "Calibration from " << reader.dir() << "\n" << model.BriefReport() << "\n";
-    const std::string index =
-        WriteReport(report_dir, "irdist calibration",
-                    CalibrationReportFields(reader.dir(), model_path, model), text.str(),
-                    CalibrationPlots(CalibrationPointsOf(model, samples), model));
-    out << "Report: " << index << "\n";
+    out << "Report: " << WriteCalibrationReport(reader, samples, model, model_path, report_dir)
+        << "\n";
   }
   return model;
 }

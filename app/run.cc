@@ -398,6 +398,23 @@ void ReportRun(LiveSession& s, const SweepResult& result, double wall_s, std::si
       << " s\n" << std::defaultfloat;
 }
 
+// The live recorder's set-up: the rig's camera, the run folder's recording, the station's
+// identity and the recipe, the features computed while recording.
+LiveCaptureSetup RecorderSetup(const RunRequest& request, const Recipe& recipe,
+                               const RigEndpoints& rig, const Station& station,
+                               const std::string& run_dir, const std::string& recipe_text,
+                               const FeatureOptions& feature_options,
+                               const CalibrationModel* blob_fit_model) {
+  LiveCaptureSetup setup = CaptureSetup(recipe, rig, RigTriggerSource(recipe.rig));
+  setup.recording_dir = run_dir + "/recording";
+  setup.resume = !request.resume_dir.empty();
+  setup.station_identity = station.IdentityBrief();
+  setup.recipe_text = recipe_text;
+  setup.feature_options = feature_options;
+  setup.blob_fit_model = blob_fit_model;
+  return setup;
+}
+
 Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& plan,
                 const FeatureOptions& feature_options, const CalibrationModel* blob_fit_model,
                 CommandIo io) {
@@ -418,14 +435,8 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   Station station(recipe.rig.station.composition, StationRunOptions(rig.ports, &log));
   station.Identify();
 
-  LiveCaptureSetup setup = CaptureSetup(recipe, rig, RigTriggerSource(recipe.rig));
-  setup.recording_dir = recorded.dir + "/recording";
-  setup.resume = !request.resume_dir.empty();
-  setup.station_identity = station.IdentityBrief();
-  setup.recipe_text = recipe_text;
-  setup.feature_options = feature_options;
-  setup.blob_fit_model = blob_fit_model;
-  LiveRecorder recorder(setup);
+  LiveRecorder recorder(RecorderSetup(request, recipe, rig, station, recorded.dir, recipe_text,
+                                      feature_options, blob_fit_model));
   if (recipe.rig.station.composition.trigger == kCameraSoftwareTrigger) {
     station.SetCameraTrigger(&recorder.CameraTrigger());
   }
@@ -447,8 +458,8 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
     progress.Finish();
     recorder.Close(true);
     io.err << "\nThe recording in " << recorded.dir << "/recording is closed as cut. Continue it "
-           << "with: " << ResumeCommand(command, recipe.path,
-                                        request.model_path, recorded.dir) << "\n";
+           << "with: " << ResumeCommand(command, recipe.path, request.model_path, recorded.dir)
+           << "\n";
     throw;
   }
   recorder.WaitCommitted();

@@ -171,64 +171,70 @@ constexpr int kDiscParams = 8;
 using DiscVector = cv::Matx<double, kDiscParams, 1>;
 using DiscMatrix = cv::Matx<double, kDiscParams, kDiscParams>;
 
+constexpr double kInvSqrt2 = 0.70710678118654752440;
+constexpr double kInvSqrt2Pi = 0.39894228040143267794;
+
+// A pixel whose centre lies more than 4 blur sigmas (plus its half-diagonal) inside or outside
+// the edge is flat: no sub-sampling. True with its value in *value (and gradient in *jac when
+// not null) for such a pixel.
+bool FlatDiscPixel(const DiscVector& v, double px, double py, DiscVector* jac, double* value) {
+  const double cx = v(0), cy = v(1), p11 = v(2), p12 = v(3), p22 = v(4), s = v(5);
+  const double dx = px - cx, dy = py - cy;
+  const double gx = p11 * dx + p12 * dy, gy = p12 * dx + p22 * dy;
+  const double n = std::sqrt(gx * gx + gy * gy);
+  const double dist = n > 1e-12 ? (1.0 - dx * gx - dy * gy) / (2.0 * n) : HUGE_VAL;
+  if (!(std::abs(dist) > 4.0 * s + 0.75)) return false;
+  const double inside = dist > 0.0 ? 1.0 : 0.0;
+  if (jac != nullptr) {
+    *jac = DiscVector::zeros();
+    (*jac)(6) = inside;
+    (*jac)(7) = 1.0;
+  }
+  *value = v(7) + v(6) * inside;
+  return true;
+}
+
+// The blurred edge Phi at the sub-sample (dx, dy) from the disc's centre; its gradient with
+// respect to the parameters 0-5, times A, added to *g_sum when g_sum is not null.
+double DiscSubSample(const DiscVector& v, double dx, double dy, DiscVector* g_sum) {
+  const double p11 = v(2), p12 = v(3), p22 = v(4), s = v(5), a = v(6);
+  const double gx = p11 * dx + p12 * dy, gy = p12 * dx + p22 * dy;
+  const double q = dx * gx + dy * gy;
+  const double n = std::sqrt(gx * gx + gy * gy);
+  if (n < 1e-12) return 1.0;
+  // A convex edge of curvature kappa blurs to Phi((dist - kappa s^2 / 2) / s) to first order:
+  // kappa of the level set of q through the point (its derivatives are left out of the
+  // Jacobian: a second-order term).
+  const double kappa = (n * n * (p11 + p22) - (gx * gx * p11 + 2.0 * gx * gy * p12 +
+                                               gy * gy * p22)) / (n * n * n);
+  const double dist = (1.0 - q) / (2.0 * n);
+  const double z = dist / s - 0.5 * kappa * s;
+  if (z > 4.0) return 1.0;
+  if (z < -4.0) return 0.0;
+  const double phi = 0.5 * std::erfc(-z * kInvSqrt2);
+  if (g_sum == nullptr) return phi;
+  const double k = a * kInvSqrt2Pi * std::exp(-0.5 * z * z) / s;
+  const double inv_n = 1.0 / n;
+  const double dq[5] = {-2.0 * gx, -2.0 * gy, dx * dx, 2.0 * dx * dy, dy * dy};
+  const double dn[5] = {-(gx * p11 + gy * p12) * inv_n, -(gx * p12 + gy * p22) * inv_n,
+                        gx * dx * inv_n, (gx * dy + gy * dx) * inv_n, gy * dy * inv_n};
+  for (int j = 0; j < 5; ++j) (*g_sum)(j) += k * (-0.5 * dq[j] * inv_n - dist * dn[j] * inv_n);
+  (*g_sum)(5) -= k * (dist / s + 0.5 * kappa * s);
+  return phi;
+}
+
 // Model value of the pixel centred at (px, py) (relative to the fit's origin); its gradient with
 // respect to the parameters in *jac when jac is not null.
 double DiscPixel(const DiscVector& v, double px, double py, DiscVector* jac) {
   constexpr double kOffsets[3] = {-1.0 / 3.0, 0.0, 1.0 / 3.0};
-  constexpr double kInvSqrt2 = 0.70710678118654752440;
-  constexpr double kInvSqrt2Pi = 0.39894228040143267794;
-  const double cx = v(0), cy = v(1), p11 = v(2), p12 = v(3), p22 = v(4), s = v(5), a = v(6);
-  // A pixel whose centre lies more than 4 blur sigmas (plus its half-diagonal) inside or outside
-  // the edge is flat: no sub-sampling.
-  {
-    const double dx = px - cx, dy = py - cy;
-    const double gx = p11 * dx + p12 * dy, gy = p12 * dx + p22 * dy;
-    const double n = std::sqrt(gx * gx + gy * gy);
-    const double dist = n > 1e-12 ? (1.0 - dx * gx - dy * gy) / (2.0 * n) : HUGE_VAL;
-    if (std::abs(dist) > 4.0 * s + 0.75) {
-      const double inside = dist > 0.0 ? 1.0 : 0.0;
-      if (jac != nullptr) {
-        *jac = DiscVector::zeros();
-        (*jac)(6) = inside;
-        (*jac)(7) = 1.0;
-      }
-      return v(7) + a * inside;
-    }
-  }
+  double flat_value = 0.0;
+  if (FlatDiscPixel(v, px, py, jac, &flat_value)) return flat_value;
   double sum_phi = 0.0;
   DiscVector g_sum = DiscVector::zeros();
   for (double oy : kOffsets) {
-    const double dy = py + oy - cy;
+    const double dy = py + oy - v(1);
     for (double ox : kOffsets) {
-      const double dx = px + ox - cx;
-      const double gx = p11 * dx + p12 * dy, gy = p12 * dx + p22 * dy;
-      const double q = dx * gx + dy * gy;
-      const double n = std::sqrt(gx * gx + gy * gy);
-      if (n < 1e-12) {
-        sum_phi += 1.0;
-        continue;
-      }
-      // A convex edge of curvature kappa blurs to Phi((dist - kappa s^2 / 2) / s) to first order:
-      // kappa of the level set of q through the point (its derivatives are left out of the
-      // Jacobian: a second-order term).
-      const double kappa = (n * n * (p11 + p22) - (gx * gx * p11 + 2.0 * gx * gy * p12 +
-                                                   gy * gy * p22)) / (n * n * n);
-      const double dist = (1.0 - q) / (2.0 * n);
-      const double z = dist / s - 0.5 * kappa * s;
-      if (z > 4.0) {
-        sum_phi += 1.0;
-        continue;
-      }
-      if (z < -4.0) continue;
-      sum_phi += 0.5 * std::erfc(-z * kInvSqrt2);
-      if (jac == nullptr) continue;
-      const double k = a * kInvSqrt2Pi * std::exp(-0.5 * z * z) / s;
-      const double inv_n = 1.0 / n;
-      const double dq[5] = {-2.0 * gx, -2.0 * gy, dx * dx, 2.0 * dx * dy, dy * dy};
-      const double dn[5] = {-(gx * p11 + gy * p12) * inv_n, -(gx * p12 + gy * p22) * inv_n,
-                            gx * dx * inv_n, (gx * dy + gy * dx) * inv_n, gy * dy * inv_n};
-      for (int j = 0; j < 5; ++j) g_sum(j) += k * (-0.5 * dq[j] * inv_n - dist * dn[j] * inv_n);
-      g_sum(5) -= k * (dist / s + 0.5 * kappa * s);
+      sum_phi += DiscSubSample(v, px + ox - v(0), dy, jac != nullptr ? &g_sum : nullptr);
     }
   }
   constexpr double kInvSamples = 1.0 / 9.0;
@@ -238,7 +244,7 @@ double DiscPixel(const DiscVector& v, double px, double py, DiscVector* jac) {
     (*jac)(6) = phi_mean;
     (*jac)(7) = 1.0;
   }
-  return v(7) + a * phi_mean;
+  return v(7) + v(6) * phi_mean;
 }
 
 bool DiscIsValid(const DiscVector& v) {

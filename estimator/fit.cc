@@ -583,25 +583,11 @@ void FitGeometricNoise(const std::vector<std::pair<double, double>>& points, Geo
     acc.first += r * r;
     ++acc.second;
   }
-  double sw = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0;
-  int used = 0;
+  std::vector<NoiseGroup> noise_groups;
   for (const auto& [big_d, acc] : groups) {
-    if (acc.second < 3 || !(acc.first > 0.0)) continue;
-    const double x = std::log(1.0 / std::sqrt(big_d));  // ln(d / 1000 mm)
-    const double y = 0.5 * std::log(acc.first / acc.second);
-    const double w = acc.second;
-    sw += w;
-    sx += w * x;
-    sy += w * y;
-    sxx += w * x * x;
-    sxy += w * x * y;
-    ++used;
+    noise_groups.push_back({std::log(1.0 / std::sqrt(big_d)), acc.first, acc.second});
   }
-  if (used == 0) return;
-  const double var_x = sxx / sw - (sx / sw) * (sx / sw);
-  const double k = used >= 2 && var_x > 1e-12 ? (sxy / sw - sx / sw * sy / sw) / var_x : 0.0;
-  g->noise_exponent = k;
-  g->noise_rel_at_1m = std::exp(sy / sw - k * sx / sw);
+  FitNoiseLaw(noise_groups, &g->noise_rel_at_1m, &g->noise_exponent);
 }
 
 }  // namespace
@@ -645,6 +631,16 @@ GeometricRows CollectGeometricRows(const std::vector<CalibrationSample>& samples
     g.rows.push_back({cos_t * cos_t * u * u / m, 1.0 / m, u / m, u * u / m});
   }
   return g;
+}
+
+// The measured blur of every usable measurement frame, at its true distance.
+std::vector<BlurPoint> MeasuredBlur(const std::vector<CalibrationSample>& samples) {
+  std::vector<BlurPoint> points;
+  for (const CalibrationSample& s : samples) {
+    if (!s.measurement.Usable() || !std::isfinite(s.measurement.blur_var_px2)) continue;
+    points.push_back({s.d_mm, s.measurement.blur_var_px2});
+  }
+  return points;
 }
 
 }  // namespace
@@ -726,29 +722,89 @@ CalibrationModel Fit(const std::vector<CalibrationSample>& samples,
     model.theta_correction =
         FitThetaCorrection(samples, model.geometric, options.theta_correction_degree);
   }
-  model.blur_calibration = FitBlurCalibration(samples);
+  model.blur_calibration = FitBlurCalibration(MeasuredBlur(samples));
   return model;
 }
+
+namespace {
+
+// One usable calibration frame of the theta correction: its squared axis ratio x, geometric
+// distance and true theta.
+struct ThetaFrame {
+  double x, d_mm, theta_deg;
+};
+
+std::vector<ThetaFrame> ThetaFrames(const std::vector<CalibrationSample>& samples,
+                                    const GeometricModel& geometric) {
+  std::vector<ThetaFrame> frames;
+  if (!geometric.fitted()) return frames;
+  for (const CalibrationSample& s : samples) {
+    const Features& m = s.measurement;
+    if (!m.Usable()) continue;
+    ThetaFrame f{0.0, 0.0, s.theta_deg};
+    if (RatioAndDistance(m.moment_major_var_px2, m.moment_minor_var_px2, geometric, &f.x,
+                         &f.d_mm)) {
+      frames.push_back(f);
+    }
+  }
+  return frames;
+}
+
+// The calibrated ranges of x and of the geometric distance.
+void SetThetaRanges(const std::vector<ThetaFrame>& frames, ThetaCorrection* tc) {
+  tc->ratio_sq_min = tc->d_min_mm = std::numeric_limits<double>::infinity();
+  tc->ratio_sq_max = tc->d_max_mm = -std::numeric_limits<double>::infinity();
+  for (const ThetaFrame& f : frames) {
+    tc->ratio_sq_min = std::min(tc->ratio_sq_min, f.x);
+    tc->ratio_sq_max = std::max(tc->ratio_sq_max, f.x);
+    tc->d_min_mm = std::min(tc->d_min_mm, f.d_mm);
+    tc->d_max_mm = std::max(tc->d_max_mm, f.d_mm);
+  }
+}
+
+// The weighted least-squares system a c = y of cos^2(theta) in the basis of tc's degree.
+void ThetaSystem(const std::vector<ThetaFrame>& frames, const ThetaCorrection& tc,
+                 Eigen::MatrixXd* a, Eigen::VectorXd* y) {
+  const int terms = ThetaCorrection::NumTerms(tc.degree);
+  const double half = 0.5 * (tc.d_max_mm - tc.d_min_mm);
+  a->resize(frames.size(), terms);
+  y->resize(frames.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const double z = half > 0.0 ? (frames[i].d_mm - tc.d_min_mm) / half - 1.0 : 0.0;
+    double basis[10];
+    ThetaBasis(tc.degree, frames[i].x, z, basis);
+    for (int k = 0; k < terms; ++k) (*a)(i, k) = basis[k];
+    // Rows at theta >= 10 deg weighted by 1 / (d cos^2 / d theta) = 1 / sin(2 theta): their
+    // residuals are then theta errors (rad). Nearly round blobs (theta < 10 deg: the eigenvalue
+    // noise floor dominates their axis ratio) get a small constant weight, so that they do not
+    // bend the fit at the angles where theta is observable.
+    const double th = frames[i].theta_deg * 3.14159265358979323846 / 180.0;
+    const double w = frames[i].theta_deg >= 10.0 ? 1.0 / std::sin(2.0 * th) : 0.25;
+    const double c = std::cos(th);
+    (*y)(i) = c * c * w;
+    a->row(i) *= w;
+  }
+}
+
+// Corrected minus true theta (deg) of every usable calibration frame, and the errors.
+void FillThetaResiduals(const std::vector<CalibrationSample>& samples,
+                        const GeometricModel& geometric, ThetaCorrection* tc) {
+  for (const CalibrationSample& s : samples) {
+    const Features& m = s.measurement;
+    if (!m.Usable()) continue;
+    const double t = tc->ThetaDeg(m.moment_major_var_px2, m.moment_minor_var_px2, geometric);
+    if (std::isfinite(t)) tc->summary.residuals.push_back(t - s.theta_deg);
+  }
+  FillErrors(&tc->summary);
+}
+
+}  // namespace
 
 ThetaCorrection FitThetaCorrection(const std::vector<CalibrationSample>& samples,
                                    const GeometricModel& geometric, int degree) {
   IRDIST_CHECK(degree >= 1 && degree <= 3, "theta correction degree ", degree, " not in [1, 3]");
   ThetaCorrection tc;
-  struct Frame {
-    double x, d_mm, theta_deg;
-  };
-  std::vector<Frame> frames;
-  if (geometric.fitted()) {
-    for (const CalibrationSample& s : samples) {
-      const Features& m = s.measurement;
-      if (!m.Usable()) continue;
-      Frame f{0.0, 0.0, s.theta_deg};
-      if (RatioAndDistance(m.moment_major_var_px2, m.moment_minor_var_px2, geometric, &f.x,
-                           &f.d_mm)) {
-        frames.push_back(f);
-      }
-    }
-  }
+  const std::vector<ThetaFrame> frames = ThetaFrames(samples, geometric);
   const int terms = ThetaCorrection::NumTerms(degree);
   tc.summary.samples = static_cast<int>(frames.size());
   if (!geometric.fitted() || static_cast<int>(frames.size()) < 2 * terms) {
@@ -757,32 +813,10 @@ ThetaCorrection FitThetaCorrection(const std::vector<CalibrationSample>& samples
     return tc;
   }
   tc.degree = degree;
-  tc.ratio_sq_min = tc.d_min_mm = std::numeric_limits<double>::infinity();
-  tc.ratio_sq_max = tc.d_max_mm = -std::numeric_limits<double>::infinity();
-  for (const Frame& f : frames) {
-    tc.ratio_sq_min = std::min(tc.ratio_sq_min, f.x);
-    tc.ratio_sq_max = std::max(tc.ratio_sq_max, f.x);
-    tc.d_min_mm = std::min(tc.d_min_mm, f.d_mm);
-    tc.d_max_mm = std::max(tc.d_max_mm, f.d_mm);
-  }
-  const double half = 0.5 * (tc.d_max_mm - tc.d_min_mm);
-  Eigen::MatrixXd a(frames.size(), terms);
-  Eigen::VectorXd y(frames.size());
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const double z = half > 0.0 ? (frames[i].d_mm - tc.d_min_mm) / half - 1.0 : 0.0;
-    double basis[10];
-    ThetaBasis(degree, frames[i].x, z, basis);
-    for (int k = 0; k < terms; ++k) a(i, k) = basis[k];
-    // Rows at theta >= 10 deg weighted by 1 / (d cos^2 / d theta) = 1 / sin(2 theta): their
-    // residuals are then theta errors (rad). Nearly round blobs (theta < 10 deg: the eigenvalue
-    // noise floor dominates their axis ratio) get a small constant weight, so that they do not
-    // bend the fit at the angles where theta is observable.
-    const double th = frames[i].theta_deg * 3.14159265358979323846 / 180.0;
-    const double w = frames[i].theta_deg >= 10.0 ? 1.0 / std::sin(2.0 * th) : 0.25;
-    const double c = std::cos(th);
-    y(i) = c * c * w;
-    a.row(i) *= w;
-  }
+  SetThetaRanges(frames, &tc);
+  Eigen::MatrixXd a;
+  Eigen::VectorXd y;
+  ThetaSystem(frames, tc, &a, &y);
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
   const Eigen::VectorXd sv = svd.singularValues();
   tc.summary.condition_number = sv(sv.size() - 1) > 0.0 ? sv(0) / sv(sv.size() - 1)
@@ -794,13 +828,7 @@ ThetaCorrection FitThetaCorrection(const std::vector<CalibrationSample>& samples
   }
   const Eigen::VectorXd c = svd.solve(y);
   tc.coefficients.assign(c.data(), c.data() + c.size());
-  for (const CalibrationSample& s : samples) {
-    const Features& m = s.measurement;
-    if (!m.Usable()) continue;
-    const double t = tc.ThetaDeg(m.moment_major_var_px2, m.moment_minor_var_px2, geometric);
-    if (std::isfinite(t)) tc.summary.residuals.push_back(t - s.theta_deg);
-  }
-  FillErrors(&tc.summary);
+  FillThetaResiduals(samples, geometric, &tc);
   tc.summary.termination = FitSummary::Termination::kConverged;
   tc.summary.message =
       "linear least squares of cos^2(theta); residuals are theta errors in degrees";

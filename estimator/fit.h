@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "estimator/features.h"
-#include "estimator/health.h"
+#include "estimator/blur_model.h"
 #include "estimator/models.h"
 #include "estimator/provenance.h"
 
@@ -173,7 +173,7 @@ struct CalibrationModel {
   GeometricModel geometric;
   ThetaCorrection theta_correction;  // not fitted: theta from the blur-corrected ratio alone
   ModelProvenance provenance;        // filled by the app from the recording (estimator/provenance.h)
-  BlurCalibration blur_calibration;  // health.h; not fitted in model files before format 4
+  BlurCalibration blur_calibration;  // blur_model.h; not fitted in model files before format 4
   const FittedModel* Find(ModelKind kind) const;  // nullptr if not fitted
   std::string BriefReport() const;
 };

@@ -5,32 +5,15 @@
 // estimated distance. A touched focus ring, a lens swap or a temperature change moves the blur;
 // the geometric (size) model then reads the wrong distance, silently. docs/estimator.md.
 
-#include <cmath>
 #include <string>
 #include <vector>
 
+#include "estimator/blur_model.h"  // BlurCalibration, for the includers of this header
+
 namespace irdist {
 
-struct CalibrationSample;  // fit.h
 struct CalibrationModel;   // fit.h
 struct Features;           // features.h
-
-// The calibrated blur: blur_var(u) = c0 + c1 u + c2 u^2, u = 1000 mm / d (the thin lens's defocus
-// variance is quadratic in u), and the per-frame sd of the measurement around it,
-// sd(d) = noise_at_1m (d / 1000 mm)^noise_exponent, both from the calibration frames.
-struct BlurCalibration {
-  double c0_px2 = 0.0, c1_px2 = 0.0, c2_px2 = 0.0;
-  double noise_at_1m_px2 = 0.0;
-  double noise_exponent = 0.0;
-  int frames = 0;
-  bool fitted() const { return noise_at_1m_px2 > 0.0; }
-  double BlurVarPx2(double d_mm) const;
-  double NoisePx2(double d_mm) const;
-};
-
-// Fits it to the usable measurement frames of the samples (those with a measured blur); not
-// fitted (noise 0) with fewer than 12 such frames.
-BlurCalibration FitBlurCalibration(const std::vector<CalibrationSample>& samples);
 
 struct HealthOptions {
   // Flag when the mean measured blur variance departs from the calibrated one by more than

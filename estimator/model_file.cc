@@ -246,7 +246,7 @@ void ReadGeometricBlur(const Reader& rd, const YAML::Node& g, int version, Geome
   }
 }
 
-// Format 4: the calibrated blur of the health check (health.h); absent: no health check.
+// Format 4: the calibrated blur of the health check (blur_model.h); absent: no health check.
 void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
   if (!b.fitted()) return;
   out << YAML::Key << "blur_calibration" << YAML::Value << YAML::BeginMap;

@@ -15,8 +15,9 @@
 #include <sstream>
 #include <thread>
 
-#include "base/input_error.h"
 #include "station/driver.h"
+#include "station/serial_driver.h"
+#include "station/line_query.h"
 
 namespace irdist {
 namespace {
@@ -58,12 +59,12 @@ bool FirstNumber(const std::string& text, double* value) {
 class FlirPtu : public DeviceDriver, public Motion {
  public:
   FlirPtu(const DeviceSpec& spec, std::unique_ptr<Transport> link)
-      : spec_(spec), link_(std::move(link)) {
+      : spec_(spec), link_(std::move(link)), query_(link_.get(), QueryOptions(spec)) {
     identity_.kind = kName;
     identity_.port = spec.port;
     identity_.vendor = "FLIR";
-    timeout_ = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 1000);
-    attempts_ = 1 + static_cast<int>(spec.Number("retries", 4));
+    timeout_ = query_.options().reply_timeout;
+    attempts_ = query_.options().attempts;
     tolerance_ = static_cast<long long>(spec.Number("tolerance_positions", 0));
     home_timeout_ = milliseconds(static_cast<long long>(spec.Number("home_timeout_s", 120) * 1000));
     for (const auto& [axis, address] : spec.axes) {
@@ -96,7 +97,9 @@ class FlirPtu : public DeviceDriver, public Motion {
   void CheckAlive() override;
 
  private:
-  bool Exchange(const std::string& command, milliseconds wait, std::string* body);
+  LineQueryOptions QueryOptions(const DeviceSpec& spec);
+  ReplyVerdict Judge(const std::string& command, const std::string& line, std::string* body) const;
+  LineRequest Request(const std::string& command, std::string* body) const;
   std::string Query(const std::string& command);
   double QueryNumber(const std::string& command);
   bool Command(const std::string& command, milliseconds wait);
@@ -117,6 +120,7 @@ class FlirPtu : public DeviceDriver, public Motion {
 
   DeviceSpec spec_;
   std::unique_ptr<Transport> link_;
+  LineQuery query_;  // after link_: it writes and reads through it
   DeviceIdentity identity_;
   std::vector<PtuAxis> axes_;
   milliseconds timeout_{1000};
@@ -126,74 +130,71 @@ class FlirPtu : public DeviceDriver, public Motion {
   bool homed_ = false;
   bool moving_ = false;
   bool was_away_ = false;  // an axis stood or was seen away from 0 since the move began
-  std::string last_heard_;
 };
 
-// Sends one command and reads its reply. True with the text after '*'; false when no reply came
-// in `wait`. A '!' reply is a DeviceError carrying the unit's message.
-bool FlirPtu::Exchange(const std::string& command, milliseconds wait, std::string* body) {
-  // Replies carry no id: whatever arrived before this command (a late reply to an earlier one)
-  // is not its reply.
-  link_->Flush();
-  link_->WriteLine(command);
-  const auto deadline = Clock::now() + wait;
-  while (true) {
-    const auto left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now());
-    std::string line;
-    try {
-      if (left.count() <= 0) throw LinkError("timeout", spec_.port, "");
-      line = link_->ReadLine(left);
-    } catch (const LinkError&) {
-      return false;
-    }
-    const std::size_t mark = line.find_first_of("*!");
-    if (mark == std::string::npos) {  // a banner, a bare echo, noise
-      if (!line.empty()) last_heard_ = line;
-      continue;
-    }
-    std::string text = line.substr(mark + 1);
-    text.erase(0, text.find_first_not_of(' '));
-    if (line[mark] == '*') {
-      *body = text;
-      return true;
-    }
-    const bool limit_hit = text == "P" || text == "T";  // manual: "!P"/"!T" on a limit hit
-    Fail("!" + text,
-         limit_hit ? std::string(text == "P" ? "pan" : "tilt") + " axis hit its limit"
-                   : "refused '" + command + "': " + text,
-         limit_hit ? "the unit lost synchrony: home (reset) it before continuing"
-                   : "check the command's value against the unit's limits (PN/PX/TN/TX)");
+LineQueryOptions FlirPtu::QueryOptions(const DeviceSpec& spec) {
+  LineQueryOptions options =
+      QueryOptionsOf(spec, 4, 1000, "the PTU",
+                     "check the cable, the baud rate (PTU default 9600) and power");
+  // Replies carry no id: whatever arrived before a command (a late reply to an earlier one) is
+  // not its reply.
+  options.before_send = [this](int) { link_->Flush(); };
+  return options;
+}
+
+// A command's reply: the text after '*' (into *body). A line with neither '*' nor '!' (a banner,
+// a bare echo, noise) is passed over. A '!' reply is a DeviceError carrying the unit's message.
+ReplyVerdict FlirPtu::Judge(const std::string& command, const std::string& line,
+                            std::string* body) const {
+  const std::size_t mark = line.find_first_of("*!");
+  if (mark == std::string::npos) return ReplyVerdict::kSkip;
+  std::string text = line.substr(mark + 1);
+  text.erase(0, text.find_first_not_of(' '));
+  if (line[mark] == '*') {
+    *body = text;
+    return ReplyVerdict::kMatch;
   }
+  const bool limit_hit = text == "P" || text == "T";  // manual: "!P"/"!T" on a limit hit
+  Fail("!" + text,
+       limit_hit ? std::string(text == "P" ? "pan" : "tilt") + " axis hit its limit"
+                 : "refused '" + command + "': " + text,
+       limit_hit ? "the unit lost synchrony: home (reset) it before continuing"
+                 : "check the command's value against the unit's limits (PN/PX/TN/TX)");
+}
+
+LineRequest FlirPtu::Request(const std::string& command, std::string* body) const {
+  LineRequest request;
+  request.query = command;
+  request.judge = [this, command, body](const std::string& line) {
+    return Judge(command, line, body);
+  };
+  return request;
 }
 
 // A query (changes nothing): retried after a lost or garbled reply.
 std::string FlirPtu::Query(const std::string& command) {
-  for (int attempt = 0; attempt < attempts_; ++attempt) {
-    std::string body;
-    if (Exchange(command, timeout_, &body)) return body;
-  }
-  throw LinkError("no reply to '" + command + "' from the PTU after " +
-                      std::to_string(attempts_) + " attempts" +
-                      (last_heard_.empty() ? "" : " (heard '" + last_heard_ + "')"),
-                  spec_.port, "check the cable, the baud rate (PTU default 9600) and power");
+  std::string body;
+  query_.Ask(Request(command, &body));
+  return body;
 }
 
 double FlirPtu::QueryNumber(const std::string& command) {
+  std::string heard;
   for (int attempt = 0; attempt < attempts_; ++attempt) {
     const std::string body = Query(command);
     double value = 0;
     if (FirstNumber(body, &value)) return value;
-    last_heard_ = "* " + body;
+    heard = "* " + body;
     link_->Flush();
   }
-  Fail(last_heard_, "'" + command + "' did not answer a number",
+  Fail(heard, "'" + command + "' did not answer a number",
        "check that the unit is a PTU and in terse or verbose feedback mode");
 }
 
 // A command that changes state: sent once. False when its acknowledgement was lost.
 bool FlirPtu::Command(const std::string& command, milliseconds wait) {
   std::string body;
-  return Exchange(command, wait, &body);
+  return query_.AskOnce(Request(command, &body), wait).has_value();
 }
 
 // The protocol has no checksum: a reported position is the same value read twice in a row.
@@ -442,8 +443,7 @@ void FlirPtu::CheckAlive() {
 }
 
 [[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {
-  throw InputError(spec.file, spec.line, 0, "station.devices." + spec.name + " (flir_ptu): " +
-                                                message + "; see docs/devices/flir_ptu.md");
+  InvalidEntry(spec, kName, message);
 }
 
 void Validate(const DeviceSpec& spec) {
@@ -471,22 +471,11 @@ void Validate(const DeviceSpec& spec) {
   if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
 }
 
+// Lines end with "\r" (manual: a command ends with a delimiter, [SPACE] or [ENTER]; a carriage
+// return is [ENTER] and also ends the line for readers that execute whole lines only); 9600 baud,
+// replies within 1000 ms.
 DriverInfo MakePtuInfo() {
-  DriverInfo info;
-  info.name = kName;
-  // Manual: a command ends with a delimiter, [SPACE] or [ENTER]; a carriage return is [ENTER]
-  // and also ends the line for readers that execute whole lines only.
-  info.line_end = "\r";
-  info.default_baud = 9600;
-  info.default_reply_timeout_ms = 1000;
-  info.roles = {"motion"};
-  info.doc = "docs/devices/flir_ptu.md";
-  info.validate = Validate;
-  info.create = [](const DeviceSpec& spec, std::unique_ptr<Transport> link) {
-    Validate(spec);
-    return std::unique_ptr<DeviceDriver>(new FlirPtu(spec, std::move(link)));
-  };
-  return info;
+  return SerialDriverInfo<FlirPtu>(kName, "\r", 9600, 1000, {"motion"}, Validate);
 }
 
 }  // namespace

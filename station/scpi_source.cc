@@ -13,8 +13,9 @@
 #include <cstdio>
 #include <sstream>
 
-#include "base/input_error.h"
 #include "station/driver.h"
+#include "station/serial_driver.h"
+#include "station/line_query.h"
 
 namespace irdist {
 namespace {
@@ -55,11 +56,10 @@ bool ParseDouble(const std::string& text, double* value) {
 class ScpiSource : public DeviceDriver, public CurrentSource {
  public:
   ScpiSource(const DeviceSpec& spec, std::unique_ptr<Transport> link)
-      : spec_(spec), link_(std::move(link)) {
+      : spec_(spec), link_(std::move(link)), query_(link_.get(), QueryOptions(spec)) {
     identity_.kind = kName;
     identity_.port = spec.port;
-    timeout_ = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 1000);
-    attempts_ = 1 + static_cast<int>(spec.Number("retries", 3));
+    timeout_ = query_.options().reply_timeout;
     compliance_v_ = spec.Number("compliance_v", 0.0);
   }
   ~ScpiSource() override {
@@ -76,6 +76,7 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
   void CheckAlive() override;
 
  private:
+  LineQueryOptions QueryOptions(const DeviceSpec& spec);
   std::string Query(const std::string& query,
                     const std::function<bool(const std::string&)>& valid);
   bool QueryBool(const std::string& query);
@@ -94,37 +95,38 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
 
   DeviceSpec spec_;
   std::unique_ptr<Transport> link_;
+  LineQuery query_;  // after link_: it writes and reads through it
   DeviceIdentity identity_;
   std::string idn_;  // the full *IDN? answer, the resynchronisation marker
   milliseconds timeout_{1000};
-  int attempts_ = 3;
   double compliance_v_ = 0.0;
   double setpoint_ma_ = 0.0;
   bool output_on_ = false;
   bool out_of_step_ = false;  // a reply was lost: resynchronise before the next query
 };
 
-// Sends a query and returns the first line `valid` accepts. A lost or invalid reply is retried
-// (queries change nothing) after a resynchronisation.
+LineQueryOptions ScpiSource::QueryOptions(const DeviceSpec& spec) {
+  LineQueryOptions options = QueryOptionsOf(
+      spec, 3, 1000, "the SourceMeter",
+      "check the RS-232 cable (straight-through), the baud rate, and that the instrument's "
+      "terminator is LF");
+  options.before_send = [this](int attempt) {
+    if (attempt > 0 || out_of_step_) Resync();
+  };
+  options.after_miss = [this] { out_of_step_ = true; };  // a late or stray reply may still come
+  return options;
+}
+
+// Sends a query and returns the first line, trimmed, if `valid` accepts it. A lost or invalid
+// reply is retried (queries change nothing) after a resynchronisation.
 std::string ScpiSource::Query(const std::string& query,
                               const std::function<bool(const std::string&)>& valid) {
-  std::string heard;
-  for (int attempt = 0; attempt < attempts_; ++attempt) {
-    if (attempt > 0 || out_of_step_) Resync();
-    link_->WriteLine(query);
-    try {
-      heard = Trim(link_->ReadLine(timeout_));
-      if (valid(heard)) return heard;
-    } catch (const LinkError&) {
-      heard.clear();
-    }
-    out_of_step_ = true;  // a late or stray reply may still come
-  }
-  throw LinkError("no valid reply to '" + query + "' after " + std::to_string(attempts_) +
-                      " attempts" + (heard.empty() ? "" : " (last heard '" + heard + "')"),
-                  spec_.port,
-                  "check the RS-232 cable (straight-through), the baud rate, and that the instrument's "
-                  "terminator is LF");
+  LineRequest request;
+  request.query = query;
+  request.judge = [&valid](const std::string& line) {
+    return valid(Trim(line)) ? ReplyVerdict::kMatch : ReplyVerdict::kRetry;
+  };
+  return Trim(query_.Ask(request));
 }
 
 // Reads away whatever is pending until the known *IDN? answer comes back.
@@ -334,8 +336,7 @@ void ScpiSource::CheckAlive() {
 }
 
 [[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {
-  throw InputError(spec.file, spec.line, 0, "station.devices." + spec.name + " (scpi_source): " +
-                                                message + "; see docs/devices/scpi_source.md");
+  InvalidEntry(spec, kName, message);
 }
 
 void Validate(const DeviceSpec& spec) {
@@ -351,20 +352,10 @@ void Validate(const DeviceSpec& spec) {
   if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
 }
 
+// Lines end with "\n" (the instrument's RS-232 terminator must be set to LF); 9600 baud,
+// replies within 1000 ms.
 DriverInfo MakeScpiInfo() {
-  DriverInfo info;
-  info.name = kName;
-  info.line_end = "\n";  // the instrument's RS-232 terminator must be set to LF
-  info.default_baud = 9600;
-  info.default_reply_timeout_ms = 1000;
-  info.roles = {"source"};
-  info.doc = "docs/devices/scpi_source.md";
-  info.validate = Validate;
-  info.create = [](const DeviceSpec& spec, std::unique_ptr<Transport> link) {
-    Validate(spec);
-    return std::unique_ptr<DeviceDriver>(new ScpiSource(spec, std::move(link)));
-  };
-  return info;
+  return SerialDriverInfo<ScpiSource>(kName, "\n", 9600, 1000, {"source"}, Validate);
 }
 
 }  // namespace

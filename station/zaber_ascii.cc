@@ -7,12 +7,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <thread>
 
-#include "base/input_error.h"
 #include "station/driver.h"
+#include "station/serial_driver.h"
+#include "station/line_query.h"
 
 namespace irdist {
 namespace {
@@ -26,6 +28,9 @@ constexpr char kName[] = "zaber_ascii";
 constexpr double kSpeedDataPerMicrostepS = 1.6384;
 constexpr double kAccelDataPerMicrostepS2 = 1.6384 / 10000.0;
 constexpr milliseconds kPollPeriod{20};
+constexpr char kNoReplyFix[] =
+    "check the cable, the baud rate (Zaber ASCII default 115200) and the device address in the "
+    "rig file";
 
 struct Address {
   int device = 1;
@@ -151,12 +156,13 @@ struct AxisState {
 class ZaberAscii : public DeviceDriver, public Motion {
  public:
   ZaberAscii(const DeviceSpec& spec, std::unique_ptr<Transport> link)
-      : spec_(spec), link_(std::move(link)) {
+      : spec_(spec),
+        link_(std::move(link)),
+        query_(link_.get(), QueryOptionsOf(spec, 4, 500, "the Zaber device", kNoReplyFix)) {
     identity_.kind = kName;
     identity_.port = spec.port;
     identity_.vendor = "Zaber";
-    timeout_ = milliseconds(spec.reply_timeout_ms > 0 ? spec.reply_timeout_ms : 500);
-    attempts_ = 1 + static_cast<int>(spec.Number("retries", 4));
+    timeout_ = query_.options().reply_timeout;
     checksum_ = spec.Text("checksum", "true") == "true";
     direction_ = spec.Number("direction", 1.0);
     tolerance_ = static_cast<long long>(spec.Number("tolerance_microsteps", 2));
@@ -194,8 +200,9 @@ class ZaberAscii : public DeviceDriver, public Motion {
   void CheckAlive() override;
 
  private:
-  int Send(const Address& a, int axis, const std::string& command);
-  bool Await(const Address& a, int axis, int id, milliseconds wait, Reply* reply);
+  std::string Compose(const Address& a, int axis, const std::string& command, int* id);
+  ReplyVerdict Judge(const Address& a, int axis, int id, const std::string& line, Reply* reply);
+  LineRequest Request(const Address& a, int axis, const std::string& command, Reply* reply);
   Reply Query(const Address& a, int axis, const std::string& command);
   bool Command(const Address& a, const std::string& command, Reply* reply);
   void ThrowIfRejected(const Reply& r, const std::string& command) const;
@@ -219,81 +226,71 @@ class ZaberAscii : public DeviceDriver, public Motion {
 
   DeviceSpec spec_;
   std::unique_ptr<Transport> link_;
+  LineQuery query_;  // after link_: it writes and reads through it
   DeviceIdentity identity_;
   std::vector<AxisState> axes_;
   milliseconds timeout_{500};
   milliseconds home_timeout_{120000};
-  int attempts_ = 4;
   bool checksum_ = true;
   bool reply_checksums_ = false;  // the device checksums its replies (learnt from the first)
   double direction_ = 1.0;
   long long tolerance_ = 2;
   int next_id_ = 0;
   bool homed_ = false;
-  std::string last_unparsed_;  // the last line that was not a Zaber message (for errors)
 };
 
-// Writes "/device axis id command[:CC]" and returns the id used.
-int ZaberAscii::Send(const Address& a, int axis, const std::string& command) {
-  next_id_ = next_id_ % 99 + 1;  // manual: message ids 0-99
+// "/device axis id command[:CC]" with the next message id (manual: ids 0-99), kept in *id.
+std::string ZaberAscii::Compose(const Address& a, int axis, const std::string& command, int* id) {
+  next_id_ = next_id_ % 99 + 1;
+  *id = next_id_;
   const std::string body = std::to_string(a.device) + " " + std::to_string(axis) + " " +
                            std::to_string(next_id_) + " " + command;
-  link_->WriteLine("/" + body + (checksum_ ? ":" + Lrc(body) : ""));
-  return next_id_;
+  return "/" + body + (checksum_ ? ":" + Lrc(body) : "");
 }
 
-// Reads until the reply of (device, axis, id) arrives; other messages (alerts, info, stale
-// replies to timed-out requests) are skipped. False when none arrives in `wait`.
-bool ZaberAscii::Await(const Address& a, int axis, int id, milliseconds wait, Reply* reply) {
-  const auto deadline = Clock::now() + wait;
-  while (true) {
-    const auto left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now());
-    if (left.count() <= 0) return false;
-    std::string line;
-    try {
-      line = link_->ReadLine(left);
-    } catch (const LinkError&) {
-      return false;
-    }
-    Reply r;
-    bool checked = false;
-    if (!ParseReply(line, reply_checksums_, &r, &checked)) {
-      last_unparsed_ = line;
-      continue;
-    }
-    if (r.type == '@' && r.device == a.device && r.axis == axis && r.id == id) {
-      // A device that answered a checksummed command with a checksum always does: from then on
-      // a reply whose checksum was damaged away is not taken.
-      reply_checksums_ = reply_checksums_ || (checksum_ && checked);
-      *reply = r;
-      return true;
-    }
+// The reply of (device, axis, id); other messages (alerts, info, stale replies to timed-out
+// requests, garbled lines) are passed over.
+ReplyVerdict ZaberAscii::Judge(const Address& a, int axis, int id, const std::string& line,
+                               Reply* reply) {
+  Reply r;
+  bool checked = false;
+  if (!ParseReply(line, reply_checksums_, &r, &checked)) return ReplyVerdict::kSkip;
+  if (r.type != '@' || r.device != a.device || r.axis != axis || r.id != id) {
+    return ReplyVerdict::kSkip;
   }
+  // A device that answered a checksummed command with a checksum always does: from then on a
+  // reply whose checksum was damaged away is not taken.
+  reply_checksums_ = reply_checksums_ || (checksum_ && checked);
+  *reply = r;
+  return ReplyVerdict::kMatch;
+}
+
+// One request to (device, axis): a fresh message id on every attempt, matched by the judge.
+LineRequest ZaberAscii::Request(const Address& a, int axis, const std::string& command,
+                                Reply* reply) {
+  auto id = std::make_shared<int>(0);
+  LineRequest request;
+  request.query = command;
+  request.device = "Zaber device " + std::to_string(a.device);
+  request.compose = [this, a, axis, command, id] { return Compose(a, axis, command, id.get()); };
+  request.judge = [this, a, axis, id, reply](const std::string& line) {
+    return Judge(a, axis, *id, line, reply);
+  };
+  return request;
 }
 
 // A query: safe to repeat, so a lost or damaged reply is retried with a new message id.
 Reply ZaberAscii::Query(const Address& a, int axis, const std::string& command) {
-  for (int attempt = 0; attempt < attempts_; ++attempt) {
-    const int id = Send(a, axis, command);
-    Reply r;
-    if (Await(a, axis, id, timeout_, &r)) {
-      ThrowIfRejected(r, command);
-      return r;
-    }
-  }
-  throw LinkError("no valid reply to '" + command + "' from Zaber device " +
-                      std::to_string(a.device) + " after " + std::to_string(attempts_) +
-                      " attempts" + (last_unparsed_.empty() ? "" : " (heard '" + last_unparsed_ + "')"),
-                  spec_.port,
-                  "check the cable, the baud rate (Zaber ASCII default 115200) and the device "
-                  "address in the rig file");
+  Reply r;
+  query_.Ask(Request(a, axis, command, &r));
+  ThrowIfRejected(r, command);
+  return r;
 }
 
 // A motion command: sent once. False when its reply was lost (the caller checks the device's
 // state before deciding anything).
 bool ZaberAscii::Command(const Address& a, const std::string& command, Reply* reply) {
-  const int id = Send(a, a.axis, command);
-  if (!Await(a, a.axis, id, timeout_, reply)) return false;
+  if (!query_.AskOnce(Request(a, a.axis, command, reply), timeout_)) return false;
   ThrowIfRejected(*reply, command);
   return true;
 }
@@ -325,8 +322,10 @@ void ZaberAscii::IdentifyDevice(const Address& a) {
   try {
     id_reply = Query(a, 0, "get deviceid");
   } catch (const LinkError& e) {
+    const auto* no_reply = dynamic_cast<const NoReplyError*>(&e);
+    const std::string heard = no_reply != nullptr ? no_reply->last_heard() : "";
     Fail("", "no Zaber ASCII device answers at address " + std::to_string(a.device) +
-                 (last_unparsed_.empty() ? "" : " (heard '" + last_unparsed_ + "')"),
+                 (heard.empty() ? "" : " (heard '" + heard + "')"),
          "check that the port is the Zaber's (ls -l /dev/serial/by-id), its baud rate and that "
          "the device speaks the ASCII protocol");
   }
@@ -552,8 +551,7 @@ void ZaberAscii::CheckAlive() {
 }
 
 [[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {
-  throw InputError(spec.file, spec.line, 0, "station.devices." + spec.name + " (zaber_ascii): " +
-                                                message + "; see docs/devices/zaber_ascii.md");
+  InvalidEntry(spec, kName, message);
 }
 
 void CheckStepKeys(const DeviceSpec& spec, const std::string& unit) {
@@ -594,20 +592,10 @@ void Validate(const DeviceSpec& spec) {
   if (checksum != "true" && checksum != "false") Invalid(spec, "checksum must be true or false");
 }
 
+// Lines end with "\n" (manual: CR, LF or both end a command; replies end with CR LF); 115200
+// baud, replies within 500 ms.
 DriverInfo MakeZaberInfo() {
-  DriverInfo info;
-  info.name = kName;
-  info.line_end = "\n";  // manual: CR, LF or both end a command; replies end with CR LF
-  info.default_baud = 115200;
-  info.default_reply_timeout_ms = 500;
-  info.roles = {"motion"};
-  info.doc = "docs/devices/zaber_ascii.md";
-  info.validate = Validate;
-  info.create = [](const DeviceSpec& spec, std::unique_ptr<Transport> link) {
-    Validate(spec);
-    return std::unique_ptr<DeviceDriver>(new ZaberAscii(spec, std::move(link)));
-  };
-  return info;
+  return SerialDriverInfo<ZaberAscii>(kName, "\n", 115200, 500, {"motion"}, Validate);
 }
 
 }  // namespace

@@ -105,6 +105,14 @@ class LabDevices : public ::testing::Test {
   void SetFaults(const std::string& device, const sim::EmulatorFaults& faults) {
     emulators_.at(device)->SetFaults(faults);
   }
+  // SweepUnderFault with `faults` set on `device` (`label` names them), cleared afterwards.
+  std::string SweepWithFaults(const std::string& device, const sim::EmulatorFaults& faults,
+                              const std::string& label) {
+    SetFaults(device, faults);
+    const std::string outcome = SweepUnderFault(device, label);
+    SetFaults(device, {});
+    return outcome;
+  }
   // Polls the World's IRED current for up to 10 host seconds.
   bool WorldCurrentReaches(double bias_ma) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
@@ -114,6 +122,7 @@ class LabDevices : public ::testing::Test {
     }
     return false;
   }
+  std::string SourceOutcomeUnder(const sim::SourceFaults& faults, const std::string& label);
   static bool Completed(const std::string& outcome) { return outcome == "completed"; }
   static bool Names(const std::string& outcome, const std::string& text) {
     return outcome.find(text) != std::string::npos;
@@ -201,54 +210,46 @@ TEST_F(LabDevices, SourceSetsAndMeasuresTheCurrentInMilliamps) {
 // --- reply faults, every device ---
 
 TEST_F(LabDevices, GarbledRepliesCompleteOrStopTyped) {
+  sim::EmulatorFaults faults;
+  faults.garble_rate = 0.01;
   for (const std::string device : {"slide", "head", "source"}) {
-    sim::EmulatorFaults faults;
-    faults.garble_rate = 0.01;
-    SetFaults(device, faults);
-    const std::string outcome = SweepUnderFault(device, "garble_rate=0.01");
+    const std::string outcome = SweepWithFaults(device, faults, "garble_rate=0.01");
     EXPECT_TRUE(Completed(outcome) || Names(outcome, device == "slide"  ? "zaber"
                                                      : device == "head" ? "flir_ptu"
                                                                         : "scpi"))
         << outcome;
-    SetFaults(device, {});
   }
 }
 
 TEST_F(LabDevices, DroppedRepliesAreRetriedOrStopTyped) {
+  sim::EmulatorFaults faults;
+  faults.drop_rate = 0.1;
   for (const std::string device : {"slide", "head", "source"}) {
-    sim::EmulatorFaults faults;
-    faults.drop_rate = 0.1;
-    SetFaults(device, faults);
-    const std::string outcome = SweepUnderFault(device, "drop_rate=0.1");
+    const std::string outcome = SweepWithFaults(device, faults, "drop_rate=0.1");
     EXPECT_TRUE(Completed(outcome) || Names(outcome, "stopped: ")) << outcome;
-    SetFaults(device, {});
   }
 }
 
 TEST_F(LabDevices, DelayedRepliesComplete) {
+  sim::EmulatorFaults faults;
+  faults.delay_rate = 0.2;
+  faults.delay_s = 0.5;  // simulated: 25 ms at the test's time scale
   for (const std::string device : {"slide", "head", "source"}) {
-    sim::EmulatorFaults faults;
-    faults.delay_rate = 0.2;
-    faults.delay_s = 0.5;  // simulated: 25 ms at the test's time scale
-    SetFaults(device, faults);
-    const std::string outcome = SweepUnderFault(device, "delay_rate=0.2 delay_s=0.5");
+    const std::string outcome = SweepWithFaults(device, faults, "delay_rate=0.2 delay_s=0.5");
     EXPECT_TRUE(Completed(outcome)) << outcome;
-    SetFaults(device, {});
   }
 }
 
 // --- power cycle in the middle of the sweep's first move, and a stuck axis ---
 
 TEST_F(LabDevices, APowerCycleMidMoveIsNoticedNeverSilent) {
+  sim::EmulatorFaults faults;
+  faults.power_cycle_after_s = 0.2;
   for (const std::string device : {"slide", "head"}) {
-    sim::EmulatorFaults faults;
-    faults.power_cycle_after_s = 0.2;
-    SetFaults(device, faults);
-    const std::string outcome = SweepUnderFault(device, "power_cycle_after_s=0.2");
+    const std::string outcome = SweepWithFaults(device, faults, "power_cycle_after_s=0.2");
     // Either the driver re-homed and the poses still landed (checked inside Sweep), or the
     // station stopped saying the device restarted / lost its reference.
     EXPECT_TRUE(Completed(outcome) || Names(outcome, "stopped: ")) << outcome;
-    SetFaults(device, {});
   }
 }
 
@@ -273,11 +274,9 @@ TEST_F(LabDevices, AStuckAxisStopsWithTheAxisDeviceNamed) {
                                      std::pair<std::string, std::string>{"head", "pan"}}) {
     sim::EmulatorFaults faults;
     faults.stuck_axis = axis;
-    SetFaults(device, faults);
-    const std::string outcome = SweepUnderFault(device, "stuck_axis=" + axis);
+    const std::string outcome = SweepWithFaults(device, faults, "stuck_axis=" + axis);
     EXPECT_TRUE(Names(outcome, "stopped: ")) << outcome;
     EXPECT_TRUE(Names(outcome, device == "slide" ? "zaber" : "flir_ptu")) << outcome;
-    SetFaults(device, {});
   }
 }
 
@@ -296,12 +295,19 @@ std::string SourceFaultOutcome(Station& station) {
   }
 }
 
+// The source's outcome with `faults` set on its emulator (`label` names them in the matrix line).
+std::string LabDevices::SourceOutcomeUnder(const sim::SourceFaults& faults,
+                                           const std::string& label) {
+  sim::SetSourceFaults(*emulators_.at("source"), faults);
+  const std::string outcome = SourceFaultOutcome(Open());
+  std::cout << "FAULT source " << label << " -> " << outcome << "\n";
+  return outcome;
+}
+
 TEST_F(LabDevices, AnOpenCircuitIredStopsNamingTheSource) {
   sim::SourceFaults faults;
   faults.open_circuit = true;
-  sim::SetSourceFaults(*emulators_.at("source"), faults);
-  const std::string outcome = SourceFaultOutcome(Open());
-  std::cout << "FAULT source open_circuit -> " << outcome << "\n";
+  const std::string outcome = SourceOutcomeUnder(faults, "open_circuit");
   EXPECT_TRUE(Names(outcome, "CurrentMismatchError")) << outcome;
   EXPECT_TRUE(Names(outcome, "source")) << outcome;
 }
@@ -309,9 +315,7 @@ TEST_F(LabDevices, AnOpenCircuitIredStopsNamingTheSource) {
 TEST_F(LabDevices, ComplianceStopsTheRun) {
   sim::SourceFaults faults;
   faults.extra_resistance_ohm = 5.0;  // 500 mA needs 4.85 V > compliance 3 V
-  sim::SetSourceFaults(*emulators_.at("source"), faults);
-  const std::string outcome = SourceFaultOutcome(Open());
-  std::cout << "FAULT source compliance -> " << outcome << "\n";
+  const std::string outcome = SourceOutcomeUnder(faults, "compliance");
   EXPECT_TRUE(Names(outcome, "CurrentMismatchError")) << outcome;
   EXPECT_TRUE(Names(outcome, "compliance")) << outcome;
 }

@@ -6,9 +6,11 @@
 #include <deque>
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "station/driver.h"
 #include "station/transport.h"
 
 namespace irdist {
@@ -43,6 +45,33 @@ class FakeTransport : public Transport {
 
  private:
   std::shared_ptr<FakeWire> wire_;
+};
+
+// A rig file's `station.devices.<name>:` entry of `driver` on `port`, written at rig.yaml:line.
+inline DeviceSpec FakeDeviceSpec(const std::string& name, const std::string& driver,
+                                 const std::string& port, int line) {
+  DeviceSpec spec;
+  spec.name = name;
+  spec.driver = driver;
+  spec.port = port;
+  spec.file = "rig.yaml";
+  spec.line = line;
+  return spec;
+}
+
+// The registered driver `driver_name`, built from `spec` over a FakeTransport whose far end is
+// `device` (a scripted model of the device with Respond(line) -> reply lines).
+template <typename Device>
+struct FakeDeviceBench {
+  std::shared_ptr<FakeWire> wire = std::make_shared<FakeWire>();
+  Device device;
+  std::unique_ptr<DeviceDriver> driver;
+  FakeDeviceBench(const std::string& driver_name, const DeviceSpec& spec) {
+    wire->respond = [this](const std::string& line) { return device.Respond(line); };
+    const DriverInfo* info = FindDriver(driver_name);
+    if (info == nullptr) throw std::logic_error("no driver registered as " + driver_name);
+    driver = info->create(spec, std::make_unique<FakeTransport>(wire));
+  }
 };
 
 }  // namespace irdist

@@ -99,27 +99,16 @@ struct Ptu {
 };
 
 DeviceSpec HeadSpec() {
-  DeviceSpec spec;
-  spec.name = "head";
-  spec.driver = "flir_ptu";
-  spec.port = "/dev/ttyUSB1";
-  spec.file = "rig.yaml";
-  spec.line = 10;
+  DeviceSpec spec = FakeDeviceSpec("head", "flir_ptu", "/dev/ttyUSB1", 10);
   spec.axes[Axis::kPan] = "pan";
   spec.axes[Axis::kTilt] = "tilt";
   return spec;
 }
 
-struct Head {
-  std::shared_ptr<FakeWire> wire = std::make_shared<FakeWire>();
-  Ptu ptu;
-  std::unique_ptr<DeviceDriver> driver;
-  Motion* motion = nullptr;
-  explicit Head(const DeviceSpec& spec = HeadSpec()) {
-    wire->respond = [this](const std::string& c) { return ptu.Respond(c); };
-    driver = FindDriver("flir_ptu")->create(spec, std::make_unique<FakeTransport>(wire));
-    motion = driver->motion();
-  }
+struct Head : FakeDeviceBench<Ptu> {
+  Ptu& ptu = device;
+  Motion* motion = driver->motion();
+  explicit Head(const DeviceSpec& spec = HeadSpec()) : FakeDeviceBench("flir_ptu", spec) {}
   int Count(const std::string& command) const {
     return static_cast<int>(std::count(ptu.commands.begin(), ptu.commands.end(), command));
   }

@@ -97,26 +97,15 @@ struct SourceMeter {
 };
 
 DeviceSpec SourceSpec() {
-  DeviceSpec spec;
-  spec.name = "source";
-  spec.driver = "scpi_source";
-  spec.port = "/dev/ttyUSB2";
-  spec.file = "rig.yaml";
-  spec.line = 20;
+  DeviceSpec spec = FakeDeviceSpec("source", "scpi_source", "/dev/ttyUSB2", 20);
   spec.settings["compliance_v"] = {"3.0", 24};
   return spec;
 }
 
-struct Bench {
-  std::shared_ptr<FakeWire> wire = std::make_shared<FakeWire>();
-  SourceMeter meter;
-  std::unique_ptr<DeviceDriver> driver;
-  CurrentSource* source = nullptr;
-  explicit Bench(const DeviceSpec& spec = SourceSpec()) {
-    wire->respond = [this](const std::string& line) { return meter.Respond(line); };
-    driver = FindDriver("scpi_source")->create(spec, std::make_unique<FakeTransport>(wire));
-    source = driver->source();
-  }
+struct Bench : FakeDeviceBench<SourceMeter> {
+  SourceMeter& meter = device;
+  CurrentSource* source = driver->source();
+  explicit Bench(const DeviceSpec& spec = SourceSpec()) : FakeDeviceBench("scpi_source", spec) {}
 };
 
 TEST(ScpiSource, RegistersAsSourceDriver) {

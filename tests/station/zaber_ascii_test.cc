@@ -107,12 +107,7 @@ struct Stage {
 };
 
 DeviceSpec SlideSpec() {
-  DeviceSpec spec;
-  spec.name = "slide";
-  spec.driver = "zaber_ascii";
-  spec.port = "/dev/ttyUSB0";
-  spec.file = "rig.yaml";
-  spec.line = 3;
+  DeviceSpec spec = FakeDeviceSpec("slide", "zaber_ascii", "/dev/ttyUSB0", 3);
   spec.axes[Axis::kSlide] = "1 1";
   spec.settings["fullstep_um"] = {"3.048", 5};
   spec.settings["origin_mm"] = {"1000", 6};
@@ -120,18 +115,10 @@ DeviceSpec SlideSpec() {
   return spec;
 }
 
-struct Rig {
-  std::shared_ptr<FakeWire> wire = std::make_shared<FakeWire>();
-  Stage stage;
-  std::unique_ptr<DeviceDriver> driver;
-  Motion* motion = nullptr;
-  explicit Rig(const DeviceSpec& spec = SlideSpec()) {
-    wire->respond = [this](const std::string& line) { return stage.Respond(line); };
-    const DriverInfo* info = FindDriver("zaber_ascii");
-    EXPECT_NE(info, nullptr);
-    driver = info->create(spec, std::make_unique<FakeTransport>(wire));
-    motion = driver->motion();
-  }
+struct Rig : FakeDeviceBench<Stage> {
+  Stage& stage = device;
+  Motion* motion = driver->motion();
+  explicit Rig(const DeviceSpec& spec = SlideSpec()) : FakeDeviceBench("zaber_ascii", spec) {}
   int Count(const std::string& prefix) const {
     int n = 0;
     for (const std::string& c : stage.commands) n += c.rfind(prefix, 0) == 0;

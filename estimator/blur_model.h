@@ -1,0 +1,48 @@
+#pragma once
+// The calibrated blur of the blob: how the blob's measured blur variance (Features::blur_var_px2)
+// depends on the distance, fitted from the calibration frames (estimator/fit.h stores it in the
+// CalibrationModel) and checked against in measurement (estimator/health.h). docs/estimator.md.
+
+#include <vector>
+
+namespace irdist {
+
+// The calibrated blur: blur_var(u) = c0 + c1 u + c2 u^2, u = 1000 mm / d (the thin lens's defocus
+// variance is quadratic in u), and the per-frame sd of the measurement around it,
+// sd(d) = noise_at_1m (d / 1000 mm)^noise_exponent, both from the calibration frames.
+struct BlurCalibration {
+  double c0_px2 = 0.0, c1_px2 = 0.0, c2_px2 = 0.0;
+  double noise_at_1m_px2 = 0.0;
+  double noise_exponent = 0.0;
+  int frames = 0;
+  bool fitted() const { return noise_at_1m_px2 > 0.0; }
+  double BlurVarPx2(double d_mm) const;
+  double NoisePx2(double d_mm) const;
+};
+
+// One calibration frame's measured blur at its true distance.
+struct BlurPoint {
+  double d_mm = 0.0;
+  double blur_var_px2 = 0.0;
+};
+
+// The residuals of a fit at one calibrated distance, for a noise law sd(d).
+struct NoiseGroup {
+  double ln_d_1m = 0.0;  // ln(d / 1000 mm)
+  double sum_r2 = 0.0;   // sum of the squared residuals there
+  int count = 0;
+};
+
+// A noise law sd(d) = at_1m (d / 1000 mm)^exponent: ln rms = ln at_1m + exponent ln(d / 1000 mm)
+// by least squares over the groups' rms (groups of >= 3 with residuals), weighted by their
+// sizes. With one such group, exponent 0 and at_1m its rms. False (nothing set) without one.
+bool FitNoiseLaw(const std::vector<NoiseGroup>& groups, double* at_1m, double* exponent);
+
+// Minimum number of frames FitBlurCalibration needs.
+constexpr int kMinBlurCalibrationFrames = 12;
+
+// Fits the calibrated blur to the frames with a measured blur (the usable measurement frames of
+// the calibration); not fitted (noise 0) with fewer than kMinBlurCalibrationFrames points.
+BlurCalibration FitBlurCalibration(const std::vector<BlurPoint>& points);
+
+}  // namespace irdist
