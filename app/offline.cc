@@ -11,6 +11,7 @@
 #include <tuple>
 
 #include "acquisition/recording.h"
+#include "app/crb.h"
 #include "app/position.h"
 #include "app/provenance.h"
 #include "app/recipe.h"
@@ -675,10 +676,12 @@ ValidationSummary WriteValidation(const std::string& dir, const std::vector<Esti
                                   std::ostream& out) {
   WriteEstimatesCsv(dir + "/estimates.csv", rows);
   ValidationSummary summary = Summarize(rows);
-  WriteSummaryYaml(dir + "/summary.yaml", summary, context);
+  const std::map<std::string, CrbFigures> crb = ValidationCrb(context, summary);
+  WriteSummaryYaml(dir + "/summary.yaml", summary, context, crb);
   const std::string index =
-      WriteReport(dir + "/report", "irdist validation", ValidationReportFields(context, summary),
-                  summary.BriefReport(), ValidationPlots(rows, summary));
+      WriteReport(dir + "/report", "irdist validation",
+                  ValidationReportFields(context, summary, crb), summary.BriefReport(),
+                  ValidationPlots(rows, summary));
   out << summary.BriefReport() << "\n";
   out << "Estimates: " << dir << "/estimates.csv\nSummary: " << dir
       << "/summary.yaml\nReport: " << index << "\n";

@@ -12,7 +12,6 @@
 #include <sstream>
 
 #include "acquisition/recording.h"
-#include "app/crb.h"
 #include "base/process.h"
 
 #ifndef IRDIST_VERSION
@@ -741,7 +740,8 @@ std::string CrbFiguresText(const CrbFigures& c) {
 }  // namespace
 
 ReportFields ValidationReportFields(const std::map<std::string, std::string>& context,
-                                    const ValidationSummary& summary) {
+                                    const ValidationSummary& summary,
+                                    const std::map<std::string, CrbFigures>& crb) {
   ReportFields fields;
   const auto recording = context.find("recording");
   if (recording != context.end()) fields = RecordingReportFields(recording->second);
@@ -757,7 +757,6 @@ ReportFields ValidationReportFields(const std::map<std::string, std::string>& co
   for (const MethodSummary& m : summary.methods) {
     fields.push_back({"method " + m.method, ErrorFiguresText(m.all)});
   }
-  const std::map<std::string, CrbFigures> crb = ValidationCrb(context, summary);
   for (const MethodSummary& m : summary.methods) {
     const auto it = crb.find(m.method);
     if (it != crb.end()) fields.push_back({"CRB " + m.method, CrbFiguresText(it->second)});

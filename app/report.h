@@ -65,9 +65,10 @@ ReportFields RecordingReportFields(const std::string& recording_dir);
 ReportFields CalibrationReportFields(const std::string& recording_dir,
                                      const std::string& model_path, const CalibrationModel& model);
 // The validation page's header: `context` (recipe, model, recording), the recording's fields
-// and each method's error figures.
+// and each method's error figures, and each method's bound in `crb` (app/crb.h ValidationCrb).
 ReportFields ValidationReportFields(const std::map<std::string, std::string>& context,
-                                    const ValidationSummary& summary);
+                                    const ValidationSummary& summary,
+                                    const std::map<std::string, CrbFigures>& crb = {});
 
 // Writes <dir>/index.html and the plots' .dat/.gp/.svg/.log beside it. The header table holds
 // `fields` then the report's date and irdist version; `summary_text` follows (preformatted).

@@ -11,7 +11,6 @@
 #include <sstream>
 #include <tuple>
 
-#include "app/crb.h"
 
 namespace irdist {
 namespace {
@@ -462,12 +461,12 @@ std::string ValidationSummary::BriefReport() const {
 }
 
 void WriteSummaryYaml(const std::string& path, const ValidationSummary& summary,
-                      const std::map<std::string, std::string>& context) {
+                      const std::map<std::string, std::string>& context,
+                      const std::map<std::string, CrbFigures>& crb) {
   YAML::Emitter out;
   out.SetDoublePrecision(6);
   out << YAML::BeginMap;
   for (const auto& [key, value] : context) out << YAML::Key << key << YAML::Value << value;
-  const std::map<std::string, CrbFigures> crb = ValidationCrb(context, summary);
   const auto crb_of = [&crb](const MethodSummary& m) -> const CrbFigures* {
     const auto it = crb.find(m.method);
     return it == crb.end() ? nullptr : &it->second;

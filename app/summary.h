@@ -140,10 +140,11 @@ std::optional<double> ReadBestDtMs(const std::string& summary_yaml_path);
 
 // summary.yaml: `count`, `distance_rel_error_pct: {median, p95, max}`, ... for the first method at
 // top level (the default pipeline), and one block per other method (`i0_dependent:`, `geometric:`).
-// With context["recording"] (a validation's recording), each method's block carries `crb:`, the
-// Cramer-Rao bound beside its figures (app/crb.h: computed from the virtual rig's physics; on a
-// hardware rig the block says why there is none).
+// Each method named in `crb` carries a `crb:` block, the Cramer-Rao bound beside its figures
+// (app/crb.h ValidationCrb computes them from the virtual rig's physics; on a hardware rig the
+// block says why there is none).
 void WriteSummaryYaml(const std::string& path, const ValidationSummary& summary,
-                      const std::map<std::string, std::string>& context = {});
+                      const std::map<std::string, std::string>& context = {},
+                      const std::map<std::string, CrbFigures>& crb = {});
 
 }  // namespace irdist

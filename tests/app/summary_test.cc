@@ -1,5 +1,7 @@
 #include "app/summary.h"
 
+#include "app/crb.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -123,12 +125,15 @@ TEST_F(SummaryTest, ConditionsGroupTheRepetitionsOfEachPoseAndCurrent) {
 TEST_F(SummaryTest, CrbBlockSaysWhyWithoutAVirtualRig) {
   const auto s = Summarize(ReadEstimatesCsv((dir_ / "estimates.csv").string()));
   const std::string path = (dir_ / "summary.yaml").string();
-  WriteSummaryYaml(path, s, {{"recording", (dir_ / "no-recording").string()}});
+  const std::map<std::string, std::string> context = {
+      {"recording", (dir_ / "no-recording").string()}};
+  WriteSummaryYaml(path, s, context, ValidationCrb(context, s));
   YAML::Node y = YAML::LoadFile(path);
   ASSERT_TRUE(y["crb"].IsMap());
   EXPECT_EQ(y["crb"]["source"].as<std::string>().rfind("not computed: ", 0), 0u);
   EXPECT_TRUE(y["geometric"]["crb"].IsMap());
-  WriteSummaryYaml(path, s, {{"recipe", "hand-made"}});
+  const std::map<std::string, std::string> no_recording = {{"recipe", "hand-made"}};
+  WriteSummaryYaml(path, s, no_recording, ValidationCrb(no_recording, s));
   y = YAML::LoadFile(path);
   EXPECT_FALSE(y["crb"].IsDefined());
 }
