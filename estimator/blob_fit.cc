@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -16,6 +15,11 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kPixelAreaVarPx2 = 1.0 / 12.0;
 // Parameters: centre x, y (relative to the fit's origin), P11, P12, P22, amplitude, background.
 constexpr int kParams = 7;
+// A round blob's fitted anisotropy |a|^2 is exponential with mean E |a_noise|^2: subtracting 3x
+// that mean leaves it nonzero in e^-3 = 5% of frames (subtracting 1x only removes the bias: the
+// size then scatters as much as the larger eigenvalue; 3x: 0.91x of it, test estimator/blob_fit),
+// and changes a clearly elliptical blob's |a| little (theta 10 deg: |a| is 1.5% of tr/2, the noise
+// sd ~0.25% on the unit test's 5 px disc; at 2.7 m theta 10's mean error moves by < 0.1 deg).
 constexpr double kAnisotropyNoiseMultiple = 3.0;
 
 // The blurred disc's value at a point, relative to its amplitude: Phi of the signed distance to the
@@ -188,18 +192,18 @@ double SolvePass(const std::vector<Pixel>& pixels, const std::vector<double>& va
 }
 
 // P's eigenvalues tr/2 -+ |a|, a = ((P11 - P22) / 2, P12). The fitted |a|^2 is the true one plus
-// the noise's E |a_noise|^2 = noise_var: on a round blob the larger disc variance (1/4 over the
+// noise of mean noise_var = E |a_noise|^2: on a round blob the larger disc variance (1/4 over the
 // smaller eigenvalue) is biased up by ~0.9 noise sd and scatters more than the mean size. With
-// shrink, |a| is replaced by sqrt(max(0, |a|^2 - noise_var)) (its noise bias removed): a blob
-// whose anisotropy is within its noise is taken as a circle, a clearly elliptical one keeps |a|
-// to second order in the noise.
+// shrink, |a| is sqrt(max(0, |a|^2 - kAnisotropyNoiseMultiple x noise_var)): a blob whose
+// anisotropy is within its noise is a circle (both axes the mean size, theta 0), a clearly
+// elliptical one keeps its axes to second order in the noise.
 void DiscEigenvalues(const double* v, double noise_var, bool shrink, double* p_small,
                      double* p_large) {
   const double tr = v[2] + v[4];
   const double a2 = 0.25 * (v[2] - v[4]) * (v[2] - v[4]) + v[3] * v[3];
-  const double c = std::getenv("IRDIST_SHRINK_C") ? std::atof(std::getenv("IRDIST_SHRINK_C")) : kAnisotropyNoiseMultiple;
-  const double bias = shrink && std::isfinite(noise_var) ? c * std::max(0.0, noise_var) : 0.0;
-  const double root = std::sqrt(std::max(0.0, a2 - bias));
+  const bool known = shrink && std::isfinite(noise_var);
+  const double removed = known ? kAnisotropyNoiseMultiple * std::max(0.0, noise_var) : 0.0;
+  const double root = std::sqrt(std::max(0.0, a2 - removed));
   *p_small = 0.5 * tr - root;
   *p_large = 0.5 * tr + root;
 }
@@ -275,9 +279,8 @@ bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationMod
   const double blur = g.BlurVarPx2(d_mm);
   const BlobFitResult fit = FitBlob(image, bit_depth, *features, blur);
   if (!fit.ok) return false;
-  const bool raw = std::getenv("IRDIST_BLOB_RAW") != nullptr;  // TEMP A/B
-  features->moment_major_var_px2 = (raw ? fit.raw_major_var_px2 : fit.major_var_px2) + blur;
-  features->moment_minor_var_px2 = (raw ? fit.raw_minor_var_px2 : fit.minor_var_px2) + blur;
+  features->moment_major_var_px2 = fit.major_var_px2 + blur;
+  features->moment_minor_var_px2 = fit.minor_var_px2 + blur;
   return true;
 }
 
