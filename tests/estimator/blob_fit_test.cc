@@ -112,15 +112,17 @@ TEST(BlobFit, ScattersLessThanTheSecondMoments) {
 }
 
 // On a round blob the larger eigenvalue of the fitted disc is the larger of two noisy axes: biased
-// up and scattered by the anisotropy's noise. The size used for distance (major_var_px2, the
-// anisotropy's noise bias removed) scatters less than the raw larger eigenvalue and is unbiased;
-// a clearly elliptical disc keeps its axes.
+// up (+0.2% here) and scattered by the anisotropy's noise. The size used for distance
+// (major_var_px2: a blob round within its noise is a circle) scatters less than the raw larger
+// eigenvalue (measured 0.95x over 150 frames) and is unbiased; a clearly elliptical disc keeps its
+// axes.
 TEST(BlobFit, ARoundBlobsSizeIsTheMeanOfItsAxesNotTheLargerOne) {
   const double a = 5.0;
+  const int kFrames = 150;
   const cv::Mat1d electrons = RenderDisc(47.6, 48.3, a, a, 0.0, kBlurPx, 3000.0, 10.0);
   std::mt19937_64 rng(5);
   std::vector<double> used, raw;
-  for (int n = 0; n < 60; ++n) {
+  for (int n = 0; n < kFrames; ++n) {
     const cv::Mat frame = Frame(electrons, &rng);
     const Features f = ComputeFeatures(frame, 12, FeatureOptions());
     ASSERT_TRUE(f.Usable());
@@ -132,10 +134,10 @@ TEST(BlobFit, ARoundBlobsSizeIsTheMeanOfItsAxesNotTheLargerOne) {
   }
   double sd_used = 0, sd_raw = 0;
   const double bias_used = MeanSd(used, &sd_used), bias_raw = MeanSd(raw, &sd_raw);
-  EXPECT_LT(sd_used, 0.93 * sd_raw) << "used " << sd_used << " raw " << sd_raw;
-  EXPECT_GT(bias_raw, 3.0 * sd_raw / std::sqrt(60.0)) << "the raw larger axis is biased up";
+  EXPECT_LT(sd_used, 0.97 * sd_raw) << "used " << sd_used << " raw " << sd_raw;
+  EXPECT_GT(bias_raw, 5.0 * sd_raw / std::sqrt(kFrames)) << "the raw larger axis is biased up";
   EXPECT_LT(std::abs(bias_used), 0.25 * bias_raw) << "used " << bias_used << " raw " << bias_raw;
-  EXPECT_LT(std::abs(bias_used), 1e-3);  // 0.1% of the size variance: 0.05% of the distance
+  EXPECT_LT(std::abs(bias_used), 5e-4);  // the fit's own: 0.05% of the size variance
 
   const cv::Mat1d ellipse = RenderDisc(47.6, 48.3, 5.5, 4.2, 30.0, kBlurPx, 3000.0, 10.0);
   const cv::Mat elliptic = Frame(ellipse, &rng);
