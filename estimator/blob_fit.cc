@@ -16,11 +16,11 @@ constexpr double kPixelAreaVarPx2 = 1.0 / 12.0;
 // Parameters: centre x, y (relative to the fit's origin), P11, P12, P22, amplitude, background.
 constexpr int kParams = 7;
 // A round blob's fitted |a|^2 (anisotropy, below) is exponential with mean E |a_noise|^2: it
-// exceeds 4x that mean in e^-4 = 1.8% of frames. Below it the blob is taken as a circle; above, only
-// the noise's mean is removed, so a clearly elliptical blob keeps its axes (unbiased |a|^2). A soft
-// shrink (|a|^2 less 3x the noise) reached the same dispersion at theta 0 but shortened |a| at
-// 10-20 deg (theta max on Fig. 13 0.431 -> 0.444 deg); subtracting 1x alone removes the bias but
-// not the scatter (docs/estimator.md).
+// exceeds 4x that mean in e^-4 = 1.8% of frames. Below it the blob is taken as a circle; above,
+// only the noise's mean is removed, so a clearly elliptical blob keeps its axes (unbiased |a|^2).
+// A soft shrink (|a|^2 less 3x the noise) reached the same dispersion at theta 0 but shortened |a|
+// at 10-20 deg (theta max on Fig. 13 0.431 -> 0.444 deg); subtracting 1x alone removes the bias
+// but not the scatter (docs/estimator.md).
 constexpr double kCircleNoiseMultiple = 4.0;
 
 // The blurred disc's value at a point, relative to its amplitude: Phi of the signed distance to the

@@ -27,7 +27,7 @@ struct BlobFitResult {
   bool ok = false;
   cv::Point2d center_px;
   // The disc's variance along its axes (no blur), A^2/4 and B^2/4, with the anisotropy's noise
-  // bias removed (a blob whose ellipticity is within its noise is a circle: both are the mean size).
+  // bias removed (a blob round within 4x its anisotropy noise is a circle: both the mean size).
   double major_var_px2 = 0.0;
   double minor_var_px2 = 0.0;
   double raw_major_var_px2 = 0.0;  // the same from the fitted P's eigenvalues as they are
