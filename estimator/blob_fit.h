@@ -11,7 +11,8 @@
 // size-blur correlation that a free-blur fit (EllipseMethod::kModelFit) pays for.
 //
 // The result replaces the blob's second-moment variances by the fitted disc's (A^2/4, B^2/4 for
-// semi-axes A, B) plus the same calibrated blur b(u): quantities with the moments' expectation,
+// semi-axes A, B; the larger taken without the noise bias a near-round blob's larger eigenvalue
+// has) plus the same calibrated blur b(u): quantities with the moments' expectation,
 // so the calibrated geometric model, theta (kCalibratedBlur) and the fused solve use them as they
 // are. The distance for b(u) is the moments' geometric distance (b(u) changes slowly with d).
 
@@ -25,8 +26,15 @@ namespace irdist {
 struct BlobFitResult {
   bool ok = false;
   cv::Point2d center_px;
-  double major_var_px2 = 0.0;  // the disc's variance along its axes (no blur): A^2/4, B^2/4
+  // The disc's variance along its axes (no blur), A^2/4 and B^2/4, with the anisotropy's noise
+  // bias removed (a blob round within 4x its anisotropy noise is a circle: both the mean size).
+  double major_var_px2 = 0.0;
   double minor_var_px2 = 0.0;
+  double raw_major_var_px2 = 0.0;  // the same from the fitted P's eigenvalues as they are
+  double raw_minor_var_px2 = 0.0;
+  // E |a_noise|^2 of P's anisotropy a = ((P11 - P22) / 2, P12), px^-4, from the fit's covariance
+  // (NaN when it could not be computed: then nothing is removed).
+  double anisotropy_noise_var = 0.0;
   double angle_deg = 0.0;      // major axis direction, degrees from +x
   double blur_var_px2 = 0.0;   // the calibrated blur variance used (pixel area included)
   double chi2_per_pixel = 0.0; // weighted residual sum of squares / pixels (~1 when the model fits)
