@@ -27,7 +27,7 @@ using std::chrono::milliseconds;
 
 constexpr char kName[] = "flir_ptu";
 constexpr double kArcsecPerDeg = 3600.0;
-constexpr milliseconds kPollPeriod{20};
+constexpr milliseconds kPollPeriod{10};
 constexpr int kStillPolls = 15;  // polls standing still, away from the target: stopped short
 
 struct PtuAxis {

@@ -27,7 +27,7 @@ constexpr char kName[] = "zaber_ascii";
 // Acceleration): microsteps/s = maxspeed / 1.6384; microsteps/s^2 = accel x 10000 / 1.6384.
 constexpr double kSpeedDataPerMicrostepS = 1.6384;
 constexpr double kAccelDataPerMicrostepS2 = 1.6384 / 10000.0;
-constexpr milliseconds kPollPeriod{20};
+constexpr milliseconds kPollPeriod{10};
 constexpr char kNoReplyFix[] =
     "check the cable, the baud rate (Zaber ASCII default 115200) and the device address in the "
     "rig file";
