@@ -74,7 +74,8 @@ std::optional<Reply> DecodeReply(std::string_view line, std::string* why) {
     const std::string_view rest = body.substr(4);
     const std::size_t comma = rest.find(',');
     const std::string code(rest.substr(0, comma));
-    if (code.empty() || code.size() > 6) return fail("bad error code");
+    const bool has_digit = code.find_first_of("0123456789") != std::string::npos;
+    if (!has_digit || code.size() > 6) return fail("bad error code");
     for (std::size_t i = 0; i < code.size(); ++i) {
       if (!((code[i] >= '0' && code[i] <= '9') || (i == 0 && code[i] == '-'))) {
         return fail("bad error code");

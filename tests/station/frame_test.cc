@@ -80,7 +80,9 @@ TEST(Frame, MalformedLinesRejected) {
   for (const std::string& bad :
        {std::string(""), std::string("OK"), std::string("#12 OK*"), Framed("12 OK"),
         Framed("#x OK"), Framed("#12 MAYBE"), Framed("#12OK"), Framed("#12 ERR abc"),
-        std::string("#12 OK\x01*00")}) {
+        std::string("#12 OK\x01*00"),
+        // Found by fuzz_station_reply: a sign without digits once reached std::stoi and threw.
+        Framed("#9 ERR -,\"x\""), Framed("#9 ERR -")}) {
     std::string why;
     EXPECT_FALSE(DecodeReply(bad, &why)) << bad;
     EXPECT_FALSE(why.empty());
