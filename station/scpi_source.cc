@@ -172,8 +172,9 @@ void ScpiSource::DrainErrors(const std::string& after) {
       double code = 0;
       return comma != std::string::npos && ParseDouble(Trim(r.substr(0, comma)), &code);
     });
-    const int code = std::stoi(reply.substr(0, reply.find(',')));
-    if (code == 0) break;
+    double code = 0.0;  // the judge above accepted it as a number; any value but 0 is an error
+    ParseDouble(Trim(reply.substr(0, reply.find(','))), &code);
+    if (code == 0.0) break;
     if (first.empty()) first = reply;
   }
   if (!first.empty()) {

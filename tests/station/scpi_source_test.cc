@@ -178,6 +178,20 @@ TEST(ScpiSource, ErrorQueueEntryIsADeviceError) {
   }
 }
 
+// An error code too large for an int (a damaged or foreign instrument) is still an error entry
+// named in a DeviceError, never a std::out_of_range from the parser.
+TEST(ScpiSource, AnOutOfRangeErrorCodeIsStillADeviceError) {
+  Bench b;
+  b.source->Identify();
+  b.meter.errors.push_back("99999999999,\"Odd\"");
+  try {
+    b.source->SetCurrent(10.0);
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    EXPECT_EQ(e.device_code(), "99999999999,\"Odd\"");
+  }
+}
+
 TEST(ScpiSource, LostQueryReplyIsRetriedAfterResync) {
   Bench b;
   b.source->Identify();
