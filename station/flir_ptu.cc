@@ -117,6 +117,10 @@ class FlirPtu : public DeviceDriver, public Motion {
                          const std::string& fix) const {
     throw DeviceError(identity_, code, message, fix);
   }
+  // A link failure naming the driver and the rig entry ("flir_ptu 'head': ...") and the port.
+  [[noreturn]] void LinkFail(const std::string& message, const std::string& fix) const {
+    throw LinkError(std::string(kName) + " '" + spec_.name + "': " + message, spec_.port, fix);
+  }
 
   DeviceSpec spec_;
   std::unique_ptr<Transport> link_;
@@ -230,13 +234,13 @@ void FlirPtu::ApplySpeed(PtuAxis* a) {
   if (spec_.settings.count("speed_deg_s")) {
     const long long s = std::llround(spec_.Number("speed_deg_s", 0) / a->deg_per_position);
     if (!Command(p + "S" + std::to_string(s), timeout_)) {
-      throw LinkError("no reply to " + p + "S", spec_.port, "check the cable");
+      LinkFail("no reply to " + p + "S", "check the cable");
     }
   }
   if (spec_.settings.count("accel_deg_s2")) {
     const long long s = std::llround(spec_.Number("accel_deg_s2", 0) / a->deg_per_position);
     if (!Command(p + "A" + std::to_string(s), timeout_)) {
-      throw LinkError("no reply to " + p + "A", spec_.port, "check the cable");
+      LinkFail("no reply to " + p + "A", "check the cable");
     }
   }
 }
@@ -347,9 +351,9 @@ void FlirPtu::StoppedShort(const std::string& what, const std::vector<long long>
 void FlirPtu::Home() {
   homed_ = false;
   if (!Command("R", home_timeout_)) {
-    throw LinkError("no acknowledgement of the reset (R) within " +
-                        std::to_string(home_timeout_.count()) + " ms",
-                    spec_.port, "check the unit's power and cable; then home again");
+    LinkFail("no acknowledgement of the reset (R) within " +
+                 std::to_string(home_timeout_.count()) + " ms",
+             "check the unit's power and cable; then home again");
   }
   for (PtuAxis& a : axes_) {
     a.has_target = false;
@@ -375,8 +379,8 @@ void FlirPtu::MoveAxis(PtuAxis* a, long long position) {
   const long long second = Position(*a);
   if (first != second || std::llabs(second - position) <= tolerance_) return;
   if (!Command(command, timeout_)) {
-    throw LinkError("no acknowledgement of '" + command + "' (sent twice, the axis stood still)",
-                    spec_.port, "check the cable and the unit's power");
+    LinkFail("no acknowledgement of '" + command + "' (sent twice, the axis stood still)",
+             "check the cable and the unit's power");
   }
 }
 

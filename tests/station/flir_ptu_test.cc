@@ -212,6 +212,25 @@ TEST(FlirPtu, DroppedQueryRepliesAreRetried) {
   EXPECT_NEAR(now.pan_deg, 0.0, 1e-12);
 }
 
+// A reset whose '*' never comes (lost or garbled) stops homing with a LinkError that names the
+// driver, the rig entry and the port.
+TEST(FlirPtu, AResetNeverAcknowledgedIsALinkErrorNamingTheDevice) {
+  DeviceSpec spec = HeadSpec();
+  spec.settings["home_timeout_s"] = {"0.2", 30};
+  Head h(spec);
+  h.motion->Identify();
+  h.ptu.drop_next = 1;  // the R's '*'
+  try {
+    h.motion->Home();
+    FAIL() << "expected LinkError";
+  } catch (const LinkError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("flir_ptu 'head'"), std::string::npos) << what;
+    EXPECT_NE(what.find("reset (R)"), std::string::npos) << what;
+    EXPECT_NE(what.find("/dev/ttyUSB1"), std::string::npos) << what;
+  }
+}
+
 TEST(FlirPtu, ReportedPositionIsReadTwiceAlike) {
   Head h;
   h.motion->Identify();
