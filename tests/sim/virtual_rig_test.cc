@@ -97,6 +97,10 @@ TEST(VirtualRig, VirtualLabStartsItsThreeDeviceEmulatorsOnTheOneWorld) {
   testing::PtyHost slide(info.device_ports.at("slide"));
   EXPECT_EQ(slide.Ask("/1 1 home\n"), "@01 1 OK BUSY WR 0");
   EXPECT_TRUE(testing::WaitFor([&] { return world.Pose().slide_mm < 1000.001; }));
+  // The world reaches the home position before the device ends its homing (and clears WR):
+  // wait for the device itself to say IDLE.
+  EXPECT_TRUE(testing::WaitFor(
+      [&] { return slide.Ask("/1 1\n").find(" IDLE ") != std::string::npos; }));
   // 1000 mm further along the slide: 1000 / 0.09921875 um microsteps.
   EXPECT_EQ(slide.Ask("/1 1 move abs 10078740\n"), "@01 1 OK BUSY -- 0");
   EXPECT_TRUE(testing::WaitFor([&] { return std::abs(world.Pose().slide_mm - 2000.0) < 1e-3; }));
