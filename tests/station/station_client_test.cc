@@ -164,9 +164,12 @@ TEST(StationClient, TriggerTrainFiresCountPulsesAtItsPeriod) {
   std::lock_guard<std::mutex> lock(m);
   ASSERT_EQ(times.size(), 5u);
   for (std::size_t i = 1; i < times.size(); ++i) {
-    // Never early. Late only by the host's scheduling (at time scale 20 a 10 ms host hiccup is
-    // 0.2 s here), so lateness is not asserted: timings belong in bench/.
-    EXPECT_GE(times[i] - times[i - 1], 0.045);
+    // Never early: the station spaces pulses by the period in its own clock. The sink sees each
+    // pulse a little after it (host scheduling: at time scale 20 a 1 ms host delay is 20 ms
+    // here), so one pulse seen late may look close to the next; against the first pulse, pulse
+    // i is never more than that delay before i periods. Lateness is not asserted: timings
+    // belong in bench/.
+    EXPECT_GE(times[i] - times.front(), static_cast<double>(i) * 0.05 - 0.02) << "pulse " << i;
   }
   EXPECT_GE(times.back() - times.front(), 4 * 0.05 - 1e-3);
   rig.world.SetTriggerSink(nullptr);
