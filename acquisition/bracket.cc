@@ -125,11 +125,15 @@ void BracketCapture::DrainLateFrames() {
     if (left.count() <= 0) break;
     auto frame = camera_.WaitFrame(left);
     if (!frame) break;
-    if (AcceptId(frame->frame_id, frame->timestamp_ns)) {
-      ++stats_.late;
-    } else {
-      ++stats_.duplicates;
-    }
+    CountLeftover(*frame);
+  }
+}
+
+void BracketCapture::CountLeftover(const RawFrame& frame) {
+  if (AcceptId(frame.frame_id, frame.timestamp_ns)) {
+    ++stats_.late;
+  } else {
+    ++stats_.duplicates;
   }
 }
 
@@ -245,11 +249,7 @@ void BracketCapture::DiscardFrameFiredAhead(const PlannedFrame& next) {
   const auto exposure = std::chrono::microseconds(std::llround(next.exposure_us));
   if (auto frame = camera_.WaitFrame(
           std::chrono::duration_cast<std::chrono::milliseconds>(exposure) + options_.frame_timeout)) {
-    if (AcceptId(frame->frame_id, frame->timestamp_ns)) {
-      ++stats_.late;
-    } else {
-      ++stats_.duplicates;
-    }
+    CountLeftover(*frame);
   }
 }
 

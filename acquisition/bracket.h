@@ -172,6 +172,8 @@ class BracketCapture {
   std::string FailureText(const PlannedFrame& plan, const BracketFrame& frame) const;
   bool AcceptId(std::uint64_t frame_id, std::uint64_t timestamp_ns);
   void DrainLateFrames();
+  // A frame that is no attempt's: counted late (a newer id) or a duplicate.
+  void CountLeftover(const RawFrame& frame);
 
   Camera& camera_;
   BracketOptions options_;

@@ -197,7 +197,9 @@ void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int
                       "). Check the trigger wiring (camera " + m.setup.trigger_source +
                       ") and the camera link, then resume the run.");
   }
-  m.pending_measured_ma = measured_ma ? *measured_ma : measure_current_ma();
+  // A complete bracket took its last frame, whose readout ran the read-back.
+  IRDIST_CHECK(measured_ma.has_value(), "the current was not read during the last readout");
+  m.pending_measured_ma = *measured_ma;
   m.pending = std::move(result);
   m.pending_pose = pose;
   m.has_pending = true;

@@ -13,6 +13,7 @@
 #include "acquisition/recording.h"
 #include "app/summary.h"
 #include "estimator/model_file.h"
+#include "tests/integration/measure_helpers.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
 
@@ -26,20 +27,7 @@ using testing::WriteAll;
 
 // 3 distances x 4 angles x 2 currents = 24 poses x 4 frames: 72 differences, enough for the
 // reduced I0-free models (the shipped smoke recipe is too small to fit them).
-constexpr const char* kCalibrationRecipe = R"(name: it-calibration
-rig: virtual
-after: fit
-axes:
-  slide_mm: [1500, 2000, 2500]
-  theta_deg: [0, 10, 20, 30]
-  bias_ma: [475, 500]
-bracket:
-  t_ref_ms: 8
-  t_meas_ms: [30, 33, 36]
-settle:
-  after_move_ms: 200
-  after_current_ms: 500
-)";
+const std::string kCalibrationRecipe = testing::SmallCalibrationRecipe("it-calibration");
 
 // Inside the calibrated range; a current not seen in calibration (525 mA).
 constexpr const char* kValidationRecipe = R"(name: it-validation

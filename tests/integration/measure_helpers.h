@@ -10,8 +10,9 @@
 
 namespace irdist::testing {
 
-// A 3-distance x 4-angle x 2-current calibration on the virtual rig, fitted after recording.
-inline std::string MeasureCalibrationRecipe(const std::string& name) {
+// A 3-distance x 4-angle x 2-current calibration on the virtual rig, fitted after recording
+// (the measure tests and integration/calibrate_validate).
+inline std::string SmallCalibrationRecipe(const std::string& name) {
   return "name: " + name + R"(
 rig: virtual
 after: fit

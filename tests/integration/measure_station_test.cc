@@ -62,7 +62,7 @@ class MeasureStation : public ::testing::Test {
     fs::create_directories(dir_ + "/runtime");
     ASSERT_EQ(setenv("XDG_RUNTIME_DIR", (dir_ + "/runtime").c_str(), 1), 0);
     WriteAll(dir_ + "/calibration.yaml",
-             testing::MeasureCalibrationRecipe("measure-station-calibration"));
+             testing::SmallCalibrationRecipe("measure-station-calibration"));
   }
 
   // irdist with `args`, its output in *output; returns the exit code.

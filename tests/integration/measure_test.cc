@@ -44,7 +44,7 @@ class Measure : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new std::string(testing::ScratchDir("measure"));
     WriteAll(*dir_ + "/calibration.yaml",
-             testing::MeasureCalibrationRecipe("measure-calibration"));
+             testing::SmallCalibrationRecipe("measure-calibration"));
     testing::LoopbackGvcpLock lock;
     calibrate_code_ = RunIrdist({"calibrate", *dir_ + "/calibration.yaml", "--out", *dir_ + "/cal",
                                  "--time-scale", kTimeScale, "--quiet"},
