@@ -148,6 +148,42 @@ TEST(BlobFit, ARoundBlobsSizeIsTheMeanOfItsAxesNotTheLargerOne) {
   EXPECT_NEAR(fit.minor_var_px2 / fit.raw_minor_var_px2, 1.0, 1e-3);
 }
 
+// The fit's analytic derivatives are those of its model: against central differences at points
+// across the blurred edge of an ellipse (where Phi varies), and zero where the pixel is flat.
+TEST(BlobFit, TheModelsDerivativesAreItsFiniteDifferences) {
+  const double v[5] = {10.3, 9.7, 1.0 / 36.0, 0.004, 1.0 / 25.0};  // semi-axes about 6 and 5 px
+  const double edge_sd = 0.9;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> angle(0.0, 2.0 * kPi), radius(3.0, 9.0);
+  int in_band = 0;
+  for (int n = 0; n < 200; ++n) {
+    const double a = angle(rng), r = radius(rng);
+    const double x = v[0] + r * std::cos(a), y = v[1] + r * std::sin(a);
+    double d[5];
+    const double value = BlobEdgeValue(v, x, y, edge_sd, d);
+    if (value <= 0.0 || value >= 1.0) continue;
+    ++in_band;
+    for (int k = 0; k < 5; ++k) {
+      const double h = 1e-6 * std::max(1.0, std::abs(v[k]));
+      double up[5], down[5], ignored[5];
+      std::copy(v, v + 5, up);
+      std::copy(v, v + 5, down);
+      up[k] += h;
+      down[k] -= h;
+      const double numeric = (BlobEdgeValue(up, x, y, edge_sd, ignored) -
+                              BlobEdgeValue(down, x, y, edge_sd, ignored)) / (2.0 * h);
+      EXPECT_NEAR(d[k], numeric, 1e-6 * std::max(1.0, std::abs(numeric)))
+          << "parameter " << k << " at (" << x << ", " << y << "), value " << value;
+    }
+  }
+  EXPECT_GT(in_band, 100);
+  double d[5] = {1, 1, 1, 1, 1};
+  EXPECT_EQ(BlobEdgeValue(v, v[0] + 0.5, v[1], edge_sd, d), 1.0);  // well inside
+  EXPECT_EQ(d[0], 0.0);
+  EXPECT_EQ(BlobEdgeValue(v, v[0] + 20.0, v[1], edge_sd, d), 0.0);  // far outside
+  EXPECT_EQ(d[2], 0.0);
+}
+
 // Without a calibrated geometric model there is no blur to fit with: the features stay as they are.
 TEST(BlobFit, RefineNeedsACalibratedBlur) {
   const cv::Mat frame = Frame(RenderDisc(48, 48, 5, 4, 0, kBlurPx, 5000, 10), nullptr);
