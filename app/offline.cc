@@ -587,16 +587,29 @@ namespace {
 
 // The blob's centre in the sensor's pixels: the mean centroid of the measurement frames (NaN
 // when some frame has no blob).
-cv::Point2d BlobOf(const std::vector<Pair>& pairs, const FeatureMap& features,
-                   const CameraGeometry& geometry) {
-  cv::Point2d sum(0.0, 0.0);
+// The blob's image position (sensor px): the mean centroid of the measurement frames, with the
+// standard error of that mean from their scatter (NaN with one frame).
+BlobPoint BlobOf(const std::vector<Pair>& pairs, const FeatureMap& features,
+                 const CameraGeometry& geometry) {
+  std::vector<cv::Point2d> centroids;
   for (const Pair& pair : pairs) {
     const Features& f = FeaturesOf(features, *pair.measurement);
-    if (!f.blob_found) return {NAN, NAN};
-    sum += f.centroid_px;
+    if (!f.blob_found) return BlobPoint{NAN, NAN, NAN, NAN};
+    centroids.push_back(f.centroid_px);
   }
-  const double n = static_cast<double>(pairs.size());
-  return {sum.x / n + geometry.roi_offset_x, sum.y / n + geometry.roi_offset_y};
+  const double n = static_cast<double>(centroids.size());
+  cv::Point2d mean(0.0, 0.0);
+  for (const cv::Point2d& c : centroids) mean += c / n;
+  BlobPoint blob{mean.x + geometry.roi_offset_x, mean.y + geometry.roi_offset_y, NAN, NAN};
+  if (centroids.size() < 2) return blob;
+  double su = 0.0, sv = 0.0;
+  for (const cv::Point2d& c : centroids) {
+    su += (c.x - mean.x) * (c.x - mean.x);
+    sv += (c.y - mean.y) * (c.y - mean.y);
+  }
+  blob.u_se_px = std::sqrt(su / (n - 1.0) / n);
+  blob.v_se_px = std::sqrt(sv / (n - 1.0) / n);
+  return blob;
 }
 
 }  // namespace
@@ -629,9 +642,9 @@ BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
     rows.i0_dependent.push_back(I0DependentRow(model, base, pairs, features, all_usable));
   }
   if (model.geometric.fitted()) rows.geometric.push_back(GeometricRow(model, base, pairs, features));
-  const cv::Point2d blob = BlobOf(pairs, features, geometry);
+  const BlobPoint blob = BlobOf(pairs, features, geometry);
   for (auto* block : {&rows.i0_free, &rows.paper, &rows.i0_dependent, &rows.geometric}) {
-    AddPositions(geometry, blob.x, blob.y, block);
+    AddPositions(geometry, blob, block);
   }
   return rows;
 }

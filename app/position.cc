@@ -11,27 +11,55 @@
 
 namespace irdist {
 
+namespace {
+
+// The unit ray of the image point (u, v) (sensor px): its undistorted normalised coordinates
+// (x, y, 1), normalised.
+cv::Vec3d RayOf(const cv::Matx33d& camera, const std::vector<double>& distortion, double u,
+                double v) {
+  const std::vector<cv::Point2d> image = {{u, v}};
+  std::vector<cv::Point2d> normalised;
+  cv::undistortPoints(image, normalised, camera, distortion);
+  const cv::Vec3d ray(normalised.front().x, normalised.front().y, 1.0);
+  return ray / cv::norm(ray);
+}
+
+}  // namespace
+
 Position3d PositionFromRange(const CameraIntrinsics& k, int roi_offset_x, int roi_offset_y,
-                             double u_px, double v_px, double range_mm, double range_se_mm) {
+                             const BlobPoint& blob, double range_mm, double range_se_mm) {
   IRDIST_CHECK(k.known, "PositionFromRange needs intrinsics");
   const double du = k.in_roi_px ? roi_offset_x : 0.0;
   const double dv = k.in_roi_px ? roi_offset_y : 0.0;
   const cv::Matx33d camera(k.fx_px, 0.0, k.cx_px + du, 0.0, k.fy_px, k.cy_px + dv, 0.0, 0.0, 1.0);
   std::vector<double> distortion = k.distortion;
   distortion.resize(5, 0.0);
-  const std::vector<cv::Point2d> image = {{u_px, v_px}};
-  std::vector<cv::Point2d> normalised;
-  cv::undistortPoints(image, normalised, camera, distortion);
-  const double x = normalised.front().x, y = normalised.front().y;
-  const double norm = std::sqrt(x * x + y * y + 1.0);
+  const cv::Vec3d ray = RayOf(camera, distortion, blob.u_px, blob.v_px);
   Position3d p;
-  p.x_mm = range_mm * x / norm;
-  p.y_mm = range_mm * y / norm;
-  p.z_mm = range_mm / norm;
+  p.x_mm = range_mm * ray[0];
+  p.y_mm = range_mm * ray[1];
+  p.z_mm = range_mm * ray[2];
+  // Central differences of the ray along u and v (0.5 px: the distortion is smooth at that scale).
+  constexpr double kStepPx = 0.5;
+  const cv::Vec3d ray_du = (RayOf(camera, distortion, blob.u_px + kStepPx, blob.v_px) -
+                            RayOf(camera, distortion, blob.u_px - kStepPx, blob.v_px)) /
+                           (2.0 * kStepPx);
+  const cv::Vec3d ray_dv = (RayOf(camera, distortion, blob.u_px, blob.v_px + kStepPx) -
+                            RayOf(camera, distortion, blob.u_px, blob.v_px - kStepPx)) /
+                           (2.0 * kStepPx);
   const double se = range_se_mm >= 0.0 ? range_se_mm : std::nan("");
-  p.x_se_mm = se * std::fabs(x) / norm;
-  p.y_se_mm = se * std::fabs(y) / norm;
-  p.z_se_mm = se / norm;
+  const bool centre_known = std::isfinite(blob.u_se_px) && std::isfinite(blob.v_se_px);
+  double* const out[3] = {&p.x_se_mm, &p.y_se_mm, &p.z_se_mm};
+  for (int i = 0; i < 3; ++i) {
+    const double along = ray[i] * se;
+    const double across_u = range_mm * ray_du[i] * blob.u_se_px;
+    const double across_v = range_mm * ray_dv[i] * blob.v_se_px;
+    if (centre_known) {
+      *out[i] = std::sqrt(along * along + across_u * across_u + across_v * across_v);
+    } else {
+      *out[i] = i == 2 ? std::fabs(along) : std::nan("");
+    }
+  }
   return p;
 }
 
@@ -52,7 +80,7 @@ CameraGeometry GeometryOfRigText(const std::string& text, const std::string& fil
   return g;
 }
 
-void AddPositions(const CameraGeometry& geometry, double blob_u_px, double blob_v_px,
+void AddPositions(const CameraGeometry& geometry, const BlobPoint& blob,
                   std::vector<EstimateRow>* rows) {
   for (EstimateRow& row : *rows) {
     if (geometry.virtual_rig && std::isfinite(row.true_d_mm)) {
@@ -60,10 +88,9 @@ void AddPositions(const CameraGeometry& geometry, double blob_u_px, double blob_
       row.true_y_mm = geometry.emitter_offset_y_mm;
       row.true_z_mm = row.true_d_mm;
     }
-    if (!geometry.intrinsics.known || !row.ok || !std::isfinite(blob_u_px)) continue;
-    const Position3d p =
-        PositionFromRange(geometry.intrinsics, geometry.roi_offset_x, geometry.roi_offset_y,
-                          blob_u_px, blob_v_px, row.d_mm, row.d_std_mm);
+    if (!geometry.intrinsics.known || !row.ok || !std::isfinite(blob.u_px)) continue;
+    const Position3d p = PositionFromRange(geometry.intrinsics, geometry.roi_offset_x,
+                                           geometry.roi_offset_y, blob, row.d_mm, row.d_std_mm);
     row.x_mm = p.x_mm;
     row.y_mm = p.y_mm;
     row.z_mm = p.z_mm;

@@ -3,6 +3,7 @@
 // columns, z along the optical axis; mm) from its image position and the estimated range: the
 // blob's undistorted ray (cv::undistortPoints with the rig's intrinsics) times the range.
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -12,16 +13,25 @@ namespace irdist {
 
 struct Position3d {
   double x_mm = 0.0, y_mm = 0.0, z_mm = 0.0;
-  // From the range's standard error alone (the ray's direction is known to a small fraction of
-  // a pixel, far below the range's relative error).
+  // The range's standard error and the blob centre's, propagated (first order, through the
+  // distortion). Along the ray the range dominates; across it, on the axis, only the centre's
+  // counts (x_se = range x centre se / f).
   double x_se_mm = 0.0, y_se_mm = 0.0, z_se_mm = 0.0;
 };
 
-// `u_px`, `v_px`: the blob's centre in the full sensor's pixels (OpenCV convention: pixel centres
-// at whole coordinates); `roi_offset_*`: the region's offset, used when the intrinsics are in ROI
-// pixels. A negative or NaN `range_se_mm` gives NaN standard errors.
+// The blob's centre in the full sensor's pixels (OpenCV convention: pixel centres at whole
+// coordinates) and each coordinate's standard error (NaN: unknown, e.g. a bracket with a single
+// measurement frame).
+struct BlobPoint {
+  double u_px = 0.0, v_px = 0.0;
+  double u_se_px = NAN, v_se_px = NAN;
+};
+
+// `roi_offset_*`: the region's offset, used when the intrinsics are in ROI pixels. A negative or
+// NaN `range_se_mm` gives NaN standard errors; an unknown centre se gives NaN x and y standard
+// errors and z's from the range alone.
 Position3d PositionFromRange(const CameraIntrinsics& intrinsics, int roi_offset_x,
-                             int roi_offset_y, double u_px, double v_px, double range_mm,
+                             int roi_offset_y, const BlobPoint& blob, double range_mm,
                              double range_se_mm);
 
 // What turns a bracket's blob and range into a 3D position, and the position's ground truth.
@@ -41,7 +51,7 @@ CameraGeometry GeometryOfRigText(const std::string& text, const std::string& fil
 struct EstimateRow;
 // Fills x, y, z (and their standard errors) of every ok row from the blob's centre (sensor px)
 // when the geometry has intrinsics, and true_x/y/z from the rows' true_d_mm on a virtual rig.
-void AddPositions(const CameraGeometry& geometry, double blob_u_px, double blob_v_px,
+void AddPositions(const CameraGeometry& geometry, const BlobPoint& blob,
                   std::vector<EstimateRow>* rows);
 
 }  // namespace irdist

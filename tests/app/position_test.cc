@@ -19,11 +19,31 @@ CameraIntrinsics Pinhole() {
 }
 
 TEST(PositionFromRange, OnTheAxisIsStraightAhead) {
-  const Position3d p = PositionFromRange(Pinhole(), 0, 0, 639.5, 511.5, 2000.0, 4.0);
+  const Position3d p = PositionFromRange(Pinhole(), 0, 0, {639.5, 511.5, 0.02, 0.03}, 2000.0, 4.0);
   EXPECT_NEAR(p.x_mm, 0.0, 1e-9);
   EXPECT_NEAR(p.y_mm, 0.0, 1e-9);
   EXPECT_NEAR(p.z_mm, 2000.0, 1e-9);
-  EXPECT_NEAR(p.z_se_mm, 4.0, 1e-12);
+  EXPECT_NEAR(p.z_se_mm, 4.0, 1e-9);
+  // Across the ray on the axis only the centre's noise counts: range x se / f.
+  EXPECT_NEAR(p.x_se_mm, 2000.0 * 0.02 / 3000.0, 1e-6);
+  EXPECT_NEAR(p.y_se_mm, 2000.0 * 0.03 / 3000.0, 1e-6);
+}
+
+// Off the axis the range's error has a lateral share; a centre of unknown noise (one measurement
+// frame) leaves x and y without a standard error rather than with the range's share alone.
+TEST(PositionFromRange, StandardErrorsPropagateTheRangeAndTheCentre) {
+  const double u = 639.5 + 300.0, v = 511.5;  // x / z = 0.1
+  const Position3d range_only = PositionFromRange(Pinhole(), 0, 0, {u, v, 0.0, 0.0}, 2000.0, 4.0);
+  EXPECT_NEAR(range_only.x_se_mm, 4.0 * 0.1 / std::sqrt(1.01), 1e-6);
+  EXPECT_NEAR(range_only.z_se_mm, 4.0 / std::sqrt(1.01), 1e-6);
+  const Position3d both = PositionFromRange(Pinhole(), 0, 0, {u, v, 0.05, 0.05}, 2000.0, 4.0);
+  EXPECT_GT(both.x_se_mm, range_only.x_se_mm);
+  EXPECT_NEAR(both.y_se_mm, 2000.0 * 0.05 / 3000.0 / std::sqrt(1.01), 1e-6);
+  const Position3d unknown =
+      PositionFromRange(Pinhole(), 0, 0, {u, v, std::nan(""), std::nan("")}, 2000.0, 4.0);
+  EXPECT_TRUE(std::isnan(unknown.x_se_mm));
+  EXPECT_TRUE(std::isnan(unknown.y_se_mm));
+  EXPECT_NEAR(unknown.z_se_mm, range_only.z_se_mm, 1e-9);
 }
 
 TEST(PositionFromRange, OffAxisPointComesBackFromItsProjection) {
@@ -31,8 +51,8 @@ TEST(PositionFromRange, OffAxisPointComesBackFromItsProjection) {
   const double x = 100.0, y = -60.0, z = 1800.0;
   const double range = std::sqrt(x * x + y * y + z * z);
   const Position3d p =
-      PositionFromRange(Pinhole(), 0, 0, 639.5 + 3000.0 * x / z, 511.5 + 3000.0 * y / z, range,
-                        -1.0);
+      PositionFromRange(Pinhole(), 0, 0, {639.5 + 3000.0 * x / z, 511.5 + 3000.0 * y / z, 0.1, 0.1},
+                        range, -1.0);
   EXPECT_NEAR(p.x_mm, x, 1e-6);
   EXPECT_NEAR(p.y_mm, y, 1e-6);
   EXPECT_NEAR(p.z_mm, z, 1e-6);
@@ -44,8 +64,8 @@ TEST(PositionFromRange, RoiPixelsAreShiftedByTheRegionsOffset) {
   roi.in_roi_px = true;
   roi.cx_px = 639.5 - 512.0;
   roi.cy_px = 511.5 - 384.0;
-  const Position3d a = PositionFromRange(Pinhole(), 512, 384, 700.0, 450.0, 2000.0, 1.0);
-  const Position3d b = PositionFromRange(roi, 512, 384, 700.0, 450.0, 2000.0, 1.0);
+  const Position3d a = PositionFromRange(Pinhole(), 512, 384, {700.0, 450.0}, 2000.0, 1.0);
+  const Position3d b = PositionFromRange(roi, 512, 384, {700.0, 450.0}, 2000.0, 1.0);
   EXPECT_NEAR(a.x_mm, b.x_mm, 1e-9);
   EXPECT_NEAR(a.y_mm, b.y_mm, 1e-9);
   EXPECT_GT(a.x_mm, 0.0);
@@ -55,8 +75,8 @@ TEST(PositionFromRange, RoiPixelsAreShiftedByTheRegionsOffset) {
 TEST(PositionFromRange, DistortionMovesTheRay) {
   CameraIntrinsics k = Pinhole();
   k.distortion = {-0.2, 0.0, 0.0, 0.0, 0.0};  // barrel: image points pulled in
-  const Position3d plain = PositionFromRange(Pinhole(), 0, 0, 1000.0, 511.5, 2000.0, 1.0);
-  const Position3d barrel = PositionFromRange(k, 0, 0, 1000.0, 511.5, 2000.0, 1.0);
+  const Position3d plain = PositionFromRange(Pinhole(), 0, 0, {1000.0, 511.5}, 2000.0, 1.0);
+  const Position3d barrel = PositionFromRange(k, 0, 0, {1000.0, 511.5}, 2000.0, 1.0);
   EXPECT_GT(barrel.x_mm, plain.x_mm);
 }
 

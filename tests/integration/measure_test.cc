@@ -140,6 +140,12 @@ TEST_F(Measure, JsonFollowsTheSchema) {
     // The shipped virtual rig has intrinsics: the position is there, on the axis.
     ASSERT_TRUE(j["position"].IsMap()) << output;
     EXPECT_NEAR(j["position"]["x_mm"].as<double>(), 0.0, 5.0);
+    // On the axis x's standard error is the centre's (range x centre se / f, about 5e-4 mm here,
+    // from the 4 measurement frames' scatter), not the range's share, which vanishes there (1e-6
+    // mm). The bound leaves a factor 15 for the scatter of a 3-dof estimate (P < 1e-3).
+    ASSERT_TRUE(j["position"]["x_se_mm"].IsScalar()) << output;
+    EXPECT_GT(j["position"]["x_se_mm"].as<double>(), 3e-5);
+    EXPECT_LT(j["position"]["x_se_mm"].as<double>(), 0.1);
     // Blob near the sensor's centre (639.5, 511.5) in sensor pixels.
     EXPECT_NEAR(j["blob_x_px"].as<double>(), 639.5, 1.0);
     EXPECT_NEAR(j["blob_y_px"].as<double>(), 511.5, 1.0);
