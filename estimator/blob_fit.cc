@@ -270,12 +270,7 @@ double ReadVariance(const std::vector<Pixel>& pixels, const cv::Point2d& centre,
     if (std::hypot(p.x - centre.x, p.y - centre.y) > radius) ring.push_back(p.value);
   }
   if (ring.size() < 16) return 0.0;
-  auto mid = ring.begin() + ring.size() / 2;
-  std::nth_element(ring.begin(), mid, ring.end());
-  const double median = *mid;
-  for (double& x : ring) x = std::abs(x - median);
-  std::nth_element(ring.begin(), mid, ring.end());
-  const double sd = 1.4826 * *mid;
+  const double sd = RobustNoiseSd(&ring);
   return sd * sd;
 }
 

@@ -41,6 +41,8 @@ struct Problem {
   double s_weight = 1.0;
   double geo_weight = 0.0;           // 0: no geometric equations
   const double* geo_ln_d = nullptr;  // per difference, ln of the frame's geometric d (NaN: none)
+  double ref_geo_ln_d = 0.0;         // the reference frame's (EstimateOptions::reference_size)
+  double ref_geo_weight = 0.0;       // 0, or a NaN ln d: no reference equation
   double theta_prior_rad = 0.0;
   double theta_prior_weight = 0.0;  // 1 / sd in rad; 0: no prior
   double huber = 0.0;               // kFused: Huber threshold of the radiometric residuals
@@ -99,11 +101,14 @@ int Residuals(const Problem& p, const T& ln_d, const T& theta_rad, T* r) {
       if (std::isfinite(p.geo_ln_d[i])) r[n++] = (ln_d - p.geo_ln_d[i]) * p.geo_weight;
     }
   }
+  if (p.ref_geo_weight > 0.0 && std::isfinite(p.ref_geo_ln_d)) {
+    r[n++] = (ln_d - p.ref_geo_ln_d) * p.ref_geo_weight;
+  }
   if (p.theta_prior_weight > 0.0) r[n++] = (theta_rad - p.theta_prior_rad) * p.theta_prior_weight;
   return n;
 }
 
-constexpr int kMaxResiduals = 3 * kMaxBracketExposures + 1;
+constexpr int kMaxResiduals = 3 * kMaxBracketExposures + 2;
 using Jet2 = ceres::Jet<double, 2>;
 
 // Residuals and Jacobian (columns: ln d, theta rad).
@@ -522,6 +527,19 @@ void SetUpFused(const CalibrationModel& model, const EstimateOptions& options, c
   p->theta_prior_weight = 1.0 / (options.theta_prior_sd_deg * kRad);
 }
 
+// EstimateOptions::reference_size: the reference frame's size as one more geometric equation,
+// weighted by the reference's share of the light against the mean measurement exposure.
+void SetUpReferenceSize(const CalibrationModel& model, const EstimateOptions& options,
+                        const Features& reference, double t_ref_ms, const double* t_ms, int n,
+                        Problem* p) {
+  if (!options.reference_size || !(p->geo_weight > 0.0)) return;
+  double mean_t_ms = 0.0;
+  for (int i = 0; i < n; ++i) mean_t_ms += t_ms[i] / n;
+  if (!(t_ref_ms > 0.0) || !(mean_t_ms > 0.0)) return;
+  p->ref_geo_ln_d = GeometricLnD(model, reference);
+  p->ref_geo_weight = p->geo_weight * std::sqrt(t_ref_ms / mean_t_ms);
+}
+
 double MeanFinite(const double* v, int n) {
   double sum = 0.0;
   int count = 0;
@@ -597,6 +615,7 @@ DistanceEstimate EstimatePair(const CalibrationModel& model, const Features& ref
   const double theta0 = Theta0Combined(model, pair, 2, measurement, options);
   Problem p{&model, e, s, !e->degenerate, &diff, 1};
   SetUpFused(model, options, &geo, theta0, &p);
+  SetUpReferenceSize(model, options, reference, t_ref_ms, &t_ms, 1, &p);
   DistanceEstimate out = Solve(p, theta0, options);
   out.d_geometric_mm = MeanFinite(&geo, 1);
   return out;
@@ -634,12 +653,14 @@ BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& r
   for (int i = 0; i < n; ++i) {
     Problem p{&model, e, s, !e->degenerate, &diffs[i], 1};
     SetUpFused(model, options, &geo[i], thetas[i], &p);
+    SetUpReferenceSize(model, options, reference, t_ref_ms, &t_ms[i], 1, &p);
     out.per_exposure.push_back(Solve(p, thetas[i], options));
     out.per_exposure.back().d_geometric_mm = MeanFinite(&geo[i], 1);
   }
   // Jointly: start from the per-exposure estimate with the smallest residuals.
   Problem joint{&model, e, s, !e->degenerate, diffs, n};
   SetUpFused(model, options, geo, theta0, &joint);
+  SetUpReferenceSize(model, options, reference, t_ref_ms, t_ms.data(), n, &joint);
   const DistanceEstimate* best = &out.per_exposure[0];
   for (const DistanceEstimate& d : out.per_exposure) {
     if (d.residual_e + d.residual_sigma < best->residual_e + best->residual_sigma) best = &d;

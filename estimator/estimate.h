@@ -57,6 +57,10 @@ struct EstimateOptions {
   // same error in d, so the fit-error weight overrates the Sigma equation.
   double radiometric_weight = 0.5;
   double geometric_weight = 1.0;
+  // kFused: the reference frame's size is one more geometric equation, weighted by its share of
+  // the light against the measurement frames', sqrt(t_ref / mean t_n) x the geometric weight (a
+  // size's noise falls as 1 / sqrt(signal)). false: the measurement frames' sizes only.
+  bool reference_size = true;
   // kFused: Huber threshold on the weighted radiometric residuals (units: calibration mean fit
   // errors x radiometric_weight, so 3 = 6 fit errors); beyond it an equation counts linearly,
   // not quadratically. Where a calibration between sparse grid points misses a measurement by

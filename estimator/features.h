@@ -167,6 +167,10 @@ FeatureOptions PaperFeatureOptions();
 // a blob gives blob_found = false (a value, not an error).
 Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options);
 
+// A Gaussian noise's sd from samples of it around a level: 1.4826 x the median absolute deviation
+// from their median (robust to the few that are not noise). Reorders `values`; 0 when empty.
+double RobustNoiseSd(std::vector<double>* values);
+
 // The frame through the lookup table of ResponseScope::kAllPixels: every gray level g of the
 // CV_16UC1 `image` (bit_depth significant bits) becomes round(65535 L(g / (2^bit_depth - 1))),
 // L(M) = (f(M) - f(0)) / (f(1) - f(0)) clamped to [0,1]. Returns a CV_16UC1 image of 16 bits.

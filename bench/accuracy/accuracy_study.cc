@@ -59,7 +59,7 @@ class SweepRenderer {
       : physics_(physics), renderer_(physics), seed_(seed) {}
 
   // With `recoverer`, every bracket's frames (reference first) also go to it as one stack.
-  // refine: when set, each measurement frame's moments are replaced by the blob fit with this
+  // refine: when set, each frame's moments (the reference's too, as in the app) are replaced by the blob fit with this
   // model's calibrated blur (RefineWithBlobFit).
   std::vector<Bracket> Run(const std::vector<Pose>& poses, const std::vector<double>& t_ms,
                            const FeatureOptions& fo, ResponseRecoverer* recoverer = nullptr,
@@ -93,7 +93,7 @@ class SweepRenderer {
         renderer_.Render(c, ++frame_index_ + seed_ * 1000003ull, sim::PixelFormat::kMono12, origin,
                          frame);
         Features f = ComputeFeatures(frame, 12, fo);
-        if (refine != nullptr && k > 0) RefineWithBlobFit(frame, 12, *refine, &f);
+        if (refine != nullptr) RefineWithBlobFit(frame, 12, *refine, &f);  // every frame, as the app
         if (recoverer != nullptr) {
           stack.push_back(frame.clone());
           stack_us.push_back(all[k] * 1000.0);

@@ -163,6 +163,29 @@ TEST(Estimate, GeometricBaseline) {
   EXPECT_FALSE(EstimateGeometric(model, none).valid);
 }
 
+// The reference frame's size is one more geometric equation, weighted by its share of the light:
+// a reference whose size says 1% farther pulls the distance out, by less than the measurement's
+// own equation does, and not at all with reference_size off.
+TEST(Estimate, TheReferencesSizePullsTheDistanceByItsShareOfTheLight) {
+  const testing::SyntheticRig rig;
+  CalibrationModel model = rig.ExactModel();
+  model.geometric = FitGeometric(rig.Table3());
+  const Features meas = rig.Frame(35.0, 500.0, 2345.0, 10.0, 10.0);
+  const Features ref = rig.Frame(8.0, 500.0, 2345.0, 10.0, 10.0);
+  Features far_ref = rig.Frame(8.0, 500.0, 2345.0 * 1.01, 10.0, 10.0);
+  far_ref.e_rel = ref.e_rel;  // only its size says farther
+  far_ref.f00 = ref.f00;
+  far_ref.sigma = ref.sigma;
+  EstimateOptions options;
+  const double d = EstimatePair(model, ref, 8.0, meas, 35.0, options).d_mm;
+  const double pulled = EstimatePair(model, far_ref, 8.0, meas, 35.0, options).d_mm;
+  EXPECT_NEAR(d, 2345.0, 0.5);
+  EXPECT_GT(pulled, d + 0.5);         // out, towards the reference's size
+  EXPECT_LT(pulled, d + 0.5 * 23.45); // by less than half the 1%: the measurement weighs more
+  options.reference_size = false;
+  EXPECT_NEAR(EstimatePair(model, far_ref, 8.0, meas, 35.0, options).d_mm, d, 0.01);
+}
+
 // The ellipse of a frame distorted as x = (minor - blur) / (major - blur) = 0.97 cos^2 + 0.01.
 void DistortEllipse(double theta_deg, Features* f) {
   const double c = std::cos(theta_deg * M_PI / 180.0);

@@ -122,6 +122,33 @@ TEST(Features, ApertureMomentsAddTheWholeBlurVariance) {
   EXPECT_LT(threshold_major, major - 0.05 * expected);
 }
 
+// A dim blob (peak about 100 read-noise sd, the 8 ms reference of a far, tilted pose): 2% of the
+// contrast is within the noise, so noise pixels anywhere in the window passed the moments'
+// threshold and the farthest of them set the aperture (minor variance 0.3 px^2 for about 7). The
+// threshold now stays 5 noise sd above the background: the variances are the blob's.
+TEST(Features, ADimBlobsMomentsAreTheBlobsNotTheNoises) {
+  Blob b;
+  b.diameter_px = 11.0;
+  b.theta_deg = 30.0;
+  b.blur_sigma_px = 1.0;
+  b.level = 0.10;  // 410 gray levels
+  b.background = 0.004;
+  const cv::Mat clean = Render(b, 12);
+  cv::Mat noise(clean.size(), CV_32F);
+  cv::Mat noisy;
+  clean.convertTo(noisy, CV_32F);
+  cv::RNG rng(17);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 4.0);  // 4 gray levels of read noise
+  noisy += noise;
+  cv::Mat frame;
+  noisy.convertTo(frame, CV_16U);
+  const Features f = ComputeFeatures(frame, 12, FeatureOptions());
+  ASSERT_TRUE(f.Usable()) << f.BriefReport();
+  const Features truth = ComputeFeatures(clean, 12, FeatureOptions());
+  EXPECT_NEAR(f.moment_major_var_px2 / truth.moment_major_var_px2, 1.0, 0.1);
+  EXPECT_NEAR(f.moment_minor_var_px2 / truth.moment_minor_var_px2, 1.0, 0.1);
+}
+
 TEST(FeatureOptions, EllipseMethodNamesRoundTrip) {
   for (EllipseMethod m :
        {EllipseMethod::kMoments, EllipseMethod::kContour, EllipseMethod::kModelFit}) {

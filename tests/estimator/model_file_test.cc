@@ -327,7 +327,7 @@ std::string WithFirstListValue(std::string text, const std::string& key, const s
 
 TEST(ModelFileSafety, NanOrInfNumbersAreRefusedWithFileAndLine) {
   const std::string good = ModelToYaml(SmallModel());
-  for (const std::string& bad : {".nan", ".inf", "-.inf"}) {
+  for (const std::string bad : {".nan", ".inf", "-.inf"}) {
     try {
       ModelFromYaml(WithFirstListValue(good, "coefficients", bad), "m.yaml");
       FAIL() << "a model with a " << bad << " coefficient was accepted";
