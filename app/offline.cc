@@ -586,9 +586,8 @@ EstimateRow BaseRowOf(const RecordedBracket& bracket, const FrameRecord& first) 
 namespace {
 
 // The blob's centre in the sensor's pixels: the mean centroid of the measurement frames (NaN
-// when some frame has no blob).
-// The blob's image position (sensor px): the mean centroid of the measurement frames, with the
-// standard error of that mean from their scatter (NaN with one frame).
+// when some frame has no blob), with the standard error of that mean from their scatter (NaN
+// with one frame).
 BlobPoint BlobOf(const std::vector<Pair>& pairs, const FeatureMap& features,
                  const CameraGeometry& geometry) {
   std::vector<cv::Point2d> centroids;
