@@ -641,10 +641,8 @@ BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
     rows.i0_dependent.push_back(I0DependentRow(model, base, pairs, features, all_usable));
   }
   if (model.geometric.fitted()) rows.geometric.push_back(GeometricRow(model, base, pairs, features));
-  const BlobPoint blob = BlobOf(pairs, features, geometry);
-  for (auto* block : {&rows.i0_free, &rows.paper, &rows.i0_dependent, &rows.geometric}) {
-    AddPositions(geometry, blob, block);
-  }
+  AddPositions(geometry, BlobOf(pairs, features, geometry),
+               {&rows.i0_free, &rows.paper, &rows.i0_dependent, &rows.geometric});
   return rows;
 }
 

@@ -1,6 +1,8 @@
 #include "app/position.h"
 
 #include <cmath>
+#include <initializer_list>
+#include <optional>
 #include <opencv2/calib3d.hpp>
 #include <vector>
 
@@ -24,36 +26,48 @@ cv::Vec3d RayOf(const cv::Matx33d& camera, const std::vector<double>& distortion
   return ray / cv::norm(ray);
 }
 
-}  // namespace
+// What a position needs from the image: the blob's unit ray, its derivatives along u and v, and
+// the centre's standard errors. One per bracket, whatever the number of estimates along it.
+struct BlobRay {
+  cv::Vec3d ray, ray_du, ray_dv;
+  double u_se_px = NAN, v_se_px = NAN;
+};
 
-Position3d PositionFromRange(const CameraIntrinsics& k, int roi_offset_x, int roi_offset_y,
-                             const BlobPoint& blob, double range_mm, double range_se_mm) {
+BlobRay RayOfBlob(const CameraIntrinsics& k, int roi_offset_x, int roi_offset_y,
+                  const BlobPoint& blob) {
   IRDIST_CHECK(k.known, "PositionFromRange needs intrinsics");
   const double du = k.in_roi_px ? roi_offset_x : 0.0;
   const double dv = k.in_roi_px ? roi_offset_y : 0.0;
   const cv::Matx33d camera(k.fx_px, 0.0, k.cx_px + du, 0.0, k.fy_px, k.cy_px + dv, 0.0, 0.0, 1.0);
   std::vector<double> distortion = k.distortion;
   distortion.resize(5, 0.0);
-  const cv::Vec3d ray = RayOf(camera, distortion, blob.u_px, blob.v_px);
-  Position3d p;
-  p.x_mm = range_mm * ray[0];
-  p.y_mm = range_mm * ray[1];
-  p.z_mm = range_mm * ray[2];
+  BlobRay r;
+  r.ray = RayOf(camera, distortion, blob.u_px, blob.v_px);
   // Central differences of the ray along u and v (0.5 px: the distortion is smooth at that scale).
   constexpr double kStepPx = 0.5;
-  const cv::Vec3d ray_du = (RayOf(camera, distortion, blob.u_px + kStepPx, blob.v_px) -
-                            RayOf(camera, distortion, blob.u_px - kStepPx, blob.v_px)) /
-                           (2.0 * kStepPx);
-  const cv::Vec3d ray_dv = (RayOf(camera, distortion, blob.u_px, blob.v_px + kStepPx) -
-                            RayOf(camera, distortion, blob.u_px, blob.v_px - kStepPx)) /
-                           (2.0 * kStepPx);
+  r.ray_du = (RayOf(camera, distortion, blob.u_px + kStepPx, blob.v_px) -
+              RayOf(camera, distortion, blob.u_px - kStepPx, blob.v_px)) /
+             (2.0 * kStepPx);
+  r.ray_dv = (RayOf(camera, distortion, blob.u_px, blob.v_px + kStepPx) -
+              RayOf(camera, distortion, blob.u_px, blob.v_px - kStepPx)) /
+             (2.0 * kStepPx);
+  r.u_se_px = blob.u_se_px;
+  r.v_se_px = blob.v_se_px;
+  return r;
+}
+
+Position3d AlongRay(const BlobRay& r, double range_mm, double range_se_mm) {
+  Position3d p;
+  p.x_mm = range_mm * r.ray[0];
+  p.y_mm = range_mm * r.ray[1];
+  p.z_mm = range_mm * r.ray[2];
   const double se = range_se_mm >= 0.0 ? range_se_mm : std::nan("");
-  const bool centre_known = std::isfinite(blob.u_se_px) && std::isfinite(blob.v_se_px);
+  const bool centre_known = std::isfinite(r.u_se_px) && std::isfinite(r.v_se_px);
   double* const out[3] = {&p.x_se_mm, &p.y_se_mm, &p.z_se_mm};
   for (int i = 0; i < 3; ++i) {
-    const double along = ray[i] * se;
-    const double across_u = range_mm * ray_du[i] * blob.u_se_px;
-    const double across_v = range_mm * ray_dv[i] * blob.v_se_px;
+    const double along = r.ray[i] * se;
+    const double across_u = range_mm * r.ray_du[i] * r.u_se_px;
+    const double across_v = range_mm * r.ray_dv[i] * r.v_se_px;
     if (centre_known) {
       *out[i] = std::sqrt(along * along + across_u * across_u + across_v * across_v);
     } else {
@@ -61,6 +75,13 @@ Position3d PositionFromRange(const CameraIntrinsics& k, int roi_offset_x, int ro
     }
   }
   return p;
+}
+
+}  // namespace
+
+Position3d PositionFromRange(const CameraIntrinsics& k, int roi_offset_x, int roi_offset_y,
+                             const BlobPoint& blob, double range_mm, double range_se_mm) {
+  return AlongRay(RayOfBlob(k, roi_offset_x, roi_offset_y, blob), range_mm, range_se_mm);
 }
 
 CameraGeometry GeometryOfRigText(const std::string& text, const std::string& file) {
@@ -81,22 +102,27 @@ CameraGeometry GeometryOfRigText(const std::string& text, const std::string& fil
 }
 
 void AddPositions(const CameraGeometry& geometry, const BlobPoint& blob,
-                  std::vector<EstimateRow>* rows) {
-  for (EstimateRow& row : *rows) {
-    if (geometry.virtual_rig && std::isfinite(row.true_d_mm)) {
-      row.true_x_mm = geometry.emitter_offset_x_mm;
-      row.true_y_mm = geometry.emitter_offset_y_mm;
-      row.true_z_mm = row.true_d_mm;
+                  std::initializer_list<std::vector<EstimateRow>*> blocks) {
+  std::optional<BlobRay> ray;  // once, at the first row that needs it
+  for (std::vector<EstimateRow>* rows : blocks) {
+    for (EstimateRow& row : *rows) {
+      if (geometry.virtual_rig && std::isfinite(row.true_d_mm)) {
+        row.true_x_mm = geometry.emitter_offset_x_mm;
+        row.true_y_mm = geometry.emitter_offset_y_mm;
+        row.true_z_mm = row.true_d_mm;
+      }
+      if (!geometry.intrinsics.known || !row.ok || !std::isfinite(blob.u_px)) continue;
+      if (!ray) {
+        ray = RayOfBlob(geometry.intrinsics, geometry.roi_offset_x, geometry.roi_offset_y, blob);
+      }
+      const Position3d p = AlongRay(*ray, row.d_mm, row.d_std_mm);
+      row.x_mm = p.x_mm;
+      row.y_mm = p.y_mm;
+      row.z_mm = p.z_mm;
+      row.x_se_mm = p.x_se_mm;
+      row.y_se_mm = p.y_se_mm;
+      row.z_se_mm = p.z_se_mm;
     }
-    if (!geometry.intrinsics.known || !row.ok || !std::isfinite(blob.u_px)) continue;
-    const Position3d p = PositionFromRange(geometry.intrinsics, geometry.roi_offset_x,
-                                           geometry.roi_offset_y, blob, row.d_mm, row.d_std_mm);
-    row.x_mm = p.x_mm;
-    row.y_mm = p.y_mm;
-    row.z_mm = p.z_mm;
-    row.x_se_mm = p.x_se_mm;
-    row.y_se_mm = p.y_se_mm;
-    row.z_se_mm = p.z_se_mm;
   }
 }
 

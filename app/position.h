@@ -4,6 +4,7 @@
 // blob's undistorted ray (cv::undistortPoints with the rig's intrinsics) times the range.
 
 #include <cmath>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -49,9 +50,10 @@ struct CameraGeometry {
 CameraGeometry GeometryOfRigText(const std::string& text, const std::string& file);
 
 struct EstimateRow;
-// Fills x, y, z (and their standard errors) of every ok row from the blob's centre (sensor px)
-// when the geometry has intrinsics, and true_x/y/z from the rows' true_d_mm on a virtual rig.
+// Fills x, y, z (and their standard errors) of every ok row of `blocks` (the estimates of one
+// bracket, by method) from the blob's centre (sensor px) when the geometry has intrinsics, and
+// true_x/y/z from the rows' true_d_mm on a virtual rig. The blob's ray is computed once.
 void AddPositions(const CameraGeometry& geometry, const BlobPoint& blob,
-                  std::vector<EstimateRow>* rows);
+                  std::initializer_list<std::vector<EstimateRow>*> blocks);
 
 }  // namespace irdist

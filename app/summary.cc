@@ -11,7 +11,6 @@
 #include <sstream>
 #include <tuple>
 
-
 namespace irdist {
 namespace {
 

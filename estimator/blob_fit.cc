@@ -100,44 +100,50 @@ struct Pixel {
 
 // Every pixel's residual, divided by its noise sd, and the analytic Jacobian, for
 // ceres::TinySolver (a dense Levenberg-Marquardt for a few parameters: the general ceres::Problem
-// cost more per iteration than the model itself). Residuals and Jacobian are computed together
-// (its rows cost little more than the residuals) and kept: TinySolver asks for the residuals at a
-// trial step, then for the Jacobian at the same point when it accepts the step.
+// cost more per iteration than the model itself). The model (each pixel's mean and its
+// derivatives) is computed once per point and kept; the weights are applied as it is read. So
+// TinySolver's Jacobian at an accepted trial step, the next pass's start (new weights, same
+// point), the noise regression and the covariance at a pass's solution cost no evaluation.
 class WindowResiduals {
  public:
   using Scalar = double;
   enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = kParams };
 
-  WindowResiduals(const std::vector<Pixel>& pixels, const std::vector<double>& var, double edge_sd)
-      : pixels_(pixels), edge_sd_(edge_sd), inv_sd_(var.size()), residuals_(pixels.size()),
-        jacobian_(pixels.size() * kParams) {
+  WindowResiduals(const std::vector<Pixel>& pixels, double edge_sd)
+      : pixels_(pixels), edge_sd_(edge_sd), inv_sd_(pixels.size()), mean_(pixels.size()),
+        d_mean_(pixels.size() * 5) {}
+  // Each pixel's noise variance (the residuals' weights, 1 / sd).
+  void SetVariances(const std::vector<double>& var) {
     for (size_t i = 0; i < var.size(); ++i) inv_sd_[i] = 1.0 / std::sqrt(var[i]);
   }
   int NumResiduals() const { return static_cast<int>(pixels_.size()); }
   // The Jacobian is column-major, NumResiduals() x kParams, as TinySolver lays it out.
   bool operator()(const double* v, double* residuals, double* jacobian) const {
-    ComputeAt(v);
-    std::copy(residuals_.begin(), residuals_.end(), residuals);
-    if (jacobian != nullptr) std::copy(jacobian_.begin(), jacobian_.end(), jacobian);
+    const std::vector<double>& mean = MeansAt(v);
+    const size_t n = pixels_.size();
+    for (size_t i = 0; i < n; ++i) {
+      residuals[i] = (v[6] + v[5] * mean[i] - pixels_[i].value) * inv_sd_[i];
+      if (jacobian == nullptr) continue;
+      for (int k = 0; k < 5; ++k) jacobian[k * n + i] = v[5] * d_mean_[k * n + i] * inv_sd_[i];
+      jacobian[5 * n + i] = mean[i] * inv_sd_[i];
+      jacobian[6 * n + i] = inv_sd_[i];
+    }
     return true;
   }
-  // The residuals and the Jacobian at v (kept: nothing is computed when v is the last point).
-  void ComputeAt(const double* v) const {
+  // Each pixel's model mean (relative to the amplitude) at v; nothing is computed when v is the
+  // last point.
+  const std::vector<double>& MeansAt(const double* v) const {
     if (!computed_ || !std::equal(v, v + kParams, at_)) Compute(v);
+    return mean_;
   }
-  const std::vector<double>& jacobian() const { return jacobian_; }
 
  private:
   void Compute(const double* v) const {
     const size_t n = pixels_.size();
     double d[5];
     for (size_t i = 0; i < n; ++i) {
-      const Pixel& p = pixels_[i];
-      const double mean = PixelMean(v, p.x, p.y, edge_sd_, d);
-      residuals_[i] = (v[6] + v[5] * mean - p.value) * inv_sd_[i];
-      for (int k = 0; k < 5; ++k) jacobian_[k * n + i] = v[5] * d[k] * inv_sd_[i];
-      jacobian_[5 * n + i] = mean * inv_sd_[i];
-      jacobian_[6 * n + i] = inv_sd_[i];
+      mean_[i] = PixelMean(v, pixels_[i].x, pixels_[i].y, edge_sd_, d);
+      for (int k = 0; k < 5; ++k) d_mean_[k * n + i] = d[k];
     }
     std::copy(v, v + kParams, at_);
     computed_ = true;
@@ -146,8 +152,8 @@ class WindowResiduals {
   const std::vector<Pixel>& pixels_;
   double edge_sd_;
   std::vector<double> inv_sd_;
-  // The last point computed and its residuals and Jacobian (TinySolver holds the functor const).
-  mutable std::vector<double> residuals_, jacobian_;
+  // The last point computed and its model (TinySolver holds the functor const).
+  mutable std::vector<double> mean_, d_mean_;
   mutable double at_[kParams] = {};
   mutable bool computed_ = false;
 };
@@ -193,13 +199,13 @@ std::vector<Pixel> BlobPixels(const cv::Mat& image, int bit_depth, const Feature
 
 // The noise variance of each pixel: read (the background's) + k x signal, k regressed (through
 // the origin, on the signal above background) from the squared residuals of the previous pass.
-std::vector<double> NoiseVariances(const std::vector<Pixel>& pixels, const double* v,
-                                   double edge_sd, double read_var) {
+std::vector<double> NoiseVariances(const std::vector<Pixel>& pixels, const WindowResiduals& model,
+                                   const double* v, double read_var) {
+  const std::vector<double>& mean = model.MeansAt(v);
   std::vector<double> signal(pixels.size());
   double sxy = 0.0, sxx = 0.0;
   for (size_t i = 0; i < pixels.size(); ++i) {
-    const double r = v[6] + v[5] * PixelMean(v, pixels[i].x, pixels[i].y, edge_sd, nullptr) -
-                     pixels[i].value;
+    const double r = v[6] + v[5] * mean[i] - pixels[i].value;
     signal[i] = std::max(0.0, r + pixels[i].value - v[6]);
     sxy += signal[i] * (r * r - read_var);
     sxx += signal[i] * signal[i];
@@ -216,9 +222,9 @@ std::vector<double> NoiseVariances(const std::vector<Pixel>& pixels, const doubl
 // parameters; J^T J's eigen-decomposition). NaN when J^T J is singular to Ceres's own threshold
 // (reciprocal condition 1e-14).
 double AnisotropyNoiseVar(const WindowResiduals& residuals, const double* v) {
-  residuals.ComputeAt(v);
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, kParams>> jacobian(
-      residuals.jacobian().data(), residuals.NumResiduals(), kParams);
+  Eigen::VectorXd r(residuals.NumResiduals());
+  Eigen::Matrix<double, Eigen::Dynamic, kParams> jacobian(residuals.NumResiduals(), kParams);
+  residuals(v, r.data(), jacobian.data());
   const Eigen::Matrix<double, kParams, kParams> information = jacobian.transpose() * jacobian;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kParams, kParams>> eigen(information);
   if (eigen.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
@@ -231,9 +237,8 @@ double AnisotropyNoiseVar(const WindowResiduals& residuals, const double* v) {
 
 // One weighted least-squares pass (ceres::TinySolver) from v; returns the weighted cost per pixel.
 // anisotropy_noise_var: when set, receives AnisotropyNoiseVar at the pass's solution.
-double SolvePass(const std::vector<Pixel>& pixels, const std::vector<double>& var, double edge_sd,
-                 double* v, bool* ok, double* anisotropy_noise_var = nullptr) {
-  const WindowResiduals residuals(pixels, var, edge_sd);
+double SolvePass(const WindowResiduals& residuals, double* v, bool* ok,
+                 double* anisotropy_noise_var = nullptr) {
   ceres::TinySolver<WindowResiduals> solver;
   solver.options.function_tolerance = kChi2Tolerance;
   Eigen::Matrix<double, kParams, 1> x(v);
@@ -243,7 +248,7 @@ double SolvePass(const std::vector<Pixel>& pixels, const std::vector<double>& va
   if (*ok && anisotropy_noise_var != nullptr) {
     *anisotropy_noise_var = AnisotropyNoiseVar(residuals, v);
   }
-  return 2.0 * summary.final_cost / static_cast<double>(pixels.size());
+  return 2.0 * summary.final_cost / static_cast<double>(residuals.NumResiduals());
 }
 
 // P's eigenvalues tr/2 -+ |a|, a = ((P11 - P22) / 2, P12). The fitted |a|^2 is the true one plus
@@ -298,16 +303,17 @@ BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& featu
   const double reach = 2.0 * std::sqrt(features.moment_major_var_px2) + 3.0 * blur_sd;
   const double scale = 1.0 / ((1 << bit_depth) - 1);
   const double read_var = std::max(ReadVariance(pixels, {v[0], v[1]}, reach), scale * scale / 12.0);
-  std::vector<double> var(pixels.size(), read_var);
+  WindowResiduals model(pixels, edge_sd);
+  model.SetVariances(std::vector<double>(pixels.size(), read_var));
   bool ok = false;
   double chi2 = 0.0;
   double noise_var = std::numeric_limits<double>::quiet_NaN();
   // IRLS, two passes: the read noise's weights, then the weights of the first pass's model (a
   // third pass, weights from the second's, moved no figure: docs/estimator.md "The blob fit").
   for (int pass = 0; pass < 2; ++pass) {
-    chi2 = SolvePass(pixels, var, edge_sd, v, &ok, pass == 1 ? &noise_var : nullptr);
+    chi2 = SolvePass(model, v, &ok, pass == 1 ? &noise_var : nullptr);
     if (!ok) return out;
-    if (pass == 0) var = NoiseVariances(pixels, v, edge_sd, read_var);
+    if (pass == 0) model.SetVariances(NoiseVariances(pixels, model, v, read_var));
   }
   double p_small, p_large;  // 1/A^2, 1/B^2
   DiscEigenvalues(v, noise_var, false, &p_small, &p_large);
