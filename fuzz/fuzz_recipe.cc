@@ -1,6 +1,7 @@
 // libFuzzer target: the recipe and rig-file parsers (app/recipe.h, app/rig.h) on one input, read
-// both as a rig file and as a recipe (whose rig is looked up in the shipped recipes/rigs/). Every
-// refusal must be an InputError (RecipeError) with the file named.
+// both as a rig file and as a recipe (whose rig is looked up in the shipped recipes/rigs/), and a
+// recipe that parses is planned (station/plan.h: grid, random draws, axis order, durations). Every
+// refusal must be an InputError (RecipeError) with the file named; a hang is a libFuzzer timeout.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -17,7 +18,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (error.File() != "fuzz-rig.yaml") __builtin_trap();
   }
   try {
-    irdist::ParseRecipe(text, "fuzz-recipe.yaml", IRDIST_SOURCE_DIR "/recipes");
+    const irdist::Recipe recipe =
+        irdist::ParseRecipe(text, "fuzz-recipe.yaml", IRDIST_SOURCE_DIR "/recipes");
+    irdist::PlanRecipe(recipe);
   } catch (const irdist::InputError& error) {
     if (error.File().empty()) __builtin_trap();
   }
