@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <thread>
 
 #include "base/input_error.h"
 #include "sim/device_emulator.h"
@@ -411,6 +412,7 @@ TEST(FlirPtuEmulated, ANewSessionReadsStaleRepliesAwayBeforeIdentifying) {
   EmulatedHead head("      reset_s: 1.0\n");
   DeviceSpec impatient = EmulatedHead::Spec();
   impatient.settings["reset_wait_s"] = {"0.05", 12};
+  std::this_thread::sleep_for(std::chrono::milliseconds(1200));  // the power-up reset
   {
     std::unique_ptr<DeviceDriver> first = head.Open(impatient);
     first->motion()->Identify();

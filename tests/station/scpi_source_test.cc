@@ -7,7 +7,10 @@
 #include <cstdio>
 
 #include "base/input_error.h"
+#include "sim/device_emulator.h"
+#include "sim/world.h"
 #include "station/driver.h"
+#include "station/serial_transport.h"
 #include "tests/station/fake_transport.h"
 
 namespace irdist {
@@ -346,6 +349,30 @@ TEST(ScpiSource, ValidateRequiresComplianceAndKnownKeys) {
   DeviceSpec high = SourceSpec();
   high.settings["compliance_v"] = {"500", 24};
   EXPECT_THROW(info->validate(high), InputError);
+}
+
+// Against the SourceMeter emulator (sim/scpi_emulator.cc): one flipped bit in the reply to
+// :OUTP? ("1" -> "0") while sourcing 475 mA does not stop the sweep.
+TEST(ScpiSourceEmulated, OneFlippedBitInTheOutputStateDoesNotStopTheRun) {
+  sim::World world(20.0);
+  const std::string rig =
+      "station:\n  devices:\n    source:\n      driver: scpi_source\n      port: auto\n"
+      "      compliance_v: 3.0\n"
+      "virtual:\n  devices:\n    source:\n      flip_reply: \":OUTP?\"\n"
+      "      flip_byte: -1\n      flip_bit: 0\n";
+  std::unique_ptr<sim::DeviceEmulator> emulator = sim::FindEmulator("scpi_source")->create(
+      world, {"source", "scpi_source", "inline.yaml", rig, 1});
+  DeviceSpec spec = SourceSpec();
+  spec.port = emulator->Start();
+  SerialOptions serial;
+  serial.line_end = FindDriver("scpi_source")->line_end;
+  std::unique_ptr<DeviceDriver> driver = FindDriver("scpi_source")->create(
+      spec, std::make_unique<SerialTransport>(spec.port, serial));
+  CurrentSource* source = driver->source();
+  source->Identify();
+  source->SetCurrent(475.0);
+  EXPECT_NEAR(source->Measure().current_ma, 475.0, 0.01);
+  EXPECT_NEAR(world.Pose().bias_ma, 475.0, 0.01);
 }
 
 }  // namespace
