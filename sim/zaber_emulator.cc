@@ -10,8 +10,9 @@
 // The checksum CC (two hex digits) is the two's complement of the 8-bit sum of the bytes between
 // the leading '/' or '@' and the ':'; a command carrying one is verified (a mismatch is rejected
 // with BADDATA). Replies carry one only while the device setting comm.checksum is 1 (default 0;
-// kept across a power cycle, as the manual's non-volatile settings). Alerts are not emitted (`set comm.alert 0` only). Warning flags: FS (stalled: a move ended away from
-// its target), WR (no reference position: after power-up until homed), "--" none.
+// kept across a power cycle, as the manual's non-volatile settings). Alerts are not emitted
+// (`set comm.alert 0` only). Warning flags: FS (stalled: a move ended away from its target), WR
+// (no reference position: after power-up until homed), "--" none.
 
 #include <algorithm>
 #include <cmath>

@@ -423,12 +423,19 @@ TEST(ZaberAsciiEmulated, RepliesAreChecksummedAndADamagedPositionIsNeverTaken) {
   std::unique_ptr<DeviceDriver> driver = slide.Open(SlideSpec());
   driver->motion()->Identify();
   driver->motion()->Home();
-  // "... 0:CC": the position's last digit, "0" -> "1", in the next two replies to `get pos`.
-  dynamic_cast<sim::LineDevice&>(*slide.emulator).SetReplyBitFlip({"get pos", -4, 0, 2});
+  StationPosition target;
+  target.slide_mm = 1500.0;  // 10498688 microsteps
+  driver->motion()->StartMove(target);
+  driver->motion()->WaitSettled(std::chrono::milliseconds(20000));
+  StationPosition at;
+  driver->motion()->ReadPosition(&at);
+  // Bit 0 of the byte 6 from the end: a digit of the position with or without ":CC" after it
+  // ("10498688:CC" -> "10498788:CC"), in the next two replies to `get pos`.
+  dynamic_cast<sim::LineDevice&>(*slide.emulator).SetReplyBitFlip({"get pos", -6, 0, 2});
   StationPosition p;
   for (int i = 0; i < 3; ++i) {
     driver->motion()->ReadPosition(&p);
-    EXPECT_DOUBLE_EQ(p.slide_mm, 1000.0);
+    EXPECT_DOUBLE_EQ(p.slide_mm, at.slide_mm);
   }
   EXPECT_EQ(dynamic_cast<sim::LineDevice&>(*slide.emulator).RepliesFlipped(), 2u);
 }
