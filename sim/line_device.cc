@@ -182,6 +182,42 @@ void LineDevice::SetFaults(const EmulatorFaults& faults) {
   move_started_s_ = -1.0;
 }
 
+bool ReplyBitFlip::IsValid(std::string* why) const {
+  std::string problem;
+  if (bit < 0 || bit > 7) problem = "flip_bit must be 0-7";
+  else if (count < 0) problem = "flip_count must be >= 0";
+  if (why != nullptr) *why = problem;
+  return problem.empty();
+}
+
+void LineDevice::SetReplyBitFlip(const ReplyBitFlip& flip) {
+  std::string why;
+  IRDIST_CHECK(flip.IsValid(&why), name_ + ": " + why);
+  std::lock_guard<std::mutex> lock(faults_mutex_);
+  flip_ = flip;
+}
+
+std::uint64_t LineDevice::RepliesFlipped() const {
+  std::lock_guard<std::mutex> lock(faults_mutex_);
+  return replies_flipped_;
+}
+
+// The chosen reply's bit, inverted (ReplyBitFlip), once per chosen message until `count` ran out.
+void LineDevice::FlipChosenBit(const std::string& message, std::string* reply) {
+  std::lock_guard<std::mutex> lock(faults_mutex_);
+  if (flip_.command.empty() || flip_.count <= 0 || reply->empty() ||
+      message.find(flip_.command) == std::string::npos) {
+    return;
+  }
+  std::size_t text = reply->size();
+  while (text > 0 && ((*reply)[text - 1] == '\r' || (*reply)[text - 1] == '\n')) --text;
+  const long index = flip_.offset < 0 ? static_cast<long>(text) + flip_.offset : flip_.offset;
+  if (index < 0 || index >= static_cast<long>(text)) return;
+  (*reply)[static_cast<std::size_t>(index)] ^= static_cast<char>(1 << flip_.bit);
+  --flip_.count;
+  ++replies_flipped_;
+}
+
 EmulatorFaults LineDevice::Faults() const {
   std::lock_guard<std::mutex> lock(faults_mutex_);
   return faults_;
@@ -226,12 +262,15 @@ void LineDevice::WaitInSimTime(std::unique_lock<std::mutex>& lock,
 void LineDevice::Serve() {
   char buffer[512];
   while (true) {
+    std::string unsolicited;
     {
       std::lock_guard<std::mutex> lock(state_mutex_);
       if (stop_) return;
       Advance(Now());
       MaybePowerCycle();
+      unsolicited.swap(outbox_);
     }
+    SendReply(unsolicited);
     pollfd ready{master_fd_, POLLIN, 0};
     const int polled = ::poll(&ready, 1, 2);
     if (polled < 0 && errno != EINTR) return;  // the pty is gone: nothing left to serve
@@ -259,6 +298,7 @@ void LineDevice::ServeBytes(const char* data, std::size_t size) {
       reply = HandleMessage(message);
       current_lock_ = nullptr;
     }
+    FlipChosenBit(message, &reply);
     SendReply(reply);
   }
 }
@@ -315,8 +355,9 @@ class DeviceSection {
 
 namespace {
 
-const std::vector<std::string> kFaultKeys = {"garble_rate",         "drop_rate", "delay_rate",
-                                              "delay_s", "power_cycle_after_s", "stuck_axis"};
+const std::vector<std::string> kFaultKeys = {
+    "garble_rate", "drop_rate",  "delay_rate", "delay_s",   "power_cycle_after_s",
+    "stuck_axis",  "flip_reply", "flip_byte",  "flip_bit",  "flip_count"};
 
 YAML::Node Child(const YAML::Node& node, const std::string& key) {
   return node && node.IsMap() ? node[key] : YAML::Node();
@@ -361,6 +402,20 @@ EmulatorFaults ReadFaults(const yaml_fields::MapReader& reader) {
   return faults;
 }
 
+ReplyBitFlip ReadFlip(const yaml_fields::MapReader& reader) {
+  ReplyBitFlip flip;
+  flip.command = reader.String("flip_reply", flip.command);
+  flip.offset = static_cast<int>(reader.Number("flip_byte", flip.offset));
+  flip.bit = static_cast<int>(reader.Number("flip_bit", flip.bit));
+  flip.count = static_cast<int>(reader.Number("flip_count", flip.count));
+  std::string why;
+  if (!flip.IsValid(&why)) {
+    yaml_fields::Fail(reader.File(), reader.Mark(),
+                      "virtual.devices: " + why + " (docs/devices/README.md, fault keys)");
+  }
+  return flip;
+}
+
 }  // namespace
 
 DeviceKeys ReadDeviceKeys(const EmulatorSpec& spec, const std::vector<std::string>& own_keys) {
@@ -374,6 +429,7 @@ DeviceKeys ReadDeviceKeys(const EmulatorSpec& spec, const std::vector<std::strin
   const std::string context = "virtual.devices." + spec.name;
   const yaml_fields::MapReader reader(entry, spec.rig_path, context, allowed);
   keys.faults = ReadFaults(reader);
+  keys.flip = ReadFlip(reader);
   keys.section = std::make_shared<DeviceSection>(entry, spec.rig_path, context);
   return keys;
 }

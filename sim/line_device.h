@@ -48,6 +48,19 @@ class TrapezoidMove {
   double accel_ = 1.0, peak_ = 0.0, ramp_s_ = 0.0;  // peak speed and ramp duration
 };
 
+// One flipped bit in chosen replies (`virtual.devices.<name>.flip_reply` and its keys; also a
+// test hook): the reply to each of the first `count` messages containing `command` leaves with
+// bit `bit` of its byte `offset` inverted (offset < 0 counts from the end of the reply's text,
+// its line end excluded: -1 is its last character). "1" -> "0" is bit 0 of the last byte;
+// "1651" -> "16=1" is bit 3 of the byte before last.
+struct ReplyBitFlip {
+  std::string command;  // empty: off
+  int offset = -1;
+  int bit = 0;          // 0-7
+  int count = 1;        // replies to damage
+  bool IsValid(std::string* why) const;
+};
+
 // A line-protocol device on its own pty, served by its own thread. The thread reads bytes,
 // splits them into messages at the device's terminators, hands each to HandleMessage (under the
 // state lock) and sends what it returns through the reply faults. Between messages it calls
@@ -61,8 +74,10 @@ class LineDevice : public DeviceEmulator {
   void Stop() override;
   void PowerCycle() override;
   void SetFaults(const EmulatorFaults& faults) override;
+  void SetReplyBitFlip(const ReplyBitFlip& flip);
 
   // --- observation, for tests ---
+  std::uint64_t RepliesFlipped() const;
   std::uint64_t PowerCycles() const;
   std::uint64_t RepliesDropped() const;
 
@@ -79,6 +94,9 @@ class LineDevice : public DeviceEmulator {
 
   // Called by the protocol when a move starts: arms the power cycle of the faults.
   void NoteMoveStarted();
+  // Queues a message the device sends on its own (an alert, the PTU's limit-hit report), sent
+  // by the serving thread after the current Advance (lock held).
+  void SendUnsolicited(const std::string& bytes) { outbox_ += bytes; }
   // Runs Advance until `done` holds or the emulator stops (used by commands that, on the real
   // device, answer only when motion ends, e.g. the PTU's await). Lock held on entry and exit.
   void WaitInSimTime(std::unique_lock<std::mutex>& lock, const std::function<bool()>& done);
@@ -93,6 +111,7 @@ class LineDevice : public DeviceEmulator {
   void Serve();
   void ServeBytes(const char* data, std::size_t size);
   void SendReply(const std::string& reply);
+  void FlipChosenBit(const std::string& message, std::string* reply);
   void MaybePowerCycle();
   void CloseFds();
 
@@ -100,6 +119,8 @@ class LineDevice : public DeviceEmulator {
   std::string name_;
   mutable std::mutex faults_mutex_;
   EmulatorFaults faults_;
+  ReplyBitFlip flip_;
+  std::uint64_t replies_flipped_ = 0;
   std::mt19937_64 rng_;
   int master_fd_ = -1;
   int slave_fd_ = -1;
@@ -107,6 +128,7 @@ class LineDevice : public DeviceEmulator {
   bool running_ = false;
   bool stop_ = false;
   std::string pending_;
+  std::string outbox_;  // unsolicited messages to send (SendUnsolicited)
   double move_started_s_ = -1.0;
   bool power_cycle_done_ = false;
   std::uint64_t power_cycles_ = 0;
@@ -126,6 +148,7 @@ struct DeviceKeys {
   // list; numbers are read with Number() below so errors carry file:line.
   std::shared_ptr<const DeviceSection> section;
   EmulatorFaults faults;
+  ReplyBitFlip flip;  // flip_reply, flip_byte, flip_bit, flip_count
 
   double Number(const std::string& key, double fallback) const;
   std::string Text(const std::string& key, const std::string& fallback) const;

@@ -2,8 +2,15 @@
 // ASCII command set (driver `flir_ptu`), written from the public PTU command reference:
 // two-letter commands, a signed integer argument for the settable ones, the same letters alone
 // as the query; every command answered by "*" (success, with the value for a query) or "!"
-// (an error with its text), each reply ending CR LF. Positions are the unit's native positions;
-// their size in arc seconds is what PR / TR report.
+// (an error with its text), each reply ending CR LF, or CR alone (`reply_line_end: cr`, as the
+// manuals' examples show). Positions are the unit's native positions; their size in arc seconds
+// is what PR / TR report.
+//
+// A reset (R, and the reset at power-up) takes `reset_s` besides the axes' return to 0: the
+// unit reads nothing meanwhile, so commands sent during it wait in the line and are answered,
+// in order, once it ends (after a client gave up, its successor reads those stale replies).
+// A limit hit (fault `limit_hit_axis`: the axis stalls halfway through its next move) is
+// reported unsolicited as "!P" or "!T": the unit lost synchrony and needs a reset.
 //
 // Commands (case-insensitive; several may share a line, separated by spaces):
 //   PP/TP [pos]   absolute position (query: the current, instantaneous position)
@@ -16,7 +23,8 @@
 //   H, HP, HT     halt both / pan / tilt
 //   V             firmware version
 //   FT / FV       terse / verbose feedback;  EE / ED echo on / off;  I immediate mode
-//   PU/PL/PB [..] upper / lower / base speed (kept, reported);  PH/PM [R|L|O|H] power modes
+//   PU/PL/PB [..] upper / lower / base speed (PS/TS outside [PL, PU] is refused);
+//   PH/PM [R|L|O|H] power modes
 //   LE / LD, CI / CV   limit enforcement, control mode (accepted)
 // Terse replies give the bare value ("* 1000"), verbose ones a sentence.
 
@@ -44,6 +52,9 @@ struct PtuConfig {
   bool verbose = true;
   bool echo = false;
   bool reset_on_power_up = true;
+  std::string line_end = "\r\n";  // `reply_line_end`: crlf | cr
+  double reset_s = 0.0;            // a reset's own duration (simulated seconds)
+  std::string limit_hit_axis;      // fault: "pan" | "tilt" stalls on its next move, "!P"/"!T"
 };
 
 struct PtuAxis {
@@ -53,7 +64,8 @@ struct PtuAxis {
   double position = 0.0;           // positions
   double speed_pos_s = 0.0, accel_pos_s2 = 0.0;
   TrapezoidMove move;
-  bool moving = false, stuck = false;
+  bool moving = false, stuck = false, limit_hit = false;
+  double limit_hit_s = 0.0;  // when the limit_hit fault stops this move (halfway)
   double speed_bounds[3] = {12000.0, 0.0, 0.0};  // PU, PL, PB
   char hold_power = 'R', move_power = 'R';
   double Degrees() const { return position * config.resolution_arcsec / 3600.0; }
@@ -95,6 +107,8 @@ class PtuEmulator : public LineDevice {
       : LineDevice(world, spec.name, keys.faults, spec.seed), config_(std::move(config)) {
     axes_[0] = std::move(pan);
     axes_[1] = std::move(tilt);
+    limit_hit_pending_ = !config_.limit_hit_axis.empty();
+    SetReplyBitFlip(keys.flip);
     std::lock_guard<std::mutex> lock(state_mutex_);
     ResetToPowerOn();
   }
@@ -122,9 +136,13 @@ class PtuEmulator : public LineDevice {
   std::string AwaitStop();
   std::string Reset();
 
+  void HitLimit(PtuAxis& axis, double now_s);
+
   PtuConfig config_;
   PtuAxis axes_[2];
   bool verbose_ = true, echo_ = false;
+  double busy_until_s_ = 0.0;       // a reset in progress: nothing is read until then
+  bool limit_hit_pending_ = false;  // the limit_hit_axis fault has not struck yet
 };
 
 void PtuEmulator::ResetToPowerOn() {
@@ -140,13 +158,24 @@ void PtuEmulator::ResetToPowerOn() {
     // The power-up reset calibration: the axis finds its index and returns to 0.
     if (config_.reset_on_power_up) MoveTo(axis, 0.0);
   }
+  if (config_.reset_on_power_up) busy_until_s_ = Now() + config_.reset_s;
   Advance(Now());
+}
+
+// The limit_hit_axis fault: the axis stops where it is and the unit reports it on its own.
+void PtuEmulator::HitLimit(PtuAxis& axis, double now_s) {
+  axis.position = axis.move.Position(now_s);
+  Halt(axis);
+  axis.limit_hit = false;
+  limit_hit_pending_ = false;
+  SendUnsolicited(std::string(axis.name == "Pan" ? "!P" : "!T") + config_.line_end);
 }
 
 void PtuEmulator::Advance(double now_s) {
   std::map<std::string, double> rig;
   bool any_moving = false;
   for (PtuAxis& axis : axes_) {
+    if (axis.moving && axis.limit_hit && now_s >= axis.limit_hit_s) HitLimit(axis, now_s);
     if (axis.moving) {
       if (!axis.stuck) axis.position = axis.move.Position(now_s);
       if (axis.move.Done(now_s)) axis.moving = false;
@@ -158,9 +187,21 @@ void PtuEmulator::Advance(double now_s) {
 }
 
 std::string PtuEmulator::HandleMessage(const std::string& message) {
+  // A reset in progress reads nothing: this message waited in the line until it ends.
+  WaitInSimTime(CurrentLock(), [this] { return Now() >= busy_until_s_; });
   std::string replies = echo_ ? message + "\r\n" : "";
   for (const std::string& command : SplitCommands(message)) replies += Execute(command);
-  return replies;
+  if (config_.line_end == "\r\n") return replies;
+  std::string out;
+  for (std::size_t i = 0; i < replies.size(); ++i) {
+    if (replies.compare(i, 2, "\r\n") == 0) {
+      out += config_.line_end;
+      ++i;
+    } else {
+      out += replies[i];
+    }
+  }
+  return out;
 }
 
 std::string PtuEmulator::Ok(const std::string& terse, const std::string& verbose) const {
@@ -250,8 +291,11 @@ std::string PtuEmulator::Rate(PtuAxis& axis, bool speed, const std::string& argu
   long value = 0;
   if (!ParseInteger(argument, &value)) return "! Illegal argument\r\n";
   if (value <= 0) return "! Minimum allowable " + axis.name + " " + what + " exceeded\r\n";
-  if (speed && value > config_.max_speed_pos_s) {
+  if (speed && (value > config_.max_speed_pos_s || value > axis.speed_bounds[0])) {
     return "! Maximum allowable " + axis.name + " speed exceeded\r\n";
+  }
+  if (speed && value < axis.speed_bounds[1]) {
+    return "! Minimum allowable " + axis.name + " speed exceeded\r\n";
   }
   rate = static_cast<double>(value);
   return Ok("", "");
@@ -298,6 +342,9 @@ void PtuEmulator::MoveTo(PtuAxis& axis, double target) {
                std::find(axis.rig.begin(), axis.rig.end(), Faults().stuck_axis) != axis.rig.end();
   axis.move = TrapezoidMove(axis.position, target, Now(), axis.speed_pos_s, axis.accel_pos_s2);
   axis.moving = true;
+  axis.limit_hit = limit_hit_pending_ && target != axis.position &&
+                   config_.limit_hit_axis == (axis.name == "Pan" ? "pan" : "tilt");
+  axis.limit_hit_s = Now() + 0.5 * axis.move.DurationS();
   NoteMoveStarted();
 }
 
@@ -312,7 +359,13 @@ std::string PtuEmulator::AwaitStop() {
 }
 
 std::string PtuEmulator::Reset() {
-  for (PtuAxis& axis : axes_) MoveTo(axis, 0.0);
+  busy_until_s_ = Now() + config_.reset_s;
+  for (PtuAxis& axis : axes_) {
+    axis.limit_hit = false;
+    MoveTo(axis, 0.0);
+    axis.limit_hit = false;  // the reset re-synchronises; no fault strikes during it
+  }
+  WaitInSimTime(CurrentLock(), [this] { return Now() >= busy_until_s_; });
   return AwaitStop();
 }
 
@@ -323,7 +376,8 @@ const std::vector<std::string> kPtuKeys = {
     "pan_resolution_arcsec", "tilt_resolution_arcsec", "pan_min_pos",     "pan_max_pos",
     "tilt_min_pos",          "tilt_max_pos",           "pan_speed_pos_s", "tilt_speed_pos_s",
     "pan_accel_pos_s2",      "tilt_accel_pos_s2",      "max_speed_pos_s", "version",
-    "verbose",               "echo",                   "reset_on_power_up"};
+    "verbose",               "echo",                   "reset_on_power_up",
+    "reply_line_end",        "reset_s",                "limit_hit_axis"};
 
 PtuAxisConfig ReadAxisConfig(const DeviceKeys& keys, const std::string& prefix,
                              PtuAxisConfig c) {
@@ -349,6 +403,15 @@ std::unique_ptr<DeviceEmulator> CreatePtu(World& world, const EmulatorSpec& spec
   c.verbose = keys.Boolean("verbose", c.verbose);
   c.echo = keys.Boolean("echo", c.echo);
   c.reset_on_power_up = keys.Boolean("reset_on_power_up", c.reset_on_power_up);
+  const std::string line_end = keys.Text("reply_line_end", "crlf");
+  if (line_end != "crlf" && line_end != "cr") keys.Fail("reply_line_end", "must be crlf or cr");
+  c.line_end = line_end == "cr" ? "\r" : "\r\n";
+  c.reset_s = keys.Number("reset_s", c.reset_s);
+  if (!(c.reset_s >= 0)) keys.Fail("reset_s", "must be >= 0");
+  c.limit_hit_axis = keys.Text("limit_hit_axis", "");
+  if (!c.limit_hit_axis.empty() && c.limit_hit_axis != "pan" && c.limit_hit_axis != "tilt") {
+    keys.Fail("limit_hit_axis", "must be pan or tilt");
+  }
   PtuAxis pan;
   pan.name = "Pan";
   pan.config = c.pan;

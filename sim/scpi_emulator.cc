@@ -159,6 +159,7 @@ class ScpiEmulator : public LineDevice {
       : LineDevice(world, spec.name, keys.faults, spec.seed),
         config_(std::move(config)),
         source_faults_(source_faults) {
+    SetReplyBitFlip(keys.flip);
     std::lock_guard<std::mutex> lock(state_mutex_);
     ResetToPowerOn();
   }

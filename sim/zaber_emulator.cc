@@ -9,8 +9,10 @@
 //   reply    @dd a [id] OK|RJ IDLE|BUSY flag data[:CC]\r\n
 // The checksum CC (two hex digits) is the two's complement of the 8-bit sum of the bytes between
 // the leading '/' or '@' and the ':'; a command carrying one is verified (a mismatch is rejected
-// with BADDATA) and its reply carries one too. Alerts are not emitted (`set comm.alert 0` only). Warning flags: FS (stalled: a move ended away from
-// its target), WR (no reference position: after power-up until homed), "--" none.
+// with BADDATA). Replies carry one only while the device setting comm.checksum is 1 (default 0;
+// kept across a power cycle, as the manual's non-volatile settings). Alerts are not emitted
+// (`set comm.alert 0` only). Warning flags: FS (stalled: a move ended away from its target), WR
+// (no reference position: after power-up until homed), "--" none.
 
 #include <algorithm>
 #include <cmath>
@@ -39,6 +41,7 @@ struct ZaberConfig {
   double maxspeed_mm_s = 250.0, accel_mm_s2 = 1000.0;
   double maxspeed_deg_s = 60.0, accel_deg_s2 = 240.0;
   double power_on_mm = 1000.0, power_on_deg = 0.0;  // where the stage rests at power-up
+  bool comm_checksum = false;  // `comm.checksum` as found at start (non-volatile)
 };
 
 struct ZaberAxis {
@@ -119,6 +122,8 @@ class ZaberEmulator : public LineDevice {
       : LineDevice(world, spec.name, keys.faults, spec.seed),
         config_(std::move(config)),
         axes_(std::move(axes)) {
+    comm_checksum_ = config_.comm_checksum;
+    SetReplyBitFlip(keys.flip);
     std::lock_guard<std::mutex> lock(state_mutex_);
     for (ZaberAxis& axis : axes_) axis.true_ustep = axis.power_on_ustep;
     ResetToPowerOn();
@@ -151,6 +156,7 @@ class ZaberEmulator : public LineDevice {
 
   ZaberConfig config_;
   std::vector<ZaberAxis> axes_;
+  bool comm_checksum_ = false;  // replies carry a checksum
 };
 
 void ZaberEmulator::ResetToPowerOn() {
@@ -236,7 +242,7 @@ std::string ZaberEmulator::ReplyOfDevice(const ZaberCommand& command, int device
   body << ' ' << (outcome.ok ? "OK" : "RJ") << ' ' << (busy ? "BUSY" : "IDLE") << ' '
        << Flag(command.axis > 0 && !targets.empty() ? targets : all) << ' ' << outcome.data;
   std::string reply = "@" + body.str();
-  if (command.checksummed) reply += ":" + Hex2(Checksum(body.str()));
+  if (comm_checksum_) reply += ":" + Hex2(Checksum(body.str()));
   return reply + "\r\n";
 }
 
@@ -331,7 +337,8 @@ ZaberEmulator::Outcome ZaberEmulator::Get(const std::string& setting, int device
     for (const ZaberAxis* axis : AxesOf(device)) count = std::max(count, axis->number);
     return {true, std::to_string(count)};
   }
-  if (setting == "comm.alert" || setting == "comm.checksum") return {true, "0"};
+  if (setting == "comm.alert") return {true, "0"};
+  if (setting == "comm.checksum") return {true, comm_checksum_ ? "1" : "0"};
   for (std::size_t i = 0; i < targets.size(); ++i) {
     const ZaberAxis& axis = *targets[i];
     if (i > 0) data << ' ';
@@ -359,6 +366,11 @@ ZaberEmulator::Outcome ZaberEmulator::Set(const std::vector<std::string>& words,
   if (words.size() != 3) return {false, "BADDATA"};
   const std::string& setting = words[1];
   if (setting == "comm.alert") return {words[2] == "0", words[2] == "0" ? "0" : "BADDATA"};
+  if (setting == "comm.checksum") {
+    if (words[2] != "0" && words[2] != "1") return {false, "BADDATA"};
+    comm_checksum_ = words[2] == "1";  // this reply already follows the new setting
+    return {};
+  }
   if (setting != "maxspeed" && setting != "accel" && setting != "limit.max" &&
       setting != "limit.min") {
     return {false, "BADCOMMAND"};
@@ -401,7 +413,7 @@ ZaberEmulator::Outcome ZaberEmulator::Warnings(const std::vector<std::string>& w
 const std::vector<std::string> kZaberKeys = {
     "device_id",     "serial",        "version",        "resolution",  "microstep_um",
     "microstep_deg", "travel_mm",     "travel_deg",     "maxspeed_mm_s", "accel_mm_s2",
-    "maxspeed_deg_s", "accel_deg_s2", "power_on_mm",    "power_on_deg"};
+    "maxspeed_deg_s", "accel_deg_s2", "power_on_mm",    "power_on_deg", "comm_checksum"};
 
 ZaberConfig ReadZaberConfig(const DeviceKeys& keys) {
   ZaberConfig c;
@@ -419,6 +431,7 @@ ZaberConfig ReadZaberConfig(const DeviceKeys& keys) {
   c.accel_deg_s2 = keys.Number("accel_deg_s2", c.accel_deg_s2);
   c.power_on_mm = keys.Number("power_on_mm", c.power_on_mm);
   c.power_on_deg = keys.Number("power_on_deg", c.power_on_deg);
+  c.comm_checksum = keys.Boolean("comm_checksum", c.comm_checksum);
   for (const char* key : {"microstep_um", "microstep_deg", "travel_mm", "travel_deg",
                           "maxspeed_mm_s", "accel_mm_s2", "maxspeed_deg_s", "accel_deg_s2",
                           "resolution"}) {

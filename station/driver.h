@@ -58,6 +58,7 @@ class DeviceDriver {
 struct DriverInfo {
   std::string name;         // rig-file name
   std::string line_end;     // written after each command: "\n", "\r\n", " "
+  bool cr_ends_reply = false;  // a '\r' alone ends a reply line (the FLIR PTU), besides '\n'
   unsigned int default_baud = 9600;
   int default_reply_timeout_ms = 500;
   std::vector<std::string> roles;  // "motion", "source", "trigger": what it can fill

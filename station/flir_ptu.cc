@@ -29,6 +29,7 @@ constexpr char kName[] = "flir_ptu";
 constexpr double kArcsecPerDeg = 3600.0;
 constexpr milliseconds kPollPeriod{10};
 constexpr int kStillPolls = 15;  // polls standing still, away from the target: stopped short
+constexpr milliseconds kQuietAfterVersion{200};  // SyncOnVersion: the line is quiet after V
 
 struct PtuAxis {
   Axis axis = Axis::kPan;
@@ -39,7 +40,25 @@ struct PtuAxis {
   long long target = 0;
   bool has_target = false;
   long long speed_pos_s = 0;  // PS/TS as read at Identify (a power cycle restores defaults)
+  long long upper_pos_s = 0, lower_pos_s = 0;  // PU/PL (TU/TL) speed bounds; 0: not read
 };
+
+// The unit's own limit-hit report: "!P" or "!T" alone on a line (manual: the axis hit a limit
+// and lost synchrony; a reset is needed).
+bool IsLimitHit(const std::string& line) {
+  const std::size_t mark = line.find('!');
+  if (mark == std::string::npos) return false;
+  std::string text = line.substr(mark + 1);
+  text.erase(0, text.find_first_not_of(' '));
+  text.erase(text.find_last_not_of(' ') + 1);
+  return text == "P" || text == "T";
+}
+
+// Speed, acceleration and speed-bound commands (PS, TA, PU...): a refusal is about speed.
+bool IsRateCommand(const std::string& command) {
+  return command.size() >= 2 && (command[0] == 'P' || command[0] == 'T') &&
+         std::string("SAULB").find(command[1]) != std::string::npos;
+}
 
 // The first number among the words of `text` ("* 22", "* Current Pan position is 22").
 bool FirstNumber(const std::string& text, double* value) {
@@ -67,6 +86,7 @@ class FlirPtu : public DeviceDriver, public Motion {
     attempts_ = query_.options().attempts;
     tolerance_ = static_cast<long long>(spec.Number("tolerance_positions", 0));
     home_timeout_ = milliseconds(static_cast<long long>(spec.Number("home_timeout_s", 120) * 1000));
+    reset_wait_ = milliseconds(static_cast<long long>(spec.Number("reset_wait_s", 60) * 1000));
     for (const auto& [axis, address] : spec.axes) {
       PtuAxis a;
       a.axis = axis;
@@ -111,6 +131,11 @@ class FlirPtu : public DeviceDriver, public Motion {
   void ApplySpeed(PtuAxis* a);
   void MoveAxis(PtuAxis* a, long long position);
   void WaitAt(milliseconds timeout, const std::string& what);
+  void TakePending(bool report_limit_hit);
+  void SyncOnVersion();
+  bool IsVersion(const std::string& line) const;
+  [[noreturn]] void LimitHit(const std::string& line) const;
+  void ReadSpeedBounds(PtuAxis* a);
   [[noreturn]] void StoppedShort(const std::string& what, const std::vector<long long>& positions);
   std::string AxisText(const PtuAxis& a) const { return AxisName(a.axis); }
   [[noreturn]] void Fail(const std::string& code, const std::string& message,
@@ -129,7 +154,10 @@ class FlirPtu : public DeviceDriver, public Motion {
   std::vector<PtuAxis> axes_;
   milliseconds timeout_{1000};
   milliseconds home_timeout_{120000};
+  milliseconds reset_wait_{60000};  // a unit silent this long after a lost reply is gone
   int attempts_ = 3;
+  std::string version_;       // the unit's V answer: the resynchronisation marker
+  bool out_of_step_ = false;  // a reply was lost: resynchronise before the next command
   long long tolerance_ = 0;
   bool homed_ = false;
   bool moving_ = false;
@@ -141,8 +169,14 @@ LineQueryOptions FlirPtu::QueryOptions(const DeviceSpec& spec) {
       QueryOptionsOf(spec, 4, 1000, "the PTU",
                      "check the cable, the baud rate (PTU default 9600) and power");
   // Replies carry no id: whatever arrived before a command (a late reply to an earlier one) is
-  // not its reply.
-  options.before_send = [this](int) { link_->Flush(); };
+  // not its reply, but a limit-hit report among it is seen. After a lost reply the unit may be
+  // resetting (it answers nothing until done, then every command queued meanwhile): the stream
+  // is resynchronised on the answer to V before anything is sent again.
+  options.before_send = [this](int attempt) {
+    TakePending(true);
+    if (attempt > 0 || out_of_step_) SyncOnVersion();
+  };
+  options.after_miss = [this] { out_of_step_ = true; };
   return options;
 }
 
@@ -158,12 +192,83 @@ ReplyVerdict FlirPtu::Judge(const std::string& command, const std::string& line,
     *body = text;
     return ReplyVerdict::kMatch;
   }
-  const bool limit_hit = text == "P" || text == "T";  // manual: "!P"/"!T" on a limit hit
-  Fail("!" + text,
-       limit_hit ? std::string(text == "P" ? "pan" : "tilt") + " axis hit its limit"
-                 : "refused '" + command + "': " + text,
-       limit_hit ? "the unit lost synchrony: home (reset) it before continuing"
-                 : "check the command's value against the unit's limits (PN/PX/TN/TX)");
+  if (IsLimitHit(line)) LimitHit(line);
+  Fail("!" + text, "refused '" + command + "': " + text,
+       IsRateCommand(command)
+           ? "check the speed against the unit's speed bounds (PU/PL, TU/TL; `irdist station "
+             "status` shows them) and lower speed_deg_s or accel_deg_s2 in the rig file"
+           : "check the command's value against the unit's position limits (PN/PX/TN/TX)");
+}
+
+// Manual: "!P" / "!T": the axis hit a limit and lost synchrony.
+void FlirPtu::LimitHit(const std::string& line) const {
+  const bool pan = line.find('P', line.find('!')) != std::string::npos;
+  Fail(line, std::string(pan ? "pan" : "tilt") + " axis hit its limit (the unit's own report)",
+       "the unit lost synchrony: check for an obstruction, then home (reset) it and resume");
+}
+
+// The lines that arrived unasked since the last reply (late replies, the unit's reports): a
+// limit hit among them is reported (once homed), the rest dropped.
+void FlirPtu::TakePending(bool report_limit_hit) {
+  for (const std::string& line : link_->ReadPending()) {
+    if (report_limit_hit && homed_ && IsLimitHit(line)) {
+      homed_ = false;
+      LimitHit(line);
+    }
+  }
+}
+
+bool FlirPtu::IsVersion(const std::string& line) const {
+  const std::size_t mark = line.find('*');
+  if (mark == std::string::npos) return false;
+  if (!version_.empty()) return line.find(version_, mark) != std::string::npos;
+  std::string upper = line.substr(mark);
+  for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return upper.find("PAN-TILT") != std::string::npos || upper.find("PTU") != std::string::npos;
+}
+
+// Sends V and reads until its answer, then on until the line is quiet: every other line answers
+// an earlier command (stale replies of a reset, of a previous session, whose own V may answer
+// first). A resetting unit answers nothing, for up to reset_wait_s; a device that answers but
+// never as a PTU is refused after `attempts` V's.
+void FlirPtu::SyncOnVersion() {
+  TakePending(true);
+  const auto deadline = Clock::now() + reset_wait_;
+  int answered = 0, unanswered = 0;
+  std::string heard;
+  link_->WriteLine("V");
+  while (true) {
+    if (Clock::now() >= deadline) {
+      if (answered > 0) break;
+      LinkFail("no answer to V within reset_wait_s (" + std::to_string(reset_wait_.count()) +
+                   " ms)" + (heard.empty() ? "" : "; last heard '" + heard + "'"),
+               "check the unit's power, cable and baud rate (PTU default 9600)");
+    }
+    std::string line;
+    try {
+      // Replies come in order: after a version only the answers to the other V's can follow,
+      // back to back (a 50-character line takes 52 ms at 9600 baud).
+      line = link_->ReadLine(answered > 0 ? std::min(timeout_, kQuietAfterVersion) : timeout_);
+    } catch (const LinkError&) {
+      if (answered > 0) break;  // quiet after the version: nothing stale is left
+      if (!heard.empty() && ++unanswered >= attempts_) {
+        Fail(heard, "the device on this port answers, but never with a pan-tilt unit's version",
+             "connect the PTU to this port or fix the rig file's port");
+      }
+      link_->WriteLine("V");
+      continue;
+    }
+    if (IsLimitHit(line) && homed_) {
+      homed_ = false;
+      LimitHit(line);
+    }
+    if (IsVersion(line)) {
+      ++answered;
+    } else if (answered == 0) {
+      heard = line;
+    }
+  }
+  out_of_step_ = false;
 }
 
 LineRequest FlirPtu::Request(const std::string& command, std::string* body) const {
@@ -189,7 +294,7 @@ double FlirPtu::QueryNumber(const std::string& command) {
     double value = 0;
     if (FirstNumber(body, &value)) return value;
     heard = "* " + body;
-    link_->Flush();
+    TakePending(true);
   }
   Fail(heard, "'" + command + "' did not answer a number",
        "check that the unit is a PTU and in terse or verbose feedback mode");
@@ -226,13 +331,37 @@ void FlirPtu::ReadAxis(PtuAxis* a) {
   a->speed.acceleration = QueryNumber(p + "A") * a->deg_per_position;
   a->speed.settle_ms = spec_.Number("settle_ms", 0.0);
   a->speed.home = 0.0;
+  ReadSpeedBounds(a);
+}
+
+// PU / PL (TU / TL): the speeds PS (TS) may take. A unit that does not know them (a refusal)
+// leaves them unchecked here; it refuses an out-of-range speed itself.
+void FlirPtu::ReadSpeedBounds(PtuAxis* a) {
+  const std::string p(1, a->letter);
+  try {
+    a->upper_pos_s = std::llround(QueryNumber(p + "U"));
+    a->lower_pos_s = std::llround(QueryNumber(p + "L"));
+  } catch (const DeviceError&) {
+    a->upper_pos_s = a->lower_pos_s = 0;
+  }
 }
 
 // Rig-file speed and acceleration, in positions per second (and per second squared).
 void FlirPtu::ApplySpeed(PtuAxis* a) {
   const std::string p(1, a->letter);
   if (spec_.settings.count("speed_deg_s")) {
-    const long long s = std::llround(spec_.Number("speed_deg_s", 0) / a->deg_per_position);
+    const double deg_s = spec_.Number("speed_deg_s", 0);
+    const long long s = std::llround(deg_s / a->deg_per_position);
+    const bool above = a->upper_pos_s > 0 && s > a->upper_pos_s;
+    if (above || s < a->lower_pos_s) {
+      const long long bound = above ? a->upper_pos_s : a->lower_pos_s;
+      Fail(p + (above ? "U " : "L ") + std::to_string(bound),
+           "speed_deg_s " + std::to_string(deg_s) + " is " + (above ? "above" : "below") +
+               " the " + AxisText(*a) + " axis's " + (above ? "upper" : "lower") +
+               " speed bound " + p + (above ? "U " : "L ") + std::to_string(bound) +
+               " positions/s (" + std::to_string(bound * a->deg_per_position) + " deg/s)",
+           "set station.devices." + spec_.name + ".speed_deg_s within the unit's speed bounds");
+    }
     if (!Command(p + "S" + std::to_string(s), timeout_)) {
       LinkFail("no reply to " + p + "S", "check the cable");
     }
@@ -246,13 +375,15 @@ void FlirPtu::ApplySpeed(PtuAxis* a) {
 }
 
 DeviceIdentity FlirPtu::Identify() {
-  link_->Flush();
   std::string version;
+  homed_ = false;
+  version_.clear();
   try {
-    Query("ED");  // echo off; the reply may still carry the echo of "ED"
-    Query("FT");  // terse feedback
+    SyncOnVersion();  // stale replies (a reset, an earlier session) are read away first
+    Query("ED");      // echo off; the reply may still carry the echo of "ED"
+    Query("FT");      // terse feedback
     version = Query("V");
-  } catch (const Error& e) {
+  } catch (const LinkError& e) {
     Fail("", std::string("no PTU answers on this port: ") + e.what(),
          "check that the port is the PTU's (ls -l /dev/serial/by-id) and its baud rate");
   }
@@ -264,6 +395,7 @@ DeviceIdentity FlirPtu::Identify() {
   }
   identity_.model = "PTU";
   identity_.firmware = version;
+  version_ = version;
   identity_.serial = "-";
   Query("I");  // immediate execution mode: position commands start at once
   for (PtuAxis& a : axes_) {
@@ -452,7 +584,7 @@ void FlirPtu::CheckAlive() {
 
 void Validate(const DeviceSpec& spec) {
   spec.CheckKnown({"speed_deg_s", "accel_deg_s2", "tolerance_positions", "retries",
-                   "home_timeout_s", "settle_ms"});
+                   "home_timeout_s", "reset_wait_s", "settle_ms"});
   if (spec.axes.empty()) Invalid(spec, "map pan and/or tilt in `axes:` ({pan: pan, tilt: tilt})");
   std::vector<std::string> used;
   for (const auto& [axis, address] : spec.axes) {
@@ -465,7 +597,7 @@ void Validate(const DeviceSpec& spec) {
     }
     used.push_back(address);
   }
-  for (const char* key : {"speed_deg_s", "accel_deg_s2", "home_timeout_s"}) {
+  for (const char* key : {"speed_deg_s", "accel_deg_s2", "home_timeout_s", "reset_wait_s"}) {
     if (spec.settings.count(key) && !(spec.Number(key, 0) > 0)) {
       Invalid(spec, key + std::string(" must be > 0"));
     }
@@ -479,7 +611,9 @@ void Validate(const DeviceSpec& spec) {
 // return is [ENTER] and also ends the line for readers that execute whole lines only); 9600 baud,
 // replies within 1000 ms.
 DriverInfo MakePtuInfo() {
-  return SerialDriverInfo<FlirPtu>(kName, "\r", 9600, 1000, {"motion"}, Validate);
+  DriverInfo info = SerialDriverInfo<FlirPtu>(kName, "\r", 9600, 1000, {"motion"}, Validate);
+  info.cr_ends_reply = true;  // the manuals' replies end with CR alone; CR LF is read too
+  return info;
 }
 
 }  // namespace

@@ -63,7 +63,8 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
     compliance_v_ = spec.Number("compliance_v", 0.0);
   }
   ~ScpiSource() override {
-    if (!idn_.empty()) Off();  // never write to a device that was not identified
+    // Never write to a device that was not identified; `irdist station` leaves the output on.
+    if (!idn_.empty() && !keep_output_) Off();
   }
 
   CurrentSource* source() override { return this; }
@@ -74,12 +75,15 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
   SourceReading Measure() override;
   void Off() noexcept override;
   void CheckAlive() override;
+  void KeepOutput() override { keep_output_ = true; }
 
  private:
   LineQueryOptions QueryOptions(const DeviceSpec& spec);
   std::string Query(const std::string& query,
                     const std::function<bool(const std::string&)>& valid);
   bool QueryBool(const std::string& query);
+  bool QueryBoolConfirmed(const std::string& query, bool alarming);
+  bool AdoptOutput();
   SourceReading ReadOnce();
   void Set(const std::string& command);
   void DrainErrors(const std::string& after);
@@ -87,6 +91,7 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
   void CheckIdentity(const std::string& idn);
   void ApplySourceSettings();
   bool OutputOn() { return QueryBool(":OUTP?"); }
+  bool OutputOnConfirmed(bool alarming) { return QueryBoolConfirmed(":OUTP?", alarming); }
   void CheckOutputState();
   [[noreturn]] void Fail(const std::string& code, const std::string& message,
                          const std::string& fix) const {
@@ -103,6 +108,7 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
   double setpoint_ma_ = 0.0;
   bool output_on_ = false;
   bool out_of_step_ = false;  // a reply was lost: resynchronise before the next query
+  bool keep_output_ = false;  // irdist station: an output found on is kept, and left on at exit
 };
 
 LineQueryOptions ScpiSource::QueryOptions(const DeviceSpec& spec) {
@@ -154,6 +160,32 @@ bool ScpiSource::QueryBool(const std::string& query) {
   const std::string reply =
       Query(query, [](const std::string& r) { return r == "0" || r == "1"; });
   return reply == "1";
+}
+
+// A reply that would stop a run (`alarming`) is read a second time: SCPI has no checksum, and one
+// flipped bit turns "1" into "0". The second reading decides.
+bool ScpiSource::QueryBoolConfirmed(const std::string& query, bool alarming) {
+  const bool first = QueryBool(query);
+  return first == alarming ? QueryBool(query) : first;
+}
+
+// irdist station: an output found on, sourcing current, is taken as it is (nothing reset); its
+// level becomes the set-point. False when the output is off or sources voltage.
+bool ScpiSource::AdoptOutput() {
+  if (!OutputOnConfirmed(false)) return false;
+  const std::string function = Upper(Query(":SOUR:FUNC?", [](const std::string& r) {
+    return !r.empty() && r.find(',') == std::string::npos;
+  }));
+  if (function.rfind("CURR", 0) != 0) return false;
+  const std::string level = Query(":SOUR:CURR:LEV?", [](const std::string& r) {
+    double v = 0;
+    return ParseDouble(r, &v);
+  });
+  double amps = 0.0;
+  ParseDouble(level, &amps);
+  output_on_ = true;
+  setpoint_ma_ = amps * 1000.0;
+  return true;
 }
 
 // A setting: sent once (never repeated blindly), then the error queue is read (manual: the
@@ -231,6 +263,7 @@ DeviceIdentity ScpiSource::Identify() {
   CheckIdentity(idn);
   idn_ = idn;
   link_->WriteLine("*CLS");  // IEEE 488.2: empties the error queue of older sessions
+  if (keep_output_ && AdoptOutput()) return identity_;  // irdist station: left as it was
   link_->WriteLine("*RST");  // manual: output off, power-on defaults
   DrainErrors("*RST");
   ApplySourceSettings();
@@ -262,7 +295,7 @@ void ScpiSource::SetCurrent(double bias_ma) {
 // Output found off while it should be on: a power cycle (source function back to its power-on
 // default) or a trip (interlock, over-temperature: settings kept).
 void ScpiSource::CheckOutputState() {
-  if (!output_on_ || OutputOn()) return;
+  if (!output_on_ || OutputOnConfirmed(false)) return;
   const std::string function = Upper(Query(":SOUR:FUNC?", [](const std::string& r) {
     return !r.empty() && r.find(',') == std::string::npos;
   }));
@@ -308,7 +341,7 @@ SourceReading ScpiSource::Measure() {
   if (std::abs(reading.current_ma - setpoint_ma_) > kConfirmFraction * setpoint_ma_) {
     reading = ReadOnce();
   }
-  reading.in_compliance = QueryBool(":SENS:VOLT:PROT:TRIP?");
+  reading.in_compliance = QueryBoolConfirmed(":SENS:VOLT:PROT:TRIP?", true);
   return reading;
 }
 
@@ -330,7 +363,7 @@ void ScpiSource::Off() noexcept {
 
 void ScpiSource::CheckAlive() {
   CheckOutputState();
-  if (!output_on_ && OutputOn()) {
+  if (!output_on_ && OutputOnConfirmed(true)) {
     Fail("OUTP 1", "the output is on while irdist set it off",
          "someone is driving the instrument from elsewhere (front panel, another program)");
   }

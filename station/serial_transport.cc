@@ -1,5 +1,6 @@
 #include "station/serial_transport.h"
 
+#include <sys/ioctl.h>
 #include <termios.h>
 
 #include <boost/asio.hpp>
@@ -9,6 +10,37 @@
 namespace irdist {
 
 namespace asio = boost::asio;
+
+namespace {
+
+using BufferIterator = asio::buffers_iterator<asio::streambuf::const_buffers_type>;
+
+// Match conditions of async_read_until: a line ends at '\n', or at '\r' or '\n'.
+std::pair<BufferIterator, bool> EndsAtLf(BufferIterator begin, BufferIterator end) {
+  for (BufferIterator i = begin; i != end; ++i) {
+    if (*i == '\n') return {++i, true};
+  }
+  return {end, false};
+}
+
+std::pair<BufferIterator, bool> EndsAtCrOrLf(BufferIterator begin, BufferIterator end) {
+  for (BufferIterator i = begin; i != end; ++i) {
+    if (*i == '\n' || *i == '\r') return {++i, true};
+  }
+  return {end, false};
+}
+
+// A received line without its line end and without any '\r'.
+std::string CleanLine(const std::string& raw) {
+  std::string clean;
+  clean.reserve(raw.size());
+  for (char c : raw) {
+    if (c != '\r' && c != '\n') clean.push_back(c);
+  }
+  return clean;
+}
+
+}  // namespace
 
 bool SerialOptions::IsValid(std::string* why) const {
   auto fail = [&](const char* m) {
@@ -101,12 +133,16 @@ std::string SerialTransport::ReadLine(std::chrono::milliseconds deadline) {
     bool done = false;
     boost::system::error_code result;
     std::size_t length = 0;
-    asio::async_read_until(impl_->port, impl_->buffer, '\n',
-                           [&](const boost::system::error_code& ec, std::size_t n) {
-                             result = ec;
-                             length = n;
-                             done = true;
-                           });
+    const auto on_read = [&](const boost::system::error_code& ec, std::size_t n) {
+      result = ec;
+      length = n;
+      done = true;
+    };
+    if (impl_->options.cr_ends_line) {
+      asio::async_read_until(impl_->port, impl_->buffer, &EndsAtCrOrLf, on_read);
+    } else {
+      asio::async_read_until(impl_->port, impl_->buffer, &EndsAtLf, on_read);
+    }
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
         until - std::chrono::steady_clock::now());
     const bool completed = impl_->RunUntil(done, std::max(left, std::chrono::milliseconds(0)));
@@ -114,12 +150,8 @@ std::string SerialTransport::ReadLine(std::chrono::milliseconds deadline) {
       std::string line(length, '\0');
       std::istream in(&impl_->buffer);
       in.read(line.data(), static_cast<std::streamsize>(length));
-      line.pop_back();  // '\n'
-      std::string clean;
-      clean.reserve(line.size());
-      for (char c : line) {
-        if (c != '\r') clean.push_back(c);
-      }
+      const std::string clean = CleanLine(line);
+      if (clean.empty() && impl_->options.cr_ends_line) continue;  // the LF of a CR LF
       if (impl_->log) impl_->log->Received(impl_->options.log_prefix + clean);
       return clean;
     }
@@ -145,6 +177,35 @@ std::string SerialTransport::ReadLine(std::chrono::milliseconds deadline) {
                       "check that the station is powered and connected, and the baud rate");
     }
   }
+}
+
+std::vector<std::string> SerialTransport::ReadPending() {
+  const int fd = impl_->port.native_handle();
+  int available = 0;
+  if (fd >= 0 && ::ioctl(fd, FIONREAD, &available) == 0 && available > 0) {
+    boost::system::error_code ec;
+    const std::size_t n =
+        impl_->port.read_some(impl_->buffer.prepare(static_cast<std::size_t>(available)), ec);
+    if (!ec) impl_->buffer.commit(n);
+  }
+  const std::string bytes(asio::buffers_begin(impl_->buffer.data()),
+                          asio::buffers_end(impl_->buffer.data()));
+  impl_->buffer.consume(impl_->buffer.size());  // a partial line is dropped, as by Flush()
+  std::vector<std::string> lines;
+  std::string line;
+  for (char c : bytes) {
+    const bool end = c == '\n' || (c == '\r' && impl_->options.cr_ends_line);
+    if (!end) {
+      line.push_back(c);
+      continue;
+    }
+    const std::string clean = CleanLine(line);
+    line.clear();
+    if (clean.empty()) continue;
+    if (impl_->log) impl_->log->Received(impl_->options.log_prefix + clean);
+    lines.push_back(clean);
+  }
+  return lines;
 }
 
 void SerialTransport::Flush() {

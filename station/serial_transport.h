@@ -18,8 +18,11 @@ struct SerialOptions {
   std::chrono::milliseconds write_timeout{1000};     // a write not done by then throws LinkError
   std::size_t max_line_bytes = 512;                  // a longer "line" is cut and returned as is
   // Appended to every written line: "\r\n" (irdist station), "\n" (Zaber ASCII, SCPI), " " or
-  // "\n" (FLIR PTU). Received lines always end at '\n', a '\r' before it dropped.
+  // "\n" (FLIR PTU). Received lines end at '\n', a '\r' before it dropped.
   std::string line_end = "\r\n";
+  // A '\r' alone also ends a received line (devices that end replies with CR only, as the FLIR
+  // PTU manuals show); the empty line between a CR and its LF is then skipped.
+  bool cr_ends_line = false;
   // Written before every line this transport logs ("slide: "), so that several devices can share
   // one LineLog; empty for a station of one device.
   std::string log_prefix;
@@ -39,6 +42,7 @@ class SerialTransport : public Transport {
   void WriteLine(std::string_view line) override;
   std::string ReadLine(std::chrono::milliseconds deadline) override;
   void Flush() override;
+  std::vector<std::string> ReadPending() override;
   const std::string& port() const;
 
  private:

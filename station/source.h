@@ -26,6 +26,10 @@ class CurrentSource {
   virtual double setpoint_ma() const = 0;
   // One measurement. Throws DeviceError, LinkError.
   virtual SourceReading Measure() = 0;
+  // For `irdist station` by hand (before Identify()): Identify() takes an output found on as it
+  // is (its set-point read back, nothing reset), and the driver leaves the output as it is when
+  // it is destroyed. Without it, Identify() resets the device and destruction switches it off.
+  virtual void KeepOutput() {}
   // Output off, best effort, on every exit path (Ctrl-C, errors, end of run). Never throws.
   virtual void Off() noexcept = 0;
   // Throws DeviceRestarted when the device lost its state (power cycle), DeviceError when its

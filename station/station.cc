@@ -50,6 +50,7 @@ void Station::OpenDevice(const DeviceSpec& device) {
   SerialOptions serial;
   serial.baud = static_cast<unsigned int>(opened.baud);
   serial.line_end = info->line_end;
+  serial.cr_ends_line = info->cr_ends_reply;
   if (spec_.devices.size() > 1) serial.log_prefix = device.name + ": ";
   auto transport = std::make_unique<SerialTransport>(opened.port, serial, options_.log);
   devices_.push_back({device.name, info->create(opened, std::move(transport)), {}});
@@ -71,6 +72,7 @@ void Station::BindRoles() {
   }
   source_ = Named(spec_.source).driver->source();
   IRDIST_CHECK(source_ != nullptr, "device ", spec_.source, " cannot fill the source role");
+  if (!options_.off_at_exit) source_->KeepOutput();  // irdist station: found and left as is
   if (spec_.trigger == kCameraSoftwareTrigger) {
     trigger_ = options_.camera_trigger;  // or SetCameraTrigger() once the camera is open
   } else {

@@ -43,7 +43,8 @@ struct StationOptions {
   // may also be handed in later with Station::SetCameraTrigger().
   Trigger* camera_trigger = nullptr;
   std::chrono::milliseconds move_timeout{300000};
-  // The destructor switches the IRED off (every run). `irdist station current` leaves it on.
+  // The destructor switches the IRED off (every run). `irdist station current` leaves it on:
+  // false also keeps the source's output as it is found (CurrentSource::KeepOutput()).
   bool off_at_exit = true;
 };
 

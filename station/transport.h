@@ -5,6 +5,7 @@
 #include <chrono>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "base/check.h"
 
@@ -39,6 +40,13 @@ class Transport {
   virtual std::string ReadLine(std::chrono::milliseconds deadline) = 0;
   // Drops any bytes already received and not yet returned (resynchronisation).
   virtual void Flush() {}
+  // The complete lines already received and not yet returned, without waiting (an unsolicited
+  // report such as the PTU's limit hit, or late replies); whatever is left (a partial line) is
+  // dropped as by Flush(). The default only flushes.
+  virtual std::vector<std::string> ReadPending() {
+    Flush();
+    return {};
+  }
 };
 
 }  // namespace irdist

@@ -127,6 +127,19 @@ std::string FlagMeaning(const std::string& flag) {
 }
 
 bool Unreferenced(const std::string& flag) { return flag == "WR" || flag == "WH"; }
+
+// The data of a numeric reply: one integer, or one per axis ("1651 1651" from a device-scope
+// get). Anything else is a reply damaged on the wire ("1651" with a flipped bit: "16=1").
+bool IsIntegers(const std::string& data) {
+  std::istringstream in(data);
+  int count = 0;
+  for (std::string word; in >> word; ++count) {
+    const std::size_t digits = word[0] == '-' ? 1 : 0;
+    if (word.size() == digits || word.find_first_not_of("0123456789", digits) != std::string::npos)
+      return false;
+  }
+  return count > 0;
+}
 bool Fault(const std::string& flag) { return !flag.empty() && flag[0] == 'F'; }
 
 // Manual, "Reply Flags": why a command was rejected, and what to do.
@@ -202,8 +215,13 @@ class ZaberAscii : public DeviceDriver, public Motion {
  private:
   std::string Compose(const Address& a, int axis, const std::string& command, int* id);
   ReplyVerdict Judge(const Address& a, int axis, int id, const std::string& line, Reply* reply);
-  LineRequest Request(const Address& a, int axis, const std::string& command, Reply* reply);
-  Reply Query(const Address& a, int axis, const std::string& command);
+  LineRequest Request(const Address& a, int axis, const std::string& command, Reply* reply,
+                      bool numeric = false);
+  Reply Query(const Address& a, int axis, const std::string& command, bool numeric = false);
+  long long QueryNumber(const Address& a, int axis, const std::string& command) {
+    return Number(Query(a, axis, command, true), command);
+  }
+  void EnableReplyChecksums(const Address& a);
   bool Command(const Address& a, const std::string& command, Reply* reply);
   void ThrowIfRejected(const Reply& r, const std::string& command) const;
   long long Number(const Reply& r, const std::string& command) const;
@@ -232,7 +250,8 @@ class ZaberAscii : public DeviceDriver, public Motion {
   milliseconds timeout_{500};
   milliseconds home_timeout_{120000};
   bool checksum_ = true;
-  bool reply_checksums_ = false;  // the device checksums its replies (learnt from the first)
+  bool reply_checksums_ = false;  // comm.checksum is on: a reply without a checksum is damaged
+  int unchecked_replies_ = 0;     // replies of the query in flight that came without checksum
   double direction_ = 1.0;
   long long tolerance_ = 2;
   int next_id_ = 0;
@@ -254,37 +273,65 @@ ReplyVerdict ZaberAscii::Judge(const Address& a, int axis, int id, const std::st
                                Reply* reply) {
   Reply r;
   bool checked = false;
-  if (!ParseReply(line, reply_checksums_, &r, &checked)) return ReplyVerdict::kSkip;
+  if (!ParseReply(line, false, &r, &checked)) return ReplyVerdict::kSkip;
   if (r.type != '@' || r.device != a.device || r.axis != axis || r.id != id) {
     return ReplyVerdict::kSkip;
   }
-  // A device that answered a checksummed command with a checksum always does: from then on a
-  // reply whose checksum was damaged away is not taken.
-  reply_checksums_ = reply_checksums_ || (checksum_ && checked);
+  if (reply_checksums_ && !checked) {  // comm.checksum is on: its checksum was damaged away
+    ++unchecked_replies_;
+    return ReplyVerdict::kRetry;
+  }
   *reply = r;
   return ReplyVerdict::kMatch;
 }
 
 // One request to (device, axis): a fresh message id on every attempt, matched by the judge.
 LineRequest ZaberAscii::Request(const Address& a, int axis, const std::string& command,
-                                Reply* reply) {
+                                Reply* reply, bool numeric) {
   auto id = std::make_shared<int>(0);
   LineRequest request;
   request.query = command;
   request.device = "Zaber device " + std::to_string(a.device);
   request.compose = [this, a, axis, command, id] { return Compose(a, axis, command, id.get()); };
-  request.judge = [this, a, axis, id, reply](const std::string& line) {
-    return Judge(a, axis, *id, line, reply);
+  request.judge = [this, a, axis, id, reply, numeric](const std::string& line) {
+    const ReplyVerdict verdict = Judge(a, axis, *id, line, reply);
+    // A numeric answer that is not numbers was damaged on the wire (no reply checksum caught
+    // it): asked again. A rejection carries a reason, not a number.
+    if (verdict == ReplyVerdict::kMatch && numeric && reply->flag == "OK" &&
+        !IsIntegers(reply->data)) {
+      return ReplyVerdict::kRetry;
+    }
+    return verdict;
   };
   return request;
 }
 
-// A query: safe to repeat, so a lost or damaged reply is retried with a new message id.
-Reply ZaberAscii::Query(const Address& a, int axis, const std::string& command) {
+// A query: safe to repeat, so a lost or damaged reply is retried with a new message id. When
+// every reply came without its checksum, the device forgot comm.checksum (a factory reset):
+// it is enabled again and the query asked once more.
+Reply ZaberAscii::Query(const Address& a, int axis, const std::string& command, bool numeric) {
   Reply r;
-  query_.Ask(Request(a, axis, command, &r));
+  unchecked_replies_ = 0;
+  try {
+    query_.Ask(Request(a, axis, command, &r, numeric));
+  } catch (const NoReplyError&) {
+    if (unchecked_replies_ < query_.options().attempts) throw;
+    reply_checksums_ = false;
+    EnableReplyChecksums(a);
+    query_.Ask(Request(a, axis, command, &r, numeric));
+  }
   ThrowIfRejected(r, command);
   return r;
+}
+
+// Manual, setting comm.checksum (device scope): 1 makes the device checksum its replies (it
+// verifies a command's checksum either way). From its acknowledgement on, a reply without a
+// checksum is taken as damaged. A firmware without the setting (RJ) keeps unchecked replies.
+void ZaberAscii::EnableReplyChecksums(const Address& a) {
+  if (!checksum_) return;
+  Reply r;
+  query_.Ask(Request(a, 0, "set comm.checksum 1", &r));
+  reply_checksums_ = r.flag == "OK";
 }
 
 // A motion command: sent once. False when its reply was lost (the caller checks the device's
@@ -311,8 +358,12 @@ long long ZaberAscii::Number(const Reply& r, const std::string& command) const {
     used = 0;
   }
   if (used == 0 || used != r.data.size()) {
-    Fail(r.data, "'" + command + "' answered '" + r.data + "', not one integer",
-         "map one axis per address in `axes:` (\"device axis\")");
+    if (IsIntegers(r.data)) {  // one number per axis: a device-scope address
+      Fail(r.data, "'" + command + "' answered '" + r.data + "', one value per axis",
+           "map one axis per address in `axes:` (\"device axis\")");
+    }
+    Fail(r.data, "'" + command + "' answered '" + r.data + "', not a number (a damaged reply)",
+         "check the cable and its shielding, the baud rate, and keep `checksum: true`");
   }
   return value;
 }
@@ -320,7 +371,8 @@ long long ZaberAscii::Number(const Reply& r, const std::string& command) const {
 void ZaberAscii::IdentifyDevice(const Address& a) {
   Reply id_reply;
   try {
-    id_reply = Query(a, 0, "get deviceid");
+    EnableReplyChecksums(a);
+    id_reply = Query(a, 0, "get deviceid", true);
   } catch (const LinkError& e) {
     const auto* no_reply = dynamic_cast<const NoReplyError*>(&e);
     const std::string heard = no_reply != nullptr ? no_reply->last_heard() : "";
@@ -330,7 +382,7 @@ void ZaberAscii::IdentifyDevice(const Address& a) {
          "the device speaks the ASCII protocol");
   }
   identity_.model = "deviceid " + id_reply.data;
-  identity_.serial = Query(a, 0, "get system.serial").data;
+  identity_.serial = Query(a, 0, "get system.serial", true).data;
   identity_.firmware = Query(a, 0, "get version").data;
   const std::string want_id = spec_.Text("deviceid", "");
   if (!want_id.empty() && want_id != id_reply.data) {
@@ -354,19 +406,17 @@ void ZaberAscii::ReadAxis(AxisState* s) {
   if (spec_.settings.count("microstep_" + unit)) {
     s->unit_per_microstep = spec_.Number("microstep_" + unit, 0.0) * scale;
   } else {
-    const long long resolution = Number(Query(s->address, s->address.axis, "get resolution"),
-                                        "get resolution");
+    const long long resolution = QueryNumber(s->address, s->address.axis, "get resolution");
     if (resolution <= 0) Fail(std::to_string(resolution), "resolution must be > 0", "set it");
     s->unit_per_microstep = spec_.Number("fullstep_" + unit, 0.0) * scale / resolution;
   }
   const Address& a = s->address;
-  s->limit_min = Number(Query(a, a.axis, "get limit.min"), "get limit.min");
-  s->limit_max = Number(Query(a, a.axis, "get limit.max"), "get limit.max");
+  s->limit_min = QueryNumber(a, a.axis, "get limit.min");
+  s->limit_max = QueryNumber(a, a.axis, "get limit.max");
   const double step = s->unit_per_microstep;
-  s->speed.speed = Number(Query(a, a.axis, "get maxspeed"), "get maxspeed") /
-                   kSpeedDataPerMicrostepS * step;
-  s->speed.acceleration = Number(Query(a, a.axis, "get accel"), "get accel") /
-                          kAccelDataPerMicrostepS2 * step;
+  s->speed.speed = QueryNumber(a, a.axis, "get maxspeed") / kSpeedDataPerMicrostepS * step;
+  s->speed.acceleration =
+      QueryNumber(a, a.axis, "get accel") / kAccelDataPerMicrostepS2 * step;
   s->speed.settle_ms = spec_.Number("settle_ms", 0.0);
   s->speed.home = ToUnits(*s, 0);
 }
@@ -402,7 +452,7 @@ void ZaberAscii::CheckFlag(const AxisState& s, const Reply& r) const {
 MotionState ZaberAscii::State() {
   MotionState state = MotionState::kIdle;
   for (const AxisState& s : axes_) {
-    const Reply r = Query(s.address, s.address.axis, "get pos");
+    const Reply r = Query(s.address, s.address.axis, "get pos", true);
     if (Fault(r.warning)) return MotionState::kFault;
     if (Unreferenced(r.warning)) state = MotionState::kUnhomed;
     if (r.status == "BUSY" && state == MotionState::kIdle) state = MotionState::kMoving;
@@ -413,7 +463,7 @@ MotionState ZaberAscii::State() {
 void ZaberAscii::WaitIdle(AxisState* s, milliseconds timeout, const std::string& what) {
   const auto deadline = Clock::now() + timeout;
   while (true) {
-    const Reply r = Query(s->address, s->address.axis, "get pos");
+    const Reply r = Query(s->address, s->address.axis, "get pos", true);
     CheckFlag(*s, r);
     if (r.status == "IDLE") return;
     if (Clock::now() > deadline) {
@@ -433,13 +483,13 @@ void ZaberAscii::Home() {
     Reply r;
     if (!Command(s.address, "home", &r)) {
       // Reply lost: homing is safe to repeat (manual), but only once we know it did not start.
-      const Reply state = Query(s.address, s.address.axis, "get pos");
+      const Reply state = Query(s.address, s.address.axis, "get pos", true);
       if (state.status == "IDLE") Command(s.address, "home", &r);
     }
   }
   for (AxisState& s : axes_) {
     WaitIdle(&s, home_timeout_, "homing");
-    const Reply r = Query(s.address, s.address.axis, "get pos");
+    const Reply r = Query(s.address, s.address.axis, "get pos", true);
     if (Unreferenced(r.warning) || Fault(r.warning)) {
       Fail(r.warning, std::string(AxisName(s.axis)) + " did not home: " + FlagMeaning(r.warning),
            "check the home sensor and that nothing blocks the travel");
@@ -456,7 +506,7 @@ void ZaberAscii::IssueMove(AxisState* s, long long microsteps) {
   const std::string command = "move abs " + std::to_string(microsteps);
   Reply r;
   if (Command(s->address, command, &r)) return;
-  const Reply state = Query(s->address, s->address.axis, "get pos");
+  const Reply state = Query(s->address, s->address.axis, "get pos", true);
   CheckFlag(*s, state);
   if (state.status == "BUSY" || std::llabs(Number(state, "get pos") - microsteps) <= tolerance_)
     return;
@@ -488,7 +538,7 @@ void ZaberAscii::StartMove(const StationPosition& target) {
 
 // One poll of one axis: true when it is idle within tolerance of its target.
 bool ZaberAscii::Settled(AxisState* s) {
-  const Reply r = Query(s->address, s->address.axis, "get pos");
+  const Reply r = Query(s->address, s->address.axis, "get pos", true);
   CheckFlag(*s, r);
   if (Unreferenced(r.warning)) {
     Fail(r.warning, std::string(AxisName(s->axis)) + " is not homed", "home the station first");
@@ -521,7 +571,7 @@ void ZaberAscii::WaitSettled(milliseconds timeout) {
 
 void ZaberAscii::ReadPosition(StationPosition* position) {
   for (const AxisState& s : axes_) {
-    const Reply r = Query(s.address, s.address.axis, "get pos");
+    const Reply r = Query(s.address, s.address.axis, "get pos", true);
     CheckFlag(s, r);
     const double value = ToUnits(s, Number(r, "get pos"));
     if (s.axis == Axis::kSlide) position->slide_mm = value;
@@ -536,7 +586,7 @@ void ZaberAscii::Stop() noexcept {
       Reply r;
       Command(s.address, "stop", &r);
       const auto deadline = Clock::now() + std::chrono::seconds(5);
-      while (Query(s.address, s.address.axis, "get pos").status == "BUSY" &&
+      while (Query(s.address, s.address.axis, "get pos", true).status == "BUSY" &&
              Clock::now() < deadline) {
         std::this_thread::sleep_for(kPollPeriod);
       }
@@ -547,7 +597,7 @@ void ZaberAscii::Stop() noexcept {
 }
 
 void ZaberAscii::CheckAlive() {
-  for (const AxisState& s : axes_) CheckFlag(s, Query(s.address, s.address.axis, "get pos"));
+  for (const AxisState& s : axes_) CheckFlag(s, Query(s.address, s.address.axis, "get pos", true));
 }
 
 [[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {

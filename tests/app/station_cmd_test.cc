@@ -2,9 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <map>
+#include <memory>
 #include <sstream>
+#include <thread>
 
 #include "app/errors.h"
+#include "sim/device_emulator.h"
 #include "sim/station_emulator.h"
 #include "sim/world.h"
 
@@ -60,6 +65,53 @@ TEST_F(StationCommand, AnUnknownDeviceInPortIsAUsageError) {
   args.ports = {"slide=" + port_};
   std::ostringstream out, err;
   EXPECT_THROW(RunStation(args, {out, err}), UsageError);
+}
+
+// `irdist station` on the virtual lab (Zaber slide, FLIR PTU head, Keithley 2400 source), each
+// device's emulator in this process on its own pty, its port given by --port.
+class LabStationCommand : public ::testing::Test {
+ protected:
+  LabStationCommand() : world_(100.0) {
+    const std::string rig = RigPath();
+    std::ifstream in(rig);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    for (const char* name : {"slide", "head", "source"}) {
+      const std::string driver = name == std::string("slide")  ? "zaber_ascii"
+                                 : name == std::string("head") ? "flir_ptu"
+                                                               : "scpi_source";
+      emulators_[name] = sim::FindEmulator(driver)->create(world_, {name, driver, rig, text, 1});
+      ports_.push_back(std::string(name) + "=" + emulators_[name]->Start());
+    }
+  }
+  static std::string RigPath() {
+    return std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual-lab.yaml";
+  }
+  std::string Run(const std::string& action, std::vector<double> values = {}) {
+    StationArgs args;
+    args.rig = RigPath();
+    args.action = action;
+    args.values = std::move(values);
+    args.ports = ports_;
+    std::ostringstream out, err;
+    RunStation(args, {out, err});
+    return out.str();
+  }
+  sim::World world_;
+  std::map<std::string, std::unique_ptr<sim::DeviceEmulator>> emulators_;
+  std::vector<std::string> ports_;
+};
+
+// The SourceMeter holds the current after the command ends, and a later command (status) does
+// not reset it; only `off` switches it off.
+TEST_F(LabStationCommand, TheSourceMeterHoldsTheCurrentUntilOff) {
+  Run("current", {500.0});
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_NEAR(world_.Pose().bias_ma, 500.0, 1e-6);
+  const std::string status = Run("status");
+  EXPECT_NE(status.find("current: 500.0"), std::string::npos) << status;
+  EXPECT_NEAR(world_.Pose().bias_ma, 500.0, 1e-6);
+  Run("off");
+  EXPECT_DOUBLE_EQ(world_.Pose().bias_ma, 0.0);
 }
 
 }  // namespace

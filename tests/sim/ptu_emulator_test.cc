@@ -154,6 +154,63 @@ TEST_F(PtuEmulatorTest, FaultsDropGarbleDelayStickAndPowerCycle) {
   EXPECT_EQ(Ask("PP"), "* 0");      // and the feedback mode is the power-on one (terse)
 }
 
+// The manuals' replies end with CR alone (`reply_line_end: cr`).
+TEST(PtuEmulatorReplies, EndWithCrAloneWhenConfigured) {
+  World world(20.0);
+  auto emulator = testing::MakeEmulator(world, "flir_ptu", "head",
+                                        Rig("      reply_line_end: cr\n"));
+  ASSERT_NE(emulator, nullptr);
+  PtyHost host(emulator->Start());
+  host.Send("PR\r");
+  host.Send("TR\r");
+  EXPECT_EQ(host.ReadRaw(500), "* 90\r* 45\r");
+  EXPECT_THROW(testing::MakeEmulator(world, "flir_ptu", "head", Rig("      reply_line_end: lf\n")),
+               InputError);
+}
+
+// A reset takes reset_s: commands sent meanwhile wait and are answered in order once it ends.
+TEST(PtuEmulatorReset, CommandsDuringAResetAreAnsweredWhenItEnds) {
+  World world(1.0);
+  auto emulator = testing::MakeEmulator(world, "flir_ptu", "head",
+                                        Rig("      reset_s: 0.5\n"
+                                            "      reset_on_power_up: false\n"));
+  ASSERT_NE(emulator, nullptr);
+  PtyHost host(emulator->Start());
+  EXPECT_EQ(host.Ask("PP\r\n"), "* 0");
+  const double start_s = world.clock().Now();
+  host.Send("R\r\n");
+  host.Send("PP\r\n");
+  host.Send("TP\r\n");
+  EXPECT_EQ(host.ReadLine(100), "");  // resetting: silent
+  EXPECT_EQ(host.ReadLine(3000), "*");
+  EXPECT_GE(world.clock().Now() - start_s, 0.5);
+  EXPECT_EQ(host.ReadLine(1000), "* 0");
+  EXPECT_EQ(host.ReadLine(1000), "* 0");
+}
+
+TEST_F(PtuEmulatorTest, ASpeedAboveTheUpperBoundIsRefused) {
+  EXPECT_EQ(Ask("PU1500"), "*");
+  EXPECT_EQ(Ask("PS1600"), "! Maximum allowable Pan speed exceeded");
+  EXPECT_EQ(Ask("PS1500"), "*");
+  EXPECT_EQ(Ask("PL200"), "*");
+  EXPECT_EQ(Ask("PS100"), "! Minimum allowable Pan speed exceeded");
+}
+
+// Fault limit_hit_axis: the axis stalls halfway through its next move and the unit says "!P".
+TEST(PtuEmulatorFaults, ALimitHitIsReportedUnasked) {
+  World world(20.0);
+  auto emulator = testing::MakeEmulator(world, "flir_ptu", "head",
+                                        Rig("      limit_hit_axis: pan\n"));
+  ASSERT_NE(emulator, nullptr);
+  PtyHost host(emulator->Start());
+  EXPECT_EQ(host.Ask("PP2000\r\n"), "*");
+  EXPECT_EQ(host.ReadLine(5000), "!P");
+  const std::string pan = host.Ask("PP\r\n");
+  const long position = std::strtol(pan.substr(2).c_str(), nullptr, 10);
+  EXPECT_GT(position, 0);
+  EXPECT_LT(position, 2000);
+}
+
 TEST(PtuEmulatorRig, AxesMustNamePanOrTilt) {
   World world(1.0);
   std::string rig = Rig();

@@ -60,6 +60,24 @@ class PtyHost {
       }
     }
   }
+  // Every byte received within `timeout_ms` (line ends included), for replies without an LF.
+  std::string ReadRaw(int timeout_ms) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+    while (true) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+                            until - std::chrono::steady_clock::now()).count();
+      if (left <= 0) break;
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, static_cast<int>(left)) > 0) {
+        char buf[256];
+        const ssize_t n = ::read(fd_, buf, sizeof(buf));
+        if (n > 0) buffer_.append(buf, static_cast<std::size_t>(n));
+      }
+    }
+    std::string bytes;
+    bytes.swap(buffer_);
+    return bytes;
+  }
   std::string Ask(const std::string& line, int timeout_ms = 3000) {
     Send(line);
     return ReadLine(timeout_ms);

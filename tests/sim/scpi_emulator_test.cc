@@ -144,6 +144,21 @@ TEST_F(ScpiEmulatorTest, SeveralQueriesInOneMessageAnswerInOneLine) {
   EXPECT_EQ(Ask(":OUTP?;:SOUR:CURR?;*OPC?"), "0;+1.000000E-01;1");
 }
 
+// The output on at 475 mA; one flipped bit turns the reply to :OUTP? "1" into "0", once.
+TEST(ScpiEmulatorFaults, OneFlippedBitInTheOutputState) {
+  World world(20.0);
+  auto emulator = testing::MakeEmulator(world, "scpi_source", "source",
+                                        Rig("      flip_reply: \":OUTP?\"\n"
+                                            "      flip_byte: -1\n"
+                                            "      flip_bit: 0\n"));
+  ASSERT_NE(emulator, nullptr);
+  PtyHost host(emulator->Start());
+  host.Send(":SOUR:FUNC CURR;:SOUR:CURR 0.475;:SENS:VOLT:PROT 3;:OUTP ON\n");
+  EXPECT_EQ(host.Ask(":OUTP?\n"), "0");  // damaged on the wire
+  EXPECT_EQ(host.Ask(":OUTP?\n"), "1");
+  EXPECT_NEAR(world.Pose().bias_ma, 475.0, 1e-9);
+}
+
 TEST_F(ScpiEmulatorTest, OpenCircuitReadsZeroCurrentAtCompliance) {
   SourceCurrent(0.5, 3.0);
   SetSourceFaults(*emulator_, SourceFaults{true, 0.0, -1.0});

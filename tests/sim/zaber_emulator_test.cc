@@ -125,9 +125,32 @@ TEST_F(ZaberEmulatorTest, RejectsOutOfRangeUnknownAndMisaddressedCommands) {
 
 TEST_F(ZaberEmulatorTest, EchoesMessageIdsAndVerifiesChecksums) {
   EXPECT_EQ(Ask("/1 1 12 get pos"), "@01 1 12 OK IDLE WR 0");
-  const std::string reply = Ask("/" + WithChecksum("1 1 get pos"));
-  EXPECT_EQ(reply, "@" + WithChecksum("01 1 OK IDLE WR 0"));
+  // Manual, comm.checksum: a command's checksum is verified; replies carry one only once the
+  // device setting is 1 (default 0).
+  EXPECT_EQ(Ask("/" + WithChecksum("1 1 get pos")), "@01 1 OK IDLE WR 0");
   EXPECT_EQ(Ask("/1 1 get pos:00").substr(0, 24), "@01 1 RJ IDLE WR BADDATA");
+  EXPECT_EQ(Ask("/1 get comm.checksum"), "@01 0 OK IDLE WR 0");
+  EXPECT_EQ(Ask("/1 set comm.checksum 1"), "@" + WithChecksum("01 0 OK IDLE WR 0"));
+  EXPECT_EQ(Ask("/1 1 get pos"), "@" + WithChecksum("01 1 OK IDLE WR 0"));
+  EXPECT_EQ(Ask("/1 set comm.checksum 2"), "@" + WithChecksum("01 0 RJ IDLE WR BADDATA"));
+  emulator_->PowerCycle();  // a non-volatile setting
+  EXPECT_EQ(Ask("/1 get comm.checksum"), "@" + WithChecksum("01 0 OK IDLE WR 1"));
+}
+
+TEST(ZaberEmulatorFaults, OneFlippedBitInTheChosenReply) {
+  World world(20.0);
+  // "1651" -> "16=1": bit 3 of the byte before last of the reply to `get accel`, once.
+  auto emulator = testing::MakeEmulator(world, "zaber_ascii", "slide",
+                                        Rig("      flip_reply: get accel\n"
+                                            "      flip_byte: -2\n"
+                                            "      flip_bit: 3\n"));
+  ASSERT_NE(emulator, nullptr);
+  PtyHost host(emulator->Start());
+  EXPECT_EQ(host.Ask("/1 1 set accel 1651\n"), "@01 1 OK IDLE WR 0");
+  EXPECT_EQ(host.Ask("/1 1 get accel\n"), "@01 1 OK IDLE WR 16=1");
+  EXPECT_EQ(host.Ask("/1 1 get accel\n"), "@01 1 OK IDLE WR 1651");  // flip_count 1
+  EXPECT_THROW(testing::MakeEmulator(world, "zaber_ascii", "slide", Rig("      flip_bit: 8\n")),
+               InputError);
 }
 
 TEST_F(ZaberEmulatorTest, SettingsChangeTheMotion) {

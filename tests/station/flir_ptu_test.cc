@@ -4,9 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <thread>
 
 #include "base/input_error.h"
+#include "sim/device_emulator.h"
+#include "sim/world.h"
 #include "station/driver.h"
+#include "station/serial_transport.h"
 #include "tests/station/fake_transport.h"
 
 namespace irdist {
@@ -325,6 +329,155 @@ TEST(FlirPtu, PowerCycleIsARestart) {
   h.ptu.PowerCycle();
   EXPECT_THROW(h.motion->CheckAlive(), DeviceRestarted);
   EXPECT_EQ(h.motion->State(), MotionState::kUnhomed);
+}
+
+// --- Against the PTU emulator (sim/ptu_emulator.cc, written from the manual) over a real pty.
+
+std::string EmulatedRig(const std::string& virtual_extra) {
+  return "station:\n"
+         "  devices:\n"
+         "    head:\n"
+         "      driver: flir_ptu\n"
+         "      port: auto\n"
+         "      axes: {pan: pan, tilt: tilt}\n"
+         "virtual:\n"
+         "  devices:\n"
+         "    head:\n"
+         "      verbose: true\n" +
+         virtual_extra;
+}
+
+// The emulator on a World in real time, and drivers opened on its pty as the Station opens them
+// (line end and CR-ended replies from the driver's registration).
+struct EmulatedHead {
+  explicit EmulatedHead(const std::string& virtual_extra)
+      : emulator(sim::FindEmulator("flir_ptu")->create(
+            world, {"head", "flir_ptu", "inline.yaml", EmulatedRig(virtual_extra), 1})) {
+    port = emulator->Start();
+  }
+  std::unique_ptr<DeviceDriver> Open(DeviceSpec spec) {
+    const DriverInfo* info = FindDriver("flir_ptu");
+    SerialOptions serial;
+    serial.baud = info->default_baud;
+    serial.line_end = info->line_end;
+    serial.cr_ends_line = info->cr_ends_reply;
+    spec.port = port;
+    return info->create(spec, std::make_unique<SerialTransport>(port, serial));
+  }
+  static DeviceSpec Spec() {
+    DeviceSpec spec = HeadSpec();
+    spec.reply_timeout_ms = 100;
+    spec.settings["retries"] = {"2", 11};
+    spec.settings["reset_wait_s"] = {"10", 12};
+    return spec;
+  }
+  sim::World world{1.0};
+  std::unique_ptr<sim::DeviceEmulator> emulator;
+  std::string port;
+};
+
+// The manuals' replies end with CR alone: read as lines.
+TEST(FlirPtuEmulated, RepliesEndingWithCrAloneAreRead) {
+  EmulatedHead head("      reply_line_end: cr\n");
+  std::unique_ptr<DeviceDriver> driver = head.Open(EmulatedHead::Spec());
+  EXPECT_NE(driver->motion()->Identify().firmware.find("Pan-Tilt"), std::string::npos);
+  driver->motion()->Home();
+  StationPosition target;
+  target.pan_deg = 10.0;
+  driver->motion()->StartMove(target);
+  driver->motion()->WaitSettled(std::chrono::milliseconds(20000));
+  EXPECT_NEAR(head.world.Pose().pan_deg, 10.0, 0.03);
+}
+
+// A power cycle whose reset lasts longer than every retry of a query (3 x 100 ms here): the
+// driver waits for the unit (up to reset_wait_s) and sees the restart, not a dead link.
+TEST(FlirPtuEmulated, AResetLongerThanTheRetriesIsWaitedFor) {
+  EmulatedHead head("      reset_s: 1.0\n      reset_on_power_up: true\n");
+  DeviceSpec spec = EmulatedHead::Spec();
+  spec.settings["speed_deg_s"] = {"40", 13};
+  std::unique_ptr<DeviceDriver> driver = head.Open(spec);
+  driver->motion()->Identify();
+  driver->motion()->Home();
+  StationPosition target;
+  target.pan_deg = 10.0;
+  driver->motion()->StartMove(target);
+  driver->motion()->WaitSettled(std::chrono::milliseconds(20000));
+  head.emulator->PowerCycle();
+  EXPECT_THROW(driver->motion()->CheckAlive(), DeviceRestarted);
+}
+
+// A run gives up while the unit resets (its queries queued in the unit); a new session at once
+// reads their stale answers away and identifies the unit.
+TEST(FlirPtuEmulated, ANewSessionReadsStaleRepliesAwayBeforeIdentifying) {
+  EmulatedHead head("      reset_s: 1.0\n");
+  DeviceSpec impatient = EmulatedHead::Spec();
+  impatient.settings["reset_wait_s"] = {"0.05", 12};
+  std::this_thread::sleep_for(std::chrono::milliseconds(1200));  // the power-up reset
+  {
+    std::unique_ptr<DeviceDriver> first = head.Open(impatient);
+    first->motion()->Identify();
+    head.emulator->PowerCycle();
+    StationPosition p;
+    EXPECT_THROW(first->motion()->ReadPosition(&p), LinkError);
+  }
+  std::unique_ptr<DeviceDriver> next = head.Open(EmulatedHead::Spec());
+  EXPECT_NE(next->motion()->Identify().firmware.find("Pan-Tilt"), std::string::npos);
+  StationPosition p;
+  next->motion()->ReadPosition(&p);
+  EXPECT_NEAR(p.pan_deg, 0.0, 1e-9);
+}
+
+// The unit's own "!P" (the pan axis hit a limit and lost synchrony) is reported as such.
+TEST(FlirPtuEmulated, TheUnitsLimitHitReportIsSeen) {
+  EmulatedHead head("      limit_hit_axis: pan\n");
+  std::unique_ptr<DeviceDriver> driver = head.Open(EmulatedHead::Spec());
+  driver->motion()->Identify();
+  driver->motion()->Home();
+  StationPosition target;
+  target.pan_deg = 30.0;
+  driver->motion()->StartMove(target);
+  try {
+    driver->motion()->WaitSettled(std::chrono::milliseconds(20000));
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    EXPECT_EQ(e.device_code(), "!P");
+    EXPECT_NE(std::string(e.what()).find("pan axis hit its limit"), std::string::npos) << e.what();
+  }
+}
+
+// speed_deg_s beyond the unit's speed bound (TU) is refused before it is sent, with advice about
+// speed; a refused speed command gets the same kind of advice, not position limits.
+TEST(FlirPtuEmulated, ASpeedBeyondTheUnitsBoundIsAboutSpeed) {
+  EmulatedHead head("");
+  DeviceSpec spec = EmulatedHead::Spec();
+  spec.settings["speed_deg_s"] = {"200", 13};  // tilt: 200 deg/s = 15555 positions/s > 12000
+  std::unique_ptr<DeviceDriver> driver = head.Open(spec);
+  try {
+    driver->motion()->Identify();
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("upper speed bound TU 12000"), std::string::npos) << what;
+    EXPECT_EQ(what.find("PN/PX"), std::string::npos) << what;
+  }
+}
+
+TEST(FlirPtu, ARefusedSpeedCommandGetsSpeedAdvice) {
+  DeviceSpec spec = HeadSpec();
+  spec.settings["speed_deg_s"] = {"30", 12};
+  Head h(spec);
+  h.wire->respond = [&h](const std::string& line) {
+    if (line.rfind("TS", 0) == 0 && line.size() > 2) {
+      return std::vector<std::string>{"! Maximum allowable Tilt speed exceeded"};
+    }
+    return h.ptu.Respond(line);
+  };
+  try {
+    h.motion->Identify();
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("speed bounds"), std::string::npos) << e.what();
+  }
 }
 
 TEST(FlirPtu, ValidateRejectsBadAxesAndUnknownKeys) {

@@ -3,10 +3,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "base/input_error.h"
+#include "sim/device_emulator.h"
+#include "sim/world.h"
 #include "station/driver.h"
+#include "station/serial_transport.h"
 #include "tests/station/fake_transport.h"
 
 namespace irdist {
@@ -24,6 +28,7 @@ struct SourceMeter {
   std::vector<std::string> commands;
   int drop_next = 0;
   int wrong_readings = 0;  // :READ? answers with a damaged current digit
+  int flipped_output = 0;  // :OUTP? answers with its one bit flipped ("1" -> "0")
 
   double Volts() const {
     if (load_ohm <= 0) return compliance_v;
@@ -60,6 +65,14 @@ struct SourceMeter {
       output = false;
     } else if (line == ":OUTP?") {
       reply = output ? "1" : "0";
+      if (flipped_output > 0) {
+        --flipped_output;
+        reply = output ? "0" : "1";
+      }
+    } else if (line == ":SOUR:CURR:LEV?") {
+      char buf[40];
+      std::snprintf(buf, sizeof(buf), "%+.6E", level_a);
+      reply = buf;
     } else if (line == ":READ?") {
       double amps = Compliance() ? (load_ohm <= 0 ? 0.0 : compliance_v / load_ohm) : level_a;
       if (wrong_readings > 0) {
@@ -261,6 +274,55 @@ TEST(ScpiSource, DestructionSwitchesTheOutputOff) {
   EXPECT_FALSE(b.meter.output);
 }
 
+// `irdist station current 500` then `irdist station status`: each command is a new driver on
+// the same instrument. A kept output stays on when the driver goes, and the next driver takes it
+// as it is (no *RST).
+TEST(ScpiSource, AKeptOutputStaysOnAndIsTakenAsItIsByTheNextDriver) {
+  Bench b;
+  b.source->KeepOutput();
+  b.source->Identify();
+  b.source->SetCurrent(500.0);
+  b.driver.reset();
+  EXPECT_TRUE(b.meter.output);
+  EXPECT_NEAR(b.meter.level_a, 0.5, 1e-12);
+  b.meter.commands.clear();
+  std::unique_ptr<DeviceDriver> next =
+      FindDriver("scpi_source")->create(SourceSpec(), std::make_unique<FakeTransport>(b.wire));
+  next->source()->KeepOutput();
+  next->source()->Identify();
+  EXPECT_EQ(std::count(b.meter.commands.begin(), b.meter.commands.end(), "*RST"), 0);
+  EXPECT_TRUE(b.meter.output);
+  EXPECT_DOUBLE_EQ(next->source()->setpoint_ma(), 500.0);
+  EXPECT_NEAR(next->source()->Measure().current_ma, 500.0, 1e-6);
+  next->source()->Off();  // `irdist station off`
+  EXPECT_FALSE(b.meter.output);
+}
+
+// Without KeepOutput (a run) an output found on is reset at connection.
+TEST(ScpiSource, ARunResetsAnOutputFoundOn) {
+  Bench b;
+  b.meter.function = "CURR";
+  b.meter.output = true;
+  b.meter.level_a = 0.5;
+  b.source->Identify();
+  EXPECT_FALSE(b.meter.output);
+  EXPECT_EQ(std::count(b.meter.commands.begin(), b.meter.commands.end(), "*RST"), 1);
+}
+
+// One flipped bit in the reply to :OUTP? ("1" -> "0") while sourcing 475 mA: the second reading
+// says on, the run goes on. Off twice is a trip.
+TEST(ScpiSource, AnOutputReadOffOnceIsConfirmedBeforeStopping) {
+  Bench b;
+  b.source->Identify();
+  b.source->SetCurrent(475.0);
+  b.meter.flipped_output = 1;
+  EXPECT_NEAR(b.source->Measure().current_ma, 475.0, 1e-6);
+  b.meter.flipped_output = 1;
+  EXPECT_NO_THROW(b.source->CheckAlive());
+  b.meter.output = false;
+  EXPECT_THROW(b.source->CheckAlive(), DeviceError);
+}
+
 TEST(ScpiSource, PowerCycleIsARestartAndTripIsADeviceError) {
   Bench b;
   b.source->Identify();
@@ -287,6 +349,30 @@ TEST(ScpiSource, ValidateRequiresComplianceAndKnownKeys) {
   DeviceSpec high = SourceSpec();
   high.settings["compliance_v"] = {"500", 24};
   EXPECT_THROW(info->validate(high), InputError);
+}
+
+// Against the SourceMeter emulator (sim/scpi_emulator.cc): one flipped bit in the reply to
+// :OUTP? ("1" -> "0") while sourcing 475 mA does not stop the sweep.
+TEST(ScpiSourceEmulated, OneFlippedBitInTheOutputStateDoesNotStopTheRun) {
+  sim::World world(20.0);
+  const std::string rig =
+      "station:\n  devices:\n    source:\n      driver: scpi_source\n      port: auto\n"
+      "      compliance_v: 3.0\n"
+      "virtual:\n  devices:\n    source:\n      flip_reply: \":OUTP?\"\n"
+      "      flip_byte: -1\n      flip_bit: 0\n";
+  std::unique_ptr<sim::DeviceEmulator> emulator = sim::FindEmulator("scpi_source")->create(
+      world, {"source", "scpi_source", "inline.yaml", rig, 1});
+  DeviceSpec spec = SourceSpec();
+  spec.port = emulator->Start();
+  SerialOptions serial;
+  serial.line_end = FindDriver("scpi_source")->line_end;
+  std::unique_ptr<DeviceDriver> driver = FindDriver("scpi_source")->create(
+      spec, std::make_unique<SerialTransport>(spec.port, serial));
+  CurrentSource* source = driver->source();
+  source->Identify();
+  source->SetCurrent(475.0);
+  EXPECT_NEAR(source->Measure().current_ma, 475.0, 0.01);
+  EXPECT_NEAR(world.Pose().bias_ma, 475.0, 0.01);
 }
 
 }  // namespace

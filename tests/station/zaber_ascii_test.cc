@@ -7,7 +7,11 @@
 #include <sstream>
 
 #include "base/input_error.h"
+#include "sim/device_emulator.h"
+#include "sim/line_device.h"
+#include "sim/world.h"
 #include "station/driver.h"
+#include "station/serial_transport.h"
 #include "tests/station/fake_transport.h"
 
 namespace irdist {
@@ -342,6 +346,98 @@ TEST(ZaberAscii, ValidateRejectsUnknownKeysAndMissingStepSize) {
   DeviceSpec bad_direction = SlideSpec();
   bad_direction.settings["direction"] = {"2", 4};
   EXPECT_THROW(info->validate(bad_direction), InputError);
+}
+
+// --- Against the Zaber emulator (sim/zaber_emulator.cc, written from the manual) over a pty.
+
+std::string EmulatedRig(const std::string& virtual_extra) {
+  return "station:\n"
+         "  devices:\n"
+         "    slide:\n"
+         "      driver: zaber_ascii\n"
+         "      port: auto\n"
+         "      axes: {slide: \"1 1\"}\n"
+         "      origin_mm: 1000.0\n"
+         "virtual:\n"
+         "  devices:\n"
+         "    slide:\n"
+         "      microstep_um: 0.09921875\n"
+         "      accel_mm_s2: 1000\n" +  // `get accel` = 1651
+         virtual_extra;
+}
+
+struct EmulatedSlide {
+  explicit EmulatedSlide(const std::string& virtual_extra)
+      : emulator(sim::FindEmulator("zaber_ascii")->create(
+            world, {"slide", "zaber_ascii", "inline.yaml", EmulatedRig(virtual_extra), 1})) {
+    port = emulator->Start();
+  }
+  std::unique_ptr<DeviceDriver> Open(DeviceSpec spec) {
+    const DriverInfo* info = FindDriver("zaber_ascii");
+    SerialOptions serial;
+    serial.line_end = info->line_end;
+    spec.port = port;
+    spec.reply_timeout_ms = 100;
+    return info->create(spec, std::make_unique<SerialTransport>(port, serial));
+  }
+  sim::World world{20.0};
+  std::unique_ptr<sim::DeviceEmulator> emulator;
+  std::string port;
+};
+
+// One flipped bit in `get accel` at connection ("1651" -> "16=1"), on a device that does not
+// checksum its replies: asked again, the connection completes.
+TEST(ZaberAsciiEmulated, ADamagedReplyAtConnectionIsAskedAgain) {
+  EmulatedSlide slide("      flip_reply: get accel\n      flip_byte: -2\n      flip_bit: 3\n");
+  DeviceSpec spec = SlideSpec();
+  spec.settings["checksum"] = {"false", 8};
+  std::unique_ptr<DeviceDriver> driver = slide.Open(spec);
+  EXPECT_NO_THROW(driver->motion()->Identify());
+  // 1651 acceleration data at the rig file's 3.048 um / 64 microstep.
+  EXPECT_NEAR(driver->motion()->Speed(Axis::kSlide).acceleration,
+              1651 / 1.6384e-4 * 3.048e-3 / 64, 1e-6);
+}
+
+// A reply damaged in every attempt is a link problem, never "map one axis per address".
+TEST(ZaberAsciiEmulated, ARepliesDamagedEveryTimeGetLinkAdvice) {
+  EmulatedSlide slide("      flip_reply: get accel\n      flip_byte: -2\n      flip_bit: 3\n"
+                      "      flip_count: 100\n");
+  DeviceSpec spec = SlideSpec();
+  spec.settings["checksum"] = {"false", 8};
+  std::unique_ptr<DeviceDriver> driver = slide.Open(spec);
+  try {
+    driver->motion()->Identify();
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find("map one axis"), std::string::npos) << what;
+    EXPECT_NE(what.find("get accel"), std::string::npos) << what;
+    EXPECT_NE(what.find("cable"), std::string::npos) << what;
+  }
+}
+
+// Manual, comm.checksum: the driver makes the device checksum its replies; a position with one
+// flipped bit then fails its checksum and is asked again, never taken.
+TEST(ZaberAsciiEmulated, RepliesAreChecksummedAndADamagedPositionIsNeverTaken) {
+  EmulatedSlide slide("");
+  std::unique_ptr<DeviceDriver> driver = slide.Open(SlideSpec());
+  driver->motion()->Identify();
+  driver->motion()->Home();
+  StationPosition target;
+  target.slide_mm = 1500.0;  // 10498688 microsteps
+  driver->motion()->StartMove(target);
+  driver->motion()->WaitSettled(std::chrono::milliseconds(20000));
+  StationPosition at;
+  driver->motion()->ReadPosition(&at);
+  // Bit 0 of the byte 6 from the end: a digit of the position with or without ":CC" after it
+  // ("10498688:CC" -> "10498788:CC"), in the next two replies to `get pos`.
+  dynamic_cast<sim::LineDevice&>(*slide.emulator).SetReplyBitFlip({"get pos", -6, 0, 2});
+  StationPosition p;
+  for (int i = 0; i < 3; ++i) {
+    driver->motion()->ReadPosition(&p);
+    EXPECT_DOUBLE_EQ(p.slide_mm, at.slide_mm);
+  }
+  EXPECT_EQ(dynamic_cast<sim::LineDevice&>(*slide.emulator).RepliesFlipped(), 2u);
 }
 
 }  // namespace
