@@ -115,6 +115,9 @@ bool SensorOptions::IsValid(std::string* why) const {
     return Fail(why, "sensor.prnu_percent must lie in [0, 10]");
   }
   if (!std::isfinite(dsnu_e) || dsnu_e < 0.0) return Fail(why, "sensor.dsnu_e must be >= 0");
+  if (!std::isfinite(crosstalk_sigma_px) || crosstalk_sigma_px < 0.0 || crosstalk_sigma_px > 5.0) {
+    return Fail(why, "sensor.crosstalk_sigma_px must lie in [0, 5]");
+  }
   return true;
 }
 
@@ -217,7 +220,8 @@ void ReadSensor(const YAML::Node& node, const std::string& file, SensorOptions* 
                     {"width_px", "height_px", "pixel_pitch_um", "quantum_efficiency",
                      "full_well_e", "system_gain_dn_per_e", "read_noise_e",
                      "dark_current_e_per_s", "black_level_dn", "adc_bits", "nonlinearity",
-                     "background_e_per_s", "temperature_c", "prnu_percent", "dsnu_e"});
+                     "background_e_per_s", "temperature_c", "prnu_percent", "dsnu_e",
+                     "crosstalk_sigma_px"});
   s->width_px = k.Integer("width_px", s->width_px);
   s->height_px = k.Integer("height_px", s->height_px);
   s->pixel_pitch_um = k.Number("pixel_pitch_um", s->pixel_pitch_um);
@@ -233,6 +237,7 @@ void ReadSensor(const YAML::Node& node, const std::string& file, SensorOptions* 
   s->temperature_c = k.Number("temperature_c", s->temperature_c);
   s->prnu_percent = k.Number("prnu_percent", s->prnu_percent);
   s->dsnu_e = k.Number("dsnu_e", s->dsnu_e);
+  s->crosstalk_sigma_px = k.Number("crosstalk_sigma_px", s->crosstalk_sigma_px);
 }
 
 void ReadCamera(const YAML::Node& node, const std::string& file, CameraOptions* c) {

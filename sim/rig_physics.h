@@ -85,6 +85,10 @@ struct SensorOptions {
   // per-pixel gain's sd in percent; DSNU, the per-pixel dark offset's sd in electrons. 0 = off.
   double prnu_percent = 0.0;
   double dsnu_e = 0.0;
+  // Inter-pixel crosstalk (charge diffusion between neighbouring pixels after the photons are
+  // counted, before read-out): the per-axis sd (px) of the lattice diffusion kernel each pixel's
+  // photo-electrons spread by (sim/sensor.h CrosstalkKernel). 0 = none.
+  double crosstalk_sigma_px = 0.0;
   std::uint64_t seed = 1;             // noise of frame n is drawn from (seed, n)
   bool IsValid(std::string* why) const;
   int AdcMax() const { return (1 << adc_bits) - 1; }

@@ -5,6 +5,9 @@
 #include <random>
 #include <vector>
 
+#include <boost/math/special_functions/bessel.hpp>
+#include <opencv2/imgproc.hpp>
+
 namespace irdist::sim {
 namespace {
 
@@ -40,6 +43,43 @@ void FillFromTable(cv::Mat& out, const std::vector<std::uint16_t>& table, std::u
 }
 
 }  // namespace
+
+std::vector<double> CrosstalkKernel(double sigma_px) {
+  IRDIST_CHECK(std::isfinite(sigma_px) && sigma_px >= 0.0, "crosstalk sigma must be >= 0");
+  if (sigma_px == 0.0) return {1.0};
+  const double t = sigma_px * sigma_px;
+  std::vector<double> w;
+  for (int n = 0;; ++n) {
+    // e^-t I_n(t): the lattice random walk's share n pixels away (exponentially scaled Bessel).
+    const double share = std::exp(-t) * boost::math::cyl_bessel_i(n, t);
+    if (n > 0 && share < 1e-9) break;
+    w.push_back(share);
+  }
+  double sum = w[0];
+  for (size_t n = 1; n < w.size(); ++n) sum += 2.0 * w[n];
+  for (double& share : w) share /= sum;
+  return w;
+}
+
+SignalWindow DiffuseCharge(const SignalWindow& electrons, double sigma_px, const cv::Rect& sensor) {
+  if (sigma_px == 0.0 || electrons.rect.empty()) return electrons;
+  const std::vector<double> half = CrosstalkKernel(sigma_px);
+  const int reach = static_cast<int>(half.size()) - 1;
+  cv::Mat1d kernel(2 * reach + 1, 1);
+  for (int n = -reach; n <= reach; ++n) kernel(n + reach) = half[std::abs(n)];
+  // The window with room for the charge to spread, zero outside the original one.
+  const cv::Rect grown(electrons.rect.x - reach, electrons.rect.y - reach,
+                       electrons.rect.width + 2 * reach, electrons.rect.height + 2 * reach);
+  cv::Mat1f padded = cv::Mat1f::zeros(grown.height, grown.width);
+  electrons.electrons.copyTo(padded(electrons.rect - grown.tl()));
+  cv::Mat1f spread;
+  cv::sepFilter2D(padded, spread, CV_32F, kernel, kernel, cv::Point(-1, -1), 0.0,
+                  cv::BORDER_CONSTANT);
+  SignalWindow out;
+  out.rect = grown & sensor;
+  out.electrons = spread(out.rect - grown.tl()).clone();
+  return out;
+}
 
 int FormatBits(PixelFormat format) {
   switch (format) {
@@ -158,9 +198,21 @@ void Sensor::Expose(const SignalWindow& signal, double exposure_s, std::uint64_t
   } else {
     FillBackground(dark_e, frame_index, format, black_dn, out);
   }
-  const cv::Rect window = signal.rect & roi;
+  const SignalWindow collected = CollectedCharge(signal);
+  const cv::Rect window = collected.rect & roi;
   if (window.empty()) return;
-  ExposeWindow(signal, window, dark_e, frame_index, format, roi, black_dn, out);
+  ExposeWindow(collected, window, dark_e, frame_index, format, roi, black_dn, out);
+}
+
+SignalWindow Sensor::CollectedCharge(const SignalWindow& signal) const {
+  const SensorOptions& s = options_;
+  SignalWindow photo = signal;
+  if (!gain_.empty() && !signal.rect.empty()) {  // PRNU: where the photon is absorbed
+    cv::Mat1f gained;  // a new buffer: `signal` (whose data photo shares) stays as it is
+    cv::multiply(signal.electrons, gain_(signal.rect), gained);
+    photo.electrons = gained;
+  }
+  return DiffuseCharge(photo, s.crosstalk_sigma_px, cv::Rect(0, 0, s.width_px, s.height_px));
 }
 
 void Sensor::FillBackground(double dark_e, std::uint64_t frame_index, PixelFormat format,
@@ -190,13 +242,14 @@ void Sensor::ExposeWindow(const SignalWindow& signal, cv::Rect window, double da
                           std::uint64_t frame_index, PixelFormat format, cv::Rect roi,
                           double black_dn, cv::Mat& out) const {
   const SensorOptions& s = options_;
-  // Exact draws inside the emitter's window, each pixel with its own PRNU gain and DSNU offset.
+  // Exact draws inside the emitter's window (`signal`: the collected charge, PRNU and crosstalk
+  // applied), each pixel with its own DSNU offset.
   std::mt19937_64 rng(FrameSeed(s.seed, frame_index, 3));
   std::normal_distribution<double> read(0.0, s.read_noise_e);
   for (int row = window.y; row < window.y + window.height; ++row) {
     const float* src = signal.electrons[row - signal.rect.y];
     for (int col = window.x; col < window.x + window.width; ++col) {
-      const double mean = src[col - signal.rect.x] * PixelGain(col, row) + dark_e;
+      const double mean = src[col - signal.rect.x] + dark_e;
       double electrons = 0.0;
       if (mean > 1e7) {
         electrons = std::normal_distribution<double>(mean, std::sqrt(mean))(rng);

@@ -13,8 +13,19 @@
 // is scaled by its own gain 1 + prnu_percent/100 x N(0,1) (PRNU) and its dark signal shifted by
 // dsnu_e x N(0,1) electrons (DSNU). Both maps are drawn once, in the constructor, from the seed's
 // own stream: the same camera (seed) shows the same pattern in every frame and every run.
+//
+// Inter-pixel crosstalk (crosstalk_sigma_px > 0): after the photons are counted, each
+// photo-electron diffuses to a neighbouring pixel before it is collected (charge diffusion in the
+// substrate). Modelled as a continuous-time random walk on the pixel lattice, each axis
+// independently: the share of a pixel's charge that lands n pixels away along an axis is
+// e^-t I_n(t), t = sigma^2 (I_n the modified Bessel function), whose variance is exactly sigma^2
+// (CrosstalkKernel). Electrons that move independently of one another turn a Poisson field into a
+// Poisson field (displacement theorem): the counts after diffusion are independent Poisson draws
+// of the diffused mean. So the mean photo-electron image (after PRNU, which acts where the photon
+// is absorbed) is diffused, then drawn; dark current and read noise are added after it.
 
 #include <cstdint>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -27,6 +38,16 @@ namespace irdist::sim {
 int FormatBits(PixelFormat format);
 // OpenCV type of an image in that format (CV_8UC1 or CV_16UC1).
 int FormatCvType(PixelFormat format);
+
+// The per-axis crosstalk kernel for sigma_px > 0: weights w[n] = e^-t I_n(t) (t = sigma_px^2) for
+// n = 0..reach, symmetric (w[-n] = w[n]), cut where the tail falls below 1e-9 and renormalised to
+// sum 1 over -reach..reach. sigma_px = 0 gives {1}.
+std::vector<double> CrosstalkKernel(double sigma_px);
+
+// The mean electron image after crosstalk: every pixel's electrons spread by the separable kernel.
+// The window grows by the kernel's reach on every side, clipped to `sensor` (charge that diffuses
+// off the sensor is lost); the total is conserved otherwise. sigma_px = 0 returns `electrons`.
+SignalWindow DiffuseCharge(const SignalWindow& electrons, double sigma_px, const cv::Rect& sensor);
 
 class Sensor {
  public:
@@ -55,6 +76,9 @@ class Sensor {
   std::uint16_t Pack(int adc, PixelFormat format) const;
 
  private:
+  // The mean photo-electrons the pixels collect: `signal` times each pixel's PRNU gain, then
+  // diffused by the crosstalk (DiffuseCharge).
+  SignalWindow CollectedCharge(const SignalWindow& signal) const;
   // ADC value for `electrons` collected (clipped at the full well) plus read noise (electrons).
   int ToAdc(double electrons, double read_noise_e, double black_dn) const;
   // The table-drawn background of a frame (no DSNU).

@@ -8,6 +8,9 @@
 // issue-6 figures. Usage:
 //   irdist_accuracy_study [--rig recipes/rigs/virtual.yaml] [--seed N] [--quick] [--crb-only]
 //                         [--nonlinearity A]
+// Rigs with a blur after the pixels (issue 20): --rig recipes/rigs/virtual-crosstalk.yaml (0.6 px
+// of inter-pixel crosstalk) and virtual-sharp.yaml (0.3 px optics, 0.8 px crosstalk); the bound
+// below includes the crosstalk (app/crb.cc diffuses the charge as the sensor does).
 // It also prints the Cramer-Rao bound on d and theta at 2.7 m (app/crb.h, the code behind
 // summary.yaml's `crb:`) for the Fig. 14 conditions, for one (t_r, t_n) pair and for a whole
 // bracket, beside the measured dispersion of Fig. 14.

@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "tests/estimator/disc_spectrum.h"
+
 namespace irdist {
 namespace {
 
@@ -182,6 +184,38 @@ TEST(BlobFit, TheModelsDerivativesAreItsFiniteDifferences) {
   EXPECT_EQ(d[0], 0.0);
   EXPECT_EQ(BlobEdgeValue(v, v[0] + 20.0, v[1], edge_sd, d), 0.0);  // far outside
   EXPECT_EQ(d[2], 0.0);
+}
+
+
+// The blob fit's size over the edge's sub-pixel phase (issue 20), noise free, on the independent
+// renderer of tests/estimator/disc_spectrum.h: the disc's radius swept over 5..6 px in 0.05 px
+// steps (the virtual rig's far end), the fit given the true total blur. On the virtual rig's mix
+// (0.7 px of optics, no crosstalk) its relative distance error stays within 0.05% peak to peak
+// (measured 0.018%). Not asserted, because not met (docs/estimator.md "The blob's size whatever
+// the edge's phase"): with crosstalk or a sharp lens its one-Gaussian edge model misses by
+// 0.06-0.33% peak to peak (0.13-0.15% at 0.3 px optics), while the aperture moments hold
+// (estimator/features EdgePhaseSweep).
+TEST(BlobFit, SizeDoesNotDependOnTheEdgesPhaseOnTheVirtualRigsBlur) {
+  const double optics = 0.7;
+  const double blur_var = optics * optics + 1.0 / 12.0;
+  std::vector<double> error;
+  for (int k = 0; k <= 20; ++k) {
+    testing::DiscBlob blob;
+    blob.cx = blob.cy = 19.5;  // on a pixel corner, as the rig's optical axis
+    blob.a = blob.b = 5.0 + 0.05 * k;
+    blob.optics_sigma_px = optics;
+    const cv::Mat frame =
+        testing::DiscFrame16(testing::RenderDiscSpectrum(blob, 40), 50000.0, 1000.0);
+    FeatureOptions options;
+    options.window_side_px = 32;
+    const Features f = ComputeFeatures(frame, 16, options);
+    ASSERT_TRUE(f.Usable());
+    const BlobFitResult fit = FitBlob(frame, 16, f, blur_var);
+    ASSERT_TRUE(fit.ok);
+    const double var = 0.5 * (fit.major_var_px2 + fit.minor_var_px2);
+    error.push_back(-0.5 * (var / (blob.a * blob.a / 4.0) - 1.0));  // d ~ 1 / size
+  }
+  EXPECT_LT(testing::PeakToPeak(error), 5e-4);
 }
 
 // Without a calibrated geometric model there is no blur to fit with: the features stay as they are.

@@ -213,3 +213,75 @@ TEST(Sensor, FixedPatternIsFixedPerCamera) {
 
 }  // namespace
 }  // namespace irdist::sim
+
+namespace irdist::sim {
+namespace {
+
+// A single pixel holding `electrons` at (x, y).
+SignalWindow Point(int x, int y, double electrons) {
+  SignalWindow w;
+  w.rect = cv::Rect(x, y, 1, 1);
+  w.electrons = cv::Mat1f(1, 1, static_cast<float>(electrons));
+  return w;
+}
+
+// Crosstalk spreads a point's charge by the lattice diffusion kernel: nothing is lost, the
+// spread is separable, and its variance along each axis is sigma^2 (what a Gaussian blur of that
+// sigma after the pixels adds to a blob's second moment).
+TEST(Sensor, CrosstalkConservesChargeAndSpreadsAPointBySigma) {
+  const cv::Rect sensor(0, 0, 1280, 1024);
+  for (double sigma : {0.3, 0.6, 1.0, 2.0}) {
+    const SignalWindow w = DiffuseCharge(Point(600, 500, 1000.0), sigma, sensor);
+    double sum = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+    for (int r = 0; r < w.electrons.rows; ++r) {
+      for (int c = 0; c < w.electrons.cols; ++c) {
+        const double v = w.electrons(r, c), x = w.rect.x + c - 600.0, y = w.rect.y + r - 500.0;
+        sum += v, sx += v * x, sy += v * y, sxx += v * x * x, syy += v * y * y, sxy += v * x * y;
+      }
+    }
+    EXPECT_NEAR(sum, 1000.0, 1e-3) << sigma;
+    EXPECT_NEAR(sx / sum, 0.0, 1e-6) << sigma;
+    EXPECT_NEAR(sxx / sum, sigma * sigma, 1e-4 * sigma * sigma) << sigma;
+    EXPECT_NEAR(syy / sum, sigma * sigma, 1e-4 * sigma * sigma) << sigma;
+    EXPECT_NEAR(sxy / sum, 0.0, 1e-6) << sigma;
+    // Separable: the corner share is the product of the axis shares.
+    const std::vector<double> k = CrosstalkKernel(sigma);
+    const cv::Point at = cv::Point(601, 501) - w.rect.tl();
+    EXPECT_NEAR(w.electrons(at) / 1000.0, k[1] * k[1], 1e-6) << sigma;
+  }
+  // At the sensor's edge the charge that diffuses off it is lost, and the window stays on it.
+  const SignalWindow edge = DiffuseCharge(Point(0, 0, 1000.0), 1.0, sensor);
+  EXPECT_EQ(edge.rect & sensor, edge.rect);
+  EXPECT_LT(cv::sum(edge.electrons)[0], 1000.0 * 0.75);
+  EXPECT_EQ(CrosstalkKernel(0.0), std::vector<double>{1.0});
+}
+
+// Exposed through the sensor, crosstalk moves the mean and keeps the counts Poisson: a lit pixel
+// loses its neighbours' share and the frames' temporal variance still follows K x mean.
+TEST(Sensor, CrosstalkActsOnTheCountedChargeBeforeTheNoise) {
+  SensorOptions o;
+  o.crosstalk_sigma_px = 0.6;
+  o.dark_current_e_per_s = 0.0;
+  const Sensor sensor(o);
+  const SignalWindow point = Point(640, 512, 8000.0);
+  const std::vector<double> k = CrosstalkKernel(0.6);
+  const double k_gain = o.system_gain_dn_per_e;
+  double centre = 0, neighbour = 0, centre2 = 0;
+  const int frames = 400;
+  for (int f = 0; f < frames; ++f) {
+    const cv::Mat img = sensor.Expose(point, 0.01, 1000 + f, PixelFormat::kMono12);
+    const double c = img.at<std::uint16_t>(512, 640) - o.black_level_dn;
+    centre += c, centre2 += c * c;
+    neighbour += img.at<std::uint16_t>(512, 641) - o.black_level_dn;
+  }
+  centre /= frames, neighbour /= frames;
+  const double var = centre2 / frames - centre * centre;
+  EXPECT_NEAR(centre / k_gain, 8000.0 * k[0] * k[0], 0.01 * 8000.0 * k[0] * k[0]);
+  EXPECT_NEAR(neighbour / k_gain, 8000.0 * k[0] * k[1], 0.03 * 8000.0 * k[0] * k[1]);
+  // Poisson after diffusion: var = K^2 (mean electrons + read^2) + 1/12, within sampling (~7%).
+  const double expected = k_gain * centre + k_gain * k_gain * o.read_noise_e * o.read_noise_e + 1.0 / 12;
+  EXPECT_NEAR(var, expected, 0.2 * expected);
+}
+
+}  // namespace
+}  // namespace irdist::sim

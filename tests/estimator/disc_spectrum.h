@@ -1,0 +1,137 @@
+#pragma once
+// An independent, noise-free renderer of a blob for the edge-phase tests (issue 20): a uniformly
+// bright elliptical disc, blurred by an optical Gaussian BEFORE the pixels sample it, integrated
+// over each pixel's square, then spread by inter-pixel crosstalk (a discrete Gaussian) AFTER the
+// sampling. Computed in the Fourier domain, exactly: the disc's transform is closed form
+// (|M| J1(2 pi |M^T f|) / |M^T f| for the ellipse x = M u of the unit disc), the optical blur
+// multiplies it by exp(-2 pi^2 s^2 |f|^2), the pixel's square by sinc(fx) sinc(fy); sampling at
+// the pixel centres folds the spectrum (the sum over the aliases f + k, k integer, which is what
+// makes a sharp image's sampled size depend on where its edge falls inside a pixel), and the
+// crosstalk multiplies the folded spectrum by its kernel's own transform. Nothing of the
+// virtual rig's renderer (strips, erf) or of the estimator's edge model is used.
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <vector>
+
+#include <boost/math/special_functions/bessel.hpp>
+#include <opencv2/core.hpp>
+
+namespace irdist::testing {
+
+struct DiscBlob {
+  double cx = 0.0, cy = 0.0;        // centre, pixel-centre coordinates (pixel (0,0) at 0)
+  double a = 5.0, b = 5.0;          // semi-axes, px
+  double angle_deg = 0.0;           // major axis direction from +x
+  double optics_sigma_px = 0.7;     // Gaussian blur before the pixels
+  double crosstalk_sigma_px = 0.0;  // discrete Gaussian after them (sampled, normalised)
+};
+
+// The crosstalk kernel's transform: a Gaussian of sigma sampled at the integers and normalised to
+// sum 1, over |n| <= 8 sigma + 1.
+inline double CrosstalkTransform(double sigma, double f) {
+  if (sigma <= 0.0) return 1.0;
+  const int reach = static_cast<int>(std::ceil(8.0 * sigma)) + 1;
+  double sum = 1.0, value = 1.0;
+  for (int n = 1; n <= reach; ++n) {
+    const double w = std::exp(-0.5 * n * n / (sigma * sigma));
+    sum += 2.0 * w;
+    value += 2.0 * w * std::cos(2.0 * M_PI * f * n);
+  }
+  return value / sum;
+}
+
+// The variance of that sampled, normalised Gaussian (below 0.5 px it is less than sigma^2).
+inline double CrosstalkVariance(double sigma) {
+  if (sigma <= 0.0) return 0.0;
+  const int reach = static_cast<int>(std::ceil(8.0 * sigma)) + 1;
+  double sum = 1.0, second = 0.0;
+  for (int n = 1; n <= reach; ++n) {
+    const double w = std::exp(-0.5 * n * n / (sigma * sigma));
+    sum += 2.0 * w;
+    second += 2.0 * w * n * n;
+  }
+  return second / sum;
+}
+
+// Peak to peak of a sweep's values.
+inline double PeakToPeak(const std::vector<double>& values) {
+  const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
+  return *hi - *lo;
+}
+
+// Mean value per pixel (disc of unit brightness: the sum is the disc's area pi a b) on an
+// side x side grid; the blob must lie well inside it (the grid is periodic).
+inline cv::Mat1d RenderDiscSpectrum(const DiscBlob& blob, int side) {
+  const double c = std::cos(blob.angle_deg * M_PI / 180.0);
+  const double s = std::sin(blob.angle_deg * M_PI / 180.0);
+  const int aliases = 3;  // |k| <= 3: beyond, the optical Gaussian (>= 0.3 px) leaves < 2e-5
+  std::vector<std::complex<double>> spectrum(static_cast<size_t>(side) * side);
+  for (int ky = 0; ky < side; ++ky) {
+    const double fy0 = (ky < side / 2 ? ky : ky - side) / static_cast<double>(side);
+    for (int kx = 0; kx < side; ++kx) {
+      const double fx0 = (kx < side / 2 ? kx : kx - side) / static_cast<double>(side);
+      std::complex<double> folded = 0.0;
+      for (int ay = -aliases; ay <= aliases; ++ay) {
+        for (int ax = -aliases; ax <= aliases; ++ax) {
+          const double fx = fx0 + ax, fy = fy0 + ay;
+          // M^T f for M = R diag(a, b): (a (c fx + s fy), b (-s fx + c fy)).
+          const double u = blob.a * (c * fx + s * fy), v = blob.b * (-s * fx + c * fy);
+          const double rho = std::hypot(u, v);
+          const double disc = rho < 1e-12 ? M_PI * blob.a * blob.b
+                                          : blob.a * blob.b *
+                                                boost::math::cyl_bessel_j(1, 2.0 * M_PI * rho) /
+                                                rho;
+          const double optics = std::exp(-2.0 * M_PI * M_PI * blob.optics_sigma_px *
+                                         blob.optics_sigma_px * (fx * fx + fy * fy));
+          const double sx = fx == 0.0 ? 1.0 : std::sin(M_PI * fx) / (M_PI * fx);
+          const double sy = fy == 0.0 ? 1.0 : std::sin(M_PI * fy) / (M_PI * fy);
+          const double phase = -2.0 * M_PI * (fx * blob.cx + fy * blob.cy);
+          folded += disc * optics * sx * sy * std::polar(1.0, phase);
+        }
+      }
+      folded *= CrosstalkTransform(blob.crosstalk_sigma_px, fx0) *
+                CrosstalkTransform(blob.crosstalk_sigma_px, fy0);
+      spectrum[static_cast<size_t>(ky) * side + kx] = folded;
+    }
+  }
+  // g(n) = (1 / side^2) sum_k folded(k / side) e^{2 pi i k n / side}, separably.
+  std::vector<std::complex<double>> rows(spectrum.size());
+  for (int ky = 0; ky < side; ++ky) {
+    for (int x = 0; x < side; ++x) {
+      std::complex<double> sum = 0.0;
+      for (int kx = 0; kx < side; ++kx) {
+        sum += spectrum[static_cast<size_t>(ky) * side + kx] *
+               std::polar(1.0, 2.0 * M_PI * kx * x / side);
+      }
+      rows[static_cast<size_t>(ky) * side + x] = sum;
+    }
+  }
+  cv::Mat1d out(side, side);
+  for (int y = 0; y < side; ++y) {
+    for (int x = 0; x < side; ++x) {
+      std::complex<double> sum = 0.0;
+      for (int ky = 0; ky < side; ++ky) {
+        sum += rows[static_cast<size_t>(ky) * side + x] *
+               std::polar(1.0, 2.0 * M_PI * ky * y / side);
+      }
+      out(y, x) = sum.real() / (static_cast<double>(side) * side);
+    }
+  }
+  return out;
+}
+
+// The rendered blob as a 16-bit frame: background + amplitude x value, rounded.
+inline cv::Mat DiscFrame16(const cv::Mat1d& value, double amplitude, double background) {
+  cv::Mat out(value.size(), CV_16UC1);
+  for (int y = 0; y < value.rows; ++y) {
+    for (int x = 0; x < value.cols; ++x) {
+      out.at<std::uint16_t>(y, x) = static_cast<std::uint16_t>(
+          std::clamp(std::round(background + amplitude * value(y, x)), 0.0, 65535.0));
+    }
+  }
+  return out;
+}
+
+}  // namespace irdist::testing
