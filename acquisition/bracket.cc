@@ -181,9 +181,11 @@ BracketCapture::Outcome BracketCapture::AwaitFrame(const PlannedFrame& plan, dou
     if (!frame) return Outcome::kTimeout;
     if (frame->status != FrameStatus::kOk) {
       // Its id and timestamp may be 0 or stale (a lost leader): counted by status, never matched.
+      // Some of its packets arrived, even when Aravis calls it a timeout (not completed within
+      // the frame retention): an incomplete frame, not a silent trigger.
       CountFailedBuffer(frame->status);
       out->status = frame->status;
-      return frame->status == FrameStatus::kTimeout ? Outcome::kTimeout : Outcome::kDamaged;
+      return Outcome::kDamaged;
     }
     if (!AcceptId(frame->frame_id, frame->timestamp_ns)) {
       ++stats_.duplicates;

@@ -109,8 +109,8 @@ struct CaptureStats {
   std::int64_t received = 0;           // frames delivered and accepted
   std::int64_t retried = 0;            // extra triggers fired
   std::int64_t lost = 0;               // frames given up after max_retries
-  std::int64_t timeouts = 0;           // attempts that saw no frame in time
-  std::int64_t damaged = 0;            // attempts whose frame came incomplete
+  std::int64_t timeouts = 0;           // attempts that saw nothing in time (no buffer at all)
+  std::int64_t damaged = 0;            // attempts whose frame came incomplete (a failed buffer)
   std::int64_t wrong_exposure = 0;     // attempts whose frame carried another exposure
   std::int64_t duplicates = 0;         // buffers discarded as stale or repeated (id/timestamp)
   std::int64_t late = 0;               // frames that arrived after their attempt timed out
