@@ -212,10 +212,9 @@ std::string CameraCheckTable(const std::vector<CameraCheck>& checks) {
   std::ostringstream out;
   int passed = 0;
   for (const CameraCheck& c : checks) {
-    char line[256];
-    std::snprintf(line, sizeof(line), "%-4s  %-24s  %s", c.passed ? "PASS" : "FAIL",
-                  c.name.c_str(), c.found.c_str());
-    out << line << "\n";
+    char head[64];
+    std::snprintf(head, sizeof(head), "%-4s  %-24s  ", c.passed ? "PASS" : "FAIL", c.name.c_str());
+    out << head << c.found << "\n";
     if (!c.passed) out << "      fix: " << c.fix << "\n";
     passed += c.passed ? 1 : 0;
   }
