@@ -170,6 +170,12 @@ std::vector<CameraCheck> SetupAndFrames(AravisCamera& camera) {
   const FeatureInfo source = camera.Describe("TriggerSource", selector ? "FrameStart" : "");
   CameraSettings settings;
   settings.pixel_format = formats.empty() ? "Mono12" : formats.front();
+  // A 512 x 512 region (or the whole sensor when smaller): the features, not the link's capacity.
+  for (const auto& [feature, side] : {std::pair{"Width", &settings.width},
+                                      std::pair{"Height", &settings.height}}) {
+    const FeatureInfo f = camera.Describe(feature);
+    *side = f.max ? std::min(512, static_cast<int>(*f.max)) : 0;
+  }
   const bool software = Offers(source, "Software") && camera.Describe("TriggerSoftware").present;
   settings.trigger_source = software ? "Software" : "Line1";
   for (const std::string& entry : source.entries) {
