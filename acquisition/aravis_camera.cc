@@ -1,10 +1,13 @@
 #include "acquisition/aravis_camera.h"
 
+#include "acquisition/pixel_format.h"
+
 #include <arv.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -74,14 +77,6 @@ FrameStatus MapStatus(ArvBufferStatus status) {
   return FrameStatus::kUnknown;
 }
 
-int BitDepthOf(const std::string& pixel_format) {
-  if (pixel_format == "Mono8") return 8;
-  if (pixel_format == "Mono10") return 10;
-  if (pixel_format == "Mono12") return 12;
-  if (pixel_format == "Mono14") return 14;
-  return 16;
-}
-
 std::string Join(const std::vector<std::string>& items) {
   std::string out;
   for (const auto& item : items) out += (out.empty() ? "" : ", ") + item;
@@ -103,7 +98,8 @@ const char* const kRecordedFeatures[] = {
     "ExposureTimeAbs",   "GainAuto",          "GainSelector",       "Gain",
     "GainRaw",           "BlackLevelAuto",    "BlackLevelSelector", "BlackLevel",
     "BlackLevelRaw",     "Gamma",             "GammaEnable",        "AcquisitionMode",
-    "AcquisitionFrameRate", "TriggerSelector", "TriggerMode",       "TriggerSource",
+    "AcquisitionFrameRate", "AcquisitionFrameRateAbs", "AcquisitionFrameRateEnable",
+    "TriggerSelector", "TriggerMode", "TriggerSource", "TriggerOverlap",
     "TriggerActivation", "TriggerDelay",      "TriggerDelayAbs",    "ChunkModeActive",
     "PayloadSize",       "GevSCPSPacketSize", "GevSCPD",            "DeviceTemperature",
     "SensorWidth",       "SensorHeight",
@@ -314,14 +310,10 @@ struct AravisCamera::Impl {
   // capability bit), the frame retention.
   void TuneGvStream(ArvStream* raw_stream) {
     if (!ARV_IS_GV_STREAM(raw_stream)) return;
-    GError* error = nullptr;
     const int socket_bytes = settings.socket_buffer_bytes > 0
                                  ? settings.socket_buffer_bytes
                                  : std::max(4 << 20, 2 * payload_bytes);
-    guint32 capabilities = 0;
-    arv_device_read_register(Device(), 0x0934, &capabilities, &error);  // GVCP capability
-    ThrowOnError(error, "reading the GVCP capability register", Name());
-    const bool resend = (capabilities & (1u << 2)) != 0;  // PACKETRESEND_CMD supported
+    const bool resend = DeclaresResend();
     g_object_set(raw_stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
                  "socket-buffer-size", socket_bytes, "packet-resend",
                  resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS : ARV_GV_STREAM_PACKET_RESEND_NEVER,
@@ -339,6 +331,16 @@ struct AravisCamera::Impl {
                         ": the stream did not keep its socket buffer / frame retention / packet request ratio "
                         "settings; this Aravis version is not supported (need 0.8.x).");
     }
+  }
+
+  // The GVCP capability register's PACKETRESEND_CMD bit (GigE Vision devices only).
+  bool DeclaresResend() {
+    if (arv_camera_is_gv_device(camera.get()) == FALSE) return false;
+    GError* error = nullptr;
+    guint32 capabilities = 0;
+    arv_device_read_register(Device(), 0x0934, &capabilities, &error);
+    ThrowOnError(error, "reading the GVCP capability register", Name());
+    return (capabilities & (1u << 2)) != 0;
   }
 
   void SetupStream() {
@@ -412,13 +414,90 @@ struct AravisCamera::Impl {
     }
   }
 
-  // Continuous acquisition, the FrameStart trigger (or the free-running frame rate).
+  void SetBoolean(const char* feature, bool value, const std::string& fix) {
+    GError* error = nullptr;
+    arv_camera_set_boolean(camera.get(), feature, value ? TRUE : FALSE, &error);
+    ThrowOnError(error, std::string("setting ") + feature, Name());
+    const bool back = arv_camera_get_boolean(camera.get(), feature, &error) != FALSE;
+    ThrowOnError(error, std::string("reading ") + feature, Name());
+    if (back != value) {
+      throw CameraError("camera " + Name() + ": " + feature + " was set to " +
+                        (value ? "true" : "false") + " but reads back " +
+                        (back ? "true" : "false") + ". " + fix);
+    }
+  }
+
+  // The exposure is the time irdist writes (not the trigger pulse's width, nor automatic).
+  void SetExposureModeTimed() {
+    if (!Has("ExposureMode")) return;  // SFNC: absent means Timed
+    SetEnum("ExposureMode", "Timed",
+            "irdist sets each frame's exposure time: the camera needs ExposureMode Timed (a "
+            "TriggerWidth mode would let the trigger pulse set the exposure).");
+  }
+
+  // Every trigger but FrameStart off (an AcquisitionStart or FrameBurstStart trigger left On by
+  // a previous user would hold frames back), then FrameStart selected.
+  void OtherTriggersOff() {
+    for (const std::string& selector : EnumEntries("TriggerSelector")) {
+      if (selector == "FrameStart") continue;
+      SetEnum("TriggerSelector", selector, "The camera must let irdist select its triggers.");
+      if (!Has("TriggerMode")) continue;  // that trigger has no mode to switch
+      SetEnum("TriggerMode", "Off",
+              "irdist triggers frames with FrameStart only: every other trigger must be Off.");
+    }
+    SetEnum("TriggerSelector", "FrameStart",
+            "irdist triggers each frame; the camera needs a FrameStart trigger.");
+  }
+
+  // No TriggerSelector: the SFNC allows it on a camera with one trigger, which then is the
+  // frame's. Its mode and source must be there (and its software command for Software).
+  void RequireSingleTrigger(const CameraSettings& s) const {
+    std::vector<std::string> missing;
+    for (const char* feature : {"TriggerMode", "TriggerSource"}) {
+      if (!Has(feature)) missing.emplace_back(feature);
+    }
+    if (s.triggered && s.trigger_source == "Software" && !Has("TriggerSoftware")) {
+      missing.emplace_back("TriggerSoftware");
+    }
+    if (missing.empty()) return;
+    throw CameraError("camera " + Name() + " has no TriggerSelector and no single trigger (" +
+                      Join(missing) + " missing); irdist triggers each frame. Use a camera with a "
+                      "FrameStart trigger (irdist camera-test lists what it lacks).");
+  }
+
+  // The frame-rate limit: off when triggered (each trigger starts a frame), the rig's rate when
+  // free-running with one, left alone otherwise.
+  void ConfigureFrameRate(const CameraSettings& s) {
+    const bool has_enable = Has("AcquisitionFrameRateEnable");
+    if (s.triggered) {
+      if (has_enable) {
+        SetBoolean("AcquisitionFrameRateEnable", false,
+                   "A frame-rate limit would hold triggered frames back.");
+      }
+      return;
+    }
+    if (!(s.frame_rate_hz > 0.0)) return;
+    if (has_enable) SetBoolean("AcquisitionFrameRateEnable", true, "The rig asks for a frame rate.");
+    GError* error = nullptr;
+    arv_camera_set_frame_rate(camera.get(), s.frame_rate_hz, &error);
+    ThrowOnError(error, "setting AcquisitionFrameRate", Name());
+    const double rate = arv_camera_get_frame_rate(camera.get(), &error);
+    ThrowOnError(error, "reading AcquisitionFrameRate", Name());
+    CheckFloat("AcquisitionFrameRate", s.frame_rate_hz, rate);
+  }
+
+  // Continuous acquisition, timed exposure, the FrameStart trigger alone (or the free-running
+  // frame rate).
   void ConfigureTrigger(const CameraSettings& s) {
     if (Has("AcquisitionMode")) {
       SetEnum("AcquisitionMode", "Continuous", "The camera must support continuous acquisition.");
     }
-    SetEnum("TriggerSelector", "FrameStart",
-            "irdist triggers each frame; the camera needs a FrameStart trigger.");
+    SetExposureModeTimed();
+    if (Has("TriggerSelector")) {
+      OtherTriggersOff();
+    } else {
+      RequireSingleTrigger(s);
+    }
     SetEnum("TriggerMode", s.triggered ? "On" : "Off",
             "irdist needs TriggerMode On/Off for FrameStart.");
     if (s.triggered) {
@@ -434,14 +513,107 @@ struct AravisCamera::Impl {
                 "overlap.");
       }
     }
-    if (!s.triggered && s.frame_rate_hz > 0.0) {
-      GError* error = nullptr;
-      arv_camera_set_frame_rate(camera.get(), s.frame_rate_hz, &error);
-      ThrowOnError(error, "setting AcquisitionFrameRate", Name());
-      const double rate = arv_camera_get_frame_rate(camera.get(), &error);
-      ThrowOnError(error, "reading AcquisitionFrameRate", Name());
-      CheckFloat("AcquisitionFrameRate", s.frame_rate_hz, rate);
+    ConfigureFrameRate(s);
+  }
+
+  // --- the state found, put back after a failed setup -------------------------------------------
+
+  // One writable feature's value as found, under a TriggerSelector entry (or none).
+  struct SavedFeature {
+    std::string selector;
+    std::string feature;
+    std::string value;
+  };
+
+  // The feature's node when the camera has it readable and writable now, else nullptr.
+  ArvGcFeatureNode* WritableNode(const char* feature) const {
+    if (!Has(feature)) return nullptr;
+    ArvGcNode* node = arv_device_get_feature(Device(), feature);
+    if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node)) return nullptr;
+    ArvGcFeatureNode* feature_node = ARV_GC_FEATURE_NODE(node);
+    if (arv_gc_feature_node_get_actual_access_mode(feature_node) != ARV_GC_ACCESS_MODE_RW) {
+      return nullptr;
     }
+    return feature_node;
+  }
+
+  std::optional<std::string> ValueAsString(ArvGcFeatureNode* node) const {
+    GError* error = nullptr;
+    const char* value = arv_gc_feature_node_get_value_as_string(node, &error);
+    if (error != nullptr) {
+      g_error_free(error);  // unreadable now: nothing to save or compare
+      return std::nullopt;
+    }
+    return OrEmpty(value);
+  }
+
+  void SaveFeature(const std::string& selector, const char* feature,
+                   std::vector<SavedFeature>* saved) const {
+    ArvGcFeatureNode* node = WritableNode(feature);
+    if (node == nullptr) return;
+    if (const auto value = ValueAsString(node)) saved->push_back({selector, feature, *value});
+  }
+
+  // The features Configure() may change, in the order they are put back.
+  std::vector<SavedFeature> SaveState() {
+    static const char* const kGlobal[] = {
+        "PixelFormat", "Width", "Height", "OffsetX", "OffsetY", "ExposureMode", "ExposureAuto",
+        "ExposureTime", "ExposureTimeAbs", "GainAuto", "Gain", "GainRaw", "BlackLevelAuto",
+        "BlackLevel", "BlackLevelRaw", "GammaEnable", "Gamma", "AcquisitionMode",
+        "AcquisitionFrameRateEnable", "AcquisitionFrameRate", "ChunkModeActive"};
+    static const char* const kPerTrigger[] = {"TriggerSource", "TriggerActivation",
+                                              "TriggerOverlap", "TriggerMode"};
+    std::vector<SavedFeature> saved;
+    for (const char* feature : kGlobal) SaveFeature("", feature, &saved);
+    if (WritableNode("TriggerSelector") == nullptr) {
+      for (const char* feature : kPerTrigger) SaveFeature("", feature, &saved);
+      return saved;
+    }
+    const std::string selected = GetString("TriggerSelector");
+    for (const std::string& selector : EnumEntries("TriggerSelector")) {
+      if (WriteFeature("", "TriggerSelector", selector).empty()) {
+        for (const char* feature : kPerTrigger) SaveFeature(selector, feature, &saved);
+      }
+    }
+    WriteFeature("", "TriggerSelector", selected);
+    saved.push_back({"", "TriggerSelector", selected});
+    return saved;
+  }
+
+  // Writes `value` (under `selector` when not empty) unless the feature holds it already;
+  // returns why it failed, or an empty string.
+  std::string WriteFeature(const std::string& selector, const char* feature,
+                           const std::string& value) {
+    if (!selector.empty()) {
+      const std::string why = WriteFeature("", "TriggerSelector", selector);
+      if (!why.empty()) return why;
+    }
+    ArvGcFeatureNode* node = WritableNode(feature);
+    if (node == nullptr) return std::string(feature) + " not writable";
+    if (ValueAsString(node) == value) return "";
+    GError* error = nullptr;
+    arv_gc_feature_node_set_value_from_string(node, value.c_str(), &error);
+    if (error == nullptr) return "";
+    const std::string why = std::string(feature) + ": " + error->message;
+    g_error_free(error);
+    return why;
+  }
+
+  // Puts back every saved feature (offsets at 0 first, so the saved size fits); returns the text
+  // that ends the setup's error message.
+  std::string RestoreState(const std::vector<SavedFeature>& saved) {
+    for (const char* offset : {"OffsetX", "OffsetY"}) {
+      if (WritableNode(offset) != nullptr) WriteFeature("", offset, "0");
+    }
+    std::vector<std::string> failed;
+    for (const SavedFeature& f : saved) {
+      const std::string why = WriteFeature(f.selector, f.feature.c_str(), f.value);
+      if (!why.empty()) failed.push_back((f.selector.empty() ? "" : f.selector + " ") + why);
+    }
+    if (failed.empty()) return " The camera was put back as it was found.";
+    return " The camera could not be put back as it was found (" + Join(failed) +
+           "); it is left with acquisition stopped: power-cycle it before another application "
+           "uses it.";
   }
 
   // Exposure chunks, where the camera offers them.
@@ -491,25 +663,17 @@ struct AravisCamera::Impl {
     ThrowOnError(error, "setting ExposureTime", Name());
   }
 
-  cv::Mat ToMat(ArvBuffer* buffer) const {
+  // The frame's image as CV_16UC1 (packed formats unpacked), or empty when the buffer does not
+  // hold a whole image of a supported format.
+  static cv::Mat ToMat(ArvBuffer* buffer) {
     const int width = arv_buffer_get_image_width(buffer);
     const int height = arv_buffer_get_image_height(buffer);
     size_t size = 0;
     const void* data = arv_buffer_get_image_data(buffer, &size);
-    const ArvPixelFormat format = arv_buffer_get_image_pixel_format(buffer);
-    cv::Mat out;
-    if (data == nullptr || width <= 0 || height <= 0) return out;
-    if (format == ARV_PIXEL_FORMAT_MONO_8) {
-      if (size < static_cast<size_t>(width) * height) return out;
-      cv::Mat view(height, width, CV_8UC1, const_cast<void*>(data));
-      view.convertTo(out, CV_16UC1);
-    } else if (format == ARV_PIXEL_FORMAT_MONO_10 || format == ARV_PIXEL_FORMAT_MONO_12 ||
-               format == ARV_PIXEL_FORMAT_MONO_14 || format == ARV_PIXEL_FORMAT_MONO_16) {
-      if (size < static_cast<size_t>(width) * height * 2) return out;
-      cv::Mat view(height, width, CV_16UC1, const_cast<void*>(data));
-      out = view.clone();
-    }
-    return out;
+    const PixelFormatInfo* format =
+        FindPixelFormat(static_cast<std::uint32_t>(arv_buffer_get_image_pixel_format(buffer)));
+    if (format == nullptr) return cv::Mat();
+    return UnpackMono(*format, static_cast<const std::uint8_t*>(data), size, width, height);
   }
 };
 
@@ -583,17 +747,25 @@ void AravisCamera::Configure(const CameraSettings& settings) {
   Impl& d = *impl_;
   d.settings = settings;
   d.stream.reset();
-  d.SetEnum("PixelFormat", settings.pixel_format,
-            "Set camera.pixel_format in the rig file to a Mono format the camera offers.");
-  d.pixel_format = settings.pixel_format;
-  d.bit_depth = BitDepthOf(settings.pixel_format);
-  d.ConfigureAnalog(settings);
-  d.SetRegion(settings);
-  d.ConfigureTrigger(settings);
-  d.ConfigureChunks();
-  d.ReadExposureBounds();
-  SetExposureUs(settings.exposure_us);
-  d.SetupStream();
+  d.configured = false;
+  const std::vector<Impl::SavedFeature> found = d.SaveState();
+  try {
+    d.SetEnum("PixelFormat", settings.pixel_format,
+              "Set camera.pixel_format in the rig file to a Mono format the camera offers.");
+    d.pixel_format = settings.pixel_format;
+    d.bit_depth = FindPixelFormat(settings.pixel_format)->bit_depth;
+    d.ConfigureAnalog(settings);
+    d.SetRegion(settings);
+    d.ConfigureTrigger(settings);
+    d.ConfigureChunks();
+    d.ReadExposureBounds();
+    SetExposureUs(settings.exposure_us);
+    d.SetupStream();
+  } catch (const CameraError& error) {
+    d.stream.reset();
+    d.exposure_max_us = 0.0;
+    throw CameraError(error.what() + d.RestoreState(found));
+  }
   d.configured = true;
 }
 
@@ -749,6 +921,45 @@ TransferStats AravisCamera::Transfer() const {
   out.failed_frames = get("n_failures");
   return out;
 }
+
+FeatureInfo AravisCamera::Describe(const std::string& feature, const std::string& selector) {
+  Impl& d = *impl_;
+  std::string selected;
+  if (!selector.empty()) {
+    selected = d.GetString("TriggerSelector");
+    const std::string why = d.WriteFeature("", "TriggerSelector", selector);
+    if (!why.empty()) throw CameraError("camera " + d.Name() + ": selecting " + why);
+  }
+  FeatureInfo info;
+  info.present = d.Has(feature.c_str());
+  ArvGcNode* node = info.present ? arv_device_get_feature(d.Device(), feature.c_str()) : nullptr;
+  if (node != nullptr && ARV_IS_GC_FEATURE_NODE(node)) {
+    ArvGcFeatureNode* feature_node = ARV_GC_FEATURE_NODE(node);
+    info.writable =
+        arv_gc_feature_node_get_actual_access_mode(feature_node) == ARV_GC_ACCESS_MODE_RW;
+    info.value = d.ValueAsString(feature_node).value_or("");
+    if (ARV_IS_GC_ENUMERATION(node)) info.entries = d.EnumEntries(feature.c_str());
+    GError* error = nullptr;
+    if (ARV_IS_GC_FLOAT(node)) {
+      info.min = arv_gc_float_get_min(ARV_GC_FLOAT(node), &error);
+      if (error == nullptr) info.max = arv_gc_float_get_max(ARV_GC_FLOAT(node), &error);
+    } else if (ARV_IS_GC_INTEGER(node) && !ARV_IS_GC_ENUMERATION(node)) {
+      info.min = static_cast<double>(arv_gc_integer_get_min(ARV_GC_INTEGER(node), &error));
+      if (error == nullptr) {
+        info.max = static_cast<double>(arv_gc_integer_get_max(ARV_GC_INTEGER(node), &error));
+      }
+    }
+    if (error != nullptr) {
+      g_error_free(error);  // bounds unknown: left out
+      info.min.reset();
+      info.max.reset();
+    }
+  }
+  if (!selected.empty()) d.WriteFeature("", "TriggerSelector", selected);
+  return info;
+}
+
+bool AravisCamera::DeclaresPacketResend() { return impl_->DeclaresResend(); }
 
 int AravisCamera::PayloadBytes() const { return impl_->payload_bytes; }
 int AravisCamera::PacketSizeBytes() const { return impl_->packet_size; }

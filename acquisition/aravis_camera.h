@@ -22,6 +22,15 @@ std::vector<DeviceInfo> ListCameras();
 // Throws CameraError listing the cameras found when none matches.
 DeviceInfo ResolveCamera(const std::string& id_serial_or_ip, const std::vector<DeviceInfo>& devices);
 
+// One GenICam feature as a camera describes it now (for `irdist camera-test`).
+struct FeatureInfo {
+  bool present = false;               // implemented and available now
+  bool writable = false;
+  std::string value;                  // as a string; empty when unreadable
+  std::vector<std::string> entries;   // an enumeration's available entries
+  std::optional<double> min, max;     // a number's bounds, when it has them
+};
+
 class AravisCamera final : public Camera {
  public:
   // Opens the camera named by `id_serial_or_ip`: an IPv4 address (e.g. "127.0.0.1", the only way
@@ -59,6 +68,12 @@ class AravisCamera final : public Camera {
   int warmup_discarded() const;
   // GigE Vision packet size in use (bytes), 0 for non-GigE cameras.
   int PacketSizeBytes() const;
+  // `feature` as the camera describes it, under TriggerSelector `selector` when not empty (the
+  // selector is put back afterwards).
+  FeatureInfo Describe(const std::string& feature, const std::string& selector = "");
+  // Whether the camera declares GVCP packet resend (GigE Vision capability register; false for
+  // other transports).
+  bool DeclaresPacketResend();
 
  private:
   struct Impl;

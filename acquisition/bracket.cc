@@ -86,6 +86,10 @@ std::string CaptureStats::BriefReport() const {
       << pipelined_frames << ", fired in readout " << fired_in_readout << ", exposure re-reads " << exposure_rereads << "], packets resent "
       << transfer.resent_packets << " of " << transfer.resend_requests << " asked, missing "
       << transfer.missing_packets;
+  if (!failed_buffers.empty()) {
+    out << ", failed buffers:";
+    for (const auto& [status, count] : failed_buffers) out << " " << status << " " << count;
+  }
   return out.str();
 }
 
@@ -129,8 +133,14 @@ void BracketCapture::DrainLateFrames() {
   }
 }
 
+void BracketCapture::CountFailedBuffer(FrameStatus status) {
+  ++stats_.failed_buffers[FrameStatusName(status)];
+}
+
 void BracketCapture::CountLeftover(const RawFrame& frame) {
-  if (AcceptId(frame.frame_id, frame.timestamp_ns)) {
+  if (frame.status != FrameStatus::kOk) {
+    CountFailedBuffer(frame.status);
+  } else if (AcceptId(frame.frame_id, frame.timestamp_ns)) {
     ++stats_.late;
   } else {
     ++stats_.duplicates;
@@ -169,6 +179,14 @@ BracketCapture::Outcome BracketCapture::AwaitFrame(const PlannedFrame& plan, dou
     if (left.count() <= 0) return Outcome::kTimeout;
     std::optional<RawFrame> frame = camera_.WaitFrame(left);
     if (!frame) return Outcome::kTimeout;
+    if (frame->status != FrameStatus::kOk) {
+      // Its id and timestamp may be 0 or stale (a lost leader): counted by status, never matched.
+      // Some of its packets arrived, even when Aravis calls it a timeout (not completed within
+      // the frame retention): an incomplete frame, not a silent trigger.
+      CountFailedBuffer(frame->status);
+      out->status = frame->status;
+      return Outcome::kDamaged;
+    }
     if (!AcceptId(frame->frame_id, frame->timestamp_ns)) {
       ++stats_.duplicates;
       continue;
@@ -177,9 +195,6 @@ BracketCapture::Outcome BracketCapture::AwaitFrame(const PlannedFrame& plan, dou
     out->timestamp_ns = frame->timestamp_ns;
     out->host_time_ns = frame->host_time_ns;
     out->status = frame->status;
-    if (frame->status != FrameStatus::kOk) {
-      return frame->status == FrameStatus::kTimeout ? Outcome::kTimeout : Outcome::kDamaged;
-    }
     out->image = std::move(frame->image);
     out->bit_depth = frame->bit_depth;
     out->exposure_from_chunk = frame->chunk_exposure_us.has_value();
@@ -253,17 +268,20 @@ void BracketCapture::DiscardFrameFiredAhead(const PlannedFrame& next) {
   }
 }
 
-void BracketCapture::CountFailure(Outcome outcome, BracketFrame* frame) {
+void BracketCapture::CountFailure(Outcome outcome, BracketFrame* frame, AttemptLog* log) {
   switch (outcome) {
     case Outcome::kTimeout:
       ++stats_.timeouts;
+      ++log->timeouts;
       frame->status = FrameStatus::kTimeout;
       break;
     case Outcome::kDamaged:
       ++stats_.damaged;
+      ++log->damaged;
       break;
     case Outcome::kWrongExposure:
       ++stats_.wrong_exposure;
+      ++log->wrong_exposure;
       break;
     case Outcome::kOk:
       break;
@@ -272,7 +290,7 @@ void BracketCapture::CountFailure(Outcome outcome, BracketFrame* frame) {
 
 bool BracketCapture::TakeFrame(const PlannedFrame& plan, const PlannedFrame* next,
                                const Trigger& trigger, BracketFrame* frame,
-                               bool* next_programmed) {
+                               bool* next_programmed, AttemptLog* log) {
   frame->plan = plan;
   frame->requested_exposure_us = plan.exposure_us;
   const bool pipelined = Pipelining();
@@ -286,7 +304,7 @@ bool BracketCapture::TakeFrame(const PlannedFrame& plan, const PlannedFrame* nex
         Attempt(plan, readback_us, trigger, pipelined ? next : nullptr, frame);
     *next_programmed = pipelined && next != nullptr;
     if (outcome == Outcome::kOk) return true;
-    CountFailure(outcome, frame);
+    CountFailure(outcome, frame, log);
     if (attempt >= options_.max_retries) return false;
     ++stats_.retried;
     if (outcome == Outcome::kTimeout) DrainLateFrames();
@@ -297,13 +315,31 @@ bool BracketCapture::TakeFrame(const PlannedFrame& plan, const PlannedFrame* nex
   }
 }
 
-std::string BracketCapture::FailureText(const PlannedFrame& plan, const BracketFrame& frame) const {
+std::string BracketCapture::FailureText(const PlannedFrame& plan, const AttemptLog& log,
+                                        const TransferStats& before) const {
+  const TransferStats now = camera_.Transfer();
+  const std::uint64_t missing = now.missing_packets - before.missing_packets;
+  const std::uint64_t asked = now.resend_requests - before.resend_requests;
+  const std::uint64_t resent = now.resent_packets - before.resent_packets;
   std::ostringstream why;
   why << "frame " << plan.frame_in_bracket << " (" << FrameRoleName(plan.role) << ", "
-      << plan.exposure_us << " us) failed " << (options_.max_retries + 1)
-      << " times, last outcome " << FrameStatusName(frame.status)
-      << "; check the trigger wiring (" << options_.trigger_source
-      << "), the network and frame_timeout";
+      << plan.exposure_us << " us) failed " << (options_.max_retries + 1) << " times ("
+      << log.timeouts << " nothing in time, " << log.damaged << " incomplete, "
+      << log.wrong_exposure << " wrong exposure)";
+  if (log.damaged > 0 || missing > 0 || asked > 0) {
+    why << ": packets were lost on the network (" << missing << " missing, " << asked
+        << " asked again, " << resent << " resent): check the cable and the network card, the "
+        << "MTU (jumbo frames) against the packet size (camera.packet_size), the socket buffer "
+        << "and the camera's packet delay (GevSCPD); then the trigger wiring ("
+        << options_.trigger_source << ")";
+  } else if (log.timeouts > 0 && log.wrong_exposure == 0) {
+    why << ": nothing arrived: check the trigger wiring (" << options_.trigger_source
+        << "), the camera's trigger source and activation, that the trigger output fires, and "
+        << "frame_timeout";
+  } else {
+    why << ": the camera did not take the exposure written: check that no other application "
+        << "controls it and that the exposures are within its range and increments";
+  }
   return why.str();
 }
 
@@ -314,7 +350,11 @@ void BracketCapture::PrepareStream(const Trigger& trigger) {
       ++stats_.warmup;
       trigger(-1);
       if (auto frame = camera_.WaitFrame(options_.frame_timeout)) {
-        AcceptId(frame->frame_id, frame->timestamp_ns);
+        if (frame->status == FrameStatus::kOk) {
+          AcceptId(frame->frame_id, frame->timestamp_ns);
+        } else {
+          CountFailedBuffer(frame->status);
+        }
       }
     }
   }
@@ -332,16 +372,18 @@ BracketResult BracketCapture::Capture(const Trigger& trigger, const FrameSink& o
   last_frame_ = static_cast<int>(plan.size()) - 1;
   // Pipelined, the first exposure is programmed (and read back) while the camera is idle.
   if (Pipelining()) ProgramExposure(plan.front().exposure_us);
+  const TransferStats transfer_before = camera_.Transfer();
   BracketResult result;
   for (size_t i = 0; i < plan.size(); ++i) {
     ++stats_.requested;
     const PlannedFrame* next = i + 1 < plan.size() ? &plan[i + 1] : nullptr;
     BracketFrame frame;
     bool next_programmed = false;
-    if (!TakeFrame(plan[i], next, trigger, &frame, &next_programmed)) {
+    AttemptLog log;
+    if (!TakeFrame(plan[i], next, trigger, &frame, &next_programmed, &log)) {
       ++stats_.lost;
       ++stats_.brackets_failed;
-      result.failure = FailureText(plan[i], frame);
+      result.failure = FailureText(plan[i], log, transfer_before);
       result.complete = false;
       stats_.transfer = camera_.Transfer();
       return result;

@@ -26,6 +26,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -108,8 +109,8 @@ struct CaptureStats {
   std::int64_t received = 0;           // frames delivered and accepted
   std::int64_t retried = 0;            // extra triggers fired
   std::int64_t lost = 0;               // frames given up after max_retries
-  std::int64_t timeouts = 0;           // attempts that saw no frame in time
-  std::int64_t damaged = 0;            // attempts whose frame came incomplete
+  std::int64_t timeouts = 0;           // attempts that saw nothing in time (no buffer at all)
+  std::int64_t damaged = 0;            // attempts whose frame came incomplete (a failed buffer)
   std::int64_t wrong_exposure = 0;     // attempts whose frame carried another exposure
   std::int64_t duplicates = 0;         // buffers discarded as stale or repeated (id/timestamp)
   std::int64_t late = 0;               // frames that arrived after their attempt timed out
@@ -119,6 +120,10 @@ struct CaptureStats {
   std::int64_t pipelined_frames = 0;   // frames whose successor's exposure was written in readout
   std::int64_t fired_in_readout = 0;   // triggers fired during the previous frame's readout
   std::int64_t exposure_rereads = 0;   // read-backs that still showed the old value
+  // Failed buffers the stream handed back, by FrameStatusName (missing_packets, timeout, ...).
+  // A failed buffer's frame id and timestamp are not trusted (a lost leader packet leaves them 0
+  // or stale): they never move the frame identity that tells duplicates apart.
+  std::map<std::string, std::int64_t> failed_buffers;
   TransferStats transfer;              // the camera's packet counters (resends, missing packets)
   std::string BriefReport() const;
 };
@@ -149,13 +154,19 @@ class BracketCapture {
 
  private:
   enum class Outcome { kOk, kTimeout, kDamaged, kWrongExposure };
+  // The outcomes of one planned frame's attempts, for the message when it is given up.
+  struct AttemptLog {
+    int timeouts = 0;
+    int damaged = 0;
+    int wrong_exposure = 0;
+  };
   void PrepareStream(const Trigger& trigger);
   bool Pipelining() const;
   // Writes `exposure_us` and reads it back until the camera reports it; returns the read-back.
   double ProgramExposure(double exposure_us);
   // Takes `plan` with retries; `next` (or null) is the exposure to program during its readout.
   bool TakeFrame(const PlannedFrame& plan, const PlannedFrame* next, const Trigger& trigger,
-                 BracketFrame* frame, bool* next_programmed);
+                 BracketFrame* frame, bool* next_programmed, AttemptLog* log);
   Outcome Attempt(const PlannedFrame& plan, double readback_us, const Trigger& trigger,
                   const PlannedFrame* next, BracketFrame* out);
   // Fires `plan`'s trigger unless it was fired during the previous frame's readout; returns a
@@ -168,11 +179,15 @@ class BracketCapture {
   void DiscardFrameFiredAhead(const PlannedFrame& next);
   Outcome AwaitFrame(const PlannedFrame& plan, double readback_us,
                      std::chrono::steady_clock::time_point deadline, BracketFrame* out);
-  void CountFailure(Outcome outcome, BracketFrame* frame);
-  std::string FailureText(const PlannedFrame& plan, const BracketFrame& frame) const;
+  void CountFailure(Outcome outcome, BracketFrame* frame, AttemptLog* log);
+  void CountFailedBuffer(FrameStatus status);
+  // Why `plan` was given up: the network first when packets were lost (incomplete buffers, or
+  // packets missing or asked again since `before`), the trigger when nothing arrived.
+  std::string FailureText(const PlannedFrame& plan, const AttemptLog& log,
+                          const TransferStats& before) const;
   bool AcceptId(std::uint64_t frame_id, std::uint64_t timestamp_ns);
   void DrainLateFrames();
-  // A frame that is no attempt's: counted late (a newer id) or a duplicate.
+  // A frame that is no attempt's: a failed buffer (by status), late (a newer id) or a duplicate.
   void CountLeftover(const RawFrame& frame);
 
   Camera& camera_;

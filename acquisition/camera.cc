@@ -1,5 +1,7 @@
 #include "acquisition/camera.h"
 
+#include "acquisition/pixel_format.h"
+
 namespace irdist {
 
 bool CameraSettings::IsValid(std::string* why) const {
@@ -7,9 +9,8 @@ bool CameraSettings::IsValid(std::string* why) const {
     if (why != nullptr) *why = message;
     return false;
   };
-  if (pixel_format != "Mono8" && pixel_format != "Mono10" && pixel_format != "Mono12" &&
-      pixel_format != "Mono14" && pixel_format != "Mono16") {
-    return fail("pixel_format must be Mono8, Mono10, Mono12, Mono14 or Mono16, got '" +
+  if (FindPixelFormat(pixel_format) == nullptr) {
+    return fail("pixel_format must be one of " + SupportedPixelFormatNames() + ", got '" +
                 pixel_format + "'");
   }
   if (triggered && trigger_source.empty()) return fail("trigger_source is empty");

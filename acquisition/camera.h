@@ -45,8 +45,9 @@ struct DeviceInfo {
 
 // How to configure a camera for irdist (from the rig file's camera: section).
 struct CameraSettings {
-  // GenICam PixelFormat: "Mono8", "Mono12" or "Mono16". Frames are always delivered as CV_16UC1
-  // with the values the camera sent (not rescaled).
+  // GenICam PixelFormat: Mono8, Mono10, Mono10p, Mono12, Mono12p, Mono12Packed, Mono14 or Mono16
+  // (acquisition/pixel_format.h). Frames are always delivered as CV_16UC1 with the values the
+  // camera sent (packed formats unpacked, never rescaled).
   std::string pixel_format = "Mono12";
   // FrameStart trigger source: "Line1" (wired to the station) or "Software" (tests).
   std::string trigger_source = "Line1";

@@ -192,10 +192,11 @@ void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int
   }
   if (!result.complete) {
     m.DropStaged();
-    throw CameraError("bracket " + std::to_string(pose.index) + " incomplete twice (" +
-                      result.failure + "; " + m.capture->stats().BriefReport() +
-                      "). Check the trigger wiring (camera " + m.setup.trigger_source +
-                      ") and the camera link, then resume the run.");
+    // The failure names the cause: the network when packets were lost, the trigger when nothing
+    // arrived.
+    throw CameraError("bracket " + std::to_string(pose.index) + " incomplete twice: " +
+                      result.failure + " (" + m.capture->stats().BriefReport() +
+                      "). Then resume the run.");
   }
   // A complete bracket took its last frame, whose readout ran the read-back.
   IRDIST_CHECK(measured_ma.has_value(), "the current was not read during the last readout");

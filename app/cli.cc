@@ -6,6 +6,7 @@
 #include <ostream>
 #include <sstream>
 
+#include "app/camera_test.h"
 #include "app/measure.h"
 #include "app/offline.h"
 #include "app/view.h"
@@ -52,6 +53,8 @@ constexpr SubcommandInfo kSubcommands[] = {
      "the station composition (station/)"},
     {"station-test", "Check a station board against docs/station-protocol.md (pass/fail table)",
      "the station conformance suite (station/)"},
+    {"camera-test", "Check a camera's features against what irdist needs (pass/fail table)",
+     "the camera (acquisition/)"},
 };
 
 const SubcommandInfo& Info(const std::string& name) {
@@ -156,6 +159,7 @@ Handlers DefaultHandlers() {
   handlers.view = RunView;
   handlers.station = RunStation;
   handlers.station_test = RunStationTest;
+  handlers.camera_test = RunCameraTest;
   return handlers;
 }
 
@@ -176,6 +180,7 @@ struct ParsedArgs {
   ViewArgs view;
   StationArgs station;
   StationTestArgs station_test;
+  CameraTestArgs camera_test;
 };
 
 // The subcommands as they are registered: each with the call that runs it.
@@ -391,7 +396,7 @@ int ParseAndRun(CLI::App& app, const CommandTable& table, int argc, const char* 
 
 }  // namespace
 
-// `irdist station` and `irdist station-test`.
+// `irdist station`, `irdist station-test` and `irdist camera-test`.
 void AddStationCommands(CommandTable& table) {
   StationArgs& station = table.args().station;
   CLI::App* sub = table.Add("station", table.handlers().station, station);
@@ -407,6 +412,12 @@ void AddStationCommands(CommandTable& table) {
   sub = table.Add("station-test", table.handlers().station_test, test);
   sub->add_option("port", test.port, "Serial port of the board (e.g. /dev/ttyUSB0)")->required();
   sub->add_option("--baud", test.baud, "Serial speed, bit/s")->capture_default_str();
+  CameraTestArgs& camera = table.args().camera_test;
+  sub = table.Add("camera-test", table.handlers().camera_test, camera);
+  sub->add_option("camera", camera.camera,
+                  "IP address, Aravis id or serial (default: the running `irdist sim` camera)");
+  sub->add_option("--rig", camera.rig, "Rig whose running sim to test, without CAMERA")
+      ->capture_default_str();
 }
 
 int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& handlers) {

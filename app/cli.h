@@ -31,6 +31,7 @@ struct Handlers {
   std::function<void(const ViewArgs&, CommandIo)> view;
   std::function<void(const StationArgs&, CommandIo)> station;
   std::function<void(const StationTestArgs&, CommandIo)> station_test;
+  std::function<void(const CameraTestArgs&, CommandIo)> camera_test;
 };
 
 // The handlers of this build: every command (app/run.h, app/offline.h, app/tools.h).

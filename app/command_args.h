@@ -119,6 +119,12 @@ struct StationTestArgs {
   int baud = 115200;
 };
 
+// `irdist camera-test [CAMERA]`: a camera's features against irdist's needs (app/camera_test.h).
+struct CameraTestArgs {
+  std::string camera;           // IP address, Aravis id or serial; empty = the running sim's
+  std::string rig = "virtual";  // --rig: whose running `irdist sim` camera, without CAMERA
+};
+
 struct DevicesArgs {
   bool discover = false;  // --discover: GigE/USB camera discovery (broadcasts on every interface)
 };

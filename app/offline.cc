@@ -10,6 +10,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "acquisition/pixel_format.h"
 #include "acquisition/recording.h"
 #include "app/crb.h"
 #include "app/position.h"
@@ -112,11 +113,8 @@ std::string ParentOf(const std::string& dir) {
 }  // namespace
 
 int BitDepthOfPixelFormat(const std::string& pixel_format) {
-  if (pixel_format == "Mono8") return 8;
-  if (pixel_format == "Mono10") return 10;
-  if (pixel_format == "Mono12") return 12;
-  if (pixel_format == "Mono14") return 14;
-  return 16;
+  const PixelFormatInfo* format = FindPixelFormat(pixel_format);  // packed ones too (Mono12p)
+  return format == nullptr ? 16 : format->bit_depth;
 }
 
 Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options,

@@ -84,7 +84,8 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   CameraConfig camera;
   camera.id = map.String("id", camera.id);
   camera.pixel_format = map.String("pixel_format", camera.pixel_format);
-  OneOf(map, "pixel_format", camera.pixel_format, {"Mono8", "Mono10", "Mono12", "Mono16"});
+  OneOf(map, "pixel_format", camera.pixel_format,
+        {"Mono8", "Mono10", "Mono10p", "Mono12", "Mono12p", "Mono12Packed", "Mono16"});
   camera.trigger_source = map.String("trigger_source", camera.trigger_source);
   camera.trigger_activation = map.String("trigger_activation", camera.trigger_activation);
   OneOf(map, "trigger_activation", camera.trigger_activation, {"RisingEdge", "FallingEdge"});

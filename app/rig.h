@@ -27,7 +27,7 @@ struct CameraIntrinsics {
 
 struct CameraConfig {
   std::string id = "auto";               // Aravis device id, serial or IP; "auto" = the only one
-  std::string pixel_format = "Mono12";   // Mono8, Mono10, Mono12 or Mono16
+  std::string pixel_format = "Mono12";   // Mono8, Mono10(p), Mono12(p), Mono12Packed or Mono16
   std::string trigger_source = "Line1";  // camera input wired to the station's trigger output
   std::string trigger_activation = "RisingEdge";  // RisingEdge or FallingEdge
   int black_level = 0;                            // camera black level register, >= 0

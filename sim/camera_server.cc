@@ -61,6 +61,7 @@ constexpr guint32 kSourceSoftware = 1;
 constexpr guint32 kSourceLine1 = 2;
 constexpr guint32 kPixelMono8 = 0x01080001;
 constexpr guint32 kPixelMono12 = 0x01100005;
+constexpr guint32 kPixelMono12p = 0x010c0047;  // PFNC: 12-bit, packed LSB-first
 constexpr guint32 kPixelMono16 = 0x01100007;
 
 // GVCP (GigE Vision control protocol) commands and status codes.
@@ -108,8 +109,8 @@ std::uint32_t GetU32(const std::uint8_t* p) {
   return (static_cast<std::uint32_t>(GetU16(p)) << 16) | GetU16(p + 2);
 }
 
-// A UDP socket bound to 127.0.0.1:port (0 = any port); -1 with `why` set on failure.
-int BindLoopbackUdp(int port, std::string* why) {
+// A UDP socket bound to address:port (0 = any port); -1 with `why` set on failure.
+int BindUdp(std::uint32_t address, int port, std::string* why) {
   const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (fd < 0) {
     *why = std::string("socket(): ") + std::strerror(errno);
@@ -118,7 +119,7 @@ int BindLoopbackUdp(int port, std::string* why) {
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   addr.sin_port = htons(static_cast<std::uint16_t>(port));
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_addr.s_addr = htonl(address);
   if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) != 0) {
     *why = std::strerror(errno);
     ::close(fd);
@@ -127,15 +128,33 @@ int BindLoopbackUdp(int port, std::string* why) {
   return fd;
 }
 
+int BindLoopbackUdp(int port, std::string* why) { return BindUdp(INADDR_LOOPBACK, port, why); }
+
 PixelFormat FormatOf(guint32 pixel_format) {
   switch (pixel_format) {
     case kPixelMono12:
+    case kPixelMono12p:
       return PixelFormat::kMono12;
     case kPixelMono16:
       return PixelFormat::kMono16;
     case kPixelMono8:
     default:
       return PixelFormat::kMono8;
+  }
+}
+
+// GenICam PFNC Mono12p: the pixels as one bit stream, each pixel's bit 0 first, bit k of the
+// stream being bit k % 8 of byte k / 8: two pixels a, b in three bytes
+// [a bits 0-7][b bits 0-3 << 4 | a bits 8-11][b bits 4-11].
+void PackMono12p(const cv::Mat& pixels, std::uint8_t* out) {
+  const std::size_t count = pixels.total();
+  const auto* p = pixels.ptr<std::uint16_t>();
+  for (std::size_t i = 0; i < count; i += 2) {
+    const unsigned a = p[i] & 0xfffu;
+    const unsigned b = i + 1 < count ? p[i + 1] & 0xfffu : 0u;
+    *out++ = static_cast<std::uint8_t>(a & 0xffu);
+    *out++ = static_cast<std::uint8_t>((a >> 8) | ((b & 0xfu) << 4));
+    if (i + 1 < count) *out++ = static_cast<std::uint8_t>(b >> 4);
   }
 }
 
@@ -198,6 +217,10 @@ struct CameraServer::Impl {
 
   int control_fd = -1;
   int stream_fd = -1;
+  // GigE Vision discovery is broadcast: a host's DISCOVERY_CMD to 255.255.255.255:3956 reaches
+  // the camera on this socket; the acknowledge goes back from the control port.
+  int discovery_fd = -1;
+  std::atomic<bool> packet_resend{true};
   std::thread control_thread;
   std::thread sensor_thread;
 
@@ -348,7 +371,8 @@ struct CameraServer::Impl {
     const std::uint8_t* data = packet + 8;
     if (length > size - 8) return AckHeader(kStatusInvalidParameter, command, 0, request_id);
     if (command == kCmdPacketResend) {
-      if (length >= 12) Resend(GetU32(data), GetU32(data + 4), GetU32(data + 8));
+      // A camera without resend does not know the command (GVCP: no acknowledge is ever sent).
+      if (packet_resend && length >= 12) Resend(GetU32(data), GetU32(data + 4), GetU32(data + 8));
       return {};
     }
     std::lock_guard<std::mutex> lock(reg_mutex);
@@ -448,9 +472,10 @@ struct CameraServer::Impl {
         std::lock_guard<std::mutex> lock(state_mutex);
         if (stopping) return;
       }
-      pollfd fd{control_fd, POLLIN, 0};
-      const int events = ::poll(&fd, 1, 5);
-      if (events > 0 && (fd.revents & POLLIN) != 0) ServeOne(packet);
+      pollfd fds[2] = {{control_fd, POLLIN, 0}, {discovery_fd, POLLIN, 0}};
+      const int events = ::poll(fds, 2, 5);
+      if (events > 0 && (fds[0].revents & POLLIN) != 0) ServeOne(packet);
+      if (events > 0 && (fds[1].revents & POLLIN) != 0) ServeDiscovery(packet);
       ApplyDueWrites();
       ExpireController();
     }
@@ -477,6 +502,22 @@ struct CameraServer::Impl {
       if (busy) ++stats.requests_during_frame;
     }
     if (fire) OfferTrigger(kSourceSoftware);
+  }
+
+  // A broadcast command: only DISCOVERY_CMD is answered (GigE Vision), from the control port to
+  // the sender.
+  void ServeDiscovery(std::vector<std::uint8_t>& packet) {
+    sockaddr_in from{};
+    socklen_t from_size = sizeof(from);
+    const ssize_t got = ::recvfrom(discovery_fd, packet.data(), packet.size(), 0,
+                                   reinterpret_cast<sockaddr*>(&from), &from_size);
+    if (got < 8 || packet[0] != kGvcpKey || GetU16(packet.data() + 2) != kCmdDiscovery) return;
+    bool fire = false;
+    const std::vector<std::uint8_t> ack =
+        Serve(packet.data(), static_cast<std::size_t>(got), from, &fire);
+    // A host gone meanwhile makes this fail; a camera does not care.
+    (void)::sendto(control_fd, ack.data(), ack.size(), 0, reinterpret_cast<sockaddr*>(&from),
+                   from_size);
   }
 
   // --- stream channel ----------------------------------------------------------------------------
@@ -632,11 +673,20 @@ struct CameraServer::Impl {
     c.pose_end = world.Pose();
     c.junction_rise_k =
         renderer.scene().JunctionRiseK(world.CurrentHistory(), t0 + 0.5 * exposure_s);
-    const std::size_t bytes_per_pixel = format == PixelFormat::kMono8 ? 1 : 2;
-    payload.assign(static_cast<std::size_t>(s.width) * s.height * bytes_per_pixel, 0);
-    if (s.width > 0 && s.height > 0) {
-      cv::Mat out(s.height, s.width, FormatCvType(format), payload.data());
-      renderer.Render(c, index, format, cv::Point(s.offset_x, s.offset_y), out);
+    const std::size_t pixels = static_cast<std::size_t>(std::max(s.width, 0)) *
+                               static_cast<std::size_t>(std::max(s.height, 0));
+    if (s.pixel_format == kPixelMono12p) {
+      cv::Mat out(s.height, s.width, FormatCvType(format));
+      if (pixels > 0) renderer.Render(c, index, format, cv::Point(s.offset_x, s.offset_y), out);
+      payload.assign((pixels * 12 + 7) / 8, 0);
+      if (pixels > 0) PackMono12p(out, payload.data());
+    } else {
+      const std::size_t bytes_per_pixel = format == PixelFormat::kMono8 ? 1 : 2;
+      payload.assign(pixels * bytes_per_pixel, 0);
+      if (pixels > 0) {
+        cv::Mat out(s.height, s.width, FormatCvType(format), payload.data());
+        renderer.Render(c, index, format, cv::Point(s.offset_x, s.offset_y), out);
+      }
     }
     FrameRecord record;
     record.index = index;
@@ -647,7 +697,7 @@ struct CameraServer::Impl {
     record.bias_ma = c.pose_start.bias_ma;
     record.junction_rise_k = c.junction_rise_k;
     record.moving = c.pose_start.moving || c.pose_end.moving;
-    record.format = PixelFormatName(format);
+    record.format = s.pixel_format == kPixelMono12p ? "Mono12p" : PixelFormatName(format);
     return record;
   }
 
@@ -753,7 +803,8 @@ struct CameraServer::Impl {
     WriteLocked(kRegBlackLevel, 0);
     WriteLocked(kRegChunkModeActive, 0);
     WriteLocked(kRegChunkEnableExposure, 0);
-    WriteLocked(kRegGvcpCapability, kCapabilityWriteMemory | kCapabilityPacketResend);
+    WriteLocked(kRegGvcpCapability,
+                kCapabilityWriteMemory | (packet_resend ? kCapabilityPacketResend : 0u));
     WriteLocked(kRegDeviceTemperature,
                 static_cast<guint32>(static_cast<gint32>(std::lround(s.temperature_c * 1000))));
   }
@@ -815,16 +866,26 @@ void CameraServer::Start() {
     ::close(control_fd);
     throw CameraServerError("virtual camera: cannot open its stream socket: " + why);
   }
+  const int discovery_fd = BindUdp(INADDR_BROADCAST, kGvcpPort, &why);
+  if (discovery_fd < 0) {
+    ::close(control_fd);
+    ::close(stream_fd);
+    throw CameraServerError("virtual camera: cannot listen for GigE Vision discovery on "
+                            "255.255.255.255:3956 (" + why + "): stop the other GigE Vision "
+                            "device or fake camera running on this host");
+  }
   try {
     d.fake = NewRegisterMap(d.physics.camera.serial);
   } catch (...) {
     ::close(control_fd);
     ::close(stream_fd);
+    ::close(discovery_fd);
     throw;
   }
   d.InitRegisters();
   d.control_fd = control_fd;
   d.stream_fd = stream_fd;
+  d.discovery_fd = discovery_fd;
   d.stopping = false;
   d.control_thread = std::thread([&d] { d.ControlLoop(); });
   d.sensor_thread = std::thread([&d] { d.SensorLoop(); });
@@ -845,8 +906,10 @@ void CameraServer::Stop() {
   if (d.sensor_thread.joinable()) d.sensor_thread.join();
   ::close(d.control_fd);
   ::close(d.stream_fd);
+  ::close(d.discovery_fd);
   d.control_fd = -1;
   d.stream_fd = -1;
+  d.discovery_fd = -1;
   std::lock_guard<std::mutex> lock(d.reg_mutex);
   if (d.fake != nullptr) g_object_unref(d.fake);
   d.fake = nullptr;
@@ -862,6 +925,14 @@ void CameraServer::SetDropFrameRate(double rate) {
 void CameraServer::SetLostPacketRatio(double ratio) {
   IRDIST_CHECK(ratio >= 0.0 && ratio <= 1.0, "lost packet ratio must lie in [0, 1]");
   impl_->lost_ratio = ratio;
+}
+
+void CameraServer::SetPacketResend(bool enabled) {
+  impl_->packet_resend = enabled;
+  std::lock_guard<std::mutex> lock(impl_->reg_mutex);
+  const guint32 capability = impl_->ReadLocked(kRegGvcpCapability);
+  impl_->WriteLocked(kRegGvcpCapability, enabled ? capability | kCapabilityPacketResend
+                                                 : capability & ~kCapabilityPacketResend);
 }
 
 void CameraServer::SetExposureWriteDelayMs(double max_delay_ms) {

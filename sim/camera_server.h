@@ -17,8 +17,11 @@
 // time, scaled by the rig's time_scale) before it is sent.
 //
 // With ChunkModeActive and ChunkEnable[ExposureTime], each frame carries ChunkExposureTime (the
-// exposure it was taken with). Lost packets are resent on request (GVCP PACKETRESEND) from the last
-// frames kept in memory.
+// exposure it was taken with). Lost packets are resent on request (GVCP PACKETRESEND, declared in
+// the GVCP capability register) from the last 8 frames kept in memory. It answers GigE Vision
+// discovery broadcasts (255.255.255.255:3956) on the loopback interface, so that Aravis's
+// discovery (arv-tool-0.8, `irdist devices --discover`) finds it by name. Pixel formats: Mono8,
+// Mono12, Mono12p (PFNC, LSB-first packed) and Mono16.
 //
 // Faults: whole frames dropped at drop_frame_rate, GVSP packets lost at lost_packet_ratio (first
 // transmissions and resends alike), and ExposureTime writes applied late (acknowledged at once, but
@@ -92,6 +95,10 @@ class CameraServer {
   // Fault injection, effective from the next frame (or the next ExposureTime write).
   void SetDropFrameRate(double rate);
   void SetLostPacketRatio(double ratio);
+  // Whether the camera resends packets (default true). Off, it declares no PACKETRESEND in its
+  // GVCP capability register (read by the grabber when it configures the stream) and ignores the
+  // command, as a camera without resend does.
+  void SetPacketResend(bool enabled);
   // ExposureTime writes take effect after a random delay in [0, max_delay_ms] (host ms); 0 = at
   // once. Reads return the old value until then.
   void SetExposureWriteDelayMs(double max_delay_ms);

@@ -12,6 +12,12 @@
 //   free-running (256 x 256 Mono8, AcquisitionFrameRate 500 Hz, time scale 100), against Aravis's
 //   arv-camera-test-0.8 on the same camera and settings in the same run; counter ratio = ours /
 //   theirs.
+// BM_FullSensorVsArvCameraTest/camera:{0,1,2}: the same comparison like for like at full sensor:
+//   0 = Aravis's fake camera (arv-fake-gv-camera-0.8) 2048 x 2048 Mono8, 1 = the same in Mono16,
+//   2 = the virtual camera 1280 x 1024 Mono12 (time scale 1). Both free-run at the same
+//   AcquisitionFrameRate for the same duration, alternated twice, each with a socket buffer sized
+//   for the frame (arv-camera-test -a: its automatic buffer; irdist: 2 payloads, at least 4 MB);
+//   counters ratio = ours / theirs (goal >= 1.0) and the frames each failed.
 #include <benchmark/benchmark.h>
 #include <fcntl.h>
 #include <spawn.h>
@@ -31,6 +37,7 @@
 #include "acquisition/bracket.h"
 #include "sim/camera_server.h"
 #include "sim/virtual_rig.h"
+#include "tests/acquisition/fake_camera_process.h"
 
 extern char** environ;
 
@@ -95,8 +102,8 @@ struct FrameRun {
   long failed = 0;
 };
 
-// arv-camera-test-0.8 (argv, no shell), its report read from a pipe.
-FrameRun RunArvCameraTest(double seconds) {
+// arv-camera-test-0.8 (argv, no shell) with `words` after its name, its report read from a pipe.
+FrameRun RunArvCameraTest(double seconds, std::vector<std::string> words) {
   int pipe_fd[2];
   FrameRun run;
   if (::pipe(pipe_fd) != 0) return run;
@@ -105,9 +112,8 @@ FrameRun RunArvCameraTest(double seconds) {
   posix_spawn_file_actions_adddup2(&actions, pipe_fd[1], STDOUT_FILENO);
   posix_spawn_file_actions_adddup2(&actions, pipe_fd[1], STDERR_FILENO);
   posix_spawn_file_actions_addclose(&actions, pipe_fd[0]);
-  const std::string duration = "--duration=" + std::to_string(std::lround(seconds));
-  std::vector<std::string> words = {"arv-camera-test-0.8", "-n", "127.0.0.1", "--no-packet-socket",
-                                    "-f", "500", "-w", "256", "-h", "256", duration};
+  words.insert(words.begin(), "arv-camera-test-0.8");
+  words.push_back("--duration=" + std::to_string(std::lround(seconds)));
   std::vector<char*> argv;
   for (auto& word : words) argv.push_back(word.data());
   argv.push_back(nullptr);
@@ -136,16 +142,21 @@ FrameRun RunArvCameraTest(double seconds) {
   return run;
 }
 
-FrameRun RunOurs(const std::string& serial, double seconds) {
-  auto camera = AravisCamera::Open("127.0.0.1", serial);
+// Free-running frames, as arv-camera-test takes them (no warm-up frames discarded).
+CameraSettings FreeRun(const std::string& pixel_format, int width, int height, double rate_hz) {
   CameraSettings settings;
-  settings.pixel_format = "Mono8";
+  settings.pixel_format = pixel_format;
   settings.triggered = false;
-  settings.frame_rate_hz = 500.0;
-  settings.width = 256;
-  settings.height = 256;
+  settings.frame_rate_hz = rate_hz;
+  settings.width = width;
+  settings.height = height;
   settings.exposure_us = 1000.0;
   settings.warmup_frames = 0;  // count every frame, as arv-camera-test does
+  return settings;
+}
+
+FrameRun RunOurs(const std::string& serial, double seconds, const CameraSettings& settings) {
+  auto camera = AravisCamera::Open("127.0.0.1", serial);
   camera->Configure(settings);
   FrameRun run;
   const auto start = Clock::now();
@@ -161,21 +172,23 @@ FrameRun RunOurs(const std::string& serial, double seconds) {
   return run;
 }
 
-void BM_GrabberVsArvCameraTest(benchmark::State& state) {
-  auto rig = StartRig(100.0);
-  const double seconds = 3.0;
+// arv-camera-test-0.8 with `theirs_args` and AravisCamera with `ours` on the camera `serial`,
+// alternated twice each (so that the host's load drifts over both alike), `seconds` per run; the
+// counters: frames per second each, ratio = ours / theirs, incomplete frames each.
+void CompareWithArvCameraTest(benchmark::State& state, const std::vector<std::string>& theirs_args,
+                              const std::string& serial, const CameraSettings& ours_settings,
+                              double seconds) {
   FrameRun theirs, ours;
-  // Alternated, twice each, so that the host's load drifts over both alike.
   for (auto _ : state) {
     for (int round = 0; round < 2; ++round) {
-      const FrameRun a = RunArvCameraTest(seconds);
-      const FrameRun b = RunOurs(rig->Info().serial, seconds);
-      theirs.seconds += a.seconds;
-      theirs.completed += a.completed;
-      theirs.failed += a.failed;
-      ours.seconds += b.seconds;
-      ours.completed += b.completed;
-      ours.failed += b.failed;
+      for (const bool mine : {false, true}) {
+        const FrameRun run = mine ? RunOurs(serial, seconds, ours_settings)
+                                  : RunArvCameraTest(seconds, theirs_args);
+        FrameRun& total = mine ? ours : theirs;
+        total.seconds += run.seconds;
+        total.completed += run.completed;
+        total.failed += run.failed;
+      }
     }
   }
   const double theirs_fps = theirs.completed / std::max(theirs.seconds, 1e-9);
@@ -186,7 +199,49 @@ void BM_GrabberVsArvCameraTest(benchmark::State& state) {
   state.counters["irdist_failed"] = static_cast<double>(ours.failed);
   state.counters["arv_failed"] = static_cast<double>(theirs.failed);
 }
+
+void BM_GrabberVsArvCameraTest(benchmark::State& state) {
+  auto rig = StartRig(100.0);
+  CompareWithArvCameraTest(
+      state, {"-n", "127.0.0.1", "--no-packet-socket", "-f", "500", "-w", "256", "-h", "256"},
+      rig->Info().serial, FreeRun("Mono8", 256, 256, 500.0), 3.0);
+}
 BENCHMARK(BM_GrabberVsArvCameraTest)->Iterations(1)->UseRealTime()->Unit(benchmark::kSecond);
+
+struct FullSensorCase {
+  const char* pixel_format;
+  int width;
+  int height;
+  double rate_hz;
+};
+
+void BM_FullSensorVsArvCameraTest(benchmark::State& state) {
+  const int which = static_cast<int>(state.range(0));
+  const FullSensorCase cases[] = {
+      {"Mono8", 2048, 2048, 25.0}, {"Mono16", 2048, 2048, 25.0}, {"Mono12", 1280, 1024, 25.0}};
+  const FullSensorCase& c = cases[which];
+  std::unique_ptr<testing::FakeCameraProcess> fake;
+  std::unique_ptr<sim::VirtualRig> rig;
+  std::string serial;
+  if (which < 2) {
+    fake = std::make_unique<testing::FakeCameraProcess>("IRDBENCH2");
+    serial = fake->serial();
+  } else {
+    rig = StartRig(1.0);
+    serial = rig->Info().serial;
+  }
+  const std::vector<std::string> theirs_args = {
+      "-n", "127.0.0.1", "--no-packet-socket", "-a", "-f", std::to_string(c.rate_hz), "-w",
+      std::to_string(c.width), "-h", std::to_string(c.height), "-e", "1000",
+      "--features", std::string("PixelFormat=") + c.pixel_format};
+  CompareWithArvCameraTest(state, theirs_args, serial,
+                           FreeRun(c.pixel_format, c.width, c.height, c.rate_hz), 5.0);
+  state.SetLabel(std::string(which < 2 ? "fake " : "virtual ") + std::to_string(c.width) + "x" +
+                 std::to_string(c.height) + " " + c.pixel_format);
+  state.counters["set_fps"] = c.rate_hz;  // each side's frames lost = (set_fps - fps) x seconds
+}
+BENCHMARK(BM_FullSensorVsArvCameraTest)->ArgName("camera")->Arg(0)->Arg(1)->Arg(2)
+    ->Iterations(1)->UseRealTime()->Unit(benchmark::kSecond);
 
 }  // namespace
 }  // namespace irdist

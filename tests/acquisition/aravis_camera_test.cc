@@ -1,9 +1,11 @@
 // Tests of AravisCamera against Aravis's own fake GigE Vision camera on 127.0.0.1.
 #include "acquisition/aravis_camera.h"
 
+#include <arv.h>
 #include <gtest/gtest.h>
 
 #include <set>
+#include <string>
 
 #include "tests/acquisition/fake_camera_process.h"
 
@@ -178,6 +180,226 @@ TEST_F(AravisCameraTest, FreeRuns100FramesAndSoftwareTriggers20WithNoneLost) {
   // Only the warm-up frames (discarded by StartStream, before the 20) may have failed.
   EXPECT_LE(stats.at("n_failures"), static_cast<std::uint64_t>(camera->warmup_discarded()));
   EXPECT_GE(stats.at("n_completed_buffers"), 20u);
+}
+
+}  // namespace
+}  // namespace irdist
+
+namespace irdist {
+namespace {
+
+// A failed setup puts back what it changed: the camera is as it was found.
+TEST_F(AravisCameraTest, AFailedSetupPutsTheCameraBackAsItWasFound) {
+  auto camera = AravisCamera::Open("127.0.0.1", kSerial);
+  camera->Configure(FakeSettings(false));  // free-running, Mono8, 512 x 512
+  const auto found = camera->ReadBackFeatures();
+  CameraSettings bad = FakeSettings(true);
+  bad.pixel_format = "Mono16";
+  bad.width = 256;
+  bad.trigger_source = "Line1";  // the stock fake camera has Line0 and Software only
+  try {
+    camera->Configure(bad);
+    FAIL() << "expected CameraError";
+  } catch (const CameraError& error) {
+    EXPECT_NE(std::string(error.what()).find("put back as it was found"), std::string::npos)
+        << error.what();
+  }
+  const auto after = camera->ReadBackFeatures();
+  for (const char* feature : {"PixelFormat", "Width", "Height", "TriggerMode", "TriggerSource",
+                              "TriggerSelector", "ExposureTimeAbs"}) {
+    EXPECT_EQ(after.at(feature), found.at(feature)) << feature;
+  }
+}
+
+// --- vendor-style GenICam files on Aravis's fake camera (tests/acquisition/genicam/) ------------
+
+std::string Genicam(const char* file) {
+  return std::string(IRDIST_SOURCE_DIR) + "/tests/acquisition/genicam/" + file;
+}
+
+// Another client's connection to the camera on 127.0.0.1 (a previous user, or a check of what
+// irdist left): reads and writes features by name, under a TriggerSelector entry when given.
+class OtherClient {
+ public:
+  OtherClient() {
+    GError* error = nullptr;
+    camera_ = arv_camera_new("127.0.0.1", &error);
+    if (error != nullptr) {
+      ADD_FAILURE() << error->message;
+      g_error_free(error);
+    }
+  }
+  ~OtherClient() {
+    if (camera_ != nullptr) g_object_unref(camera_);
+  }
+  void Set(const std::string& selector, const char* feature, const char* value) {
+    Select(selector);
+    GError* error = nullptr;
+    arv_gc_feature_node_set_value_from_string(Node(feature), value, &error);
+    Check(error, feature);
+  }
+  std::string Get(const std::string& selector, const char* feature) {
+    Select(selector);
+    GError* error = nullptr;
+    const char* value = arv_gc_feature_node_get_value_as_string(Node(feature), &error);
+    Check(error, feature);
+    return value == nullptr ? "" : value;
+  }
+
+ private:
+  ArvGcFeatureNode* Node(const char* feature) {
+    ArvGcNode* node = arv_device_get_feature(arv_camera_get_device(camera_), feature);
+    EXPECT_NE(node, nullptr) << feature;
+    return ARV_GC_FEATURE_NODE(node);
+  }
+  void Select(const std::string& selector) {
+    if (selector.empty()) return;
+    GError* error = nullptr;
+    arv_camera_set_string(camera_, "TriggerSelector", selector.c_str(), &error);
+    Check(error, "TriggerSelector");
+  }
+  static void Check(GError* error, const char* what) {
+    if (error == nullptr) return;
+    ADD_FAILURE() << what << ": " << error->message;
+    g_error_free(error);
+  }
+  ArvCamera* camera_ = nullptr;
+};
+
+CameraSettings Triggered(const char* pixel_format) {
+  CameraSettings settings;
+  settings.pixel_format = pixel_format;
+  settings.trigger_source = "Software";
+  settings.width = 256;
+  settings.height = 128;
+  settings.exposure_us = 5000.0;
+  return settings;
+}
+
+// Three software-triggered frames arrive whole, with `bit_depth`.
+void ExpectTriggeredFrames(AravisCamera& camera, int bit_depth) {
+  camera.StartStream();
+  for (int i = 0; i < 3; ++i) {
+    camera.SoftwareTrigger();
+    const auto frame = camera.WaitFrame(std::chrono::milliseconds(2000));
+    ASSERT_TRUE(frame.has_value()) << "frame " << i;
+    ASSERT_EQ(frame->status, FrameStatus::kOk) << FrameStatusName(frame->status);
+    EXPECT_EQ(frame->image.cols, 256);
+    EXPECT_EQ(frame->image.rows, 128);
+    EXPECT_EQ(frame->bit_depth, bit_depth);
+  }
+  camera.StopStream();
+}
+
+// Basler-style: ExposureTimeAbs, GainRaw, no automatic features. A previous user left the
+// AcquisitionStart trigger On, ExposureMode TriggerWidth and a frame-rate limit: irdist turns
+// each back to its defined state and reads it back.
+TEST(VendorCameras, BaslerStyleIsSetToTimedExposureAndFrameStartAlone) {
+  testing::FakeCameraProcess fake("IRDBAS01", {"-g", Genicam("basler_style.xml")});
+  {
+    OtherClient previous_user;
+    previous_user.Set("AcquisitionStart", "TriggerMode", "On");
+    previous_user.Set("", "ExposureMode", "TriggerWidth");
+    previous_user.Set("", "AcquisitionFrameRateEnable", "true");
+  }
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  camera->Configure(Triggered("Mono12"));
+  auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.at("ExposureMode"), "Timed");
+  EXPECT_EQ(features.at("AcquisitionFrameRateEnable"), "false");
+  EXPECT_EQ(features.at("TriggerSelector"), "FrameStart");
+  EXPECT_EQ(features.at("TriggerMode"), "On");
+  EXPECT_NEAR(std::stod(features.at("ExposureTimeAbs")), 5000.0, 1.0);
+  EXPECT_EQ(features.count("ExposureAuto"), 0u);
+  ExpectTriggeredFrames(*camera, 12);
+  camera->Configure(Triggered("Mono12Packed"));
+  ExpectTriggeredFrames(*camera, 12);
+  camera.reset();
+  OtherClient check;
+  EXPECT_EQ(check.Get("AcquisitionStart", "TriggerMode"), "Off");
+}
+
+// FLIR-style: ExposureAuto and GainAuto Continuous, GammaEnable and ExposureMode TriggerWidth at
+// power-up, Mono12p and no Mono12. Mono12 is refused naming Mono12p; Mono12p streams with
+// every automatic control off, gamma off, TriggerOverlap ReadOut and the other triggers Off.
+TEST(VendorCameras, FlirStyleStreamsMono12pWithEveryAutomaticControlOff) {
+  testing::FakeCameraProcess fake("IRDFLI01", {"-g", Genicam("flir_style.xml")});
+  {
+    OtherClient previous_user;
+    previous_user.Set("FrameBurstStart", "TriggerMode", "On");
+  }
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  try {
+    camera->Configure(Triggered("Mono12"));
+    FAIL() << "expected CameraError";
+  } catch (const CameraError& error) {
+    EXPECT_NE(std::string(error.what()).find("Mono12p"), std::string::npos) << error.what();
+  }
+  CameraSettings settings = Triggered("Mono12p");
+  settings.trigger_overlap_readout = true;
+  camera->Configure(settings);
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.at("PixelFormat"), "Mono12p");
+  EXPECT_EQ(features.at("ExposureAuto"), "Off");
+  EXPECT_EQ(features.at("GainAuto"), "Off");
+  EXPECT_EQ(features.at("GammaEnable"), "false");
+  EXPECT_EQ(features.at("ExposureMode"), "Timed");
+  EXPECT_EQ(features.at("AcquisitionFrameRateEnable"), "false");
+  EXPECT_EQ(features.at("TriggerOverlap"), "ReadOut");
+  EXPECT_EQ(camera->PayloadBytes(), 256 * 128 * 12 / 8);
+  ExpectTriggeredFrames(*camera, 12);
+  camera.reset();
+  OtherClient check;
+  EXPECT_EQ(check.Get("FrameBurstStart", "TriggerMode"), "Off");
+  EXPECT_EQ(check.Get("AcquisitionStart", "TriggerMode"), "Off");
+}
+
+// A failed setup on the FLIR-style camera puts back its automatic controls, gamma and exposure
+// mode as found.
+TEST(VendorCameras, FlirStyleFailedSetupLeavesItAsFound) {
+  testing::FakeCameraProcess fake("IRDFLI02", {"-g", Genicam("flir_style.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  CameraSettings settings = Triggered("Mono12p");
+  settings.trigger_source = "Line1";  // this camera's inputs are Line0 and Line2
+  EXPECT_THROW(camera->Configure(settings), CameraError);
+  camera.reset();
+  OtherClient check;
+  EXPECT_EQ(check.Get("", "ExposureAuto"), "Continuous");
+  EXPECT_EQ(check.Get("", "GainAuto"), "Continuous");
+  EXPECT_EQ(check.Get("", "GammaEnable"), "true");
+  EXPECT_EQ(check.Get("", "ExposureMode"), "TriggerWidth");
+  EXPECT_EQ(check.Get("", "PixelFormat"), "Mono8");
+  EXPECT_EQ(check.Get("FrameStart", "TriggerMode"), "Off");
+}
+
+// One trigger, no TriggerSelector (the SFNC allows it): configured and triggered as FrameStart.
+TEST(VendorCameras, SingleTriggerWithoutSelectorIsTheFrameTrigger) {
+  testing::FakeCameraProcess fake("IRDONE01", {"-g", Genicam("single_trigger.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  camera->Configure(Triggered("Mono12"));
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.count("TriggerSelector"), 0u);
+  EXPECT_EQ(features.at("TriggerMode"), "On");
+  EXPECT_EQ(features.at("TriggerSource"), "Software");
+  ExpectTriggeredFrames(*camera, 12);
+}
+
+// No trigger at all: refused, naming what is missing, and left as found.
+TEST(VendorCameras, MinimalCameraWithoutTriggerIsRefusedAndLeftAsFound) {
+  testing::FakeCameraProcess fake("IRDMIN01", {"-g", Genicam("minimal.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  try {
+    camera->Configure(Triggered("Mono8"));
+    FAIL() << "expected CameraError";
+  } catch (const CameraError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("TriggerMode"), std::string::npos) << message;
+    EXPECT_NE(message.find("TriggerSource"), std::string::npos) << message;
+    EXPECT_NE(message.find("put back as it was found"), std::string::npos) << message;
+  }
+  camera.reset();
+  OtherClient check;
+  EXPECT_EQ(check.Get("", "Width"), "512");
 }
 
 }  // namespace

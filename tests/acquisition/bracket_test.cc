@@ -52,7 +52,9 @@ TEST(PlanBracket, PlainAndInterleavedOrders) {
 // A camera whose response to each trigger follows a script.
 class ScriptedCamera : public Camera {
  public:
-  enum class Act { kDeliver, kDrop, kDamage, kRepeatLastThenDeliver, kWrongChunk };
+  // kLostLeader: a failed buffer as Aravis hands it back when the frame's leader packet was lost:
+  // status missing_packets, frame id and timestamp 0.
+  enum class Act { kDeliver, kDrop, kDamage, kRepeatLastThenDeliver, kWrongChunk, kLostLeader };
   std::deque<Act> script;
   std::vector<double> exposures_at_trigger;
   bool chunks = false;
@@ -102,6 +104,13 @@ class ScriptedCamera : public Camera {
       case Act::kWrongChunk:
         frame.chunk_exposure_us = exposure_us_ * 2.0;
         break;
+      case Act::kLostLeader:
+        frame.status = FrameStatus::kMissingPackets;
+        frame.image = cv::Mat();
+        next_id = next_id == 65535 ? 1 : next_id + 1;
+        timestamp_ += 1000;
+        queue_.push_back(frame);  // id 0, timestamp 0
+        return;
     }
     frame.frame_id = next_id;
     next_id = next_id == 65535 ? 1 : next_id + 1;
@@ -218,6 +227,57 @@ TEST(BracketCapture, GivesUpAfterMaxRetriesAndCountsTheLoss) {
   EXPECT_EQ(capture.stats().lost, 1);
   EXPECT_EQ(capture.stats().retried, 2);
   EXPECT_EQ(capture.stats().brackets_failed, 1);
+}
+
+// A failed buffer's id and timestamp (0 after a lost leader) never move the frame identity: the
+// good frames after it are accepted, none is called a duplicate, and the failure is counted by its
+// status. Ids from 0x9000 make a 0 look newer to 16-bit wrap arithmetic, so that later good ids
+// would look older.
+TEST(BracketCapture, LostLeaderBuffersNeverMakeLaterFramesDuplicates) {
+  using Act = ScriptedCamera::Act;
+  ScriptedCamera camera;
+  camera.next_id = 0x9000;
+  camera.script = {Act::kDeliver, Act::kLostLeader, Act::kDeliver, Act::kDeliver,
+                   Act::kLostLeader, Act::kDeliver, Act::kDeliver, Act::kDeliver};
+  BracketCapture capture(camera, FastOptions());
+  for (int b = 0; b < 3; ++b) {
+    const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+    ASSERT_TRUE(result.complete) << result.BriefReport() << " / " << capture.stats().BriefReport();
+  }
+  const CaptureStats& stats = capture.stats();
+  EXPECT_EQ(stats.duplicates, 0) << stats.BriefReport();
+  EXPECT_EQ(stats.received, 15);
+  EXPECT_EQ(stats.damaged, 2);
+  EXPECT_EQ(stats.timeouts, 0) << stats.BriefReport();
+  EXPECT_EQ(stats.failed_buffers.at("missing_packets"), 2);
+  EXPECT_NE(stats.BriefReport().find("missing_packets 2"), std::string::npos);
+}
+
+// The stop message leads with the network when buffers came incomplete, with the trigger when
+// nothing arrived.
+TEST(BracketCapture, GivingUpNamesTheNetworkForLostPacketsAndTheTriggerForSilence) {
+  using Act = ScriptedCamera::Act;
+  for (const Act act : {Act::kLostLeader, Act::kDrop}) {
+    ScriptedCamera camera;
+    camera.script = {act, act, act};
+    BracketCapture capture(camera, FastOptions());
+    const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+    ASSERT_FALSE(result.complete);
+    const std::string& why = result.failure;
+    const auto network = why.find("packets were lost");
+    const auto trigger = why.find("trigger wiring");
+    ASSERT_NE(trigger, std::string::npos) << why;
+    if (act == Act::kLostLeader) {
+      ASSERT_NE(network, std::string::npos) << why;
+      EXPECT_LT(network, trigger) << why;
+      for (const char* cause : {"cable", "MTU", "jumbo", "socket buffer", "packet delay"}) {
+        EXPECT_NE(why.find(cause), std::string::npos) << cause << " in " << why;
+      }
+    } else {
+      EXPECT_EQ(network, std::string::npos) << why;
+      EXPECT_NE(why.find("nothing arrived"), std::string::npos) << why;
+    }
+  }
 }
 
 TEST(BracketCapture, ChunkExposureMismatchIsRetried) {

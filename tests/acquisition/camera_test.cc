@@ -49,7 +49,8 @@ TEST(CameraSettings, UntriggeredCameraNeedsNoTriggerSourceAndEveryMonoFormatIsVa
   settings.triggered = false;
   settings.trigger_source = "";
   EXPECT_TRUE(settings.IsValid(nullptr));
-  for (const char* format : {"Mono8", "Mono10", "Mono12", "Mono14", "Mono16"}) {
+  for (const char* format : {"Mono8", "Mono10", "Mono10p", "Mono12", "Mono12p", "Mono12Packed",
+                             "Mono14", "Mono16"}) {
     settings.pixel_format = format;
     EXPECT_TRUE(settings.IsValid(nullptr)) << format;
   }

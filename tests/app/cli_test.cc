@@ -49,7 +49,7 @@ TEST(CliTest, EverySubcommandIsInTheTable) {
   EXPECT_EQ(SubcommandNames(),
             (std::vector<std::string>{"calibrate", "validate", "fit", "playback", "check", "plan",
                                       "sim", "devices", "measure", "snap", "view", "station",
-                                      "station-test"}));
+                                      "station-test", "camera-test"}));
 }
 
 TEST(CliTest, MeasureTakesItsOptions) {
@@ -333,6 +333,13 @@ TEST(CliTest, StationCommandsParseTheirArguments) {
   EXPECT_EQ(RunWords({"station-test", "/dev/ttyUSB0", "--baud", "57600"}, handlers), 0);
   EXPECT_EQ(test.port, "/dev/ttyUSB0");
   EXPECT_EQ(test.baud, 57600);
+  CameraTestArgs camera;
+  handlers.camera_test = [&](const CameraTestArgs& args, CommandIo) { camera = args; };
+  EXPECT_EQ(RunWords({"camera-test", "192.0.2.40"}, handlers), 0);
+  EXPECT_EQ(camera.camera, "192.0.2.40");
+  EXPECT_EQ(RunWords({"camera-test", "--rig", "virtual-lab"}, handlers), 0);
+  EXPECT_EQ(camera.camera, "");
+  EXPECT_EQ(camera.rig, "virtual-lab");
 }
 
 TEST(CliTest, PlanPrintsCountsOrderAndDuration) {

@@ -96,6 +96,16 @@ TEST(RigTest, ExampleHardwareRigLoads) {
   EXPECT_TRUE(rig.camera.FullFrame());  // no roi_px: the whole sensor until the user sets one
 }
 
+// Packed formats (PFNC Mono10p / Mono12p, GigE Vision Mono12Packed) are accepted as such.
+TEST(RigTest, PackedPixelFormatsAreAccepted) {
+  for (const char* format : {"Mono10p", "Mono12p", "Mono12Packed"}) {
+    const Rig rig = ParseRig(std::string("kind: virtual\ncamera:\n  pixel_format: ") + format +
+                                 "\n",
+                             "packed.yaml");
+    EXPECT_EQ(rig.camera.pixel_format, format);
+  }
+}
+
 TEST(RigTest, EveryKeyIsRead) {
   const Rig rig = ParseRig(R"(name: lab
 kind: hardware
@@ -175,7 +185,7 @@ const BadRig kBadRigs[] = {
     {"limits not a pair", "kind: virtual\nstation:\n  limits:\n    pan_deg: 45\n", 4, 14,
      "a list [min, max]"},
     {"bad pixel format", "kind: virtual\ncamera:\n  pixel_format: RGB8\n", 3, 17,
-     "valid: Mono8, Mono10, Mono12, Mono16"},
+     "valid: Mono8, Mono10, Mono10p, Mono12, Mono12p, Mono12Packed, Mono16"},
     {"bad kind", "kind: imaginary\n", 1, 7, "valid: virtual, hardware"},
     {"hardware with an automatic port", "kind: hardware\nstation:\n  port: auto\n", 3, 9,
      "must name the serial device"},

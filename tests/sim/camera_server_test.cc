@@ -2,6 +2,7 @@
 
 #include <arpa/inet.h>
 #include <arv.h>
+#include <net/if.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -13,6 +14,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <opencv2/imgproc.hpp>
 
 #include "sim/renderer.h"
 #include "tests/loopback_gvcp.h"
@@ -321,6 +324,124 @@ TEST_F(CameraServerTest, ResendsLostPacketsOnRequest) {
   EXPECT_GT(server_->Stats().packets_lost, 0u);
   EXPECT_GT(server_->Stats().resend_requests, 0u);
   EXPECT_GT(server_->Stats().packets_resent, 0u);
+}
+
+// Mono12p (PFNC): each frame is the Mono12 frame's values as an LSB-first 12-bit stream, two
+// pixels in three bytes: unpacked by the layout, the packed frame matches a Mono12 frame of the
+// same scene.
+TEST_F(CameraServerTest, Mono12pFramesAreTheMono12ValuesPackedLsbFirst) {
+  GError* error = nullptr;
+  arv_camera_set_region(camera_.get(), 600, 480, 96, 64, &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_string(camera_.get(), "TriggerSource", "Software", &error);
+  ASSERT_NO_GERROR(error);
+  cv::Mat sums[2];
+  for (const char* format : {"Mono12", "Mono12p"}) {
+    stream_.reset();
+    arv_camera_set_pixel_format_from_string(camera_.get(), format, &error);
+    ASSERT_NO_GERROR(error);
+    const bool packed = std::string(format) == "Mono12p";
+    EXPECT_EQ(arv_camera_get_payload(camera_.get(), nullptr), packed ? 96u * 64 * 3 / 2 : 96u * 64 * 2);
+    CreateStream();
+    arv_camera_start_acquisition(camera_.get(), &error);
+    ASSERT_NO_GERROR(error);
+    cv::Mat sum(64, 96, CV_64F, cv::Scalar(0));
+    for (int i = 0; i < 4; ++i) {
+      arv_camera_software_trigger(camera_.get(), &error);
+      ASSERT_NO_GERROR(error);
+      ASSERT_TRUE(Pop(3000000, [&](ArvBuffer* buffer) {
+        size_t size = 0;
+        const auto* b = static_cast<const std::uint8_t*>(arv_buffer_get_image_data(buffer, &size));
+        EXPECT_EQ(static_cast<std::uint32_t>(arv_buffer_get_image_pixel_format(buffer)),
+                  packed ? 0x010c0047u : 0x01100005u);
+        for (int n = 0; n < 96 * 64; ++n) {
+          int value = 0;
+          if (!packed) {
+            value = b[2 * n] | (b[2 * n + 1] << 8);
+          } else if (n % 2 == 0) {
+            value = b[3 * (n / 2)] | ((b[3 * (n / 2) + 1] & 0x0f) << 8);
+          } else {
+            value = (b[3 * (n / 2) + 1] >> 4) | (b[3 * (n / 2) + 2] << 4);
+          }
+          EXPECT_LE(value, 4095);
+          sum.at<double>(n / 96, n % 96) += value;
+        }
+      }));
+    }
+    arv_camera_stop_acquisition(camera_.get(), &error);
+    ASSERT_NO_GERROR(error);
+    sums[packed ? 1 : 0] = sum;
+  }
+  // The same scene: the IRED's image in the same place with the same signal (noise apart).
+  cv::Point2d centre[2];
+  for (int k = 0; k < 2; ++k) {
+    double peak = 0.0;
+    cv::minMaxLoc(sums[k], nullptr, &peak);
+    cv::Mat blob;
+    cv::threshold(sums[k], blob, 0.5 * peak, 0.0, cv::THRESH_TOZERO);
+    const cv::Moments m = cv::moments(blob);
+    ASSERT_GT(m.m00, 0.0);
+    centre[k] = {m.m10 / m.m00, m.m01 / m.m00};
+  }
+  EXPECT_NEAR(centre[1].x, centre[0].x, 0.5);
+  EXPECT_NEAR(centre[1].y, centre[0].y, 0.5);
+  EXPECT_NEAR(cv::sum(sums[1])[0], cv::sum(sums[0])[0], 0.02 * cv::sum(sums[0])[0]);
+}
+
+// A camera without resend: no PACKETRESEND capability declared and no packet sent again.
+TEST_F(CameraServerTest, WithoutResendLostPacketsStayLost) {
+  server_->SetPacketResend(false);
+  guint32 capability = 0;
+  GError* error = nullptr;
+  arv_device_read_register(arv_camera_get_device(camera_.get()), 0x934, &capability, &error);
+  ASSERT_NO_GERROR(error);
+  EXPECT_EQ(capability & (1u << 2), 0u);
+  arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_string(camera_.get(), "TriggerSource", "Software", &error);
+  ASSERT_NO_GERROR(error);
+  server_->SetLostPacketRatio(0.05);
+  CreateStream();
+  g_object_set(stream_.get(), "packet-resend", ARV_GV_STREAM_PACKET_RESEND_ALWAYS, nullptr);
+  arv_camera_start_acquisition(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+  int complete = 0;
+  for (int i = 0; i < 3; ++i) {
+    arv_camera_software_trigger(camera_.get(), &error);
+    ASSERT_NO_GERROR(error);
+    if (Pop(3000000, [](ArvBuffer*) {})) ++complete;
+  }
+  EXPECT_EQ(complete, 0);  // a full frame is ~1900 packets: none arrives whole at 5% loss
+  EXPECT_GT(server_->Stats().packets_lost, 0u);
+  EXPECT_EQ(server_->Stats().packets_resent, 0u);
+}
+
+// Only loopback in this network namespace: discovery (a broadcast) reaches nothing else.
+bool OnlyLoopback() {
+  struct if_nameindex* names = if_nameindex();
+  if (names == nullptr) return false;
+  bool only = true;
+  for (auto* n = names; n->if_index != 0; ++n) only = only && std::string(n->if_name) == "lo";
+  if_freenameindex(names);
+  return only;
+}
+
+// GigE Vision discovery (a DISCOVERY_CMD broadcast to 255.255.255.255:3956) finds the camera by
+// name on the loopback interface, as arv-tool-0.8 and `irdist devices --discover` look for it.
+TEST_F(CameraServerTest, AnswersDiscoveryOnItsInterface) {
+  if (!OnlyLoopback()) GTEST_SKIP() << "discovery broadcasts: run in a network namespace (unshare -n)";
+  arv_update_device_list();
+  bool found = false;
+  for (unsigned int i = 0; i < arv_get_n_devices(); ++i) {
+    if (server_->device_id() == arv_get_device_id(i)) {
+      found = true;
+      EXPECT_STREQ(arv_get_device_address(i), "127.0.0.1");
+      EXPECT_STREQ(arv_get_device_serial_nbr(i), kSerial);
+    }
+  }
+  EXPECT_TRUE(found) << server_->device_id() << " not discovered";
 }
 
 // Sends one GVCP WRITEREG command from `fd` to 127.0.0.1:3956 and waits for its acknowledge.
