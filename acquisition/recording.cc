@@ -21,9 +21,13 @@
 #include <utility>
 
 #include <boost/crc.hpp>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "acquisition/content_hash.h"
+#include "acquisition/recording_integrity.h"
 #include "base/regular_file.h"
+#include "base/safe_file.h"
 #include "base/yaml_fields.h"
 
 namespace irdist {
@@ -34,7 +38,8 @@ namespace fs = std::filesystem;
 constexpr char kYaml[] = "recording.yaml";
 constexpr char kCsv[] = "frames.csv";
 constexpr char kFramesDir[] = "frames";
-constexpr int kColumns = 20;
+constexpr int kColumns = 21;    // format 2: ..., status, sha256
+constexpr int kColumnsV1 = 20;  // format 1: no sha256
 
 std::string NowIso8601() {
   const auto now = std::chrono::system_clock::now();
@@ -83,31 +88,17 @@ bool WriteAll(int fd, const void* data, size_t size) {
 
 // fsync of a folder, so that a rename in it survives a crash.
 void SyncFolder(const std::string& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) throw RecordingError("cannot open folder " + dir + " to sync it: " + Errno() + ".");
-  const bool ok = ::fsync(fd) == 0 || errno == EINVAL;  // EINVAL: the file system cannot sync
-  const int saved = errno;
-  ::close(fd);
-  if (!ok) {
-    errno = saved;
-    throw RecordingError("cannot sync folder " + dir + ": " + Errno() + ". Is the disk failing?");
-  }
+  std::string why;
+  if (!irdist::SyncFolder(dir, &why)) throw RecordingError(why + ". Is the disk failing?");
 }
 
-// Writes `data` to `tmp` (created or truncated) and syncs it; on failure removes it and throws.
+// Writes `data` to `tmp`, created new (a stale file or planted link there is unlinked first,
+// never followed), and syncs it; on failure removes it and throws.
 void WriteSynced(const std::string& tmp, const void* data, size_t size) {
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    throw RecordingError("cannot create " + tmp + ": " + Errno() +
-                         ". Check the disk and permissions of the recording directory.");
-  }
-  const bool ok = WriteAll(fd, data, size) && ::fsync(fd) == 0;
-  const int saved = errno;
-  ::close(fd);
-  if (!ok) {
-    ::unlink(tmp.c_str());
-    errno = saved;
-    throw RecordingError("cannot write " + tmp + ": " + Errno() + ". Is the disk full?");
+  std::string why;
+  if (!WriteNewFileSynced(tmp, std::string_view(static_cast<const char*>(data), size), 0644,
+                          &why)) {
+    throw RecordingError(tmp + " " + why + ". Check the disk and the recording folder.");
   }
 }
 
@@ -117,13 +108,15 @@ void RenameOrThrow(const std::string& from, const std::string& to) {
   }
 }
 
-// Writes `data` to path + ".tmp", syncs it, renames it to `path` and syncs the folder: after a
-// crash `path` is either the old or the new file, complete.
+// Writes `data` to path + ".tmp" (created new), syncs it, renames it to `path` and syncs the
+// folder: after a crash `path` is either the old or the new file, complete. A `path` that is a
+// symbolic link is refused.
 void WriteFileAtomically(const std::string& path, const void* data, size_t size) {
-  const std::string tmp = path + ".tmp";
-  WriteSynced(tmp, data, size);
-  RenameOrThrow(tmp, path);
-  SyncFolder(fs::path(path).parent_path().string());
+  std::string why;
+  if (!irdist::WriteFileAtomically(path, std::string_view(static_cast<const char*>(data), size),
+                                   0644, &why)) {
+    throw RecordingError(path + " " + why + ".");
+  }
 }
 
 constexpr std::int64_t kMaxPngBytes = std::int64_t{1} << 28;
@@ -138,7 +131,8 @@ std::string Crc32Hex(const std::string& text) {
   return hex;
 }
 
-std::string FormatRow(const FrameRecord& r) {
+// One frames.csv row; with `hashed` (format 2) the PNG's SHA-256 is the last column.
+std::string FormatRow(const FrameRecord& r, bool hashed) {
   std::ostringstream out;
   out << r.index << ',' << r.file << ',' << r.bracket_id << ',' << r.frame_in_bracket << ','
       << r.bracket_size << ',' << FrameRoleName(r.role) << ','
@@ -147,7 +141,9 @@ std::string FormatRow(const FrameRecord& r) {
       << ',' << FormatDouble(r.bias_ma_measured) << ',' << FormatDouble(r.slide_mm) << ','
       << FormatDouble(r.pan_deg) << ',' << FormatDouble(r.tilt_deg) << ','
       << FormatDouble(r.theta_deg) << ',' << r.repeat << ',' << r.camera_frame_id << ','
-      << r.camera_timestamp_ns << ',' << r.host_time_ns << ',' << r.status << '\n';
+      << r.camera_timestamp_ns << ',' << r.host_time_ns << ',' << r.status;
+  if (hashed) out << ',' << r.sha256;
+  out << '\n';
   return out.str();
 }
 
@@ -196,11 +192,13 @@ bool ParseDouble(const std::string& text, double* value, bool optional = false) 
   return true;
 }
 
-// Parses one frames.csv data line; on failure says which column is wrong.
-bool ParseRow(const std::string& line, FrameRecord* r, std::string* why) {
+// Parses one frames.csv data line (`hashed`: format 2, with the sha256 column); on failure says
+// which column is wrong.
+bool ParseRow(const std::string& line, FrameRecord* r, std::string* why, bool hashed) {
   const std::vector<std::string> f = Split(line);
-  if (static_cast<int>(f.size()) != kColumns) {
-    *why = "expected " + std::to_string(kColumns) + " columns, found " + std::to_string(f.size());
+  const int columns = hashed ? kColumns : kColumnsV1;
+  if (static_cast<int>(f.size()) != columns) {
+    *why = "expected " + std::to_string(columns) + " columns, found " + std::to_string(f.size());
     return false;
   }
   auto bad = [&](const char* column, const std::string& text) {
@@ -246,6 +244,8 @@ bool ParseRow(const std::string& line, FrameRecord* r, std::string* why) {
   if (!ParseInt(f[18], &r->host_time_ns)) return bad("host_time_ns", f[18]);
   r->status = f[19];
   if (r->status != "ok" && r->status != "retried") return bad("status", f[19]);
+  if (hashed && !IsSha256Hex(f[20])) return bad("sha256 (64 hex digits)", f[20]);
+  r->sha256 = hashed ? f[20] : "";
   return true;
 }
 
@@ -387,17 +387,24 @@ RecordingHeader ParseHeaderFields(const std::string& text, const std::string& pa
   const yf::MapReader root(yf::Parse(text, path), path, "recording.yaml",
                            {"format", "format_version", "completion", "software_version",
                             "start_time", "end_time", "frame_count", "resumed", "image", "camera",
-                            "station", "recipe", "rig"});
+                            "station", "recipe", "rig", "frames_csv_sha256"});
   if (root.String("format", "") != "irdist-recording") {
     yf::Fail(path, root.Mark(), "'format' is not irdist-recording; this is not an irdist "
                                 "recording header");
   }
   RecordingHeader h;
   h.format_version = root.Integer("format_version", 0);
-  if (h.format_version != kRecordingFormatVersion) {
+  if (h.format_version < kOldestRecordingFormatVersion ||
+      h.format_version > kRecordingFormatVersion) {
     yf::Fail(path, root.Mark(), "format_version " + std::to_string(h.format_version) +
-                                    " is not supported (this irdist reads version " +
+                                    " is not supported (this irdist reads versions " +
+                                    std::to_string(kOldestRecordingFormatVersion) + " to " +
                                     std::to_string(kRecordingFormatVersion) + ")");
+  }
+  h.frames_csv_sha256 = root.String("frames_csv_sha256", "");
+  if (!h.frames_csv_sha256.empty() && !IsSha256Hex(h.frames_csv_sha256)) {
+    yf::Fail(path, root.Get("frames_csv_sha256").Mark(),
+             "frames_csv_sha256 must be 64 lowercase hex digits (the SHA-256 of frames.csv)");
   }
   h.completion = ParseCompletionField(root);
   h.software_version = root.String("software_version", "");
@@ -466,6 +473,10 @@ std::string HeaderYaml(const RecordingHeader& h) {
   out << YAML::Key << "end_time" << YAML::Value << h.end_time;
   out << YAML::Key << "frame_count" << YAML::Value << h.frame_count;
   out << YAML::Key << "resumed" << YAML::Value << YAML::Flow << h.resumed;
+  if (h.format_version >= 2) {
+    out << YAML::Key << "frames_csv_sha256" << YAML::Value << YAML::DoubleQuoted
+        << h.frames_csv_sha256;
+  }
   out << YAML::Key << "image" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "encoding" << YAML::Value << "png16";
   out << YAML::Key << "bit_depth" << YAML::Value << h.bit_depth;
@@ -500,7 +511,7 @@ std::string HeaderYaml(const RecordingHeader& h) {
 }
 
 int OpenCsvForAppend(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_NOFOLLOW | O_CLOEXEC);
   if (fd < 0) {
     throw RecordingError("cannot open " + path + " for appending: " + Errno() + ".");
   }
@@ -601,7 +612,14 @@ cv::Mat LoadFrame(const std::string& dir, const FrameRecord& row, std::string* w
   if (!ReadRegularFile((fs::path(dir) / row.file).string(), kMaxPngBytes, &bytes, why)) {
     return cv::Mat();
   }
-  return DecodeFramePng(std::vector<unsigned char>(bytes.begin(), bytes.end()), why);
+  cv::Mat image = DecodeFramePng(std::vector<unsigned char>(bytes.begin(), bytes.end()), why);
+  if (!image.empty() && !row.sha256.empty() && Sha256Hex(bytes) != row.sha256) {
+    *why = "its content is not the frame recorded in its row (SHA-256 " + Sha256Hex(bytes) +
+           ", frames.csv says " + row.sha256 + "): the file was replaced, swapped or edited. "
+           "Restore it from a copy of the recording";
+    return cv::Mat();
+  }
+  return image;
 }
 
 std::uint32_t BigEndian32(const unsigned char* p) {
@@ -619,6 +637,11 @@ std::string ReadCsvText(const std::string& dir) {
                          "frames.csv.");
   }
   return text;
+}
+
+void RefuseLinkedParts(const std::string& dir) {
+  const std::string linked = LinkedRecordingPart(dir);
+  if (!linked.empty()) throw RecordingError(LinkedPartMessage(dir, linked) + ".");
 }
 
 [[noreturn]] void ThrowIssue(const std::string& dir, const RecordingIssue& issue) {
@@ -641,11 +664,17 @@ const char* CompletionName(Completion completion) {
   return "running";
 }
 
-const std::string& FramesCsvHeader() {
+// The format 1 header (no sha256 column).
+static const std::string& FramesCsvHeaderV1() {
   static const std::string header =
       "index,file,bracket_id,frame_in_bracket,bracket_size,role,requested_exposure_us,"
       "actual_exposure_us,exposure_source,bias_ma_set,bias_ma_measured,slide_mm,pan_deg,tilt_deg,"
       "theta_deg,repeat,camera_frame_id,camera_timestamp_ns,host_time_ns,status";
+  return header;
+}
+
+const std::string& FramesCsvHeader() {
+  static const std::string header = FramesCsvHeaderV1() + ",sha256";
   return header;
 }
 
@@ -689,7 +718,8 @@ FramesCsv ParseFramesCsv(const std::string& text) {
   const CsvLines lines = SplitLines(text);
   csv.partial_last = lines.partial_last;
   csv.complete_bytes = lines.complete_bytes;
-  if (lines.lines.empty() || lines.lines[0] != FramesCsvHeader()) {
+  csv.hashed = !lines.lines.empty() && lines.lines[0] == FramesCsvHeader();
+  if (lines.lines.empty() || (!csv.hashed && lines.lines[0] != FramesCsvHeaderV1())) {
     csv.errors.push_back({kCsv, 1, "header line is not the irdist frames.csv header (format " +
                                        std::to_string(kRecordingFormatVersion) + ")"});
     return csv;
@@ -705,7 +735,7 @@ FramesCsv ParseFramesCsv(const std::string& text) {
     FrameRecord row;
     std::string why;
     row.line = static_cast<int>(i + 1);
-    if (!ParseRow(lines.lines[i], &row, &why)) {
+    if (!ParseRow(lines.lines[i], &row, &why, csv.hashed)) {
       csv.errors.push_back({kCsv, row.line, "bad row: " + why});
       continue;
     }
@@ -789,7 +819,8 @@ static void WriteTextsBeside(const std::string& dir, const RecordingHeader& head
 
 static void CreateCsv(const std::string& csv_path) {
   const std::string line = FramesCsvHeader() + "\n";
-  const int fd = ::open(csv_path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  const int fd =
+      ::open(csv_path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (fd < 0) throw RecordingError("cannot create " + csv_path + ": " + Errno() + ".");
   const bool ok = WriteAll(fd, line.data(), line.size()) && ::fsync(fd) == 0;
   const int saved = errno;
@@ -827,6 +858,7 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Open(const std::string& dir,
 }
 
 std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir) {
+  RefuseLinkedParts(dir);
   const int lock_fd = AcquireWriterLock(dir);
   std::unique_ptr<RecordingWriter> writer(new RecordingWriter(dir, RecordingHeader{}, 0));
   writer->lock_fd_ = lock_fd;  // released by the writer's destructor on every path
@@ -853,6 +885,8 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir)
   header.frame_count = -1;
   header.resumed.push_back(NowIso8601());
   writer->header_ = std::move(header);
+  writer->header_.frames_csv_sha256.clear();  // frames.csv grows again: hashed at Close()
+  writer->hashed_ = csv.hashed;
   writer->next_index_ = next_index;
   writer->WriteHeader();
   writer->csv_fd_ = OpenCsvForAppend(csv_path);
@@ -861,12 +895,12 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir)
 
 // Checks the row against the reader's rules: a row the reader would refuse is a bug of the
 // caller, refused before anything reaches the disk.
-static void CheckRowReadable(const std::string& row, std::int64_t index) {
+static void CheckRowReadable(const std::string& row, std::int64_t index, bool hashed) {
   FrameRecord parsed;
   std::string why;
   std::string line = row;
   while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
-  IRDIST_CHECK(ParseRow(line, &parsed, &why), "frame ", index,
+  IRDIST_CHECK(ParseRow(line, &parsed, &why, hashed), "frame ", index,
                " would be unreadable in frames.csv: ", why);
 }
 
@@ -915,6 +949,8 @@ std::int64_t RecordingWriter::Stage(const cv::Mat& image) {
     throw;
   }
   staged_.push_back(tmp);
+  staged_sha256_.push_back(
+      Sha256Hex(std::string_view(reinterpret_cast<const char*>(png.data()), png.size())));
   return index;
 }
 
@@ -927,8 +963,9 @@ std::vector<std::string> RecordingWriter::StagedRows(std::vector<FrameRecord>* r
     FrameRecord& record = (*records)[i];
     record.index = next_index_ + static_cast<std::int64_t>(i);
     record.file = FrameFileName(record.index);
-    rows.push_back(FormatRow(record));
-    CheckRowReadable(rows.back(), record.index);
+    record.sha256 = hashed_ ? staged_sha256_[i] : "";
+    rows.push_back(FormatRow(record, hashed_));
+    CheckRowReadable(rows.back(), record.index, hashed_);
   }
   return rows;
 }
@@ -953,19 +990,23 @@ std::vector<FrameRecord> RecordingWriter::CommitStaged(std::vector<FrameRecord> 
   }
   next_index_ += static_cast<std::int64_t>(staged_.size());
   staged_.clear();
+  staged_sha256_.clear();
   return records;
 }
 
 void RecordingWriter::DropStaged() {
   for (const std::string& tmp : staged_) ::unlink(tmp.c_str());  // never visible; best effort
   staged_.clear();
+  staged_sha256_.clear();
 }
 
 FrameRecord RecordingWriter::Append(const cv::Mat& image, FrameRecord record) {
   IRDIST_CHECK(staged_.empty(), "Append() with staged frames: commit or drop them first");
   record.index = next_index_;
   record.file = FrameFileName(record.index);
-  CheckRowReadable(FormatRow(record), record.index);  // before anything reaches the disk
+  FrameRecord probe = record;  // its hash is known once encoded: any well-formed one here
+  probe.sha256 = std::string(64, '0');
+  CheckRowReadable(FormatRow(probe, hashed_), record.index, hashed_);  // before the disk
   Stage(image);
   return CommitStaged({std::move(record)}).front();
 }
@@ -984,6 +1025,12 @@ void RecordingWriter::Close(Completion completion) {
   header_.completion = first_error_.empty() ? completion : Completion::kCut;
   header_.end_time = NowIso8601();
   header_.frame_count = next_index_;
+  header_.frames_csv_sha256.clear();
+  std::string csv_text, why;
+  if (header_.format_version >= 2 &&
+      ReadRegularFile((fs::path(dir_) / kCsv).string(), kMaxTextBytes, &csv_text, &why)) {
+    header_.frames_csv_sha256 = Sha256Hex(csv_text);  // frames.csv as closed (check verifies it)
+  }
   try {
     WriteHeader();
   } catch (const RecordingError&) {
@@ -995,10 +1042,26 @@ void RecordingWriter::Close(Completion completion) {
   lock_fd_ = -1;
 }
 
+std::string LiveWriterOf(const std::string& dir) {
+  const std::string path = (fs::path(dir) / "writer.lock").string();
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return "";
+  std::string holder;
+  if (::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK) {
+    char pid[32] = {0};
+    const ssize_t n = ::pread(fd, pid, sizeof(pid) - 1, 0);
+    holder = n > 0 ? std::string(pid, static_cast<size_t>(n)) : "?";
+    while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
+    if (holder.empty()) holder = "?";
+  }
+  ::close(fd);  // releases a shared lock taken here
+  return holder;
+}
+
 // --- RecordingReader --------------------------------------------------------------------------
 
 RecordingReader::RecordingReader(const std::string& dir)
-    : dir_(dir), header_(ReadHeader(dir)) {
+    : dir_(dir), header_((RefuseLinkedParts(dir), ReadHeader(dir))) {
   FramesCsv csv = ParseFramesCsv(ReadCsvText(dir));
   if (!csv.errors.empty()) ThrowIssue(dir, csv.errors.front());
   rows_ = std::move(csv.rows);
@@ -1046,9 +1109,12 @@ std::string RecordingCheck::BriefReport() const {
 
 namespace {
 
-// Every row's PNG: readable, 16-bit gray, all of one size.
-void CheckFrames(const std::string& dir, const std::vector<FrameRecord>& rows,
-                 RecordingCheck* check) {
+// Every row's PNG: its recorded content (SHA-256), readable, 16-bit gray, all of one size.
+// Returns each decoded frame's signal.
+std::map<std::int64_t, FrameSignal> CheckFrames(const std::string& dir,
+                                                const std::vector<FrameRecord>& rows,
+                                                RecordingCheck* check) {
+  std::map<std::int64_t, FrameSignal> signals;
   cv::Size size;
   for (const FrameRecord& row : rows) {
     std::string why;
@@ -1056,12 +1122,18 @@ void CheckFrames(const std::string& dir, const std::vector<FrameRecord>& rows,
     const std::string at = " (row at frames.csv:" + std::to_string(row.line) + ")";
     if (image.empty()) {
       check->errors.push_back({row.file, 0, why + at});
-    } else if (size.area() == 0) {
+      continue;
+    }
+    if (size.area() == 0) {
       size = image.size();
     } else if (image.size() != size) {
       check->errors.push_back({row.file, 0, "size differs from the first frame" + at});
     }
+    double max_value = 0.0;
+    cv::minMaxLoc(image, nullptr, &max_value);
+    signals[row.index] = {cv::sum(image)[0], max_value};
   }
+  return signals;
 }
 
 // Files in frames/ without a row, and temp files.
@@ -1100,6 +1172,10 @@ void CheckBrackets(const std::vector<FrameRecord>& rows, RecordingCheck* check) 
   }
 }
 
+void AddIssues(const std::vector<RecordingIssue>& issues, std::vector<RecordingIssue>* to) {
+  to->insert(to->end(), issues.begin(), issues.end());
+}
+
 void CheckCompletion(const RecordingHeader& header, RecordingCheck* check) {
   switch (check->completion) {
     case Completion::kRunning:
@@ -1123,6 +1199,11 @@ void CheckCompletion(const RecordingHeader& header, RecordingCheck* check) {
 
 RecordingCheck CheckRecording(const std::string& dir) {
   RecordingCheck check;
+  const std::string linked = LinkedRecordingPart(dir);
+  if (!linked.empty()) {
+    check.errors.push_back({linked, 0, LinkedPartMessage(dir, linked)});
+    return check;
+  }
   if (!fs::exists(fs::path(dir) / kYaml) && !fs::exists(fs::path(dir) / kCsv)) {
     throw RecordingError(dir + " is not a recording (no recording.yaml, no frames.csv).");
   }
@@ -1137,8 +1218,10 @@ RecordingCheck CheckRecording(const std::string& dir) {
     header_ok = false;
   }
   FramesCsv csv;
+  std::string csv_text;
   try {
-    csv = ParseFramesCsv(ReadCsvText(dir));
+    csv_text = ReadCsvText(dir);
+    csv = ParseFramesCsv(csv_text);
   } catch (const RecordingError& error) {
     check.errors.push_back({kCsv, 0, error.what()});
     return check;
@@ -1146,10 +1229,15 @@ RecordingCheck CheckRecording(const std::string& dir) {
   check.errors.insert(check.errors.end(), csv.errors.begin(), csv.errors.end());
   check.warnings.insert(check.warnings.end(), csv.warnings.begin(), csv.warnings.end());
   check.rows = static_cast<std::int64_t>(csv.rows.size());
-  CheckFrames(dir, csv.rows, &check);
+  const std::map<std::int64_t, FrameSignal> signals = CheckFrames(dir, csv.rows, &check);
   CheckLeftovers(dir, csv.rows, &check);
   CheckBrackets(csv.rows, &check);
-  if (header_ok) CheckCompletion(header, &check);
+  AddIssues(ExposureOrderIssues(BracketsOf(csv.rows), signals), &check.errors);
+  if (!header_ok) return check;
+  CheckCompletion(header, &check);
+  AddCsvHashIssues(header, csv_text, &check);
+  AddIssues(BitDepthIssues(header), &check.errors);
+  AddIssues(ValueRangeIssues(csv.rows, signals, header.bit_depth), &check.errors);
   return check;
 }
 

@@ -23,7 +23,10 @@ class RecordingError : public Error {
   using Error::Error;
 };
 
-inline constexpr int kRecordingFormatVersion = 1;
+// Version 2 adds the content hashes (frames.csv's sha256 column, recording.yaml's
+// frames_csv_sha256); version 1 recordings still load, unverified, with a note from check.
+inline constexpr int kRecordingFormatVersion = 2;
+inline constexpr int kOldestRecordingFormatVersion = 1;
 
 enum class Completion { kRunning, kComplete, kCut };
 const char* CompletionName(Completion completion);  // "running" / "complete" / "cut"
@@ -46,6 +49,7 @@ struct RecordingHeader {
   std::string recipe_text;              // the recipe as used, byte for byte (recipe.yaml beside)
   std::string rig_path;
   std::string rig_text;                 // the rig file as used, byte for byte (rig.yaml beside)
+  std::string frames_csv_sha256;        // SHA-256 of frames.csv, set by Close() ("" while open)
 };
 
 // Largest frame the readers decode (checked on the PNG header, before decoding).
@@ -81,6 +85,7 @@ struct FrameRecord {
   std::uint64_t camera_timestamp_ns = 0;
   std::int64_t host_time_ns = 0;
   std::string status = "ok";            // ok | retried
+  std::string sha256;                   // of the PNG's bytes, set by the writer ("" = format 1)
   int line = 0;                         // line in frames.csv (filled by the reader)
 };
 
@@ -149,12 +154,18 @@ class RecordingWriter {
   std::int64_t next_index_ = 0;
   int csv_fd_ = -1;
   int lock_fd_ = -1;
+  bool hashed_ = true;  // rows carry their PNG's SHA-256 (false: resuming a format 1 recording)
   bool closed_ = false;
   std::string first_error_;
   std::vector<std::string> staged_;  // temporary paths of the staged frames, in index order
+  std::vector<std::string> staged_sha256_;  // their PNG bytes' SHA-256
   std::vector<std::string> set_aside_;
   std::string set_aside_dir_;
 };
+
+// The pid of the live writer that holds the recording's lock (writer.lock), or "" when no writer
+// is live. Never takes the lock.
+std::string LiveWriterOf(const std::string& dir);
 
 // One bracket as recorded: its rows in frame_in_bracket order (the last row of each position wins
 // when a resumed run re-acquired it).
@@ -210,6 +221,7 @@ struct RecordingCheck {
 // frames/<index>.png of its own index), duplicates, gaps and order. A partial last line is a
 // warning and left out. Used by RecordingReader (first error thrown) and CheckRecording (all).
 struct FramesCsv {
+  bool hashed = false;            // the header has the sha256 column (format 2)
   std::vector<FrameRecord> rows;  // the readable complete rows, line filled
   std::vector<RecordingIssue> errors, warnings;
   std::uint64_t complete_bytes = 0;  // bytes up to and including the last '\n'

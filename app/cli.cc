@@ -344,6 +344,7 @@ void AddSnapAndView(CommandTable& table) {
   CLI::App* sub = table.Add("snap", table.handlers().snap, s);
   sub->add_option("--rig", s.rig, "Rig name or rig file")->capture_default_str();
   sub->add_option("--out", s.out, "PNG file to write")->required();
+  sub->add_flag("--force", s.force, "Replace an existing --out file");
   sub->add_option("--exposure-ms", s.exposure_ms, "Exposure")->check(CLI::PositiveNumber);
   AddAt(sub, s.at);
   AddTimeScale(sub, s.time_scale);
@@ -357,6 +358,7 @@ void AddSnapAndView(CommandTable& table) {
   AddAt(sub, v.at);
   sub->add_option("--frames", v.frames, "Quit after N frames (0: at q or Esc)");
   sub->add_option("--screenshot", v.screenshot, "Save the last window image to this PNG");
+  sub->add_flag("--force", v.force, "Replace an existing --screenshot file");
   AddTimeScale(sub, v.time_scale);
 }
 

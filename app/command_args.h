@@ -69,6 +69,7 @@ struct MeasureArgs {
 struct SnapArgs {
   std::string rig = "virtual";
   std::string out;              // --out FILE.png
+  bool force = false;           // --force: replace an existing FILE.png
   double exposure_ms = 8.0;     // --exposure-ms
   std::vector<double> at;       // --at (virtual rig only)
   double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
@@ -82,6 +83,7 @@ struct ViewArgs {
   std::vector<double> at;       // --at (virtual rig only)
   int frames = 0;               // --frames: quit after N frames (0 = until q / Esc)
   std::string screenshot;       // --screenshot FILE.png: save the last window image
+  bool force = false;           // --force: replace an existing screenshot file
   double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
 };
 

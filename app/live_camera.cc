@@ -142,7 +142,7 @@ LiveCamera::LiveCamera(const LiveCameraOptions& options, std::ostream& err) : im
   CameraRoute route;
   if (m.rig.kind != RigKind::kVirtual) {
     route = UseHardwareCamera(m.rig, m.rig_path, options);
-  } else if (const std::optional<RunningSim> sim = FindRunningSim(m.rig_path)) {
+  } else if (const std::optional<RunningSim> sim = FindRunningSim(m.rig_path, err)) {
     route = UseRunningSim(*sim, options, err);
   } else {
     route = StartOwnVirtualRig(m.rig_path, options, err, &m.virtual_rig);

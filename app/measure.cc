@@ -20,6 +20,7 @@
 #include "app/offline.h"
 #include "app/position.h"
 #include "app/provenance.h"
+#include "app/resume.h"
 #include "app/run.h"
 #include "estimator/model_file.h"
 
@@ -477,6 +478,8 @@ void CheckMeasureArgs(const MeasureArgs& args) {
 
 void RunMeasure(const MeasureArgs& args, CommandIo io) {
   CheckMeasureArgs(args);
+  std::optional<RunFolderLock> folder_lock;  // one measurement per --out folder at a time
+  if (!args.out_dir.empty()) folder_lock.emplace(args.out_dir, "measure");
   const CalibrationModel model = LoadModel(args.model);
   SignalGuard guard;  // Ctrl-C ends the loop after the bracket in flight
   MeasureSession session(args, model, io);

@@ -16,6 +16,7 @@
 #include "app/position.h"
 #include "app/provenance.h"
 #include "app/recipe.h"
+#include "app/resume.h"
 #include "app/show.h"
 #include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
@@ -88,14 +89,19 @@ void RequireCleanRecording(const std::string& dir) {
   throw CheckFailedError(message.str());
 }
 
-// Results are never replaced without being asked: refuses when one of `names` exists in `dir`.
+// Results are never replaced without being asked: refuses when one of `names` exists in `dir`;
+// one that is a symbolic link is refused even with --force (never written through).
 void RefuseExistingResults(const std::string& dir, const std::vector<std::string>& names,
                            bool force, const std::string& command) {
-  if (force) return;
   for (const std::string& name : names) {
     const fs::path path = fs::path(dir) / name;
     std::error_code ec;
-    if (fs::exists(path, ec)) {
+    if (fs::is_symlink(fs::symlink_status(path, ec))) {
+      throw RunFolderError(path.string() + " is a symbolic link: irdist " + command +
+                           " never writes through a link. Remove it, or give a new folder with "
+                           "--out.");
+    }
+    if (!force && fs::exists(path, ec)) {
       throw RunFolderError(path.string() + " exists: irdist " + command +
                            " does not replace results. Give a new folder with --out, or pass "
                            "--force to replace them.");
@@ -731,6 +737,11 @@ void ProcessValidation(const std::string& run_dir, const CalibrationModel& model
 }
 
 void RunFit(const FitArgs& args, CommandIo io) {
+  const std::string writer = LiveWriterOf(args.recording);
+  if (!writer.empty()) {
+    throw RunFolderError(args.recording + " is being written by a live run (process " + writer +
+                         "); fit it once that run has ended (or stop it and resume it).");
+  }
   RequireCleanRecording(args.recording);
   const RecordingReader reader(args.recording);
   if (!reader.IsComplete()) {
@@ -742,6 +753,7 @@ void RunFit(const FitArgs& args, CommandIo io) {
   const std::string out_dir = ParentOf(model_path);
   RefuseExistingResults(out_dir, {fs::path(model_path).filename().string(), "features.csv", "report"},
                         args.force, "fit");
+  RefuseLiveRun(out_dir, "fit");
   fs::create_directories(out_dir);
   const FeatureOptions options =
       FitFeatureOptions(reader, FeatureOptions{}, args.recover_response, io.out);

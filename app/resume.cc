@@ -76,7 +76,46 @@ void CheckCameraSettings(const RecordingHeader& header, const ResumeExpectation&
   }
 }
 
+// The parts of a run folder irdist writes or reads: none may be a symbolic link.
+void RefuseLinkedRunParts(const std::string& run_dir) {
+  for (const char* part : {"recording", "recording/frames", "recording/recording.yaml",
+                           "recording/frames.csv", "model.yaml", "features.csv", "estimates.csv",
+                           "summary.yaml", "report", "station.log", "run.lock"}) {
+    const fs::path path = fs::path(run_dir) / part;
+    std::error_code ec;
+    if (fs::is_symlink(fs::symlink_status(path, ec))) {
+      throw RunFolderError(path.string() + " is a symbolic link; a resume never writes through "
+                           "a link. Replace it with the real file or folder (or remove it), or "
+                           "start a new run.");
+    }
+  }
+}
+
+// The first of `results` missing from `run_dir` ("" when every one is there).
+std::string FirstMissing(const std::string& run_dir, const std::vector<std::string>& results) {
+  for (const std::string& name : results) {
+    std::error_code ec;
+    if (!fs::exists(fs::path(run_dir) / name, ec)) return name;
+  }
+  return "";
+}
+
 }  // namespace
+
+void RefuseLiveRun(const std::string& run_dir, const std::string& command) {
+  const std::string path = (fs::path(run_dir) / "run.lock").string();
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return;  // no run ever locked the folder (or it is gone)
+  const bool live = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  const auto holder = LockHolder(fd);
+  ::close(fd);
+  if (live) {
+    throw RunFolderError(run_dir + " is in use by a live run (irdist " + holder.second +
+                         ", process " + holder.first + "); irdist " + command +
+                         " would write into it. Wait for that run to end, or give another "
+                         "folder with --out.");
+  }
+}
 
 RunFolderLock::RunFolderLock(const std::string& run_dir, const std::string& command) {
   std::error_code ec;
@@ -124,6 +163,7 @@ ResumeExpectation ResumeExpectationOf(const Recipe& recipe, const std::string& r
 ResumeState CheckResume(const std::string& run_dir, const std::string& command,
                         const ResumeExpectation& expected) {
   const std::string recording_dir = run_dir + "/recording";
+  RefuseLinkedRunParts(run_dir);
   if (!fs::exists(recording_dir + "/recording.yaml")) {
     throw RunFolderError(recording_dir + ": no recording to resume (recording.yaml missing); "
                          "pass the folder of a cut run to --resume.");
@@ -140,20 +180,40 @@ ResumeState CheckResume(const std::string& run_dir, const std::string& command,
   CheckSameText("rig file", expected.rig_path, expected.rig_text, reader.header().rig_text,
                 recording_dir);
   CheckCameraSettings(reader.header(), expected, recording_dir);
-  if (reader.IsComplete()) {
-    throw RunFolderError(recording_dir + " is complete: there is nothing to resume, and its "
-                         "results stand (nothing was refitted). Start a new run with --out.");
-  }
   ResumeState state;
+  if (reader.IsComplete()) {
+    state.missing_result = FirstMissing(run_dir, expected.results);
+    if (state.missing_result.empty()) {
+      throw RunFolderError(recording_dir + " is complete and its results are in " + run_dir +
+                           ": there is nothing to resume, and they stand. Start a new run with "
+                           "--out.");
+    }
+    state.complete = true;
+  }
   state.complete_brackets = reader.CompleteBracketIds();
   return state;
 }
 
 std::string ResumeCommand(const std::string& command, const std::string& recipe_path,
                           const std::string& model_path, const std::string& run_dir) {
-  std::string line = "irdist " + command + " " + recipe_path;
-  if (!model_path.empty()) line += " --model " + model_path;
-  return line + " --resume " + run_dir;
+  std::string line = "irdist " + command + " " + ShellQuoted(recipe_path);
+  if (!model_path.empty()) line += " --model " + ShellQuoted(model_path);
+  return line + " --resume " + ShellQuoted(run_dir);
+}
+
+std::string ShellQuoted(const std::string& word) {
+  static const char kPlain[] =
+      "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_./:=,+@%-";
+  if (!word.empty() && word.find_first_not_of(kPlain) == std::string::npos) return word;
+  std::string quoted = "'";
+  for (const char c : word) {
+    if (c == '\'') {
+      quoted += "'\\''";
+    } else {
+      quoted += c;
+    }
+  }
+  return quoted + "'";
 }
 
 }  // namespace irdist

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <set>
 #include <string>
+#include <vector>
 
 namespace irdist {
 
@@ -23,12 +24,20 @@ class RunFolderLock {
   int fd_ = -1;
 };
 
+// Refuses (RunFolderError naming the pid and command) while a live run holds `run_dir`'s lock;
+// `command` is the one refused ("fit"). Never takes the lock; a folder without run.lock is free.
+void RefuseLiveRun(const std::string& run_dir, const std::string& command);
+
 // What the resumed run uses; each must match the recording (the texts byte for byte).
 struct ResumeExpectation {
   std::string recipe_path, recipe_text;
   std::string rig_path, rig_text;
   std::string pixel_format;
   int roi_offset_x = 0, roi_offset_y = 0, roi_width = 0, roi_height = 0;  // width 0: whole sensor
+  // The files a finished run leaves in its folder, the last one written last (model.yaml and
+  // report/index.html for calibrate): a complete recording missing one was cut during the
+  // processing, which a resume then runs.
+  std::vector<std::string> results;
 };
 
 struct Recipe;
@@ -37,19 +46,27 @@ ResumeExpectation ResumeExpectationOf(const Recipe& recipe, const std::string& r
                                       const std::string& rig_text);
 
 struct ResumeState {
-  bool complete = false;  // never true on return: a complete recording is refused
+  bool complete = false;       // the recording is complete: only the processing is left to do
+  std::string missing_result;  // then: the first of ResumeExpectation::results that is missing
   std::set<std::int64_t> complete_brackets;
 };
 
-// Checks that `run_dir` can be resumed by `command` with `expected`: a recording is there, cut
-// (not complete: its results stand, nothing is refitted), made by the same command, with the same
-// recipe and rig bytes, pixel format and ROI. Throws RunFolderError or RecipeError (InputError)
-// naming the file and what differs.
+// Checks that `run_dir` can be resumed by `command` with `expected`: a recording is there, made
+// by the same command, with the same recipe and rig bytes, pixel format and ROI, and no part of
+// the folder (recording, frames/, recording.yaml, model.yaml, ...) is a symbolic link. A cut
+// recording is continued; a complete one only when one of its results is missing (the run was
+// killed while processing); with every result there they stand and the resume is refused.
+// Throws RunFolderError or RecipeError (InputError) naming the file and what differs.
 ResumeState CheckResume(const std::string& run_dir, const std::string& command,
                         const ResumeExpectation& expected);
 
-// "irdist calibrate RECIPE --resume RUN" (with --model MODEL for validate).
+// "irdist calibrate RECIPE --resume RUN" (with --model MODEL for validate), each word quoted for
+// a POSIX shell when it needs it (ShellQuoted).
 std::string ResumeCommand(const std::string& command, const std::string& recipe_path,
                           const std::string& model_path, const std::string& run_dir);
+
+// `word` as one word of a POSIX shell command: as is when it has only letters, digits and
+// `_./:=,+@%-`, else in single quotes (a quote inside as '\'').
+std::string ShellQuoted(const std::string& word);
 
 }  // namespace irdist

@@ -3,6 +3,8 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -25,6 +27,7 @@
 #include "app/recipe.h"
 #include "app/resume.h"
 #include "app/suggest.h"
+#include "base/safe_file.h"
 #include "estimator/model_file.h"
 #include "sim/virtual_rig.h"
 #include "app/station_setup.h"
@@ -146,6 +149,7 @@ struct Recorded {
   std::string dir;
   FeatureMap cache;  // features of the frames captured in this session
   bool cut = false;
+  std::unique_ptr<RunFolderLock> lock;  // held through the processing too
 };
 
 std::vector<Pose> SweepPoses(const Plan& plan, const std::set<std::int64_t>& done) {
@@ -177,27 +181,50 @@ const char* CommandName(RunKind kind) {
   return kind == RunKind::kCalibrate ? "calibrate" : "validate";
 }
 
+// The files a finished run of `recipe` leaves in its folder, the last one written last.
+std::vector<std::string> ResultsOf(RunKind kind, const Recipe& recipe) {
+  if (recipe.after == AfterRecording::kNone) return {"features.csv"};
+  if (kind == RunKind::kCalibrate) return {"model.yaml", "report/index.html"};
+  return {"estimates.csv", "summary.yaml", "report/index.html"};
+}
+
+// A new run folder holds no recording or results of another run (nor a link in their place).
+void RefuseOtherResults(const std::string& dir, RunKind kind) {
+  for (const char* name : {"recording", "model.yaml", "features.csv", "estimates.csv",
+                           "summary.yaml", "report"}) {
+    const fs::path path = fs::path(dir) / name;
+    std::error_code ec;
+    if (fs::exists(fs::symlink_status(path, ec))) {
+      throw RunFolderError(path.string() + " exists already: irdist " + CommandName(kind) +
+                           " never replaces a run's recording or results. Continue that run "
+                           "with --resume " + ShellQuoted(dir) + ", or choose a new --out "
+                           "folder.");
+    }
+  }
+}
+
 // The run folder: a new one, or the cut run to resume (its complete brackets in `done_ids`).
-// Returns false when the recording to resume is complete already.
+// Returns false when the recording to resume is complete already (only its processing is left).
 bool PrepareRunFolder(const RunRequest& request, const Recipe& recipe, const Plan& plan,
                       const std::string& recipe_text, CommandIo io, Recorded* recorded,
                       std::set<std::int64_t>* done_ids) {
   if (request.resume_dir.empty()) {
     recorded->dir =
         request.out_dir.empty() ? recipe.output_dir + "-" + Timestamp() : request.out_dir;
-    if (fs::exists(recorded->dir + "/recording")) {
-      throw RunFolderError(recorded->dir +
-                           "/recording exists already; choose another --out "
-                           "folder, or continue that run with --resume " +
-                           recorded->dir + ".");
-    }
+    RefuseOtherResults(recorded->dir, request.kind);
     fs::create_directories(recorded->dir);
     return true;
   }
   recorded->dir = request.resume_dir;
-  const ResumeState state =
-      CheckResume(recorded->dir, CommandName(request.kind),
-                  ResumeExpectationOf(recipe, recipe_text, ReadText(recipe.rig_path)));
+  ResumeExpectation expected = ResumeExpectationOf(recipe, recipe_text, ReadText(recipe.rig_path));
+  expected.results = ResultsOf(request.kind, recipe);
+  const ResumeState state = CheckResume(recorded->dir, CommandName(request.kind), expected);
+  if (state.complete) {
+    io.err << "Resuming " << recorded->dir << ": the recording is complete but "
+           << state.missing_result << " is missing (the run was stopped while processing); "
+           << "processing it now.\n";
+    return false;
+  }
   *done_ids = state.complete_brackets;
   io.err << "Resuming " << recorded->dir << ": " << done_ids->size() << " of "
          << plan.poses.size() << " brackets already recorded.\n";
@@ -421,11 +448,11 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   Recorded recorded;
   const std::string recipe_text = ReadText(recipe.path);
   std::set<std::int64_t> done_ids;
-  if (!PrepareRunFolder(request, recipe, plan, recipe_text, io, &recorded, &done_ids)) {
-    return recorded;
-  }
+  const bool record = PrepareRunFolder(request, recipe, plan, recipe_text, io, &recorded, &done_ids);
   const std::string command = CommandName(request.kind);
-  const RunFolderLock folder_lock(recorded.dir, command);  // one run per folder, for the whole run
+  // One run per folder, for the whole run (recording and processing).
+  recorded.lock = std::make_unique<RunFolderLock>(recorded.dir, command);
+  if (!record) return recorded;
   const std::vector<Pose> poses = SweepPoses(plan, done_ids);
   // Declared first: the camera and the station links are closed before a virtual rig stops.
   RigEndpoints rig = StartRig(request, recipe, io);
@@ -511,12 +538,10 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
                       model ? BlobFitModelOf(*model) : nullptr, io);
   }
   if (recorded.cut) {
-    throw InterruptedError(
-        "run stopped; the recording in " + recorded.dir +
-        "/recording is closed as cut. Continue it with: irdist " +
-        (request.kind == RunKind::kCalibrate ? "calibrate " : "validate ") + recipe.path +
-        (request.kind == RunKind::kValidate ? " --model " + request.model_path : std::string()) +
-        " --resume " + recorded.dir);
+    throw InterruptedError("run stopped; the recording in " + recorded.dir +
+                           "/recording is closed as cut. Continue it with: " +
+                           ResumeCommand(CommandName(request.kind), recipe.path,
+                                         request.model_path, recorded.dir));
   }
 
   if (recipe.after == AfterRecording::kNone) {
@@ -568,25 +593,43 @@ RecipeEnds EndsOf(const Plan& plan) {
 }
 
 std::string ProbeRecipeText(const Recipe& recipe, const RecipeEnds& e) {
-  const auto pair = [](double lo, double hi) {
-    std::ostringstream out;
-    out << std::setprecision(10) << "[" << lo;
-    if (hi != lo) out << ", " << hi;
-    out << "]";
-    return out.str();
+  // [lo, hi], or [lo] when the recipe has one value on the axis.
+  const auto pair = [](YAML::Emitter& out, double lo, double hi) {
+    out << YAML::Flow << YAML::BeginSeq << lo;
+    if (hi != lo) out << hi;
+    out << YAML::EndSeq;
   };
   const BracketSpec& b = recipe.sweep.bracket;
   const double t_long = *std::max_element(b.t_meas_ms.begin(), b.t_meas_ms.end());
-  std::ostringstream y;
-  y << std::setprecision(10) << "# Probe frames for 'irdist plan --suggest " << recipe.path
-    << "'\nname: " << recipe.name << "-probe\nrig: " << fs::absolute(recipe.rig_path).string()
-    << "\nafter: none\naxes:\n  slide_mm: " << pair(e.d_min, e.d_max)
-    << "\n  theta_deg: " << pair(e.th_min, e.th_max) << "\n  bias_ma: " << pair(e.i_min, e.i_max)
-    << "\nbracket:\n  t_ref_ms: " << b.t_ref_ms << "\n  t_meas_ms: [" << t_long << "]\n";
-  return y.str();
+  YAML::Emitter y;  // every path and name quoted as it needs ('#', ':', quotes, spaces)
+  y.SetDoublePrecision(10);
+  y << YAML::Comment("Probe frames for 'irdist plan --suggest " + recipe.path + "'");
+  y << YAML::BeginMap;
+  y << YAML::Key << "name" << YAML::Value << YAML::DoubleQuoted << recipe.name + "-probe";
+  y << YAML::Key << "rig" << YAML::Value << YAML::DoubleQuoted
+    << fs::absolute(recipe.rig_path).string();
+  y << YAML::Key << "after" << YAML::Value << "none";
+  y << YAML::Key << "axes" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "slide_mm" << YAML::Value;
+  pair(y, e.d_min, e.d_max);
+  y << YAML::Key << "theta_deg" << YAML::Value;
+  pair(y, e.th_min, e.th_max);
+  y << YAML::Key << "bias_ma" << YAML::Value;
+  pair(y, e.i_min, e.i_max);
+  y << YAML::EndMap;
+  y << YAML::Key << "bracket" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "t_ref_ms" << YAML::Value << b.t_ref_ms;
+  y << YAML::Key << "t_meas_ms" << YAML::Value << YAML::Flow << YAML::BeginSeq << t_long
+    << YAML::EndSeq;
+  y << YAML::EndMap << YAML::EndMap;
+  return std::string(y.c_str()) + "\n";
 }
 
 }  // namespace
+
+std::string SuggestProbeRecipe(const Recipe& recipe, const Plan& plan) {
+  return ProbeRecipeText(recipe, EndsOf(plan));
+}
 
 void RunSuggest(const PlanArgs& args, CommandIo io) {
   const Recipe recipe = LoadRecipe(args.recipe);
@@ -606,10 +649,9 @@ void RunSuggest(const PlanArgs& args, CommandIo io) {
       args.out_dir.empty() ? recipe.output_dir + "-suggest-" + Timestamp() : args.out_dir;
   fs::create_directories(dir);
   const std::string probe_path = dir + "/probe-recipe.yaml";
-  {
-    std::ofstream probe(probe_path, std::ios::trunc);
-    probe << ProbeRecipeText(recipe, ends);
-    if (!probe) throw RunFolderError(probe_path + ": cannot be written; check the folder.");
+  std::string why;
+  if (!WriteFileAtomically(probe_path, SuggestProbeRecipe(recipe, plan), 0644, &why)) {
+    throw RunFolderError(probe_path + " " + why + "; check the folder.");
   }
   RunRequest request;
   request.kind = RunKind::kCalibrate;

@@ -13,6 +13,7 @@
 // A resumed run keeps the earlier sessions' station logs as station.<n>.log.
 
 #include <atomic>
+#include <string>
 
 #include "app/command_args.h"
 #include "app/errors.h"
@@ -45,5 +46,12 @@ void RunValidate(const ValidateArgs& args, CommandIo io);
 // plan --suggest: records probe frames at the recipe's two ends on its rig and proposes t_r, the
 // t_n and the current (app/suggest.h). Throws SuggestError when no exposures fit.
 void RunSuggest(const PlanArgs& args, CommandIo io);
+
+struct Recipe;
+struct Plan;
+// The probe recipe RunSuggest records (YAML written through yaml-cpp's emitter, so any rig path
+// or name reads back as it is): the recipe's two ends crossed (nearest distance, smallest angle,
+// highest current; farthest, largest angle, lowest current), at its t_r and its longest t_n.
+std::string SuggestProbeRecipe(const Recipe& recipe, const Plan& plan);
 
 }  // namespace irdist

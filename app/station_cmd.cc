@@ -14,8 +14,8 @@ namespace irdist {
 namespace {
 
 // The ports a running `irdist sim` of this rig file wrote in its state file.
-std::map<std::string, std::string> RunningSimPorts(const Rig& rig) {
-  const std::optional<RunningSim> sim = FindRunningSim(rig.path);
+std::map<std::string, std::string> RunningSimPorts(const Rig& rig, std::ostream& warn) {
+  const std::optional<RunningSim> sim = FindRunningSim(rig.path, warn);
   if (!sim) return {};
   std::map<std::string, std::string> ports;
   for (const auto& [key, value] : sim->values) {
@@ -26,9 +26,10 @@ std::map<std::string, std::string> RunningSimPorts(const Rig& rig) {
   return ports;
 }
 
-std::map<std::string, std::string> PortsFor(const Rig& rig, const StationArgs& args) {
+std::map<std::string, std::string> PortsFor(const Rig& rig, const StationArgs& args,
+                                            std::ostream& warn) {
   std::map<std::string, std::string> ports;
-  if (rig.kind == RigKind::kVirtual) ports = RunningSimPorts(rig);
+  if (rig.kind == RigKind::kVirtual) ports = RunningSimPorts(rig, warn);
   for (const auto& [name, port] : ParsePortOverrides(rig, args.ports)) ports[name] = port;
   for (const DeviceSpec& d : rig.station.composition.devices) {
     if (ports.count(d.name) == 0 && d.port == "auto") {
@@ -92,7 +93,7 @@ void SetCurrent(const Rig& rig, const StationArgs& args, Station& station) {
 
 void RunStation(const StationArgs& args, CommandIo io) {
   const Rig rig = LoadRig(ResolveRig(args.rig));
-  StationOptions options = StationRunOptions(PortsFor(rig, args), nullptr);
+  StationOptions options = StationRunOptions(PortsFor(rig, args, io.err), nullptr);
   options.off_at_exit = false;  // `current` leaves the IRED on; `off` switches it off
   Station station(rig.station.composition, options);
   station.Identify();

@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "base/safe_file.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -479,15 +481,9 @@ void WriteSummaryYaml(const std::string& path, const ValidationSummary& summary,
     out << YAML::EndMap;
   }
   out << YAML::EndMap;
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream file(tmp, std::ios::trunc);
-    if (!file) throw EstimatesFileError(path + ": cannot be written; check the folder.");
-    file << out.c_str() << '\n';
-    if (!file) throw EstimatesFileError(path + ": write failed (disk full?).");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    throw EstimatesFileError(path + ": could not replace the file; check permissions.");
+  std::string why;  // path.tmp created new (never through a planted link), then renamed
+  if (!WriteFileAtomically(path, std::string(out.c_str()) + "\n", 0644, &why)) {
+    throw EstimatesFileError(path + ": " + why + "; check the folder (and the disk).");
   }
 }
 

@@ -1,14 +1,10 @@
 #include "app/tools.h"
 #include "app/station_setup.h"
 
-#include <signal.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <chrono>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <ostream>
 #include <sstream>
@@ -23,12 +19,6 @@
 namespace irdist {
 
 namespace fs = std::filesystem;
-
-std::string SimStateDir() {
-  const char* runtime = std::getenv("XDG_RUNTIME_DIR");  // NOLINT(concurrency-mt-unsafe)
-  if (runtime != nullptr && *runtime != '\0' && fs::is_directory(runtime)) return runtime;
-  return "/tmp";
-}
 
 std::string ResolveRig(const std::string& spec) {
   if (fs::exists(spec)) return spec;
@@ -48,6 +38,7 @@ class RemoveOnExit {
  public:
   explicit RemoveOnExit(std::string path) : path_(std::move(path)) {}
   ~RemoveOnExit() {
+    if (path_.empty()) return;
     std::error_code ignored;
     fs::remove(path_, ignored);
   }
@@ -62,36 +53,11 @@ class RemoveOnExit {
 
 }  // namespace
 
-std::map<std::string, std::string> ReadFlatYaml(const std::string& path) {
-  std::map<std::string, std::string> values;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    const size_t colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    std::string value = line.substr(colon + 1);
-    while (!value.empty() && (value.front() == ' ' || value.front() == '"')) value.erase(0, 1);
-    while (!value.empty() && (value.back() == ' ' || value.back() == '"')) value.pop_back();
-    values[line.substr(0, colon)] = value;
-  }
-  return values;
-}
-
-std::optional<RunningSim> FindRunningSim(const std::string& rig_path) {
-  std::error_code error;
-  for (const auto& entry : fs::directory_iterator(SimStateDir(), error)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind("irdist-sim-", 0) != 0 || entry.path().extension() != ".yaml") continue;
-    RunningSim sim{0, entry.path().string(), ReadFlatYaml(entry.path().string())};
-    const auto pid = sim.values.find("pid");
+std::optional<RunningSim> FindRunningSim(const std::string& rig_path, std::ostream& warn) {
+  for (RunningSim& sim : LiveSims(warn)) {
     const auto rig = sim.values.find("rig");
-    if (pid == sim.values.end() || rig == sim.values.end()) continue;
     std::error_code same_error;
-    if (!fs::equivalent(rig->second, rig_path, same_error)) continue;
-    sim.pid = std::atol(pid->second.c_str());
-    const bool alive = sim.pid > 0 && (kill(static_cast<pid_t>(sim.pid), 0) == 0 || errno == EPERM);
-    if (!alive) continue;  // the stale file of a rig that died
-    return sim;
+    if (rig != sim.values.end() && fs::equivalent(rig->second, rig_path, same_error)) return sim;
   }
   return std::nullopt;
 }
@@ -110,23 +76,22 @@ void RunSim(const SimArgs& args, CommandIo io) {
   std::unique_ptr<sim::VirtualRig> virtual_rig = sim::VirtualRig::Start(rig_path, overrides);
   const sim::VirtualRigInfo& info = virtual_rig->Info();
 
-  const std::string state_path =
-      SimStateDir() + "/irdist-sim-" + std::to_string(getpid()) + ".yaml";
-  RemoveOnExit remove_state(state_path);
-  {
-    std::ofstream state(state_path);
-    state << "pid: " << getpid() << "\nrig: \"" << fs::absolute(rig_path).string()
-          << "\"\ncamera_id: \"" << info.camera_id << "\"\ncamera_address: \""
-          << info.camera_address << "\"\nserial: \"" << info.serial << "\"\nstation_port: \""
-          << info.station_port << "\"\ntime_scale: " << info.time_scale << "\n";
-    for (const auto& [name, port] : VirtualDevicePorts(rig, info)) {
-      state << "port." << name << ": \"" << port << "\"\n";
-    }
+  SimState state{getpid(),         fs::absolute(rig_path).string(), info.camera_id,
+                 info.camera_address, info.serial, info.station_port, info.time_scale,
+                 VirtualDevicePorts(rig, info)};
+  std::string state_path;
+  try {
+    state_path = WriteSimState(state);
+  } catch (const StateFileError& error) {
+    io.err << "warning: " << error.what() << " measure, snap, view and station will not find "
+           << "this rig.\n";
   }
+  RemoveOnExit remove_state(state_path);
   io.out << "camera: " << info.camera_id << " " << info.camera_address << " serial " << info.serial
          << "\n";
   io.out << "station: " << info.station_port << "\n";
-  io.out << "time scale: " << info.time_scale << "\nstate: " << state_path
+  io.out << "time scale: " << info.time_scale << "\nstate: "
+         << (state_path.empty() ? "not written (see the warning)" : state_path)
          << "\nRunning until Ctrl-C (SIGINT or SIGTERM).\n"
          << std::flush;
   while (!StopRequested().load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -137,20 +102,17 @@ void RunSim(const SimArgs& args, CommandIo io) {
 void RunDevices(const DevicesArgs& args, CommandIo io) {
   io.out << "Virtual rigs (irdist sim):\n";
   int rigs = 0;
-  std::error_code error;
-  for (const auto& entry : fs::directory_iterator(SimStateDir(), error)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind("irdist-sim-", 0) != 0 || entry.path().extension() != ".yaml") continue;
-    const auto values = ReadFlatYaml(entry.path().string());
-    const auto pid = values.find("pid");
-    if (pid == values.end()) continue;
-    const pid_t id = static_cast<pid_t>(std::atoll(pid->second.c_str()));
-    if (id <= 0 || kill(id, 0) != 0) continue;  // stale file of a rig that died
+  for (const RunningSim& sim : LiveSims(io.err)) {
+    const auto value = [&sim](const char* key) {
+      const auto found = sim.values.find(key);
+      return found == sim.values.end() ? std::string("?") : found->second;
+    };
     ++rigs;
-    io.out << "  pid " << id << ": camera " << values.at("camera_id") << " at "
-           << values.at("camera_address") << " serial " << values.at("serial") << ", station "
-           << values.at("station_port") << ", time scale " << values.at("time_scale") << "\n";
+    io.out << "  pid " << sim.pid << ": camera " << value("camera_id") << " at "
+           << value("camera_address") << " serial " << value("serial") << ", station "
+           << value("station_port") << ", time scale " << value("time_scale") << "\n";
   }
+  std::error_code error;
   if (rigs == 0) io.out << "  none\n";
 
   io.out << "Serial ports:\n";

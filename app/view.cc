@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <opencv2/highgui.hpp>
@@ -16,10 +18,47 @@
 #include "app/measure.h"
 #include "app/offline.h"
 #include "app/show.h"
+#include "base/safe_file.h"
 #include "estimator/model_file.h"
 
 namespace irdist {
 namespace {
+
+namespace fs = std::filesystem;
+
+// An output image named by `flag`: a .png (the only format that keeps 16-bit values), not an
+// existing file unless `force`, never a symbolic link. Checked before the camera starts.
+void CheckPngOutput(const std::string& path, bool force, const char* flag) {
+  std::string extension = fs::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".png") {
+    throw UsageError(std::string(flag) + " " + path + ": irdist writes PNG images only (the one "
+                     "supported format: .png, which keeps every bit of the frame); name the "
+                     "file FILE.png.");
+  }
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(path, ec);
+  if (fs::is_symlink(status)) {
+    throw RunFolderError(path + " is a symbolic link; irdist never writes through one. Remove it "
+                         "or choose another " + flag + " name.");
+  }
+  if (fs::exists(status) && !force) {
+    throw RunFolderError(path + " exists: irdist does not replace a file unasked. Choose another " +
+                         std::string(flag) + " name, or add --force to replace it.");
+  }
+}
+
+// `image` as a PNG at `path`, written whole (a temporary file renamed into place).
+void WritePng(const std::string& path, const cv::Mat& image, const char* what) {
+  std::vector<uchar> png;
+  std::string why = "cannot be encoded as PNG";
+  if (!cv::imencode(".png", image, png) ||
+      !WriteFileAtomically(path, std::string_view(reinterpret_cast<const char*>(png.data()),
+                                                  png.size()), 0644, &why)) {
+    throw RunFolderError(path + ": cannot write the " + what + ": " + why + "; check the folder.");
+  }
+}
 
 // The side of the suggested region of interest: the features' window with room to move.
 constexpr int kSuggestedRoiSidePx = 256;
@@ -106,24 +145,26 @@ void ViewLoop(const std::function<ViewFrame()>& next, int bit_depth, const ViewA
     const int key = cv::waitKey(1);
     if (key == 'q' || key == 27) break;
     if (key == 's') {
-      const std::string file = "view-" + std::to_string(saved++) + ".png";
-      if (cv::imwrite(file, shown)) out << "Saved " << file << "\n";
+      std::string file;  // the next view-N.png that does not exist: none is replaced
+      std::error_code ec;
+      do {
+        file = "view-" + std::to_string(saved++) + ".png";
+      } while (fs::exists(fs::symlink_status(file, ec)));
+      WritePng(file, shown, "screenshot");
+      out << "Saved " << file << "\n";
     }
   }
-  if (!args.screenshot.empty() && !shown.empty() && !cv::imwrite(args.screenshot, shown)) {
-    throw DisplayError(args.screenshot + ": cannot write the screenshot; check the folder.");
-  }
+  if (!args.screenshot.empty() && !shown.empty()) WritePng(args.screenshot, shown, "screenshot");
   cv::destroyWindow(window);
 }
 
 }  // namespace
 
 void RunSnap(const SnapArgs& args, CommandIo io) {
+  CheckPngOutput(args.out, args.force, "--out");
   SingleExposure camera(args.rig, args.at, args.exposure_ms, args.time_scale, io.err);
   const cv::Mat image = camera.Next();
-  if (!cv::imwrite(args.out, image)) {
-    throw RunFolderError(args.out + ": cannot write the PNG; check the folder and the .png name.");
-  }
+  WritePng(args.out, image, "frame");
   const int bit_depth = camera.live().bit_depth();
   const Features f = FrameFeatures(image, bit_depth, FeatureOptions{});
   io.out << "Frame: " << args.out << " (" << image.cols << " x " << image.rows << ", "
@@ -133,6 +174,7 @@ void RunSnap(const SnapArgs& args, CommandIo io) {
 }
 
 void RunView(const ViewArgs& args, CommandIo io) {
+  if (!args.screenshot.empty()) CheckPngOutput(args.screenshot, args.force, "--screenshot");
   RequireDisplay("view");
   if (!args.model.empty()) {
     const CalibrationModel model = LoadModel(args.model);

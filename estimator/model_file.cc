@@ -1,11 +1,7 @@
 #include "estimator/model_file.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <yaml-cpp/yaml.h>
 
-#include <cerrno>
 #include <algorithm>
 #include <type_traits>
 #include <cmath>
@@ -14,6 +10,7 @@
 #include <sstream>
 
 #include "base/regular_file.h"
+#include "base/safe_file.h"
 
 namespace irdist {
 namespace {
@@ -587,25 +584,13 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   return model;
 }
 
-// Written to path.tmp, synced, then renamed: a crash leaves the old file or the new one, whole.
+// Written to path.tmp (created new: a stale or planted one is unlinked, never followed), synced,
+// then renamed: a crash leaves the old file or the new one, whole. A model.yaml that is a
+// symbolic link is refused.
 void SaveModel(const CalibrationModel& model, const std::string& path) {
-  const std::string text = ModelToYaml(model);
-  const std::string tmp = path + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw ModelFileError(path, "", 0, "cannot open for writing (check the folder exists)");
-  size_t done = 0;
-  bool ok = true;
-  while (ok && done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    ok = n > 0;
-    if (ok) done += static_cast<size_t>(n);
-  }
-  ok = ok && ::fsync(fd) == 0;
-  ::close(fd);
-  if (!ok || ::rename(tmp.c_str(), path.c_str()) != 0) {
-    ::unlink(tmp.c_str());
-    throw ModelFileError(path, "", 0, "write failed (disk full?)");
+  std::string why;
+  if (!WriteFileAtomically(path, ModelToYaml(model), 0644, &why)) {
+    throw ModelFileError(path, "", 0, why + "; check the folder (and the disk)");
   }
 }
 

@@ -2,6 +2,8 @@
 // on corrupted files, and resuming a cut run.
 #include "acquisition/recording.h"
 
+#include "acquisition/content_hash.h"
+
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
@@ -309,7 +311,7 @@ TEST(Recording, CheckReportsCorruptPngBadRowGapAndOrphanByFileAndLine) {
     while (std::getline(in, line)) lines.push_back(line);
   }
   lines[3] = "2,frames/000002.png,0,2,5,meas,12000,twelve,readback,500,,1500,10,-5.5,11.4,1,"
-             "65532,3000000000,1700000000000000002,ok";
+             "65532,3000000000,1700000000000000002,ok," + std::string(64, 'a');
   lines.erase(lines.begin() + 8);
   {
     std::ofstream out(fs::path(dir) / "frames.csv", std::ios::trunc);
@@ -596,6 +598,182 @@ TEST(RecordingSafety, ParsersRefuseGarbageWithNamedErrors) {
   std::string why;
   EXPECT_TRUE(DecodeFramePng({0x89, 'P', 'N', 'G'}, &why).empty());
   EXPECT_NE(why.find("not a PNG"), std::string::npos);
+}
+
+// --- Issue 19: content hashes, links, the bit depth -------------------------------------------
+
+// Every row carries its PNG's SHA-256, and recording.yaml frames.csv's once closed.
+TEST(RecordingIntegrity, RowsCarryTheirPngsHashAndTheHeaderFramesCsvs) {
+  const std::string dir = CompleteRecording("hashes", kBracketSize);
+  const RecordingReader reader(dir);
+  EXPECT_EQ(reader.header().format_version, 2);
+  ASSERT_EQ(reader.rows().size(), static_cast<size_t>(kBracketSize));
+  for (const FrameRecord& row : reader.rows()) {
+    EXPECT_EQ(row.sha256, Sha256Hex(Slurp(fs::path(dir) / row.file))) << row.file;
+  }
+  EXPECT_EQ(reader.header().frames_csv_sha256, Sha256Hex(Slurp(fs::path(dir) / "frames.csv")));
+  EXPECT_TRUE(CheckRecording(dir).ok()) << CheckRecording(dir).BriefReport();
+  fs::remove_all(dir);
+}
+
+// The issue's case: two PNGs swapped passed check. Now check, and the reader, name the frames.
+TEST(RecordingIntegrity, SwappedPngsAreFoundByCheckAndTheReader) {
+  const std::string dir = CompleteRecording("swapped", 2 * kBracketSize);
+  const fs::path a = fs::path(dir) / "frames/000002.png";
+  const fs::path b = fs::path(dir) / "frames/000007.png";
+  const std::string bytes_a = Slurp(a);
+  WriteText(a, Slurp(b));
+  WriteText(b, bytes_a);
+  const std::string report = CheckRecording(dir).BriefReport();
+  EXPECT_FALSE(CheckRecording(dir).ok());
+  EXPECT_NE(report.find("frames/000002.png: its content is not the frame recorded in its row"),
+            std::string::npos) << report;
+  EXPECT_NE(report.find("frames/000007.png: its content"), std::string::npos) << report;
+  EXPECT_NE(ReaderError(dir).find("frames/000002.png"), std::string::npos) << ReaderError(dir);
+  fs::remove_all(dir);
+}
+
+// Edited pose columns (with the row's hash intact) passed check: frames.csv's hash finds them.
+TEST(RecordingIntegrity, AnEditedFramesCsvOfAClosedRecordingIsAnError) {
+  const std::string dir = CompleteRecording("editedcsv", kBracketSize);
+  EditCsvLine(dir, 3, [](std::string line) {
+    return std::regex_replace(line, std::regex(",1500,10,"), ",1600,10,");
+  });
+  const std::string report = CheckRecording(dir).BriefReport();
+  EXPECT_NE(report.find("error: frames.csv: its SHA-256 is"), std::string::npos) << report;
+  fs::remove_all(dir);
+}
+
+// A resume clears the hash while the file grows, and the new close writes the new one.
+TEST(RecordingIntegrity, AResumedRecordingIsHashedAgainAtItsClose) {
+  const std::string dir = TempDir("resumehash");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, kBracketSize);
+  writer->Close(Completion::kCut);
+  EXPECT_TRUE(CheckRecording(dir).ok()) << CheckRecording(dir).BriefReport();
+  auto resumed = RecordingWriter::Resume(dir);
+  EXPECT_EQ(ReadRecordingHeader(dir).frames_csv_sha256, "");
+  WriteFrames(*resumed, kBracketSize, 2 * kBracketSize);
+  resumed->Close(Completion::kComplete);
+  EXPECT_EQ(ReadRecordingHeader(dir).frames_csv_sha256,
+            Sha256Hex(Slurp(fs::path(dir) / "frames.csv")));
+  EXPECT_TRUE(CheckRecording(dir).ok()) << CheckRecording(dir).BriefReport();
+  fs::remove_all(dir);
+}
+
+// A recording made before the hashes (format 1: no sha256 column, no frames_csv_sha256) still
+// loads and checks clean, with a note; a resume appends format 1 rows to it.
+TEST(RecordingIntegrity, AFormat1RecordingStillLoadsWithANote) {
+  const std::string dir = CompleteRecording("format1", kBracketSize);
+  std::istringstream in(Slurp(fs::path(dir) / "frames.csv"));
+  std::string csv, line;
+  while (std::getline(in, line)) csv += line.substr(0, line.rfind(',')) + "\n";
+  WriteText(fs::path(dir) / "frames.csv", csv);
+  std::string yaml = Slurp(fs::path(dir) / "recording.yaml");
+  yaml = std::regex_replace(yaml, std::regex("format_version: 2"), "format_version: 1");
+  yaml = std::regex_replace(yaml, std::regex("frames_csv_sha256: \"[0-9a-f]*\"\n"), "");
+  yaml = std::regex_replace(yaml, std::regex("completion: complete"), "completion: cut");
+  WriteText(fs::path(dir) / "recording.yaml", yaml);
+  const RecordingReader reader(dir);
+  EXPECT_EQ(reader.header().format_version, 1);
+  EXPECT_EQ(reader.rows().size(), static_cast<size_t>(kBracketSize));
+  EXPECT_EQ(reader.rows()[0].sha256, "");
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_TRUE(check.ok()) << check.BriefReport();
+  EXPECT_NE(check.BriefReport().find("note: format_version 1 (before content hashes)"),
+            std::string::npos) << check.BriefReport();
+  auto resumed = RecordingWriter::Resume(dir);
+  WriteFrames(*resumed, kBracketSize, 2 * kBracketSize);
+  resumed->Close(Completion::kComplete);
+  EXPECT_TRUE(CheckRecording(dir).ok()) << CheckRecording(dir).BriefReport();
+  EXPECT_EQ(RecordingReader(dir).rows().size(), static_cast<size_t>(2 * kBracketSize));
+  fs::remove_all(dir);
+}
+
+// The issue's case: bit_depth 16 on a Mono12 recording passed check.
+TEST(RecordingIntegrity, BitDepthThatContradictsThePixelFormatFailsCheck) {
+  const std::string dir = CompleteRecording("bitdepth16", kBracketSize);
+  std::string yaml = Slurp(fs::path(dir) / "recording.yaml");
+  WriteText(fs::path(dir) / "recording.yaml",
+            std::regex_replace(yaml, std::regex("bit_depth: 12"), "bit_depth: 16"));
+  const std::string report = CheckRecording(dir).BriefReport();
+  EXPECT_NE(report.find("error: recording.yaml: image.bit_depth 16 contradicts image.pixel_format "
+                        "Mono12"), std::string::npos) << report;
+  fs::remove_all(dir);
+}
+
+// Frames of a bracket in the wrong order (their PNGs and hashes moved with them): the signal
+// falls as the exposure grows.
+TEST(RecordingIntegrity, ABracketWhoseBrightnessContradictsItsExposuresFailsCheck) {
+  const std::string dir = TempDir("ordering");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  for (std::int64_t i = 0; i < kBracketSize; ++i) {
+    writer->Append(TestImage(100 * (kBracketSize - i)), TestRecord(i));  // brightest first
+  }
+  writer->Close(Completion::kComplete);
+  const std::string report = CheckRecording(dir).BriefReport();
+  EXPECT_NE(report.find("has less signal"), std::string::npos) << report;
+  fs::remove_all(dir);
+}
+
+// A frames/ that is a link (the issue: check passed, a resume wrote 240 PNGs outside), and a
+// recording.yaml that is one: refused by check, the reader and a resume, naming the path.
+TEST(RecordingSafety, LinkedFramesFolderOrHeaderIsRefusedEverywhere) {
+  for (const std::string part : {"frames", "recording.yaml", "frames.csv"}) {
+    const std::string dir = TempDir("linked-" + part);
+    auto writer = RecordingWriter::Open(dir, TestHeader());
+    WriteFrames(*writer, 0, kBracketSize);
+    writer->Close(Completion::kCut);
+    const fs::path real = fs::path(dir + "-outside");
+    fs::remove_all(real);
+    fs::rename(fs::path(dir) / part, real);
+    fs::create_symlink(real, fs::path(dir) / part);
+    const RecordingCheck check = CheckRecording(dir);
+    EXPECT_FALSE(check.ok()) << part;
+    EXPECT_NE(check.BriefReport().find(part + " is a symbolic link"), std::string::npos)
+        << check.BriefReport();
+    EXPECT_NE(ReaderError(dir).find("symbolic link"), std::string::npos) << ReaderError(dir);
+    try {
+      RecordingWriter::Resume(dir);
+      ADD_FAILURE() << "a resume through a linked " << part << " was accepted";
+    } catch (const RecordingError& error) {
+      EXPECT_NE(std::string(error.what()).find(dir + "/" + part), std::string::npos)
+          << error.what();
+    }
+    fs::remove_all(dir);
+    fs::remove_all(real);
+  }
+}
+
+// Stale temporary files that are links (the issue: a resume wrote the header outside the
+// folder): unlinked, never followed.
+TEST(RecordingSafety, ResumeNeverWritesThroughAPlantedTemporaryLink) {
+  const std::string dir = TempDir("tmplink");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, kBracketSize);
+  writer->Close(Completion::kCut);
+  const fs::path victim = fs::path(dir + "-victim");
+  WriteText(victim, "precious");
+  fs::create_symlink(victim, fs::path(dir) / "recording.yaml.tmp");
+  fs::create_symlink(victim, fs::path(dir) / "frames/000005.png.tmp");
+  auto resumed = RecordingWriter::Resume(dir);
+  WriteFrames(*resumed, kBracketSize, 2 * kBracketSize);
+  resumed->Close(Completion::kComplete);
+  EXPECT_EQ(Slurp(victim), "precious");
+  EXPECT_FALSE(fs::is_symlink(fs::path(dir) / "recording.yaml"));
+  EXPECT_TRUE(CheckRecording(dir).ok()) << CheckRecording(dir).BriefReport();
+  fs::remove_all(dir);
+  fs::remove(victim);
+}
+
+TEST(RecordingSafety, LiveWriterIsNamedWithoutTakingItsLock) {
+  const std::string dir = TempDir("livewriter");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  EXPECT_EQ(LiveWriterOf(dir), std::to_string(::getpid()));
+  EXPECT_EQ(LiveWriterOf(dir), std::to_string(::getpid()));  // still held by the writer
+  writer->Close(Completion::kComplete);
+  EXPECT_EQ(LiveWriterOf(dir), "");
+  fs::remove_all(dir);
 }
 
 }  // namespace

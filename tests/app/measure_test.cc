@@ -6,7 +6,14 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "app/errors.h"
+#include "app/resume.h"
 
 namespace irdist {
 namespace {
@@ -92,6 +99,28 @@ TEST(MeasureStats, MeanAndSdOverTheEstimates) {
   EXPECT_NE(report.find("2.00 brackets/s"), std::string::npos) << report;
   EXPECT_NE(report.find("3 with an estimate"), std::string::npos) << report;
   EXPECT_NE(report.find("d: mean 2000.00 mm, sd 10.00 mm"), std::string::npos) << report;
+}
+
+// Two `measure --out` on one folder at once: the second is refused by the folder's lock (the
+// first's estimates would be lost), before anything else is opened.
+TEST(MeasureOut, ASecondMeasurementOnALiveFolderIsRefused) {
+  namespace fs = std::filesystem;
+  const std::string dir =
+      (fs::temp_directory_path() / ("irdist-measure-lock-" + std::to_string(::getpid()))).string();
+  fs::remove_all(dir);
+  const RunFolderLock first(dir, "measure");
+  MeasureArgs args;
+  args.model = dir + "/no-model.yaml";
+  args.out_dir = dir;
+  std::ostringstream out, err;
+  try {
+    RunMeasure(args, {out, err});
+    FAIL() << "a second measure on a live folder";
+  } catch (const RunFolderError& e) {
+    EXPECT_NE(std::string(e.what()).find("irdist measure, process " + std::to_string(::getpid())),
+              std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

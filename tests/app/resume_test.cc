@@ -128,5 +128,71 @@ TEST(ResumeCommandTest, NamesTheCommandRecipeModelAndFolder) {
             "irdist validate r.yaml --model m.yaml --resume runs/v");
 }
 
+// The printed command pastes into a shell as it is: spaces, '#', '$' and quotes are quoted.
+TEST(ResumeCommandTest, QuotesEveryWordAShellWouldSplitOrExpand) {
+  EXPECT_EQ(ResumeCommand("calibrate", "lab #2/r.yaml", "", "runs/it's $HOME"),
+            "irdist calibrate 'lab #2/r.yaml' --resume 'runs/it'\\''s $HOME'");
+  EXPECT_EQ(ShellQuoted("runs/a-b_c.d:e=f,g+h@i%j"), "runs/a-b_c.d:e=f,g+h@i%j");
+  EXPECT_EQ(ShellQuoted(""), "''");
+  EXPECT_EQ(ShellQuoted("a;b"), "'a;b'");
+}
+
+// Killed during the fit step: the recording is complete, model.yaml is missing. The resume now
+// goes on to the processing instead of saying the results stand.
+TEST_F(ResumeTest, CompleteRunWithoutItsModelIsProcessedByTheResume) {
+  MakeCutRun("calibrate", Completion::kComplete);
+  ResumeExpectation expected = Same();
+  expected.results = {"model.yaml", "report/index.html"};
+  ResumeState state = CheckResume(run_, "calibrate", expected);
+  EXPECT_TRUE(state.complete);
+  EXPECT_EQ(state.missing_result, "model.yaml");
+  std::ofstream(run_ + "/model.yaml") << "model\n";
+  state = CheckResume(run_, "calibrate", expected);
+  EXPECT_EQ(state.missing_result, "report/index.html");  // killed while writing the report
+  fs::create_directories(run_ + "/report");
+  std::ofstream(run_ + "/report/index.html") << "<html>\n";
+  try {
+    CheckResume(run_, "calibrate", expected);
+    FAIL() << "a finished run was resumed";
+  } catch (const RunFolderError& e) {
+    EXPECT_NE(std::string(e.what()).find("they stand"), std::string::npos) << e.what();
+  }
+}
+
+// A model.yaml (or frames/, recording.yaml) that is a link: the resume would write through it.
+TEST_F(ResumeTest, ALinkInTheRunFolderIsRefusedNamingIt) {
+  MakeCutRun("calibrate");
+  const std::string outside = run_ + "-outside.yaml";
+  std::ofstream(outside) << "theirs\n";
+  fs::create_symlink(outside, run_ + "/model.yaml");
+  try {
+    CheckResume(run_, "calibrate", Same());
+    FAIL() << "a linked model.yaml was accepted";
+  } catch (const RunFolderError& e) {
+    EXPECT_NE(std::string(e.what()).find(run_ + "/model.yaml is a symbolic link"),
+              std::string::npos) << e.what();
+  }
+  fs::remove(outside);
+}
+
+// fit and the like check a folder's lock without taking it (the folder's command stays).
+TEST_F(ResumeTest, RefuseLiveRunNamesTheLiveRunAndLeavesTheLockAlone) {
+  RefuseLiveRun(run_, "fit");  // no run.lock: free
+  {
+    const RunFolderLock live(run_, "calibrate");
+    try {
+      RefuseLiveRun(run_, "fit");
+      FAIL() << "fit beside a live run";
+    } catch (const RunFolderError& e) {
+      EXPECT_NE(std::string(e.what()).find("irdist calibrate, process " +
+                                           std::to_string(getpid())),
+                std::string::npos) << e.what();
+    }
+  }
+  RefuseLiveRun(run_, "fit");  // the run ended
+  MakeCutRun("calibrate");
+  EXPECT_NO_THROW(CheckResume(run_, "calibrate", Same()));  // still a calibrate folder
+}
+
 }  // namespace
 }  // namespace irdist

@@ -12,10 +12,12 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <thread>
 
+#include "app/errors.h"
 #include "app/show.h"
 #include "tests/loopback_gvcp.h"
 
@@ -54,6 +56,43 @@ TEST(Snap, SavesTheFrameAndFindsTheBlobOnTheAxis) {
   EXPECT_NE(out.str().find("Blob at (639."), std::string::npos) << out.str();
   EXPECT_NE(out.str().find("Suggested roi_px: [512, 384, 256, 256]"), std::string::npos)
       << out.str();
+}
+
+// snap and view never replace a file unasked, never write through a link, and write PNG only;
+// each refused before the camera starts.
+TEST(Snap, RefusesAnExistingFileALinkAndAnotherFormatBeforeTheCamera) {
+  const std::string dir = Scratch("snap-refusals");
+  std::ostringstream out, err;
+  SnapArgs snap;
+  snap.rig = VirtualRig();
+  snap.out = dir + "/frame.jpg";
+  try {
+    RunSnap(snap, {out, err});
+    FAIL() << "snap wrote a JPEG";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("supported format: .png"), std::string::npos) << e.what();
+  }
+  snap.out = dir + "/recorded.png";
+  std::ofstream(snap.out) << "a recorded frame";
+  EXPECT_THROW(RunSnap(snap, {out, err}), RunFolderError);
+  fs::create_symlink(dir + "/recorded.png", dir + "/link.png");
+  snap.out = dir + "/link.png";
+  snap.force = true;
+  EXPECT_THROW(RunSnap(snap, {out, err}), RunFolderError);
+  ViewArgs view;
+  view.rig = VirtualRig();
+  view.screenshot = dir + "/recorded.png";
+  try {
+    RunView(view, {out, err});
+    FAIL() << "view would replace an existing screenshot";
+  } catch (const RunFolderError& e) {
+    EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos) << e.what();
+  }
+  view.screenshot = dir + "/view.tiff";
+  EXPECT_THROW(RunView(view, {out, err}), UsageError);
+  std::ifstream in(dir + "/recorded.png");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "a recorded frame");
 }
 
 TEST(View, WithoutADisplaySaysSo) {

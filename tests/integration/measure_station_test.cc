@@ -124,7 +124,7 @@ TEST_F(MeasureStation, EstimatesAgreeWithThePosesSetByIrdistStation) {
   testing::Child sim({"sim", "virtual", "--time-scale", "10"}, sim_log);
   const std::string state = WaitForSim(sim, sim_log);
   ASSERT_FALSE(state.empty()) << ReadAll(sim_log);
-  EXPECT_EQ(fs::path(state).parent_path(), fs::path(dir_ + "/runtime"));
+  EXPECT_EQ(fs::path(state).parent_path(), fs::path(dir_ + "/runtime/irdist"));  // private
   ASSERT_EQ(Run("home", {"station", "--rig", "virtual", "home"}, &output), 0) << output;
 
   // --at would place the IRED behind the running sim's back: refused, naming irdist station.

@@ -205,5 +205,24 @@ TEST_F(Resume, ResumeOfACompleteRunSaysSoAndRefitsNothing) {
   EXPECT_EQ(fs::last_write_time(model), written) << "the complete run was processed again";
 }
 
+// The issue: killed (kill -9) during the processing after the recording, the folder has a complete
+// recording and no result; `--resume` said the results stand. Now it runs the processing (here
+// the features of `after: none`; model.yaml and the report for a fit) without starting the rig.
+TEST_F(Resume, AResumeFinishesAProcessingThatWasKilled) {
+  ASSERT_EQ(reference_code_, 0);
+  const std::string run = *dir_ + "/killed-in-processing";
+  fs::remove_all(run);
+  fs::copy(*dir_ + "/whole", run, fs::copy_options::recursive);
+  fs::remove(run + "/features.csv");
+  std::string output;
+  EXPECT_EQ(RunIrdist({"calibrate", *dir_ + "/recipe.yaml", "--resume", run},
+                      *dir_ + "/killed-in-processing.log", &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("features.csv is missing"), std::string::npos) << output;
+  EXPECT_EQ(testing::CountLines(run + "/features.csv"), 1 + kRows);
+  EXPECT_EQ(testing::ReadAll(run + "/features.csv"), testing::ReadAll(*dir_ + "/whole/features.csv"));
+}
+
 }  // namespace
 }  // namespace irdist

@@ -18,17 +18,23 @@
 namespace irdist {
 namespace {
 
+// Waits (30 s at most) until `irdist sim` says it runs; returns its log so far.
+std::string WaitUntilRunning(testing::Child& sim, const std::string& log_path) {
+  std::string log;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (sim.Running() && std::chrono::steady_clock::now() < deadline) {
+    log = testing::ReadAll(log_path);
+    if (log.find("Running until") != std::string::npos) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return log;
+}
+
 TEST(Sim, PrintsCameraAndStationAndStopsOnSigint) {
   const std::string dir = testing::ScratchDir("sim");
   testing::LoopbackGvcpLock lock;
   testing::Child sim({"sim", "--time-scale", "10"}, dir + "/sim.log");
-  std::string log;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (sim.Running() && std::chrono::steady_clock::now() < deadline) {
-    log = testing::ReadAll(dir + "/sim.log");
-    if (log.find("Running until") != std::string::npos) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
+  const std::string log = WaitUntilRunning(sim, dir + "/sim.log");
   std::smatch camera, station, state;
   ASSERT_TRUE(
       std::regex_search(log, camera, std::regex(R"(camera: (\S+) 127\.0\.0\.1 serial (\S+))")))
@@ -117,6 +123,24 @@ TEST(Sim, SurvivesAKilledClientAndCtrlCAtAnyMoment) {
       ::waitpid(survivor, nullptr, 0);
     }
   }
+}
+
+// The issue: sim printed a state file it never wrote. With its runtime folder unusable (here a
+// file in its place) it says so, runs on, and names no state file.
+TEST(Sim, SaysSoWhenItCannotWriteItsStateFile) {
+  const std::string dir = testing::ScratchDir("sim-no-state");
+  std::filesystem::create_directories(dir + "/runtime");
+  testing::WriteAll(dir + "/runtime/irdist", "a file where the folder would be\n");
+  ASSERT_EQ(setenv("XDG_RUNTIME_DIR", (dir + "/runtime").c_str(), 1), 0);
+  testing::LoopbackGvcpLock lock;
+  testing::Child sim({"sim", "--time-scale", "10"}, dir + "/sim.log");
+  unsetenv("XDG_RUNTIME_DIR");
+  const std::string log = WaitUntilRunning(sim, dir + "/sim.log");
+  EXPECT_NE(log.find("state: not written"), std::string::npos) << log;
+  EXPECT_NE(log.find(dir + "/runtime/irdist is not a folder"), std::string::npos) << log;
+  EXPECT_FALSE(std::regex_search(log, std::regex(R"(state: \S+\.yaml)"))) << log;
+  sim.Signal(SIGINT);
+  EXPECT_EQ(sim.Wait(std::chrono::seconds(30)), 0) << testing::ReadAll(dir + "/sim.log");
 }
 
 }  // namespace

@@ -1,0 +1,135 @@
+#include "acquisition/recording_integrity.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "acquisition/content_hash.h"
+#include "base/safe_file.h"
+
+namespace irdist {
+namespace {
+
+std::string Number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.10g", value);
+  return text;
+}
+
+// Whether the longer exposure's signal is clearly below the shorter one's.
+bool Contradicts(const FrameSignal& shorter, const FrameSignal& longer) {
+  const double tolerance = 0.002 * std::max(shorter.sum, longer.sum) +
+                           6.0 * std::sqrt(std::max(0.0, shorter.sum + longer.sum));
+  return longer.sum < shorter.sum - tolerance;
+}
+
+}  // namespace
+
+std::string LinkedRecordingPart(const std::string& dir) {
+  for (const char* part : {"recording.yaml", "frames.csv", "frames", "recipe.yaml", "rig.yaml",
+                           "writer.lock"}) {
+    if (IsSymlink((std::filesystem::path(dir) / part).string())) return part;
+  }
+  return "";
+}
+
+std::string LinkedPartMessage(const std::string& dir, const std::string& part) {
+  return (std::filesystem::path(dir) / part).string() + " is a symbolic link; irdist never "
+         "reads or writes a recording through a link. Replace it with the real " +
+         std::string(part == "frames" ? "folder" : "file") + " (or remove it) and run `irdist "
+         "check` again";
+}
+
+void AddCsvHashIssues(const RecordingHeader& header, const std::string& csv_text,
+                      RecordingCheck* check) {
+  if (header.format_version < 2) {
+    check->warnings.push_back({"recording.yaml", 0,
+                               "note: format_version " + std::to_string(header.format_version) +
+                                   " (before content hashes): frames and frames.csv cannot be "
+                                   "verified"});
+  } else if (!header.frames_csv_sha256.empty()) {
+    const std::string actual = Sha256Hex(csv_text);
+    if (actual != header.frames_csv_sha256) {
+      check->errors.push_back({"frames.csv", 0,
+                               "its SHA-256 is " + actual + ", recording.yaml's "
+                               "frames_csv_sha256 is " + header.frames_csv_sha256 +
+                                   ": frames.csv was edited after the recording was closed. "
+                                   "Restore it from a copy of the recording"});
+    }
+  } else if (header.completion != Completion::kRunning) {
+    check->errors.push_back({"recording.yaml", 0,
+                             "completion is '" + std::string(CompletionName(header.completion)) +
+                                 "' but frames_csv_sha256 is missing: the header was edited. "
+                                 "Restore it from a copy of the recording"});
+  }
+}
+
+int BitsOfMonoFormat(const std::string& pixel_format) {
+  for (const int bits : {8, 10, 12, 14, 16}) {
+    if (pixel_format == "Mono" + std::to_string(bits)) return bits;
+  }
+  return 0;
+}
+
+std::vector<RecordingIssue> BitDepthIssues(const RecordingHeader& header) {
+  const int bits = BitsOfMonoFormat(header.pixel_format);
+  if (bits == 0 || bits == header.bit_depth) return {};
+  return {{"recording.yaml", 0,
+           "image.bit_depth " + std::to_string(header.bit_depth) + " contradicts " +
+               "image.pixel_format " + header.pixel_format + ", which delivers " +
+               std::to_string(bits) + " bits; set image.bit_depth: " + std::to_string(bits)}};
+}
+
+std::vector<RecordingIssue> ValueRangeIssues(const std::vector<FrameRecord>& rows,
+                                             const std::map<std::int64_t, FrameSignal>& signals,
+                                             int bit_depth) {
+  std::vector<RecordingIssue> issues;
+  const double limit = std::ldexp(1.0, bit_depth) - 1.0;
+  for (const FrameRecord& row : rows) {
+    const auto found = signals.find(row.index);
+    if (found == signals.end() || found->second.max_value <= limit) continue;
+    issues.push_back({row.file, 0,
+                      "holds the value " + Number(found->second.max_value) +
+                          ", beyond image.bit_depth " + std::to_string(bit_depth) +
+                          " (at most " + Number(limit) + "; row at frames.csv:" +
+                          std::to_string(row.line) + ")"});
+  }
+  return issues;
+}
+
+std::vector<RecordingIssue> ExposureOrderIssues(
+    const std::vector<RecordedBracket>& brackets,
+    const std::map<std::int64_t, FrameSignal>& signals) {
+  std::vector<RecordingIssue> issues;
+  for (const RecordedBracket& bracket : brackets) {
+    std::vector<const FrameRecord*> frames;
+    for (const FrameRecord& row : bracket.frames) {
+      if (signals.count(row.index) > 0) frames.push_back(&row);
+    }
+    std::sort(frames.begin(), frames.end(), [](const FrameRecord* a, const FrameRecord* b) {
+      return a->actual_exposure_us < b->actual_exposure_us;
+    });
+    bool found = false;
+    for (std::size_t j = 1; j < frames.size() && !found; ++j) {
+      for (std::size_t i = 0; i < j && !found; ++i) {
+        const FrameRecord& a = *frames[i];
+        const FrameRecord& b = *frames[j];
+        if (b.actual_exposure_us <= a.actual_exposure_us * 1.001) continue;
+        found = Contradicts(signals.at(a.index), signals.at(b.index));
+        if (!found) continue;
+        issues.push_back(
+            {"frames.csv", b.line,
+             "bracket " + std::to_string(bracket.bracket_id) + ": " + b.file + " (exposure " +
+                 Number(b.actual_exposure_us) + " us) has less signal (sum " +
+                 Number(signals.at(b.index).sum) + ") than " + a.file + " (exposure " +
+                 Number(a.actual_exposure_us) + " us, sum " + Number(signals.at(a.index).sum) +
+                 "): the frames are swapped or their exposures are wrong"});
+      }
+    }
+  }
+  return issues;
+}
+
+}  // namespace irdist
