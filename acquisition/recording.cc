@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -28,6 +29,7 @@
 #include "acquisition/recording_integrity.h"
 #include "base/regular_file.h"
 #include "base/safe_file.h"
+#include "base/utc_time.h"
 #include "base/yaml_fields.h"
 
 namespace irdist {
@@ -38,23 +40,9 @@ namespace fs = std::filesystem;
 constexpr char kYaml[] = "recording.yaml";
 constexpr char kCsv[] = "frames.csv";
 constexpr char kFramesDir[] = "frames";
-constexpr int kColumns = 21;    // format 2: ..., status, sha256
-constexpr int kColumnsV1 = 20;  // format 1: no sha256
+constexpr int kColumns = 23;    // format 2: ..., status, utc_time, host_monotonic_ns, sha256
+constexpr int kColumnsV1 = 20;  // format 1: ends at status
 
-std::string NowIso8601() {
-  const auto now = std::chrono::system_clock::now();
-  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
-  const auto micros =
-      std::chrono::duration_cast<std::chrono::microseconds>(now.time_since_epoch()).count() %
-      1000000;
-  std::tm utc{};
-  gmtime_r(&seconds, &utc);
-  char text[64];
-  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%S", &utc);
-  char out[96];
-  std::snprintf(out, sizeof(out), "%s.%06lldZ", text, static_cast<long long>(micros));
-  return out;
-}
 
 std::string Errno() { return std::strerror(errno); }
 
@@ -131,7 +119,11 @@ std::string Crc32Hex(const std::string& text) {
   return hex;
 }
 
-// One frames.csv row; with `hashed` (format 2) the PNG's SHA-256 is the last column.
+// An empty field for 0: the camera gave no timestamp, the host's monotonic time was not recorded.
+template <typename Int>
+std::string NonZeroOrEmpty(Int value) { return value == 0 ? "" : std::to_string(value); }
+
+// One frames.csv row; with `hashed` (format 2) the time columns and the PNG's SHA-256 end it.
 std::string FormatRow(const FrameRecord& r, bool hashed) {
   std::ostringstream out;
   out << r.index << ',' << r.file << ',' << r.bracket_id << ',' << r.frame_in_bracket << ','
@@ -141,8 +133,11 @@ std::string FormatRow(const FrameRecord& r, bool hashed) {
       << ',' << FormatDouble(r.bias_ma_measured) << ',' << FormatDouble(r.slide_mm) << ','
       << FormatDouble(r.pan_deg) << ',' << FormatDouble(r.tilt_deg) << ','
       << FormatDouble(r.theta_deg) << ',' << r.repeat << ',' << r.camera_frame_id << ','
-      << r.camera_timestamp_ns << ',' << r.host_time_ns << ',' << r.status;
-  if (hashed) out << ',' << r.sha256;
+      << NonZeroOrEmpty(r.camera_timestamp_ns) << ',' << r.host_time_ns << ',' << r.status;
+  if (hashed) {
+    out << ',' << FormatUtcIso8601(r.host_time_ns) << ',' << NonZeroOrEmpty(r.host_monotonic_ns)
+        << ',' << r.sha256;
+  }
   out << '\n';
   return out.str();
 }
@@ -192,8 +187,23 @@ bool ParseDouble(const std::string& text, double* value, bool optional = false) 
   return true;
 }
 
-// Parses one frames.csv data line (`hashed`: format 2, with the sha256 column); on failure says
-// which column is wrong.
+// utc_time (host_time_ns as UTC ISO 8601, which it must match) and host_monotonic_ns (empty = 0).
+bool ParseTimeColumns(const std::vector<std::string>& f, FrameRecord* r, std::string* why) {
+  const std::optional<std::int64_t> utc_ns = ParseUtcIso8601(f[20]);
+  if (!utc_ns || *utc_ns != r->host_time_ns / 1000 * 1000) {
+    *why = "bad utc_time '" + f[20] + "' (host_time_ns " + std::to_string(r->host_time_ns) +
+           " is " + FormatUtcIso8601(r->host_time_ns) + ")";
+    return false;
+  }
+  if (!f[21].empty() && (!ParseInt(f[21], &r->host_monotonic_ns) || r->host_monotonic_ns < 0)) {
+    *why = "bad host_monotonic_ns '" + f[21] + "'";
+    return false;
+  }
+  return true;
+}
+
+// Parses one frames.csv data line (`hashed`: format 2, with the time and sha256 columns); on
+// failure says which column is wrong.
 bool ParseRow(const std::string& line, FrameRecord* r, std::string* why, bool hashed) {
   const std::vector<std::string> f = Split(line);
   const int columns = hashed ? kColumns : kColumnsV1;
@@ -240,12 +250,17 @@ bool ParseRow(const std::string& line, FrameRecord* r, std::string* why, bool ha
   if (!ParseInt(f[15], &v) || v < 0) return bad("repeat", f[15]);
   r->repeat = static_cast<int>(v);
   if (!ParseUint(f[16], &r->camera_frame_id)) return bad("camera_frame_id", f[16]);
-  if (!ParseUint(f[17], &r->camera_timestamp_ns)) return bad("camera_timestamp_ns", f[17]);
+  if (!f[17].empty() && !ParseUint(f[17], &r->camera_timestamp_ns)) {
+    return bad("camera_timestamp_ns", f[17]);
+  }
   if (!ParseInt(f[18], &r->host_time_ns)) return bad("host_time_ns", f[18]);
   r->status = f[19];
   if (r->status != "ok" && r->status != "retried") return bad("status", f[19]);
-  if (hashed && !IsSha256Hex(f[20])) return bad("sha256 (64 hex digits)", f[20]);
-  r->sha256 = hashed ? f[20] : "";
+  r->sha256.clear();
+  if (!hashed) return true;
+  if (!ParseTimeColumns(f, r, why)) return false;
+  if (!IsSha256Hex(f[22])) return bad("sha256 (64 hex digits)", f[22]);
+  r->sha256 = f[22];
   return true;
 }
 
@@ -565,7 +580,7 @@ std::vector<std::string> Leftovers(const std::string& dir, std::int64_t next_ind
 // Moves `names` from frames/ to <dir>/set-aside-<time>/ (never deleted). Returns that folder.
 std::string MoveAside(const std::string& dir, const std::vector<std::string>& names) {
   if (names.empty()) return "";
-  std::string stamp = NowIso8601();
+  std::string stamp = UtcNowIso8601();
   std::replace(stamp.begin(), stamp.end(), ':', '-');
   const fs::path aside = fs::path(dir) / ("set-aside-" + stamp);
   std::error_code ec;
@@ -674,7 +689,7 @@ static const std::string& FramesCsvHeaderV1() {
 }
 
 const std::string& FramesCsvHeader() {
-  static const std::string header = FramesCsvHeaderV1() + ",sha256";
+  static const std::string header = FramesCsvHeaderV1() + ",utc_time,host_monotonic_ns,sha256";
   return header;
 }
 
@@ -690,6 +705,7 @@ FrameRecord RecordFromFrame(const BracketFrame& frame, int bracket_size) {
   r.camera_frame_id = frame.frame_id;
   r.camera_timestamp_ns = frame.timestamp_ns;
   r.host_time_ns = frame.host_time_ns;
+  r.host_monotonic_ns = frame.host_monotonic_ns;
   r.status = frame.retries > 0 ? "retried" : "ok";
   return r;
 }
@@ -842,7 +858,7 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Open(const std::string& dir,
                          ec.message() + ". Check the path and permissions.");
   }
   const int lock_fd = AcquireWriterLock(dir);
-  if (header.start_time.empty()) header.start_time = NowIso8601();
+  if (header.start_time.empty()) header.start_time = UtcNowIso8601();
   header.completion = Completion::kRunning;
   header.end_time.clear();
   header.frame_count = -1;
@@ -883,7 +899,7 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir)
   header.completion = Completion::kRunning;
   header.end_time.clear();
   header.frame_count = -1;
-  header.resumed.push_back(NowIso8601());
+  header.resumed.push_back(UtcNowIso8601());
   writer->header_ = std::move(header);
   writer->header_.frames_csv_sha256.clear();  // frames.csv grows again: hashed at Close()
   writer->hashed_ = csv.hashed;
@@ -1023,7 +1039,7 @@ void RecordingWriter::Close(Completion completion) {
     if (!synced && first_error_.empty()) first_error_ = "cannot sync frames.csv: " + Errno();
   }
   header_.completion = first_error_.empty() ? completion : Completion::kCut;
-  header_.end_time = NowIso8601();
+  header_.end_time = UtcNowIso8601();
   header_.frame_count = next_index_;
   header_.frames_csv_sha256.clear();
   std::string csv_text, why;

@@ -82,8 +82,9 @@ struct FrameRecord {
   double theta_deg = 0.0;
   int repeat = 0;
   std::uint64_t camera_frame_id = 0;
-  std::uint64_t camera_timestamp_ns = 0;
-  std::int64_t host_time_ns = 0;
+  std::uint64_t camera_timestamp_ns = 0;  // 0 = the camera gave none (empty field)
+  std::int64_t host_time_ns = 0;          // wall clock at arrival (column utc_time: the same, UTC)
+  std::int64_t host_monotonic_ns = 0;     // monotonic clock at arrival; 0 = not recorded (empty)
   std::string status = "ok";            // ok | retried
   std::string sha256;                   // of the PNG's bytes, set by the writer ("" = format 1)
   int line = 0;                         // line in frames.csv (filled by the reader)

@@ -215,8 +215,6 @@ class Session {
     live_ = std::make_unique<LiveCamera>(options, io.err);
     CheckModel(io);
     geometry_ = GeometryOfRigText(ReadRigText(), live_->rig_path());
-    roi_x_ = geometry_.roi_offset_x;
-    roi_y_ = geometry_.roi_offset_y;
     BracketOptions capture;
     capture.exposures_us = bracket.exposures_us;
     capture.interleave_reference = bracket.retake_reference;
@@ -244,8 +242,6 @@ class Session {
                                     std::chrono::steady_clock::time_point* last_frame_at);
   std::vector<FrameRecord> Records(const BracketResult& result,
                                    const std::vector<Features>& arrived, FeatureMap* features);
-  MeasureSample SampleOf(const RecordedBracket& bracket, const FeatureMap& features,
-                         const BracketEstimateRows& rows);
 
   const MeasureArgs& args_;
   const CalibrationModel& model_;
@@ -255,7 +251,6 @@ class Session {
   std::unique_ptr<RecordingWriter> writer_;
   std::string ReadRigText() const;
   CameraGeometry geometry_;
-  int roi_x_ = 0, roi_y_ = 0;
   std::int64_t next_bracket_ = 0;
   std::int64_t next_index_ = 0;  // frame index when nothing is recorded
   BracketEstimateRows all_;
@@ -359,7 +354,7 @@ MeasureSample Session::Next(double time_s) {
   bracket.complete = true;
   const BracketEstimateRows rows = EstimateRecordedBracket(bracket, features, model_, geometry_);
   AppendBracketRows(rows, &all_);
-  MeasureSample sample = SampleOf(bracket, features, rows);
+  MeasureSample sample = MeasureSampleOf(bracket, features, rows, model_, geometry_);
   sample.time_s = time_s;
   sample.latency_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
                                                                 last_frame_at)
@@ -369,8 +364,11 @@ MeasureSample Session::Next(double time_s) {
   return sample;
 }
 
-MeasureSample Session::SampleOf(const RecordedBracket& bracket, const FeatureMap& features,
-                                       const BracketEstimateRows& rows) {
+}  // namespace
+
+MeasureSample MeasureSampleOf(const RecordedBracket& bracket, const FeatureMap& features,
+                              const BracketEstimateRows& rows, const CalibrationModel& model,
+                              const CameraGeometry& geometry) {
   MeasureSample s;
   s.bracket = bracket.bracket_id;
   if (!rows.i0_free.empty()) {
@@ -378,15 +376,15 @@ MeasureSample Session::SampleOf(const RecordedBracket& bracket, const FeatureMap
     s.have_estimate = true;
     // theta from the calibrated ellipse correction (not solved): its calibration scatter, the sd
     // of a normal law whose mean |error| the fit recorded.
-    const ThetaCorrection& tc = model_.theta_correction;
+    const ThetaCorrection& tc = model.theta_correction;
     if (s.estimate.theta_std_deg < 0.0 && tc.fitted()) {
       s.estimate.theta_std_deg = std::sqrt(kPi / 2.0) * tc.summary.mean_relative_error;
     }
   }
   const Features& last = features.at(bracket.frames.back().index);
   s.blob_found = last.blob_found;
-  s.blob_x_px = last.centroid_px.x + roi_x_;
-  s.blob_y_px = last.centroid_px.y + roi_y_;
+  s.blob_x_px = last.centroid_px.x + geometry.roi_offset_x;
+  s.blob_y_px = last.centroid_px.y + geometry.roi_offset_y;
   for (const FrameRecord& row : bracket.frames) {
     const Features& f = features.at(row.index);
     s.blob_found = s.blob_found && f.blob_found;
@@ -403,6 +401,8 @@ MeasureSample Session::SampleOf(const RecordedBracket& bracket, const FeatureMap
   s.z_se_mm = s.estimate.z_se_mm;
   return s;
 }
+
+namespace {
 
 void Session::Finish() {
   if (capture_ && live_->camera().streaming()) live_->camera().StopStream();

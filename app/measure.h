@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "app/command_args.h"
+#include "app/offline.h"
 #include "app/summary.h"
 #include "estimator/features.h"
 
@@ -42,6 +43,13 @@ struct MeasureSample {
   double x_se_mm = 0.0, y_se_mm = 0.0, z_se_mm = 0.0;
 };
 
+// The sample of one estimated bracket: the default estimate (`rows` of EstimateRecordedBracket),
+// the blob of its last frame in sensor pixels (the frames' ROI offset from `geometry`) and the
+// quality flags of all its frames. measure's and the Python module's (python/) one path.
+MeasureSample MeasureSampleOf(const RecordedBracket& bracket, const FeatureMap& features,
+                              const BracketEstimateRows& rows, const CalibrationModel& model,
+                              const CameraGeometry& geometry);
+
 // The JSON object of one bracket (one line, no trailing newline).
 std::string MeasureJson(const MeasureSample& s);
 // The one-line text form (piped output; the terminal's live line is the same text).
@@ -67,8 +75,6 @@ class MeasureStats {
   int estimated_ = 0;
   Moments d_, theta_, x_, y_, z_, latency_;
 };
-
-struct CalibrationModel;
 
 // The camera taking brackets and estimating each (what measure and view --model run). Starts a
 // virtual rig when the rig is one; checks the model's provenance against the camera.

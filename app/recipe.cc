@@ -244,6 +244,16 @@ std::string AfterRecordingName(AfterRecording after) {
   return "?";
 }
 
+std::string ShippedRecipesDir() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);  // the real file, through symlinks
+  if (!ec) {
+    const fs::path installed = exe.parent_path().parent_path() / "share" / "irdist" / "recipes";
+    if (fs::is_directory(installed, ec)) return installed.string();
+  }
+  return (fs::path(IRDIST_SOURCE_DIR) / "recipes").string();
+}
+
 std::string FindRigFile(const std::string& spec, const std::string& base_dir) {
   std::error_code ec;
   const bool is_path = spec.find('/') != std::string::npos ||
@@ -254,7 +264,7 @@ std::string FindRigFile(const std::string& spec, const std::string& base_dir) {
     candidates.push_back(path.is_absolute() ? path : fs::path(base_dir) / path);
   } else {
     candidates.push_back(fs::path(base_dir) / "rigs" / (spec + ".yaml"));
-    candidates.push_back(fs::path(IRDIST_SOURCE_DIR) / "recipes" / "rigs" / (spec + ".yaml"));
+    candidates.push_back(fs::path(ShippedRecipesDir()) / "rigs" / (spec + ".yaml"));
   }
   for (const fs::path& candidate : candidates) {
     if (fs::is_regular_file(candidate, ec)) return candidate.lexically_normal().string();
@@ -294,8 +304,8 @@ void ReadRigKey(const MapReader& map, const std::string& file, const std::string
     const YAML::Node rig_node = map.Get("rig");
     Fail(file, rig_node ? rig_node.Mark() : map.Mark(),
          "rig '" + rig_spec +
-             "' not found; give a rig name from recipes/rigs/ (e.g. virtual) "
-             "or the path of a rig file");
+             "' not found; give a rig name from " + ShippedRecipesDir() +
+             "/rigs/ (e.g. virtual) or the path of a rig file");
   }
   recipe->rig = LoadRig(recipe->rig_path);
   recipe->motion = recipe->rig.station.motion;

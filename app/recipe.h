@@ -55,8 +55,13 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
 // RecordingHeader::recipe_text), without loading its rig. Throws RecipeError naming file:line.
 CameraResponse CameraResponseOfRecipeText(const std::string& text, const std::string& file);
 
+// The folder of the shipped recipes and rig files: <prefix>/share/irdist/recipes beside an
+// installed irdist (<prefix>/bin/irdist, found from the running program's real path, through any
+// symlink), else recipes/ of the source tree this build came from.
+std::string ShippedRecipesDir();
+
 // Where `rig: SPEC` points: a name ("virtual") is looked up as rigs/NAME.yaml beside the recipe,
-// then as recipes/rigs/NAME.yaml of the source tree; a path (containing '/' or ending in .yaml)
+// then in ShippedRecipesDir()/rigs/; a path (containing '/' or ending in .yaml)
 // is taken relative to base_dir. Returns "" when no file exists.
 std::string FindRigFile(const std::string& spec, const std::string& base_dir);
 
