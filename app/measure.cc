@@ -1,12 +1,17 @@
 #include "app/measure.h"
 
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
-#include <future>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <future>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -21,6 +26,7 @@
 #include "app/position.h"
 #include "app/provenance.h"
 #include "app/run.h"
+#include "base/utc_time.h"
 #include "estimator/model_file.h"
 
 namespace irdist {
@@ -31,6 +37,8 @@ namespace {
 
 constexpr const char* kSoftwareVersion = "irdist 0.1.0";
 constexpr double kPi = 3.14159265358979323846;
+// Free space a recording leaves on its disk by default (or 5% of the disk when that is less).
+constexpr double kFreeMarginBytes = 1024.0 * 1024.0 * 1024.0;
 
 std::string JsonNumber(double value) {
   if (!std::isfinite(value)) return "null";
@@ -47,6 +55,17 @@ std::string Fixed(double value, int decimals) {
 }
 
 const char* JsonBool(bool value) { return value ? "true" : "false"; }
+
+// The bracket's absolute time keys (utc_time, host_monotonic_ns, camera_timestamp_ns), each with
+// its leading comma.
+std::string TimeJson(const MeasureSample& s) {
+  std::string out = ",\"utc_time\":";
+  out += s.utc_ns != 0 ? "\"" + FormatUtcIso8601(s.utc_ns) + "\"" : std::string("null");
+  out += ",\"host_monotonic_ns\":" + std::to_string(s.host_monotonic_ns);
+  out += ",\"camera_timestamp_ns\":";
+  out += s.camera_timestamp_ns != 0 ? std::to_string(s.camera_timestamp_ns) : std::string("null");
+  return out;
+}
 
 double Se(double value) { return value >= 0.0 ? value : std::nan(""); }
 
@@ -71,7 +90,7 @@ std::string MeasureJson(const MeasureSample& s) {
   const bool ok = s.have_estimate && e.ok;
   std::ostringstream out;
   out << "{\"schema\":\"irdist.measure/" << kMeasureJsonVersion << "\",\"bracket\":" << s.bracket
-      << ",\"time_s\":" << JsonNumber(s.time_s)
+      << ",\"time_s\":" << JsonNumber(s.time_s) << TimeJson(s)
       << ",\"latency_ms\":" << JsonNumber(s.latency_ms) << ",\"ok\":" << JsonBool(ok)
       << ",\"d_mm\":" << JsonNumber(ok ? e.d_mm : NAN)
       << ",\"d_se_mm\":" << JsonNumber(ok ? Se(e.d_std_mm) : NAN)
@@ -223,12 +242,15 @@ class Session {
     capture.frame_timeout = std::chrono::milliseconds(live_->frame_timeout_ms());
     capture.trigger_in_readout = live_->rig().camera.trigger_in_readout;
     capture_ = std::make_unique<BracketCapture>(live_->camera(), capture);
+    if (!args.out_dir.empty()) {
+      estimates_ = std::make_unique<EstimatesCsvWriter>(args.out_dir + "/estimates.csv");
+    }
     if (args.record) OpenRecording();
   }
 
   MeasureSample Next(double time_s);
-  // estimates.csv in playback's order; closes the recording as complete.
-  void Finish();
+  std::string StopReason() const;
+  void Finish();  // closes the recording as complete
   const cv::Mat& last_image() const { return last_image_; }
   const Features& last_features() const { return last_features_; }
   int bit_depth() const { return live_->bit_depth(); }
@@ -257,7 +279,9 @@ class Session {
   int roi_x_ = 0, roi_y_ = 0;
   std::int64_t next_bracket_ = 0;
   std::int64_t next_index_ = 0;  // frame index when nothing is recorded
-  BracketEstimateRows all_;
+  std::unique_ptr<EstimatesCsvWriter> estimates_;  // --out's estimates.csv, one bracket at a time
+  std::uint64_t recorded_bytes_ = 0;      // the recording's frames so far
+  std::uint64_t last_bracket_bytes_ = 0;  // ... of the last bracket: what the next one needs
   cv::Mat last_image_;
   Features last_features_;
 };
@@ -296,6 +320,7 @@ std::vector<FrameRecord> Session::Records(const BracketResult& result,
                                           const std::vector<Features>& arrived,
                                           FeatureMap* features) {
   std::vector<FrameRecord> records;
+  std::uint64_t bracket_bytes = 0;
   const int size = static_cast<int>(result.frames.size());
   for (std::size_t i = 0; i < result.frames.size(); ++i) {
     const BracketFrame& frame = result.frames[i];
@@ -309,12 +334,21 @@ std::vector<FrameRecord> Session::Records(const BracketResult& result,
     record.theta_deg = truth_.theta_deg;
     if (writer_) {
       record = writer_->Append(frame.image, record);
+      struct stat written {};
+      const std::string png = writer_->dir() + "/" + record.file;
+      if (::stat(png.c_str(), &written) != 0) {
+        throw RecordingError(png + ": just written, cannot be read back (" +
+                             std::strerror(errno) + "); check the disk.");
+      }
+      bracket_bytes += static_cast<std::uint64_t>(written.st_size);
     } else {
       record.index = next_index_++;
     }
     (*features)[record.index] = arrived[i];
     records.push_back(record);
   }
+  recorded_bytes_ += bracket_bytes;
+  last_bracket_bytes_ = bracket_bytes;
   return records;
 }
 
@@ -357,12 +391,17 @@ MeasureSample Session::Next(double time_s) {
   bracket.bracket_size = static_cast<int>(bracket.frames.size());
   bracket.complete = true;
   const BracketEstimateRows rows = EstimateRecordedBracket(bracket, features, model_, geometry_);
-  AppendBracketRows(rows, &all_);
   MeasureSample sample = SampleOf(bracket, features, rows);
   sample.time_s = time_s;
   sample.latency_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
                                                                 last_frame_at)
                           .count();
+  sample.utc_ns = bracket.frames.back().host_time_ns;
+  sample.camera_timestamp_ns = bracket.frames.back().camera_timestamp_ns;
+  sample.host_monotonic_ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(last_frame_at.time_since_epoch())
+          .count();
+  if (estimates_) estimates_->Append(FlattenRows(rows));  // on disk before it is printed
   last_image_ = result.frames.back().image;
   last_features_ = features.at(bracket.frames.back().index);
   return sample;
@@ -406,7 +445,33 @@ MeasureSample Session::SampleOf(const RecordedBracket& bracket, const FeatureMap
 void Session::Finish() {
   if (capture_ && live_->camera().streaming()) live_->camera().StopStream();
   if (writer_) writer_->Close(Completion::kComplete);
-  if (!args_.out_dir.empty()) WriteEstimatesCsv(args_.out_dir + "/estimates.csv", FlattenRows(all_));
+}
+
+std::string GbText(double bytes) { return Fixed(bytes / 1e9, 3) + " GB"; }
+
+std::string Session::StopReason() const {
+  if (!writer_) return "";
+  const double recorded = static_cast<double>(recorded_bytes_);
+  const double next = static_cast<double>(last_bracket_bytes_);
+  if (args_.max_disk_gb > 0.0 && recorded + next > args_.max_disk_gb * 1e9) {
+    return "the recording (" + GbText(recorded) + ") would exceed --max-disk-gb " +
+           Fixed(args_.max_disk_gb, 3) + " with another bracket (" + GbText(next) +
+           "); it is complete up to here. Give a larger --max-disk-gb to record longer.";
+  }
+  struct statvfs disk {};
+  if (::statvfs(writer_->dir().c_str(), &disk) != 0) {
+    return "the free space of " + writer_->dir() + " cannot be read (" + std::strerror(errno) +
+           "); stopped before the disk could fill.";
+  }
+  const double free_bytes = static_cast<double>(disk.f_bavail) * disk.f_frsize;
+  const double margin = std::min(kFreeMarginBytes, 0.05 * disk.f_blocks * disk.f_frsize);
+  if (free_bytes - next < margin) {
+    return "the disk of " + writer_->dir() + " has " + GbText(free_bytes) +
+           " free; another bracket (" + GbText(next) + ") would leave less than the margin of " +
+           GbText(margin) + " (min(1 GiB, 5% of the disk)). Free space, or record to another "
+           "disk with --out.";
+  }
+  return "";
 }
 
 }  // namespace
@@ -420,6 +485,7 @@ MeasureSession::MeasureSession(const MeasureArgs& args, const CalibrationModel& 
     : impl_(new Impl{Session(args, model, io)}) {}
 MeasureSession::~MeasureSession() = default;
 MeasureSample MeasureSession::Next(double time_s) { return impl_->session.Next(time_s); }
+std::string MeasureSession::StopReason() const { return impl_->session.StopReason(); }
 void MeasureSession::Finish() { impl_->session.Finish(); }
 const cv::Mat& MeasureSession::last_image() const { return impl_->session.last_image(); }
 const Features& MeasureSession::last_features() const { return impl_->session.last_features(); }
@@ -453,6 +519,28 @@ class MeasurePrinter {
   bool line_open_ = false;
 };
 
+// While alive, a write to a closed pipe fails with EPIPE instead of killing the process (SIGPIPE
+// ignored; GLib's sockets also set it so), and measure sees its reader gone through the stream's
+// state; the previous handler comes back at the end.
+class BrokenPipeGuard {
+ public:
+  BrokenPipeGuard() {
+    struct sigaction ignore {};
+    ignore.sa_handler = SIG_IGN;
+    sigemptyset(&ignore.sa_mask);
+    installed_ = ::sigaction(SIGPIPE, &ignore, &saved_) == 0;
+  }
+  ~BrokenPipeGuard() {
+    if (installed_) ::sigaction(SIGPIPE, &saved_, nullptr);
+  }
+  BrokenPipeGuard(const BrokenPipeGuard&) = delete;
+  BrokenPipeGuard& operator=(const BrokenPipeGuard&) = delete;
+
+ private:
+  struct sigaction saved_ {};
+  bool installed_ = false;
+};
+
 bool StopNow(const MeasureArgs& args, int count, double elapsed_s) {
   if (StopRequested().load()) return true;
   if (args.count > 0 && count >= args.count) return true;
@@ -462,6 +550,9 @@ bool StopNow(const MeasureArgs& args, int count, double elapsed_s) {
 void CheckMeasureArgs(const MeasureArgs& args) {
   if (args.record && args.out_dir.empty()) {
     throw UsageError("measure: --record needs --out DIR (the recording goes to DIR/recording).");
+  }
+  if (args.max_disk_gb > 0.0 && !args.record) {
+    throw UsageError("measure: --max-disk-gb bounds a recording; give it with --record --out DIR.");
   }
   if (!args.out_dir.empty()) {
     if (fs::exists(args.out_dir + "/recording") || fs::exists(args.out_dir + "/estimates.csv")) {
@@ -479,6 +570,7 @@ void RunMeasure(const MeasureArgs& args, CommandIo io) {
   CheckMeasureArgs(args);
   const CalibrationModel model = LoadModel(args.model);
   SignalGuard guard;  // Ctrl-C ends the loop after the bracket in flight
+  BrokenPipeGuard pipe_guard;  // a reader that goes away ends it too (below)
   MeasureSession session(args, model, io);
   MeasurePrinter printer(io.out, args.json, !args.json && isatty(STDOUT_FILENO) == 1);
   MeasureStats stats;
@@ -486,16 +578,25 @@ void RunMeasure(const MeasureArgs& args, CommandIo io) {
   const auto elapsed = [&t0] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
+  std::string stopped;  // why the loop ended early, "" for --count, --duration and Ctrl-C
   while (!StopNow(args, stats.count(), elapsed())) {
+    stopped = session.StopReason();
+    if (!stopped.empty()) break;
     const MeasureSample sample = session.Next(elapsed());
     stats.Add(sample);
     printer.Print(sample);
+    if (!io.out) {
+      stopped = "stdout was closed (its reader went away) after bracket " +
+                std::to_string(sample.bracket) + ".";
+      break;
+    }
   }
   printer.Close();
   const double wall_s = elapsed();
   session.Finish();
-  std::ostream& summary = args.json ? io.err : io.out;
+  std::ostream& summary = args.json || !io.out ? io.err : io.out;
   summary << stats.Report(wall_s);
+  if (!stopped.empty()) summary << "Stopped: " << stopped << "\n";
   if (!args.out_dir.empty()) summary << "Estimates: " << args.out_dir << "/estimates.csv\n";
   if (args.record) summary << "Recording: " << args.out_dir << "/recording\n";
 }
