@@ -11,7 +11,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <condition_variable>
+#include <deque>
+#include <functional>
 #include <future>
+#include <mutex>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -214,6 +219,58 @@ Truth TruthOf(const std::vector<double>& at) {
   return t;
 }
 
+// Threads that compute frames' features as the frames arrive, alive as long as the session: a
+// bracket's frames overlap on the host's cores without a thread started per frame, so the
+// process's thread count stays the same bracket after bracket.
+class FeatureWorkers {
+ public:
+  explicit FeatureWorkers(int count) {
+    for (int i = 0; i < count; ++i) threads_.emplace_back([this] { Loop(); });
+  }
+  ~FeatureWorkers() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+    }
+    wake_.notify_all();
+    for (std::thread& t : threads_) t.join();
+  }
+  FeatureWorkers(const FeatureWorkers&) = delete;
+  FeatureWorkers& operator=(const FeatureWorkers&) = delete;
+
+  std::future<Features> Submit(std::function<Features()> work) {
+    std::packaged_task<Features()> task(std::move(work));
+    std::future<Features> result = task.get_future();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      queue_.push_back(std::move(task));
+    }
+    wake_.notify_one();
+    return result;
+  }
+
+ private:
+  void Loop() {
+    while (true) {
+      std::packaged_task<Features()> task;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+        if (queue_.empty()) return;  // stopping, nothing left to compute
+        task = std::move(queue_.front());
+        queue_.pop_front();
+      }
+      task();  // an exception reaches the future
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::packaged_task<Features()>> queue_;
+  bool stopping_ = false;
+  std::vector<std::thread> threads_;
+};
+
 // One camera, one bracket after another; each bracket's frames recorded (optionally) and
 // estimated with the playback path.
 class Session {
@@ -242,6 +299,7 @@ class Session {
     capture.frame_timeout = std::chrono::milliseconds(live_->frame_timeout_ms());
     capture.trigger_in_readout = live_->rig().camera.trigger_in_readout;
     capture_ = std::make_unique<BracketCapture>(live_->camera(), capture);
+    workers_ = std::make_unique<FeatureWorkers>(static_cast<int>(bracket.exposures_us.size()));
     if (!args.out_dir.empty()) {
       estimates_ = std::make_unique<EstimatesCsvWriter>(args.out_dir + "/estimates.csv");
     }
@@ -284,6 +342,7 @@ class Session {
   std::uint64_t last_bracket_bytes_ = 0;  // ... of the last bracket: what the next one needs
   cv::Mat last_image_;
   Features last_features_;
+  std::unique_ptr<FeatureWorkers> workers_;  // last: stops before what its work uses
 };
 
 void Session::CheckModel(CommandIo io) {
@@ -354,21 +413,22 @@ std::vector<FrameRecord> Session::Records(const BracketResult& result,
 
 BracketResult Session::CaptureWithFeatures(std::vector<Features>* arrived,
                                            std::chrono::steady_clock::time_point* last_frame_at) {
-  // Each frame's features on a thread of its own as it arrives: the capture never waits for them
-  // (the blob fit may take longer than the next exposure), and frames overlap on the host's cores.
+  // Each frame's features on a worker as it arrives (one worker per frame of the bracket): the
+  // capture never waits for them (the blob fit may take longer than the next exposure), and
+  // frames overlap on the host's cores.
   std::vector<std::future<Features>> pending;
   const int bit_depth = live_->bit_depth();
   const CalibrationModel* blob_fit_model = BlobFitModelOf(model_);
   const BracketCapture::FrameSink on_frame = [&](const BracketFrame& frame) {
     *last_frame_at = std::chrono::steady_clock::now();
-    pending.push_back(std::async(std::launch::async, [this, image = frame.image, bit_depth,
+    pending.push_back(workers_->Submit([this, image = frame.image, bit_depth,
                                                       blob_fit_model] {
       return FrameFeatures(image, bit_depth, model_.features, blob_fit_model);
     }));
   };
   BracketResult result = capture_->Capture(live_->Trigger(), on_frame);
   if (!result.complete) {
-    pending.clear();  // waits for the frames of the incomplete bracket
+    pending.clear();  // the incomplete bracket's features are computed and dropped
     result = capture_->Capture(live_->Trigger(), on_frame);
   }
   if (!result.complete) {
