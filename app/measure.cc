@@ -507,15 +507,24 @@ void Session::Finish() {
   if (writer_) writer_->Close(Completion::kComplete);
 }
 
-std::string GbText(double bytes) { return Fixed(bytes / 1e9, 3) + " GB"; }
+// A size for a person: MB below a GB, GB above.
+std::string SizeText(double bytes) {
+  return bytes < 1e9 ? Fixed(bytes / 1e6, 1) + " MB" : Fixed(bytes / 1e9, 2) + " GB";
+}
+
+std::string Shortest(double value) {
+  char text[40];
+  std::snprintf(text, sizeof(text), "%g", value);
+  return text;
+}
 
 std::string Session::StopReason() const {
   if (!writer_) return "";
   const double recorded = static_cast<double>(recorded_bytes_);
   const double next = static_cast<double>(last_bracket_bytes_);
   if (args_.max_disk_gb > 0.0 && recorded + next > args_.max_disk_gb * 1e9) {
-    return "the recording (" + GbText(recorded) + ") would exceed --max-disk-gb " +
-           Fixed(args_.max_disk_gb, 3) + " with another bracket (" + GbText(next) +
+    return "the recording (" + SizeText(recorded) + ") would exceed --max-disk-gb " +
+           Shortest(args_.max_disk_gb) + " with another bracket (" + SizeText(next) +
            "); it is complete up to here. Give a larger --max-disk-gb to record longer.";
   }
   struct statvfs disk {};
@@ -526,9 +535,9 @@ std::string Session::StopReason() const {
   const double free_bytes = static_cast<double>(disk.f_bavail) * disk.f_frsize;
   const double margin = std::min(kFreeMarginBytes, 0.05 * disk.f_blocks * disk.f_frsize);
   if (free_bytes - next < margin) {
-    return "the disk of " + writer_->dir() + " has " + GbText(free_bytes) +
-           " free; another bracket (" + GbText(next) + ") would leave less than the margin of " +
-           GbText(margin) + " (min(1 GiB, 5% of the disk)). Free space, or record to another "
+    return "the disk of " + writer_->dir() + " has " + SizeText(free_bytes) +
+           " free; another bracket (" + SizeText(next) + ") would leave less than the margin of " +
+           SizeText(margin) + " (min(1 GiB, 5% of the disk)). Free space, or record to another "
            "disk with --out.";
   }
   return "";

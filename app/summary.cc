@@ -13,6 +13,7 @@
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <tuple>
 
 #include "base/utc_time.h"
@@ -350,8 +351,11 @@ void Read3d(const std::vector<std::string>& c, const std::string& where, Estimat
 // A count of ns (digits only, all 64 bits kept); empty = 0 (unknown).
 std::uint64_t ParseCount(const std::string& text, const std::string& where, const char* column) {
   if (text.empty()) return 0;
-  if (text.find_first_not_of("0123456789") == std::string::npos && text.size() <= 19) {
-    return std::stoull(text);
+  if (text.find_first_not_of("0123456789") == std::string::npos) {
+    try {
+      return std::stoull(text);
+    } catch (const std::out_of_range&) {  // more than 64 bits: refused below
+    }
   }
   throw EstimatesFileError(where + ": column '" + column + "' is '" + text +
                            "', not a count of ns; fix or delete that row.");

@@ -11,11 +11,14 @@
 #include <yaml-cpp/yaml.h>
 
 #include <fcntl.h>
+#include <sys/mount.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <regex>
@@ -337,6 +340,33 @@ TEST_F(Measure, RecordingStopsBeforeItsDiskBudget) {
       << output;
   EXPECT_EQ(RunMeasure("budget-alone", {"--count", "1", "--max-disk-gb", "1"}, &output), 2)
       << output;
+}
+
+// Without --max-disk-gb, the recording keeps the disk's margin free (5% of an 8 MB tmpfs here):
+// measure stops before it, says why, and every recorded bracket is in estimates.csv.
+TEST_F(Measure, RecordingStopsBeforeTheDisksFreeSpaceMargin) {
+  const std::string disk = *dir_ + "/small-disk";
+  fs::create_directories(disk);
+  if (::mount("tmpfs", disk.c_str(), "tmpfs", MS_NOSUID | MS_NODEV, "size=8m") != 0) {
+    GTEST_SKIP() << "cannot mount a tmpfs (" << std::strerror(errno) << "): needs root";
+  }
+  std::string output;
+  const int code = RunMeasure("margin", {"--at", "2000,0,0,490", "--count", "500", "--out",
+                                         disk + "/run", "--record"},
+                              &output);
+  const std::map<int, int> rows = RowsPerBracket(ReadAll(disk + "/run/estimates.csv"));
+  std::string check;
+  const int check_code =
+      RunIrdist({"check", disk + "/run/recording"}, *dir_ + "/margin-check.log", &check);
+  ::umount2(disk.c_str(), MNT_DETACH);
+  ASSERT_EQ(code, 0) << output;
+  EXPECT_NE(output.find("Stopped: the disk of"), std::string::npos) << output;
+  EXPECT_NE(output.find("less than the margin"), std::string::npos) << output;
+  EXPECT_NE(output.find("Measured " + std::to_string(rows.size()) + " brackets"),
+            std::string::npos)
+      << output;
+  EXPECT_GT(rows.size(), 0u);
+  EXPECT_EQ(check_code, 0) << check;
 }
 
 // 3D at a lateral offset: the emitter 40 mm right and 30 mm up of the optical axis.
