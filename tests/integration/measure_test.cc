@@ -313,6 +313,34 @@ TEST_F(Measure, JsonReaderThatGoesAwayStopsMeasureCleanly) {
   }
 }
 
+// The other commands with their stdout's reader gone before they write: playback of a measure
+// recording still writes its estimates.csv and exits 0 (a failed write, not a SIGPIPE kill).
+TEST_F(Measure, PlaybackWithItsReaderGoneFinishesAndExitsZero) {
+  const std::string out = *dir_ + "/reader-gone";
+  std::string output;
+  ASSERT_EQ(RunMeasure("reader-gone", {"--at", "2000,0,0,490", "--count", "2", "--out", out,
+                                       "--record"},
+                       &output),
+            0)
+      << output;
+  int pipe_fds[2];
+  ASSERT_EQ(pipe(pipe_fds), 0);
+  close(pipe_fds[0]);  // nobody will read
+  const pid_t pid = fork();
+  if (pid == 0) {
+    dup2(pipe_fds[1], STDOUT_FILENO);
+    execl(testing::IrdistBinary().c_str(), "irdist", "playback", (out + "/recording").c_str(),
+          "--model", Model().c_str(), "--out", (out + "/pb").c_str(), nullptr);
+    _exit(127);
+  }
+  close(pipe_fds[1]);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(RowsPerBracket(ReadAll(out + "/pb/estimates.csv")).size(), 2u);
+}
+
 // --record with a disk budget: measure stops before the recording would exceed it, says why,
 // exits 0, and leaves a complete recording whose brackets are all in estimates.csv.
 TEST_F(Measure, RecordingStopsBeforeItsDiskBudget) {
