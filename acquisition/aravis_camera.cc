@@ -8,6 +8,8 @@
 #include <sstream>
 #include <utility>
 
+#include "base/utc_time.h"
+
 namespace irdist {
 namespace {
 
@@ -86,12 +88,6 @@ std::string Join(const std::vector<std::string>& items) {
   std::string out;
   for (const auto& item : items) out += (out.empty() ? "" : ", ") + item;
   return out;
-}
-
-std::int64_t HostNowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 // Features read back for recording.yaml, when the camera has them.
@@ -679,7 +675,8 @@ std::optional<RawFrame> AravisCamera::WaitFrame(std::chrono::milliseconds timeou
   if (buffer == nullptr) return std::nullopt;
   RawFrame frame;
   // Received: stamped the moment the complete frame is taken from the stream, before any copy.
-  frame.host_time_ns = HostNowNs();
+  frame.host_time_ns = UtcNowNs();
+  frame.host_monotonic_ns = MonotonicNowNs();
   frame.status = MapStatus(arv_buffer_get_status(buffer));
   frame.frame_id = arv_buffer_get_frame_id(buffer);
   frame.timestamp_ns = arv_buffer_get_timestamp(buffer);

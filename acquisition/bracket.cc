@@ -176,6 +176,7 @@ BracketCapture::Outcome BracketCapture::AwaitFrame(const PlannedFrame& plan, dou
     out->frame_id = frame->frame_id;
     out->timestamp_ns = frame->timestamp_ns;
     out->host_time_ns = frame->host_time_ns;
+    out->host_monotonic_ns = frame->host_monotonic_ns;
     out->status = frame->status;
     if (frame->status != FrameStatus::kOk) {
       return frame->status == FrameStatus::kTimeout ? Outcome::kTimeout : Outcome::kDamaged;

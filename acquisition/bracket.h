@@ -89,6 +89,7 @@ struct BracketFrame {
   std::uint64_t frame_id = 0;
   std::uint64_t timestamp_ns = 0;
   std::int64_t host_time_ns = 0;
+  std::int64_t host_monotonic_ns = 0;
   int retries = 0;                  // retries this frame needed
   FrameStatus status = FrameStatus::kOk;
 };

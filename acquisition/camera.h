@@ -124,10 +124,11 @@ struct RawFrame {
   cv::Mat image;                  // CV_16UC1 when status == kOk, else empty
   int bit_depth = 16;             // significant bits of the pixel values
   std::uint64_t frame_id = 0;     // camera block id (16-bit on GigE Vision 1.x, wraps)
-  std::uint64_t timestamp_ns = 0; // camera timestamp
+  std::uint64_t timestamp_ns = 0; // camera timestamp (Aravis's buffer timestamp); 0 = none
   // Host wall clock (ns since the Unix epoch) when the frame was received: stamped by the grabber
   // as it takes the complete frame from the stream (before copying it), not later by its user.
   std::int64_t host_time_ns = 0;
+  std::int64_t host_monotonic_ns = 0;  // the host's monotonic clock at the same moment
   std::optional<double> chunk_exposure_us;  // ChunkExposureTime when the camera sends chunks
 };
 

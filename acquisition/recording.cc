@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -24,6 +25,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "base/regular_file.h"
+#include "base/utc_time.h"
 #include "base/yaml_fields.h"
 
 namespace irdist {
@@ -34,22 +36,10 @@ namespace fs = std::filesystem;
 constexpr char kYaml[] = "recording.yaml";
 constexpr char kCsv[] = "frames.csv";
 constexpr char kFramesDir[] = "frames";
-constexpr int kColumns = 20;
+constexpr int kColumns = 22;
+// Recordings written before the time columns (utc_time, host_monotonic_ns) end at status.
+constexpr int kColumnsBeforeTime = 20;
 
-std::string NowIso8601() {
-  const auto now = std::chrono::system_clock::now();
-  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
-  const auto micros =
-      std::chrono::duration_cast<std::chrono::microseconds>(now.time_since_epoch()).count() %
-      1000000;
-  std::tm utc{};
-  gmtime_r(&seconds, &utc);
-  char text[64];
-  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%S", &utc);
-  char out[96];
-  std::snprintf(out, sizeof(out), "%s.%06lldZ", text, static_cast<long long>(micros));
-  return out;
-}
 
 std::string Errno() { return std::strerror(errno); }
 
@@ -138,7 +128,12 @@ std::string Crc32Hex(const std::string& text) {
   return hex;
 }
 
-std::string FormatRow(const FrameRecord& r) {
+// An empty field for 0: the camera gave no timestamp, the host's monotonic time was not recorded.
+template <typename Int>
+std::string NonZeroOrEmpty(Int value) { return value == 0 ? "" : std::to_string(value); }
+
+// `time_columns` false: the layout of a recording written before them (a resumed old recording).
+std::string FormatRow(const FrameRecord& r, bool time_columns = true) {
   std::ostringstream out;
   out << r.index << ',' << r.file << ',' << r.bracket_id << ',' << r.frame_in_bracket << ','
       << r.bracket_size << ',' << FrameRoleName(r.role) << ','
@@ -147,7 +142,11 @@ std::string FormatRow(const FrameRecord& r) {
       << ',' << FormatDouble(r.bias_ma_measured) << ',' << FormatDouble(r.slide_mm) << ','
       << FormatDouble(r.pan_deg) << ',' << FormatDouble(r.tilt_deg) << ','
       << FormatDouble(r.theta_deg) << ',' << r.repeat << ',' << r.camera_frame_id << ','
-      << r.camera_timestamp_ns << ',' << r.host_time_ns << ',' << r.status << '\n';
+      << NonZeroOrEmpty(r.camera_timestamp_ns) << ',' << r.host_time_ns << ',' << r.status;
+  if (time_columns) {
+    out << ',' << FormatUtcIso8601(r.host_time_ns) << ',' << NonZeroOrEmpty(r.host_monotonic_ns);
+  }
+  out << '\n';
   return out.str();
 }
 
@@ -196,11 +195,27 @@ bool ParseDouble(const std::string& text, double* value, bool optional = false) 
   return true;
 }
 
+// utc_time (host_time_ns as UTC ISO 8601, which it must match) and host_monotonic_ns (empty = 0).
+bool ParseTimeColumns(const std::vector<std::string>& f, FrameRecord* r, std::string* why) {
+  const std::optional<std::int64_t> utc_ns = ParseUtcIso8601(f[20]);
+  if (!utc_ns || *utc_ns != r->host_time_ns / 1000 * 1000) {
+    *why = "bad utc_time '" + f[20] + "' (host_time_ns " + std::to_string(r->host_time_ns) +
+           " is " + FormatUtcIso8601(r->host_time_ns) + ")";
+    return false;
+  }
+  if (!f[21].empty() && (!ParseInt(f[21], &r->host_monotonic_ns) || r->host_monotonic_ns < 0)) {
+    *why = "bad host_monotonic_ns '" + f[21] + "'";
+    return false;
+  }
+  return true;
+}
+
 // Parses one frames.csv data line; on failure says which column is wrong.
-bool ParseRow(const std::string& line, FrameRecord* r, std::string* why) {
+bool ParseRow(const std::string& line, FrameRecord* r, std::string* why, bool time_columns = true) {
   const std::vector<std::string> f = Split(line);
-  if (static_cast<int>(f.size()) != kColumns) {
-    *why = "expected " + std::to_string(kColumns) + " columns, found " + std::to_string(f.size());
+  const int columns = time_columns ? kColumns : kColumnsBeforeTime;
+  if (static_cast<int>(f.size()) != columns) {
+    *why = "expected " + std::to_string(columns) + " columns, found " + std::to_string(f.size());
     return false;
   }
   auto bad = [&](const char* column, const std::string& text) {
@@ -242,11 +257,13 @@ bool ParseRow(const std::string& line, FrameRecord* r, std::string* why) {
   if (!ParseInt(f[15], &v) || v < 0) return bad("repeat", f[15]);
   r->repeat = static_cast<int>(v);
   if (!ParseUint(f[16], &r->camera_frame_id)) return bad("camera_frame_id", f[16]);
-  if (!ParseUint(f[17], &r->camera_timestamp_ns)) return bad("camera_timestamp_ns", f[17]);
+  if (!f[17].empty() && !ParseUint(f[17], &r->camera_timestamp_ns)) {
+    return bad("camera_timestamp_ns", f[17]);
+  }
   if (!ParseInt(f[18], &r->host_time_ns)) return bad("host_time_ns", f[18]);
   r->status = f[19];
   if (r->status != "ok" && r->status != "retried") return bad("status", f[19]);
-  return true;
+  return !time_columns || ParseTimeColumns(f, r, why);
 }
 
 // frames.csv's text split into lines; `partial_last` when the last line lacks its '\n'.
@@ -554,7 +571,7 @@ std::vector<std::string> Leftovers(const std::string& dir, std::int64_t next_ind
 // Moves `names` from frames/ to <dir>/set-aside-<time>/ (never deleted). Returns that folder.
 std::string MoveAside(const std::string& dir, const std::vector<std::string>& names) {
   if (names.empty()) return "";
-  std::string stamp = NowIso8601();
+  std::string stamp = UtcNowIso8601();
   std::replace(stamp.begin(), stamp.end(), ':', '-');
   const fs::path aside = fs::path(dir) / ("set-aside-" + stamp);
   std::error_code ec;
@@ -645,8 +662,15 @@ const std::string& FramesCsvHeader() {
   static const std::string header =
       "index,file,bracket_id,frame_in_bracket,bracket_size,role,requested_exposure_us,"
       "actual_exposure_us,exposure_source,bias_ma_set,bias_ma_measured,slide_mm,pan_deg,tilt_deg,"
-      "theta_deg,repeat,camera_frame_id,camera_timestamp_ns,host_time_ns,status";
+      "theta_deg,repeat,camera_frame_id,camera_timestamp_ns,host_time_ns,status,utc_time,"
+      "host_monotonic_ns";
   return header;
+}
+
+// The header of recordings written before the time columns: read, and resumed in their layout.
+static std::string FramesCsvHeaderBeforeTime() {
+  const std::string& header = FramesCsvHeader();
+  return header.substr(0, header.rfind(",utc_time,"));
 }
 
 FrameRecord RecordFromFrame(const BracketFrame& frame, int bracket_size) {
@@ -661,6 +685,7 @@ FrameRecord RecordFromFrame(const BracketFrame& frame, int bracket_size) {
   r.camera_frame_id = frame.frame_id;
   r.camera_timestamp_ns = frame.timestamp_ns;
   r.host_time_ns = frame.host_time_ns;
+  r.host_monotonic_ns = frame.host_monotonic_ns;
   r.status = frame.retries > 0 ? "retried" : "ok";
   return r;
 }
@@ -689,7 +714,9 @@ FramesCsv ParseFramesCsv(const std::string& text) {
   const CsvLines lines = SplitLines(text);
   csv.partial_last = lines.partial_last;
   csv.complete_bytes = lines.complete_bytes;
-  if (lines.lines.empty() || lines.lines[0] != FramesCsvHeader()) {
+  csv.time_columns = !lines.lines.empty() && lines.lines[0] == FramesCsvHeader();
+  if (lines.lines.empty() ||
+      (!csv.time_columns && lines.lines[0] != FramesCsvHeaderBeforeTime())) {
     csv.errors.push_back({kCsv, 1, "header line is not the irdist frames.csv header (format " +
                                        std::to_string(kRecordingFormatVersion) + ")"});
     return csv;
@@ -705,7 +732,7 @@ FramesCsv ParseFramesCsv(const std::string& text) {
     FrameRecord row;
     std::string why;
     row.line = static_cast<int>(i + 1);
-    if (!ParseRow(lines.lines[i], &row, &why)) {
+    if (!ParseRow(lines.lines[i], &row, &why, csv.time_columns)) {
       csv.errors.push_back({kCsv, row.line, "bad row: " + why});
       continue;
     }
@@ -811,7 +838,7 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Open(const std::string& dir,
                          ec.message() + ". Check the path and permissions.");
   }
   const int lock_fd = AcquireWriterLock(dir);
-  if (header.start_time.empty()) header.start_time = NowIso8601();
+  if (header.start_time.empty()) header.start_time = UtcNowIso8601();
   header.completion = Completion::kRunning;
   header.end_time.clear();
   header.frame_count = -1;
@@ -851,9 +878,10 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir)
   header.completion = Completion::kRunning;
   header.end_time.clear();
   header.frame_count = -1;
-  header.resumed.push_back(NowIso8601());
+  header.resumed.push_back(UtcNowIso8601());
   writer->header_ = std::move(header);
   writer->next_index_ = next_index;
+  writer->time_columns_ = csv.time_columns;  // an older recording continues in its own layout
   writer->WriteHeader();
   writer->csv_fd_ = OpenCsvForAppend(csv_path);
   return writer;
@@ -861,12 +889,12 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir)
 
 // Checks the row against the reader's rules: a row the reader would refuse is a bug of the
 // caller, refused before anything reaches the disk.
-static void CheckRowReadable(const std::string& row, std::int64_t index) {
+static void CheckRowReadable(const std::string& row, std::int64_t index, bool time_columns) {
   FrameRecord parsed;
   std::string why;
   std::string line = row;
   while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
-  IRDIST_CHECK(ParseRow(line, &parsed, &why), "frame ", index,
+  IRDIST_CHECK(ParseRow(line, &parsed, &why, time_columns), "frame ", index,
                " would be unreadable in frames.csv: ", why);
 }
 
@@ -927,8 +955,8 @@ std::vector<std::string> RecordingWriter::StagedRows(std::vector<FrameRecord>* r
     FrameRecord& record = (*records)[i];
     record.index = next_index_ + static_cast<std::int64_t>(i);
     record.file = FrameFileName(record.index);
-    rows.push_back(FormatRow(record));
-    CheckRowReadable(rows.back(), record.index);
+    rows.push_back(FormatRow(record, time_columns_));
+    CheckRowReadable(rows.back(), record.index, time_columns_);
   }
   return rows;
 }
@@ -965,7 +993,8 @@ FrameRecord RecordingWriter::Append(const cv::Mat& image, FrameRecord record) {
   IRDIST_CHECK(staged_.empty(), "Append() with staged frames: commit or drop them first");
   record.index = next_index_;
   record.file = FrameFileName(record.index);
-  CheckRowReadable(FormatRow(record), record.index);  // before anything reaches the disk
+  // Checked before anything reaches the disk.
+  CheckRowReadable(FormatRow(record, time_columns_), record.index, time_columns_);
   Stage(image);
   return CommitStaged({std::move(record)}).front();
 }
@@ -982,7 +1011,7 @@ void RecordingWriter::Close(Completion completion) {
     if (!synced && first_error_.empty()) first_error_ = "cannot sync frames.csv: " + Errno();
   }
   header_.completion = first_error_.empty() ? completion : Completion::kCut;
-  header_.end_time = NowIso8601();
+  header_.end_time = UtcNowIso8601();
   header_.frame_count = next_index_;
   try {
     WriteHeader();

@@ -78,8 +78,9 @@ struct FrameRecord {
   double theta_deg = 0.0;
   int repeat = 0;
   std::uint64_t camera_frame_id = 0;
-  std::uint64_t camera_timestamp_ns = 0;
-  std::int64_t host_time_ns = 0;
+  std::uint64_t camera_timestamp_ns = 0;  // 0 = the camera gave none (empty field)
+  std::int64_t host_time_ns = 0;          // wall clock at arrival (column utc_time: the same, UTC)
+  std::int64_t host_monotonic_ns = 0;     // monotonic clock at arrival; 0 = not recorded (empty)
   std::string status = "ok";            // ok | retried
   int line = 0;                         // line in frames.csv (filled by the reader)
 };
@@ -151,6 +152,7 @@ class RecordingWriter {
   int lock_fd_ = -1;
   bool closed_ = false;
   std::string first_error_;
+  bool time_columns_ = true;  // false: resuming a recording written before the time columns
   std::vector<std::string> staged_;  // temporary paths of the staged frames, in index order
   std::vector<std::string> set_aside_;
   std::string set_aside_dir_;
@@ -214,6 +216,7 @@ struct FramesCsv {
   std::vector<RecordingIssue> errors, warnings;
   std::uint64_t complete_bytes = 0;  // bytes up to and including the last '\n'
   bool partial_last = false;
+  bool time_columns = true;  // false: written before utc_time and host_monotonic_ns
 };
 FramesCsv ParseFramesCsv(const std::string& text);
 

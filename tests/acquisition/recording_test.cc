@@ -73,8 +73,11 @@ FrameRecord TestRecord(std::int64_t index) {
   r.theta_deg = 11.4;
   r.repeat = 1;
   r.camera_frame_id = static_cast<std::uint64_t>(65530 + index) % 65536;
-  r.camera_timestamp_ns = 1000000000ull * static_cast<std::uint64_t>(index + 1);
-  r.host_time_ns = 1700000000000000000ll + index;
+  // Frame 4 of each bracket: a camera that gives no timestamp.
+  r.camera_timestamp_ns =
+      index % kBracketSize == 4 ? 0 : 1000000000ull * static_cast<std::uint64_t>(index + 1);
+  r.host_time_ns = 1700000000000000000ll + 1000 * index;
+  r.host_monotonic_ns = 5000000000ll + 1000 * index;
   r.status = index % 7 == 3 ? "retried" : "ok";
   return r;
 }
@@ -125,6 +128,7 @@ TEST(Recording, RoundTripGivesBackBracketsAndTheHeaderVerbatim) {
       EXPECT_EQ(row.camera_frame_id, expected.camera_frame_id);
       EXPECT_EQ(row.camera_timestamp_ns, expected.camera_timestamp_ns);
       EXPECT_EQ(row.host_time_ns, expected.host_time_ns);
+      EXPECT_EQ(row.host_monotonic_ns, expected.host_monotonic_ns);
       EXPECT_EQ(row.status, expected.status);
       const cv::Mat image = reader.LoadImage(row);
       EXPECT_EQ(cv::norm(image, TestImage(row.index), cv::NORM_INF), 0.0);
@@ -596,6 +600,78 @@ TEST(RecordingSafety, ParsersRefuseGarbageWithNamedErrors) {
   std::string why;
   EXPECT_TRUE(DecodeFramePng({0x89, 'P', 'N', 'G'}, &why).empty());
   EXPECT_NE(why.find("not a PNG"), std::string::npos);
+}
+
+// frames.csv's line `line` split at commas (an empty last field kept).
+std::vector<std::string> CsvFields(const std::string& dir, int line) {
+  std::istringstream in(Slurp(fs::path(dir) / "frames.csv"));
+  std::string text;
+  for (int n = 1; n <= line; ++n) std::getline(in, text);
+  std::vector<std::string> fields;
+  std::istringstream row(text + ",");
+  for (std::string field; std::getline(row, field, ',');) fields.push_back(field);
+  return fields;
+}
+
+TEST(RecordingTime, EachRowCarriesItsUtcTimeMonotonicTimeAndCameraTimestampWhenGiven) {
+  const std::string dir = CompleteRecording("time", kBracketSize);
+  const std::vector<std::string> header = CsvFields(dir, 1);
+  ASSERT_EQ(header.size(), 22u);
+  EXPECT_EQ(header[20], "utc_time");
+  EXPECT_EQ(header[21], "host_monotonic_ns");
+  // 1700000000 s after the epoch is 2023-11-14T22:13:20Z (date -u -d @1700000000).
+  EXPECT_EQ(CsvFields(dir, 3)[20], "2023-11-14T22:13:20.000001Z");
+  EXPECT_EQ(CsvFields(dir, 3)[21], "5000001000");
+  EXPECT_EQ(CsvFields(dir, 3)[17], "2000000000");
+  EXPECT_EQ(CsvFields(dir, 6)[17], "") << "the camera gave no timestamp: empty, not 0";
+  const RecordingReader reader(dir);
+  EXPECT_EQ(reader.rows()[4].camera_timestamp_ns, 0u);
+  EXPECT_EQ(reader.rows()[1].camera_timestamp_ns, 2000000000u);
+  fs::remove_all(dir);
+}
+
+TEST(RecordingTime, UtcTimeThatIsNotTheHostTimeIsAnErrorNamingTheLine) {
+  const std::string dir = CompleteRecording("badutc", kBracketSize);
+  EditCsvLine(dir, 3, [](std::string line) {
+    return std::regex_replace(line, std::regex("2023-11-14T22:13:20"), "2023-11-14T22:13:21");
+  });
+  EXPECT_NE(ReaderError(dir).find("frames.csv:3: bad row: bad utc_time"), std::string::npos)
+      << ReaderError(dir);
+  fs::remove_all(dir);
+}
+
+// A recording as written before the time columns: the header and every row end at status.
+void DropTimeColumns(const std::string& dir) {
+  std::istringstream in(Slurp(fs::path(dir) / "frames.csv"));
+  std::string out;
+  for (std::string line; std::getline(in, line);) {
+    for (int i = 0; i < 2; ++i) line.erase(line.rfind(','));
+    out += line + "\n";
+  }
+  WriteText(fs::path(dir) / "frames.csv", out);
+}
+
+TEST(RecordingTime, RecordingWrittenBeforeTheTimeColumnsLoadsAndResumesInItsLayout) {
+  const std::string dir = TempDir("oldlayout");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, kBracketSize);
+  writer->Close(Completion::kCut);
+  DropTimeColumns(dir);
+  ASSERT_EQ(CsvFields(dir, 1).back(), "status");
+  {
+    const RecordingReader reader(dir);
+    ASSERT_EQ(reader.rows().size(), 5u);
+    EXPECT_EQ(reader.rows()[2].host_time_ns, TestRecord(2).host_time_ns);
+    EXPECT_EQ(reader.rows()[2].host_monotonic_ns, 0) << "not recorded";
+  }
+  auto resumed = RecordingWriter::Resume(dir);
+  WriteFrames(*resumed, kBracketSize, 2 * kBracketSize);
+  resumed->Close(Completion::kComplete);
+  EXPECT_EQ(CsvFields(dir, 8).size(), 20u) << "a resumed old recording keeps its own columns";
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_TRUE(check.ok()) << check.BriefReport();
+  EXPECT_EQ(check.complete_brackets, 2);
+  fs::remove_all(dir);
 }
 
 }  // namespace
