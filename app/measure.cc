@@ -456,11 +456,10 @@ MeasureSample Session::Next(double time_s) {
   sample.latency_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
                                                                 last_frame_at)
                           .count();
+  // The bracket's time: its last frame's arrival, as estimates.csv's (the grabber's stamps).
   sample.utc_ns = bracket.frames.back().host_time_ns;
+  sample.host_monotonic_ns = bracket.frames.back().host_monotonic_ns;
   sample.camera_timestamp_ns = bracket.frames.back().camera_timestamp_ns;
-  sample.host_monotonic_ns =
-      std::chrono::duration_cast<std::chrono::nanoseconds>(last_frame_at.time_since_epoch())
-          .count();
   if (estimates_) estimates_->Append(FlattenRows(rows));  // on disk before it is printed
   last_image_ = result.frames.back().image;
   last_features_ = features.at(bracket.frames.back().index);

@@ -28,8 +28,8 @@ constexpr int kMeasureJsonVersion = 1;
 struct MeasureSample {
   std::int64_t bracket = 0;
   double time_s = 0.0;  // host seconds since the first bracket started
-  // The bracket's last frame: its arrival on the host's wall clock (ns since the Unix epoch, UTC),
-  // the host's monotonic clock when the grabber handed it over, and the camera's own timestamp of
+  // The bracket's last frame: its arrival on the host's wall clock (ns since the Unix epoch, UTC)
+  // and on its monotonic clock (both stamped by the grabber), and the camera's own timestamp of
   // it (0: the camera gave none).
   std::int64_t utc_ns = 0;
   std::int64_t host_monotonic_ns = 0;

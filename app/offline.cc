@@ -581,6 +581,7 @@ EstimateRow BaseRowOf(const RecordedBracket& bracket, const FrameRecord& first) 
   // The bracket's time: its last frame's arrival (the estimate's data complete then).
   const FrameRecord& last = bracket.frames.back();
   base.utc_ns = last.host_time_ns;
+  base.host_monotonic_ns = last.host_monotonic_ns;
   base.camera_timestamp_ns = last.camera_timestamp_ns;
   return base;
 }

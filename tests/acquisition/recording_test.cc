@@ -313,7 +313,7 @@ TEST(Recording, CheckReportsCorruptPngBadRowGapAndOrphanByFileAndLine) {
     while (std::getline(in, line)) lines.push_back(line);
   }
   lines[3] = "2,frames/000002.png,0,2,5,meas,12000,twelve,readback,500,,1500,10,-5.5,11.4,1,"
-             "65532,3000000000,1700000000000000002,ok";
+             "65532,3000000000,1700000000000002000,ok,2023-11-14T22:13:20.000002Z,5000002000";
   lines.erase(lines.begin() + 8);
   {
     std::ofstream out(fs::path(dir) / "frames.csv", std::ios::trunc);

@@ -258,6 +258,12 @@ TEST_F(Measure, KillNineKeepsEveryPrintedBracketInEstimatesCsv) {
   for (const auto& [bracket, count] : rows) {
     EXPECT_EQ(count, rows.begin()->second) << "bracket " << bracket << " is partial";
   }
+  // Each row ends in the bracket's time: UTC, the host's monotonic clock, the camera's timestamp.
+  const std::string text = ReadAll(out + "/estimates.csv");
+  const std::string last = text.substr(text.rfind('\n', text.size() - 2) + 1);
+  EXPECT_TRUE(std::regex_search(
+      last, std::regex(R"(,\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{6}Z,[1-9]\d*,[1-9]\d*\n$)")))
+      << last;
   std::string output;
   EXPECT_EQ(RunIrdist({"check", out + "/estimates.csv"}, *dir_ + "/killed-check.log", &output), 0)
       << output;
