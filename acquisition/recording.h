@@ -158,6 +158,7 @@ class RecordingWriter {
   bool hashed_ = true;  // rows carry their PNG's SHA-256 (false: resuming a format 1 recording)
   bool closed_ = false;
   std::string first_error_;
+  bool time_columns_ = true;  // false: resuming a recording written before the time columns
   std::vector<std::string> staged_;  // temporary paths of the staged frames, in index order
   std::vector<std::string> staged_sha256_;  // their PNG bytes' SHA-256
   std::vector<std::string> set_aside_;
@@ -227,6 +228,7 @@ struct FramesCsv {
   std::vector<RecordingIssue> errors, warnings;
   std::uint64_t complete_bytes = 0;  // bytes up to and including the last '\n'
   bool partial_last = false;
+  bool time_columns = true;  // false: written before utc_time and host_monotonic_ns
 };
 FramesCsv ParseFramesCsv(const std::string& text);
 

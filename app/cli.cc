@@ -276,7 +276,7 @@ void AddFitAndPlayback(CommandTable& table) {
 void AddCheckAndPlan(CommandTable& table) {
   CheckArgs& c = table.args().check;
   CLI::App* sub = table.Add("check", table.handlers().check, c);
-  sub->add_option("recording", c.recording, "Recording folder")->required();
+  sub->add_option("recording", c.recording, "Recording folder, or an estimates.csv")->required();
 
   PlanArgs& p = table.args().plan;
   sub = table.Add("plan", table.handlers().plan, p);
@@ -333,6 +333,10 @@ void AddMeasure(CommandTable& table) {
   sub->add_flag("--json", a.json, "One JSON object per bracket on stdout (docs/measure.md)");
   sub->add_option("--out", a.out_dir, "Folder for estimates.csv (and recording/ with --record)");
   sub->add_flag("--record", a.record, "With --out: record the frames (playable by playback)");
+  sub->add_option("--max-disk-gb", a.max_disk_gb,
+                  "With --record: stop before the recording exceeds this many GB (default: stop "
+                  "before the disk's free space falls below min(1 GiB, 5% of the disk))")
+      ->check(CLI::PositiveNumber);
   AddAt(sub, a.at);
   AddTimeScale(sub, a.time_scale);
   sub->add_flag("--allow-model-mismatch", a.allow_model_mismatch,

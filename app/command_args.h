@@ -60,6 +60,7 @@ struct MeasureArgs {
   bool json = false;            // --json: one JSON object per bracket on stdout
   std::string out_dir;          // --out: estimates.csv (and recording/ with --record)
   bool record = false;          // --record: the frames in the recording format
+  double max_disk_gb = 0.0;     // --max-disk-gb: the recording's budget (0 = free space margin only)
   std::vector<double> at;       // --at SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA (virtual rig only)
   double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
   bool allow_model_mismatch = false;

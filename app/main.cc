@@ -1,4 +1,5 @@
 // irdist: turns the library's typed errors into exit codes and one clear message each.
+#include <csignal>
 #include <exception>
 #include <iostream>
 
@@ -11,6 +12,12 @@ int main(int argc, char** argv) {
   // steps") is an ERROR line there, while the fit already reports each model's termination. Keep
   // the terminal for irdist's own messages.
   FLAGS_minloglevel = google::GLOG_FATAL;
+  // A reader that goes away (`irdist ... | head`) is a failed write (EPIPE), not a kill, in every
+  // command (GLib's sockets already make it so where a camera is opened): measure stops on it
+  // with its summary; calibrate, validate and playback finish their run folder and exit 0.
+  if (std::signal(SIGPIPE, SIG_IGN) == SIG_ERR) {
+    std::cerr << "irdist: warning: SIGPIPE cannot be ignored; a closed pipe will end the command\n";
+  }
   try {
     return irdist::RunIrdist(argc, argv, {std::cout, std::cerr});
   } catch (const irdist::UsageError& e) {

@@ -1,12 +1,22 @@
 #include "app/measure.h"
 
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
-#include <future>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <future>
+#include <mutex>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -22,6 +32,7 @@
 #include "app/provenance.h"
 #include "app/resume.h"
 #include "app/run.h"
+#include "base/utc_time.h"
 #include "estimator/model_file.h"
 
 namespace irdist {
@@ -32,6 +43,8 @@ namespace {
 
 constexpr const char* kSoftwareVersion = "irdist 0.1.0";
 constexpr double kPi = 3.14159265358979323846;
+// Free space a recording leaves on its disk by default (or 5% of the disk when that is less).
+constexpr double kFreeMarginBytes = 1024.0 * 1024.0 * 1024.0;
 
 std::string JsonNumber(double value) {
   if (!std::isfinite(value)) return "null";
@@ -48,6 +61,17 @@ std::string Fixed(double value, int decimals) {
 }
 
 const char* JsonBool(bool value) { return value ? "true" : "false"; }
+
+// The bracket's absolute time keys (utc_time, host_monotonic_ns, camera_timestamp_ns), each with
+// its leading comma.
+std::string TimeJson(const MeasureSample& s) {
+  std::string out = ",\"utc_time\":";
+  out += s.utc_ns != 0 ? "\"" + FormatUtcIso8601(s.utc_ns) + "\"" : std::string("null");
+  out += ",\"host_monotonic_ns\":" + std::to_string(s.host_monotonic_ns);
+  out += ",\"camera_timestamp_ns\":";
+  out += s.camera_timestamp_ns != 0 ? std::to_string(s.camera_timestamp_ns) : std::string("null");
+  return out;
+}
 
 double Se(double value) { return value >= 0.0 ? value : std::nan(""); }
 
@@ -72,7 +96,7 @@ std::string MeasureJson(const MeasureSample& s) {
   const bool ok = s.have_estimate && e.ok;
   std::ostringstream out;
   out << "{\"schema\":\"irdist.measure/" << kMeasureJsonVersion << "\",\"bracket\":" << s.bracket
-      << ",\"time_s\":" << JsonNumber(s.time_s)
+      << ",\"time_s\":" << JsonNumber(s.time_s) << TimeJson(s)
       << ",\"latency_ms\":" << JsonNumber(s.latency_ms) << ",\"ok\":" << JsonBool(ok)
       << ",\"d_mm\":" << JsonNumber(ok ? e.d_mm : NAN)
       << ",\"d_se_mm\":" << JsonNumber(ok ? Se(e.d_std_mm) : NAN)
@@ -196,6 +220,58 @@ Truth TruthOf(const std::vector<double>& at) {
   return t;
 }
 
+// Threads that compute frames' features as the frames arrive, alive as long as the session: a
+// bracket's frames overlap on the host's cores without a thread started per frame, so the
+// process's thread count stays the same bracket after bracket.
+class FeatureWorkers {
+ public:
+  explicit FeatureWorkers(int count) {
+    for (int i = 0; i < count; ++i) threads_.emplace_back([this] { Loop(); });
+  }
+  ~FeatureWorkers() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+    }
+    wake_.notify_all();
+    for (std::thread& t : threads_) t.join();
+  }
+  FeatureWorkers(const FeatureWorkers&) = delete;
+  FeatureWorkers& operator=(const FeatureWorkers&) = delete;
+
+  std::future<Features> Submit(std::function<Features()> work) {
+    std::packaged_task<Features()> task(std::move(work));
+    std::future<Features> result = task.get_future();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      queue_.push_back(std::move(task));
+    }
+    wake_.notify_one();
+    return result;
+  }
+
+ private:
+  void Loop() {
+    while (true) {
+      std::packaged_task<Features()> task;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+        if (queue_.empty()) return;  // stopping, nothing left to compute
+        task = std::move(queue_.front());
+        queue_.pop_front();
+      }
+      task();  // an exception reaches the future
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::packaged_task<Features()>> queue_;
+  bool stopping_ = false;
+  std::vector<std::thread> threads_;
+};
+
 // One camera, one bracket after another; each bracket's frames recorded (optionally) and
 // estimated with the playback path.
 class Session {
@@ -222,12 +298,16 @@ class Session {
     capture.frame_timeout = std::chrono::milliseconds(live_->frame_timeout_ms());
     capture.trigger_in_readout = live_->rig().camera.trigger_in_readout;
     capture_ = std::make_unique<BracketCapture>(live_->camera(), capture);
+    workers_ = std::make_unique<FeatureWorkers>(static_cast<int>(bracket.exposures_us.size()));
+    if (!args.out_dir.empty()) {
+      estimates_ = std::make_unique<EstimatesCsvWriter>(args.out_dir + "/estimates.csv");
+    }
     if (args.record) OpenRecording();
   }
 
   MeasureSample Next(double time_s);
-  // estimates.csv in playback's order; closes the recording as complete.
-  void Finish();
+  std::string StopReason() const;
+  void Finish();  // closes the recording as complete
   const cv::Mat& last_image() const { return last_image_; }
   const Features& last_features() const { return last_features_; }
   int bit_depth() const { return live_->bit_depth(); }
@@ -253,9 +333,12 @@ class Session {
   CameraGeometry geometry_;
   std::int64_t next_bracket_ = 0;
   std::int64_t next_index_ = 0;  // frame index when nothing is recorded
-  BracketEstimateRows all_;
+  std::unique_ptr<EstimatesCsvWriter> estimates_;  // --out's estimates.csv, one bracket at a time
+  std::uint64_t recorded_bytes_ = 0;      // the recording's frames so far
+  std::uint64_t last_bracket_bytes_ = 0;  // ... of the last bracket: what the next one needs
   cv::Mat last_image_;
   Features last_features_;
+  std::unique_ptr<FeatureWorkers> workers_;  // last: stops before what its work uses
 };
 
 void Session::CheckModel(CommandIo io) {
@@ -292,6 +375,7 @@ std::vector<FrameRecord> Session::Records(const BracketResult& result,
                                           const std::vector<Features>& arrived,
                                           FeatureMap* features) {
   std::vector<FrameRecord> records;
+  std::uint64_t bracket_bytes = 0;
   const int size = static_cast<int>(result.frames.size());
   for (std::size_t i = 0; i < result.frames.size(); ++i) {
     const BracketFrame& frame = result.frames[i];
@@ -305,32 +389,42 @@ std::vector<FrameRecord> Session::Records(const BracketResult& result,
     record.theta_deg = truth_.theta_deg;
     if (writer_) {
       record = writer_->Append(frame.image, record);
+      struct stat written {};
+      const std::string png = writer_->dir() + "/" + record.file;
+      if (::stat(png.c_str(), &written) != 0) {
+        throw RecordingError(png + ": just written, cannot be read back (" +
+                             std::strerror(errno) + "); check the disk.");
+      }
+      bracket_bytes += static_cast<std::uint64_t>(written.st_size);
     } else {
       record.index = next_index_++;
     }
     (*features)[record.index] = arrived[i];
     records.push_back(record);
   }
+  recorded_bytes_ += bracket_bytes;
+  last_bracket_bytes_ = bracket_bytes;
   return records;
 }
 
 BracketResult Session::CaptureWithFeatures(std::vector<Features>* arrived,
                                            std::chrono::steady_clock::time_point* last_frame_at) {
-  // Each frame's features on a thread of its own as it arrives: the capture never waits for them
-  // (the blob fit may take longer than the next exposure), and frames overlap on the host's cores.
+  // Each frame's features on a worker as it arrives (one worker per frame of the bracket): the
+  // capture never waits for them (the blob fit may take longer than the next exposure), and
+  // frames overlap on the host's cores.
   std::vector<std::future<Features>> pending;
   const int bit_depth = live_->bit_depth();
   const CalibrationModel* blob_fit_model = BlobFitModelOf(model_);
   const BracketCapture::FrameSink on_frame = [&](const BracketFrame& frame) {
     *last_frame_at = std::chrono::steady_clock::now();
-    pending.push_back(std::async(std::launch::async, [this, image = frame.image, bit_depth,
+    pending.push_back(workers_->Submit([this, image = frame.image, bit_depth,
                                                       blob_fit_model] {
       return FrameFeatures(image, bit_depth, model_.features, blob_fit_model);
     }));
   };
   BracketResult result = capture_->Capture(live_->Trigger(), on_frame);
   if (!result.complete) {
-    pending.clear();  // waits for the frames of the incomplete bracket
+    pending.clear();  // the incomplete bracket's features are computed and dropped
     result = capture_->Capture(live_->Trigger(), on_frame);
   }
   if (!result.complete) {
@@ -353,12 +447,16 @@ MeasureSample Session::Next(double time_s) {
   bracket.bracket_size = static_cast<int>(bracket.frames.size());
   bracket.complete = true;
   const BracketEstimateRows rows = EstimateRecordedBracket(bracket, features, model_, geometry_);
-  AppendBracketRows(rows, &all_);
   MeasureSample sample = MeasureSampleOf(bracket, features, rows, model_, geometry_);
   sample.time_s = time_s;
   sample.latency_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
                                                                 last_frame_at)
                           .count();
+  // The bracket's time: its last frame's arrival, as estimates.csv's (the grabber's stamps).
+  sample.utc_ns = bracket.frames.back().host_time_ns;
+  sample.host_monotonic_ns = bracket.frames.back().host_monotonic_ns;
+  sample.camera_timestamp_ns = bracket.frames.back().camera_timestamp_ns;
+  if (estimates_) estimates_->Append(FlattenRows(rows));  // on disk before it is printed
   last_image_ = result.frames.back().image;
   last_features_ = features.at(bracket.frames.back().index);
   return sample;
@@ -407,7 +505,42 @@ namespace {
 void Session::Finish() {
   if (capture_ && live_->camera().streaming()) live_->camera().StopStream();
   if (writer_) writer_->Close(Completion::kComplete);
-  if (!args_.out_dir.empty()) WriteEstimatesCsv(args_.out_dir + "/estimates.csv", FlattenRows(all_));
+}
+
+// A size for a person: MB below a GB, GB above.
+std::string SizeText(double bytes) {
+  return bytes < 1e9 ? Fixed(bytes / 1e6, 1) + " MB" : Fixed(bytes / 1e9, 2) + " GB";
+}
+
+std::string Shortest(double value) {
+  char text[40];
+  std::snprintf(text, sizeof(text), "%g", value);
+  return text;
+}
+
+std::string Session::StopReason() const {
+  if (!writer_) return "";
+  const double recorded = static_cast<double>(recorded_bytes_);
+  const double next = static_cast<double>(last_bracket_bytes_);
+  if (args_.max_disk_gb > 0.0 && recorded + next > args_.max_disk_gb * 1e9) {
+    return "the recording (" + SizeText(recorded) + ") would exceed --max-disk-gb " +
+           Shortest(args_.max_disk_gb) + " with another bracket (" + SizeText(next) +
+           "); it is complete up to here. Give a larger --max-disk-gb to record longer.";
+  }
+  struct statvfs disk {};
+  if (::statvfs(writer_->dir().c_str(), &disk) != 0) {
+    return "the free space of " + writer_->dir() + " cannot be read (" + std::strerror(errno) +
+           "); stopped before the disk could fill.";
+  }
+  const double free_bytes = static_cast<double>(disk.f_bavail) * disk.f_frsize;
+  const double margin = std::min(kFreeMarginBytes, 0.05 * disk.f_blocks * disk.f_frsize);
+  if (free_bytes - next < margin) {
+    return "the disk of " + writer_->dir() + " has " + SizeText(free_bytes) +
+           " free; another bracket (" + SizeText(next) + ") would leave less than the margin of " +
+           SizeText(margin) + " (min(1 GiB, 5% of the disk)). Free space, or record to another "
+           "disk with --out.";
+  }
+  return "";
 }
 
 }  // namespace
@@ -421,6 +554,7 @@ MeasureSession::MeasureSession(const MeasureArgs& args, const CalibrationModel& 
     : impl_(new Impl{Session(args, model, io)}) {}
 MeasureSession::~MeasureSession() = default;
 MeasureSample MeasureSession::Next(double time_s) { return impl_->session.Next(time_s); }
+std::string MeasureSession::StopReason() const { return impl_->session.StopReason(); }
 void MeasureSession::Finish() { impl_->session.Finish(); }
 const cv::Mat& MeasureSession::last_image() const { return impl_->session.last_image(); }
 const Features& MeasureSession::last_features() const { return impl_->session.last_features(); }
@@ -454,6 +588,28 @@ class MeasurePrinter {
   bool line_open_ = false;
 };
 
+// While alive, a write to a closed pipe fails with EPIPE instead of killing the process (SIGPIPE
+// ignored; GLib's sockets also set it so), and measure sees its reader gone through the stream's
+// state; the previous handler comes back at the end.
+class BrokenPipeGuard {
+ public:
+  BrokenPipeGuard() {
+    struct sigaction ignore {};
+    ignore.sa_handler = SIG_IGN;
+    sigemptyset(&ignore.sa_mask);
+    installed_ = ::sigaction(SIGPIPE, &ignore, &saved_) == 0;
+  }
+  ~BrokenPipeGuard() {
+    if (installed_) ::sigaction(SIGPIPE, &saved_, nullptr);
+  }
+  BrokenPipeGuard(const BrokenPipeGuard&) = delete;
+  BrokenPipeGuard& operator=(const BrokenPipeGuard&) = delete;
+
+ private:
+  struct sigaction saved_ {};
+  bool installed_ = false;
+};
+
 bool StopNow(const MeasureArgs& args, int count, double elapsed_s) {
   if (StopRequested().load()) return true;
   if (args.count > 0 && count >= args.count) return true;
@@ -463,6 +619,9 @@ bool StopNow(const MeasureArgs& args, int count, double elapsed_s) {
 void CheckMeasureArgs(const MeasureArgs& args) {
   if (args.record && args.out_dir.empty()) {
     throw UsageError("measure: --record needs --out DIR (the recording goes to DIR/recording).");
+  }
+  if (args.max_disk_gb > 0.0 && !args.record) {
+    throw UsageError("measure: --max-disk-gb bounds a recording; give it with --record --out DIR.");
   }
   if (!args.out_dir.empty()) {
     if (fs::exists(args.out_dir + "/recording") || fs::exists(args.out_dir + "/estimates.csv")) {
@@ -482,6 +641,7 @@ void RunMeasure(const MeasureArgs& args, CommandIo io) {
   if (!args.out_dir.empty()) folder_lock.emplace(args.out_dir, "measure");
   const CalibrationModel model = LoadModel(args.model);
   SignalGuard guard;  // Ctrl-C ends the loop after the bracket in flight
+  BrokenPipeGuard pipe_guard;  // a reader that goes away ends it too (below)
   MeasureSession session(args, model, io);
   MeasurePrinter printer(io.out, args.json, !args.json && isatty(STDOUT_FILENO) == 1);
   MeasureStats stats;
@@ -489,16 +649,25 @@ void RunMeasure(const MeasureArgs& args, CommandIo io) {
   const auto elapsed = [&t0] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
+  std::string stopped;  // why the loop ended early, "" for --count, --duration and Ctrl-C
   while (!StopNow(args, stats.count(), elapsed())) {
+    stopped = session.StopReason();
+    if (!stopped.empty()) break;
     const MeasureSample sample = session.Next(elapsed());
     stats.Add(sample);
     printer.Print(sample);
+    if (!io.out) {
+      stopped = "stdout was closed (its reader went away) after bracket " +
+                std::to_string(sample.bracket) + ".";
+      break;
+    }
   }
   printer.Close();
   const double wall_s = elapsed();
   session.Finish();
-  std::ostream& summary = args.json ? io.err : io.out;
+  std::ostream& summary = args.json || !io.out ? io.err : io.out;
   summary << stats.Report(wall_s);
+  if (!stopped.empty()) summary << "Stopped: " << stopped << "\n";
   if (!args.out_dir.empty()) summary << "Estimates: " << args.out_dir << "/estimates.csv\n";
   if (args.record) summary << "Recording: " << args.out_dir << "/recording\n";
 }

@@ -4,8 +4,9 @@
 // validate and playback (EstimateRecordedBracket), printed as a live line on a terminal, one line
 // per bracket when piped, or one JSON object per bracket (docs/measure.md). Stops after --count
 // brackets, --duration seconds or at Ctrl-C, with a summary (count, rate, mean and sd).
-// `--out DIR` writes DIR/estimates.csv (validate's columns; ground truth empty unless --at) and,
-// with --record, DIR/recording/ that `irdist playback` turns into the same estimates.csv.
+// `--out DIR` writes DIR/estimates.csv as the estimates are made (validate's columns; ground truth
+// empty unless --at) and, with --record, DIR/recording/ that `irdist playback` turns into the same
+// estimates.csv. Memory does not grow with the run's length (the summary keeps running moments).
 
 #include <cmath>
 #include <cstdint>
@@ -28,6 +29,12 @@ constexpr int kMeasureJsonVersion = 1;
 struct MeasureSample {
   std::int64_t bracket = 0;
   double time_s = 0.0;  // host seconds since the first bracket started
+  // The bracket's last frame: its arrival on the host's wall clock (ns since the Unix epoch, UTC)
+  // and on its monotonic clock (both stamped by the grabber), and the camera's own timestamp of
+  // it (0: the camera gave none).
+  std::int64_t utc_ns = 0;
+  std::int64_t host_monotonic_ns = 0;
+  std::uint64_t camera_timestamp_ns = 0;
   // Host ms from the bracket's last frame (handed over by the grabber) to its estimate; the frames'
   // features are computed as they arrive, so this is the last frame's features and the solve
   // (and, with --record, the recording's writes).
@@ -86,8 +93,13 @@ class MeasureSession {
   MeasureSession(const MeasureSession&) = delete;
   MeasureSession& operator=(const MeasureSession&) = delete;
 
-  MeasureSample Next(double time_s);  // one bracket; throws CameraError when it fails twice
-  // Stops the stream, closes the recording as complete, writes --out's estimates.csv.
+  // One bracket; its rows are appended to --out's estimates.csv (synced) before it returns.
+  // Throws CameraError when it fails twice, EstimatesFileError, RecordingError.
+  MeasureSample Next(double time_s);
+  // Why measure must stop before the next bracket ("" = it may go on): with --record, the disk
+  // budget (--max-disk-gb) or the disk's free space would not hold another bracket.
+  std::string StopReason() const;
+  // Stops the stream, closes the recording as complete.
   void Finish();
   const cv::Mat& last_image() const;  // the last frame of the last bracket (CV_16UC1)
   const Features& last_features() const;

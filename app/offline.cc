@@ -582,6 +582,11 @@ EstimateRow BaseRowOf(const RecordedBracket& bracket, const FrameRecord& first) 
   base.true_d_mm = first.slide_mm;
   base.true_theta_deg = first.theta_deg;
   base.bias_ma = first.bias_ma_set;
+  // The bracket's time: its last frame's arrival (the estimate's data complete then).
+  const FrameRecord& last = bracket.frames.back();
+  base.utc_ns = last.host_time_ns;
+  base.host_monotonic_ns = last.host_monotonic_ns;
+  base.camera_timestamp_ns = last.camera_timestamp_ns;
   return base;
 }
 
@@ -650,19 +655,9 @@ BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
   return rows;
 }
 
-void AppendBracketRows(const BracketEstimateRows& bracket, BracketEstimateRows* all) {
-  const auto append = [](const std::vector<EstimateRow>& from, std::vector<EstimateRow>* to) {
-    to->insert(to->end(), from.begin(), from.end());
-  };
-  append(bracket.i0_free, &all->i0_free);
-  append(bracket.paper, &all->paper);
-  append(bracket.i0_dependent, &all->i0_dependent);
-  append(bracket.geometric, &all->geometric);
-}
-
-std::vector<EstimateRow> FlattenRows(const BracketEstimateRows& all) {
-  std::vector<EstimateRow> rows = all.i0_free;
-  for (const auto* block : {&all.paper, &all.i0_dependent, &all.geometric}) {
+std::vector<EstimateRow> FlattenRows(const BracketEstimateRows& bracket) {
+  std::vector<EstimateRow> rows = bracket.i0_free;
+  for (const auto* block : {&bracket.paper, &bracket.i0_dependent, &bracket.geometric}) {
     rows.insert(rows.end(), block->begin(), block->end());
   }
   return rows;
@@ -671,18 +666,20 @@ std::vector<EstimateRow> FlattenRows(const BracketEstimateRows& all) {
 std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
                                            const FeatureMap& features,
                                            const CalibrationModel& model) {
-  BracketEstimateRows all;
+  std::vector<EstimateRow> all;
+  HealthCheck health;
   const CameraGeometry geometry = GeometryOfRecording(reader);
   for (const RecordedBracket& bracket : reader.Brackets()) {
     const BracketEstimateRows rows = EstimateRecordedBracket(bracket, features, model, geometry);
-    if (rows.health.flagged && !all.health.flagged) all.health = rows.health;
-    AppendBracketRows(rows, &all);
+    if (rows.health.flagged && !health.flagged) health = rows.health;
+    const std::vector<EstimateRow> flat = FlattenRows(rows);
+    all.insert(all.end(), flat.begin(), flat.end());
   }
-  if (all.health.flagged) {  // once per recording
+  if (health.flagged) {  // once per recording
     std::fprintf(stderr, "warning: calibration health: %s (estimates.csv column health).\n",
-                 all.health.Advice().c_str());
+                 health.Advice().c_str());
   }
-  return FlattenRows(all);
+  return all;
 }
 
 ValidationSummary WriteValidation(const std::string& dir, const std::vector<EstimateRow>& rows,
@@ -810,7 +807,33 @@ void RunPlayback(const PlaybackArgs& args, CommandIo io) {
   if (args.show) ShowPlayback(reader, features, rows);
 }
 
+namespace {
+
+// `irdist check FILE`: an estimates.csv (irdist measure's, also after a crash): every row read, a
+// torn last line dropped with a note.
+void CheckEstimatesFile(const std::string& path, std::ostream& out) {
+  std::string note;
+  std::vector<EstimateRow> rows;
+  try {
+    rows = ReadEstimatesCsv(path, &note);
+  } catch (const EstimatesFileError& e) {
+    throw CheckFailedError(e.what());
+  }
+  std::set<int> brackets;
+  for (const EstimateRow& row : rows) brackets.insert(row.bracket);
+  out << path << ": " << rows.size() << " estimate rows of " << brackets.size() << " brackets";
+  if (!brackets.empty()) out << " (" << *brackets.begin() << " to " << *brackets.rbegin() << ")";
+  out << ", readable\n";
+  if (!note.empty()) out << "note: " << note << "\n";
+}
+
+}  // namespace
+
 void RunCheck(const CheckArgs& args, CommandIo io) {
+  if (fs::is_regular_file(args.recording)) {
+    CheckEstimatesFile(args.recording, io.out);
+    return;
+  }
   const RecordingCheck check = CheckRecording(args.recording);
   io.out << check.BriefReport() << "\n";
   if (!check.ok()) {

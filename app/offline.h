@@ -101,8 +101,9 @@ BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
                                             const CameraGeometry& geometry);
 // The geometry of the rig a recording was made on (its header's rig text).
 CameraGeometry GeometryOfRecording(const RecordingReader& reader);
-void AppendBracketRows(const BracketEstimateRows& bracket, BracketEstimateRows* all);
-std::vector<EstimateRow> FlattenRows(const BracketEstimateRows& all);  // estimates.csv order
+// One bracket's rows in estimates.csv's order (the methods in the order above); estimates.csv
+// lists bracket after bracket, so that measure can append each as it is made.
+std::vector<EstimateRow> FlattenRows(const BracketEstimateRows& bracket);
 
 // Estimates of every complete bracket: method "i0_free" (joint row dt_ms = 0, then one row per
 // t_n) and "geometric" (the mean over the bracket's measurement frames, dt_ms = 0). Ground truth

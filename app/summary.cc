@@ -1,17 +1,24 @@
 #include "app/summary.h"
 
+#include <fcntl.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include "base/safe_file.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <tuple>
+
+#include "base/utc_time.h"
 
 namespace irdist {
 namespace {
@@ -19,9 +26,11 @@ namespace {
 constexpr const char* kEstimatesHeader =
     "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,bias_ma,d_mm,theta_deg,"
     "outside_range,ok,health,x_mm,y_mm,z_mm,x_se_mm,y_se_mm,z_se_mm,true_x_mm,true_y_mm,"
-    "true_z_mm";
-constexpr int kEstimatesColumns = 22;
-// Older files: without the 3D columns (13: health last), or without health too (12).
+    "true_z_mm,utc_time,host_monotonic_ns,camera_timestamp_ns";
+constexpr int kEstimatesColumns = 25;
+// Older files: without the time columns (22), without the 3D columns too (13: health last), or
+// without health too (12).
+constexpr int kEstimatesColumnsNoTime = 22;
 constexpr int kEstimatesColumnsNo3d = 13;
 constexpr int kEstimatesColumnsNoHealth = 12;
 
@@ -341,14 +350,44 @@ void Read3d(const std::vector<std::string>& c, const std::string& where, Estimat
   }
 }
 
-}  // namespace
+// A count of ns (digits only, all 64 bits kept); empty = 0 (unknown).
+std::uint64_t ParseCount(const std::string& text, const std::string& where, const char* column) {
+  if (text.empty()) return 0;
+  if (text.find_first_not_of("0123456789") == std::string::npos) {
+    try {
+      return std::stoull(text);
+    } catch (const std::out_of_range&) {  // more than 64 bits: refused below
+    }
+  }
+  throw EstimatesFileError(where + ": column '" + column + "' is '" + text +
+                           "', not a count of ns; fix or delete that row.");
+}
 
-void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& rows) {
-  std::ofstream out(path, std::ios::trunc);
-  if (!out)
-    throw EstimatesFileError(path +
-                             ": cannot be written; check the folder exists and is writable.");
-  out << kEstimatesHeader << '\n' << std::setprecision(10);
+// The time columns (22..24) of a row; empty = 0 (unknown).
+void ReadTimes(const std::vector<std::string>& c, const std::string& where, EstimateRow* r) {
+  if (!c[22].empty()) {
+    const std::optional<std::int64_t> utc_ns = ParseUtcIso8601(c[22]);
+    if (!utc_ns) {
+      throw EstimatesFileError(where + ": column 'utc_time' is '" + c[22] +
+                               "', not YYYY-MM-DDTHH:MM:SS.ffffffZ; fix or delete that row.");
+    }
+    r->utc_ns = *utc_ns;
+  }
+  r->host_monotonic_ns =
+      static_cast<std::int64_t>(ParseCount(c[23], where, "host_monotonic_ns"));
+  r->camera_timestamp_ns = ParseCount(c[24], where, "camera_timestamp_ns");
+}
+
+// An integer cell; empty when 0 (unknown).
+template <typename Int>
+std::string IntOrEmpty(Int value) {
+  return value == 0 ? std::string() : std::to_string(value);
+}
+
+// The rows' lines (each ending in '\n'), as estimates.csv holds them.
+std::string EstimateLines(const std::vector<EstimateRow>& rows) {
+  std::ostringstream out;
+  out << std::setprecision(10);
   for (const EstimateRow& r : rows) {
     out << r.bracket << ',' << r.pose << ',' << r.repeat << ',' << r.method << ',' << r.dt_ms << ','
         << Truth(r.true_d_mm) << ',' << Truth(r.true_theta_deg) << ',' << Truth(r.bias_ma) << ','
@@ -358,57 +397,129 @@ void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& 
                      r.true_y_mm, r.true_z_mm}) {
       out << ',' << Truth(v);
     }
-    out << '\n';
+    out << ',' << (r.utc_ns != 0 ? FormatUtcIso8601(r.utc_ns) : "") << ','
+        << IntOrEmpty(r.host_monotonic_ns) << ',' << IntOrEmpty(r.camera_timestamp_ns) << '\n';
   }
-  out.flush();
-  if (!out) throw EstimatesFileError(path + ": write failed (disk full?); free space and rerun.");
+  return out.str();
 }
 
-std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw EstimatesFileError(path + ": cannot be opened; check the path.");
-  std::string line;
+// A cell that may be empty (a ground truth irdist measure does not know): NaN then.
+double NumberOrNan(const std::string& text, const std::string& where, const char* column) {
+  return text.empty() ? NAN : ParseNumber(text, where, column);
+}
+
+EstimateRow ParseEstimateRow(const std::vector<std::string>& c, int columns,
+                             const std::string& where) {
+  EstimateRow r;
+  r.bracket = static_cast<int>(ParseNumber(c[0], where, "bracket"));
+  r.pose = static_cast<int>(ParseNumber(c[1], where, "pose"));
+  r.repeat = static_cast<int>(ParseNumber(c[2], where, "repeat"));
+  r.method = c[3];
+  r.dt_ms = ParseNumber(c[4], where, "dt_ms");
+  r.true_d_mm = NumberOrNan(c[5], where, "true_d_mm");
+  r.true_theta_deg = NumberOrNan(c[6], where, "true_theta_deg");
+  r.bias_ma = NumberOrNan(c[7], where, "bias_ma");
+  r.d_mm = ParseNumber(c[8], where, "d_mm");
+  r.theta_deg = ParseNumber(c[9], where, "theta_deg");
+  r.outside_range = ParseBool(c[10], where, "outside_range");
+  r.ok = ParseBool(c[11], where, "ok");
+  if (columns >= kEstimatesColumnsNo3d) r.health = c[12];
+  if (columns >= kEstimatesColumnsNoTime) Read3d(c, where, &r);
+  if (columns == kEstimatesColumns) ReadTimes(c, where, &r);
+  if (!(r.true_d_mm > 0.0) && !std::isnan(r.true_d_mm)) {
+    throw EstimatesFileError(where + ": true_d_mm must be positive (or empty: unknown); fix that "
+                             "row.");
+  }
+  return r;
+}
+
+// The number of columns a header line announces (0: not an estimates.csv header).
+int ColumnsOfHeader(const std::string& line) {
   const std::string header(kEstimatesHeader);
-  const std::string no_3d = header.substr(0, header.find(",x_mm"));
-  const std::string no_health = header.substr(0, header.find(",health"));
-  const bool has_line = static_cast<bool>(std::getline(in, line));
-  if (!has_line || (line != header && line != no_3d && line != no_health)) {
+  if (line == header) return kEstimatesColumns;
+  if (line == header.substr(0, header.find(",utc_time"))) return kEstimatesColumnsNoTime;
+  if (line == header.substr(0, header.find(",x_mm"))) return kEstimatesColumnsNo3d;
+  if (line == header.substr(0, header.find(",health"))) return kEstimatesColumnsNoHealth;
+  return 0;
+}
+
+}  // namespace
+
+EstimatesCsvWriter::EstimatesCsvWriter(const std::string& path) : path_(path) {
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) {
+    throw EstimatesFileError(path + ": cannot be written (" + std::strerror(errno) +
+                             "); check the folder exists and is writable.");
+  }
+  WriteAll(std::string(kEstimatesHeader) + "\n");
+}
+
+EstimatesCsvWriter::~EstimatesCsvWriter() {
+  if (fd_ >= 0) ::close(fd_);  // every Append was synced: nothing to report here
+}
+
+void EstimatesCsvWriter::Append(const std::vector<EstimateRow>& rows) {
+  if (!rows.empty()) WriteAll(EstimateLines(rows));
+}
+
+void EstimatesCsvWriter::WriteAll(const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd_, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      throw EstimatesFileError(path_ + ": write failed (" + std::strerror(errno) +
+                               "; disk full?); free space and rerun.");
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fdatasync(fd_) != 0) {
+    throw EstimatesFileError(path_ + ": sync failed (" + std::strerror(errno) +
+                             "); check the disk.");
+  }
+}
+
+void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& rows) {
+  EstimatesCsvWriter writer(path);
+  writer.Append(rows);
+}
+
+std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path, std::string* note) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw EstimatesFileError(path + ": cannot be opened; check the path.");
+  std::ostringstream whole;
+  whole << in.rdbuf();
+  const std::string text = whole.str();
+  if (note != nullptr) note->clear();
+  std::istringstream lines(text);
+  std::string line;
+  std::getline(lines, line);
+  const int columns = ColumnsOfHeader(line);
+  if (columns == 0) {
     throw EstimatesFileError(path + ":1: the header is not '" + std::string(kEstimatesHeader) +
                              "'; is this an irdist estimates.csv?");
   }
-  const int columns = line == header   ? kEstimatesColumns
-                      : line == no_3d ? kEstimatesColumnsNo3d
-                                      : kEstimatesColumnsNoHealth;
   std::vector<EstimateRow> rows;
   int line_no = 1;
-  while (std::getline(in, line)) {
+  std::size_t end = line.size() + 1;  // bytes read up to the end of this line
+  while (std::getline(lines, line)) {
     ++line_no;
-    if (line.empty()) continue;
+    end += line.size() + 1;
     const std::string where = path + ":" + std::to_string(line_no);
+    if (end > text.size() && text.back() != '\n') {  // no end of line: torn by a crash
+      if (note != nullptr) {
+        *note = where + ": a torn last line (no end of line: the writer stopped while writing "
+                        "it) was dropped";
+      }
+      break;
+    }
+    if (line.empty()) continue;
     const std::vector<std::string> c = SplitCsv(line);
     if (static_cast<int>(c.size()) != columns) {
       throw EstimatesFileError(where + ": " + std::to_string(c.size()) + " columns, expected " +
                                std::to_string(columns) + "; fix or delete that row.");
     }
-    EstimateRow r;
-    r.bracket = static_cast<int>(ParseNumber(c[0], where, "bracket"));
-    r.pose = static_cast<int>(ParseNumber(c[1], where, "pose"));
-    r.repeat = static_cast<int>(ParseNumber(c[2], where, "repeat"));
-    r.method = c[3];
-    r.dt_ms = ParseNumber(c[4], where, "dt_ms");
-    r.true_d_mm = ParseNumber(c[5], where, "true_d_mm");
-    r.true_theta_deg = ParseNumber(c[6], where, "true_theta_deg");
-    r.bias_ma = ParseNumber(c[7], where, "bias_ma");
-    r.d_mm = ParseNumber(c[8], where, "d_mm");
-    r.theta_deg = ParseNumber(c[9], where, "theta_deg");
-    r.outside_range = ParseBool(c[10], where, "outside_range");
-    r.ok = ParseBool(c[11], where, "ok");
-    if (columns >= kEstimatesColumnsNo3d) r.health = c[12];
-    if (columns == kEstimatesColumns) Read3d(c, where, &r);
-    if (r.true_d_mm <= 0.0) {
-      throw EstimatesFileError(where + ": true_d_mm must be positive; fix that row.");
-    }
-    rows.push_back(r);
+    rows.push_back(ParseEstimateRow(c, columns, where));
   }
   return rows;
 }

@@ -3,6 +3,7 @@
 // Pure computation over rows, so the same numbers come from a live run and from playback.
 
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -38,6 +39,13 @@ struct EstimateRow {
   // Calibration health (estimator/health.h): "ok", "-" (not assessed), "blur_larger" or
   // "blur_smaller" (the optics no longer match the calibration).
   std::string health = "-";
+  // When the bracket's data was complete: its last frame's arrival on the host's wall clock (ns
+  // since the Unix epoch; estimates.csv column utc_time, ISO 8601 UTC with microseconds), the
+  // host's monotonic clock then (host_monotonic_ns) and the camera's own timestamp of that frame
+  // (camera_timestamp_ns). 0 = unknown (an empty cell).
+  std::int64_t utc_ns = 0;
+  std::int64_t host_monotonic_ns = 0;
+  std::uint64_t camera_timestamp_ns = 0;
 };
 
 class EstimatesFileError : public Error {
@@ -45,9 +53,31 @@ class EstimatesFileError : public Error {
   using Error::Error;
 };
 
-// estimates.csv: header line then one row per estimate (columns in docs/reports.md).
+// estimates.csv: header line then one row per estimate, bracket after bracket (columns in
+// docs/reports.md). Throws EstimatesFileError.
 void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& rows);
-std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path);  // throws EstimatesFileError
+// Reads every complete row. A last line without its end of line (the writer was killed or the
+// power cut while writing it) is dropped, and `*note` (when given) says so; "" otherwise. Empty
+// ground-truth cells (irdist measure without --at) read as NaN. Throws EstimatesFileError.
+std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path, std::string* note = nullptr);
+
+// estimates.csv written as the estimates are made (irdist measure): Open writes the header, each
+// Append writes its rows with one write(2) and syncs the file (fdatasync), so a kill -9 or a power
+// cut loses at most the rows being written, and a reader drops a torn last line.
+class EstimatesCsvWriter {
+ public:
+  // Creates (or replaces) `path` and writes the header. Throws EstimatesFileError.
+  explicit EstimatesCsvWriter(const std::string& path);
+  ~EstimatesCsvWriter();
+  EstimatesCsvWriter(const EstimatesCsvWriter&) = delete;
+  EstimatesCsvWriter& operator=(const EstimatesCsvWriter&) = delete;
+  void Append(const std::vector<EstimateRow>& rows);  // throws EstimatesFileError
+
+ private:
+  void WriteAll(const std::string& text);
+  std::string path_;
+  int fd_ = -1;
+};
 
 struct ErrorFigures {
   int count = 0;

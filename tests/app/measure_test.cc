@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <sstream>
 
@@ -66,6 +67,24 @@ TEST(MeasureJson, NoEstimateGivesNullsAndNoPosition) {
   EXPECT_TRUE(j["blob_x_px"].IsNull());
   EXPECT_TRUE(j["position"].IsNull());
   EXPECT_TRUE(j["flags"]["no_blob"].as<bool>());
+}
+
+// The bracket's absolute time: UTC (ISO 8601, microseconds) beside the monotonic clock and the
+// camera's timestamp (all 64 bits); unknown ones are null.
+TEST(MeasureJson, CarriesTheBracketsUtcTimeBesideTheMonotonicAndCameraClocks) {
+  MeasureSample s = Good();
+  s.utc_ns = 1796191923123456789;  // 2026-12-02T06:12:03.123456789Z
+  s.host_monotonic_ns = 987654321012345;
+  s.camera_timestamp_ns = 18446744073709551000ull;
+  YAML::Node j = YAML::Load(MeasureJson(s));
+  EXPECT_EQ(j["utc_time"].as<std::string>(), "2026-12-02T06:12:03.123456Z");
+  EXPECT_EQ(j["host_monotonic_ns"].as<std::int64_t>(), 987654321012345);
+  EXPECT_EQ(j["camera_timestamp_ns"].as<std::uint64_t>(), 18446744073709551000ull);
+  s.utc_ns = 0;
+  s.camera_timestamp_ns = 0;  // a camera without timestamps
+  j = YAML::Load(MeasureJson(s));
+  EXPECT_TRUE(j["utc_time"].IsNull());
+  EXPECT_TRUE(j["camera_timestamp_ns"].IsNull());
 }
 
 TEST(QualityFlags, NamesEachProblem) {

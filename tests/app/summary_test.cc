@@ -11,7 +11,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <vector>
+
+#include "base/utc_time.h"
 
 namespace irdist {
 namespace {
@@ -32,6 +35,11 @@ constexpr const char* kCsv =
     "4,2,0,i0_free,24,1500,0,500,1503,3,0,1\n"
     "4,2,0,geometric,0,1500,0,500,1485,0,0,1\n"
     "5,2,1,geometric,0,1500,0,500,0,0,0,0\n";
+
+// One line of a text file, for istream_iterator.
+struct Line : std::string {
+  friend std::istream& operator>>(std::istream& in, Line& line) { return std::getline(in, line); }
+};
 
 class SummaryTest : public ::testing::Test {
  protected:
@@ -201,6 +209,64 @@ TEST_F(SummaryTest, HealthColumnRoundTripsAndIsCounted) {
   std::ifstream in(yaml);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("health: {assessed: 3, flagged: 1}"), std::string::npos) << text;
+}
+
+// estimates.csv as irdist measure writes it, bracket by bracket: every appended row reads back;
+// a last line torn by a crash (no end of line) is dropped, and the note names its line.
+TEST_F(SummaryTest, StreamedRowsReadBackAndATornLastLineIsDroppedWithANote) {
+  const std::vector<EstimateRow> rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  ASSERT_EQ(rows.size(), 9u);
+  const std::string path = (dir_ / "streamed.csv").string();
+  {
+    EstimatesCsvWriter writer(path);
+    writer.Append({rows.begin(), rows.begin() + 4});
+    EXPECT_EQ(ReadEstimatesCsv(path).size(), 4u);  // on disk before the next append
+    writer.Append({rows.begin() + 4, rows.end()});
+  }
+  std::string note = "stale";
+  EXPECT_EQ(ReadEstimatesCsv(path, &note).size(), 9u);
+  EXPECT_EQ(note, "");
+  std::ofstream(path, std::ios::app) << "6,3,0,i0_free,0,1500,0,5";  // killed while writing
+  const std::vector<EstimateRow> again = ReadEstimatesCsv(path, &note);
+  ASSERT_EQ(again.size(), 9u);
+  EXPECT_EQ(again.back().bracket, 5);
+  EXPECT_NE(note.find("streamed.csv:11"), std::string::npos) << note;
+  EXPECT_NE(note.find("torn"), std::string::npos) << note;
+  EXPECT_EQ(ReadEstimatesCsv(path).size(), 9u);  // also without asking for the note
+}
+
+// The bracket's time: UTC as ISO 8601 with microseconds, the monotonic clock and the camera's
+// timestamp (all 64 bits), empty when unknown; unknown ground truth (measure without --at) reads
+// as NaN.
+TEST_F(SummaryTest, TimeColumnsRoundTripAndUnknownValuesAreEmpty) {
+  std::vector<EstimateRow> rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  const std::optional<std::int64_t> utc_ns = ParseUtcIso8601("2026-12-02T06:12:03.123456Z");
+  ASSERT_TRUE(utc_ns.has_value());
+  rows[0].utc_ns = *utc_ns;
+  rows[0].host_monotonic_ns = 987654321012345;
+  rows[0].camera_timestamp_ns = 18446744073709551000ull;
+  rows[1].true_d_mm = rows[1].true_theta_deg = rows[1].bias_ma = NAN;
+  const std::string path = (dir_ / "times.csv").string();
+  WriteEstimatesCsv(path, rows);
+  std::ifstream in(path);
+  const std::vector<std::string> lines{std::istream_iterator<Line>(in),
+                                       std::istream_iterator<Line>()};
+  ASSERT_EQ(lines.size(), rows.size() + 1);
+  EXPECT_NE(lines[0].find(",true_z_mm,utc_time,host_monotonic_ns,camera_timestamp_ns"),
+            std::string::npos)
+      << lines[0];
+  EXPECT_NE(lines[1].find(",2026-12-02T06:12:03.123456Z,987654321012345,18446744073709551000"),
+            std::string::npos)
+      << lines[1];
+  EXPECT_EQ(lines[2].substr(lines[2].size() - 3), ",,,") << lines[2];
+  const std::vector<EstimateRow> again = ReadEstimatesCsv(path);
+  EXPECT_EQ(again[0].utc_ns, *utc_ns);
+  EXPECT_EQ(again[0].host_monotonic_ns, 987654321012345);
+  EXPECT_EQ(again[0].camera_timestamp_ns, 18446744073709551000ull);
+  EXPECT_EQ(again[1].utc_ns, 0);
+  EXPECT_EQ(again[1].camera_timestamp_ns, 0u);
+  EXPECT_TRUE(std::isnan(again[1].true_d_mm));
+  EXPECT_TRUE(std::isnan(again[1].bias_ma));
 }
 
 TEST_F(SummaryTest, BadRowIsRefusedWithItsLine) {

@@ -3,13 +3,25 @@
 // virtual station (--at) at three poses (estimates against the pose), --json against the schema
 // of docs/measure.md, --count and Ctrl-C stopping cleanly, --record + playback reproducing
 // estimates.csv byte for byte, 3D at a lateral offset, and a model from another camera setup
-// refused by measure, validate and playback unless --allow-model-mismatch.
+// refused by measure, validate and playback unless --allow-model-mismatch; estimates.csv on disk
+// as it is made (kill -9), a JSON reader that goes away (| head -n 2) and a recording's disk
+// budget.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <yaml-cpp/yaml.h>
 
+#include <fcntl.h>
+#include <sys/mount.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <map>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -201,6 +213,196 @@ TEST_F(Measure, RecordAndPlaybackReproduceTheEstimatesByteForByte) {
       << ReadAll(*dir_ + "/replayed/estimates.csv");
 }
 
+// The bracket ids of an estimates.csv (its first column) and how many rows each has.
+std::map<int, int> RowsPerBracket(const std::string& csv_text) {
+  std::map<int, int> rows;
+  std::istringstream csv(csv_text);
+  std::string line;
+  std::getline(csv, line);  // header
+  while (std::getline(csv, line)) {
+    if (!line.empty()) ++rows[std::stoi(line.substr(0, line.find(',')))];
+  }
+  return rows;
+}
+
+// Lines of a log that are measure's per-bracket lines ("#N t ...").
+int BracketLines(const std::string& log) {
+  std::istringstream in(ReadAll(log));
+  int n = 0;
+  for (std::string line; std::getline(in, line);) n += line.rfind("#", 0) == 0 ? 1 : 0;
+  return n;
+}
+
+// estimates.csv is on disk as the estimates are made: killed with -9 after N printed brackets,
+// --out holds at least those N, each with all its rows, and `irdist check` reads the file.
+TEST_F(Measure, KillNineKeepsEveryPrintedBracketInEstimatesCsv) {
+  const std::string out = *dir_ + "/killed";
+  const std::string log = *dir_ + "/killed.log";
+  {
+    testing::LoopbackGvcpLock lock;
+    testing::Child child({"measure", "--model", Model(), "--time-scale", kTimeScale, "--at",
+                          "2000,0,0,490", "--out", out},
+                         log);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (BracketLines(log) < 6 && child.Running() &&
+           std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    child.Signal(SIGKILL);
+    EXPECT_EQ(child.Wait(std::chrono::seconds(30)), 128 + SIGKILL) << ReadAll(log);
+  }
+  const int printed = BracketLines(log);
+  ASSERT_GE(printed, 6) << ReadAll(log);
+  const std::map<int, int> rows = RowsPerBracket(ReadAll(out + "/estimates.csv"));
+  EXPECT_GE(static_cast<int>(rows.size()), printed) << ReadAll(out + "/estimates.csv");
+  for (const auto& [bracket, count] : rows) {
+    EXPECT_EQ(count, rows.begin()->second) << "bracket " << bracket << " is partial";
+  }
+  // Each row ends in the bracket's time: UTC, the host's monotonic clock, the camera's timestamp.
+  const std::string text = ReadAll(out + "/estimates.csv");
+  const std::string last = text.substr(text.rfind('\n', text.size() - 2) + 1);
+  EXPECT_TRUE(std::regex_search(
+      last, std::regex(R"(,\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{6}Z,[1-9]\d*,[1-9]\d*\n$)")))
+      << last;
+  std::string output;
+  EXPECT_EQ(RunIrdist({"check", out + "/estimates.csv"}, *dir_ + "/killed-check.log", &output), 0)
+      << output;
+  EXPECT_NE(output.find("of " + std::to_string(rows.size()) + " brackets"), std::string::npos)
+      << output;
+}
+
+// `irdist measure --json | head -n 2`: the reader takes two lines and goes away; measure stops
+// at its next line (EPIPE), prints its summary on stderr and exits 0. Each line carries the
+// bracket's UTC time (ISO 8601, microseconds) beside the host's monotonic clock.
+TEST_F(Measure, JsonReaderThatGoesAwayStopsMeasureCleanly) {
+  int pipe_fds[2];
+  ASSERT_EQ(pipe(pipe_fds), 0);
+  const std::string log = *dir_ + "/head.log";
+  testing::LoopbackGvcpLock lock;
+  const pid_t pid = fork();
+  if (pid == 0) {
+    dup2(pipe_fds[1], STDOUT_FILENO);
+    const int err = ::open(log.c_str(), O_CREAT | O_WRONLY | O_TRUNC, 0644);
+    dup2(err, STDERR_FILENO);
+    close(pipe_fds[0]);
+    execl(testing::IrdistBinary().c_str(), "irdist", "measure", "--model", Model().c_str(),
+          "--time-scale", kTimeScale, "--at", "2000,0,0,490", "--json", nullptr);
+    _exit(127);
+  }
+  close(pipe_fds[1]);
+  FILE* reader = fdopen(pipe_fds[0], "r");
+  std::vector<std::string> lines;
+  char buffer[4096];
+  while (lines.size() < 2 && std::fgets(buffer, sizeof(buffer), reader) != nullptr) {
+    lines.emplace_back(buffer);
+  }
+  std::fclose(reader);  // the reader goes away, as head does
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_EQ(lines.size(), 2u) << ReadAll(log);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status) << "\n" << ReadAll(log);
+  EXPECT_EQ(WEXITSTATUS(status), 0) << ReadAll(log);
+  const std::string err = ReadAll(log);
+  EXPECT_NE(err.find("Measured "), std::string::npos) << err;
+  EXPECT_NE(err.find("Stopped: stdout was closed"), std::string::npos) << err;
+  std::int64_t previous_ns = 0;
+  for (const std::string& line : lines) {
+    const YAML::Node j = YAML::Load(line);
+    const std::string utc = j["utc_time"].as<std::string>();
+    EXPECT_TRUE(std::regex_match(utc, std::regex(R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{6}Z)")))
+        << utc;
+    const std::int64_t monotonic_ns = j["host_monotonic_ns"].as<std::int64_t>();
+    EXPECT_GT(monotonic_ns, previous_ns) << line;
+    previous_ns = monotonic_ns;
+    EXPECT_TRUE(j["camera_timestamp_ns"].IsNull() || j["camera_timestamp_ns"].as<std::uint64_t>() > 0)
+        << line;
+  }
+}
+
+// The other commands with their stdout's reader gone before they write: playback of a measure
+// recording still writes its estimates.csv and exits 0 (a failed write, not a SIGPIPE kill).
+TEST_F(Measure, PlaybackWithItsReaderGoneFinishesAndExitsZero) {
+  const std::string out = *dir_ + "/reader-gone";
+  std::string output;
+  ASSERT_EQ(RunMeasure("reader-gone", {"--at", "2000,0,0,490", "--count", "2", "--out", out,
+                                       "--record"},
+                       &output),
+            0)
+      << output;
+  int pipe_fds[2];
+  ASSERT_EQ(pipe(pipe_fds), 0);
+  close(pipe_fds[0]);  // nobody will read
+  const pid_t pid = fork();
+  if (pid == 0) {
+    dup2(pipe_fds[1], STDOUT_FILENO);
+    execl(testing::IrdistBinary().c_str(), "irdist", "playback", (out + "/recording").c_str(),
+          "--model", Model().c_str(), "--out", (out + "/pb").c_str(), nullptr);
+    _exit(127);
+  }
+  close(pipe_fds[1]);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(RowsPerBracket(ReadAll(out + "/pb/estimates.csv")).size(), 2u);
+}
+
+// --record with a disk budget: measure stops before the recording would exceed it, says why,
+// exits 0, and leaves a complete recording whose brackets are all in estimates.csv.
+TEST_F(Measure, RecordingStopsBeforeItsDiskBudget) {
+  const std::string out = *dir_ + "/budget";
+  std::string output;
+  ASSERT_EQ(RunMeasure("budget", {"--at", "2000,0,0,490", "--count", "500", "--out", out,
+                                  "--record", "--max-disk-gb", "0.002"},
+                       &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("Stopped: the recording"), std::string::npos) << output;
+  EXPECT_NE(output.find("--max-disk-gb 0.002"), std::string::npos) << output;
+  std::uintmax_t bytes = 0;
+  for (const auto& entry : fs::directory_iterator(out + "/recording/frames")) {
+    bytes += entry.file_size();
+  }
+  EXPECT_LE(bytes, 2000000u);
+  EXPECT_GT(bytes, 0u);
+  const std::map<int, int> rows = RowsPerBracket(ReadAll(out + "/estimates.csv"));
+  EXPECT_LT(rows.size(), 500u);
+  EXPECT_NE(output.find("Measured " + std::to_string(rows.size()) + " brackets"),
+            std::string::npos)
+      << output;
+  ASSERT_EQ(RunIrdist({"check", out + "/recording"}, *dir_ + "/budget-check.log", &output), 0)
+      << output;
+  EXPECT_EQ(RunMeasure("budget-alone", {"--count", "1", "--max-disk-gb", "1"}, &output), 2)
+      << output;
+}
+
+// Without --max-disk-gb, the recording keeps the disk's margin free (5% of an 8 MB tmpfs here):
+// measure stops before it, says why, and every recorded bracket is in estimates.csv.
+TEST_F(Measure, RecordingStopsBeforeTheDisksFreeSpaceMargin) {
+  const std::string disk = *dir_ + "/small-disk";
+  fs::create_directories(disk);
+  if (::mount("tmpfs", disk.c_str(), "tmpfs", MS_NOSUID | MS_NODEV, "size=8m") != 0) {
+    GTEST_SKIP() << "cannot mount a tmpfs (" << std::strerror(errno) << "): needs root";
+  }
+  std::string output;
+  const int code = RunMeasure("margin", {"--at", "2000,0,0,490", "--count", "500", "--out",
+                                         disk + "/run", "--record"},
+                              &output);
+  const std::map<int, int> rows = RowsPerBracket(ReadAll(disk + "/run/estimates.csv"));
+  std::string check;
+  const int check_code =
+      RunIrdist({"check", disk + "/run/recording"}, *dir_ + "/margin-check.log", &check);
+  ::umount2(disk.c_str(), MNT_DETACH);
+  ASSERT_EQ(code, 0) << output;
+  EXPECT_NE(output.find("Stopped: the disk of"), std::string::npos) << output;
+  EXPECT_NE(output.find("less than the margin"), std::string::npos) << output;
+  EXPECT_NE(output.find("Measured " + std::to_string(rows.size()) + " brackets"),
+            std::string::npos)
+      << output;
+  EXPECT_GT(rows.size(), 0u);
+  EXPECT_EQ(check_code, 0) << check;
+}
+
 // 3D at a lateral offset: the emitter 40 mm right and 30 mm up of the optical axis.
 TEST_F(Measure, PositionAtALateralOffsetWithinHalfAPercentOfRange) {
   std::string rig = RigWith("offset_x_mm: 0.0", "offset_x_mm: 40.0");
@@ -253,7 +455,7 @@ TEST_F(Measure, ValidateWritesThePositionBesideItsTruth) {
     std::vector<std::string> c;
     std::stringstream fields(line);
     for (std::string f; std::getline(fields, f, ',');) c.push_back(f);
-    ASSERT_EQ(c.size(), 22u) << line;  // health at 12, then the 3D columns
+    ASSERT_EQ(c.size(), 25u) << line;  // health at 12, the 3D columns, then the 3 time columns
     const double x = std::stod(c[13]), y = std::stod(c[14]), z = std::stod(c[15]);
     const double tx = std::stod(c[19]), ty = std::stod(c[20]), tz = std::stod(c[21]);
     EXPECT_EQ(tx, 40.0);
