@@ -21,6 +21,7 @@
 #include "app/position.h"
 #include "app/provenance.h"
 #include "app/run.h"
+#include "base/yaml_fields.h"
 #include "estimator/model_file.h"
 
 namespace irdist {
@@ -271,12 +272,7 @@ void Session::CheckModel(CommandIo io) {
   if (!warning.empty()) io.err << warning << "\n";
 }
 
-std::string Session::ReadRigText() const {
-  std::ifstream rig_file(live_->rig_path(), std::ios::binary);
-  std::ostringstream rig_text;
-  rig_text << rig_file.rdbuf();
-  return rig_text.str();
-}
+std::string Session::ReadRigText() const { return yaml_fields::ReadFile(live_->rig_path()); }
 
 void Session::OpenRecording() {
   RecordingHeader header;

@@ -10,6 +10,7 @@
 
 #include "app/summary.h"
 #include "base/check.h"
+#include "base/yaml_fields.h"
 
 namespace irdist {
 
@@ -93,7 +94,7 @@ CameraGeometry GeometryOfRigText(const std::string& text, const std::string& fil
   g.virtual_rig = rig.kind == RigKind::kVirtual;
   if (!g.virtual_rig) return g;
   // sim/ checked these keys when the rig started; here they are only the ground truth's offsets.
-  const YAML::Node emitter = YAML::Load(text)["virtual"]["emitter"];
+  const YAML::Node emitter = yaml_fields::Parse(text, file)["virtual"]["emitter"];
   if (emitter.IsMap()) {
     if (emitter["offset_x_mm"]) g.emitter_offset_x_mm = emitter["offset_x_mm"].as<double>();
     if (emitter["offset_y_mm"]) g.emitter_offset_y_mm = emitter["offset_y_mm"].as<double>();

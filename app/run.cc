@@ -25,6 +25,7 @@
 #include "app/recipe.h"
 #include "app/resume.h"
 #include "app/suggest.h"
+#include "base/yaml_fields.h"
 #include "estimator/model_file.h"
 #include "sim/virtual_rig.h"
 #include "app/station_setup.h"
@@ -47,13 +48,8 @@ extern "C" void OnStopSignal(int) { StopRequested().store(true); }
 
 constexpr const char* kSoftwareVersion = "irdist 0.1.0";
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw RecipeError(path, 0, 0, "cannot read the file; check the path.");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+// A recipe's or rig file's text, through the one reader that refuses FIFOs and devices.
+std::string ReadText(const std::string& path) { return yaml_fields::ReadFile(path); }
 
 std::string Timestamp() {
   const std::time_t now = std::time(nullptr);
@@ -602,6 +598,8 @@ void RunSuggest(const PlanArgs& args, CommandIo io) {
              << "suggesting without it.\n";
     }
   }
+  std::string why;  // before the probe sweep: a bad option must not cost a sweep
+  if (!options.IsValid(&why)) throw SuggestError(args.from_summary + ": " + why);
   const std::string dir =
       args.out_dir.empty() ? recipe.output_dir + "-suggest-" + Timestamp() : args.out_dir;
   fs::create_directories(dir);

@@ -122,8 +122,8 @@ MapReader::MapReader(const YAML::Node& node, std::string file, std::string conte
     if (!key.IsScalar()) Fail(file_, key.Mark(), "keys of " + context_ + " must be names");
     const std::string name = key.Scalar();
     if (std::find(allowed_.begin(), allowed_.end(), name) == allowed_.end()) {
-      std::string message =
-          "unknown key " + Quoted(name) + " in " + context_ + "; valid keys: " + JoinNames(allowed_);
+      std::string message = "unknown key " + Quoted(name) + " in " + context_ +
+                            "; valid keys: " + JoinNames(allowed_);
       const std::string closest = ClosestMatch(name, allowed_);
       if (!closest.empty()) message += " (did you mean '" + closest + "'?)";
       Fail(file_, key.Mark(), message);
