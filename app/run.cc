@@ -584,22 +584,33 @@ std::string ProbeRecipeText(const Recipe& recipe, const RecipeEnds& e) {
 
 }  // namespace
 
-void RunSuggest(const PlanArgs& args, CommandIo io) {
-  const Recipe recipe = LoadRecipe(args.recipe);
-  const Plan plan = PlanRecipe(recipe);
-  const RecipeEnds ends = EndsOf(plan);
+namespace {
+
+// The suggestion's options, with --from's best dt; checked before the probe sweep (a bad value
+// must not cost a sweep).
+SuggestOptions SuggestOptionsOf(const PlanArgs& args, std::ostream& err) {
   SuggestOptions options;
   if (!args.from_summary.empty()) {
     const std::optional<double> best = ReadBestDtMs(args.from_summary);
     if (best) {
       options.best_dt_ms = *best;
     } else {
-      io.err << args.from_summary << " has no best_dt_ms (a validation with one t_n?); "
-             << "suggesting without it.\n";
+      err << args.from_summary << " has no best_dt_ms (a validation with one t_n?); "
+          << "suggesting without it.\n";
     }
   }
-  std::string why;  // before the probe sweep: a bad option must not cost a sweep
+  std::string why;
   if (!options.IsValid(&why)) throw SuggestError(args.from_summary + ": " + why);
+  return options;
+}
+
+}  // namespace
+
+void RunSuggest(const PlanArgs& args, CommandIo io) {
+  const Recipe recipe = LoadRecipe(args.recipe);
+  const Plan plan = PlanRecipe(recipe);
+  const RecipeEnds ends = EndsOf(plan);
+  const SuggestOptions options = SuggestOptionsOf(args, io.err);
   const std::string dir =
       args.out_dir.empty() ? recipe.output_dir + "-suggest-" + Timestamp() : args.out_dir;
   fs::create_directories(dir);
