@@ -69,7 +69,7 @@ struct BracketSpec {
 // Bounds that keep every count and duration of a plan far from overflow.
 constexpr double kMaxExposureMs = 100000.0;  // one exposure, ms (100 s)
 constexpr double kMaxSettleMs = 3600000.0;   // one settle wait, ms (1 h)
-constexpr double kMaxPlanFrames = 1e7;       // frames of one plan (int counts, ~1e5 GB of PNGs)
+constexpr double kMaxPlanFrames = 1e7;       // frames of one plan (int counts; ~10 TB of PNGs)
 
 // Waits the sweep adds on top of the station's own settle (which is in MotionModel).
 struct SettleSpec {
