@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <ostream>
 #include <sstream>
 
@@ -15,6 +16,7 @@
 #include "app/station_cmd.h"
 #include "app/tools.h"
 #include "station/plan.h"
+#include "station/serial_transport.h"
 
 namespace irdist {
 namespace {
@@ -125,6 +127,40 @@ CLI::Validator TimeScaleRange() {
         return "";
       },
       "0.01..1000");
+}
+
+// A number flag (each value of a list flag): finite and inside (min, max] or [min, max], said
+// with the flag's name, the range and an example (the flag with good values), before any device
+// is opened.
+CLI::Validator NumberIn(const std::string& flag, double min, double max, bool min_open,
+                        const std::string& unit, const std::string& example) {
+  char range[96];
+  std::snprintf(range, sizeof(range), "%s%.10g, %.10g] %s", min_open ? "(" : "[", min, max,
+                unit.c_str());
+  const std::string range_text = range;
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        double value = 0.0;
+        const bool parsed = CLI::detail::lexical_cast(text, value);
+        const bool inside = min_open ? value > min : value >= min;
+        if (parsed && inside && value <= max) return "";
+        return flag + " " + text + " is outside " + range_text + "; e.g. " + example;
+      },
+      range_text);
+}
+
+// An output folder flag: absent, or a folder; never an existing file (or a path through one).
+CLI::Validator FolderPath(const std::string& flag) {
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        std::error_code error;
+        std::filesystem::path path(text);
+        while (!path.empty() && !std::filesystem::exists(path, error)) path = path.parent_path();
+        if (path.empty() || std::filesystem::is_directory(path, error)) return "";
+        return flag + " " + text + ": " + path.string() +
+               " is a file, not a folder; give a new or existing folder";
+      },
+      "FOLDER");
 }
 
 }  // namespace
@@ -316,7 +352,10 @@ void AddAt(CLI::App* sub, std::vector<double>& at) {
                   "'irdist station'): place the IRED through the station at "
                   "SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA first")
       ->delimiter(',')
-      ->expected(4);
+      ->expected(4)
+      ->check(NumberIn("--at", -1e6, 1e6, false, "(mm, deg, deg, mA)", "--at 2000,10,0,500"))
+      ->check(NumberIn("--at (its BIAS_MA)", 0.0, 1e6, false, "mA", "--at 2000,10,0,500")
+                  .application_index(3));
 }
 
 void AddMeasure(CommandTable& table) {
@@ -325,13 +364,15 @@ void AddMeasure(CommandTable& table) {
   sub->add_option("--model", a.model, "model.yaml from a calibration")->required();
   sub->add_option("--rig", a.rig, "Rig name or rig file")->capture_default_str();
   sub->add_option("--t-ref-ms", a.t_ref_ms, "Reference exposure (default: the model's)")
-      ->check(CLI::PositiveNumber);
+      ->check(NumberIn("--t-ref-ms", 0.0, kMaxExposureMs, true, "ms", "--t-ref-ms 8"));
   sub->add_option("--t-meas-ms", a.t_meas_ms, "Measurement exposures (default: the model's)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(NumberIn("--t-meas-ms", 0.0, kMaxExposureMs, true, "ms", "--t-meas-ms 30,32,34,36"));
   sub->add_option("--count", a.count, "Stop after N brackets")->check(CLI::PositiveNumber);
   sub->add_option("--duration", a.duration_s, "Stop after S seconds")->check(CLI::PositiveNumber);
   sub->add_flag("--json", a.json, "One JSON object per bracket on stdout (docs/measure.md)");
-  sub->add_option("--out", a.out_dir, "Folder for estimates.csv (and recording/ with --record)");
+  sub->add_option("--out", a.out_dir, "Folder for estimates.csv (and recording/ with --record)")
+      ->check(FolderPath("--out"));
   sub->add_flag("--record", a.record, "With --out: record the frames (playable by playback)");
   sub->add_option("--max-disk-gb", a.max_disk_gb,
                   "With --record: stop before the recording exceeds this many GB (default: stop "
@@ -417,7 +458,9 @@ void AddStationCommands(CommandTable& table) {
   StationTestArgs& test = table.args().station_test;
   sub = table.Add("station-test", table.handlers().station_test, test);
   sub->add_option("port", test.port, "Serial port of the board (e.g. /dev/ttyUSB0)")->required();
-  sub->add_option("--baud", test.baud, "Serial speed, bit/s")->capture_default_str();
+  sub->add_option("--baud", test.baud, "Serial speed, bit/s")
+      ->capture_default_str()
+      ->check(NumberIn("--baud", 1, kMaxBaud, false, "bit/s", "--baud 115200"));
   CameraTestArgs& camera = table.args().camera_test;
   sub = table.Add("camera-test", table.handlers().camera_test, camera);
   sub->add_option("camera", camera.camera,

@@ -33,6 +33,7 @@
 #include "app/resume.h"
 #include "app/run.h"
 #include "base/utc_time.h"
+#include "base/yaml_fields.h"
 #include "estimator/model_file.h"
 
 namespace irdist {
@@ -350,12 +351,7 @@ void Session::CheckModel(CommandIo io) {
   if (!warning.empty()) io.err << warning << "\n";
 }
 
-std::string Session::ReadRigText() const {
-  std::ifstream rig_file(live_->rig_path(), std::ios::binary);
-  std::ostringstream rig_text;
-  rig_text << rig_file.rdbuf();
-  return rig_text.str();
-}
+std::string Session::ReadRigText() const { return yaml_fields::ReadFile(live_->rig_path()); }
 
 void Session::OpenRecording() {
   RecordingHeader header;

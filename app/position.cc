@@ -3,6 +3,8 @@
 #include <cmath>
 #include <initializer_list>
 #include <optional>
+#include <string>
+#include <utility>
 #include <opencv2/calib3d.hpp>
 #include <vector>
 
@@ -10,6 +12,7 @@
 
 #include "app/summary.h"
 #include "base/check.h"
+#include "base/yaml_fields.h"
 
 namespace irdist {
 
@@ -93,10 +96,16 @@ CameraGeometry GeometryOfRigText(const std::string& text, const std::string& fil
   g.virtual_rig = rig.kind == RigKind::kVirtual;
   if (!g.virtual_rig) return g;
   // sim/ checked these keys when the rig started; here they are only the ground truth's offsets.
-  const YAML::Node emitter = YAML::Load(text)["virtual"]["emitter"];
+  const YAML::Node root = yaml_fields::Parse(text, file);  // a map: ParseRig read it
+  const YAML::Node virt = root["virtual"];
+  const YAML::Node emitter = virt.IsMap() ? virt["emitter"] : YAML::Node();
   if (emitter.IsMap()) {
-    if (emitter["offset_x_mm"]) g.emitter_offset_x_mm = emitter["offset_x_mm"].as<double>();
-    if (emitter["offset_y_mm"]) g.emitter_offset_y_mm = emitter["offset_y_mm"].as<double>();
+    for (const auto& [key, offset_mm] : {std::pair{"offset_x_mm", &g.emitter_offset_x_mm},
+                                         std::pair{"offset_y_mm", &g.emitter_offset_y_mm}}) {
+      const YAML::Node value = emitter[key];
+      const std::string what = std::string("virtual.emitter.") + key;
+      if (value) *offset_mm = yaml_fields::AsNumber(value, file, what);
+    }
   }
   return g;
 }

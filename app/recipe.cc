@@ -26,6 +26,7 @@ constexpr int kMaxAxisValues = 100000;
 // Brackets of one plan: 1e6 is 11 days at 1 s a bracket, and a plan of ~100 MB.
 constexpr double kMaxPlanBrackets = 1e6;
 constexpr double kPi = 3.14159265358979323846;
+constexpr double kMaxPlanDurationS = 1e8;  // three years
 
 std::string Number(double value) {
   char buffer[64];
@@ -179,6 +180,13 @@ void CheckLimits(ParsedAxis* axis, const AxisRange& limits, const std::string& f
     draws.max = std::min(draws.max, limits.max);
     if (!(draws.min < draws.max) || draws.mean < draws.min || draws.mean > draws.max) {
       Fail(file, axis->mark, what + ": need min < mean < max for the random draws");
+    }
+    std::string why;
+    if (!draws.IsValid(&why)) {
+      Fail(file, axis->random_node["sd"].Mark(),
+           what + ": the random draws N(" + Number(draws.mean) + ", sd " + Number(draws.sd) +
+               ") are kept only inside [" + Number(draws.min) + ", " + Number(draws.max) +
+               "] (the draws' min/max and the rig's limits): " + why);
     }
     return;
   }
@@ -395,8 +403,9 @@ void ReadBracket(const MapReader& map, const std::string& file, BracketSpec* spe
   const MapReader bracket(map.Require("bracket"), file, "bracket",
                           {"t_ref_ms", "t_meas_ms", "repeats", "retake_reference"});
   spec->t_ref_ms = AsNumber(bracket.Require("t_ref_ms"), file, "bracket.t_ref_ms");
-  if (!(spec->t_ref_ms > 0.0)) {
-    Fail(file, bracket.Get("t_ref_ms").Mark(), "bracket.t_ref_ms must be > 0 ms");
+  if (!(spec->t_ref_ms > 0.0 && spec->t_ref_ms <= kMaxExposureMs)) {
+    Fail(file, bracket.Get("t_ref_ms").Mark(),
+         "bracket.t_ref_ms must lie in (0, " + Number(kMaxExposureMs) + "] ms");
   }
   const ParsedAxis t_meas =
       ReadAxis(bracket.Require("t_meas_ms"), file, "bracket.t_meas_ms", false);
@@ -406,6 +415,12 @@ void ReadBracket(const MapReader& map, const std::string& file, BracketSpec* spe
       Fail(file, t_meas.marks[i],
            "bracket.t_meas_ms " + Number(spec->t_meas_ms[i]) + " must be longer than t_ref_ms " +
                Number(spec->t_ref_ms) + " (the method differences t_n - t_r > 0)");
+    }
+    if (!(spec->t_meas_ms[i] <= kMaxExposureMs)) {
+      Fail(file, t_meas.marks[i],
+           "bracket.t_meas_ms " + Number(spec->t_meas_ms[i]) + " is longer than " +
+               Number(kMaxExposureMs) + " ms; give exposures in (t_ref_ms, " +
+               Number(kMaxExposureMs) + "] ms");
     }
   }
   spec->repeats = bracket.Integer("repeats", 1);
@@ -419,8 +434,11 @@ void ReadSettle(const MapReader& map, const std::string& file, SettleSpec* spec)
   spec->after_move_ms = settle.Number("after_move_ms", spec->after_move_ms);
   spec->after_current_ms = settle.Number("after_current_ms", spec->after_current_ms);
   for (const char* key : {"after_move_ms", "after_current_ms"}) {
-    if (settle.Has(key) && settle.Number(key, 0.0) < 0.0) {
-      Fail(file, settle.Get(key).Mark(), std::string("settle.") + key + " must be >= 0 ms");
+    const double ms = settle.Number(key, 0.0);
+    if (settle.Has(key) && !(ms >= 0.0 && ms <= kMaxSettleMs)) {
+      Fail(file, settle.Get(key).Mark(),
+           std::string("settle.") + key + " " + Number(ms) + " must lie in [0, " +
+               Number(kMaxSettleMs) + "] ms (at most an hour a wait)");
     }
   }
 }
@@ -458,7 +476,7 @@ void CheckPlanSize(const MapReader& map, const std::string& file, const SweepSpe
                        sweep.tilt_deg.Count() * sweep.bias_ma.Count() * b.repeats;
   const double per_bracket = 1.0 + static_cast<double>(b.t_meas_ms.size()) *
                                        (b.retake_reference ? 2.0 : 1.0);
-  if (poses > kMaxPlanBrackets) {
+  if (poses > kMaxPlanBrackets || poses * per_bracket > kMaxPlanFrames) {
     Fail(file, map.Mark(),
          "the recipe asks for " + Number(poses) + " brackets (slide " +
              std::to_string(sweep.slide_mm.Count()) + " x angle " +
@@ -466,7 +484,8 @@ void CheckPlanSize(const MapReader& map, const std::string& file, const SweepSpe
              std::to_string(sweep.tilt_deg.Count()) + " x bias " +
              std::to_string(sweep.bias_ma.Count()) + " x repeats " + std::to_string(b.repeats) +
              ", " + Number(poses * per_bracket) + " frames); at most " +
-             Number(kMaxPlanBrackets) + " brackets: use fewer values or repeats");
+             Number(kMaxPlanBrackets) + " brackets and " + Number(kMaxPlanFrames) +
+             " frames: use fewer values, repeats or exposures");
   }
 }
 
@@ -500,6 +519,19 @@ Recipe LoadRecipe(const std::string& path) {
   return ParseRecipe(text, path, base_dir);
 }
 
-Plan PlanRecipe(const Recipe& recipe) { return MakePlan(recipe.sweep, recipe.motion); }
+Plan PlanRecipe(const Recipe& recipe) {
+  Plan plan = MakePlan(recipe.sweep, recipe.motion);
+  // Every term is bounded by the recipe's checks except the rig's motion (a speed of 1e-300
+  // mm/s): a plan that would last beyond any lab's patience is the rig file's to fix.
+  if (!(plan.summary.total_s <= kMaxPlanDurationS)) {
+    throw RecipeError(recipe.path, 0, 0,
+                      "the sweep would last " + FormatDuration(plan.summary.total_s) +
+                          " (at most " + FormatDuration(kMaxPlanDurationS) +
+                          "); check station.motion (speed, acceleration, settle_ms) and "
+                          "station.limits in " + recipe.rig_path +
+                          ", and the recipe's settle and exposures");
+  }
+  return plan;
+}
 
 }  // namespace irdist

@@ -13,6 +13,7 @@
 
 #include "acquisition/recording.h"
 #include "base/process.h"
+#include "base/regular_file.h"
 
 #ifndef IRDIST_VERSION
 #define IRDIST_VERSION "unknown"
@@ -61,11 +62,18 @@ void ReplaceAll(std::string* text, const std::string& from, const std::string& t
   }
 }
 
+// What to do when a report file cannot be written: the disk is the usual cause.
+std::string WriteFix(const fs::path& path) {
+  return "; free disk space (df -h " + path.parent_path().string() +
+         ") or fix the folder's permissions, then run the command again";
+}
+
+// Whole or not at all (temporary file, sync, rename): a full disk never leaves a cut file.
 void WriteFile(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::trunc);
-  out << text;
-  if (!out)
-    throw ReportError(path.string() + ": cannot be written; check the folder and free space.");
+  std::string why;
+  if (!WriteRegularFile(path.string(), text, &why)) {
+    throw ReportError(path.string() + ": " + why + WriteFix(path));
+  }
 }
 
 std::string ReadFile(const fs::path& path) {
@@ -655,7 +663,13 @@ std::string FigureHtml(const fs::path& dir, const Plot& plot, bool have_gnuplot)
   html << "<figure id='" << plot.name << "'><h2>" << HtmlEscape(plot.title) << "</h2>\n";
   const std::string problem = have_gnuplot ? RunGnuplot(dir, plot.name) : "gnuplot not found";
   if (problem.empty()) {
-    const std::string svg = ReadFile(dir / (plot.name + ".svg"));
+    const fs::path svg_path = dir / (plot.name + ".svg");
+    const std::string svg = ReadFile(svg_path);
+    // gnuplot exits 0 even when its output was cut short (a full disk): a cut SVG has no end tag.
+    if (svg.find("</svg>") == std::string::npos) {
+      throw ReportError(svg_path.string() + ": gnuplot's plot is cut short (no </svg>; the disk "
+                        "is full?)" + WriteFix(svg_path));
+    }
     const size_t start = svg.find("<svg");
     html << (start == std::string::npos ? svg : svg.substr(start)) << "\n";
   } else {

@@ -1,11 +1,13 @@
 #include "app/rig.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <vector>
 
 #include "app/errors.h"
 #include "base/yaml_fields.h"
+#include "station/serial_transport.h"
 
 namespace irdist {
 namespace {
@@ -13,6 +15,11 @@ namespace {
 using yaml_fields::AsNumber;
 using yaml_fields::Fail;
 using yaml_fields::MapReader;
+
+// station.limits beyond this (1 km, a million degrees or mA) are typos, and would overflow the
+// station's centi-unit counts.
+constexpr double kMaxLimitMagnitude = 1e6;
+constexpr double kMaxSensorPx = 1 << 20;  // no sensor is wider
 
 bool Fail(std::string* why, const std::string& message) {
   if (why != nullptr) *why = message;
@@ -105,8 +112,9 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
     int v[4];
     for (int i = 0; i < 4; ++i) {
       const double x = AsNumber(node[i], file, "camera.roi_px");
-      if (!(x >= 0.0) || x != static_cast<int>(x)) {
-        Fail(file, node[i].Mark(), shape + "; every value a whole number >= 0");
+      // Range first: casting 1e300 to int is undefined behaviour.
+      if (!(x >= 0.0 && x <= kMaxSensorPx) || x != std::floor(x)) {
+        Fail(file, node[i].Mark(), shape + "; every value a whole number >= 0 (at most 1048576)");
       }
       v[i] = static_cast<int>(x);
     }
@@ -136,6 +144,11 @@ AxisRange ReadRange(const MapReader& limits, const std::string& key, AxisRange f
                   AsNumber(node[1], limits.File(), key + " max")};
   if (!(range.min < range.max)) {
     Fail(limits.File(), node.Mark(), "station.limits." + key + " must have min < max");
+  }
+  if (!(std::abs(range.min) <= kMaxLimitMagnitude && std::abs(range.max) <= kMaxLimitMagnitude)) {
+    Fail(limits.File(), node.Mark(),
+         "station.limits." + key + " must lie within [-1000000, 1000000] (mm, deg or mA); give "
+         "the station's real travel");
   }
   return range;
 }
@@ -208,6 +221,17 @@ std::map<Axis, std::string> ReadAxes(const YAML::Node& node, const std::string& 
   return axes;
 }
 
+// A key of station.devices (a device's name) or of one device's entry: a name, never a list or
+// a map (yaml-cpp would throw its own "bad conversion", naming no file).
+std::string DeviceKey(const YAML::Node& key, const std::string& file, const std::string& what) {
+  if (!key.IsScalar() || key.Scalar().empty()) {
+    Fail(file, key.Mark(),
+         what + " must be names (e.g. slide:, source:), not " +
+             (key.IsSequence() ? "a list" : key.IsMap() ? "a map" : "an empty key"));
+  }
+  return key.Scalar();
+}
+
 // One `station.devices.<name>:` entry; the driver's own keys are checked by its validate().
 DeviceSpec ReadDevice(const std::string& name, const YAML::Node& node, const std::string& file) {
   const std::string context = "station.devices." + name;
@@ -217,7 +241,7 @@ DeviceSpec ReadDevice(const std::string& name, const YAML::Node& node, const std
   device.file = file;
   device.line = node.Mark().line + 1;
   for (const auto& entry : node) {
-    const std::string key = entry.first.as<std::string>();
+    const std::string key = DeviceKey(entry.first, file, context + " keys");
     const YAML::Node& value = entry.second;
     const std::string what = context + "." + key;
     if (key == "driver") {
@@ -226,6 +250,10 @@ DeviceSpec ReadDevice(const std::string& name, const YAML::Node& node, const std
       device.port = yaml_fields::AsString(value, file, what);
     } else if (key == "baud") {
       device.baud = yaml_fields::AsInteger(value, file, what);
+      if (device.baud < 0 || device.baud > static_cast<int>(kMaxBaud)) {
+        Fail(file, value.Mark(),
+             what + " must lie in 0..4000000 bit/s (e.g. 9600, 115200; 0: the driver's default)");
+      }
     } else if (key == "reply_timeout_ms") {
       device.reply_timeout_ms = yaml_fields::AsInteger(value, file, what);
     } else if (key == "axes") {
@@ -281,9 +309,14 @@ StationSpec ReadComposition(const MapReader& map) {
     Fail(map.File(), devices.Mark(), "station.devices must map device names to their entries");
   }
   for (const auto& entry : devices) {
-    spec.devices.push_back(ReadDevice(entry.first.as<std::string>(), entry.second, map.File()));
+    const std::string name = DeviceKey(entry.first, map.File(), "the keys of station.devices");
+    if (spec.Find(name) != nullptr) {
+      Fail(map.File(), entry.first.Mark(), "station.devices names '" + name + "' twice");
+    }
+    spec.devices.push_back(ReadDevice(name, entry.second, map.File()));
   }
   ReadRoles(map.Require("roles"), map.File(), &spec);
+  CheckStationRoles(spec);
   spec.current_tolerance_ma =
       Positive(map, "current_tolerance_ma", spec.current_tolerance_ma);
   return spec;
@@ -310,6 +343,9 @@ StationConfig ReadStation(const YAML::Node& node, const std::string& file) {
   }
   station.port = map.String("port", station.port);
   station.baud = AtLeast(map, "baud", station.baud, 1);
+  if (station.baud > static_cast<int>(kMaxBaud)) {
+    Fail(file, map.Get("baud").Mark(), "station.baud must lie in 1..4000000 bit/s (e.g. 115200)");
+  }
   station.reply_timeout_ms = AtLeast(map, "reply_timeout_ms", station.reply_timeout_ms, 1);
   station.composition = LegacyComposition(station, file, map.Mark().line + 1);
   station.composition.current_tolerance_ma =

@@ -28,6 +28,7 @@
 #include "app/resume.h"
 #include "app/suggest.h"
 #include "base/safe_file.h"
+#include "base/yaml_fields.h"
 #include "estimator/model_file.h"
 #include "sim/virtual_rig.h"
 #include "app/station_setup.h"
@@ -50,13 +51,8 @@ extern "C" void OnStopSignal(int) { StopRequested().store(true); }
 
 constexpr const char* kSoftwareVersion = "irdist 0.1.0";
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw RecipeError(path, 0, 0, "cannot read the file; check the path.");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+// A recipe's or rig file's text, through the one reader that refuses FIFOs and devices.
+std::string ReadText(const std::string& path) { return yaml_fields::ReadFile(path); }
 
 std::string Timestamp() {
   const std::time_t now = std::time(nullptr);
@@ -631,20 +627,33 @@ std::string SuggestProbeRecipe(const Recipe& recipe, const Plan& plan) {
   return ProbeRecipeText(recipe, EndsOf(plan));
 }
 
-void RunSuggest(const PlanArgs& args, CommandIo io) {
-  const Recipe recipe = LoadRecipe(args.recipe);
-  const Plan plan = PlanRecipe(recipe);
-  const RecipeEnds ends = EndsOf(plan);
+namespace {
+
+// The suggestion's options, with --from's best dt; checked before the probe sweep (a bad value
+// must not cost a sweep).
+SuggestOptions SuggestOptionsOf(const PlanArgs& args, std::ostream& err) {
   SuggestOptions options;
   if (!args.from_summary.empty()) {
     const std::optional<double> best = ReadBestDtMs(args.from_summary);
     if (best) {
       options.best_dt_ms = *best;
     } else {
-      io.err << args.from_summary << " has no best_dt_ms (a validation with one t_n?); "
-             << "suggesting without it.\n";
+      err << args.from_summary << " has no best_dt_ms (a validation with one t_n?); "
+          << "suggesting without it.\n";
     }
   }
+  std::string why;
+  if (!options.IsValid(&why)) throw SuggestError(args.from_summary + ": " + why);
+  return options;
+}
+
+}  // namespace
+
+void RunSuggest(const PlanArgs& args, CommandIo io) {
+  const Recipe recipe = LoadRecipe(args.recipe);
+  const Plan plan = PlanRecipe(recipe);
+  const RecipeEnds ends = EndsOf(plan);
+  const SuggestOptions options = SuggestOptionsOf(args, io.err);
   const std::string dir =
       args.out_dir.empty() ? recipe.output_dir + "-suggest-" + Timestamp() : args.out_dir;
   fs::create_directories(dir);

@@ -119,6 +119,7 @@ void RunStation(const StationArgs& args, CommandIo io) {
 void RunStationTest(const StationTestArgs& args, CommandIo io) {
   SerialOptions serial;
   serial.baud = static_cast<unsigned int>(args.baud);
+  serial.origin = "the PORT and --baud of irdist station-test";
   SerialTransport transport(args.port, serial);
   const ConformanceReport report = RunConformance(transport, ConformanceOptions{});
   io.out << report.Table();

@@ -5,6 +5,8 @@
 #include <iomanip>
 #include <sstream>
 
+#include "station/plan.h"
+
 namespace irdist {
 namespace {
 
@@ -67,7 +69,9 @@ bool SuggestOptions::IsValid(std::string* why) const {
   if (!(min_t_ref_ms > 0.0)) return fail("min_t_ref_ms must be positive");
   if (!(t_step_ms > 0.0)) return fail("t_step_ms must be positive");
   if (t_meas_count < 1) return fail("t_meas_count must be at least 1");
-  if (best_dt_ms && !(*best_dt_ms > 0.0)) return fail("best_dt_ms must be positive");
+  if (best_dt_ms && !(*best_dt_ms > 0.0 && *best_dt_ms <= kMaxExposureMs)) {
+    return fail("best_dt_ms must lie in (0, 100000] ms");
+  }
   return true;
 }
 

@@ -19,6 +19,8 @@
 #include <tuple>
 
 #include "base/utc_time.h"
+#include "base/yaml_fields.h"
+#include "station/plan.h"
 
 namespace irdist {
 namespace {
@@ -532,14 +534,23 @@ const MethodSummary* ValidationSummary::Find(const std::string& method) const {
 }
 
 std::optional<double> ReadBestDtMs(const std::string& summary_yaml_path) {
+  const std::string fix =
+      "; pass the summary.yaml of an irdist validation (its best_dt_ms a number of ms in (0, " +
+      std::to_string(static_cast<long>(kMaxExposureMs)) + "])";
   try {
-    const YAML::Node root = YAML::LoadFile(summary_yaml_path);
+    // The one reader of input files: a FIFO or a device is refused, never waited on.
+    const std::string& path = summary_yaml_path;
+    const YAML::Node root = yaml_fields::Parse(yaml_fields::ReadFile(path), path);
+    if (!root.IsMap()) yaml_fields::Fail(path, root.Mark(), "not a map of results");
     const YAML::Node best = root["best_dt_ms"];
     if (!best || best.IsNull()) return std::nullopt;
-    return best.as<double>();
-  } catch (const YAML::Exception& e) {
-    throw EstimatesFileError(summary_yaml_path + ":" + std::to_string(e.mark.line + 1) + ": " +
-                             e.msg + "; pass the summary.yaml of an irdist validation.");
+    const double best_dt_ms = yaml_fields::AsNumber(best, path, "best_dt_ms");
+    if (!(best_dt_ms > 0.0 && best_dt_ms <= kMaxExposureMs)) {
+      yaml_fields::Fail(path, best.Mark(), "best_dt_ms " + best.Scalar() + " is out of range");
+    }
+    return best_dt_ms;
+  } catch (const InputError& e) {
+    throw EstimatesFileError(e.what() + fix);
   }
 }
 

@@ -10,12 +10,22 @@
 namespace irdist::yaml_fields {
 namespace {
 
+// A scalar as quoted in a message: at most 40 characters, control characters shown as '?'.
+std::string Quoted(const std::string& text) {
+  constexpr size_t kMaxShown = 40;
+  std::string shown = text.substr(0, kMaxShown);
+  for (char& c : shown) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  }
+  return "'" + shown + (text.size() > kMaxShown ? "...'" : "'");
+}
+
 std::string TypeName(const YAML::Node& node) {
   switch (node.Type()) {
     case YAML::NodeType::Null:
       return "nothing";
     case YAML::NodeType::Scalar:
-      return "'" + node.Scalar() + "'";
+      return Quoted(node.Scalar());
     case YAML::NodeType::Sequence:
       return "a list";
     case YAML::NodeType::Map:
@@ -99,8 +109,12 @@ MapReader::MapReader(const YAML::Node& node, std::string file, std::string conte
       allowed_(std::move(allowed)),
       mark_(node.Mark()) {
   if (!node_.IsMap()) {
+    // The kind only, never the text: a file that is not YAML at all (`rig: ../../etc/passwd`)
+    // reads as one long scalar, and its content has no place in an error message.
+    const std::string kind = node_.IsScalar() ? "a single text value" : TypeName(node_);
     Fail(file_, mark_,
-         context_ + " must be a map with keys " + JoinNames(allowed_) + ", not " + TypeName(node_));
+         context_ + " must be a map with keys " + JoinNames(allowed_) + ", not " + kind +
+             "; check that this is the right file and its indentation");
   }
   std::vector<std::string> seen;
   for (const auto& entry : node_) {
@@ -108,8 +122,8 @@ MapReader::MapReader(const YAML::Node& node, std::string file, std::string conte
     if (!key.IsScalar()) Fail(file_, key.Mark(), "keys of " + context_ + " must be names");
     const std::string name = key.Scalar();
     if (std::find(allowed_.begin(), allowed_.end(), name) == allowed_.end()) {
-      std::string message =
-          "unknown key '" + name + "' in " + context_ + "; valid keys: " + JoinNames(allowed_);
+      std::string message = "unknown key " + Quoted(name) + " in " + context_ +
+                            "; valid keys: " + JoinNames(allowed_);
       const std::string closest = ClosestMatch(name, allowed_);
       if (!closest.empty()) message += " (did you mean '" + closest + "'?)";
       Fail(file_, key.Mark(), message);
@@ -158,8 +172,13 @@ double AsNumber(const YAML::Node& node, const std::string& file, const std::stri
 int AsInteger(const YAML::Node& node, const std::string& file, const std::string& what) {
   double value = 0.0;
   if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value) ||
-      value != std::floor(value) || std::abs(value) > 2e9) {
+      value != std::floor(value)) {
     Fail(file, node.Mark(), what + " must be a whole number, not " + TypeName(node));
+  }
+  if (std::abs(value) > kMaxInteger) {
+    Fail(file, node.Mark(),
+         what + " " + Quoted(node.Scalar()) + " is out of range; whole numbers here lie in [-" +
+             std::to_string(kMaxInteger) + ", " + std::to_string(kMaxInteger) + "]");
   }
   return static_cast<int>(value);
 }

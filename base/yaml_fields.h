@@ -58,7 +58,11 @@ class MapReader {
   YAML::Mark mark_;
 };
 
-// Scalar conversions; `what` names the value in messages ("bracket.t_ref_ms").
+// The largest magnitude AsInteger accepts: far from int overflow in any sum of a few of them.
+constexpr int kMaxInteger = 2000000000;
+
+// Scalar conversions; `what` names the value in messages ("bracket.t_ref_ms"). Messages quote at
+// most 40 characters of a value.
 double AsNumber(const YAML::Node& node, const std::string& file, const std::string& what);
 int AsInteger(const YAML::Node& node, const std::string& file, const std::string& what);
 bool AsBoolean(const YAML::Node& node, const std::string& file, const std::string& what);

@@ -191,6 +191,28 @@ class Reader {
   std::string path_;
 };
 
+// provenance.roi_px: [x, y, width, height], whole pixels inside any sensor, width and height 0
+// for the full sensor; checked before the cast to int (1e300 would be undefined behaviour).
+void ReadRoi(const Reader& rd, const YAML::Node& n, const std::string& k, ModelProvenance* p) {
+  constexpr double kMaxSensorPx = 1 << 20;
+  const std::vector<double> roi = rd.Doubles(n, k, "roi_px", false);
+  const std::string shape = "expected [x, y, width, height], each a whole number of sensor "
+                            "pixels in [0, 1048576] (width and height 0: the full sensor)";
+  if (roi.size() != 4) rd.Fail(n["roi_px"], k + ".roi_px", shape);
+  for (double v : roi) {
+    if (!(v >= 0.0 && v <= kMaxSensorPx) || v != std::floor(v)) {
+      rd.Fail(n["roi_px"], k + ".roi_px", shape);
+    }
+  }
+  if ((roi[2] == 0.0) != (roi[3] == 0.0)) {
+    rd.Fail(n["roi_px"], k + ".roi_px", shape + "; width and height are both 0 or both > 0");
+  }
+  p->roi_offset_x = static_cast<int>(roi[0]);
+  p->roi_offset_y = static_cast<int>(roi[1]);
+  p->roi_width = static_cast<int>(roi[2]);
+  p->roi_height = static_cast<int>(roi[3]);
+}
+
 // The optional `provenance:` block; provenance.known says whether it was there.
 ModelProvenance ReadProvenance(const Reader& rd, const YAML::Node& root) {
   ModelProvenance p;
@@ -208,12 +230,12 @@ ModelProvenance ReadProvenance(const Reader& rd, const YAML::Node& root) {
   p.camera_serial = rd.Scalar<std::string>(n, k, "camera_serial");
   p.pixel_format = rd.Scalar<std::string>(n, k, "pixel_format");
   p.bit_depth = rd.Scalar<int>(n, k, "bit_depth");
-  const std::vector<double> roi = rd.Doubles(n, k, "roi_px", false);
-  if (roi.size() != 4) rd.Fail(n["roi_px"], k + ".roi_px", "expected [x, y, width, height]");
-  p.roi_offset_x = static_cast<int>(roi[0]);
-  p.roi_offset_y = static_cast<int>(roi[1]);
-  p.roi_width = static_cast<int>(roi[2]);
-  p.roi_height = static_cast<int>(roi[3]);
+  if (p.bit_depth < 1 || p.bit_depth > 16) {
+    rd.Fail(n["bit_depth"], k + ".bit_depth",
+            std::to_string(p.bit_depth) + " is not a camera bit depth; valid: 1..16 (Mono8: 8, "
+            "Mono12: 12)");
+  }
+  ReadRoi(rd, n, k, &p);
   p.recipe_path = rd.Scalar<std::string>(n, k, "recipe_path");
   p.calibration_date = rd.Scalar<std::string>(n, k, "calibration_date");
   p.t_ref_ms = rd.Scalar<double>(n, k, "t_ref_ms");

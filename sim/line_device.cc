@@ -369,14 +369,17 @@ void ReadStationEntry(const YAML::Node& entry, const EmulatorSpec& spec, DeviceK
   if (!entry || !entry.IsMap()) return;
   const std::string where = "station.devices." + spec.name;
   for (const auto& item : entry) {
-    const std::string key = item.first.as<std::string>();
+    if (!item.first.IsScalar()) {
+      yaml_fields::Fail(spec.rig_path, item.first.Mark(), where + ": keys must be names");
+    }
+    const std::string key = item.first.Scalar();
     if (key == "axes") {
       if (!item.second.IsMap()) {
         yaml_fields::Fail(spec.rig_path, item.second.Mark(),
                           where + ".axes must be a map of rig axis to address");
       }
       for (const auto& axis : item.second) {
-        keys->axes[axis.first.as<std::string>()] =
+        keys->axes[yaml_fields::AsString(axis.first, spec.rig_path, where + ".axes keys")] =
             yaml_fields::AsString(axis.second, spec.rig_path, where + ".axes");
       }
     } else if (key == "origin_mm" || key == "origin_deg" || key == "direction") {
@@ -422,8 +425,11 @@ DeviceKeys ReadDeviceKeys(const EmulatorSpec& spec, const std::vector<std::strin
   const YAML::Node root = yaml_fields::Parse(spec.rig_text, spec.rig_path);
   DeviceKeys keys;
   ReadStationEntry(Child(Child(Child(root, "station"), "devices"), spec.name), spec, &keys);
-  YAML::Node entry = Child(Child(Child(root, "virtual"), "devices"), spec.name);
-  if (!entry || entry.IsNull()) entry = YAML::Node(YAML::NodeType::Map);
+  // A device without a virtual.devices entry keeps every default. (Never assign to the missing
+  // entry's node: yaml-cpp throws its own "invalid node", naming no file.)
+  const YAML::Node found = Child(Child(Child(root, "virtual"), "devices"), spec.name);
+  const YAML::Node entry =
+      !found || found.IsNull() ? YAML::Node(YAML::NodeType::Map) : found;
   std::vector<std::string> allowed = own_keys;
   allowed.insert(allowed.end(), kFaultKeys.begin(), kFaultKeys.end());
   const std::string context = "virtual.devices." + spec.name;

@@ -28,7 +28,11 @@ std::vector<DeviceEntry> ReadStationDevices(const std::string& rig_path, const s
   }
   for (const auto& item : devices) {
     DeviceEntry entry;
-    entry.name = item.first.as<std::string>();
+    if (!item.first.IsScalar()) {
+      yaml_fields::Fail(rig_path, item.first.Mark(),
+                        "the keys of station.devices must be device names, not a list or a map");
+    }
+    entry.name = item.first.Scalar();
     entry.mark = item.second.Mark();
     if (!item.second.IsMap()) {
       yaml_fields::Fail(rig_path, entry.mark,

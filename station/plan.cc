@@ -80,10 +80,17 @@ class NormalSource {
   double spare_ = 0.0;
 };
 
+// Rejection sampling of the truncated normal. IsValid() keeps at least 1% of the draws, so the
+// bound on attempts (the expected count times a thousand, and more) is never reached by a valid
+// spec: it only turns a spec that skipped IsValid() into an error instead of a spin.
 std::vector<double> DrawSet(const RandomDraws& draws, NormalSource* source) {
   std::vector<double> values;
-  values.reserve(draws.count);
-  while (static_cast<int>(values.size()) < draws.count) {
+  values.reserve(static_cast<size_t>(draws.count));
+  const long max_attempts = 100000L + 100000L * draws.count;
+  for (long attempt = 0; static_cast<int>(values.size()) < draws.count; ++attempt) {
+    IRDIST_CHECK(attempt < max_attempts, "random draws N(", draws.mean, ", ", draws.sd,
+                 ") kept ", values.size(), " of ", attempt, " inside [", draws.min, ", ",
+                 draws.max, "]; RandomDraws::IsValid() refuses such a window");
     const double v = draws.mean + draws.sd * source->Next();
     if (v >= draws.min && v <= draws.max) values.push_back(v);
   }
@@ -102,6 +109,13 @@ double MedianStep(const AxisValues& axis) {
   const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
   std::nth_element(steps.begin(), middle, steps.end());
   return steps[steps.size() / 2];
+}
+
+// Frames of the whole sweep, in double: never overflows, whatever the counts.
+double FrameCount(const SweepSpec& spec) {
+  const double poses = static_cast<double>(spec.slide_mm.Count()) * spec.angle_deg.Count() *
+                       spec.tilt_deg.Count() * spec.bias_ma.Count() * spec.bracket.repeats;
+  return poses * static_cast<double>(PlannedExposures(spec.bracket).size());
 }
 
 std::string Seconds(double s) {
@@ -132,7 +146,38 @@ bool RandomDraws::IsValid(std::string* why) const {
   if (count < 1) return Fail(why, "count must be >= 1");
   if (!(min < max)) return Fail(why, "min must be < max");
   if (!(mean >= min && mean <= max)) return Fail(why, "mean must lie in [min, max]");
+  if (!(AcceptedFraction() >= kMinAcceptedFraction)) {
+    char text[200];
+    std::snprintf(text, sizeof(text),
+                  "only %.3g of the draws fall inside [min, max] (at least %g needed); lower sd "
+                  "to at most %.6g or widen [min, max]",
+                  AcceptedFraction(), kMinAcceptedFraction, LargestUsableSd());
+    return Fail(why, text);
+  }
   return true;
+}
+
+double RandomDraws::AcceptedFraction() const {
+  if (sd == 0.0) return mean >= min && mean <= max ? 1.0 : 0.0;
+  // Phi((max - mean) / sd) - Phi((min - mean) / sd), as a sum of two erf: no cancellation while
+  // the mean lies inside the window.
+  const double below = (mean - min) / sd;
+  const double above = (max - mean) / sd;
+  return 0.5 * (std::erf(above / std::sqrt(2.0)) + std::erf(below / std::sqrt(2.0)));
+}
+
+double RandomDraws::LargestUsableSd() const {
+  RandomDraws probe = *this;
+  probe.sd = std::numeric_limits<double>::max();
+  if (probe.AcceptedFraction() >= kMinAcceptedFraction) return probe.sd;
+  // AcceptedFraction() falls as sd grows: bisect log(sd) between 1e-300 and the largest double.
+  double log_lo = std::log(1e-300), log_hi = std::log(probe.sd);
+  for (int i = 0; i < 200; ++i) {
+    const double log_mid = 0.5 * (log_lo + log_hi);
+    probe.sd = std::exp(log_mid);
+    (probe.AcceptedFraction() >= kMinAcceptedFraction ? log_lo : log_hi) = log_mid;
+  }
+  return std::exp(log_lo);
 }
 
 int AxisValues::Count() const {
@@ -140,11 +185,14 @@ int AxisValues::Count() const {
 }
 
 bool BracketSpec::IsValid(std::string* why) const {
-  if (!(t_ref_ms > 0.0) || !std::isfinite(t_ref_ms)) return Fail(why, "t_ref_ms must be > 0");
+  const std::string at_most = std::to_string(static_cast<long>(kMaxExposureMs)) + " ms";
+  if (!(t_ref_ms > 0.0 && t_ref_ms <= kMaxExposureMs)) {
+    return Fail(why, "t_ref_ms must lie in (0, " + at_most + "]");
+  }
   if (t_meas_ms.empty()) return Fail(why, "t_meas_ms must hold at least one exposure");
   for (double t : t_meas_ms) {
-    if (!std::isfinite(t) || !(t > t_ref_ms)) {
-      return Fail(why, "every t_meas_ms must be greater than t_ref_ms");
+    if (!(t > t_ref_ms && t <= kMaxExposureMs)) {
+      return Fail(why, "every t_meas_ms must be greater than t_ref_ms and at most " + at_most);
     }
   }
   if (repeats < 1) return Fail(why, "repeats must be >= 1");
@@ -152,11 +200,11 @@ bool BracketSpec::IsValid(std::string* why) const {
 }
 
 bool SettleSpec::IsValid(std::string* why) const {
-  if (!(after_move_ms >= 0.0) || !std::isfinite(after_move_ms)) {
-    return Fail(why, "after_move_ms must be >= 0");
+  if (!(after_move_ms >= 0.0 && after_move_ms <= kMaxSettleMs)) {
+    return Fail(why, "after_move_ms must lie in [0, 3600000] ms (1 h)");
   }
-  if (!(after_current_ms >= 0.0) || !std::isfinite(after_current_ms)) {
-    return Fail(why, "after_current_ms must be >= 0");
+  if (!(after_current_ms >= 0.0 && after_current_ms <= kMaxSettleMs)) {
+    return Fail(why, "after_current_ms must lie in [0, 3600000] ms (1 h)");
   }
   return true;
 }
@@ -188,6 +236,13 @@ bool SweepSpec::IsValid(std::string* why) const {
   std::string inner;
   if (!bracket.IsValid(&inner)) return Fail(why, "bracket: " + inner);
   if (!settle.IsValid(&inner)) return Fail(why, "settle: " + inner);
+  const double frames = FrameCount(*this);
+  if (!(frames <= kMaxPlanFrames)) {
+    char text[160];
+    std::snprintf(text, sizeof(text), "the sweep has %.6g frames; at most %.6g (use fewer values, "
+                  "repeats or exposures)", frames, kMaxPlanFrames);
+    return Fail(why, text);
+  }
   return true;
 }
 
@@ -380,15 +435,22 @@ bool MoveCost(const Pose* previous, const Pose& pose, const MotionModel& motion,
   return moved;
 }
 
+// The counts, in 64 bits first: a plan of more than kMaxPlanFrames frames is refused before its
+// int counts could overflow.
 void CountFrames(Plan* plan) {
   PlanSummary& summary = plan->summary;
-  summary.pose_count = static_cast<int>(plan->poses.size());
-  summary.frames_per_pose = static_cast<int>(plan->bracket.size());
-  summary.frame_count = summary.pose_count * summary.frames_per_pose;
-  const int differences_per_pose =
-      static_cast<int>(std::count_if(plan->bracket.begin(), plan->bracket.end(),
-                                     [](const PlannedExposure& f) { return !f.is_reference; }));
-  summary.difference_count = summary.pose_count * differences_per_pose;
+  const std::int64_t poses = static_cast<std::int64_t>(plan->poses.size());
+  const std::int64_t frames_per_pose = static_cast<std::int64_t>(plan->bracket.size());
+  const std::int64_t frames = poses * frames_per_pose;
+  IRDIST_CHECK(static_cast<double>(frames) <= kMaxPlanFrames, "the plan has ", poses, " poses x ",
+               frames_per_pose, " frames = ", frames, " frames; at most ", kMaxPlanFrames);
+  summary.pose_count = static_cast<int>(poses);
+  summary.frames_per_pose = static_cast<int>(frames_per_pose);
+  summary.frame_count = static_cast<int>(frames);
+  const std::int64_t differences_per_pose =
+      std::count_if(plan->bracket.begin(), plan->bracket.end(),
+                    [](const PlannedExposure& f) { return !f.is_reference; });
+  summary.difference_count = static_cast<int>(poses * differences_per_pose);
 }
 
 // The duration estimate and the physical bound, pose by pose.
@@ -478,6 +540,7 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion) {
 
 std::string FormatDuration(double seconds) {
   char buffer[64];
+  if (!(seconds <= 1e9)) return "over 1e9 s";  // also infinite and NaN: never lround() them
   if (seconds < 60.0) {
     std::snprintf(buffer, sizeof(buffer), "%.1f s", seconds);
   } else if (seconds < 3600.0) {

@@ -40,7 +40,14 @@ struct RandomDraws {
   bool per_pose = true;    // a fresh set of draws each time an outer axis advances
   double min = -1e300;     // truncation, unit of the axis
   double max = 1e300;
+  // IsValid() also needs AcceptedFraction() >= kMinAcceptedFraction: a window that keeps fewer
+  // draws than that (sd 1e308, or a window 1e-7 wide) would make the draws redraw for ever.
+  static constexpr double kMinAcceptedFraction = 0.01;
   bool IsValid(std::string* why) const;
+  // The fraction of N(mean, sd) inside [min, max]: the chance that a draw is kept (1 for sd 0).
+  double AcceptedFraction() const;
+  // The largest sd whose AcceptedFraction() is still kMinAcceptedFraction (the fix to suggest).
+  double LargestUsableSd() const;
 };
 
 // One axis: an explicit list of values (lists and ranges end up here), or random draws.
@@ -56,8 +63,13 @@ struct BracketSpec {
   std::vector<double> t_meas_ms = {30.0, 32.0, 34.0, 36.0};  // measurement exposures t_n, ms
   int repeats = 1;                // brackets per pose (the station does not move between them)
   bool retake_reference = false;  // true: t_r is retaken right before each t_n
-  bool IsValid(std::string* why) const;
+  bool IsValid(std::string* why) const;  // exposures in (0, kMaxExposureMs]
 };
+
+// Bounds that keep every count and duration of a plan far from overflow.
+constexpr double kMaxExposureMs = 100000.0;  // one exposure, ms (100 s)
+constexpr double kMaxSettleMs = 3600000.0;   // one settle wait, ms (1 h)
+constexpr double kMaxPlanFrames = 1e7;       // frames of one plan (int counts; ~10 TB of PNGs)
 
 // Waits the sweep adds on top of the station's own settle (which is in MotionModel).
 struct SettleSpec {
@@ -71,7 +83,7 @@ struct SettleSpec {
   // equilibrium. The wait overlaps the move that follows the change (plan and sweep set the
   // current first).
   double after_current_ms = 20.0;
-  bool IsValid(std::string* why) const;
+  bool IsValid(std::string* why) const;  // each in [0, kMaxSettleMs]
 };
 
 // Everything a sweep plan is made of.
@@ -164,8 +176,9 @@ struct Plan {
   PlanSummary summary;
 };
 
-// Expands the spec. Throws CheckError when !spec.IsValid() or !motion.IsValid(), or when a theta
-// cannot be reached with the given tilt (|cos theta| > |cos tilt|).
+// Expands the spec. Throws CheckError when !spec.IsValid() or !motion.IsValid(), when a theta
+// cannot be reached with the given tilt (|cos theta| > |cos tilt|), or when the plan would hold
+// more than kMaxPlanFrames frames.
 Plan MakePlan(const SweepSpec& spec, const MotionModel& motion);
 
 // `model` with each axis's speed, acceleration, settle and home as its device reports them
@@ -173,7 +186,7 @@ Plan MakePlan(const SweepSpec& spec, const MotionModel& motion);
 // on what its devices are actually set to. Axes absent from `speeds` keep the model's values.
 MotionModel WithDeviceSpeeds(MotionModel model, const std::map<Axis, AxisSpeed>& speeds);
 
-// "1h 02m 03s", "4m 05.2s", "12.3 s".
+// "1h 02m 03s", "4m 05.2s", "12.3 s"; "over 1e9 s" for longer (or infinite) durations.
 std::string FormatDuration(double seconds);
 
 }  // namespace irdist

@@ -47,7 +47,7 @@ bool SerialOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  if (baud == 0) return fail("baud must be > 0");
+  if (baud == 0 || baud > kMaxBaud) return fail("baud must lie in 1..4000000 bit/s");
   if (write_timeout.count() <= 0) return fail("write_timeout must be > 0");
   if (max_line_bytes < 16) return fail("max_line_bytes must be >= 16");
   return true;
@@ -78,7 +78,10 @@ struct SerialTransport::Impl {
 SerialTransport::SerialTransport(const std::string& port, SerialOptions options, LineLog* log)
     : impl_(std::make_unique<Impl>()) {
   std::string why;
-  IRDIST_CHECK(options.IsValid(&why), why);
+  if (!options.IsValid(&why)) {
+    throw LinkError("invalid serial settings: " + why, port,
+                    "fix " + options.origin + " (common speeds: 9600, 115200)");
+  }
   impl_->port_name = port;
   impl_->options = options;
   impl_->log = log;
@@ -86,7 +89,7 @@ SerialTransport::SerialTransport(const std::string& port, SerialOptions options,
   impl_->port.open(port, ec);
   if (ec) {
     throw LinkError("cannot open serial port: " + ec.message(), port,
-                    "check the rig file's station.port, that the device exists and that you may "
+                    "check " + options.origin + ", that the device exists and that you may "
                     "open it (group dialout)");
   }
   // A pty rejects some of these; what matters (raw mode) was set by open().

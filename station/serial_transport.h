@@ -13,8 +13,11 @@
 
 namespace irdist {
 
+// The fastest serial line a Linux tty driver sets (B4000000), bit/s.
+constexpr unsigned int kMaxBaud = 4000000;
+
 struct SerialOptions {
-  unsigned int baud = 115200;                        // bits per second, 8N1, no flow control
+  unsigned int baud = 115200;                        // bits/s, 1..kMaxBaud; 8N1, no flow control
   std::chrono::milliseconds write_timeout{1000};     // a write not done by then throws LinkError
   std::size_t max_line_bytes = 512;                  // a longer "line" is cut and returned as is
   // Appended to every written line: "\r\n" (irdist station), "\n" (Zaber ASCII, SCPI), " " or
@@ -26,6 +29,9 @@ struct SerialOptions {
   // Written before every line this transport logs ("slide: "), so that several devices can share
   // one LineLog; empty for a station of one device.
   std::string log_prefix;
+  // Where the port and the baud were given, for the fix of an error ("the rig file's
+  // station.port", "the PORT and --baud of irdist station-test").
+  std::string origin = "the rig file's station.port and baud";
   bool IsValid(std::string* why) const;
 };
 
@@ -33,7 +39,7 @@ class SerialTransport : public Transport {
  public:
   // Opens `port` (e.g. /dev/ttyUSB0 or /dev/pts/7) and configures it. Settings a pty rejects
   // (baud, flow control) are tolerated. `log` (may be null) must outlive the transport.
-  // Throws LinkError if the port cannot be opened.
+  // Throws LinkError if the options are not valid or the port cannot be opened.
   SerialTransport(const std::string& port, SerialOptions options = {}, LineLog* log = nullptr);
   ~SerialTransport() override;
   SerialTransport(const SerialTransport&) = delete;

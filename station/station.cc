@@ -1,5 +1,6 @@
 #include "station/station.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <future>
@@ -17,8 +18,102 @@ const DeviceSpec* StationSpec::Find(const std::string& name) const {
   return nullptr;
 }
 
+namespace {
+
+// The device's registered driver; an unknown one is an InputError at the device's line.
+const DriverInfo& DriverOf(const DeviceSpec& device) {
+  const DriverInfo* info = FindDriver(device.driver);
+  if (info == nullptr) {
+    std::string known;
+    for (const std::string& n : DriverNames()) known += (known.empty() ? "" : ", ") + n;
+    throw InputError(device.file, device.line, 0,
+                     "station.devices." + device.name + ": unknown driver '" + device.driver +
+                         "'; known drivers: " + known);
+  }
+  return *info;
+}
+
+std::string RigFileOf(const StationSpec& spec) {
+  return spec.devices.empty() ? std::string("the rig file") : spec.devices.front().file;
+}
+
+bool CanFill(const DeviceSpec& device, const std::string& role) {
+  const DriverInfo* info = FindDriver(device.driver);
+  return info != nullptr &&
+         std::find(info->roles.begin(), info->roles.end(), role) != info->roles.end();
+}
+
+// A role given to a device that cannot fill it: the device's line and the devices that can.
+[[noreturn]] void ThrowCannotFill(const StationSpec& spec, const DeviceSpec& device,
+                                  const std::string& role) {
+  std::string able;
+  for (const DeviceSpec& d : spec.devices) {
+    if (CanFill(d, role)) able += (able.empty() ? "" : ", ") + d.name;
+  }
+  throw InputError(device.file, device.line, 0,
+                   "station.roles." + role + " names device '" + device.name + "' (driver " +
+                       device.driver + "), which cannot fill the " + role + " role; " +
+                       (able.empty() ? "add a device whose driver can (docs/devices/)"
+                                     : "name one that can: " + able));
+}
+
+const DeviceSpec& RoleDevice(const StationSpec& spec, const std::string& name,
+                             const std::string& role) {
+  const DeviceSpec* device = spec.Find(name);
+  if (device == nullptr) {
+    throw InputError(RigFileOf(spec), 0, 0,
+                     "station.roles." + role + " names '" + name +
+                         "', which is not in station.devices; name one of its devices");
+  }
+  if (!CanFill(*device, role)) ThrowCannotFill(spec, *device, role);
+  return *device;
+}
+
+std::vector<Axis> DeclaredAxes(const DeviceSpec& device) {
+  if (device.axes.empty()) return {Axis::kSlide, Axis::kPan, Axis::kTilt};
+  std::vector<Axis> axes;
+  for (const auto& entry : device.axes) axes.push_back(entry.first);
+  return axes;
+}
+
+// Each axis driven by exactly one motion device; `drivers_of` lists the devices of each axis.
+void CheckAxisDrivers(const StationSpec& spec,
+                      const std::map<Axis, std::vector<std::string>>& drivers_of) {
+  for (Axis axis : {Axis::kSlide, Axis::kPan, Axis::kTilt}) {
+    const auto found = drivers_of.find(axis);
+    const std::vector<std::string> names =
+        found == drivers_of.end() ? std::vector<std::string>{} : found->second;
+    if (names.size() == 1) continue;
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    const DeviceSpec* second = names.size() > 1 ? spec.Find(names[1]) : nullptr;
+    throw InputError(RigFileOf(spec), second != nullptr ? second->line : 0, 0,
+                     std::string("axis ") + AxisName(axis) + " is driven by " +
+                         std::to_string(names.size()) + " motion devices" +
+                         (list.empty() ? "" : " (" + list + ")") +
+                         "; map each axis to exactly one device of station.roles.motion in its "
+                         "station.devices.<name>.axes");
+  }
+}
+
+}  // namespace
+
+void CheckStationRoles(const StationSpec& spec) {
+  for (const DeviceSpec& device : spec.devices) DriverOf(device);
+  std::map<Axis, std::vector<std::string>> drivers_of;
+  for (const std::string& name : spec.motion) {
+    for (Axis axis : DeclaredAxes(RoleDevice(spec, name, "motion"))) {
+      drivers_of[axis].push_back(name);
+    }
+  }
+  RoleDevice(spec, spec.source, "source");
+  if (spec.trigger != kCameraSoftwareTrigger) RoleDevice(spec, spec.trigger, "trigger");
+  CheckAxisDrivers(spec, drivers_of);
+}
+
 Station::Station(const StationSpec& spec, StationOptions options)
     : spec_(spec), options_(std::move(options)) {
+  CheckStationRoles(spec_);
   for (const DeviceSpec& device : spec_.devices) OpenDevice(device);
   BindRoles();
 }
@@ -28,14 +123,7 @@ Station::~Station() {
 }
 
 void Station::OpenDevice(const DeviceSpec& device) {
-  const DriverInfo* info = FindDriver(device.driver);
-  if (info == nullptr) {
-    std::string known;
-    for (const std::string& n : DriverNames()) known += (known.empty() ? "" : ", ") + n;
-    throw InputError(device.file, device.line, 0,
-                     "station.devices." + device.name + ": unknown driver '" + device.driver +
-                         "'; known drivers: " + known);
-  }
+  const DriverInfo* info = &DriverOf(device);
   DeviceSpec opened = device;
   const auto port = options_.ports.find(device.name);
   if (port != options_.ports.end()) opened.port = port->second;
@@ -52,6 +140,10 @@ void Station::OpenDevice(const DeviceSpec& device) {
   serial.line_end = info->line_end;
   serial.cr_ends_line = info->cr_ends_reply;
   if (spec_.devices.size() > 1) serial.log_prefix = device.name + ": ";
+  serial.origin = (port != options_.ports.end() ? "--port " + device.name + "=PATH or "
+                                                : std::string()) +
+                  device.file + (device.line > 0 ? ":" + std::to_string(device.line) : "") +
+                  " (device '" + device.name + "': its port and baud)";
   auto transport = std::make_unique<SerialTransport>(opened.port, serial, options_.log);
   devices_.push_back({device.name, info->create(opened, std::move(transport)), {}});
 }
@@ -67,17 +159,17 @@ Station::Device& Station::Named(const std::string& name) {
 void Station::BindRoles() {
   for (const std::string& name : spec_.motion) {
     Motion* motion = Named(name).driver->motion();
-    IRDIST_CHECK(motion != nullptr, "device ", name, " cannot fill the motion role");
+    if (motion == nullptr) ThrowCannotFill(spec_, *spec_.Find(name), "motion");
     motion_.push_back(motion);
   }
   source_ = Named(spec_.source).driver->source();
-  IRDIST_CHECK(source_ != nullptr, "device ", spec_.source, " cannot fill the source role");
+  if (source_ == nullptr) ThrowCannotFill(spec_, *spec_.Find(spec_.source), "source");
   if (!options_.off_at_exit) source_->KeepOutput();  // irdist station: found and left as is
   if (spec_.trigger == kCameraSoftwareTrigger) {
     trigger_ = options_.camera_trigger;  // or SetCameraTrigger() once the camera is open
   } else {
     trigger_ = Named(spec_.trigger).driver->trigger();
-    IRDIST_CHECK(trigger_ != nullptr, "device ", spec_.trigger, " cannot fill the trigger role");
+    if (trigger_ == nullptr) ThrowCannotFill(spec_, *spec_.Find(spec_.trigger), "trigger");
   }
 }
 
@@ -94,18 +186,11 @@ const std::vector<DeviceIdentity>& Station::Identify() {
     }
     identities_.push_back(d.identity);
   }
-  std::map<Axis, int> drivers_of;
-  for (Motion* m : motion_) {
-    for (Axis axis : m->Axes()) ++drivers_of[axis];
+  std::map<Axis, std::vector<std::string>> drivers_of;
+  for (std::size_t i = 0; i < motion_.size(); ++i) {
+    for (Axis axis : motion_[i]->Axes()) drivers_of[axis].push_back(spec_.motion[i]);
   }
-  for (Axis axis : {Axis::kSlide, Axis::kPan, Axis::kTilt}) {
-    if (drivers_of[axis] != 1) {
-      throw StationNotReadyError(std::string("axis ") + AxisName(axis) + " is driven by " +
-                                 std::to_string(drivers_of[axis]) +
-                                 " motion devices; map each axis to exactly one device in the "
-                                 "rig file's station.devices.<name>.axes");
-    }
-  }
+  CheckAxisDrivers(spec_, drivers_of);
   return identities_;
 }
 

@@ -35,6 +35,12 @@ struct StationSpec {
 
 constexpr const char* kCameraSoftwareTrigger = "camera_software";
 
+// The roles of `spec` against its devices' drivers, before anything is opened: throws InputError
+// naming the rig file and the device's line when a role names no device or a device whose
+// driver cannot fill it (DriverInfo::roles), or when an axis is driven by other than exactly one
+// motion device (a device's axes are its `axes:` map; none: all three, the irdist station).
+void CheckStationRoles(const StationSpec& spec);
+
 struct StationOptions {
   // Device name -> port, overriding DeviceSpec::port (the virtual rig's ptys, `--port NAME=PATH`).
   std::map<std::string, std::string> ports;

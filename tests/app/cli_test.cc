@@ -416,5 +416,57 @@ TEST(CliSafety, TimeScaleZeroIsRefusedInPlainNumbers) {
   }
 }
 
+// Flags that would reach an internal check (bracket.cc, station_client.cc, serial_transport.cc)
+// or a raw filesystem error are usage errors naming the flag and the valid range; nothing runs.
+TEST(CliTest, OutOfRangeFlagsNameTheFlagAndTheRangeAndRunNothing) {
+  const std::string file = ::testing::TempDir() + "cli_test_file_" + std::to_string(::getpid());
+  { std::ofstream(file) << "x"; }
+  struct Bad {
+    std::vector<std::string> words;
+    std::string message;
+  };
+  const std::vector<Bad> bad = {
+      {{"measure", "--model", "m.yaml", "--t-meas-ms", "-5"},
+       "--t-meas-ms -5 is outside (0, 100000] ms"},
+      {{"measure", "--model", "m.yaml", "--t-meas-ms", "30,0"}, "--t-meas-ms 0 is outside"},
+      {{"measure", "--model", "m.yaml", "--t-meas-ms", "nan"}, "--t-meas-ms nan is outside"},
+      {{"measure", "--model", "m.yaml", "--t-meas-ms", "1e308"}, "--t-meas-ms 1e308 is outside"},
+      {{"measure", "--model", "m.yaml", "--t-ref-ms", "inf"}, "--t-ref-ms inf is outside"},
+      {{"measure", "--model", "m.yaml", "--at", "nan,0,0,500"}, "--at nan is outside"},
+      {{"snap", "--out", "a.png", "--at", "2000,0,0,-5"}, "--at (its BIAS_MA) -5 is outside [0, "},
+      {{"view", "--at", "2000,inf,0,500"}, "--at inf is outside"},
+      {{"station-test", "/dev/null", "--baud", "0"}, "--baud 0 is outside [1, 4000000] bit/s"},
+      {{"station-test", "/dev/null", "--baud", "-9600"}, "--baud -9600 is outside"},
+      {{"measure", "--model", "m.yaml", "--out", file}, "is a file, not a folder"},
+      {{"measure", "--model", "m.yaml", "--out", file + "/sub"}, "is a file, not a folder"},
+  };
+  int called = 0;
+  Handlers h;
+  h.measure = [&called](const MeasureArgs&, CommandIo) { ++called; };
+  h.snap = [&called](const SnapArgs&, CommandIo) { ++called; };
+  h.view = [&called](const ViewArgs&, CommandIo) { ++called; };
+  h.station_test = [&called](const StationTestArgs&, CommandIo) { ++called; };
+  for (const Bad& b : bad) {
+    SCOPED_TRACE(b.message);
+    try {
+      RunWords(b.words, h);
+      ADD_FAILURE() << "accepted";
+    } catch (const UsageError& e) {
+      EXPECT_NE(std::string(e.what()).find(b.message), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(called, 0);
+  // In range: accepted as given.
+  MeasureArgs got;
+  h.measure = [&got](const MeasureArgs& a, CommandIo) { got = a; };
+  ASSERT_EQ(RunWords({"measure", "--model", "m.yaml", "--t-ref-ms", "8", "--t-meas-ms",
+                      "30,100000", "--at", "2000,-10,0,0", "--out", ::testing::TempDir()},
+                     h),
+            0);
+  EXPECT_EQ(got.t_meas_ms, (std::vector<double>{30.0, 100000.0}));
+  EXPECT_EQ(got.at, (std::vector<double>{2000.0, -10.0, 0.0, 0.0}));
+  std::remove(file.c_str());
+}
+
 }  // namespace
 }  // namespace irdist

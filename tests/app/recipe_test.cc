@@ -666,5 +666,114 @@ bracket:
   }
 }
 
+// A recipe error for `text` (read as bounded.yaml); fails the test when there is none.
+RecipeError BoundedError(const std::string& text) {
+  try {
+    ParseRecipe(text, "bounded.yaml", kRecipes);
+  } catch (const RecipeError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "accepted:\n" << text;
+  return RecipeError("", 0, 0, "");
+}
+
+std::string WithBias(const std::string& bias) {
+  return "axes:\n  slide_mm: 2000\n  pan_deg: 0\n  bias_ma: " + bias +
+         "\nbracket:\n  t_ref_ms: 8\n  t_meas_ms: 30\n";
+}
+
+// Random draws that (almost) never land in their window are refused at the sd's line with the
+// largest sd that would do, instead of redrawing for ever.
+TEST(RecipeSafety, RandomDrawsThatCannotMeetTheirWindowNameTheSdAndTheFix) {
+  for (const std::string& draws :
+       {std::string("{mean: 500, sd: 1e308, count: 3, seed: 1}"),
+        std::string("{mean: 500, sd: 50, count: 3, seed: 1, min: 500, max: 500.0000001}")}) {
+    SCOPED_TRACE(draws);
+    const RecipeError e = BoundedError(WithBias(draws));
+    EXPECT_EQ(e.File(), "bounded.yaml");
+    EXPECT_EQ(e.Line(), 4) << e.what();
+    EXPECT_NE(e.Message().find("lower sd to at most"), std::string::npos) << e.what();
+  }
+  // The sd it suggests is accepted.
+  const Recipe ok = ParseRecipe(WithBias("{mean: 500, sd: 3e-9, count: 3, seed: 1, min: 500, "
+                                         "max: 500.0000001}"),
+                                "bounded.yaml", kRecipes);
+  EXPECT_EQ(PlanRecipe(ok).summary.pose_count, 3);
+}
+
+TEST(RecipeSafety, HugeSettlesAndExposuresAreRefusedAtTheirLine) {
+  const std::string base = WithBias("500");
+  const RecipeError settle = BoundedError(base + "settle:\n  after_move_ms: 1e308\n");
+  EXPECT_EQ(settle.Line(), 9) << settle.what();
+  EXPECT_NE(settle.Message().find("settle.after_move_ms 1e+308 must lie in [0, 3600000] ms"),
+            std::string::npos)
+      << settle.what();
+  const RecipeError meas = BoundedError(
+      "axes: {slide_mm: 2000, pan_deg: 0, bias_ma: 500}\nbracket:\n  t_ref_ms: 8\n"
+      "  t_meas_ms: [30, 1e308]\n");
+  EXPECT_EQ(meas.Line(), 4) << meas.what();
+  EXPECT_NE(meas.Message().find("(t_ref_ms, 100000] ms"), std::string::npos) << meas.what();
+  const RecipeError ref = BoundedError(
+      "axes: {slide_mm: 2000, pan_deg: 0, bias_ma: 500}\nbracket:\n  t_ref_ms: 1e308\n"
+      "  t_meas_ms: 2e308\n");
+  EXPECT_EQ(ref.Line(), 3) << ref.what();
+}
+
+// 50000 poses x 42951 frames overflowed the int frame count (a negative count was printed).
+TEST(RecipeSafety, FrameCountsBeyondTheLimitAreRefusedNotWrapped) {
+  const RecipeError e = BoundedError(
+      "axes:\n  slide_mm: {start: 1000, stop: 3499.95, step: 0.05}\n  pan_deg: 0\n"
+      "  bias_ma: 500\nbracket:\n  t_ref_ms: 1\n"
+      "  t_meas_ms: {start: 1.002, stop: 86.9, step: 0.002}\n");
+  EXPECT_NE(e.Message().find("slide 50000 x angle 1"), std::string::npos) << e.what();
+  EXPECT_NE(e.Message().find("2147550000 frames"), std::string::npos) << e.what();  // > 2^31
+}
+
+// A rig path that names a file that is no rig file: its text never shows in the error.
+TEST(RecipeSafety, ARigThatIsNotARigFileIsNotEchoed) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("irdist_recipe_passwd_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream passwd(dir / "passwd");
+    passwd << "root:x:0:0:root:/root:/bin/bash\nsecret:x:1000:1000::/home/secret:/bin/sh\n";
+  }
+  try {
+    ParseRecipe("rig: " + (dir / "passwd").string() + "\n" + WithBias("500"), "r.yaml",
+                dir.string());
+    ADD_FAILURE() << "a passwd file accepted as a rig";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.File(), (dir / "passwd").string());
+    EXPECT_EQ(std::string(e.what()).find("root:x"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("secret"), std::string::npos) << e.what();
+    EXPECT_NE(e.Message().find("must be a map"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// A rig whose motion is absurdly slow: the plan's duration would overflow; refused naming the rig.
+TEST(RecipeSafety, APlanLongerThanAnyLabIsRefusedNamingTheRigFile) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("irdist_recipe_slow_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "rigs");
+  {
+    std::ofstream rig(dir / "rigs" / "slow.yaml");
+    rig << "kind: virtual\nstation:\n  motion:\n    slide: {speed: 1e-300, acceleration: 1e-300}\n";
+  }
+  Recipe recipe = ParseRecipe(
+      "rig: slow\naxes: {slide_mm: [1500, 2000], pan_deg: 0, bias_ma: 500}\n"
+      "bracket: {t_ref_ms: 8, t_meas_ms: 30}\n",
+      "slow-recipe.yaml", dir.string());
+  try {
+    PlanRecipe(recipe);
+    ADD_FAILURE() << "an endless plan accepted";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.File(), "slow-recipe.yaml");
+    EXPECT_NE(e.Message().find("over 1e9 s"), std::string::npos) << e.what();
+    EXPECT_NE(e.Message().find(recipe.rig_path), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace irdist

@@ -1,6 +1,9 @@
 #include "app/report.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+
+#include <csignal>
 
 #include <filesystem>
 #include <fstream>
@@ -137,6 +140,55 @@ TEST(Report, HostilePathsRunNoShellAndEveryPlotIsDrawn) {
   }
   EXPECT_FALSE(fs::exists(cwd / "INJECTED"));
   fs::remove_all(root);
+}
+
+// A disk that fills up while the report is written, simulated with a file size limit (writes
+// past it fail as on a full disk; gnuplot inherits the limit and cuts its SVG short).
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(rlim_t bytes) {
+    ::getrlimit(RLIMIT_FSIZE, &saved_);
+    old_handler_ = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit limit = saved_;
+    limit.rlim_cur = bytes;
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+  }
+  ~FileSizeLimit() {
+    ::setrlimit(RLIMIT_FSIZE, &saved_);
+    std::signal(SIGXFSZ, old_handler_);
+  }
+  FileSizeLimit(const FileSizeLimit&) = delete;
+  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+
+ private:
+  rlimit saved_{};
+  void (*old_handler_)(int) = nullptr;
+};
+
+// A full disk never leaves a cut report that looks whole: the error names the file and the fix,
+// and no page (nor its temporary file) is left behind.
+TEST(Report, AFullDiskIsAnErrorWithTheFixNotACutReport) {
+  const fs::path dir = fs::temp_directory_path() / ("irdist_full_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const auto rows = Rows();
+  const auto plots = ValidationPlots(rows, Summarize(rows));
+  for (const bool with_plots : {true, false}) {
+    SCOPED_TRACE(with_plots ? "a plot cut short" : "the page cut short");
+    fs::remove_all(dir);
+    try {
+      FileSizeLimit limit(6000);  // each .dat and .gp fits; an SVG or the page does not
+      WriteReport(dir.string(), "V", {}, std::string(with_plots ? 10 : 20000, 's'),
+                  with_plots ? plots : std::vector<Plot>{});
+      ADD_FAILURE() << "the report was written whole under a 6000-byte limit";
+    } catch (const ReportError& e) {
+      EXPECT_NE(std::string(e.what()).find("free disk space (df -h " + dir.string() + ")"),
+                std::string::npos)
+          << e.what();
+    }
+    EXPECT_FALSE(fs::exists(dir / "index.html"));
+    EXPECT_FALSE(fs::exists(dir / "index.html.tmp"));
+  }
+  fs::remove_all(dir);
 }
 
 TEST(Report, CalibrationReportShowsFitAndEq25) {

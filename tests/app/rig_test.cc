@@ -197,6 +197,24 @@ const BadRig kBadRigs[] = {
      "width and height must be >= 96"},
     {"negative speed", "kind: virtual\nstation:\n  motion:\n    tilt: {speed: -1}\n", 4, 19,
      "speed must be > 0"},
+    // Huge numbers: refused before any cast or sum could overflow.
+    {"roi beyond any sensor", "kind: virtual\ncamera:\n  roi_px: [1e300, 0, 256, 256]\n", 3, 12,
+     "at most 1048576"},
+    {"limits beyond any station", "kind: virtual\nstation:\n  limits:\n    slide_mm: [0, 1e308]\n",
+     4, 15, "must lie within [-1000000, 1000000]"},
+    {"baud beyond any tty", "kind: virtual\nstation:\n  baud: 2000000000\n", 3, 9,
+     "1..4000000 bit/s"},
+    {"integer out of range", "kind: virtual\ncamera:\n  black_level: 2147483647\n", 3, 16,
+     "black_level '2147483647' is out of range"},
+    // A device key that is a list: was yaml-cpp's own "bad conversion", naming no file.
+    {"device name that is a list",
+     "kind: virtual\nstation:\n  roles: {motion: box, source: box, trigger: box}\n  devices:\n"
+     "    [a, b]: {driver: irdist_station, port: auto}\n",
+     5, 5, "the keys of station.devices must be names"},
+    {"device key that is a map",
+     "kind: virtual\nstation:\n  roles: {motion: box, source: box, trigger: box}\n  devices:\n"
+     "    box: {driver: irdist_station, port: auto, {a: 1}: 2}\n",
+     5, 47, "station.devices.box keys must be names"},
 };
 
 TEST(RigTest, BadRigFilesNameTheirLineAndColumn) {
@@ -299,6 +317,43 @@ TEST(RigTest, TheTriggerMustMatchTheCamerasTriggerSource) {
     ADD_FAILURE() << "no error";
   } catch (const RecipeError& e) {
     EXPECT_NE(e.Message().find("trigger_source: Software"), std::string::npos) << e.what();
+  }
+}
+
+// A composed lab: a Zaber stage and a source meter. `motion` and `source` are replaced below.
+std::string TwoDeviceRig(const std::string& motion, const std::string& slide_axes) {
+  return "kind: hardware\ncamera:\n  trigger_source: Software\nstation:\n  roles:\n"
+         "    motion: " + motion + "\n    source: meter\n    trigger: camera_software\n"
+         "  devices:\n    stage:\n      driver: zaber_ascii\n      port: /dev/ttyUSB0\n"
+         "      axes: " + slide_axes + "\n      fullstep_um: 6.35\n      fullstep_deg: 0.1\n"
+         "    meter:\n      driver: scpi_source\n      port: /dev/ttyUSB1\n"
+         "      compliance_v: 3\n";
+}
+
+// Roles and axes are checked when the rig is read (plan time), naming the rig file's line: a
+// source meter cannot move; an axis needs exactly one device (was station.cc's internal checks,
+// and "axis driven by 2 devices" without the file's name, at run time).
+TEST(RigTest, RolesDevicesCannotFillAndAxesWithoutOneDeviceNameTheRigFile) {
+  const std::string axes = "{slide: \"1 1\", pan: \"2 1\", tilt: \"3 1\"}";
+  EXPECT_NO_THROW(ParseRig(TwoDeviceRig("stage", axes), "lab.yaml"));
+  try {
+    ParseRig(TwoDeviceRig("[stage, meter]", axes), "lab.yaml");
+    ADD_FAILURE() << "a source meter accepted as a motion device";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.File(), "lab.yaml");
+    EXPECT_EQ(e.Line(), 17) << e.what();  // the meter's entry
+    EXPECT_NE(e.Message().find("station.roles.motion names device 'meter' (driver scpi_source), "
+                               "which cannot fill the motion role; name one that can: stage"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    ParseRig(TwoDeviceRig("stage", "{slide: \"1 1\", pan: \"2 1\"}"), "lab.yaml");
+    ADD_FAILURE() << "a rig without a tilt axis accepted";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.File(), "lab.yaml");
+    EXPECT_NE(e.Message().find("axis tilt is driven by 0 motion devices"), std::string::npos)
+        << e.what();
   }
 }
 

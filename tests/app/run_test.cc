@@ -4,12 +4,16 @@
 
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include <string>
+
+#include "app/command_args.h"
 #include "app/errors.h"
 #include "app/recipe.h"
 #include "station/plan.h"
@@ -97,6 +101,35 @@ TEST(RunFolderTest, CalibrateOutOntoAnotherRunsResultsIsRefused) {
     std::ifstream in(dir / result);
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     EXPECT_EQ(text, "theirs\n") << result;
+  }
+  fs::remove_all(dir);
+}
+
+// plan --suggest --from: a summary whose best_dt_ms no exposure can hold, or a FIFO, is refused
+// before the probe sweep (nothing is started, no probe folder is made); it was checked after it.
+TEST(RunSuggestTest, ABadFromIsRefusedBeforeTheProbeSweep) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("irdist_suggest_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "summary.yaml") << "best_dt_ms: 1e308\n";
+  ASSERT_EQ(::mkfifo((dir / "fifo.yaml").c_str(), 0600), 0);
+  for (const char* from : {"summary.yaml", "fifo.yaml"}) {
+    SCOPED_TRACE(from);
+    PlanArgs args;
+    args.recipe = std::string(IRDIST_SOURCE_DIR) + "/recipes/smoke-calibration.yaml";
+    args.suggest = true;
+    args.from_summary = (dir / from).string();
+    args.out_dir = (dir / "probe").string();
+    std::ostringstream out, err;
+    try {
+      RunSuggest(args, {out, err});
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(args.from_summary), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("(0, 100000]"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(dir / "probe"));
   }
   fs::remove_all(dir);
 }

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace irdist {
 namespace {
 
@@ -18,6 +20,20 @@ std::vector<ProbeFrame> Probes() {
 TEST(SuggestOptions, DefaultsAreValid) {
   std::string why;
   EXPECT_TRUE(SuggestOptions().IsValid(&why)) << why;
+}
+
+// A best dt no exposure can hold (summary.yaml's best_dt_ms 1e308, nan, -5) is invalid: RunSuggest
+// checks the options before the probe sweep.
+TEST(SuggestOptions, BestDtOutsideAnyExposureIsInvalid) {
+  SuggestOptions o;
+  std::string why;
+  for (double bad : {-5.0, 0.0, std::nan(""), 1e308, 100000.5}) {
+    o.best_dt_ms = bad;
+    EXPECT_FALSE(o.IsValid(&why)) << bad;
+    EXPECT_NE(why.find("(0, 100000] ms"), std::string::npos) << why;
+  }
+  o.best_dt_ms = 100000.0;
+  EXPECT_TRUE(o.IsValid(&why)) << why;
 }
 
 TEST(Suggest, LongestExposureKeepsTheNearestPoseBelowTheLimit) {

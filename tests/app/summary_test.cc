@@ -3,6 +3,7 @@
 #include "app/crb.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <yaml-cpp/yaml.h>
@@ -280,6 +281,36 @@ TEST_F(SummaryTest, BadRowIsRefusedWithItsLine) {
   } catch (const EstimatesFileError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.csv:3"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("d_mm"), std::string::npos) << e.what();
+  }
+}
+
+// plan --suggest --from reads best_dt_ms before any probe: a bad value names the file, its line
+// and the valid range; a FIFO is refused at once (YAML::LoadFile blocked on it).
+TEST_F(SummaryTest, BestDtIsReadStrictlyAndNeverFromAFifo) {
+  const fs::path path = dir_ / "summary.yaml";
+  std::ofstream(path) << "methods: 2\nbest_dt_ms: 12.5\n";
+  EXPECT_EQ(ReadBestDtMs(path.string()), 12.5);
+  std::ofstream(path) << "best_dt_ms: null\n";
+  EXPECT_EQ(ReadBestDtMs(path.string()), std::nullopt);
+  for (const std::string bad : {"-5", "0", ".nan", "1e308", "abc", "[1, 2]"}) {
+    SCOPED_TRACE(bad);
+    std::ofstream(path) << "i0_free: {}\nbest_dt_ms: " << bad << "\n";
+    try {
+      ReadBestDtMs(path.string());
+      ADD_FAILURE() << "accepted";
+    } catch (const EstimatesFileError& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string() + ":2:13: best_dt_ms"), std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("(0, 100000]"), std::string::npos) << e.what();
+    }
+  }
+  const fs::path fifo = dir_ / "fifo.yaml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    ReadBestDtMs(fifo.string());
+    ADD_FAILURE() << "a FIFO was read";
+  } catch (const EstimatesFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
   }
 }
 

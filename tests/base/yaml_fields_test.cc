@@ -75,6 +75,48 @@ TEST(YamlFieldsTest, InputErrorFormatsItsPosition) {
   EXPECT_STREQ(without.what(), "r.yaml: cannot open");
 }
 
+// 2147483647 is a whole number: the error says it is out of range, and the range.
+TEST(YamlFieldsTest, IntegersOutOfRangeSaySoAndGiveTheRange) {
+  try {
+    AsInteger(Parse("2147483647", "f.yaml"), "f.yaml", "count");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Message().find("whole number,"), std::string::npos) << e.what();
+    EXPECT_NE(e.Message().find("count '2147483647' is out of range"), std::string::npos)
+        << e.what();
+    EXPECT_NE(e.Message().find("[-2000000000, 2000000000]"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(AsInteger(Parse("-2000000000", "f.yaml"), "f.yaml", "count"), -2000000000);
+  try {
+    AsInteger(Parse("2.5", "f.yaml"), "f.yaml", "count");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.Message().find("must be a whole number, not '2.5'"), std::string::npos)
+        << e.what();
+  }
+}
+
+// A file that is not YAML (a password file) reads as one long scalar: the error names its kind
+// and place, never its text; quoted values are cut at 40 characters.
+TEST(YamlFieldsTest, ErrorsNeverEchoAFilesText) {
+  const std::string passwd = "root:x:0:0:root:/root:/bin/bash\nuser:x:1000:1000::/home/u:/bin/sh\n";
+  try {
+    MapReader(Parse(passwd, "rig.yaml"), "rig.yaml", "the rig file", {"name"});
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).find("root"), std::string::npos) << e.what();
+    EXPECT_NE(e.Message().find("not a single text value"), std::string::npos) << e.what();
+  }
+  try {
+    AsNumber(Parse(std::string(100, 'x') + "\x01", "f.yaml"), "f.yaml", "n");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.Message().find("'" + std::string(40, 'x') + "...'"), std::string::npos)
+        << e.what();
+    EXPECT_EQ(e.Message().find(std::string(41, 'x')), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace irdist::yaml_fields
 

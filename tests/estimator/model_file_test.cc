@@ -372,6 +372,54 @@ TEST(ModelFileSafety, MisspeltKeyIsAnErrorNotADefault) {
   }
 }
 
+// A provenance whose roi_px or bit_depth no camera has: refused naming the key, before any cast
+// (roi_px 1e300 was undefined behaviour).
+TEST(ModelFileSafety, ProvenanceRoiAndBitDepthOutsideAnyCameraAreRefused) {
+  CalibrationModel model = SmallModel();
+  ModelProvenance& p = model.provenance;
+  p.known = true;
+  p.pixel_format = "Mono12";
+  p.bit_depth = 12;
+  p.roi_offset_x = 512;
+  p.roi_offset_y = 384;
+  p.roi_width = 256;
+  p.roi_height = 256;
+  p.t_ref_ms = 8.0;
+  p.t_meas_ms = {30.0};
+  const std::string good = ModelToYaml(model);
+  EXPECT_EQ(ModelFromYaml(good, "m.yaml").provenance.roi_width, 256);
+  const std::string roi = "roi_px: [512, 384, 256, 256]";
+  ASSERT_NE(good.find(roi), std::string::npos) << good;
+  for (const std::string bad : {"roi_px: [1e300, 384, 256, 256]", "roi_px: [-5, 384, 256, 256]",
+                                "roi_px: [512, 384, -256, 256]", "roi_px: [512, 384, 256.5, 256]",
+                                "roi_px: [512, 384, 0, 256]"}) {
+    SCOPED_TRACE(bad);
+    std::string text = good;
+    text.replace(text.find(roi), roi.size(), bad);
+    try {
+      ModelFromYaml(text, "m.yaml");
+      ADD_FAILURE() << "accepted";
+    } catch (const ModelFileError& e) {
+      EXPECT_EQ(e.key(), "provenance.roi_px");
+      EXPECT_GT(e.line(), 1);
+      EXPECT_NE(std::string(e.what()).find("[0, 1048576]"), std::string::npos) << e.what();
+    }
+  }
+  for (const std::string depth : {"-7", "0", "17", "2147483647"}) {
+    SCOPED_TRACE(depth);
+    std::string text = good;
+    const size_t at = text.find("bit_depth: 12");
+    text.replace(at, 13, "bit_depth: " + depth);
+    try {
+      ModelFromYaml(text, "m.yaml");
+      ADD_FAILURE() << "accepted";
+    } catch (const ModelFileError& e) {
+      EXPECT_EQ(e.key(), "provenance.bit_depth");
+      EXPECT_NE(std::string(e.what()).find("1..16"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace irdist
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -395,6 +396,73 @@ TEST(PlanTest, FormatDurationReadsNaturally) {
   EXPECT_EQ(FormatDuration(12.34), "12.3 s");
   EXPECT_EQ(FormatDuration(245.2), "4m 05.2s");
   EXPECT_EQ(FormatDuration(3723.0), "1h 02m 03s");
+}
+
+TEST(PlanTest, FormatDurationNeverRoundsTheUnrepresentable) {
+  EXPECT_EQ(FormatDuration(2e9), "over 1e9 s");
+  EXPECT_EQ(FormatDuration(std::numeric_limits<double>::infinity()), "over 1e9 s");
+  EXPECT_EQ(FormatDuration(std::nan("")), "over 1e9 s");
+}
+
+// The chance that a draw is kept, against the normal law's own figures.
+TEST(PlanSafety, AcceptedFractionIsTheNormalMassInsideTheWindow) {
+  RandomDraws draws{500.0, 50.0, 10, 1, true, 450.0, 550.0};
+  EXPECT_NEAR(draws.AcceptedFraction(), 0.682689492137, 1e-9);  // +-1 sd
+  draws.min = 500.0;
+  EXPECT_NEAR(draws.AcceptedFraction(), 0.341344746068, 1e-9);  // 0..+1 sd
+  draws.sd = 0.0;
+  EXPECT_EQ(draws.AcceptedFraction(), 1.0);
+}
+
+// sd 1e308, or a window 1e-7 wide, would redraw for ever: IsValid refuses them and says the
+// largest sd that works, and MakePlan throws instead of spinning.
+TEST(PlanSafety, RandomDrawsThatCannotMeetTheirWindowAreRefusedWithTheFix) {
+  const RandomDraws huge{500.0, 1e308, 3, 1, true, 0.0, 600.0};
+  const RandomDraws narrow{500.0, 50.0, 3, 1, true, 500.0, 500.0000001};
+  for (const RandomDraws& draws : {huge, narrow}) {
+    std::string why;
+    EXPECT_FALSE(draws.IsValid(&why));
+    EXPECT_NE(why.find("lower sd to at most"), std::string::npos) << why;
+    SweepSpec spec;
+    spec.bias_ma.random = draws;
+    EXPECT_THROW(MakePlan(spec, MotionModel()), CheckError);
+    // The suggested sd keeps at least the fraction asked for, and the plan is made.
+    RandomDraws fixed = draws;
+    fixed.sd = draws.LargestUsableSd();
+    EXPECT_NEAR(fixed.AcceptedFraction(), RandomDraws::kMinAcceptedFraction, 1e-6);
+    EXPECT_TRUE(fixed.IsValid(&why)) << why;
+    spec.bias_ma.random = fixed;
+    const Plan plan = MakePlan(spec, MotionModel());
+    for (const Pose& p : plan.poses) {
+      EXPECT_GE(p.bias_ma, draws.min);
+      EXPECT_LE(p.bias_ma, draws.max);
+    }
+  }
+}
+
+TEST(PlanSafety, SettlesAndExposuresBeyondTheirBoundsAreInvalid) {
+  std::string why;
+  SettleSpec settle;
+  settle.after_move_ms = 1e308;
+  EXPECT_FALSE(settle.IsValid(&why));
+  EXPECT_NE(why.find("[0, 3600000] ms"), std::string::npos) << why;
+  BracketSpec bracket;
+  bracket.t_meas_ms = {30.0, 1e308};
+  EXPECT_FALSE(bracket.IsValid(&why));
+  bracket = BracketSpec();
+  bracket.t_ref_ms = 1e306;
+  EXPECT_FALSE(bracket.IsValid(&why));
+}
+
+// 50000 poses x 42951 frames is more than an int holds: refused before any pose is made.
+TEST(PlanSafety, FrameCountsThatWouldOverflowAreRefused) {
+  SweepSpec spec;
+  spec.slide_mm.values.assign(50000, 2000.0);
+  spec.bracket.t_meas_ms.assign(42950, 30.0);
+  std::string why;
+  EXPECT_FALSE(spec.IsValid(&why));
+  EXPECT_NE(why.find("2.14755e+09 frames"), std::string::npos) << why;
+  EXPECT_THROW(MakePlan(spec, MotionModel()), CheckError);
 }
 
 }  // namespace

@@ -109,5 +109,35 @@ TEST(SerialTransport, MissingPortThrowsLinkError) {
   EXPECT_THROW(SerialTransport("/dev/does-not-exist-irdist"), LinkError);
 }
 
+// A baud of 0 (station-test --baud 0) is a LinkError naming the port, where the baud was given
+// and the fix; it was an internal check. The origin also replaces "check the rig file" when the
+// port came from elsewhere.
+TEST(SerialTransport, InvalidBaudIsALinkErrorNamingWhereItWasGiven) {
+  Pty pty;
+  SerialOptions options;
+  options.origin = "the PORT and --baud of irdist station-test";
+  for (unsigned int baud : {0u, kMaxBaud + 1}) {
+    options.baud = baud;
+    try {
+      SerialTransport transport(pty.path, options);
+      ADD_FAILURE() << "baud " << baud << " accepted";
+    } catch (const LinkError& e) {
+      EXPECT_EQ(e.where(), pty.path);
+      EXPECT_NE(e.failure().find("baud must lie in 1..4000000"), std::string::npos) << e.what();
+      EXPECT_NE(e.fix().find("fix the PORT and --baud of irdist station-test"), std::string::npos)
+          << e.what();
+    }
+  }
+  options.baud = 115200;
+  try {
+    SerialTransport transport("/dev/does-not-exist-irdist", options);
+    ADD_FAILURE() << "a missing port opened";
+  } catch (const LinkError& e) {
+    EXPECT_EQ(std::string(e.what()).find("rig file"), std::string::npos) << e.what();
+    EXPECT_NE(e.fix().find("check the PORT and --baud of irdist station-test"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace irdist

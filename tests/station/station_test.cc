@@ -169,8 +169,57 @@ TEST(Station, AnAxisDrivenTwiceIsRefusedBeforeAnythingMoves) {
   spec.motion = {"a", "b"};
   spec.source = "a";
   spec.trigger = "a";
-  Station station(spec, {});
-  EXPECT_THROW(station.Identify(), StationNotReadyError);
+  for (DeviceSpec& d : spec.devices) d.file = "two.yaml";
+  try {
+    Station station(spec, {});  // refused before any port is opened
+    ADD_FAILURE() << "two devices on one axis accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.File(), "two.yaml");
+    EXPECT_NE(e.Message().find("axis slide is driven by 2 motion devices (a, b)"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(world_a.Pose().slide_mm, world_b.Pose().slide_mm);  // nothing moved
+}
+
+// A role given to a device whose driver cannot fill it names the rig file's line and the devices
+// that can, before any port is opened (was an internal check, station.cc:69/73).
+TEST(Station, ARoleADeviceCannotFillNamesTheRigFileLine) {
+  StationSpec spec;
+  spec.devices = {VirtualStationRig::Spec("/nonexistent/pty", 5.0).devices[0]};
+  spec.devices[0].name = "box";
+  spec.devices[0].file = "rig.yaml";
+  spec.devices[0].line = 12;
+  DeviceSpec source;
+  source.name = "meter";
+  source.driver = "scpi_source";
+  source.port = "/nonexistent/pty2";
+  source.file = "rig.yaml";
+  source.line = 20;
+  spec.devices.push_back(source);
+  spec.motion = {"meter"};  // a source meter cannot move
+  spec.source = "meter";
+  spec.trigger = "box";
+  try {
+    Station station(spec, {});
+    ADD_FAILURE() << "a source meter accepted as a motion device";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.File(), "rig.yaml");
+    EXPECT_EQ(e.Line(), 20);
+    EXPECT_NE(e.Message().find("cannot fill the motion role; name one that can: box"),
+              std::string::npos)
+        << e.what();
+  }
+  spec.motion = {"box"};
+  spec.trigger = "meter";  // nor trigger the camera
+  try {
+    CheckStationRoles(spec);
+    ADD_FAILURE() << "a source meter accepted as the trigger";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Line(), 20);
+    EXPECT_NE(e.Message().find("station.roles.trigger names device 'meter'"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
