@@ -17,9 +17,11 @@ namespace {
 constexpr const char* kEstimatesHeader =
     "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,bias_ma,d_mm,theta_deg,"
     "outside_range,ok,health,x_mm,y_mm,z_mm,x_se_mm,y_se_mm,z_se_mm,true_x_mm,true_y_mm,"
-    "true_z_mm";
-constexpr int kEstimatesColumns = 22;
-// Older files: without the 3D columns (13: health last), or without health too (12).
+    "true_z_mm,motion,spread_mm,outside";
+constexpr int kEstimatesColumns = 25;
+// Older files: without motion and outside (22), without the 3D columns (13: health last), or
+// without health too (12).
+constexpr int kEstimatesColumnsNoMotion = 22;
 constexpr int kEstimatesColumnsNo3d = 13;
 constexpr int kEstimatesColumnsNoHealth = 12;
 
@@ -145,6 +147,8 @@ MethodSummary SummarizeMethod(const std::string& method, const std::vector<Estim
   for (const EstimateRow* r : main_rows) {
     m.health_assessed += r->health != "-" ? 1 : 0;
     m.health_flagged += r->health != "-" && r->health != "ok" ? 1 : 0;
+    m.motion_assessed += r->motion != "-" ? 1 : 0;
+    m.motion_flagged += r->motion == "moving" ? 1 : 0;
   }
 
   std::map<PoseKey, std::map<long, std::vector<double>>> by_pose_current;
@@ -298,6 +302,11 @@ void EmitMethod(YAML::Emitter& out, const MethodSummary& m, const CrbFigures* cr
         << "assessed" << YAML::Value << m.health_assessed << YAML::Key << "flagged" << YAML::Value
         << m.health_flagged << YAML::EndMap;
   }
+  if (m.motion_assessed > 0) {
+    out << YAML::Key << "motion" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+        << "assessed" << YAML::Value << m.motion_assessed << YAML::Key << "moving" << YAML::Value
+        << m.motion_flagged << YAML::EndMap;
+  }
   if (crb) EmitCrb(out, *crb);
 }
 
@@ -339,7 +348,29 @@ void Read3d(const std::vector<std::string>& c, const std::string& where, Estimat
   }
 }
 
+// The motion and range columns (22..24): motion, spread_mm (empty = NaN), outside (names
+// separated by ';', empty = none).
+void ReadMotionAndRanges(const std::vector<std::string>& c, const std::string& where,
+                         EstimateRow* r) {
+  r->motion = c[22];
+  if (r->motion != "-" && r->motion != "static" && r->motion != "moving") {
+    throw EstimatesFileError(where + ": motion '" + r->motion +
+                             "' is not one of -, static, moving; fix that row.");
+  }
+  r->spread_mm = c[23].empty() ? NAN : ParseNumber(c[23], where, "spread_mm");
+  std::istringstream names(c[24]);
+  for (std::string name; std::getline(names, name, ';');) {
+    if (!name.empty()) r->outside.push_back(name);
+  }
+}
+
 }  // namespace
+
+std::string JoinNames(const std::vector<std::string>& names, const char* separator) {
+  std::string out;
+  for (const std::string& name : names) out += (out.empty() ? "" : separator) + name;
+  return out;
+}
 
 void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& rows) {
   std::ofstream out(path, std::ios::trunc);
@@ -356,6 +387,7 @@ void WriteEstimatesCsv(const std::string& path, const std::vector<EstimateRow>& 
                      r.true_y_mm, r.true_z_mm}) {
       out << ',' << Truth(v);
     }
+    out << ',' << r.motion << ',' << Truth(r.spread_mm) << ',' << JoinNames(r.outside);
     out << '\n';
   }
   out.flush();
@@ -367,16 +399,19 @@ std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
   if (!in) throw EstimatesFileError(path + ": cannot be opened; check the path.");
   std::string line;
   const std::string header(kEstimatesHeader);
+  const std::string no_motion = header.substr(0, header.find(",motion"));
   const std::string no_3d = header.substr(0, header.find(",x_mm"));
   const std::string no_health = header.substr(0, header.find(",health"));
   const bool has_line = static_cast<bool>(std::getline(in, line));
-  if (!has_line || (line != header && line != no_3d && line != no_health)) {
+  if (!has_line ||
+      (line != header && line != no_motion && line != no_3d && line != no_health)) {
     throw EstimatesFileError(path + ":1: the header is not '" + std::string(kEstimatesHeader) +
                              "'; is this an irdist estimates.csv?");
   }
-  const int columns = line == header   ? kEstimatesColumns
-                      : line == no_3d ? kEstimatesColumnsNo3d
-                                      : kEstimatesColumnsNoHealth;
+  const int columns = line == header      ? kEstimatesColumns
+                      : line == no_motion ? kEstimatesColumnsNoMotion
+                      : line == no_3d     ? kEstimatesColumnsNo3d
+                                          : kEstimatesColumnsNoHealth;
   std::vector<EstimateRow> rows;
   int line_no = 1;
   while (std::getline(in, line)) {
@@ -402,7 +437,8 @@ std::vector<EstimateRow> ReadEstimatesCsv(const std::string& path) {
     r.outside_range = ParseBool(c[10], where, "outside_range");
     r.ok = ParseBool(c[11], where, "ok");
     if (columns >= kEstimatesColumnsNo3d) r.health = c[12];
-    if (columns == kEstimatesColumns) Read3d(c, where, &r);
+    if (columns >= kEstimatesColumnsNoMotion) Read3d(c, where, &r);
+    if (columns == kEstimatesColumns) ReadMotionAndRanges(c, where, &r);
     if (r.true_d_mm <= 0.0) {
       throw EstimatesFileError(where + ": true_d_mm must be positive; fix that row.");
     }
@@ -454,6 +490,8 @@ std::string ValidationSummary::BriefReport() const {
     if (m.dispersion_mm) out << ", dispersion " << *m.dispersion_mm << " mm";
     if (m.best_dt_ms) out << ", best dt " << *m.best_dt_ms << " ms";
     if (m.outside_calibrated_range) out << ", " << m.outside_calibrated_range << " outside range";
+    if (m.health_flagged) out << ", " << m.health_flagged << " unhealthy (optics)";
+    if (m.motion_flagged) out << ", " << m.motion_flagged << " moving";
     out << "\n";
   }
   return out.str();
