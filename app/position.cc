@@ -135,6 +135,11 @@ void AddPositions(const CameraGeometry& geometry, const BlobPoint& blob,
       if (!ray) {
         ray = RayOfBlob(geometry.intrinsics, geometry.roi_offset_x, geometry.roi_offset_y, blob);
       }
+      // The calibration (on the optical axis) maps the blob to its depth: off the axis a disc's
+      // image scales as f / z, not f / range. The range along the blob's ray is z / cos(field
+      // angle), cos = the unit ray's z.
+      row.d_mm /= (*ray).ray[2];
+      if (row.d_std_mm > 0.0) row.d_std_mm /= (*ray).ray[2];
       const Position3d p = AlongRay(*ray, row.d_mm, row.d_std_mm);
       row.x_mm = p.x_mm;
       row.y_mm = p.y_mm;

@@ -68,9 +68,11 @@ TrueGeometry TrueGeometryOf(const CameraGeometry& geometry, double slide_mm, dou
 CameraGeometry GeometryOfRigText(const std::string& text, const std::string& file);
 
 struct EstimateRow;
-// Fills x, y, z (and their standard errors) of every ok row of `blocks` (the estimates of one
-// bracket, by method) from the blob's centre (sensor px) when the geometry has intrinsics (the
-// rows' true_x/y/z come with their truth, TrueGeometryOf). The blob's ray is computed once.
+// With intrinsics, turns every ok row's distance (the depth z the on-axis calibration reads from
+// the blob's size: off the axis a disc's image scales as f / z) into the range along the blob's
+// ray, z / cos(field angle), and fills x, y, z (and their standard errors) of the rows of `blocks`
+// (the estimates of one bracket, by method) from the blob's centre (sensor px). The rows'
+// true_x/y/z come with their truth (TrueGeometryOf). The blob's ray is computed once.
 void AddPositions(const CameraGeometry& geometry, const BlobPoint& blob,
                   std::initializer_list<std::vector<EstimateRow>*> blocks);
 
