@@ -825,7 +825,10 @@ std::vector<std::string> OutsideRanges(const CalibratedRanges& ranges,
                                        const std::vector<const Features*>& frames,
                                        const RangeOptions& options) {
   std::vector<std::string> outside;
-  if (OutsideDistance(ranges, estimate, options.z_limit)) outside.push_back("distance");
+  DistanceEstimate widened = estimate;  // the distance's se with the calibration's error
+  const double calibration_mm = options.calibration_rel_error * estimate.d_mm;
+  widened.d_std_mm = std::hypot(std::max(estimate.d_std_mm, 0.0), calibration_mm);
+  if (OutsideDistance(ranges, widened, options.z_limit)) outside.push_back("distance");
   if (OutsideTheta(ranges, estimate, options.z_limit)) outside.push_back("theta");
   const auto beyond = [](double value, double lo, double hi, double tolerance) {
     return value < lo * (1.0 - tolerance) || value > hi * (1.0 + tolerance);

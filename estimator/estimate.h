@@ -141,13 +141,18 @@ MotionCheck CheckMotion(double joint_d_mm, const std::vector<double>& d_mm,
                         const MotionOptions& options = MotionOptions());
 
 // Which calibrated ranges (model.yaml `ranges:`) a bracket's estimate lies outside, by name:
-// "distance", "theta" (each edge widened by z_limit x the estimate's own standard error, so a
-// reading at the calibration's edge is inside), "t_ref", "t_meas" (every exposure of the bracket,
+// "distance", "theta" (each edge widened by z_limit x the estimate's own standard error, the
+// distance's combined with the calibration's own relative error, so a reading at the
+// calibration's edge is inside), "t_ref", "t_meas" (every exposure of the bracket,
 // against the calibrated reference and measurement exposures, to 0.1%) and "signal" (the peak
 // gray level of the bracket's frames against the calibration frames', to 2%; skipped for models
 // without a `ranges.peak`). Empty: inside every range.
 struct RangeOptions {
   double z_limit = 3.0;
+  // The calibration's relative distance error (e.g. the geometric fit's mean relative error),
+  // added in quadrature to the distance's standard error: a systematic error the estimate's own
+  // noise does not show.
+  double calibration_rel_error = 0.0;
   double exposure_tolerance = 1e-3;  // relative
   double signal_tolerance = 0.02;    // relative
 };

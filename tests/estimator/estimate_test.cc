@@ -305,6 +305,10 @@ TEST(OutsideRanges, EdgesAreTestedWithTheEstimatesOwnStandardError) {
   EXPECT_TRUE(OutsideRanges(Table3Ranges(), e, 8.0, t_ms, {}).empty());
   e.d_mm = 1490.0;  // 10 standard errors below
   EXPECT_EQ(OutsideRanges(Table3Ranges(), e, 8.0, t_ms, {}), std::vector<std::string>{"distance"});
+  // ... within 3 of the calibration's own error (0.3% of 1490 mm = 4.5 mm, with the se 4.6 mm).
+  RangeOptions calibrated;
+  calibrated.calibration_rel_error = 0.003;
+  EXPECT_TRUE(OutsideRanges(Table3Ranges(), e, 8.0, t_ms, {}, calibrated).empty());
   e.d_mm = 2000.0;
   e.theta_deg = 42.0;
   EXPECT_EQ(OutsideRanges(Table3Ranges(), e, 8.0, t_ms, {}), std::vector<std::string>{"theta"});
