@@ -80,17 +80,49 @@ double Se(double value) { return value >= 0.0 ? value : std::nan(""); }
 
 std::string QualityFlags(const MeasureSample& s) {
   std::string flags;
-  const auto add = [&flags](bool on, const char* name) {
-    if (on) flags += (flags.empty() ? "" : ",") + std::string(name);
+  const auto add = [&flags](bool on, const std::string& name) {
+    if (on) flags += (flags.empty() ? "" : ",") + name;
   };
   add(!s.blob_found, "no_blob");
   add(s.saturated, "saturated");
   add(s.touches_border, "touches_border");
   add(s.clipped, "clipped");
-  add(s.have_estimate && s.estimate.outside_range, "outside_range");
+  add(s.have_estimate && s.estimate.outside_range,
+      "outside_range(" + JoinNames(s.estimate.outside, " ") + ")");
+  add(s.health.flagged, std::string(s.health.Label()) + "(" +
+                            (s.health.sigma_change > 0.0 ? "+" : "") +
+                            Fixed(100.0 * s.health.sigma_change, 0) + "%)");
+  add(s.motion.moving, "moving(" + Fixed(s.motion.spread_mm, 1) + " mm)");
   add(!s.have_estimate || !s.estimate.ok, "no_estimate");
   return flags.empty() ? "ok" : flags;
 }
+
+namespace {
+
+// "health": the figure behind the flag (null when not assessed).
+std::string HealthJson(const HealthCheck& h) {
+  if (!h.assessed) return "null";
+  return std::string("{\"status\":\"") + h.Label() +
+         "\",\"blur_var_px2\":" + JsonNumber(h.blur_var_px2) +
+         ",\"calibrated_blur_var_px2\":" + JsonNumber(h.calibrated_px2) +
+         ",\"sigma_change\":" + JsonNumber(h.sigma_change) + ",\"z\":" + JsonNumber(h.z) + "}";
+}
+
+// "motion": the figure behind the flag (null when not assessed).
+std::string MotionJson(const MotionCheck& m) {
+  if (!m.assessed) return "null";
+  return "{\"spread_mm\":" + JsonNumber(m.spread_mm) + ",\"chi2\":" + JsonNumber(m.chi2) +
+         ",\"chi2_limit\":" + JsonNumber(m.chi2_limit) +
+         ",\"exposures\":" + std::to_string(m.exposures) + "}";
+}
+
+std::string NamesJson(const std::vector<std::string>& names) {
+  std::string out = "[";
+  for (const std::string& name : names) out += (out.size() > 1 ? ",\"" : "\"") + name + "\"";
+  return out + "]";
+}
+
+}  // namespace
 
 std::string MeasureJson(const MeasureSample& s) {
   const EstimateRow& e = s.estimate;
@@ -108,7 +140,11 @@ std::string MeasureJson(const MeasureSample& s) {
       << "\"no_blob\":" << JsonBool(!s.blob_found) << ",\"saturated\":" << JsonBool(s.saturated)
       << ",\"touches_border\":" << JsonBool(s.touches_border)
       << ",\"clipped\":" << JsonBool(s.clipped)
-      << ",\"outside_range\":" << JsonBool(s.have_estimate && e.outside_range) << "}"
+      << ",\"outside_range\":" << JsonBool(s.have_estimate && e.outside_range)
+      << ",\"unhealthy\":" << JsonBool(s.health.flagged)
+      << ",\"moving\":" << JsonBool(s.motion.moving) << "}"
+      << ",\"outside\":" << NamesJson(s.have_estimate ? e.outside : std::vector<std::string>{})
+      << ",\"health\":" << HealthJson(s.health) << ",\"motion\":" << MotionJson(s.motion)
       << ",\"position\":";
   if (ok && s.has_position) {
     out << "{\"x_mm\":" << JsonNumber(s.x_mm) << ",\"y_mm\":" << JsonNumber(s.y_mm)
@@ -151,6 +187,14 @@ double MeasureStats::Moments::Sd() const { return n > 1 ? std::sqrt(m2 / (n - 1)
 void MeasureStats::Add(const MeasureSample& s) {
   ++count_;
   if (std::isfinite(s.latency_ms)) latency_.Add(s.latency_ms);
+  health_assessed_ += s.health.assessed ? 1 : 0;
+  unhealthy_ += s.health.flagged ? 1 : 0;
+  motion_assessed_ += s.motion.assessed ? 1 : 0;
+  moving_ += s.motion.moving ? 1 : 0;
+  if (s.have_estimate && s.estimate.outside_range) {
+    ++outside_;
+    for (const std::string& name : s.estimate.outside) ++outside_by_range_[name];
+  }
   if (!s.have_estimate || !s.estimate.ok) return;
   ++estimated_;
   d_.Add(s.estimate.d_mm);
@@ -177,6 +221,15 @@ std::string MeasureStats::Report(double wall_s) const {
   line("y", y_, "mm", 2);
   line("z", z_, "mm", 2);
   line("latency (last frame to estimate)", latency_, "ms", 3);
+  out << "  health: " << unhealthy_ << " of " << health_assessed_
+      << " assessed brackets unhealthy (blur off the calibration's)\n";
+  out << "  motion: " << moving_ << " of " << motion_assessed_ << " assessed brackets moving\n";
+  std::string ranges;
+  for (const auto& [name, n] : outside_by_range_) {
+    ranges += (ranges.empty() ? "" : ", ") + name + " " + std::to_string(n);
+  }
+  out << "  outside the calibrated ranges: " << outside_
+      << (ranges.empty() ? "" : " (" + ranges + ")") << "\n";
   return out.str();
 }
 
@@ -349,6 +402,7 @@ void Session::CheckModel(CommandIo io) {
                        "the camera of rig " + live_->rig().name, args_.allow_model_mismatch,
                        &warning);
   if (!warning.empty()) io.err << warning << "\n";
+  for (const std::string& w : ModelFitnessWarnings(model_, args_.model)) io.err << w << "\n";
 }
 
 std::string Session::ReadRigText() const { return yaml_fields::ReadFile(live_->rig_path()); }
@@ -465,6 +519,8 @@ MeasureSample MeasureSampleOf(const RecordedBracket& bracket, const FeatureMap& 
                               const CameraGeometry& geometry) {
   MeasureSample s;
   s.bracket = bracket.bracket_id;
+  s.health = rows.health;
+  s.motion = rows.motion;
   if (!rows.i0_free.empty()) {
     s.estimate = rows.i0_free.front();
     s.have_estimate = true;
@@ -606,6 +662,40 @@ class BrokenPipeGuard {
   bool installed_ = false;
 };
 
+// The run's stderr warnings, each once: the optics fingerprint at the first bracket whose health
+// is assessed, the calibration health at the first unhealthy bracket (what to do), and the first
+// moving bracket.
+class MeasureWarnings {
+ public:
+  MeasureWarnings(const CalibrationModel& model, std::ostream& err) : model_(model), err_(err) {}
+  void Check(const MeasureSample& s) {
+    if (s.health.assessed && !fingerprint_done_) {
+      fingerprint_done_ = true;
+      const std::string w = OpticsFingerprintWarning(model_, s.health, s.estimate.d_mm);
+      if (!w.empty()) err_ << Break() << w << "\n";
+    }
+    if (s.health.flagged && !health_done_) {
+      health_done_ = true;
+      err_ << Break() << "warning: calibration health at bracket " << s.bracket << ": "
+           << s.health.Advice() << " (JSON health, live flag " << s.health.Label() << ").\n";
+    }
+    if (s.motion.moving && !motion_done_) {
+      motion_done_ = true;
+      err_ << Break() << "warning: bracket " << s.bracket << " moving: its per-exposure "
+           << "distances spread " << Fixed(s.motion.spread_mm, 1)
+           << " mm, beyond their noise; the IRED moved during the bracket. Its estimate mixes "
+              "positions: hold the IRED still, or discard brackets flagged moving.\n";
+    }
+  }
+
+ private:
+  // A warning under a live line starts on a line of its own.
+  const char* Break() const { return isatty(STDERR_FILENO) == 1 ? "\n" : ""; }
+  const CalibrationModel& model_;
+  std::ostream& err_;
+  bool fingerprint_done_ = false, health_done_ = false, motion_done_ = false;
+};
+
 bool StopNow(const MeasureArgs& args, int count, double elapsed_s) {
   if (StopRequested().load()) return true;
   if (args.count > 0 && count >= args.count) return true;
@@ -646,12 +736,14 @@ void RunMeasure(const MeasureArgs& args, CommandIo io) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
   std::string stopped;  // why the loop ended early, "" for --count, --duration and Ctrl-C
+  MeasureWarnings warnings(model, io.err);
   while (!StopNow(args, stats.count(), elapsed())) {
     stopped = session.StopReason();
     if (!stopped.empty()) break;
     const MeasureSample sample = session.Next(elapsed());
     stats.Add(sample);
     printer.Print(sample);
+    warnings.Check(sample);
     if (!io.out) {
       stopped = "stdout was closed (its reader went away) after bracket " +
                 std::to_string(sample.bracket) + ".";

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
@@ -18,12 +19,16 @@
 #include "app/command_args.h"
 #include "app/offline.h"
 #include "app/summary.h"
+#include "estimator/estimate.h"
 #include "estimator/features.h"
+#include "estimator/health.h"
 
 namespace irdist {
 
-// Version of the per-bracket JSON object (its "schema" field: "irdist.measure/1").
-constexpr int kMeasureJsonVersion = 1;
+// Version of the per-bracket JSON object (its "schema" field: "irdist.measure/2"). 2:
+// flags.outside_range also covers the exposures and the signal level, and a distance or theta
+// within 3 standard errors of the calibration's edge is inside (docs/measure.md).
+constexpr int kMeasureJsonVersion = 2;
 
 // What one bracket gives: the default (I0-free, joint) estimate and where the blob was.
 struct MeasureSample {
@@ -48,6 +53,9 @@ struct MeasureSample {
   bool has_position = false;
   double x_mm = 0.0, y_mm = 0.0, z_mm = 0.0;
   double x_se_mm = 0.0, y_se_mm = 0.0, z_se_mm = 0.0;
+  // The bracket's calibration health and motion (the estimate's outside ranges are in `estimate`).
+  HealthCheck health;
+  MotionCheck motion;
 };
 
 // The sample of one estimated bracket: the default estimate (`rows` of EstimateRecordedBracket),
@@ -80,6 +88,8 @@ class MeasureStats {
   };
   int count_ = 0;
   int estimated_ = 0;
+  int unhealthy_ = 0, health_assessed_ = 0, moving_ = 0, motion_assessed_ = 0, outside_ = 0;
+  std::map<std::string, int> outside_by_range_;
   Moments d_, theta_, x_, y_, z_, latency_;
 };
 

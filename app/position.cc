@@ -1,5 +1,6 @@
 #include "app/position.h"
 
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 #include <optional>
@@ -94,6 +95,7 @@ CameraGeometry GeometryOfRigText(const std::string& text, const std::string& fil
   g.roi_offset_x = rig.camera.roi_offset_x;
   g.roi_offset_y = rig.camera.roi_offset_y;
   g.virtual_rig = rig.kind == RigKind::kVirtual;
+  for (int i = 0; i < 3; ++i) g.lever_mm[i] = rig.station.emitter_offset_mm[i];
   if (!g.virtual_rig) return g;
   // sim/ checked these keys when the rig started; here they are only the ground truth's offsets.
   const YAML::Node root = yaml_fields::Parse(text, file);  // a map: ParseRig read it
@@ -110,20 +112,43 @@ CameraGeometry GeometryOfRigText(const std::string& text, const std::string& fil
   return g;
 }
 
+TrueGeometry TrueGeometryOf(const CameraGeometry& g, double slide_mm, double pan_deg,
+                            double tilt_deg) {
+  TrueGeometry t;
+  if (!std::isfinite(slide_mm) || !std::isfinite(pan_deg) || !std::isfinite(tilt_deg)) return t;
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  const cv::Matx33d tilt_about_x(1, 0, 0, 0, std::cos(tilt_deg * kDeg), -std::sin(tilt_deg * kDeg),
+                                 0, std::sin(tilt_deg * kDeg), std::cos(tilt_deg * kDeg));
+  const double p = -pan_deg * kDeg;
+  const cv::Matx33d pan_about_y(std::cos(p), 0, std::sin(p), 0, 1, 0, -std::sin(p), 0,
+                                std::cos(p));
+  const cv::Matx33d mount = pan_about_y * tilt_about_x;  // mount * (0, 0, -1) = the IRED's axis
+  const cv::Vec3d centre = cv::Vec3d(g.emitter_offset_x_mm, g.emitter_offset_y_mm, slide_mm) +
+                           mount * cv::Vec3d(g.lever_mm[0], g.lever_mm[1], g.lever_mm[2]);
+  const cv::Vec3d axis = mount * cv::Vec3d(0.0, 0.0, -1.0);
+  t.x_mm = centre[0];
+  t.y_mm = centre[1];
+  t.z_mm = centre[2];
+  t.d_mm = cv::norm(centre);
+  const double cos_theta = -axis.dot(centre) / t.d_mm;  // the line of sight is -centre
+  t.theta_deg = std::acos(std::max(-1.0, std::min(1.0, cos_theta))) / kDeg;
+  return t;
+}
+
 void AddPositions(const CameraGeometry& geometry, const BlobPoint& blob,
                   std::initializer_list<std::vector<EstimateRow>*> blocks) {
   std::optional<BlobRay> ray;  // once, at the first row that needs it
   for (std::vector<EstimateRow>* rows : blocks) {
     for (EstimateRow& row : *rows) {
-      if (geometry.virtual_rig && std::isfinite(row.true_d_mm)) {
-        row.true_x_mm = geometry.emitter_offset_x_mm;
-        row.true_y_mm = geometry.emitter_offset_y_mm;
-        row.true_z_mm = row.true_d_mm;
-      }
       if (!geometry.intrinsics.known || !row.ok || !std::isfinite(blob.u_px)) continue;
       if (!ray) {
         ray = RayOfBlob(geometry.intrinsics, geometry.roi_offset_x, geometry.roi_offset_y, blob);
       }
+      // The calibration (on the optical axis) maps the blob to its depth: off the axis a disc's
+      // image scales as f / z, not f / range. The range along the blob's ray is z / cos(field
+      // angle), cos = the unit ray's z.
+      row.d_mm /= (*ray).ray[2];
+      if (row.d_std_mm > 0.0) row.d_std_mm /= (*ray).ray[2];
       const Position3d p = AlongRay(*ray, row.d_mm, row.d_std_mm);
       row.x_mm = p.x_mm;
       row.y_mm = p.y_mm;

@@ -39,10 +39,28 @@ Position3d PositionFromRange(const CameraIntrinsics& intrinsics, int roi_offset_
 struct CameraGeometry {
   CameraIntrinsics intrinsics;  // known == false: no 3D
   int roi_offset_x = 0, roi_offset_y = 0;
-  // A virtual rig's emitter sits at (offset_x_mm, offset_y_mm, slide_mm) in the camera frame.
+  // A virtual rig's emitter sits at (offset_x_mm, offset_y_mm, slide_mm) in the camera frame
+  // whatever the pan and tilt (sim/scene.h: the disc turns about its own centre).
   bool virtual_rig = false;
   double emitter_offset_x_mm = 0.0, emitter_offset_y_mm = 0.0;
+  // A hardware rig's `station.emitter_offset_mm` (app/rig.h): the emitter's centre from the pan
+  // and tilt axes' crossing, in the mount's frame; it turns with the pan and tilt.
+  double lever_mm[3] = {0.0, 0.0, 0.0};
 };
+
+// The true camera-IRED geometry of a station pose: the emitter's centre in the camera frame,
+// its distance from the camera's centre (the pinhole) and the angle between the IRED's axis
+// (after pan and tilt) and its line of sight to the camera. The axis is n = (sin(pan) cos(tilt),
+// sin(tilt), -cos(pan) cos(tilt)) (pointing at the camera at pan = tilt = 0, as sim/scene.h);
+// the mount turns the lever by the same rotation (R (0, 0, -1) = n). NaN when the pose is
+// unknown (NaN slide, pan or tilt).
+struct TrueGeometry {
+  double x_mm = NAN, y_mm = NAN, z_mm = NAN;
+  double d_mm = NAN;
+  double theta_deg = NAN;
+};
+TrueGeometry TrueGeometryOf(const CameraGeometry& geometry, double slide_mm, double pan_deg,
+                            double tilt_deg);
 
 // From a rig file's text (as a recording stores it): the camera's intrinsics and ROI and, on a
 // virtual rig, its `virtual.emitter.offset_x_mm/offset_y_mm`. Throws RecipeError for a rig file
@@ -50,9 +68,11 @@ struct CameraGeometry {
 CameraGeometry GeometryOfRigText(const std::string& text, const std::string& file);
 
 struct EstimateRow;
-// Fills x, y, z (and their standard errors) of every ok row of `blocks` (the estimates of one
-// bracket, by method) from the blob's centre (sensor px) when the geometry has intrinsics, and
-// true_x/y/z from the rows' true_d_mm on a virtual rig. The blob's ray is computed once.
+// With intrinsics, turns every ok row's distance (the depth z the on-axis calibration reads from
+// the blob's size: off the axis a disc's image scales as f / z) into the range along the blob's
+// ray, z / cos(field angle), and fills x, y, z (and their standard errors) of the rows of `blocks`
+// (the estimates of one bracket, by method) from the blob's centre (sensor px). The rows'
+// true_x/y/z come with their truth (TrueGeometryOf). The blob's ray is computed once.
 void AddPositions(const CameraGeometry& geometry, const BlobPoint& blob,
                   std::initializer_list<std::vector<EstimateRow>*> blocks);
 

@@ -322,12 +322,31 @@ StationSpec ReadComposition(const MapReader& map) {
   return spec;
 }
 
+// `station.emitter_offset_mm: [x, y, z]` (finite mm), when given.
+void ReadEmitterOffset(const MapReader& map, double offset_mm[3]) {
+  if (!map.Has("emitter_offset_mm")) return;
+  const YAML::Node node = map.Get("emitter_offset_mm");
+  if (!node.IsSequence() || node.size() != 3) {
+    Fail(map.File(), node.Mark(),
+         "station.emitter_offset_mm must be [x, y, z] in mm (the emitter's centre from the pan "
+         "and tilt axes' crossing)");
+  }
+  for (int i = 0; i < 3; ++i) {
+    offset_mm[i] = AsNumber(node[i], map.File(), "station.emitter_offset_mm[" +
+                                                      std::to_string(i) + "]");
+    if (!std::isfinite(offset_mm[i])) {
+      Fail(map.File(), node[i].Mark(), "station.emitter_offset_mm must be finite numbers");
+    }
+  }
+}
+
 StationConfig ReadStation(const YAML::Node& node, const std::string& file) {
   const MapReader map(node, file, "station",
                       {"port", "baud", "reply_timeout_ms", "limits", "motion", "roles", "devices",
-                       "current_tolerance_ma"});
+                       "current_tolerance_ma", "emitter_offset_mm"});
   StationConfig station;
   station.limits = ReadLimits(map, station.limits);
+  ReadEmitterOffset(map, station.emitter_offset_mm);
   station.motion = ReadMotionModel(map, station.motion);
   station.composed = map.Has("roles") || map.Has("devices");
   if (station.composed) {
@@ -465,6 +484,10 @@ Rig ParseRig(const std::string& text, const std::string& file) {
            "a virtual: section belongs to a rig of kind: virtual; remove it or set kind: virtual");
     }
     CheckHardwarePorts(rig, map);
+  } else if (map.Has("station") && map.Get("station")["emitter_offset_mm"]) {
+    Fail(file, map.Get("station")["emitter_offset_mm"].Mark(),
+         "station.emitter_offset_mm is for hardware rigs; a virtual rig's emitter sits at "
+         "virtual.emitter.offset_x_mm/offset_y_mm");
   }
   std::string why;
   if (!rig.IsValid(&why)) Fail(file, map.Mark(), why);

@@ -83,6 +83,11 @@ struct StationConfig {
   MotionModel motion;  // optional `motion:` section; readout_ms comes from camera:
   StationSpec composition;
   bool composed = false;  // true when written with roles/devices
+  // Optional `emitter_offset_mm: [x, y, z]`: the emitter's centre from the crossing of the pan and
+  // tilt axes (which the slide carries along the optical axis), in the mount's frame at pan =
+  // tilt = 0 (x right and y down as the camera sees it, z away from the camera). Ground truth
+  // turns it with the pan and tilt (app/position.h TrueGeometryOf). Hardware rigs only.
+  double emitter_offset_mm[3] = {0.0, 0.0, 0.0};
   bool IsValid(std::string* why) const;
 };
 

@@ -509,6 +509,7 @@ void CheckModelAgainstRig(const CalibrationModel& model, const RunRequest& reque
                        "rig " + recipe.rig.name + " (" + recipe.rig_path + ")",
                        request.allow_model_mismatch, &warning);
   if (!warning.empty()) io.err << warning << "\n";
+  for (const std::string& w : ModelFitnessWarnings(model, request.model_path)) io.err << w << "\n";
 }
 
 void RunRecipe(const RunRequest& request, CommandIo io) {

@@ -28,11 +28,11 @@ namespace {
 constexpr const char* kEstimatesHeader =
     "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,bias_ma,d_mm,theta_deg,"
     "outside_range,ok,health,x_mm,y_mm,z_mm,x_se_mm,y_se_mm,z_se_mm,true_x_mm,true_y_mm,"
-    "true_z_mm,utc_time,host_monotonic_ns,camera_timestamp_ns";
-constexpr int kEstimatesColumns = 25;
-// Older files: without the time columns (22), without the 3D columns too (13: health last), or
-// without health too (12).
-constexpr int kEstimatesColumnsNoTime = 22;
+    "true_z_mm,motion,spread_mm,outside,utc_time,host_monotonic_ns,camera_timestamp_ns";
+constexpr int kEstimatesColumns = 28;
+// Older files: without the motion, range and time columns (22), without the 3D columns too (13:
+// health last), or without health too (12).
+constexpr int kEstimatesColumnsNoMotion = 22;
 constexpr int kEstimatesColumnsNo3d = 13;
 constexpr int kEstimatesColumnsNoHealth = 12;
 
@@ -158,6 +158,8 @@ MethodSummary SummarizeMethod(const std::string& method, const std::vector<Estim
   for (const EstimateRow* r : main_rows) {
     m.health_assessed += r->health != "-" ? 1 : 0;
     m.health_flagged += r->health != "-" && r->health != "ok" ? 1 : 0;
+    m.motion_assessed += r->motion != "-" ? 1 : 0;
+    m.motion_flagged += r->motion == "moving" ? 1 : 0;
   }
 
   std::map<PoseKey, std::map<long, std::vector<double>>> by_pose_current;
@@ -311,6 +313,11 @@ void EmitMethod(YAML::Emitter& out, const MethodSummary& m, const CrbFigures* cr
         << "assessed" << YAML::Value << m.health_assessed << YAML::Key << "flagged" << YAML::Value
         << m.health_flagged << YAML::EndMap;
   }
+  if (m.motion_assessed > 0) {
+    out << YAML::Key << "motion" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+        << "assessed" << YAML::Value << m.motion_assessed << YAML::Key << "moving" << YAML::Value
+        << m.motion_flagged << YAML::EndMap;
+  }
   if (crb) EmitCrb(out, *crb);
 }
 
@@ -352,6 +359,22 @@ void Read3d(const std::vector<std::string>& c, const std::string& where, Estimat
   }
 }
 
+// The motion and range columns (22..24): motion, spread_mm (empty = NaN), outside (names
+// separated by ';', empty = none).
+void ReadMotionAndRanges(const std::vector<std::string>& c, const std::string& where,
+                         EstimateRow* r) {
+  r->motion = c[22];
+  if (r->motion != "-" && r->motion != "static" && r->motion != "moving") {
+    throw EstimatesFileError(where + ": motion '" + r->motion +
+                             "' is not one of -, static, moving; fix that row.");
+  }
+  r->spread_mm = c[23].empty() ? NAN : ParseNumber(c[23], where, "spread_mm");
+  std::istringstream names(c[24]);
+  for (std::string name; std::getline(names, name, ';');) {
+    if (!name.empty()) r->outside.push_back(name);
+  }
+}
+
 // A count of ns (digits only, all 64 bits kept); empty = 0 (unknown).
 std::uint64_t ParseCount(const std::string& text, const std::string& where, const char* column) {
   if (text.empty()) return 0;
@@ -365,19 +388,19 @@ std::uint64_t ParseCount(const std::string& text, const std::string& where, cons
                            "', not a count of ns; fix or delete that row.");
 }
 
-// The time columns (22..24) of a row; empty = 0 (unknown).
+// The time columns (25..27) of a row; empty = 0 (unknown).
 void ReadTimes(const std::vector<std::string>& c, const std::string& where, EstimateRow* r) {
-  if (!c[22].empty()) {
-    const std::optional<std::int64_t> utc_ns = ParseUtcIso8601(c[22]);
+  if (!c[25].empty()) {
+    const std::optional<std::int64_t> utc_ns = ParseUtcIso8601(c[25]);
     if (!utc_ns) {
-      throw EstimatesFileError(where + ": column 'utc_time' is '" + c[22] +
+      throw EstimatesFileError(where + ": column 'utc_time' is '" + c[25] +
                                "', not YYYY-MM-DDTHH:MM:SS.ffffffZ; fix or delete that row.");
     }
     r->utc_ns = *utc_ns;
   }
   r->host_monotonic_ns =
-      static_cast<std::int64_t>(ParseCount(c[23], where, "host_monotonic_ns"));
-  r->camera_timestamp_ns = ParseCount(c[24], where, "camera_timestamp_ns");
+      static_cast<std::int64_t>(ParseCount(c[26], where, "host_monotonic_ns"));
+  r->camera_timestamp_ns = ParseCount(c[27], where, "camera_timestamp_ns");
 }
 
 // An integer cell; empty when 0 (unknown).
@@ -399,6 +422,7 @@ std::string EstimateLines(const std::vector<EstimateRow>& rows) {
                      r.true_y_mm, r.true_z_mm}) {
       out << ',' << Truth(v);
     }
+    out << ',' << r.motion << ',' << Truth(r.spread_mm) << ',' << JoinNames(r.outside);
     out << ',' << (r.utc_ns != 0 ? FormatUtcIso8601(r.utc_ns) : "") << ','
         << IntOrEmpty(r.host_monotonic_ns) << ',' << IntOrEmpty(r.camera_timestamp_ns) << '\n';
   }
@@ -426,8 +450,11 @@ EstimateRow ParseEstimateRow(const std::vector<std::string>& c, int columns,
   r.outside_range = ParseBool(c[10], where, "outside_range");
   r.ok = ParseBool(c[11], where, "ok");
   if (columns >= kEstimatesColumnsNo3d) r.health = c[12];
-  if (columns >= kEstimatesColumnsNoTime) Read3d(c, where, &r);
-  if (columns == kEstimatesColumns) ReadTimes(c, where, &r);
+  if (columns >= kEstimatesColumnsNoMotion) Read3d(c, where, &r);
+  if (columns == kEstimatesColumns) {
+    ReadMotionAndRanges(c, where, &r);
+    ReadTimes(c, where, &r);
+  }
   if (!(r.true_d_mm > 0.0) && !std::isnan(r.true_d_mm)) {
     throw EstimatesFileError(where + ": true_d_mm must be positive (or empty: unknown); fix that "
                              "row.");
@@ -439,13 +466,19 @@ EstimateRow ParseEstimateRow(const std::vector<std::string>& c, int columns,
 int ColumnsOfHeader(const std::string& line) {
   const std::string header(kEstimatesHeader);
   if (line == header) return kEstimatesColumns;
-  if (line == header.substr(0, header.find(",utc_time"))) return kEstimatesColumnsNoTime;
+  if (line == header.substr(0, header.find(",motion"))) return kEstimatesColumnsNoMotion;
   if (line == header.substr(0, header.find(",x_mm"))) return kEstimatesColumnsNo3d;
   if (line == header.substr(0, header.find(",health"))) return kEstimatesColumnsNoHealth;
   return 0;
 }
 
 }  // namespace
+
+std::string JoinNames(const std::vector<std::string>& names, const char* separator) {
+  std::string out;
+  for (const std::string& name : names) out += (out.empty() ? "" : separator) + name;
+  return out;
+}
 
 EstimatesCsvWriter::EstimatesCsvWriter(const std::string& path) : path_(path) {
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -578,6 +611,8 @@ std::string ValidationSummary::BriefReport() const {
     if (m.dispersion_mm) out << ", dispersion " << *m.dispersion_mm << " mm";
     if (m.best_dt_ms) out << ", best dt " << *m.best_dt_ms << " ms";
     if (m.outside_calibrated_range) out << ", " << m.outside_calibrated_range << " outside range";
+    if (m.health_flagged) out << ", " << m.health_flagged << " unhealthy (optics)";
+    if (m.motion_flagged) out << ", " << m.motion_flagged << " moving";
     out << "\n";
   }
   return out.str();

@@ -39,6 +39,14 @@ struct EstimateRow {
   // Calibration health (estimator/health.h): "ok", "-" (not assessed), "blur_larger" or
   // "blur_smaller" (the optics no longer match the calibration).
   std::string health = "-";
+  // Motion inside the bracket (estimator/estimate.h CheckMotion), on rows whose per-exposure
+  // estimates have standard errors (the default method's joint row): "moving", "static", or "-"
+  // (not assessed); spread_mm = largest minus smallest per-exposure distance (NaN: "-").
+  std::string motion = "-";
+  double spread_mm = NAN;
+  // The calibrated ranges the estimate lies outside (estimator/estimate.h OutsideRanges:
+  // "distance", "theta", "t_ref", "t_meas", "signal"); outside_range = !outside.empty().
+  std::vector<std::string> outside;
   // When the bracket's data was complete: its last frame's arrival on the host's wall clock (ns
   // since the Unix epoch; estimates.csv column utc_time, ISO 8601 UTC with microseconds), the
   // host's monotonic clock then (host_monotonic_ns) and the camera's own timestamp of that frame
@@ -52,6 +60,9 @@ class EstimatesFileError : public Error {
  public:
   using Error::Error;
 };
+
+// "a;b" from {"a", "b"} ("" when empty): estimates.csv's outside column.
+std::string JoinNames(const std::vector<std::string>& names, const char* separator = ";");
 
 // estimates.csv: header line then one row per estimate, bracket after bracket (columns in
 // docs/reports.md). Throws EstimatesFileError.
@@ -150,6 +161,8 @@ struct MethodSummary {
   int outside_calibrated_range = 0;
   int health_assessed = 0;  // default rows whose health was assessed
   int health_flagged = 0;   // ... and flagged (the optics no longer match the calibration)
+  int motion_assessed = 0;  // default rows whose motion was assessed
+  int motion_flagged = 0;   // ... and flagged moving
   std::vector<ConditionErrors> conditions;  // the default rows by pose and current
 };
 

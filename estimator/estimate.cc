@@ -1,5 +1,6 @@
 #include "estimator/estimate.h"
 
+#include <boost/math/distributions/chi_squared.hpp>
 #include <ceres/jet.h>
 #include <ceres/tiny_solver.h>
 
@@ -250,12 +251,27 @@ void ReportConditioning(const Problem& p, const double x[2], bool solve_theta,
   if (p.fused) FusedUncertainty(p, h_equations, h_prior, solve_theta, out);
 }
 
-// Tolerances: 1e-6 relative in d, 1e-4 deg in theta (the solver's own precision).
+constexpr double kRangeZ = 3.0;  // RangeOptions::z_limit's default
+
+// Is `value` (standard error `se`; <= 0 or NaN: none) outside [lo, hi] beyond z standard errors?
+// `floor` is the smallest margin (the solver's own precision).
+bool OutsideEdges(double value, double se, double lo, double hi, double z, double floor) {
+  const double margin = std::max(floor, se > 0.0 ? z * se : 0.0);
+  return value < lo - margin || value > hi + margin;
+}
+
+bool OutsideDistance(const CalibratedRanges& cr, const DistanceEstimate& e, double z) {
+  return OutsideEdges(e.d_mm, e.d_std_mm, cr.d_min_mm, cr.d_max_mm, z, 1e-6 * cr.d_max_mm);
+}
+
+bool OutsideTheta(const CalibratedRanges& cr, const DistanceEstimate& e, double z) {
+  return OutsideEdges(e.theta_deg, e.theta_std_deg, cr.theta_min_deg, cr.theta_max_deg, z, 1e-4);
+}
+
+// Distance, and theta when solved, each edge widened by 3 standard errors of the estimate.
 bool OutsideCalibratedRange(const CalibratedRanges& cr, const DistanceEstimate& e,
                             bool solve_theta) {
-  return e.d_mm < cr.d_min_mm * (1.0 - 1e-6) || e.d_mm > cr.d_max_mm * (1.0 + 1e-6) ||
-         (solve_theta &&
-          (e.theta_deg < cr.theta_min_deg - 1e-4 || e.theta_deg > cr.theta_max_deg + 1e-4));
+  return OutsideDistance(cr, e, kRangeZ) || (solve_theta && OutsideTheta(cr, e, kRangeZ));
 }
 
 // Eq. 26 by ceres::TinySolver on 2 (or 1, theta fixed) unknowns, from out->d0_mm, theta0_deg.
@@ -776,6 +792,66 @@ I0DependentEstimate EstimateI0Dependent(const CalibrationModel& model, const Fea
   out.outside_calibrated_range =
       out.d_mm < model.ranges.d_min_mm || out.d_mm > model.ranges.d_max_mm;
   return out;
+}
+
+MotionCheck CheckMotion(double joint_d_mm, const std::vector<double>& d_mm,
+                        const std::vector<double>& d_se_mm, const MotionOptions& options) {
+  IRDIST_CHECK(d_mm.size() == d_se_mm.size(), "d_mm and d_se_mm differ in length");
+  IRDIST_CHECK(options.false_alarm > 0.0 && options.false_alarm < 1.0,
+               "MotionOptions::false_alarm must be in (0, 1)");
+  MotionCheck m;
+  if (!std::isfinite(joint_d_mm)) return m;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (size_t i = 0; i < d_mm.size(); ++i) {
+    if (!std::isfinite(d_mm[i]) || !(d_se_mm[i] > 0.0) || !std::isfinite(d_se_mm[i])) continue;
+    const double z = (d_mm[i] - joint_d_mm) / d_se_mm[i];
+    m.chi2 += z * z;
+    lo = std::min(lo, d_mm[i]);
+    hi = std::max(hi, d_mm[i]);
+    ++m.exposures;
+  }
+  if (m.exposures < 2) return MotionCheck{};
+  m.assessed = true;
+  m.spread_mm = hi - lo;
+  const boost::math::chi_squared law(m.exposures - 1);
+  m.chi2_limit = boost::math::quantile(boost::math::complement(law, options.false_alarm));
+  m.moving = m.chi2 > m.chi2_limit;
+  return m;
+}
+
+std::vector<std::string> OutsideRanges(const CalibratedRanges& ranges,
+                                       const DistanceEstimate& estimate, double t_ref_ms,
+                                       const std::vector<double>& t_ms,
+                                       const std::vector<const Features*>& frames,
+                                       const RangeOptions& options) {
+  std::vector<std::string> outside;
+  DistanceEstimate widened = estimate;  // the distance's se with the calibration's error
+  const double calibration_mm = options.calibration_rel_error * estimate.d_mm;
+  widened.d_std_mm = std::hypot(std::max(estimate.d_std_mm, 0.0), calibration_mm);
+  if (OutsideDistance(ranges, widened, options.z_limit)) outside.push_back("distance");
+  if (OutsideTheta(ranges, estimate, options.z_limit)) outside.push_back("theta");
+  const auto beyond = [](double value, double lo, double hi, double tolerance) {
+    return value < lo * (1.0 - tolerance) || value > hi * (1.0 + tolerance);
+  };
+  if (beyond(t_ref_ms, ranges.t_ref_min_ms, ranges.t_ref_max_ms, options.exposure_tolerance)) {
+    outside.push_back("t_ref");
+  }
+  for (double t : t_ms) {
+    if (beyond(t, ranges.t_min_ms, ranges.t_max_ms, options.exposure_tolerance)) {
+      outside.push_back("t_meas");
+      break;
+    }
+  }
+  if (ranges.peak_max > 0.0) {
+    for (const Features* f : frames) {
+      if (f != nullptr && f->blob_found &&
+          beyond(f->peak, ranges.peak_min, ranges.peak_max, options.signal_tolerance)) {
+        outside.push_back("signal");
+        break;
+      }
+    }
+  }
+  return outside;
 }
 
 }  // namespace irdist

@@ -686,6 +686,26 @@ GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples,
   return g;
 }
 
+namespace {
+
+// The blob's peak level over the usable frames of the calibration (CalibratedRanges::peak_*).
+void RecordPeakRange(const std::vector<CalibrationSample>& samples, CalibratedRanges* r) {
+  double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+  for (const CalibrationSample& s : samples) {
+    for (const Features* f : {&s.reference, &s.measurement}) {
+      if (!f->Usable() || !(f->peak > 0.0)) continue;
+      lo = std::min(lo, f->peak);
+      hi = std::max(hi, f->peak);
+    }
+  }
+  if (hi > 0.0) {
+    r->peak_min = lo;
+    r->peak_max = hi;
+  }
+}
+
+}  // namespace
+
 CalibrationModel Fit(const std::vector<CalibrationSample>& samples,
                      const FeatureOptions& feature_options, const FitOptions& options) {
   std::string why;
@@ -711,6 +731,7 @@ CalibrationModel Fit(const std::vector<CalibrationSample>& samples,
     r.bias_min_ma = std::min(r.bias_min_ma, s.bias_ma);
     r.bias_max_ma = std::max(r.bias_max_ma, s.bias_ma);
   }
+  RecordPeakRange(samples, &r);
   for (ModelKind kind : options.models) {
     const ModelForm form = (kind == ModelKind::kFreeE || kind == ModelKind::kFreeSigma)
                                ? options.free_form

@@ -101,6 +101,9 @@ struct CalibratedRanges {
   double t_min_ms = 0.0, t_max_ms = 0.0;  // measurement exposures
   double t_ref_min_ms = 0.0, t_ref_max_ms = 0.0;
   double bias_min_ma = 0.0, bias_max_ma = 0.0;
+  // Signal level: the blob's peak gray level (Features::peak, normalised) over the calibration's
+  // frames, reference and measurement; 0, 0 = not recorded (a model file before it).
+  double peak_min = 0.0, peak_max = 0.0;
 };
 
 // Geometric baseline: the blob's second moment along the disc's major axis (px^2) is

@@ -345,6 +345,7 @@ void EmitScalingAndRanges(YAML::Emitter& out, const ModelScaling& s, const Calib
   range("t_ms", r.t_min_ms, r.t_max_ms);
   range("t_ref_ms", r.t_ref_min_ms, r.t_ref_max_ms);
   range("bias_ma", r.bias_min_ma, r.bias_max_ma);
+  if (r.peak_max > 0.0) range("peak", r.peak_min, r.peak_max);
   out << YAML::EndMap;
 }
 
@@ -462,13 +463,14 @@ ModelScaling ReadScaling(const Reader& rd, const YAML::Node& root) {
 
 CalibratedRanges ReadRanges(const Reader& rd, const YAML::Node& root) {
   const YAML::Node r = rd.Child(root, "", "ranges");
-  rd.Keys(r, "ranges", {"d_mm", "theta_deg", "t_ms", "t_ref_ms", "bias_ma"});
+  rd.Keys(r, "ranges", {"d_mm", "theta_deg", "t_ms", "t_ref_ms", "bias_ma", "peak"});
   CalibratedRanges cr;
   rd.Range(r, "ranges", "d_mm", &cr.d_min_mm, &cr.d_max_mm);
   rd.Range(r, "ranges", "theta_deg", &cr.theta_min_deg, &cr.theta_max_deg);
   rd.Range(r, "ranges", "t_ms", &cr.t_min_ms, &cr.t_max_ms);
   rd.Range(r, "ranges", "t_ref_ms", &cr.t_ref_min_ms, &cr.t_ref_max_ms);
   rd.Range(r, "ranges", "bias_ma", &cr.bias_min_ma, &cr.bias_max_ma);
+  if (r["peak"]) rd.Range(r, "ranges", "peak", &cr.peak_min, &cr.peak_max);  // optional
   return cr;
 }
 

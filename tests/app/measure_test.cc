@@ -43,7 +43,7 @@ TEST(MeasureJson, ParsesWithEveryDocumentedField) {
   s.y_mm = -5.0;
   s.z_mm = 2001.0;
   const YAML::Node j = YAML::Load(MeasureJson(s));
-  EXPECT_EQ(j["schema"].as<std::string>(), "irdist.measure/1");
+  EXPECT_EQ(j["schema"].as<std::string>(), "irdist.measure/2");
   EXPECT_EQ(j["bracket"].as<int>(), 7);
   EXPECT_TRUE(j["ok"].as<bool>());
   EXPECT_DOUBLE_EQ(j["d_mm"].as<double>(), 2001.25);
@@ -92,7 +92,87 @@ TEST(QualityFlags, NamesEachProblem) {
   MeasureSample s = Good();
   s.saturated = true;
   s.estimate.outside_range = true;
-  EXPECT_EQ(QualityFlags(s), "saturated,outside_range");
+  s.estimate.outside = {"theta", "t_meas"};
+  EXPECT_EQ(QualityFlags(s), "saturated,outside_range(theta t_meas)");
+}
+
+HealthCheck BlurLarger() {
+  HealthCheck h;
+  h.assessed = true;
+  h.frames = 4;
+  h.blur_var_px2 = 0.91;
+  h.calibrated_px2 = 0.57;
+  h.sigma_change = 0.30;
+  h.z = 40.0;
+  h.flagged = true;
+  return h;
+}
+
+MotionCheck Moving() {
+  MotionCheck m;
+  m.assessed = true;
+  m.exposures = 4;
+  m.chi2 = 900.0;
+  m.chi2_limit = 16.27;
+  m.spread_mm = 23.4;
+  m.moving = true;
+  return m;
+}
+
+// Health and motion in every output form: the live line's flags, the JSON's flags and the figures
+// behind them, the summary's counts.
+TEST(QualityFlags, NameHealthAndMotionWithTheirFigures) {
+  MeasureSample s = Good();
+  s.health = BlurLarger();
+  s.motion = Moving();
+  EXPECT_EQ(QualityFlags(s), "blur_larger(+30%),moving(23.4 mm)");
+  EXPECT_NE(MeasureLine(s).find("[blur_larger(+30%),moving(23.4 mm)]"), std::string::npos);
+}
+
+TEST(MeasureJson, CarriesHealthMotionAndTheRangesOutside) {
+  MeasureSample s = Good();
+  YAML::Node j = YAML::Load(MeasureJson(s));
+  EXPECT_FALSE(j["flags"]["unhealthy"].as<bool>());
+  EXPECT_FALSE(j["flags"]["moving"].as<bool>());
+  EXPECT_EQ(j["outside"].size(), 0u);
+  EXPECT_TRUE(j["health"].IsNull());  // not assessed
+  EXPECT_TRUE(j["motion"].IsNull());
+  s.health = BlurLarger();
+  s.motion = Moving();
+  s.estimate.outside_range = true;
+  s.estimate.outside = {"theta"};
+  j = YAML::Load(MeasureJson(s));
+  EXPECT_TRUE(j["flags"]["unhealthy"].as<bool>());
+  EXPECT_TRUE(j["flags"]["moving"].as<bool>());
+  EXPECT_TRUE(j["flags"]["outside_range"].as<bool>());
+  ASSERT_EQ(j["outside"].size(), 1u);
+  EXPECT_EQ(j["outside"][0].as<std::string>(), "theta");
+  EXPECT_EQ(j["health"]["status"].as<std::string>(), "blur_larger");
+  EXPECT_DOUBLE_EQ(j["health"]["blur_var_px2"].as<double>(), 0.91);
+  EXPECT_DOUBLE_EQ(j["health"]["calibrated_blur_var_px2"].as<double>(), 0.57);
+  EXPECT_DOUBLE_EQ(j["health"]["sigma_change"].as<double>(), 0.30);
+  EXPECT_DOUBLE_EQ(j["motion"]["spread_mm"].as<double>(), 23.4);
+  EXPECT_DOUBLE_EQ(j["motion"]["chi2_limit"].as<double>(), 16.27);
+  EXPECT_EQ(j["motion"]["exposures"].as<int>(), 4);
+}
+
+TEST(MeasureStats, CountsUnhealthyMovingAndOutsideBrackets) {
+  MeasureStats stats;
+  MeasureSample healthy = Good();
+  healthy.health = BlurLarger();
+  healthy.health.flagged = false;
+  stats.Add(healthy);
+  MeasureSample bad = Good();
+  bad.health = BlurLarger();
+  bad.motion = Moving();
+  bad.estimate.outside_range = true;
+  bad.estimate.outside = {"theta", "t_meas"};
+  stats.Add(bad);
+  const std::string report = stats.Report(1.0);
+  EXPECT_NE(report.find("health: 1 of 2 assessed brackets unhealthy"), std::string::npos) << report;
+  EXPECT_NE(report.find("motion: 1 of 1 assessed brackets moving"), std::string::npos) << report;
+  EXPECT_NE(report.find("outside the calibrated ranges: 1 (t_meas 1, theta 1)"), std::string::npos)
+      << report;
 }
 
 TEST(MeasureLine, ShowsDistanceThetaAndFlags) {

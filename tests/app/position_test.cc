@@ -80,5 +80,57 @@ TEST(PositionFromRange, DistortionMovesTheRay) {
   EXPECT_GT(barrel.x_mm, plain.x_mm);
 }
 
+// Ground truth from the geometry, by hand. The virtual offset rig: the emitter at (40, -30, 1500)
+// mm, turned 10 deg in pan about its own centre. Distance sqrt(1500^2 + 40^2 + 30^2) =
+// 1500.8331 mm; axis n = (sin 10, 0, -cos 10), line of sight -c / |c|: cos(theta) = (1500 cos 10 -
+// 40 sin 10) / 1500.8331, theta = 11.5835 deg (not the station's 10: the line of sight is 1.9 deg
+// off the optical axis).
+TEST(TrueGeometryOf, VirtualOffsetEmitterTurnsAboutItsCentre) {
+  CameraGeometry g;
+  g.virtual_rig = true;
+  g.emitter_offset_x_mm = 40.0;
+  g.emitter_offset_y_mm = -30.0;
+  const TrueGeometry t = TrueGeometryOf(g, 1500.0, 10.0, 0.0);
+  EXPECT_NEAR(t.d_mm, 1500.8331, 1e-4);
+  EXPECT_NEAR(t.theta_deg, 11.5835, 1e-4);
+  EXPECT_DOUBLE_EQ(t.x_mm, 40.0);
+  EXPECT_DOUBLE_EQ(t.y_mm, -30.0);
+  EXPECT_DOUBLE_EQ(t.z_mm, 1500.0);
+  // Centred: the station's own figures (slide, acos(cos pan cos tilt)).
+  const TrueGeometry centred = TrueGeometryOf(CameraGeometry{}, 2000.0, 20.0, 10.0);
+  EXPECT_NEAR(centred.d_mm, 2000.0, 1e-9);
+  const double kDeg = 3.14159265358979323846 / 180.0;
+  EXPECT_NEAR(centred.theta_deg, std::acos(std::cos(20 * kDeg) * std::cos(10 * kDeg)) / kDeg,
+              1e-9);
+}
+
+// A hardware mount whose emitter sits 100 mm in front of the pan axis (towards the camera,
+// station.emitter_offset_mm [0, 0, -100]), pan 30 deg at slide 2000: the emitter swings to
+// (100 sin 30, 0, 2000 - 100 cos 30) = (50, 0, 1913.3975) mm, distance 1914.0506 mm, and its axis
+// is 30 deg from -z towards +x while the line of sight is atan(50 / 1913.3975) = 1.4969 deg from
+// -z towards -x: theta = 31.4969 deg.
+TEST(TrueGeometryOf, HardwareLeverTurnsWithThePan) {
+  CameraGeometry g;
+  g.lever_mm[2] = -100.0;
+  const TrueGeometry t = TrueGeometryOf(g, 2000.0, 30.0, 0.0);
+  EXPECT_NEAR(t.x_mm, 50.0, 1e-9);
+  EXPECT_NEAR(t.y_mm, 0.0, 1e-9);
+  EXPECT_NEAR(t.z_mm, 1913.3975, 1e-4);
+  EXPECT_NEAR(t.d_mm, 1914.0506, 1e-4);
+  EXPECT_NEAR(t.theta_deg, 31.4969, 1e-4);
+  EXPECT_TRUE(std::isnan(TrueGeometryOf(g, 2000.0, NAN, 0.0).d_mm));  // unknown pose
+}
+
+// The rig file's key reaches the geometry.
+TEST(GeometryOfRigText, HardwareEmitterOffsetKey) {
+  const CameraGeometry g = GeometryOfRigText(
+      "name: r\nkind: hardware\nstation:\n  port: /dev/ttyUSB0\n  emitter_offset_mm: [1, 2, "
+      "-3]\ncamera:\n  id: 10.0.0.2\n",
+      "r.yaml");
+  EXPECT_EQ(g.lever_mm[0], 1.0);
+  EXPECT_EQ(g.lever_mm[1], 2.0);
+  EXPECT_EQ(g.lever_mm[2], -3.0);
+}
+
 }  // namespace
 }  // namespace irdist

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "app/errors.h"
@@ -83,6 +85,27 @@ TEST(RigTest, IntrinsicsNeedTheirKeysAndRefuseUnknownOnes) {
   EXPECT_THROW(ParseRig(head + "    fx: -1\n    fy: 2000\n    cx: 1\n    cy: 1\n", "r.yaml"),
                RecipeError);
   EXPECT_FALSE(LoadRig(kRigs + "/example-hardware.yaml").camera.intrinsics.known);
+}
+
+TEST(RigTest, EmitterOffsetIsThreeFiniteNumbersOnAHardwareRig) {
+  const std::string head = "name: r\nkind: hardware\ncamera:\n  id: 10.0.0.2\nstation:\n  port: "
+                           "/dev/ttyUSB0\n  emitter_offset_mm: ";
+  const Rig rig = ParseRig(head + "[5, 0, -80]\n", "r.yaml");
+  EXPECT_EQ(rig.station.emitter_offset_mm[0], 5.0);
+  EXPECT_EQ(rig.station.emitter_offset_mm[2], -80.0);
+  EXPECT_EQ(LoadRig(kRigs + "/example-hardware.yaml").station.emitter_offset_mm[2], 0.0);
+  EXPECT_THROW(ParseRig(head + "[5, 0]\n", "r.yaml"), RecipeError);
+  EXPECT_THROW(ParseRig(head + "[5, 0, .nan]\n", "r.yaml"), RecipeError);
+  // A virtual rig's emitter is placed by its physics (virtual.emitter.offset_*), not this key.
+  std::string text;
+  {
+    std::ifstream in(kRigs + "/virtual.yaml");
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const size_t at = text.find("  baud: 115200");
+  ASSERT_NE(at, std::string::npos);
+  text.insert(at, "  emitter_offset_mm: [0, 0, 10]\n");
+  EXPECT_THROW(ParseRig(text, "v.yaml"), RecipeError);
 }
 
 TEST(RigTest, ExampleHardwareRigLoads) {

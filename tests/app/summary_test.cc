@@ -270,6 +270,37 @@ TEST_F(SummaryTest, TimeColumnsRoundTripAndUnknownValuesAreEmpty) {
   EXPECT_TRUE(std::isnan(again[1].bias_ma));
 }
 
+TEST_F(SummaryTest, MotionAndOutsideColumnsRoundTripAndAreCounted) {
+  auto rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  for (const EstimateRow& r : rows) {
+    EXPECT_EQ(r.motion, "-");
+    EXPECT_TRUE(r.outside.empty());
+  }
+  rows[0].motion = "static";
+  rows[0].spread_mm = 1.25;
+  rows[1].motion = "moving";
+  rows[1].spread_mm = 23.5;
+  rows[4].outside = {"theta", "t_meas"};
+  const std::string path = (dir_ / "motion.csv").string();
+  WriteEstimatesCsv(path, rows);
+  const auto again = ReadEstimatesCsv(path);
+  ASSERT_EQ(again.size(), rows.size());
+  EXPECT_EQ(again[1].motion, "moving");
+  EXPECT_DOUBLE_EQ(again[1].spread_mm, 23.5);
+  EXPECT_TRUE(std::isnan(again[2].spread_mm));
+  EXPECT_EQ(again[4].outside, (std::vector<std::string>{"theta", "t_meas"}));
+  EXPECT_TRUE(again[5].outside.empty());
+  const MethodSummary* m = Summarize(again).Find("i0_free");
+  ASSERT_NE(m, nullptr);
+  EXPECT_EQ(m->motion_assessed, 2);
+  EXPECT_EQ(m->motion_flagged, 1);
+  const std::string yaml = (dir_ / "summary.yaml").string();
+  WriteSummaryYaml(yaml, Summarize(again));
+  std::ifstream in(yaml);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("motion: {assessed: 2, moving: 1}"), std::string::npos) << text;
+}
+
 TEST_F(SummaryTest, BadRowIsRefusedWithItsLine) {
   std::ofstream(dir_ / "bad.csv") << "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,"
                                      "bias_ma,d_mm,theta_deg,outside_range,ok\n"

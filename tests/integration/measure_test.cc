@@ -15,6 +15,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -124,7 +125,15 @@ TEST_F(Measure, EstimatesAgreeWithThePoseAtThreePoses) {
       ASSERT_TRUE(j["ok"].as<bool>()) << output;
       EXPECT_NEAR(j["d_mm"].as<double>(), pose.d_mm, 0.01 * pose.d_mm) << pose.at;
       EXPECT_NEAR(j["theta_deg"].as<double>(), pose.theta_deg, 1.0) << pose.at;
+      // A static IRED on the rig it was calibrated on, inside the calibration (1500 mm is its
+      // edge): no flag.
+      EXPECT_FALSE(j["flags"]["moving"].as<bool>()) << output;
+      EXPECT_FALSE(j["flags"]["unhealthy"].as<bool>()) << output;
+      EXPECT_FALSE(j["flags"]["outside_range"].as<bool>()) << output;
+      EXPECT_TRUE(j["motion"].IsMap()) << output;  // assessed
+      EXPECT_EQ(j["health"]["status"].as<std::string>(), "ok") << output;
     }
+    EXPECT_EQ(output.find("warning:"), std::string::npos) << output;
     EXPECT_NE(output.find("Measured 3 brackets"), std::string::npos) << output;
   }
 }
@@ -137,7 +146,7 @@ TEST_F(Measure, JsonFollowsTheSchema) {
   ASSERT_EQ(objects.size(), 2u) << output;
   for (size_t i = 0; i < objects.size(); ++i) {
     const YAML::Node& j = objects[i];
-    EXPECT_EQ(j["schema"].as<std::string>(), "irdist.measure/1");
+    EXPECT_EQ(j["schema"].as<std::string>(), "irdist.measure/2");
     EXPECT_EQ(j["bracket"].as<int>(), static_cast<int>(i));
     for (const char* key : {"time_s", "latency_ms", "d_mm", "d_se_mm", "theta_deg", "theta_se_deg", "blob_x_px",
                             "blob_y_px"}) {
@@ -455,11 +464,20 @@ TEST_F(Measure, ValidateWritesThePositionBesideItsTruth) {
     std::vector<std::string> c;
     std::stringstream fields(line);
     for (std::string f; std::getline(fields, f, ',');) c.push_back(f);
-    ASSERT_EQ(c.size(), 25u) << line;  // health at 12, the 3D columns, then the 3 time columns
+    if (line.back() == ',') c.emplace_back();  // an empty last column
+    // health at 12, the 3D columns, motion, spread, outside, then the 3 time columns
+    ASSERT_EQ(c.size(), 28u) << line;
     const double x = std::stod(c[13]), y = std::stod(c[14]), z = std::stod(c[15]);
     const double tx = std::stod(c[19]), ty = std::stod(c[20]), tz = std::stod(c[21]);
     EXPECT_EQ(tx, 40.0);
     EXPECT_EQ(ty, -30.0);
+    // The truth is the geometry, by hand: the emitter at (40, -30, slide) turned 10 deg in pan
+    // about its centre, axis n = (sin 10, 0, -cos 10). At 1500 mm: distance
+    // sqrt(1500^2 + 40^2 + 30^2) = 1500.8331 mm, cos(theta) = (1500 cos 10 - 40 sin 10) /
+    // 1500.8331, theta = 11.5835 deg; at 2500 mm: 2500.5000 mm and 10.9380 deg.
+    const double true_d = std::stod(c[5]), true_theta = std::stod(c[6]);
+    EXPECT_NEAR(true_d, tz == 1500.0 ? 1500.8331 : 2500.5000, 1e-4) << line;
+    EXPECT_NEAR(true_theta, tz == 1500.0 ? 11.5835 : 10.9380, 1e-4) << line;
     const double range = std::sqrt(tx * tx + ty * ty + tz * tz);
     const double error = std::sqrt((x - tx) * (x - tx) + (y - ty) * (y - ty) + (z - tz) * (z - tz));
     std::cout << "validate 3D at (40, -30, " << tz << ") mm: error " << error << " mm = "
@@ -468,6 +486,84 @@ TEST_F(Measure, ValidateWritesThePositionBesideItsTruth) {
     ++checked;
   }
   EXPECT_EQ(checked, 2);
+}
+
+int Occurrences(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// The lens blurring 30% more than at calibration (psf_sigma_px 0.7 -> 0.91): every bracket is
+// flagged, in the JSON (with the figure behind it), the live line and the summary, and one
+// warning says what to do.
+TEST_F(Measure, BlurLargerThanTheModelsIsFlaggedEverywhereWithOneWarning) {
+  const std::string rig_path = *dir_ + "/blur-rig.yaml";
+  WriteAll(rig_path, RigWith("psf_sigma_px: 0.7", "psf_sigma_px: 0.91"));
+  std::string output;
+  ASSERT_EQ(RunMeasure("blur-json",
+                       {"--rig", rig_path, "--at", "2000,10,0,490", "--count", "5", "--json"},
+                       &output),
+            0)
+      << output;
+  const std::vector<YAML::Node> objects = JsonLines(output);
+  ASSERT_EQ(objects.size(), 5u) << output;
+  for (const YAML::Node& j : objects) {
+    EXPECT_TRUE(j["flags"]["unhealthy"].as<bool>()) << output;
+    EXPECT_EQ(j["health"]["status"].as<std::string>(), "blur_larger") << output;
+    EXPECT_GT(j["health"]["blur_var_px2"].as<double>(),
+              j["health"]["calibrated_blur_var_px2"].as<double>());
+    EXPECT_GT(j["health"]["sigma_change"].as<double>(), 0.15) << output;
+  }
+  EXPECT_EQ(Occurrences(output, "warning: calibration health"), 1) << output;
+  EXPECT_NE(output.find("Restore the calibration's focus, or recalibrate"), std::string::npos)
+      << output;
+  EXPECT_EQ(Occurrences(output, "model fitness (optics_differ)"), 1) << output;
+  EXPECT_NE(output.find("health: 5 of 5 assessed brackets unhealthy"), std::string::npos)
+      << output;
+  ASSERT_EQ(RunMeasure("blur-line", {"--rig", rig_path, "--at", "2000,10,0,490", "--count", "2"},
+                       &output),
+            0)
+      << output;
+  EXPECT_EQ(Occurrences(output, "[blur_larger(+"), 2) << output;
+}
+
+// Outside the calibration (0-30 deg, 30-36 ms here), with the reason; its edge (1500 mm) inside.
+TEST_F(Measure, OutsideTheCalibrationNamesTheRange) {
+  const auto outside_of = [](const YAML::Node& j) {
+    std::vector<std::string> names;
+    for (const YAML::Node& n : j["outside"]) names.push_back(n.as<std::string>());
+    return names;
+  };
+  const auto has = [](const std::vector<std::string>& names, const char* name) {
+    return std::find(names.begin(), names.end(), name) != names.end();
+  };
+  std::string output;
+  ASSERT_EQ(RunMeasure("pan42", {"--at", "2000,42,0,490", "--count", "2", "--json"}, &output), 0)
+      << output;
+  ASSERT_EQ(JsonLines(output).size(), 2u) << output;
+  for (const YAML::Node& j : JsonLines(output)) {
+    EXPECT_TRUE(j["flags"]["outside_range"].as<bool>()) << output;
+    EXPECT_TRUE(has(outside_of(j), "theta")) << output;
+  }
+  ASSERT_EQ(RunMeasure("t-meas-4", {"--at", "2000,10,0,490", "--count", "2", "--json",
+                                    "--t-meas-ms", "4"},
+                       &output),
+            0)
+      << output;
+  ASSERT_EQ(JsonLines(output).size(), 2u) << output;
+  for (const YAML::Node& j : JsonLines(output)) {
+    EXPECT_TRUE(j["flags"]["outside_range"].as<bool>()) << output;
+    EXPECT_TRUE(has(outside_of(j), "t_meas")) << output;
+  }
+  // The calibration's own edge: 1500 mm on a 1500-2500 mm calibration.
+  ASSERT_EQ(RunMeasure("edge", {"--at", "1500,0,0,490", "--count", "5", "--json"}, &output), 0)
+      << output;
+  ASSERT_EQ(JsonLines(output).size(), 5u) << output;
+  for (const YAML::Node& j : JsonLines(output)) {
+    EXPECT_FALSE(j["flags"]["outside_range"].as<bool>()) << output;
+    EXPECT_EQ(j["outside"].size(), 0u) << output;
+  }
 }
 
 TEST_F(Measure, ModelOfAnotherCameraSetupIsRefusedUnlessOverridden) {
