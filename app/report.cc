@@ -318,10 +318,11 @@ Plot Fig14(const ByPose& by_pose, size_t total_poses) {
   for (const auto& [pose, rs] : by_pose) {
     for (const EstimateRow* r : rs) max_repeat = std::max(max_repeat, r->repeat);
   }
-  // Whole repetitions, at most about 10 labels (a run of 110 repetitions labelled each one).
+  // Whole repetitions, at most about 10 labels counting the ends gnuplot adds (a run of 110
+  // repetitions labelled each one).
   s << kCommonStyle << "set xlabel 'repetition (points of a pose spread by up to +-0.3)'\n"
     << "set ylabel 'estimate - truth (mm)'\nset xtics 0, "
-    << std::max(1.0, TickStep(max_repeat, 10)) << "\nplot 0 title 'truth' lc rgb "
+    << std::max(1.0, TickStep(max_repeat, 8)) << "\nplot 0 title 'truth' lc rgb "
        "'#000000' lw 1.5";
   const int n = static_cast<int>(by_pose.size());
   int i = 0;
