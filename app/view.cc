@@ -84,15 +84,19 @@ void PrintNoBlob(const Rig& rig, const cv::Mat& image, int bit_depth, double exp
       << "virtual rig: snap --at SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA, or 'irdist station' with "
       << "'irdist sim' running)?\n";
   if (!rig.camera.FullFrame()) {
-    out << "To widen it: set roi_px: [0, 0, 0, 0] in " << rig.path
-        << " (width 0 = the whole sensor), snap again, and put the suggested roi_px back.\n";
+    out << "To widen it: remove camera.roi_px from " << rig.path
+        << " (absent = the whole sensor), snap again, and put the suggested roi_px in.\n";
   }
   double max_level = 0.0;
   cv::minMaxLoc(image, nullptr, &max_level);
   const double max_percent = 100.0 * max_level / (std::ldexp(1.0, bit_depth) - 1.0);
   if (max_percent < 10.0) {
-    out << "The brightest pixel is " << max_percent << "% of full scale: try a longer "
-        << "--exposure-ms than " << exposure_ms << ".\n";
+    char text[160];
+    std::snprintf(text, sizeof(text),
+                  "The brightest pixel is %.1f%% of full scale: try a longer --exposure-ms than "
+                  "%g.\n",
+                  max_percent, exposure_ms);
+    out << text;
   }
 }
 
