@@ -231,7 +231,7 @@ std::string CameraCheckTable(const std::vector<CameraCheck>& checks) {
 void RunCameraTest(const CameraTestArgs& args, CommandIo io) {
   std::string name = args.camera;
   if (name.empty()) {
-    const std::optional<RunningSim> sim = FindRunningSim(ResolveRig(args.rig));
+    const std::optional<RunningSim> sim = FindRunningSim(ResolveRig(args.rig), io.err);
     if (!sim || sim->values.count("camera_address") == 0) {
       throw UsageError("camera-test: give CAMERA (IP address, Aravis id or serial), or start "
                        "`irdist sim " + args.rig + "` to test the virtual camera");

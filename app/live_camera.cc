@@ -1,6 +1,8 @@
 #include "app/live_camera.h"
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -32,14 +34,34 @@ struct LiveCamera::Impl {
 
 namespace {
 
-// Places the IRED through the virtual station: home, move, current (the sweep's calls).
-void PlaceThroughStation(const std::string& port, const std::vector<double>& at) {
+// Places the IRED through the virtual station: home, move, current (the sweep's calls), with a
+// progress line per step on `progress` (null: silent), so a user at time scale 1 is not left
+// waiting without a word.
+void PlaceThroughStation(const std::string& port, const std::vector<double>& at,
+                         std::ostream* progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto say = [&](const std::string& step) {
+    if (progress == nullptr) return;
+    const double elapsed_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    char stamp[32];
+    std::snprintf(stamp, sizeof(stamp), "[%5.1f s] ", elapsed_s);
+    *progress << "--at: " << stamp << step << std::endl;
+  };
   SerialTransport transport(port);
   StationClient client(transport);
   client.Identify();
+  say("homing the station");
   client.Home();
+  char step[160];
+  std::snprintf(step, sizeof(step), "setting the IRED current to %.1f mA (settling)", at[3]);
+  say(step);
   client.SetCurrent(at[3]);
+  std::snprintf(step, sizeof(step), "moving to slide %.1f mm, pan %.2f deg, tilt %.2f deg", at[0],
+                at[1], at[2]);
+  say(step);
   client.MoveTo({at[0], at[1], at[2]});
+  say("at the pose, settled");
 }
 
 CameraSettings SettingsOf(const CameraConfig& c, const std::string& trigger_source,
@@ -80,7 +102,7 @@ CameraRoute StartOwnVirtualRig(const std::string& rig_path, const LiveCameraOpti
     err << "Virtual rig (time scale " << info.time_scale << "):\n" << info.BriefReport();
   }
   if (!options.at.empty()) {
-    PlaceThroughStation(info.station_port, options.at);
+    PlaceThroughStation(info.station_port, options.at, options.quiet ? nullptr : &err);
   } else if (!options.quiet) {
     err << "note: the virtual station's IRED is off until placed; give --at "
            "SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA\n";

@@ -1,6 +1,7 @@
 #include "app/measure.h"
 
 #include <signal.h>
+#include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
@@ -158,21 +159,65 @@ std::string MeasureJson(const MeasureSample& s) {
   return out.str();
 }
 
-std::string MeasureLine(const MeasureSample& s) {
+namespace {
+
+// The live line's fields in display order, each with its rank: the lowest ranks are dropped
+// first when the line does not fit the terminal (the distance and the flags stay).
+struct LineField {
+  std::string text;
+  int rank;
+};
+
+std::vector<LineField> MeasureLineFields(const MeasureSample& s) {
   const EstimateRow& e = s.estimate;
   const bool ok = s.have_estimate && e.ok;
-  std::ostringstream out;
-  out << "#" << s.bracket << " t " << Fixed(s.time_s, 2) << " s  d " << Fixed(ok ? e.d_mm : NAN, 1)
-      << " +- " << Fixed(ok ? Se(e.d_std_mm) : NAN, 1) << " mm  theta "
-      << Fixed(ok ? e.theta_deg : NAN, 2) << " +- " << Fixed(ok ? Se(e.theta_std_deg) : NAN, 2)
-      << " deg  blob (" << Fixed(s.blob_found ? s.blob_x_px : NAN, 1) << ", "
-      << Fixed(s.blob_found ? s.blob_y_px : NAN, 1) << ") px";
+  std::vector<LineField> fields;
+  fields.push_back({"#" + std::to_string(s.bracket), 5});
+  fields.push_back({"t " + Fixed(s.time_s, 2) + " s", 1});
+  fields.push_back({"d " + Fixed(ok ? e.d_mm : NAN, 1) + " +- " +
+                        Fixed(ok ? Se(e.d_std_mm) : NAN, 1) + " mm", 7});
+  fields.push_back({"theta " + Fixed(ok ? e.theta_deg : NAN, 2) + " +- " +
+                        Fixed(ok ? Se(e.theta_std_deg) : NAN, 2) + " deg", 4});
+  fields.push_back({"blob (" + Fixed(s.blob_found ? s.blob_x_px : NAN, 1) + ", " +
+                        Fixed(s.blob_found ? s.blob_y_px : NAN, 1) + ") px", 2});
   if (ok && s.has_position) {
-    out << "  xyz (" << Fixed(s.x_mm, 1) << ", " << Fixed(s.y_mm, 1) << ", " << Fixed(s.z_mm, 1)
-        << ") mm";
+    fields.push_back({"xyz (" + Fixed(s.x_mm, 1) + ", " + Fixed(s.y_mm, 1) + ", " +
+                          Fixed(s.z_mm, 1) + ") mm", 3});
   }
-  out << "  [" << QualityFlags(s) << "]";
-  return out.str();
+  fields.push_back({"[" + QualityFlags(s) + "]", 6});
+  return fields;
+}
+
+std::string JoinFields(const std::vector<LineField>& fields) {
+  std::string line;
+  for (const LineField& f : fields) line += (line.empty() ? "" : "  ") + f.text;
+  return line;
+}
+
+}  // namespace
+
+std::string MeasureLine(const MeasureSample& s) { return JoinFields(MeasureLineFields(s)); }
+
+std::string MeasureLine(const MeasureSample& s, std::size_t width_chars) {
+  std::vector<LineField> fields = MeasureLineFields(s);
+  // One column short of the width: a line that fills the last column wraps on some terminals.
+  const std::size_t fit_chars = width_chars > 1 ? width_chars - 1 : 1;
+  std::string line = JoinFields(fields);
+  while (line.size() > fit_chars && fields.size() > 1) {
+    const auto lowest = std::min_element(fields.begin(), fields.end(),
+        [](const LineField& a, const LineField& b) { return a.rank < b.rank; });
+    fields.erase(lowest);
+    line = JoinFields(fields);
+  }
+  return line.substr(0, fit_chars);
+}
+
+std::size_t TerminalWidthChars(int fd) {
+  winsize size{};
+  if (isatty(fd) == 1 && ioctl(fd, TIOCGWINSZ, &size) == 0 && size.ws_col > 0) {
+    return size.ws_col;
+  }
+  return 80;
 }
 
 void MeasureStats::Moments::Add(double value) {
@@ -622,7 +667,7 @@ class MeasurePrinter {
     if (json_) {
       out_ << MeasureJson(s) << std::endl;
     } else if (tty_) {
-      out_ << "\r\033[K" << MeasureLine(s) << std::flush;
+      out_ << "\r\033[K" << MeasureLine(s, TerminalWidthChars(STDOUT_FILENO)) << std::flush;
       line_open_ = true;
     } else {
       out_ << MeasureLine(s) << std::endl;

@@ -69,6 +69,11 @@ MeasureSample MeasureSampleOf(const RecordedBracket& bracket, const FeatureMap& 
 std::string MeasureJson(const MeasureSample& s);
 // The one-line text form (piped output; the terminal's live line is the same text).
 std::string MeasureLine(const MeasureSample& s);
+// The live line cut to fit `width_chars` columns (one short of it, so it never wraps): the fields
+// that matter least (time, blob, xyz, theta) are dropped first; the distance and flags stay.
+std::string MeasureLine(const MeasureSample& s, std::size_t width_chars);
+// The terminal's width in columns (TIOCGWINSZ) when `fd` is a terminal, else 80.
+std::size_t TerminalWidthChars(int fd);
 // The quality flags of a sample, comma-separated ("ok" when none).
 std::string QualityFlags(const MeasureSample& s);
 

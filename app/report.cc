@@ -89,6 +89,27 @@ std::string Fixed(double v, int digits) {
   return s.str();
 }
 
+// A tick step of 1, 2 or 5 times a power of ten that puts at most `most_labels` labels on `span`
+// (figures readable at 1280 px: gnuplot's own choice runs labels together on small panels).
+double TickStep(double span, int most_labels) {
+  if (!(span > 0.0) || !std::isfinite(span)) return 1.0;
+  const double raw = span / most_labels;
+  const double decade = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0}) {
+    if (m * decade >= raw) return m * decade;
+  }
+  return 10.0 * decade;
+}
+
+// "set xtics STEP" (or ytics) for values spanning [lowest, highest], at most `most_labels` labels.
+std::string TicsFor(const char* axis, const std::vector<double>& values, int most_labels) {
+  if (values.empty()) return std::string("set ") + axis + "tics\n";
+  const auto [lowest, highest] = std::minmax_element(values.begin(), values.end());
+  std::ostringstream s;
+  s << "set " << axis << "tics " << TickStep(*highest - *lowest, most_labels) << "\n";
+  return s.str();
+}
+
 // The default pipeline's rows: the first method, joint rows when the run has them.
 std::vector<const EstimateRow*> DefaultRows(const std::vector<EstimateRow>& rows,
                                             const std::string& method) {
@@ -301,8 +322,15 @@ ByPose SpreadPoses(const ByPose& by_pose, size_t most) {
 
 Plot Fig14(const ByPose& by_pose, size_t total_poses) {
   std::ostringstream data, s;
+  int max_repeat = 1;
+  for (const auto& [pose, rs] : by_pose) {
+    for (const EstimateRow* r : rs) max_repeat = std::max(max_repeat, r->repeat);
+  }
+  // Whole repetitions, at most about 10 labels counting the ends gnuplot adds (a run of 110
+  // repetitions labelled each one).
   s << kCommonStyle << "set xlabel 'repetition (points of a pose spread by up to +-0.3)'\n"
-    << "set ylabel 'estimate - truth (mm)'\nset xtics 1\nplot 0 title 'truth' lc rgb "
+    << "set ylabel 'estimate - truth (mm)'\nset xtics 0, "
+    << std::max(1.0, TickStep(max_repeat, 8)) << "\nplot 0 title 'truth' lc rgb "
        "'#000000' lw 1.5";
   const int n = static_cast<int>(by_pose.size());
   int i = 0;
@@ -446,17 +474,43 @@ std::string Fig7EPanels(const std::string& e_problem, bool top) {
   return s.str();
 }
 
-std::string Fig7Script(const std::string& e_problem) {
+// Each Fig. 7 panel's ticks, chosen for its data: at most about 6 labels on a panel of about
+// 450 px (gnuplot's own steps ran 4-digit labels together at 1280 px).
+struct Fig7Tics {
+  std::string e_top, e_bottom, sigma_top, sigma_bottom;
+};
+
+Fig7Tics Fig7TicsFor(const std::vector<CalibrationPoint>& points, bool e_fit) {
+  constexpr int kMostLabels = 5;
+  std::vector<double> de, de_both, ds_both, de_err, ds_err, d_mm, index;
+  for (const CalibrationPoint& p : points) {
+    de.push_back(p.de_measured);
+    de_both.insert(de_both.end(), {p.de_measured, p.de_model});
+    ds_both.insert(ds_both.end(), {p.ds_measured, p.ds_model});
+    de_err.push_back(100.0 * (p.de_model - p.de_measured) / p.de_measured);
+    ds_err.push_back(100.0 * (p.ds_model - p.ds_measured) / p.ds_measured);
+    d_mm.push_back(p.d_mm);
+    index.push_back(static_cast<double>(index.size()));
+  }
+  const auto tics = [](const std::vector<double>& x, const std::vector<double>& y) {
+    return TicsFor("x", x, kMostLabels) + TicsFor("y", y, kMostLabels);
+  };
+  return {e_fit ? tics(de_both, de_both) : tics(d_mm, de), tics(index, de_err),
+          tics(ds_both, ds_both), tics(index, ds_err)};
+}
+
+std::string Fig7Script(const std::string& e_problem, const std::vector<CalibrationPoint>& points) {
+  const Fig7Tics tics = Fig7TicsFor(points, e_problem.empty());
   std::ostringstream s;
   s << "set multiplot layout 2,2\nset grid\nset offsets graph 0.04, graph 0.04, graph 0.06, "
        "graph 0.06\n"
-    << Fig7EPanels(e_problem, true)
+    << tics.e_top << Fig7EPanels(e_problem, true) << tics.sigma_top
     << "set xlabel 'measured dSigma (normalised gray)'\n"
        "set ylabel 'model dSigma (normalised gray)'\n"
        "plot x notitle lc rgb '#555555' dt 2, '__DATA__' using 3:4 with points pt 7 ps 0.4 lc "
        "rgb '"
     << Colour(1) << "' notitle\n"
-    << Fig7EPanels(e_problem, false)
+    << tics.e_bottom << Fig7EPanels(e_problem, false) << tics.sigma_bottom
     << "set xlabel 'calibration sample (index)'\nset ylabel 'dSigma model error (%)'\n"
        "plot 0 notitle lc rgb '#000000', '__DATA__' using 0:6 with impulses lc rgb '"
     << Colour(1) << "' notitle\nunset multiplot\n";
@@ -469,7 +523,7 @@ Plot Fig7(const std::vector<CalibrationPoint>& points, const std::string& e_prob
          "Calibration fit: measured against modelled",
          "",
          Fig7Data(points),
-         Fig7Script(e_problem),
+         Fig7Script(e_problem, points),
          900,
          720};
   p.caption =

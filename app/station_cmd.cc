@@ -71,14 +71,28 @@ void PrintStatus(Station& station, std::ostream& out) {
   out << line;
 }
 
-void Move(const Rig& rig, const StationArgs& args, Station& station) {
+// A move needs homed axes: a device that reports no home reference (never homed since it powered
+// up; a PTU cannot tell, so it is homed once per command) is homed first, and the user told so.
+void HomeFirstIfUnhomed(const StationArgs& args, Station& station, std::ostream& err) {
+  station.CheckReadyToStart();
+  if (station.homed()) return;
+  std::string unhomed;
+  for (const auto& [name, state] : station.States()) {
+    if (state != MotionState::kIdle) unhomed += (unhomed.empty() ? "" : ", ") + name;
+  }
+  err << "station move: " << unhomed << " not homed since power-up: homing first (as 'irdist "
+      << "station --rig " << args.rig << " home' does), then moving\n";
+  err.flush();
+  station.Home();
+}
+
+void Move(const Rig& rig, const StationArgs& args, Station& station, std::ostream& err) {
   CheckCount(args, 3, "SLIDE_MM PAN_DEG TILT_DEG");
   const StationPosition target{args.values[0], args.values[1], args.values[2]};
   CheckWithin(rig, "slide_mm", target.slide_mm, rig.station.limits.slide_mm);
   CheckWithin(rig, "pan_deg", target.pan_deg, rig.station.limits.pan_deg);
   CheckWithin(rig, "tilt_deg", target.tilt_deg, rig.station.limits.tilt_deg);
-  station.CheckReadyToStart();
-  if (!station.homed()) station.Home();
+  HomeFirstIfUnhomed(args, station, err);
   station.MoveTo(target);
 }
 
@@ -99,7 +113,7 @@ void RunStation(const StationArgs& args, CommandIo io) {
   station.Identify();
   io.err << station.IdentityBrief() << "\n";
   if (args.action == "move") {
-    Move(rig, args, station);
+    Move(rig, args, station, io.err);
   } else if (args.action == "current") {
     SetCurrent(rig, args, station);
   } else if (args.action == "off") {

@@ -36,12 +36,18 @@ MeasureSample Good() {
   return s;
 }
 
-TEST(MeasureJson, ParsesWithEveryDocumentedField) {
+// Good() with a 3D position (a rig with intrinsics).
+MeasureSample GoodWithPosition() {
   MeasureSample s = Good();
   s.has_position = true;
   s.x_mm = 10.0;
   s.y_mm = -5.0;
   s.z_mm = 2001.0;
+  return s;
+}
+
+TEST(MeasureJson, ParsesWithEveryDocumentedField) {
+  const MeasureSample s = GoodWithPosition();
   const YAML::Node j = YAML::Load(MeasureJson(s));
   EXPECT_EQ(j["schema"].as<std::string>(), "irdist.measure/2");
   EXPECT_EQ(j["bracket"].as<int>(), 7);
@@ -180,6 +186,22 @@ TEST(MeasureLine, ShowsDistanceThetaAndFlags) {
   EXPECT_NE(line.find("#7"), std::string::npos) << line;
   EXPECT_NE(line.find("2001.2"), std::string::npos) << line;
   EXPECT_NE(line.find("[ok]"), std::string::npos) << line;
+}
+
+// The live line fits an 80-column terminal (one column spare, so it never wraps and leaves no
+// trail), keeping the distance and the flags; a wide terminal gets the whole line.
+TEST(MeasureLine, FitsTheTerminalsWidthKeepingDistanceAndFlags) {
+  MeasureSample s = GoodWithPosition();
+  s.saturated = true;
+  ASSERT_GT(MeasureLine(s).size(), 80u);  // the whole line does not fit 80 columns
+  for (std::size_t width : {80u, 60u, 40u}) {
+    const std::string line = MeasureLine(s, width);
+    EXPECT_LT(line.size(), width) << line;
+    EXPECT_NE(line.find("d 2001.2"), std::string::npos) << line;
+    EXPECT_NE(line.find("[saturated]"), std::string::npos) << line;
+  }
+  EXPECT_EQ(MeasureLine(s, 300), MeasureLine(s));
+  EXPECT_EQ(TerminalWidthChars(-1), 80u);  // not a terminal
 }
 
 TEST(MeasureStats, MeanAndSdOverTheEstimates) {

@@ -5,6 +5,7 @@
 
 #include <csignal>
 
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -251,6 +252,66 @@ TEST(Report, DegenerateEModelIsNotDrawnAsAPerfectFit) {
   const std::string html = Slurp(WriteReport(dir.string(), "Calibration", {}, "fit", plots));
   EXPECT_EQ(html.find("class='missing'"), std::string::npos);
   fs::remove_all(dir);
+}
+
+// The steps of "set xtics STEP" / "set ytics STEP" (or "set xtics START, STEP") in a script.
+std::vector<double> TickSteps(const std::string& script, const std::string& axis) {
+  std::vector<double> steps;
+  const std::string key = "set " + axis + "tics ";
+  for (size_t at = script.find(key); at != std::string::npos; at = script.find(key, at + 1)) {
+    const size_t from = at + key.size();
+    const std::string line = script.substr(from, script.find('\n', at) - from);
+    if (line.empty() || !(std::isdigit(line[0]) || line[0] == '.')) continue;
+    const size_t comma = line.find(',');
+    steps.push_back(std::stod(comma == std::string::npos ? line : line.substr(comma + 1)));
+  }
+  return steps;
+}
+
+// Readable at 1280 px: 110 repetitions get at most about 10 x labels on Fig. 14 (each was
+// labelled), and each Fig. 7 panel's ticks are chosen for its data.
+TEST(Report, TicksAreChosenForTheDataAtMostAboutTenLabels) {
+  std::vector<EstimateRow> rows;
+  for (int rep = 0; rep < 110; ++rep) {
+    for (double d : {1500.0, 2500.0}) {
+      EstimateRow r;
+      r.bracket = static_cast<int>(rows.size());
+      r.repeat = rep;
+      r.method = "i0_free";
+      r.true_d_mm = d;
+      r.d_mm = d + 0.01 * rep;
+      rows.push_back(r);
+    }
+  }
+  const Plot& fig14 = Named(ValidationPlots(rows, Summarize(rows)), "fig14_repetitions");
+  const std::vector<double> x14 = TickSteps(fig14.script, "x");
+  ASSERT_EQ(x14.size(), 1u) << fig14.script;
+  EXPECT_GE(x14[0], 1.0);
+  EXPECT_LE(109.0 / x14[0], 10.0) << fig14.script;
+
+  std::vector<CalibrationPoint> points(256);
+  for (size_t i = 0; i < points.size(); ++i) {
+    points[i].d_mm = 1500.0 + 500.0 * static_cast<double>(i % 4);
+    points[i].de_measured = 0.005 + 0.0002 * static_cast<double>(i);
+    points[i].de_model = points[i].de_measured * 1.001;
+    points[i].ds_measured = 0.02 + 0.0005 * static_cast<double>(i);
+    points[i].ds_model = points[i].ds_measured * 0.999;
+  }
+  CalibrationModel model;
+  FittedModel free_e;
+  free_e.kind = ModelKind::kFreeE;
+  free_e.summary.termination = FitSummary::Termination::kConverged;
+  model.models.push_back(free_e);
+  const Plot& fig7 = Named(CalibrationPlots(points, model), "fig7_fit");
+  // Four panels, each with its x and y step; the sample index (0..255) at most ~10 labels.
+  const std::vector<double> x7 = TickSteps(fig7.script, "x"), y7 = TickSteps(fig7.script, "y");
+  ASSERT_EQ(x7.size(), 4u) << fig7.script;
+  ASSERT_EQ(y7.size(), 4u) << fig7.script;
+  EXPECT_LE(255.0 / x7[2], 10.0) << fig7.script;  // the bottom panels: the sample index
+  EXPECT_LE(255.0 / x7[3], 10.0) << fig7.script;
+  const double de_span = points.back().de_model - points.front().de_measured;
+  EXPECT_LE(de_span / x7[0], 10.0) << fig7.script;
+  EXPECT_LE(de_span / y7[0], 10.0) << fig7.script;
 }
 
 }  // namespace

@@ -31,10 +31,12 @@ class StationCommand : public ::testing::Test {
     args.ports = {"station=" + port_};
     std::ostringstream out, err;
     RunStation(args, {out, err});
+    err_ = err.str();
     return out.str();
   }
   sim::World world_;
   sim::StationEmulator emulator_;
+  std::string err_;  // the last command's stderr
   std::string port_;
 };
 
@@ -43,6 +45,20 @@ TEST_F(StationCommand, MovesHomingFirstAndReportsThePose) {
   EXPECT_NEAR(world_.Pose().slide_mm, 1800.0, 1e-6);
   EXPECT_NEAR(world_.Pose().pan_deg, 5.0, 1e-6);
   EXPECT_NE(out.find("position: slide 1800.00 mm, pan 5.00 deg"), std::string::npos) << out;
+}
+
+// A move on a station that was never homed since it powered up says so and names the command
+// that homes it; once homed, a later move does not home again.
+TEST_F(StationCommand, AMoveBeforeHomeSaysItHomesFirstAndNamesTheHomeCommand) {
+  Run("move", {1500.0, 0.0, 0.0});
+  EXPECT_NE(err_.find("not homed since power-up: homing first"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("'irdist station --rig " + std::string(IRDIST_SOURCE_DIR) +
+                      "/recipes/rigs/virtual.yaml home'"),
+            std::string::npos)
+      << err_;
+  Run("move", {1600.0, 0.0, 0.0});
+  EXPECT_EQ(err_.find("homing first"), std::string::npos) << err_;
+  EXPECT_NEAR(world_.Pose().slide_mm, 1600.0, 1e-6);
 }
 
 TEST_F(StationCommand, TheCurrentStaysOnUntilOff) {

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include <thread>
 
 #include "app/errors.h"
+#include "acquisition/camera.h"
 #include "app/show.h"
 #include "tests/loopback_gvcp.h"
 
@@ -56,6 +58,60 @@ TEST(Snap, SavesTheFrameAndFindsTheBlobOnTheAxis) {
   EXPECT_NE(out.str().find("Blob at (639."), std::string::npos) << out.str();
   EXPECT_NE(out.str().find("Suggested roi_px: [512, 384, 256, 256]"), std::string::npos)
       << out.str();
+  // Beside it, an 8-bit preview for people: black = background, white = the brightest pixel.
+  const cv::Mat preview =
+      cv::imread(png.substr(0, png.size() - 4) + ".preview.png", cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(preview.empty()) << out.str();
+  EXPECT_EQ(preview.depth(), CV_8U);
+  EXPECT_EQ(preview.size(), image.size());
+  double lowest = 0.0, highest = 0.0;
+  cv::minMaxLoc(preview, &lowest, &highest);
+  EXPECT_EQ(highest, 255.0);
+  EXPECT_LT(cv::mean(preview(cv::Rect(0, 0, 32, 32)))[0], 5.0);  // a corner of the background
+  EXPECT_NE(out.str().find(".preview.png"), std::string::npos) << out.str();
+  // --at says each step while the station homes, moves and the current settles.
+  for (const char* step : {"--at: [", "homing the station", "IRED current to 490.0 mA",
+                           "moving to slide 2000.0 mm", "at the pose"}) {
+    EXPECT_NE(err.str().find(step), std::string::npos) << step << "\n" << err.str();
+  }
+}
+
+// With the IRED off nothing is found: the message names the ROI with its numbers, how to widen it,
+// and snap's own flags.
+TEST(Snap, NoBlobSaysWhereItLookedAndHowToWidenIt) {
+  testing::LoopbackGvcpLock lock;
+  SnapArgs args;
+  args.rig = VirtualRig();
+  args.out = Scratch("snap-dark") + "/frame.png";
+  args.at = {2000.0, 0.0, 0.0, 0.0};
+  args.time_scale = 50.0;
+  std::ostringstream out, err;
+  RunSnap(args, {out, err});
+  const std::string text = out.str();
+  EXPECT_NE(text.find("No blob found in the rig's roi_px [512, 384, 256, 256]"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("remove camera.roi_px from " + VirtualRig()), std::string::npos) << text;
+  EXPECT_NE(text.find("--exposure-ms"), std::string::npos) << text;
+  EXPECT_NE(text.find("snap --at"), std::string::npos) << text;
+}
+
+// An exposure the camera cannot take is named by snap's flag, not by a recipe's exposures.
+TEST(Snap, AnExposureOutsideTheCamerasRangeNamesExposureMs) {
+  testing::LoopbackGvcpLock lock;
+  SnapArgs args;
+  args.rig = VirtualRig();
+  args.out = Scratch("snap-exposure") + "/frame.png";
+  args.exposure_ms = 1e9;
+  args.time_scale = 50.0;
+  std::ostringstream out, err;
+  try {
+    RunSnap(args, {out, err});
+    ADD_FAILURE() << "an exposure of 1e9 ms was accepted";
+  } catch (const CameraError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("--exposure-ms"), std::string::npos) << what;
+    EXPECT_EQ(what.find("recipe"), std::string::npos) << what;
+  }
 }
 
 // snap and view never replace a file unasked, never write through a link, and write PNG only;
