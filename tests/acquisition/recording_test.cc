@@ -778,6 +778,9 @@ TEST(RecordingSafety, LiveWriterIsNamedWithoutTakingItsLock) {
   EXPECT_EQ(LiveWriterOf(dir), std::to_string(::getpid()));  // still held by the writer
   writer->Close(Completion::kComplete);
   EXPECT_EQ(LiveWriterOf(dir), "");
+  fs::remove_all(dir);
+}
+
 // frames.csv's line `line` split at commas (an empty last field kept).
 std::vector<std::string> CsvFields(const std::string& dir, int line) {
   std::istringstream in(Slurp(fs::path(dir) / "frames.csv"));
@@ -792,9 +795,10 @@ std::vector<std::string> CsvFields(const std::string& dir, int line) {
 TEST(RecordingTime, EachRowCarriesItsUtcTimeMonotonicTimeAndCameraTimestampWhenGiven) {
   const std::string dir = CompleteRecording("time", kBracketSize);
   const std::vector<std::string> header = CsvFields(dir, 1);
-  ASSERT_EQ(header.size(), 22u);
+  ASSERT_EQ(header.size(), 23u);
   EXPECT_EQ(header[20], "utc_time");
   EXPECT_EQ(header[21], "host_monotonic_ns");
+  EXPECT_EQ(header[22], "sha256");
   // 1700000000 s after the epoch is 2023-11-14T22:13:20Z (date -u -d @1700000000).
   EXPECT_EQ(CsvFields(dir, 3)[20], "2023-11-14T22:13:20.000001Z");
   EXPECT_EQ(CsvFields(dir, 3)[21], "5000001000");
@@ -813,40 +817,6 @@ TEST(RecordingTime, UtcTimeThatIsNotTheHostTimeIsAnErrorNamingTheLine) {
   });
   EXPECT_NE(ReaderError(dir).find("frames.csv:3: bad row: bad utc_time"), std::string::npos)
       << ReaderError(dir);
-  fs::remove_all(dir);
-}
-
-// A recording as written before the time columns: the header and every row end at status.
-void DropTimeColumns(const std::string& dir) {
-  std::istringstream in(Slurp(fs::path(dir) / "frames.csv"));
-  std::string out;
-  for (std::string line; std::getline(in, line);) {
-    for (int i = 0; i < 2; ++i) line.erase(line.rfind(','));
-    out += line + "\n";
-  }
-  WriteText(fs::path(dir) / "frames.csv", out);
-}
-
-TEST(RecordingTime, RecordingWrittenBeforeTheTimeColumnsLoadsAndResumesInItsLayout) {
-  const std::string dir = TempDir("oldlayout");
-  auto writer = RecordingWriter::Open(dir, TestHeader());
-  WriteFrames(*writer, 0, kBracketSize);
-  writer->Close(Completion::kCut);
-  DropTimeColumns(dir);
-  ASSERT_EQ(CsvFields(dir, 1).back(), "status");
-  {
-    const RecordingReader reader(dir);
-    ASSERT_EQ(reader.rows().size(), 5u);
-    EXPECT_EQ(reader.rows()[2].host_time_ns, TestRecord(2).host_time_ns);
-    EXPECT_EQ(reader.rows()[2].host_monotonic_ns, 0) << "not recorded";
-  }
-  auto resumed = RecordingWriter::Resume(dir);
-  WriteFrames(*resumed, kBracketSize, 2 * kBracketSize);
-  resumed->Close(Completion::kComplete);
-  EXPECT_EQ(CsvFields(dir, 8).size(), 20u) << "a resumed old recording keeps its own columns";
-  const RecordingCheck check = CheckRecording(dir);
-  EXPECT_TRUE(check.ok()) << check.BriefReport();
-  EXPECT_EQ(check.complete_brackets, 2);
   fs::remove_all(dir);
 }
 
