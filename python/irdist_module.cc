@@ -87,6 +87,7 @@ py::dict RowDict(const FrameRecord& r) {
   d["status"] = r.status;
   d["utc_time"] = FormatUtcIso8601(r.host_time_ns);
   d["host_monotonic_ns"] = NoneIfZero(r.host_monotonic_ns);
+  d["sha256"] = r.sha256.empty() ? py::object(py::none()) : py::object(py::str(r.sha256));
   return d;
 }
 

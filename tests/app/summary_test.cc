@@ -253,7 +253,7 @@ TEST_F(SummaryTest, TimeColumnsRoundTripAndUnknownValuesAreEmpty) {
   const std::vector<std::string> lines{std::istream_iterator<Line>(in),
                                        std::istream_iterator<Line>()};
   ASSERT_EQ(lines.size(), rows.size() + 1);
-  EXPECT_NE(lines[0].find(",true_z_mm,utc_time,host_monotonic_ns,camera_timestamp_ns"),
+  EXPECT_NE(lines[0].find(",outside,utc_time,host_monotonic_ns,camera_timestamp_ns"),
             std::string::npos)
       << lines[0];
   EXPECT_NE(lines[1].find(",2026-12-02T06:12:03.123456Z,987654321012345,18446744073709551000"),
