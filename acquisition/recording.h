@@ -14,6 +14,7 @@
 
 #include "acquisition/bracket.h"
 #include "acquisition/camera.h"
+#include "acquisition/recording_types.h"
 
 namespace irdist {
 
@@ -23,72 +24,11 @@ class RecordingError : public Error {
   using Error::Error;
 };
 
-// Version 2 adds the content hashes (frames.csv's sha256 column, recording.yaml's
-// frames_csv_sha256); version 1 recordings still load, unverified, with a note from check.
-inline constexpr int kRecordingFormatVersion = 2;
-inline constexpr int kOldestRecordingFormatVersion = 1;
-
-enum class Completion { kRunning, kComplete, kCut };
-const char* CompletionName(Completion completion);  // "running" / "complete" / "cut"
-
-// recording.yaml (see docs/recording-format.md for each key).
-struct RecordingHeader {
-  int format_version = kRecordingFormatVersion;
-  Completion completion = Completion::kRunning;
-  std::string software_version;
-  std::string start_time;               // ISO 8601 UTC; set by the writer when empty
-  std::string end_time;                 // set by Close()
-  std::int64_t frame_count = -1;        // set by Close()
-  std::vector<std::string> resumed;     // one start time per resumption
-  int bit_depth = 16;                   // significant bits of the PNG values
-  std::string pixel_format;             // the camera's PixelFormat
-  CameraIdentity camera;
-  std::map<std::string, std::string> camera_features;  // read back after configuring
-  std::string station_identity;
-  std::string recipe_path;
-  std::string recipe_text;              // the recipe as used, byte for byte (recipe.yaml beside)
-  std::string rig_path;
-  std::string rig_text;                 // the rig file as used, byte for byte (rig.yaml beside)
-  std::string frames_csv_sha256;        // SHA-256 of frames.csv, set by Close() ("" while open)
-};
 
 // Largest frame the readers decode (checked on the PNG header, before decoding).
 inline constexpr std::int64_t kMaxFrameSidePx = 16384;
 inline constexpr std::int64_t kMaxFramePixels = std::int64_t{1} << 26;  // 64 Mpx, 128 MB at 16 bit
 
-// One problem found in a recording: file relative to the recording, line (0 = not about a line).
-struct RecordingIssue {
-  std::string file;  // "frames.csv", "frames/000003.png"
-  int line = 0;
-  std::string message;
-};
-
-// One row of frames.csv.
-struct FrameRecord {
-  std::int64_t index = -1;              // assigned by the writer
-  std::string file;                     // assigned by the writer ("frames/000042.png")
-  std::int64_t bracket_id = 0;
-  int frame_in_bracket = 0;
-  int bracket_size = 0;
-  FrameRole role = FrameRole::kReference;
-  double requested_exposure_us = 0.0;
-  double actual_exposure_us = 0.0;
-  bool exposure_from_chunk = false;     // column exposure_source: chunk | readback
-  double bias_ma_set = 0.0;
-  double bias_ma_measured = 0.0;        // NaN = not measured (empty field)
-  double slide_mm = 0.0;
-  double pan_deg = 0.0;
-  double tilt_deg = 0.0;
-  double theta_deg = 0.0;
-  int repeat = 0;
-  std::uint64_t camera_frame_id = 0;
-  std::uint64_t camera_timestamp_ns = 0;  // 0 = the camera gave none (empty field)
-  std::int64_t host_time_ns = 0;          // wall clock at arrival (column utc_time: the same, UTC)
-  std::int64_t host_monotonic_ns = 0;     // monotonic clock at arrival; 0 = not recorded (empty)
-  std::string status = "ok";            // ok | retried
-  std::string sha256;                   // of the PNG's bytes, set by the writer ("" = format 1)
-  int line = 0;                         // line in frames.csv (filled by the reader)
-};
 
 // Builds a record from a captured frame (exposures, ids, times, role, status); the caller fills the
 // pose, current, bracket id and repeat.
@@ -158,7 +98,6 @@ class RecordingWriter {
   bool hashed_ = true;  // rows carry their PNG's SHA-256 (false: resuming a format 1 recording)
   bool closed_ = false;
   std::string first_error_;
-  bool time_columns_ = true;  // false: resuming a recording written before the time columns
   std::vector<std::string> staged_;  // temporary paths of the staged frames, in index order
   std::vector<std::string> staged_sha256_;  // their PNG bytes' SHA-256
   std::vector<std::string> set_aside_;
@@ -169,16 +108,6 @@ class RecordingWriter {
 // is live. Never takes the lock.
 std::string LiveWriterOf(const std::string& dir);
 
-// One bracket as recorded: its rows in frame_in_bracket order (the last row of each position wins
-// when a resumed run re-acquired it).
-struct RecordedBracket {
-  std::int64_t bracket_id = 0;
-  int bracket_size = 0;
-  bool complete = false;                // every position 0..bracket_size-1 present
-  std::vector<FrameRecord> frames;      // ordered by frame_in_bracket; only present positions
-  const FrameRecord* Reference() const; // first ref frame, nullptr if none
-  std::vector<const FrameRecord*> Measurements() const;
-};
 
 class RecordingReader {
  public:
@@ -207,17 +136,6 @@ class RecordingReader {
   std::vector<FrameRecord> rows_;
 };
 
-struct RecordingCheck {
-  using Issue = RecordingIssue;
-  Completion completion = Completion::kRunning;
-  std::int64_t rows = 0;
-  std::int64_t brackets = 0;
-  std::int64_t complete_brackets = 0;
-  std::vector<Issue> errors;    // the recording is damaged: bad rows, missing or bad PNGs, gaps
-  std::vector<Issue> warnings;  // expected after a crash: leftovers, partial last line, cut
-  bool ok() const { return errors.empty(); }
-  std::string BriefReport() const;  // one line per issue, "file:line: message"
-};
 
 // frames.csv parsed once for every reader: the header line, each row (its `file` must be
 // frames/<index>.png of its own index), duplicates, gaps and order. A partial last line is a
@@ -228,7 +146,6 @@ struct FramesCsv {
   std::vector<RecordingIssue> errors, warnings;
   std::uint64_t complete_bytes = 0;  // bytes up to and including the last '\n'
   bool partial_last = false;
-  bool time_columns = true;  // false: written before utc_time and host_monotonic_ns
 };
 FramesCsv ParseFramesCsv(const std::string& text);
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_types.h"
 
 namespace irdist {
 
