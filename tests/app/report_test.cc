@@ -283,7 +283,8 @@ TEST(Report, TicksAreChosenForTheDataAtMostAboutTenLabels) {
       rows.push_back(r);
     }
   }
-  const Plot& fig14 = Named(ValidationPlots(rows, Summarize(rows)), "fig14_repetitions");
+  const std::vector<Plot> validation_plots = ValidationPlots(rows, Summarize(rows));
+  const Plot& fig14 = Named(validation_plots, "fig14_repetitions");
   const std::vector<double> x14 = TickSteps(fig14.script, "x");
   ASSERT_EQ(x14.size(), 1u) << fig14.script;
   EXPECT_GE(x14[0], 1.0);
@@ -302,7 +303,8 @@ TEST(Report, TicksAreChosenForTheDataAtMostAboutTenLabels) {
   free_e.kind = ModelKind::kFreeE;
   free_e.summary.termination = FitSummary::Termination::kConverged;
   model.models.push_back(free_e);
-  const Plot& fig7 = Named(CalibrationPlots(points, model), "fig7_fit");
+  const std::vector<Plot> calibration_plots = CalibrationPlots(points, model);
+  const Plot& fig7 = Named(calibration_plots, "fig7_fit");
   // Four panels, each with its x and y step; the sample index (0..255) at most ~10 labels.
   const std::vector<double> x7 = TickSteps(fig7.script, "x"), y7 = TickSteps(fig7.script, "y");
   ASSERT_EQ(x7.size(), 4u) << fig7.script;

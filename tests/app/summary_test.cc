@@ -290,7 +290,8 @@ TEST_F(SummaryTest, MotionAndOutsideColumnsRoundTripAndAreCounted) {
   EXPECT_TRUE(std::isnan(again[2].spread_mm));
   EXPECT_EQ(again[4].outside, (std::vector<std::string>{"theta", "t_meas"}));
   EXPECT_TRUE(again[5].outside.empty());
-  const MethodSummary* m = Summarize(again).Find("i0_free");
+  const ValidationSummary summary = Summarize(again);
+  const MethodSummary* m = summary.Find("i0_free");
   ASSERT_NE(m, nullptr);
   EXPECT_EQ(m->motion_assessed, 2);
   EXPECT_EQ(m->motion_flagged, 1);
