@@ -481,10 +481,12 @@ std::string JoinNames(const std::vector<std::string>& names, const char* separat
 }
 
 EstimatesCsvWriter::EstimatesCsvWriter(const std::string& path) : path_(path) {
-  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // Never through a link planted at its name (ELOOP).
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW, 0644);
   if (fd_ < 0) {
     throw EstimatesFileError(path + ": cannot be written (" + std::strerror(errno) +
-                             "); check the folder exists and is writable.");
+                             "); check the folder exists and is writable, and that the name is "
+                             "not a symbolic link.");
   }
   WriteAll(std::string(kEstimatesHeader) + "\n");
 }

@@ -302,6 +302,17 @@ TEST_F(SummaryTest, MotionAndOutsideColumnsRoundTripAndAreCounted) {
   EXPECT_NE(text.find("motion: {assessed: 2, moving: 1}"), std::string::npos) << text;
 }
 
+// estimates.csv is never written through a link planted at its name: the link's target is kept.
+TEST_F(SummaryTest, EstimatesCsvIsNeverWrittenThroughALink) {
+  const fs::path victim = dir_ / "victim.txt";
+  std::ofstream(victim) << "precious\n";
+  fs::create_symlink(victim, dir_ / "linked.csv");
+  EXPECT_THROW(EstimatesCsvWriter((dir_ / "linked.csv").string()), EstimatesFileError);
+  std::ifstream in(victim);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "precious\n");
+}
+
 TEST_F(SummaryTest, BadRowIsRefusedWithItsLine) {
   std::ofstream(dir_ / "bad.csv") << "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,"
                                      "bias_ma,d_mm,theta_deg,outside_range,ok\n"
