@@ -1,6 +1,5 @@
 #include "app/measure.h"
 
-#include <signal.h>
 #include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
@@ -685,28 +684,6 @@ class MeasurePrinter {
   bool line_open_ = false;
 };
 
-// While alive, a write to a closed pipe fails with EPIPE instead of killing the process (SIGPIPE
-// ignored; GLib's sockets also set it so), and measure sees its reader gone through the stream's
-// state; the previous handler comes back at the end.
-class BrokenPipeGuard {
- public:
-  BrokenPipeGuard() {
-    struct sigaction ignore {};
-    ignore.sa_handler = SIG_IGN;
-    sigemptyset(&ignore.sa_mask);
-    installed_ = ::sigaction(SIGPIPE, &ignore, &saved_) == 0;
-  }
-  ~BrokenPipeGuard() {
-    if (installed_) ::sigaction(SIGPIPE, &saved_, nullptr);
-  }
-  BrokenPipeGuard(const BrokenPipeGuard&) = delete;
-  BrokenPipeGuard& operator=(const BrokenPipeGuard&) = delete;
-
- private:
-  struct sigaction saved_ {};
-  bool installed_ = false;
-};
-
 // The run's stderr warnings, each once: the optics fingerprint at the first bracket whose health
 // is assessed, the calibration health at the first unhealthy bracket (what to do), and the first
 // moving bracket.
@@ -772,7 +749,6 @@ void RunMeasure(const MeasureArgs& args, CommandIo io) {
   if (!args.out_dir.empty()) folder_lock.emplace(args.out_dir, "measure");
   const CalibrationModel model = LoadModel(args.model);
   SignalGuard guard;  // Ctrl-C ends the loop after the bracket in flight
-  BrokenPipeGuard pipe_guard;  // a reader that goes away ends it too (below)
   MeasureSession session(args, model, io);
   MeasurePrinter printer(io.out, args.json, !args.json && isatty(STDOUT_FILENO) == 1);
   MeasureStats stats;
