@@ -346,6 +346,9 @@ std::string BracketCapture::FailureText(const PlannedFrame& plan, const AttemptL
 
 void BracketCapture::PrepareStream(const Trigger& trigger) {
   if (!camera_.streaming()) {
+    // A new stream: the camera may number its frames afresh (GigE Vision block ids restart with
+    // acquisition on many cameras), and no frame of the old stream can arrive on it.
+    have_last_ = false;
     camera_.StartStream();
     if (options_.warmup_trigger && options_.trigger_source != "Software") {
       ++stats_.warmup;

@@ -398,8 +398,11 @@ void AddSnapAndView(CommandTable& table) {
   sub = table.Add("view", table.handlers().view, v);
   sub->add_option("--rig", v.rig, "Rig name or rig file")->capture_default_str();
   sub->add_option("--model", v.model, "model.yaml: show the live estimate");
-  sub->add_option("--exposure-ms", v.exposure_ms, "Exposure without a model")
+  sub->add_option("--exposure-ms", v.exposure_ms,
+                  "Exposure of single frames: without a model, and of the whole sensor")
       ->check(CLI::PositiveNumber);
+  sub->add_flag("--whole-sensor", v.whole_sensor,
+                "Start on the whole sensor with the ROI drawn (the w key toggles)");
   AddAt(sub, v.at);
   sub->add_option("--frames", v.frames, "Quit after N frames (0: at q or Esc)");
   sub->add_option("--screenshot", v.screenshot, "Save the last window image to this PNG");

@@ -80,7 +80,8 @@ struct SnapArgs {
 struct ViewArgs {
   std::string rig = "virtual";
   std::string model;            // --model: live estimate
-  double exposure_ms = 8.0;     // --exposure-ms (without a model)
+  double exposure_ms = 8.0;     // --exposure-ms (without a model, and of the whole sensor)
+  bool whole_sensor = false;    // --whole-sensor: start on the whole sensor (w toggles)
   std::vector<double> at;       // --at (virtual rig only)
   int frames = 0;               // --frames: quit after N frames (0 = until q / Esc)
   std::string screenshot;       // --screenshot FILE.png: save the last window image

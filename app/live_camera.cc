@@ -30,6 +30,8 @@ struct LiveCamera::Impl {
   std::string trigger_source;
   double time_scale = 1.0;
   int frame_timeout_ms = 1000;
+  LiveCameraOptions options;  // as opened, for configuring the camera again
+  bool whole_sensor = false;
 };
 
 namespace {
@@ -159,6 +161,7 @@ CameraRoute UseHardwareCamera(const Rig& rig, const std::string& rig_path,
 
 LiveCamera::LiveCamera(const LiveCameraOptions& options, std::ostream& err) : impl_(new Impl) {
   Impl& m = *impl_;
+  m.options = options;
   m.rig_path = ResolveRig(options.rig_spec);
   m.rig = LoadRig(m.rig_path);
   CameraRoute route;
@@ -194,6 +197,17 @@ Camera& LiveCamera::camera() { return *impl_->camera; }
 std::string LiveCamera::trigger_source() const { return impl_->trigger_source; }
 int LiveCamera::frame_timeout_ms() const { return impl_->frame_timeout_ms; }
 int LiveCamera::bit_depth() const { return BitDepthOfPixelFormat(impl_->rig.camera.pixel_format); }
+bool LiveCamera::whole_sensor() const { return impl_->whole_sensor || impl_->rig.camera.FullFrame(); }
+
+void LiveCamera::SetWholeSensor(bool whole) {
+  Impl& m = *impl_;
+  if (whole == m.whole_sensor) return;
+  if (m.camera->streaming()) m.camera->StopStream();
+  CameraSettings settings = SettingsOf(m.rig.camera, m.trigger_source, m.options);
+  if (whole) settings.offset_x = settings.offset_y = settings.width = settings.height = 0;
+  m.camera->Configure(settings);
+  m.whole_sensor = whole;
+}
 
 std::function<void(int)> LiveCamera::Trigger() {
   Impl& m = *impl_;

@@ -47,6 +47,11 @@ class LiveCamera {
   std::string trigger_source() const;  // the camera's TriggerSource as configured
   int frame_timeout_ms() const;
   int bit_depth() const;
+  // The camera's region: the whole sensor (true) or the rig's roi_px (false, as opened). Stops
+  // the stream and configures the camera again; the next capture starts it (its frames are then
+  // of the new size). For aiming (`irdist view`'s w key). Throws CameraError.
+  void SetWholeSensor(bool whole);
+  bool whole_sensor() const;
 
  private:
   struct Impl;

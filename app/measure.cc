@@ -408,6 +408,7 @@ class Session {
   void Finish();  // closes the recording as complete
   const cv::Mat& last_image() const { return last_image_; }
   const Features& last_features() const { return last_features_; }
+  LiveCamera& live() { return *live_; }
   int bit_depth() const { return live_->bit_depth(); }
 
  private:
@@ -655,6 +656,7 @@ void MeasureSession::Finish() { impl_->session.Finish(); }
 const cv::Mat& MeasureSession::last_image() const { return impl_->session.last_image(); }
 const Features& MeasureSession::last_features() const { return impl_->session.last_features(); }
 int MeasureSession::bit_depth() const { return impl_->session.bit_depth(); }
+LiveCamera& MeasureSession::live() { return impl_->session.live(); }
 
 namespace {
 

@@ -30,6 +30,8 @@ namespace irdist {
 // within 3 standard errors of the calibration's edge is inside (docs/measure.md).
 constexpr int kMeasureJsonVersion = 2;
 
+class LiveCamera;  // app/live_camera.h
+
 // What one bracket gives: the default (I0-free, joint) estimate and where the blob was.
 struct MeasureSample {
   std::int64_t bracket = 0;
@@ -119,6 +121,8 @@ class MeasureSession {
   const cv::Mat& last_image() const;  // the last frame of the last bracket (CV_16UC1)
   const Features& last_features() const;
   int bit_depth() const;
+  // The session's camera (`irdist view` aims with it between brackets).
+  LiveCamera& live();
 
  private:
   struct Impl;

@@ -8,6 +8,7 @@
 
 #include "acquisition/recording.h"
 #include "app/show.h"
+#include "app/view_layout.h"
 
 namespace irdist {
 
@@ -24,53 +25,11 @@ void RequireDisplay(const std::string& what) {
 
 void OpenWindow(const std::string& window, const std::string& what) {
   try {
-    cv::namedWindow(window, cv::WINDOW_NORMAL);
+    // Resizable, the image scaled to the window, no toolbar or status bar taking its room.
+    cv::namedWindow(window, cv::WINDOW_NORMAL | cv::WINDOW_KEEPRATIO | cv::WINDOW_GUI_NORMAL);
   } catch (const cv::Exception& e) {
     throw DisplayError(what + ": cannot open a window: " + e.what());
   }
-}
-
-namespace {
-
-// A small frame (a region of interest) is enlarged to this width for display, by whole pixels.
-constexpr int kMinDisplayWidthPx = 768;
-
-cv::Point2f Scaled(double x, double y, int scale) {
-  // Pixel centres are at whole coordinates: pixel i covers [i - 0.5, i + 0.5).
-  return {static_cast<float>((x + 0.5) * scale - 0.5), static_cast<float>((y + 0.5) * scale - 0.5)};
-}
-
-void DrawFeatures(const Features& f, int scale, cv::Mat* view) {
-  const cv::Rect r = f.roi;
-  cv::rectangle(*view, cv::Rect(r.x * scale, r.y * scale, r.width * scale, r.height * scale),
-                cv::Scalar(0, 255, 0), 1);
-  const EllipseFit& e = f.ellipse_moments;
-  if (!e.valid) return;
-  cv::ellipse(*view,
-              cv::RotatedRect(Scaled(e.center_px.x, e.center_px.y, scale),
-                              cv::Size2f(static_cast<float>(e.major_px * scale),
-                                         static_cast<float>(e.minor_px * scale)),
-                              static_cast<float>(e.angle_deg)),
-              cv::Scalar(0, 0, 255), 1);
-}
-
-}  // namespace
-
-cv::Mat FrameOverlay(const cv::Mat& image, int bit_depth, const Features* features,
-                     const std::vector<std::string>& lines) {
-  const double full_scale = (1 << bit_depth) - 1;
-  cv::Mat gray;
-  image.convertTo(gray, CV_8U, 255.0 / full_scale);
-  const int scale = std::max(1, kMinDisplayWidthPx / std::max(1, image.cols));
-  if (scale > 1) cv::resize(gray, gray, cv::Size(), scale, scale, cv::INTER_NEAREST);
-  cv::Mat view;
-  cv::cvtColor(gray, view, cv::COLOR_GRAY2BGR);
-  if (features != nullptr) DrawFeatures(*features, scale, &view);
-  for (size_t i = 0; i < lines.size(); ++i) {
-    cv::putText(view, lines[i], cv::Point(8, 22 + static_cast<int>(i) * 24),
-                cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 255, 255), 1);
-  }
-  return view;
 }
 
 void ShowPlayback(const RecordingReader& reader,
@@ -92,9 +51,12 @@ void ShowPlayback(const RecordingReader& reader,
     if (est != joint.end() && est->second->ok) {
       text << ", estimate " << est->second->d_mm << " mm, theta " << est->second->theta_deg;
     }
-    cv::imshow(window, FrameOverlay(reader.LoadImage(row), reader.header().bit_depth,
-                                    f != features.end() ? &f->second : nullptr,
-                                    {text.str(), "any key: next frame, q or Esc: quit"}));
+    ViewPanel panel;  // view's layout: saturated pixels, a zoom, text wrapped to the window
+    panel.image = reader.LoadImage(row);
+    panel.bit_depth = reader.header().bit_depth;
+    panel.features = f != features.end() ? &f->second : nullptr;
+    panel.lines = {text.str(), "any key: next frame, q or Esc: quit"};
+    cv::imshow(window, ComposeView(panel, {1024, 720}));
     const int key = cv::waitKey(0);
     if (key == 'q' || key == 27) break;
   }

@@ -1,6 +1,6 @@
 #pragma once
-// The display side of the app (app/show.cc): playback's `--show` window, and the frame overlay
-// and window helpers that `irdist view` shares with it.
+// The display side of the app (app/show.cc): playback's `--show` window, and the window helpers
+// that `irdist view` shares with it (both draw with app/view_layout.h).
 
 #include <cstdint>
 #include <map>
@@ -33,9 +33,4 @@ class DisplayError : public Error {
 void RequireDisplay(const std::string& what);
 // cv::namedWindow; throws DisplayError when OpenCV cannot open it.
 void OpenWindow(const std::string& window, const std::string& what);
-// A frame for display: gray scaled to 8 bits, the features' window (green) and ellipse (red),
-// `lines` of text at the top left.
-cv::Mat FrameOverlay(const cv::Mat& image, int bit_depth, const Features* features,
-                     const std::vector<std::string>& lines);
-
 }  // namespace irdist

@@ -8,16 +8,19 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <ostream>
 #include <sstream>
+#include <utility>
 
 #include "acquisition/bracket.h"
 #include "app/live_camera.h"
 #include "app/measure.h"
 #include "app/offline.h"
 #include "app/show.h"
+#include "app/view_layout.h"
 #include "base/safe_file.h"
 #include "estimator/model_file.h"
 
@@ -63,36 +66,41 @@ void WritePng(const std::string& path, const cv::Mat& image, const char* what) {
 // The side of the suggested region of interest: the features' window with room to move.
 constexpr int kSuggestedRoiSidePx = 256;
 
-// One exposure after another on the rig's camera (snap, view without a model).
+// The rig's camera opened for single exposures of `exposure_ms` (snap, view without a model).
+std::unique_ptr<LiveCamera> OpenForSingleExposures(const std::string& rig,
+                                                   const std::vector<double>& at,
+                                                   double exposure_ms, double time_scale,
+                                                   std::ostream& err) {
+  LiveCameraOptions options;
+  options.rig_spec = rig;
+  options.at = at;
+  options.time_scale = time_scale;
+  options.first_exposure_us = exposure_ms * 1000.0;
+  options.longest_exposure_us = exposure_ms * 1000.0;
+  return std::make_unique<LiveCamera>(options, err);
+}
+
+// One exposure after another on a live camera (snap, view without a model, view's whole sensor).
 class SingleExposure {
  public:
-  SingleExposure(const std::string& rig, const std::vector<double>& at, double exposure_ms,
-                 double time_scale, std::ostream& err) {
-    LiveCameraOptions options;
-    options.rig_spec = rig;
-    options.at = at;
-    options.time_scale = time_scale;
-    options.first_exposure_us = exposure_ms * 1000.0;
-    options.longest_exposure_us = exposure_ms * 1000.0;
-    live_ = std::make_unique<LiveCamera>(options, err);
+  SingleExposure(LiveCamera& live, double exposure_ms) : live_(live) {
     BracketOptions bracket;
     // BracketCapture takes a reference and at least one measurement: two frames at the same
     // exposure, the second one shown (it also skips a first frame after an idle stream).
     bracket.exposures_us = {exposure_ms * 1000.0, exposure_ms * 1000.0};
-    bracket.trigger_source = live_->trigger_source();
-    bracket.frame_timeout = std::chrono::milliseconds(live_->frame_timeout_ms());
-    capture_ = std::make_unique<BracketCapture>(live_->camera(), bracket);
+    bracket.trigger_source = live.trigger_source();
+    bracket.frame_timeout = std::chrono::milliseconds(live.frame_timeout_ms());
+    capture_ = std::make_unique<BracketCapture>(live.camera(), bracket);
   }
   cv::Mat Next() {
-    BracketResult result = capture_->Capture(live_->Trigger());
-    if (!result.complete) result = capture_->Capture(live_->Trigger());
+    BracketResult result = capture_->Capture(live_.Trigger());
+    if (!result.complete) result = capture_->Capture(live_.Trigger());
     if (!result.complete) throw CameraError("no frame twice: " + result.failure);
     return result.frames.back().image;
   }
-  LiveCamera& live() { return *live_; }
 
  private:
-  std::unique_ptr<LiveCamera> live_;
+  LiveCamera& live_;
   std::unique_ptr<BracketCapture> capture_;
 };
 
@@ -181,49 +189,180 @@ cv::Mat PreviewImage(const cv::Mat& image, const Features& f, int bit_depth) {
 struct ViewFrame {
   cv::Mat image;
   Features features;
+  std::optional<cv::Rect> roi;  // the rig's ROI drawn on a whole-sensor frame
+  FocusFigure focus;
   std::vector<std::string> lines;
 };
 
-constexpr const char* kKeysLine = "keys: q or Esc quit, s save a screenshot (view-N.png)";
+constexpr const char* kKeysLine =
+    "keys: q or Esc quit, w whole sensor / ROI, s save a screenshot (view-N.png)";
 
-// Shows frames from `next` until q/Esc, or `frames` frames; saves the last view to `screenshot`.
-void ViewLoop(const std::function<ViewFrame()>& next, int bit_depth, const ViewArgs& args,
-              std::ostream& out) {
+// The rig's roi_px, in the whole sensor's pixels.
+cv::Rect RigRoi(const Rig& rig) {
+  const CameraConfig& c = rig.camera;
+  return {c.roi_offset_x, c.roi_offset_y, c.roi_width, c.roi_height};
+}
+
+// Which region is shown, and how to switch.
+std::string RegionLine(const Rig& rig, const cv::Mat& image, bool whole) {
+  std::ostringstream line;
+  if (rig.camera.FullFrame()) {
+    line << "whole sensor " << image.cols << " x " << image.rows << " px (the rig has no roi_px)";
+  } else if (whole) {
+    const cv::Rect r = RigRoi(rig);
+    line << "whole sensor " << image.cols << " x " << image.rows << " px, the rig's roi_px ["
+         << r.x << ", " << r.y << ", " << r.width << ", " << r.height
+         << "] in cyan (w: back to the ROI)";
+  } else {
+    const cv::Rect r = RigRoi(rig);
+    line << "roi_px [" << r.x << ", " << r.y << ", " << r.width << ", " << r.height
+         << "] (w: the whole sensor, to aim)";
+  }
+  return line.str();
+}
+
+// The saturation advice (none when no pixel saturates); `remedy` is the flag that helps.
+std::string SaturationLine(const Features& f, const std::string& remedy) {
+  if (f.saturated_pixels == 0) return "";
+  return std::to_string(f.saturated_pixels) + " saturated pixels (magenta): " + remedy;
+}
+
+// Where view's frames come from, ROI or whole sensor: single exposures without a model; with one,
+// the live estimate on the ROI and single exposures (estimates paused) on the whole sensor.
+class ViewSource {
+ public:
+  ViewSource(LiveCamera& live, double exposure_ms, MeasureSession* session,
+             const CalibrationModel* model)
+      : live_(live), single_(live, exposure_ms), session_(session),
+        focus_(model != nullptr ? &model->blur_calibration : nullptr) {}
+  void SetWholeSensor(bool whole) {
+    if (live_.rig().camera.FullFrame()) return;  // nothing to toggle
+    live_.SetWholeSensor(whole);
+    whole_ = whole;
+  }
+  ViewFrame Next(double exposure_ms) {
+    ViewFrame frame;
+    if (session_ != nullptr && !whole_) {
+      const MeasureSample s = session_->Next(Elapsed());
+      frame.image = session_->last_image();
+      frame.features = session_->last_features();
+      frame.lines.push_back(MeasureLine(s));
+      if (s.have_estimate && s.estimate.ok) last_d_mm_ = s.estimate.d_mm;
+    } else {
+      frame.image = single_.Next();
+      frame.features = FrameFeatures(frame.image, live_.bit_depth(), FeatureOptions{});
+      char exposure[96];
+      std::snprintf(exposure, sizeof(exposure), "exposure %.3g ms%s", exposure_ms,
+                    session_ != nullptr ? " (estimates paused on the whole sensor)" : "");
+      frame.lines.push_back(exposure);
+    }
+    if (whole_) frame.roi = RigRoi(live_.rig());
+    // The blur does not depend on the exposure: the last estimate's distance serves the whole
+    // sensor's frames too.
+    frame.focus = focus_.Add(frame.features, last_d_mm_);
+    frame.lines.push_back(RegionLine(live_.rig(), frame.image, whole_));
+    frame.lines.push_back(LevelLine(frame.features));
+    const std::string saturated = SaturationLine(
+        frame.features, session_ != nullptr && !whole_ ? "lower the IRED's current"
+                                                       : "shorten --exposure-ms or lower the "
+                                                         "IRED's current");
+    if (!saturated.empty()) frame.lines.push_back(saturated);
+    frame.lines.push_back(frame.focus.Line());
+    return frame;
+  }
+
+ private:
+  double Elapsed() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+  LiveCamera& live_;
+  SingleExposure single_;
+  MeasureSession* session_;
+  FocusTracker focus_;
+  bool whole_ = false;
+  double last_d_mm_ = 0.0;  // the last estimate's distance (0: none yet)
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+};
+
+// The window's drawable size (0 x 0 where the backend does not report it).
+cv::Size WindowImageSize(const std::string& window) {
+  try {
+    return cv::getWindowImageRect(window).size();
+  } catch (const cv::Exception&) {
+    return {};  // not every backend reports it
+  }
+}
+
+// The size view lays its image out to: 1024 x 720 at first, then the window's size once the user
+// resizes it (a change of the window's size between two frames that view did not ask for).
+class WindowFit {
+ public:
+  explicit WindowFit(std::string window) : window_(std::move(window)) {}
+  cv::Size Target() const { return target_; }
+  // After a frame is shown (`shown`, its image) and the window's events are handled.
+  void Shown(const cv::Mat& shown) {
+    if (frames_++ == 0) {
+      cv::resizeWindow(window_, shown.cols, shown.rows);
+      return;
+    }
+    const cv::Size now = WindowImageSize(window_);
+    if (now.width >= 320 && now.height >= 240 && seen_.area() > 0 && now != seen_) target_ = now;
+    seen_ = now;
+  }
+
+ private:
+  std::string window_;
+  cv::Size target_{1024, 720};
+  cv::Size seen_;
+  int frames_ = 0;
+};
+
+// Saves `shown` as the next view-N.png that does not exist (none is replaced).
+void SaveNumbered(const cv::Mat& shown, int* saved, std::ostream& out) {
+  std::string file;
+  std::error_code ec;
+  do {
+    file = "view-" + std::to_string((*saved)++) + ".png";
+  } while (fs::exists(fs::symlink_status(file, ec)));
+  WritePng(file, shown, "screenshot");
+  out << "Saved " << file << "\n";
+}
+
+// Shows frames until q/Esc, or `frames` frames; saves the last view to `screenshot`.
+void ViewLoop(ViewSource& source, int bit_depth, const ViewArgs& args, std::ostream& out) {
   const std::string window = "irdist view";
   OpenWindow(window, "view");
+  WindowFit fit(window);
+  bool whole = args.whole_sensor;
+  source.SetWholeSensor(whole);
   cv::Mat shown;
+  std::vector<std::string> last_lines;
   int saved = 0;
   for (int n = 0; args.frames <= 0 || n < args.frames; ++n) {
-    ViewFrame frame = next();
+    ViewFrame frame = source.Next(args.exposure_ms);
+    last_lines = frame.lines;
     frame.lines.push_back(kKeysLine);
-    shown = FrameOverlay(frame.image, bit_depth, &frame.features, frame.lines);
+    const ViewPanel panel{frame.image, bit_depth, &frame.features, frame.roi, frame.focus,
+                          frame.lines};
+    shown = ComposeView(panel, fit.Target());
     cv::imshow(window, shown);
     const int key = cv::waitKey(1);
+    fit.Shown(shown);
     if (key == 'q' || key == 27) break;
-    if (key == 's') {
-      std::string file;  // the next view-N.png that does not exist: none is replaced
-      std::error_code ec;
-      do {
-        file = "view-" + std::to_string(saved++) + ".png";
-      } while (fs::exists(fs::symlink_status(file, ec)));
-      WritePng(file, shown, "screenshot");
-      out << "Saved " << file << "\n";
-    }
+    if (key == 'w') source.SetWholeSensor(whole = !whole);
+    if (key == 's') SaveNumbered(shown, &saved, out);
   }
   if (!args.screenshot.empty() && !shown.empty()) WritePng(args.screenshot, shown, "screenshot");
   cv::destroyWindow(window);
+  // What the last frame showed, for the terminal (and a log): estimate, region, level, focus.
+  for (const std::string& line : last_lines) out << line << "\n";
 }
 
-}  // namespace
-
-namespace {
-
 // The camera's refusal of the exposure, in snap's terms (its exposure is --exposure-ms).
-cv::Mat SnapFrame(const SnapArgs& args, std::ostream& err, std::unique_ptr<SingleExposure>* cam) {
+cv::Mat SnapFrame(const SnapArgs& args, std::ostream& err, std::unique_ptr<LiveCamera>* live) {
   try {
-    *cam = std::make_unique<SingleExposure>(args.rig, args.at, args.exposure_ms,
-                                            args.time_scale, err);
-    return (*cam)->Next();
+    *live = OpenForSingleExposures(args.rig, args.at, args.exposure_ms, args.time_scale, err);
+    return SingleExposure(**live, args.exposure_ms).Next();
   } catch (const CameraError& e) {
     const std::string what = e.what();
     if (what.find("exposure") == std::string::npos) throw;
@@ -240,16 +379,16 @@ void RunSnap(const SnapArgs& args, CommandIo io) {
   const std::string preview = PreviewPath(args.out);
   CheckPngOutput(args.out, args.force, "--out");
   CheckPngOutput(preview, args.force, "--out (its preview)");
-  std::unique_ptr<SingleExposure> camera;
-  const cv::Mat image = SnapFrame(args, io.err, &camera);
+  std::unique_ptr<LiveCamera> live;
+  const cv::Mat image = SnapFrame(args, io.err, &live);
   WritePng(args.out, image, "frame");
-  const int bit_depth = camera->live().bit_depth();
+  const int bit_depth = live->bit_depth();
   const Features f = FrameFeatures(image, bit_depth, FeatureOptions{});
   WritePng(preview, PreviewImage(image, f, bit_depth), "preview");
   io.out << "Frame: " << args.out << " (" << image.cols << " x " << image.rows << ", "
          << bit_depth << " bit)\n";
   io.out << "Preview: " << preview << " (8 bit, black = background, white = brightest pixel)\n";
-  PrintSnap(f, camera->live().rig(), image, args.exposure_ms, io.out);
+  PrintSnap(f, live->rig(), image, args.exposure_ms, io.out);
   io.out << LevelLine(f) << "\n";
 }
 
@@ -265,32 +404,16 @@ void RunView(const ViewArgs& args, CommandIo io) {
     measure.time_scale = args.time_scale;
     measure.json = true;  // no progress chatter from the rig on stderr
     MeasureSession session(measure, model, io);
-    const auto t0 = std::chrono::steady_clock::now();
-    ViewLoop(
-        [&] {
-          const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          const MeasureSample s = session.Next(t);
-          return ViewFrame{session.last_image(), session.last_features(),
-                           {MeasureLine(s), LevelLine(session.last_features())}};
-        },
-        session.bit_depth(), args, io.out);
+    ViewSource source(session.live(), args.exposure_ms, &session, &model);
+    ViewLoop(source, session.bit_depth(), args, io.out);
+    source.SetWholeSensor(false);
     session.Finish();
     return;
   }
-  SingleExposure camera(args.rig, args.at, args.exposure_ms, args.time_scale, io.err);
-  const int bit_depth = camera.live().bit_depth();
-  ViewLoop(
-      [&] {
-        ViewFrame frame;
-        frame.image = camera.Next();
-        frame.features = FrameFeatures(frame.image, bit_depth, FeatureOptions{});
-        char exposure[64];
-        std::snprintf(exposure, sizeof(exposure), "exposure %.3g ms", args.exposure_ms);
-        frame.lines = {exposure,
-                       LevelLine(frame.features)};
-        return frame;
-      },
-      bit_depth, args, io.out);
+  const std::unique_ptr<LiveCamera> live =
+      OpenForSingleExposures(args.rig, args.at, args.exposure_ms, args.time_scale, io.err);
+  ViewSource source(*live, args.exposure_ms, nullptr, nullptr);
+  ViewLoop(source, live->bit_depth(), args, io.out);
 }
 
 }  // namespace irdist

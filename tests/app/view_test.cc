@@ -1,12 +1,10 @@
 // snap and view on the virtual rig (in process, GIGE): snap writes the frame and finds the blob
 // where the rig's physics puts it; view refuses without a display and, under Xvfb when the
-// machine has it, shows the live image with its overlay (checked on a screenshot).
+// machine has it, shows the live image with its overlay, the whole sensor with the ROI drawn and
+// saturated pixels marked (checked on screenshots).
 #include "app/view.h"
 
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -15,15 +13,16 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <thread>
 
 #include "app/errors.h"
 #include "acquisition/camera.h"
 #include "app/show.h"
+#include "app/view_layout.h"
 #include "tests/loopback_gvcp.h"
-
-extern char** environ;
+#include "tests/xvfb.h"
 
 namespace irdist {
 namespace {
@@ -160,65 +159,71 @@ TEST(View, WithoutADisplaySaysSo) {
   EXPECT_THROW(RunView(args, {out, err}), DisplayError);
 }
 
-// Xvfb on display :97 for the life of the object (skips when the machine has no Xvfb).
-class Xvfb {
- public:
-  Xvfb() {
-    for (const char* path : {"/usr/bin/Xvfb", "/usr/local/bin/Xvfb"}) {
-      if (fs::exists(path)) binary_ = path;
-    }
-    if (binary_.empty()) return;
-    std::vector<std::string> words = {binary_, ":97", "-screen", "0", "1024x768x24", "-nolisten",
-                                      "tcp"};
-    std::vector<char*> argv;
-    for (std::string& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    if (posix_spawn(&pid_, binary_.c_str(), nullptr, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    std::this_thread::sleep_for(std::chrono::seconds(1));
-  }
-  ~Xvfb() {
-    if (pid_ > 0) {
-      kill(pid_, SIGTERM);
-      waitpid(pid_, nullptr, 0);
-    }
-  }
-  Xvfb(const Xvfb&) = delete;
-  Xvfb& operator=(const Xvfb&) = delete;
-  bool running() const { return pid_ > 0; }
+int CountColour(const cv::Mat& bgr, const cv::Scalar& colour) {
+  cv::Mat mask;
+  cv::inRange(bgr, colour, colour, mask);
+  return cv::countNonZero(mask);
+}
 
- private:
-  std::string binary_;
-  pid_t pid_ = -1;
-};
+// The one Xvfb of this test process: OpenCV's window system connects to one display for the
+// process's life, so every view here shares it (stopped at exit).
+const testing::Xvfb& SharedXvfb() {
+  static const testing::Xvfb xvfb;
+  return xvfb;
+}
 
-TEST(View, ShowsTheLiveImageWithItsOverlayUnderXvfb) {
-  Xvfb xvfb;
-  if (!xvfb.running()) GTEST_SKIP() << "no Xvfb on this machine";
-  setenv("DISPLAY", ":97", 1);
+// view for `frames` frames under Xvfb; the screenshot, or an empty image (no Xvfb).
+cv::Mat ViewUnderXvfb(const std::string& name, ViewArgs args, std::string* output) {
+  if (!SharedXvfb().running()) return {};
+  setenv("DISPLAY", SharedXvfb().display().c_str(), 1);
   testing::LoopbackGvcpLock lock;
-  const std::string shot = Scratch("xvfb") + "/view.png";
-  ViewArgs args;
+  const std::string shot = Scratch(name) + "/view.png";
   args.rig = VirtualRig();
-  args.at = {2000.0, 20.0, 0.0, 490.0};
-  args.frames = 5;
   args.time_scale = 50.0;
   args.screenshot = shot;
   std::ostringstream out, err;
   RunView(args, {out, err});
-  const cv::Mat image = cv::imread(shot, cv::IMREAD_COLOR);
+  *output = out.str();
+  return cv::imread(shot, cv::IMREAD_COLOR);
+}
+
+TEST(View, ShowsTheLiveImageWithItsOverlayUnderXvfb) {
+  ViewArgs args;
+  args.at = {2000.0, 20.0, 0.0, 490.0};
+  args.frames = 5;
+  std::string output;
+  const cv::Mat image = ViewUnderXvfb("xvfb", args, &output);
+  if (!SharedXvfb().running()) GTEST_SKIP() << "no Xvfb on this machine";
   ASSERT_FALSE(image.empty());
-  EXPECT_EQ(image.cols, 768);  // the 256 px ROI, enlarged 3x for display
-  // The ellipse is drawn in red and the window of the features in green around the centre.
-  int red = 0, green = 0;
-  for (int y = 0; y < image.rows; ++y) {
-    for (int x = 0; x < image.cols; ++x) {
-      const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
-      red += p[2] == 255 && p[1] == 0 && p[0] == 0;
-      green += p[1] == 255 && p[2] == 0 && p[0] == 0;
-    }
-  }
-  EXPECT_GT(red, 20);
-  EXPECT_GT(green, 20);
+  EXPECT_LE(image.cols, 1024);  // laid out to the window, within the 1024 x 768 screen
+  EXPECT_LE(image.rows, 768);
+  // The ellipse is drawn in red and the window of the features in green around the centre; no
+  // pixel saturates at this pose, and the ROI is shown (no cyan outline).
+  EXPECT_GT(CountColour(image, kEllipseColour), 20);
+  EXPECT_GT(CountColour(image, kWindowColour), 20);
+  EXPECT_EQ(CountColour(image, kSaturatedColour), 0);
+  EXPECT_EQ(CountColour(image, kRoiColour), 0);
+  // On exit view states what it showed last: the region and the focus figure (no model: the
+  // edge width).
+  EXPECT_NE(output.find("roi_px [512, 384, 256, 256]"), std::string::npos) << output;
+  EXPECT_NE(output.find("focus: edge width"), std::string::npos) << output;
+}
+
+TEST(View, WholeSensorDrawsTheRoiAndMarksSaturatedPixels) {
+  ViewArgs args;
+  args.at = {1500.0, 0.0, 0.0, 600.0};
+  args.exposure_ms = 80.0;  // the IRED saturates the camera at 1.5 m, full current, 80 ms
+  args.whole_sensor = true;
+  args.frames = 3;
+  std::string output;
+  const cv::Mat image = ViewUnderXvfb("whole", args, &output);
+  if (!SharedXvfb().running()) GTEST_SKIP() << "no Xvfb on this machine";
+  ASSERT_FALSE(image.empty());
+  EXPECT_GT(CountColour(image, kRoiColour), 400);        // the rig's roi_px outline
+  EXPECT_GT(CountColour(image, kSaturatedColour), 10);   // the saturated blob
+  EXPECT_NE(output.find("whole sensor 1280 x 1024"), std::string::npos) << output;
+  EXPECT_NE(output.find("saturated pixels (magenta)"), std::string::npos) << output;
+  EXPECT_NE(output.find("shorten --exposure-ms"), std::string::npos) << output;
 }
 
 }  // namespace

@@ -4,8 +4,8 @@
 // of docs/measure.md, --count and Ctrl-C stopping cleanly, --record + playback reproducing
 // estimates.csv byte for byte, 3D at a lateral offset, and a model from another camera setup
 // refused by measure, validate and playback unless --allow-model-mismatch; estimates.csv on disk
-// as it is made (kill -9), a JSON reader that goes away (| head -n 2) and a recording's disk
-// budget.
+// as it is made (kill -9), a JSON reader that goes away (| head -n 2), a recording's disk
+// budget, and view with the model (the focus against the calibrated blur) under Xvfb.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <yaml-cpp/yaml.h>
@@ -30,6 +30,7 @@
 #include "tests/integration/measure_helpers.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
+#include "tests/xvfb.h"
 
 namespace irdist {
 namespace {
@@ -616,6 +617,45 @@ TEST_F(Measure, ModelOfAnotherCameraSetupIsRefusedUnlessOverridden) {
                       *dir_ + "/val-allowed.log", &output),
             0)
       << output;
+}
+
+// view with the model under Xvfb: the live estimate, and the focus figure against the calibrated
+// blur at the estimated distance (the optics have not changed: near 0%); with --whole-sensor the
+// estimates pause and the rig's ROI is drawn.
+TEST_F(Measure, ViewWithTheModelComparesTheFocusWithTheCalibration) {
+  testing::Xvfb xvfb;
+  if (!xvfb.running()) GTEST_SKIP() << "no Xvfb on this machine";
+  setenv("DISPLAY", xvfb.display().c_str(), 1);
+  std::string output;
+  const std::string shot = *dir_ + "/view-model.png";
+  fs::remove(shot);
+  {
+    testing::LoopbackGvcpLock lock;
+    ASSERT_EQ(RunIrdist({"view", "--model", Model(), "--time-scale", kTimeScale, "--at",
+                         "2000,10,0,490", "--frames", "6", "--screenshot", shot},
+                        *dir_ + "/view-model.log", &output),
+              0)
+        << output;
+  }
+  EXPECT_TRUE(fs::exists(shot));
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(output, m,
+                                std::regex(R"(focus: blur ([0-9.]+) px, calibrated ([0-9.]+) px at )"
+                                           R"(([0-9]+) mm: ([-+][0-9]+)%)")))
+      << output;
+  EXPECT_NEAR(std::stod(m[3]), 2000.0, 40.0) << output;  // the estimate's distance
+  EXPECT_LE(std::abs(std::stoi(m[4])), 10) << output;     // as calibrated, within the noise
+  EXPECT_NE(output.find(" mm"), std::string::npos) << output;  // the estimate's line
+  {
+    testing::LoopbackGvcpLock lock;
+    ASSERT_EQ(RunIrdist({"view", "--model", Model(), "--time-scale", kTimeScale, "--at",
+                         "2000,10,0,490", "--frames", "2", "--whole-sensor"},
+                        *dir_ + "/view-model-whole.log", &output),
+              0)
+        << output;
+  }
+  EXPECT_NE(output.find("estimates paused on the whole sensor"), std::string::npos) << output;
+  EXPECT_NE(output.find("whole sensor 1280 x 1024"), std::string::npos) << output;
 }
 
 }  // namespace
