@@ -426,6 +426,59 @@ std::string WriteCalibrationReport(const RecordingReader& reader,
                      CalibrationPlots(CalibrationPointsOf(model, samples), model));
 }
 
+// The most calibration frames the crosstalk's split is fitted on (spread over the recording).
+constexpr std::size_t kCrosstalkFrames = 32;
+
+// The split of the calibrated blur into optics and crosstalk (estimator/blob_fit.h FitBlurSplit), from up to kCrosstalkFrames usable measurement frames spread over the
+// recording, each with the geometric model's blur at its distance; only where the estimates use
+// the blob fit.
+void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& features,
+                        CalibrationModel* model, std::ostream& out) {
+  std::vector<const FrameRecord*> rows;
+  for (const FrameRecord& row : reader.rows()) {
+    const auto f = features.find(row.index);
+    if (row.role == FrameRole::kMeasurement && f != features.end() && f->second.Usable()) {
+      rows.push_back(&row);
+    }
+  }
+  std::vector<CrosstalkFrame> frames;
+  const std::size_t stride = std::max<std::size_t>(1, rows.size() / kCrosstalkFrames);
+  for (std::size_t i = 0; i < rows.size() && frames.size() < kCrosstalkFrames; i += stride) {
+    const Features& f = features.at(rows[i]->index);
+    const double d_mm = model->geometric.DistanceMm(f.moment_major_var_px2);
+    if (!std::isfinite(d_mm) || d_mm <= 0.0) continue;
+    frames.push_back({reader.LoadImage(*rows[i]), reader.header().bit_depth, f,
+                      BlobFitBlurVarPx2(*model, d_mm)});
+  }
+  const BlurSplit split = FitBlurSplit(frames);
+  model->blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
+  out << "  blur split: " << split.crosstalk_var_px2
+      << " px^2 after the pixels (crosstalk), the rest before them (optics); from " << split.frames
+      << " frames\n";
+}
+
+// The second pass of a calibration whose estimates use the blob fit: every frame's size from the
+// blob fit with the first pass's calibrated blur and split (what measurement computes), and the
+// models fitted again on those sizes, so the distance reads the size as measurement measures it
+// (any smooth difference between the moments and the fit calibrates out).
+CalibrationModel RefitOnBlobFitSizes(const RecordingReader& reader, const FeatureMap& features,
+                                     const FeatureOptions& feature_options,
+                                     const FitOptions& fit_options, const CalibrationModel& first,
+                                     std::ostream& out) {
+  FeatureMap refined = features;
+  int replaced = 0;
+  for (const FrameRecord& row : reader.rows()) {
+    const auto f = refined.find(row.index);
+    if (f == refined.end() || !f->second.Usable()) continue;
+    replaced += RefineWithBlobFit(reader.LoadImage(row), reader.header().bit_depth, first,
+                                  &f->second);
+  }
+  CalibrationModel model = Fit(SamplesFromRecording(reader, refined), feature_options, fit_options);
+  model.blur_calibration = first.blur_calibration;  // measured on the frames, unchanged
+  out << "  sizes from the blob fit on " << replaced << " frames; models fitted again on them\n";
+  return model;
+}
+
 }  // namespace
 
 CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
@@ -439,6 +492,10 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   FitOptions fit_options;
   fit_options.models = DeterminedModels(reader, samples, usable, fit_options, out);
   CalibrationModel model = Fit(samples, feature_options, fit_options);
+  if (feature_options.blob_fit && model.geometric.fitted() && model.blur_calibration.fitted()) {
+    CalibrateCrosstalk(reader, features, &model, out);
+    model = RefitOnBlobFitSizes(reader, features, feature_options, fit_options, model, out);
+  }
   model.provenance = ProvenanceOfRecording(reader);
   SaveModel(model, model_path);
   PrintFitSummaries(model, model_path, out);

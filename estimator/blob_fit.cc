@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
+#include <boost/math/tools/minima.hpp>
 #include <ceres/tiny_solver.h>
 
 namespace irdist {
@@ -42,8 +44,9 @@ struct EdgeGeometry {
 // d Phi(z) / d (x, y, P11, P12, P22) at one pixel (PixelMean's model), by the chain rule through
 // q = (p - c)^T P (p - c), g = P (p - c), n = |g|, dist = (sqrt q - q) / n and the curvature
 // kappa = (n^2 tr P - g^T P g) / n^3.
-void DiscDerivatives(const double* v, const EdgeGeometry& e, double s, double* d) {
-  const double phi_over_s = std::exp(-0.5 * e.z * e.z) * 0.39894228040143267794 / s;
+// slope: the model's derivative along the edge's offset t = dist - shift kappa (SquareMean's).
+void DiscDerivatives(const double* v, const EdgeGeometry& e, double slope, double shift,
+                     double* d) {
   const double n2 = e.n * e.n, inv_n = 1.0 / e.n, inv_n3 = inv_n / n2;
   const double trace = v[2] + v[4];
   const double dq[5] = {-2.0 * e.gx, -2.0 * e.gy, e.dx * e.dx, 2.0 * e.dx * e.dy, e.dy * e.dy};
@@ -58,45 +61,147 @@ void DiscDerivatives(const double* v, const EdgeGeometry& e, double s, double* d
     const double dgpg = 2.0 * (e.pgx * dgx[k] + e.pgy * dgy[k]) + dgpg_p[k];
     const double dkappa =
         (2.0 * e.n * dn * trace + n2 * dtrace[k] - dgpg) * inv_n3 - 3.0 * e.kappa * dn * inv_n;
-    d[k] = phi_over_s * (ddist - 0.5 * s * s * dkappa);
+    d[k] = slope * (ddist - shift * dkappa);
   }
-}
-
-// The blurred disc's mean over the pixel at (x, y), relative to its amplitude, and, when d is
-// set, its derivatives along the centre and P (d[0..4]: x, y, P11, P12, P22), analytic: Phi of
-// the signed distance to the edge (to first order in the quadratic form, exact on a circle),
-// shifted inward by the edge's curvature kappa s^2 / 2 (the blurred edge of a disc of radius R
-// sits s^2 / (2R) inside it).
-// s: the blur sd with the pixel's spread folded in (kPixelSpreadVarPx2): one evaluation per pixel.
-// A pixel's projection on any direction has a variance that does not depend on the direction,
-// so a pixel integrates a blurred edge as a wider Gaussian does, up to its kurtosis, which is
-// symmetric across the edge and so leaves the edge, the size, in place.
-// A pixel more than 5 sd (Phi(-5) = 3e-7, against a 12-bit quantum of 2.4e-4) plus 0.5 px (the
-// first-order distance and the curvature's shift) from the edge is 1 or 0, with no derivative.
-double PixelMean(const double* v, double x, double y, double s, double* d) {
-  const double dx = x - v[0], dy = y - v[1];
-  const double gx = v[2] * dx + v[3] * dy, gy = v[3] * dx + v[4] * dy;  // g = P (p - c)
-  const double q = dx * gx + dy * gy;
-  const double n2 = gx * gx + gy * gy;
-  const double r = std::sqrt(q), n = std::sqrt(n2);
-  const double dist = (r - q) / n;
-  const double margin = 0.5 + 5.0 * s;
-  if (q < 0.09 || dist > margin || dist < -margin) {  // well inside (q < 0.09), or far from the edge
-    if (d != nullptr) std::fill(d, d + 5, 0.0);
-    return dist < 0.0 ? 0.0 : 1.0;
-  }
-  const double pgx = v[2] * gx + v[3] * gy, pgy = v[3] * gx + v[4] * gy;  // P g
-  const double trace = v[2] + v[4], gpg = gx * pgx + gy * pgy;
-  const double inv_n = 1.0 / n, inv_n3 = inv_n / n2;
-  const double kappa = (n2 * trace - gpg) * inv_n3;
-  const double z = (dist - 0.5 * kappa * s * s) / s;
-  if (d != nullptr) DiscDerivatives(v, {dx, dy, gx, gy, pgx, pgy, r, n, dist, kappa, z}, s, d);
-  return 0.5 * std::erfc(-z * 0.70710678118654752440);
 }
 
 struct Pixel {
   double x, y, value;
 };
+
+// How a pixel responds to the blurred disc (issue 20): the optical blur's sd before the pixels
+// sample the image, each pixel's square integrating it, then the inter-pixel crosstalk after the
+// sampling, a separable kernel on the pixel grid. A model that folds the pixel's square and the
+// crosstalk into one Gaussian before the sampling (the fit before issue 20) takes a sharp image's
+// sampled edge for a smooth one: the fitted size then swings with the edge's sub-pixel phase.
+// Integrated and spread in this order, the model's pixels are the camera's, whatever the mix.
+struct PixelResponse {
+  double optics_sd = 0.0;
+  std::vector<double> kernel;   // crosstalk, 1-D (applied along x, then y), odd, sums to 1
+  int reach = 0;                // the kernel's half width
+};
+
+// The sampled, normalised Gaussian of sd `sd` over |n| <= reach, and its variance.
+double SampledGaussian(double sd, int reach, std::vector<double>* kernel) {
+  kernel->assign(2 * reach + 1, 0.0);
+  double sum = 0.0, var = 0.0;
+  for (int n = -reach; n <= reach; ++n) {
+    const double w = std::exp(-0.5 * n * n / (sd * sd));
+    (*kernel)[n + reach] = w;
+    sum += w;
+    var += w * n * n;
+  }
+  for (double& w : *kernel) w /= sum;
+  return var / sum;
+}
+
+// The response for a blur of `blur_var_px2` per axis (pixel area included) of which
+// `crosstalk_var_px2` comes after the sampling. The crosstalk kernel is the sampled Gaussian whose
+// variance on the grid is crosstalk_var_px2 (its sd found by bisection: at small variances the
+// sampled Gaussian's variance falls below sd^2).
+PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2) {
+  PixelResponse r;
+  r.optics_sd = std::sqrt(std::max(blur_var_px2 - kPixelAreaVarPx2 - crosstalk_var_px2, 0.01));
+  r.kernel = {1.0};
+  if (!(crosstalk_var_px2 > 1e-6)) return r;
+  double low = 0.05, high = 3.0;
+  for (int i = 0; i < 50; ++i) {
+    const double sd = 0.5 * (low + high);
+    std::vector<double> k;
+    (SampledGaussian(sd, static_cast<int>(std::ceil(4.0 * sd)) + 1, &k) < crosstalk_var_px2
+         ? low
+         : high) = sd;
+  }
+  r.reach = static_cast<int>(std::ceil(4.0 * high)) + 1;
+  SampledGaussian(high, r.reach, &r.kernel);
+  return r;
+}
+
+double NormalCdf(double x) { return 0.5 * std::erfc(-x * 0.70710678118654752440); }
+double NormalPdf(double x) { return std::exp(-0.5 * x * x) * 0.39894228040143267794; }
+// Psi' = Phi and Lambda' = Psi: the first and second integrals of the normal CDF.
+double Psi(double x) { return x * NormalCdf(x) + NormalPdf(x); }
+double Lambda(double x) { return 0.5 * ((x * x + 1.0) * NormalCdf(x) + x * NormalPdf(x)); }
+
+// The mean of Phi((t + U) / sd) over a pixel's square, U the square's projection on the edge's
+// normal (nx, ny): the sum of two uniforms of widths |nx| and |ny|, in closed form through Lambda
+// (Psi when the edge runs along a pixel axis); its derivative along t into *slope.
+double SquareEdge(double t, double nx, double ny, double sd, double* slope) {
+  const double a = std::max(std::fabs(nx), std::fabs(ny));
+  const double b = std::min(std::fabs(nx), std::fabs(ny));
+  if (b < 1e-4) {  // one uniform of width a (~1)
+    const double hi = (t + 0.5 * a) / sd, lo = (t - 0.5 * a) / sd;
+    *slope = (NormalCdf(hi) - NormalCdf(lo)) / a;
+    return sd / a * (Psi(hi) - Psi(lo));
+  }
+  const double x[4] = {(t + 0.5 * (a + b)) / sd, (t + 0.5 * (a - b)) / sd,
+                       (t - 0.5 * (a - b)) / sd, (t - 0.5 * (a + b)) / sd};
+  const double c = sd / (a * b);
+  *slope = c * (Psi(x[0]) - Psi(x[1]) - Psi(x[2]) + Psi(x[3]));
+  return c * sd * (Lambda(x[0]) - Lambda(x[1]) - Lambda(x[2]) + Lambda(x[3]));
+}
+
+// The disc's mean over the pixel at (x, y) before crosstalk, and its derivatives into d[5]: the
+// optical edge integrated over the pixel's square as a straight edge (SquareEdge) at the signed
+// distance to the disc's edge, shifted inward by the curvature kappa times the blur's variance
+// over 2 (a disc of radius R blurred by sd s has its 50% edge s^2 / (2R) inside R) plus the
+// square's tangential variance (1/12) over 2, and widened to second order in the curvature.
+// The derivatives (analytic, the chain rule through q = (p - c)^T P (p - c), g = P (p - c), the
+// first-order distance and the curvature; DiscDerivatives) leave out the turn of the edge's
+// normal across the square and the widening's change: a few % of the slope, which moves the
+// fit's path, not its solution on an exact model. A pixel whose square lies far from the edge
+// (5 sd, Phi(-5) = 3e-7, plus the square's half diagonal and 0.5 px for the first-order distance)
+// is 1 or 0 at once.
+double SquareMean(const double* v, double x, double y, const PixelResponse& r, double* d) {
+  const double dx = x - v[0], dy = y - v[1];
+  const double gx = v[2] * dx + v[3] * dy, gy = v[3] * dx + v[4] * dy;  // g = P (p - c)
+  const double q = dx * gx + dy * gy;
+  const double n2 = gx * gx + gy * gy;
+  const double rq = std::sqrt(q), n = std::sqrt(n2);
+  const double dist = (rq - q) / n;
+  const double margin = 1.25 + 5.0 * r.optics_sd;
+  std::fill(d, d + 5, 0.0);
+  if (q < 0.09 || dist > margin || dist < -margin) return dist < 0.0 ? 0.0 : 1.0;
+  const double pgx = v[2] * gx + v[3] * gy, pgy = v[3] * gx + v[4] * gy;  // P g
+  // The curvature of the level set through the pixel, scaled to the disc's edge (the level sets
+  // of q are the edge scaled by sqrt q): the edge's own curvature bends the blur's reach.
+  const double kappa = (n2 * (v[2] + v[4]) - (gx * pgx + gy * pgy)) / (n2 * n);
+  const double kappa_edge = kappa * rq;
+  const double sd2 = r.optics_sd * r.optics_sd;
+  const double shift = 0.5 * sd2 + 0.5 * kPixelAreaVarPx2;
+  // To second order the curvature also widens the edge: the tangential offset Y (blur and square)
+  // moves it by kappa Y^2 / 2, whose variance kappa^2 var(Y^2) / 4 adds to the edge's (var(Y^2) =
+  // 2 sd^4 + sd^2 / 3 + 1/80 - 1/144 for a Gaussian of sd plus a uniform of width 1).
+  const double var_y2 = 2.0 * sd2 * sd2 + sd2 / 3.0 + 1.0 / 80.0 - 1.0 / 144.0;
+  const double sd = r.optics_sd * (1.0 + kappa_edge * kappa_edge * var_y2 / (8.0 * sd2));
+  double slope = 0.0;
+  const double value = SquareEdge(dist - shift * kappa_edge, gx / n, gy / n, sd, &slope);
+  // d kappa_edge = sqrt q d kappa + kappa d q / (2 sqrt q): the first through DiscDerivatives.
+  DiscDerivatives(v, {dx, dy, gx, gy, pgx, pgy, rq, n, dist, kappa, 0.0}, slope, shift * rq, d);
+  const double dq[5] = {-2.0 * gx, -2.0 * gy, dx * dx, 2.0 * dx * dy, dy * dy};
+  for (int k = 0; k < 5; ++k) d[k] -= slope * shift * kappa * dq[k] / (2.0 * rq);
+  return value;
+}
+
+// `in` (rows x cols, row-major) convolved with `kernel` along x (dx = 1) or y, keeping the valid
+// part: (rows x (cols - 2 reach)) or ((rows - 2 reach) x cols).
+std::vector<double> Convolve(const std::vector<double>& in, int rows, int cols,
+                             const std::vector<double>& kernel, bool along_x) {
+  const int reach = static_cast<int>(kernel.size() / 2);
+  const int out_rows = along_x ? rows : rows - 2 * reach;
+  const int out_cols = along_x ? cols - 2 * reach : cols;
+  const int stride = along_x ? 1 : cols;
+  std::vector<double> out(static_cast<size_t>(out_rows) * out_cols, 0.0);
+  for (int row = 0; row < out_rows; ++row) {
+    for (int col = 0; col < out_cols; ++col) {
+      const double* first = &in[static_cast<size_t>(row) * cols + col];
+      double acc = 0.0;
+      for (size_t k = 0; k < kernel.size(); ++k) acc += kernel[k] * first[k * stride];
+      out[static_cast<size_t>(row) * out_cols + col] = acc;
+    }
+  }
+  return out;
+}
 
 // Every pixel's residual, divided by its noise sd, and the analytic Jacobian, for
 // ceres::TinySolver (a dense Levenberg-Marquardt for a few parameters: the general ceres::Problem
@@ -109,9 +214,10 @@ class WindowResiduals {
   using Scalar = double;
   enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = kParams };
 
-  WindowResiduals(const std::vector<Pixel>& pixels, double edge_sd)
-      : pixels_(pixels), edge_sd_(edge_sd), inv_sd_(pixels.size()), mean_(pixels.size()),
-        d_mean_(pixels.size() * 5) {}
+  // `pixels`: the window's, row by row (cols x rows, BlobPixels).
+  WindowResiduals(const std::vector<Pixel>& pixels, int cols, int rows, PixelResponse response)
+      : pixels_(pixels), cols_(cols), rows_(rows), response_(std::move(response)),
+        inv_sd_(pixels.size()), mean_(pixels.size()), d_mean_(pixels.size() * 5) {}
   // Each pixel's noise variance (the residuals' weights, 1 / sd).
   void SetVariances(const std::vector<double>& var) {
     for (size_t i = 0; i < var.size(); ++i) inv_sd_[i] = 1.0 / std::sqrt(var[i]);
@@ -138,19 +244,37 @@ class WindowResiduals {
   }
 
  private:
+  // The model on the window grown by the crosstalk's reach (planes: the mean, then its five
+  // derivatives), each pixel's square integrated, then spread by the crosstalk onto the window.
   void Compute(const double* v) const {
-    const size_t n = pixels_.size();
+    const int reach = response_.reach;
+    const int cols = cols_ + 2 * reach, rows = rows_ + 2 * reach;
+    std::vector<std::vector<double>> planes(6, std::vector<double>(static_cast<size_t>(cols) * rows));
     double d[5];
-    for (size_t i = 0; i < n; ++i) {
-      mean_[i] = PixelMean(v, pixels_[i].x, pixels_[i].y, edge_sd_, d);
-      for (int k = 0; k < 5; ++k) d_mean_[k * n + i] = d[k];
+    for (int row = 0; row < rows; ++row) {
+      for (int col = 0; col < cols; ++col) {
+        const size_t i = static_cast<size_t>(row) * cols + col;
+        planes[0][i] = SquareMean(v, col - reach, row - reach, response_, d);
+        for (int k = 0; k < 5; ++k) planes[k + 1][i] = d[k];
+      }
+    }
+    const size_t n = pixels_.size();
+    for (int p = 0; p < 6; ++p) {
+      std::vector<double> spread = planes[p];
+      if (reach > 0) {
+        spread = Convolve(Convolve(spread, rows, cols, response_.kernel, true), rows, cols_,
+                          response_.kernel, false);
+      }
+      double* out = p == 0 ? mean_.data() : d_mean_.data() + (p - 1) * n;
+      std::copy(spread.begin(), spread.end(), out);
     }
     std::copy(v, v + kParams, at_);
     computed_ = true;
   }
 
   const std::vector<Pixel>& pixels_;
-  double edge_sd_;
+  int cols_, rows_;
+  PixelResponse response_;
   std::vector<double> inv_sd_;
   // The last point computed and its model (TinySolver holds the functor const).
   mutable std::vector<double> mean_, d_mean_;
@@ -178,19 +302,19 @@ bool StartFromMoments(const Features& f, double blur_var_px2, cv::Point origin, 
 
 // The pixels of a square around the blob reaching 4 blur sigmas + 2 px beyond its major semi-axis.
 std::vector<Pixel> BlobPixels(const cv::Mat& image, int bit_depth, const Features& f,
-                              double blur_var_px2, cv::Point* origin) {
+                              double blur_var_px2, cv::Rect* window) {
   const double half = 2.0 * std::sqrt(std::max(f.moment_major_var_px2, 0.0)) +
                       4.0 * std::sqrt(blur_var_px2) + 2.0;
   const cv::Rect box(cvRound(f.ellipse_moments.center_px.x - half),
                      cvRound(f.ellipse_moments.center_px.y - half), cvRound(2 * half) + 1,
                      cvRound(2 * half) + 1);
   const cv::Rect inside = box & cv::Rect(0, 0, image.cols, image.rows);
-  *origin = inside.tl();
+  *window = inside;
   const double scale = 1.0 / ((1 << bit_depth) - 1);
   std::vector<Pixel> out;
   for (int row = inside.y; row < inside.br().y; ++row) {
     for (int col = inside.x; col < inside.br().x; ++col) {
-      out.push_back({static_cast<double>(col - origin->x), static_cast<double>(row - origin->y),
+      out.push_back({static_cast<double>(col - inside.x), static_cast<double>(row - inside.y),
                      image.at<std::uint16_t>(row, col) * scale});
     }
   }
@@ -281,39 +405,42 @@ double ReadVariance(const std::vector<Pixel>& pixels, const cv::Point2d& centre,
 
 }  // namespace
 
-double BlobEdgeValue(const double v[5], double x, double y, double edge_sd, double d[5]) {
-  return PixelMean(v, x, y, edge_sd, d);
+double BlobEdgeValue(const double v[5], double x, double y, double optics_sd, double d[5]) {
+  PixelResponse response;
+  response.optics_sd = optics_sd;
+  return SquareMean(v, x, y, response, d);
 }
 
-BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& features,
-                      double blur_var_px2) {
+// FitBlob with `passes` IRLS passes (1: the read noise's weights alone, for FitBlurSplit).
+BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features& features,
+                            double blur_var_px2, double crosstalk_var_px2, int passes) {
   BlobFitResult out;
   out.blur_var_px2 = blur_var_px2;
   const double gauss_var = blur_var_px2 - kPixelAreaVarPx2;
   if (!features.Usable() || !features.ellipse_moments.valid || image.type() != CV_16UC1 ||
-      !(gauss_var > 0.01)) {
+      !(gauss_var > 0.01) || !(crosstalk_var_px2 >= 0.0)) {
     return out;
   }
-  const double blur_sd = std::sqrt(gauss_var);
-  const double edge_sd = std::sqrt(gauss_var + kPixelSpreadVarPx2);  // PixelMean's s
-  cv::Point origin;
-  const std::vector<Pixel> pixels = BlobPixels(image, bit_depth, features, blur_var_px2, &origin);
+  // The optics keep at least a 0.1 px sd: the crosstalk cannot be the whole blur.
+  out.crosstalk_var_px2 = std::min(crosstalk_var_px2, gauss_var - 0.01);
+  cv::Rect window;
+  const std::vector<Pixel> pixels = BlobPixels(image, bit_depth, features, blur_var_px2, &window);
   double v[kParams];
-  if (!StartFromMoments(features, blur_var_px2, origin, v)) return out;
-  const double reach = 2.0 * std::sqrt(features.moment_major_var_px2) + 3.0 * blur_sd;
+  if (!StartFromMoments(features, blur_var_px2, window.tl(), v)) return out;
+  const double reach = 2.0 * std::sqrt(features.moment_major_var_px2) + 3.0 * std::sqrt(gauss_var);
   const double scale = 1.0 / ((1 << bit_depth) - 1);
   const double read_var = std::max(ReadVariance(pixels, {v[0], v[1]}, reach), scale * scale / 12.0);
-  WindowResiduals model(pixels, edge_sd);
+  WindowResiduals model(pixels, window.width, window.height,
+                        MakeResponse(blur_var_px2, out.crosstalk_var_px2));
   model.SetVariances(std::vector<double>(pixels.size(), read_var));
   bool ok = false;
   double chi2 = 0.0;
   double noise_var = std::numeric_limits<double>::quiet_NaN();
-  // IRLS, two passes: the read noise's weights, then the weights of the first pass's model (a
-  // third pass, weights from the second's, moved no figure: docs/estimator.md "The blob fit").
-  for (int pass = 0; pass < 2; ++pass) {
+  for (int pass = 0; pass < passes; ++pass) {
     chi2 = SolvePass(model, v, &ok, pass == 1 ? &noise_var : nullptr);
     if (!ok) return out;
-    if (pass == 0) model.SetVariances(NoiseVariances(pixels, model, v, read_var));
+    if (pass == 0) out.read_weighted_chi2 = chi2;
+    if (pass == 0 && passes > 1) model.SetVariances(NoiseVariances(pixels, model, v, read_var));
   }
   double p_small, p_large;  // 1/A^2, 1/B^2
   DiscEigenvalues(v, noise_var, false, &p_small, &p_large);
@@ -322,7 +449,7 @@ BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& featu
   out.anisotropy_noise_var = noise_var;
   DiscEigenvalues(v, noise_var, true, &p_small, &p_large);
   out.ok = p_small > 0.0 && out.raw_major_var_px2 > 0.0;
-  out.center_px = cv::Point2d(v[0] + origin.x, v[1] + origin.y);
+  out.center_px = cv::Point2d(v[0] + window.x, v[1] + window.y);
   out.major_var_px2 = 0.25 / p_small;
   out.minor_var_px2 = 0.25 / p_large;
   // The major axis is the eigenvector of P's smaller eigenvalue.
@@ -332,18 +459,76 @@ BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& featu
   return out;
 }
 
+BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& features,
+                      double blur_var_px2, double crosstalk_var_px2) {
+  // IRLS, two passes: the read noise's weights, then the weights of the first pass's model (a
+  // third pass, weights from the second's, moved no figure: docs/estimator.md "The blob fit").
+  return FitBlobPasses(image, bit_depth, features, blur_var_px2, crosstalk_var_px2, 2);
+}
+
+double BlobFitBlurVarPx2(const CalibrationModel& model, double d_mm) {
+  const BlurCalibration& b = model.blur_calibration;
+  return b.fitted() ? b.BlurVarPx2(d_mm) : model.geometric.BlurVarPx2(d_mm);
+}
+
 bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
                        Features* features) {
   const GeometricModel& g = model.geometric;
   if (!g.fitted() || !features->Usable()) return false;
   const double d_mm = g.DistanceMm(features->moment_major_var_px2);
   if (!std::isfinite(d_mm) || d_mm <= 0.0) return false;
-  const double blur = g.BlurVarPx2(d_mm);
-  const BlobFitResult fit = FitBlob(image, bit_depth, *features, blur);
+  const double blur = BlobFitBlurVarPx2(model, d_mm);
+  const BlobFitResult fit =
+      FitBlob(image, bit_depth, *features, blur, model.blur_calibration.crosstalk_var_px2);
   if (!fit.ok) return false;
   features->moment_major_var_px2 = fit.major_var_px2 + blur;
   features->moment_minor_var_px2 = fit.minor_var_px2 + blur;
   return true;
+}
+
+namespace {
+
+// The frames' summed first-pass cost with blur b + offset of which crosstalk_var comes after the
+// pixels; +inf when a frame's fit fails (no split may win by losing frames).
+double SplitCost(const std::vector<const CrosstalkFrame*>& frames, double crosstalk_var,
+                 double offset) {
+  double sum = 0.0;
+  for (const CrosstalkFrame* f : frames) {
+    const BlobFitResult fit = FitBlobPasses(f->image, f->bit_depth, f->features,
+                                            f->blur_var_px2 + offset, crosstalk_var, 1);
+    if (!fit.ok) return std::numeric_limits<double>::infinity();
+    sum += fit.read_weighted_chi2 * fit.pixels;
+  }
+  return sum;
+}
+
+// Brent's minimisation (Boost) of f over [low, high] to 2^-9 of the range.
+template <typename F>
+double Minimise(F f, double low, double high) {
+  if (!(high > low)) return low;
+  boost::uintmax_t iterations = 30;
+  return boost::math::tools::brent_find_minima(f, low, high, 9, iterations).first;
+}
+
+}  // namespace
+
+BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
+  BlurSplit split;
+  double min_blur = std::numeric_limits<double>::infinity();
+  std::vector<const CrosstalkFrame*> usable;
+  for (const CrosstalkFrame& f : frames) {
+    if (!f.features.Usable() || !(f.blur_var_px2 > kPixelAreaVarPx2 + 0.05)) continue;
+    usable.push_back(&f);
+    min_blur = std::min(min_blur, f.blur_var_px2);
+  }
+  split.frames = static_cast<int>(usable.size());
+  if (usable.empty()) return split;
+  // The optics keep at least 0.1 px of sd on every frame.
+  constexpr double kMinOpticsVarPx2 = 0.01;
+  const auto cost = [&usable](double c) { return SplitCost(usable, c, 0.0); };
+  const double best = Minimise(cost, 0.0, min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2);
+  split.crosstalk_var_px2 = cost(best) <= cost(0.0) ? best : 0.0;
+  return split;
 }
 
 }  // namespace irdist

@@ -17,6 +17,8 @@
 // so the calibrated geometric model, theta (kCalibratedBlur) and the fused solve use them as they
 // are. The distance for b(u) is the moments' geometric distance (b(u) changes slowly with d).
 
+#include <vector>
+
 #include <opencv2/core.hpp>
 
 #include "estimator/features.h"
@@ -38,26 +40,64 @@ struct BlobFitResult {
   double anisotropy_noise_var = 0.0;
   double angle_deg = 0.0;      // major axis direction, degrees from +x
   double blur_var_px2 = 0.0;   // the calibrated blur variance used (pixel area included)
+  double crosstalk_var_px2 = 0.0;  // the part of it after the sampling, as used
   double chi2_per_pixel = 0.0; // weighted residual sum of squares / pixels (~1 when the model fits)
+  // The same after the first pass, weighted by the read noise alone (FitBlurSplit compares it).
+  double read_weighted_chi2 = 0.0;
   int pixels = 0;
 };
 
 // Fits one frame's blob. image: the CV_16UC1 frame the features were computed on (bit_depth
 // significant bits); blur_var_px2: the blur variance per axis, pixel area included (> 1/12).
 // Returns ok = false when the features have no usable blob or the fit fails.
+// crosstalk_var_px2: the part of the blur that comes after the pixels sample the image
+// (inter-pixel crosstalk, charge diffusion), px^2 on the pixel grid; the rest, less the pixel's
+// area, is the optics' blur before them (BlurCalibration::crosstalk_var_px2, FitBlurSplit).
 BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& features,
-                      double blur_var_px2);
+                      double blur_var_px2, double crosstalk_var_px2 = 0.0);
 
-// The fit's model at one pixel (x, y): the blurred disc's value relative to its amplitude, and its
-// derivatives along v = (centre x, centre y, P11, P12, P22) into d[5] (zero where the pixel is
-// flat, 1 or 0). edge_sd: the edge's sd, the blur's with the pixel's spread folded in. Exposed
-// for its test (the analytic derivatives against finite differences).
-double BlobEdgeValue(const double v[5], double x, double y, double edge_sd, double d[5]);
+// The fit's model at one pixel (x, y) before crosstalk: the disc blurred by the optics' sd,
+// integrated over the pixel's square, relative to its amplitude, and its derivatives along
+// v = (centre x, centre y, P11, P12, P22) into d[5] (zero where the pixel is flat, 1 or 0).
+// Exposed for its test (the derivatives against finite differences).
+double BlobEdgeValue(const double v[5], double x, double y, double optics_sd, double d[5]);
 
-// The default path's hook: the calibrated blur b(u) at the moments' geometric distance, FitBlob,
-// and the features' moment variances replaced by the fit's (disc + b(u)). Leaves the features
+// The blur the blob fit is given at d_mm: the calibrated blur (BlurCalibration, measured on every
+// calibration frame from the blob's cumulants, crosstalk included) where the model has it, else
+// the geometric model's b(u).
+double BlobFitBlurVarPx2(const CalibrationModel& model, double d_mm);
+
+// The default path's hook: the blur (BlobFitBlurVarPx2) at the moments' geometric distance,
+// FitBlob with the model's crosstalk split, and the features' moment variances replaced by the
+// fit's (disc + that blur). The calibration fits its geometric model on these same sizes (a
+// second pass, app/offline.cc), so measurement and calibration see one size. Leaves the features
 // unchanged when the model has no geometric fit or the blob fit fails. Returns whether it replaced.
 bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
                        Features* features);
+
+// One calibration frame for FitBlurSplit: the frame, its features and the calibrated blur at
+// its distance (pixel area included).
+struct CrosstalkFrame {
+  cv::Mat image;  // CV_16UC1
+  int bit_depth = 12;
+  Features features;
+  double blur_var_px2 = 0.0;
+};
+
+// The split of the calibrated blur (issue 20): the variance (px^2) of the part that comes after
+// the pixels sample the image (inter-pixel crosstalk; the rest, less the pixel's area, is the
+// optics' before them), as the one that fits the frames best: the blob fit's first-pass
+// residuals summed over the frames, minimised by Brent's method (Boost). The edge's shape on the
+// pixels tells the two blurs apart where the optics are sharp (a sharp image spread after the
+// sampling is not a blurred one sampled); at 0.7 px of optics and more they shape the edge alike
+// and either split serves. The crosstalk is modelled as a sampled Gaussian: a kernel of another
+// shape with the same variance (a lattice random walk, the virtual rig's) reads smaller
+// (docs/estimator.md). 0 when no frame is usable or the optics alone fit best. About 15 one-pass
+// blob fits per frame: give it a few dozen frames across the calibrated distances.
+struct BlurSplit {
+  double crosstalk_var_px2 = 0.0;
+  int frames = 0;  // the frames that took part
+};
+BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);
 
 }  // namespace irdist

@@ -15,6 +15,10 @@ struct BlurCalibration {
   double noise_at_1m_px2 = 0.0;
   double noise_exponent = 0.0;
   int frames = 0;
+  // The part of the blur after the pixels sample the image (inter-pixel crosstalk), px^2, fitted
+  // from calibration frames by the blob fit (blob_fit.h FitBlurSplit); 0 = all of it before
+  // (optics), as in model files before it.
+  double crosstalk_var_px2 = 0.0;
   bool fitted() const { return noise_at_1m_px2 > 0.0; }
   double BlurVarPx2(double d_mm) const;
   double NoisePx2(double d_mm) const;

@@ -265,6 +265,11 @@ void ReadGeometricBlur(const Reader& rd, const YAML::Node& g, int version, Geome
   }
 }
 
+// An optional key: present and not null.
+bool Present(const YAML::Node& parent, const char* name) {
+  return parent[name].IsDefined() && !parent[name].IsNull();
+}
+
 // Format 4: the calibrated blur of the health check (blur_model.h); absent: no health check.
 void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
   if (!b.fitted()) return;
@@ -274,6 +279,7 @@ void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
   EmitDouble(out, "noise_at_1m_px2", b.noise_at_1m_px2);
   EmitDouble(out, "noise_exponent", b.noise_exponent);
   out << YAML::Key << "frames" << YAML::Value << b.frames;
+  if (b.crosstalk_var_px2 > 0.0) EmitDouble(out, "crosstalk_var_px2", b.crosstalk_var_px2);
   out << YAML::EndMap;
 }
 
@@ -293,6 +299,13 @@ void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
   b->noise_at_1m_px2 = rd.Scalar<double>(node, "blur_calibration", "noise_at_1m_px2");
   b->noise_exponent = rd.Scalar<double>(node, "blur_calibration", "noise_exponent");
   b->frames = rd.Scalar<int>(node, "blur_calibration", "frames");
+  if (Present(node, "crosstalk_var_px2")) {  // optional: absent = all of the blur is the optics'
+    b->crosstalk_var_px2 = rd.Scalar<double>(node, "blur_calibration", "crosstalk_var_px2");
+    if (!(b->crosstalk_var_px2 >= 0.0) || !(b->crosstalk_var_px2 < b->c0_px2 + 10.0)) {
+      rd.Fail(node["crosstalk_var_px2"], "blur_calibration.crosstalk_var_px2",
+              "must be >= 0 and below the blur itself (px^2)");
+    }
+  }
   if (!(b->noise_at_1m_px2 > 0.0) || !std::isfinite(b->noise_exponent)) {
     rd.Fail(node["noise_at_1m_px2"], "blur_calibration.noise_at_1m_px2",
             "must be > 0 with a finite noise_exponent");
@@ -388,11 +401,6 @@ void EmitThetaCorrection(YAML::Emitter& out, const ThetaCorrection& tc) {
       << tc.d_min_mm << tc.d_max_mm << YAML::EndSeq;
   EmitFit(out, tc.summary);
   out << YAML::EndMap;
-}
-
-// An optional key: present and not null.
-bool Present(const YAML::Node& parent, const char* name) {
-  return parent[name].IsDefined() && !parent[name].IsNull();
 }
 
 FeatureOptions ReadFeatures(const Reader& rd, const YAML::Node& root, int version) {

@@ -96,6 +96,7 @@ class SweepRenderer {
         renderer_.Render(c, ++frame_index_ + seed_ * 1000003ull, sim::PixelFormat::kMono12, origin,
                          frame);
         Features f = ComputeFeatures(frame, 12, fo);
+        if (keep_ != nullptr && k > 0) keep_->push_back({frame.clone(), 12, f, 0.0});
         if (refine != nullptr) RefineWithBlobFit(frame, 12, *refine, &f);  // every frame, as the app
         if (recoverer != nullptr) {
           stack.push_back(frame.clone());
@@ -113,6 +114,8 @@ class SweepRenderer {
     }
     return out;
   }
+  // Keeps every measurement frame of the next runs (frame and features; blur left 0).
+  void KeepFrames(std::vector<CrosstalkFrame>* keep) { keep_ = keep; }
   double JunctionSteadyK(double bias_ma) const {
     const auto& e = physics_.emitter;
     return e.thermal_resistance_k_per_w * bias_ma * 1e-3 * e.forward_voltage_v;
@@ -123,6 +126,7 @@ class SweepRenderer {
   sim::Renderer renderer_;
   std::uint64_t seed_;
   std::uint64_t frame_index_ = 0;
+  std::vector<CrosstalkFrame>* keep_ = nullptr;
 };
 
 struct Row {
@@ -355,6 +359,27 @@ std::vector<double> Range(double a, double b, double step) {
   std::vector<double> v;
   for (double x = a; x <= b + 1e-9; x += step) v.push_back(x);
   return v;
+}
+
+// The blob fit's split of the calibrated blur (optics before the pixels, crosstalk after them),
+// fitted on calibration frames as `irdist calibrate` does (app/offline.cc CalibrateCrosstalk):
+// 32 measurement frames over the calibrated distances and angles.
+void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipeline* pl) {
+  std::vector<Pose> poses;
+  for (double d : Range(1500, 3000, 500))
+    for (double th : {0.0, 10.0, 20.0, 30.0}) poses.push_back({d, th, 500.0, 0});
+  SweepRenderer sr(physics, seed + 17);
+  std::vector<CrosstalkFrame> frames;
+  sr.KeepFrames(&frames);
+  sr.Run(poses, {34, 36}, pl->features);
+  for (CrosstalkFrame& f : frames) {
+    const double d_mm = pl->model.geometric.DistanceMm(f.features.moment_major_var_px2);
+    f.blur_var_px2 = std::isfinite(d_mm) && d_mm > 0.0 ? BlobFitBlurVarPx2(pl->model, d_mm) : 0.0;
+  }
+  const BlurSplit split = FitBlurSplit(frames);
+  pl->model.blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
+  std::printf("calibration %-10s blur split: %.4f px^2 after the pixels (crosstalk), %d frames\n",
+              pl->name.c_str(), split.crosstalk_var_px2, split.frames);
 }
 
 // Per angle of Fig. 14: sd of d and of theta over the repetitions, and the mean error, for the
@@ -720,6 +745,16 @@ int Main(int argc, char** argv) {
     SweepRenderer sr(physics, seed);
     const auto brackets = sr.Run(calib, calib_t, pl.features);
     pl.model = Fit(Samples(brackets), pl.features, pl.fit);
+    if (pl.blob_fit) {
+      // As `irdist calibrate` (app/offline.cc): the split, then the models fitted again on the
+      // blob fit's own sizes of the calibration frames.
+      CalibrateBlurSplit(physics, seed, &pl);
+      SweepRenderer again(physics, seed);
+      const BlurCalibration blur = pl.model.blur_calibration;
+      pl.model = Fit(Samples(again.Run(calib, calib_t, pl.features, nullptr, &pl.model)),
+                     pl.features, pl.fit);
+      pl.model.blur_calibration = blur;
+    }
     if (!dump_theta.empty() && pl.name == "default") {
       // Per calibration frame: true pose, moment variances, theta0 without / with correction.
       FILE* out = std::fopen(dump_theta.c_str(), "w");
