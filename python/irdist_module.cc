@@ -18,11 +18,11 @@
 #include <vector>
 
 #include "acquisition/recording.h"
-#include "app/errors.h"
-#include "app/measure.h"
-#include "app/offline.h"
-#include "app/position.h"
-#include "app/recipe.h"
+#include "app/cli/errors.h"
+#include "app/inputs/recipe.h"
+#include "app/live/measure.h"
+#include "app/processing/position.h"
+#include "app/runs/offline.h"
 #include "base/utc_time.h"
 #include "estimator/model_file.h"
 

@@ -11,7 +11,7 @@
 #include <tuple>
 
 #include "acquisition/recording.h"
-#include "app/recipe.h"
+#include "app/inputs/recipe.h"
 #include "station/plan.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
