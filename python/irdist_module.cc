@@ -21,8 +21,9 @@
 #include "app/cli/errors.h"
 #include "app/inputs/recipe.h"
 #include "app/live/measure.h"
+#include "app/processing/bracket_estimates.h"
+#include "app/processing/frame_features.h"
 #include "app/processing/position.h"
-#include "app/runs/offline.h"
 #include "base/utc_time.h"
 #include "estimator/model_file.h"
 

@@ -1,8 +1,9 @@
 #pragma once
 // What every irdist command receives: its output streams and its parsed flags, one Args struct per
-// subcommand. A leaf header (no app/ include) so that each command family's header (run.h: live
-// runs, offline.h: fit/playback/check, tools.h: sim/devices, measure.h and view.h: the camera-only
-// commands, cli.h: parsing and dispatch) declares its own commands without including another's.
+// subcommand. A leaf header (no app/ include) so that each command family's header (runs/run.h:
+// live runs, runs/offline.h: fit/playback/check, devices/tools.h: sim/devices, live/measure.h and
+// live/view.h: the camera-only commands, cli/cli.h: parsing and dispatch) declares its own
+// commands without including another's.
 
 #include <iosfwd>
 #include <string>

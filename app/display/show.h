@@ -20,7 +20,7 @@ class RecordingReader;
 // An OpenCV window stepping through the recording's frames with the ROI, the ellipse and the
 // bracket's estimate drawn (any key: next frame, q or Esc: quit). Throws CameraError-free
 // irdist::Error (DisplayError) when no display is available.
-// `features` by frame index (app/runs/offline.h's FeatureMap).
+// `features` by frame index (app/processing/frame_features.h's FeatureMap).
 void ShowPlayback(const RecordingReader& reader, const std::map<std::int64_t, Features>& features,
                   const std::vector<EstimateRow>& estimates);
 

@@ -12,7 +12,7 @@
 #include "app/cli/errors.h"
 #include "app/devices/tools.h"
 #include "app/inputs/recipe.h"
-#include "app/runs/offline.h"
+#include "app/processing/frame_features.h"
 #include "sim/virtual_rig.h"
 #include "station/serial_transport.h"
 #include "station/station_client.h"

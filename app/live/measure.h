@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "app/cli/command_args.h"
+#include "app/processing/bracket_estimates.h"
 #include "app/reports/summary.h"
-#include "app/runs/offline.h"
 #include "estimator/estimate.h"
 #include "estimator/features.h"
 #include "estimator/health.h"

@@ -16,11 +16,12 @@
 #include <utility>
 
 #include "acquisition/bracket.h"
+#include "app/cli/errors.h"
 #include "app/display/show.h"
 #include "app/display/view_layout.h"
 #include "app/live/live_camera.h"
 #include "app/live/measure.h"
-#include "app/runs/offline.h"
+#include "app/processing/frame_features.h"
 #include "base/safe_file.h"
 #include "estimator/model_file.h"
 

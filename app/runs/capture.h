@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "app/processing/frame_features.h"
 #include "app/runs/bracket_committer.h"
-#include "app/runs/offline.h"
 #include "estimator/features.h"
 #include "station/pose.h"
 #include "station/trigger.h"
@@ -39,8 +39,8 @@ struct LiveCaptureSetup {
   std::string station_identity;
   std::string recipe_path, recipe_text, rig_path, rig_text;
   FeatureOptions feature_options;  // features of every frame, computed while it is in memory
-  // The model FrameFeatures refines them with (app/runs/offline.h BlobFitModelOf); null = moments.
-  // Must outlive the recorder.
+  // The model FrameFeatures refines them with (app/processing/frame_features.h BlobFitModelOf);
+  // null = moments. Must outlive the recorder.
   const CalibrationModel* blob_fit_model = nullptr;
 };
 
