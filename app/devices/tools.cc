@@ -11,9 +11,9 @@
 #include <thread>
 
 #include "acquisition/aravis_camera.h"
+#include "app/cli/stop_signal.h"
 #include "app/inputs/recipe.h"
 #include "app/inputs/rig.h"
-#include "app/runs/run.h"
 #include "sim/virtual_rig.h"
 
 namespace irdist {

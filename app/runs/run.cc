@@ -1,6 +1,5 @@
 #include "app/runs/run.h"
 
-#include <signal.h>
 #include <unistd.h>
 
 #include <yaml-cpp/yaml.h>
@@ -20,6 +19,7 @@
 #include <thread>
 
 #include "acquisition/recording.h"
+#include "app/cli/stop_signal.h"
 #include "app/devices/station_setup.h"
 #include "app/inputs/provenance.h"
 #include "app/inputs/recipe.h"
@@ -42,14 +42,7 @@ namespace irdist {
 
 namespace fs = std::filesystem;
 
-std::atomic<bool>& StopRequested() {
-  static std::atomic<bool> stop{false};
-  return stop;
-}
-
 namespace {
-
-extern "C" void OnStopSignal(int) { StopRequested().store(true); }
 
 constexpr const char* kSoftwareVersion = "irdist 0.1.0";
 
@@ -701,27 +694,6 @@ void RunSuggest(const PlanArgs& args, CommandIo io) {
   io.out << "Suggested bracket for " << recipe.path << " (probe run in " << dir << "):\n"
          << s.BriefReport();
   if (!s.feasible) throw SuggestError("no feasible exposures: " + s.reason);
-}
-
-struct SignalGuard::Saved {
-  struct sigaction interrupt {};
-  struct sigaction terminate {};
-};
-
-SignalGuard::SignalGuard() : saved_(new Saved) {
-  StopRequested().store(false);
-  struct sigaction action {};
-  action.sa_handler = OnStopSignal;
-  sigemptyset(&action.sa_mask);
-  action.sa_flags = SA_RESTART;
-  sigaction(SIGINT, &action, &saved_->interrupt);
-  sigaction(SIGTERM, &action, &saved_->terminate);
-}
-
-SignalGuard::~SignalGuard() {
-  sigaction(SIGINT, &saved_->interrupt, nullptr);
-  sigaction(SIGTERM, &saved_->terminate, nullptr);
-  delete saved_;
 }
 
 namespace {

@@ -12,32 +12,12 @@
 //   DIR/report/index.html
 // A resumed run keeps the earlier sessions' station logs as station.<n>.log.
 
-#include <atomic>
 #include <string>
 
 #include "app/cli/command_args.h"
 #include "app/cli/errors.h"
 
 namespace irdist {
-
-// Set by SIGINT/SIGTERM while a run's SignalGuard is alive; polled between poses.
-std::atomic<bool>& StopRequested();
-
-// Installs SIGINT/SIGTERM handlers that set StopRequested() (and clears it); restores the previous
-// handlers when destroyed.
-class SignalGuard {
- public:
-  SignalGuard();
-  ~SignalGuard();
-  SignalGuard(const SignalGuard&) = delete;
-  SignalGuard& operator=(const SignalGuard&) = delete;
-  SignalGuard(SignalGuard&&) = delete;
-  SignalGuard& operator=(SignalGuard&&) = delete;
-
- private:
-  struct Saved;
-  Saved* saved_;
-};
 
 // Throw InterruptedError after a Ctrl-C (recording closed as cut), RecipeError, CameraError,
 // LinkError, StationError, RecordingError, ModelFileError.

@@ -1,9 +1,8 @@
-// The run's signal handling: SIGINT/SIGTERM set the stop flag while a SignalGuard lives, and the
-// previous handlers come back after it; the probe recipe of plan --suggest.
+// The live runs: the probe recipe of plan --suggest, a run folder holding another run's results,
+// a bad --from refused before the probe.
 #include "app/runs/run.h"
 
 #include <gtest/gtest.h>
-#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -20,36 +19,6 @@
 
 namespace irdist {
 namespace {
-
-std::atomic<int> previous_calls{0};
-extern "C" void PreviousHandler(int) { previous_calls.fetch_add(1); }
-
-TEST(SignalGuardTest, SigintAndSigtermRequestAStopThenTheOldHandlersReturn) {
-  struct sigaction old_int {
-  }, old_term{}, mine{};
-  mine.sa_handler = PreviousHandler;
-  sigemptyset(&mine.sa_mask);
-  sigaction(SIGINT, &mine, &old_int);
-  sigaction(SIGTERM, &mine, &old_term);
-  {
-    SignalGuard guard;
-    EXPECT_FALSE(StopRequested().load());
-    raise(SIGINT);
-    EXPECT_TRUE(StopRequested().load());
-    StopRequested().store(false);
-    raise(SIGTERM);
-    EXPECT_TRUE(StopRequested().load());
-    EXPECT_EQ(previous_calls.load(), 0);
-  }
-  raise(SIGINT);
-  EXPECT_EQ(previous_calls.load(), 1);
-  {
-    SignalGuard guard;  // a new run starts with the flag cleared
-    EXPECT_FALSE(StopRequested().load());
-  }
-  sigaction(SIGINT, &old_int, nullptr);
-  sigaction(SIGTERM, &old_term, nullptr);
-}
 
 // The case: a lab folder named `lab #2` (a '#' starts a YAML comment when unquoted) and
 // a recipe name with ': '. The probe recipe reads back with the same rig file and the ends.
