@@ -9,6 +9,7 @@
 #include "acquisition/recording.h"
 #include "app/inputs/provenance.h"
 #include "app/inputs/recipe.h"
+#include "app/reports/calibration_plots.h"
 #include "app/reports/report.h"
 #include "estimator/model_file.h"
 #include "estimator/models.h"

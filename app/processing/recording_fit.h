@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "app/processing/frame_features.h"
-#include "app/reports/report.h"
+#include "app/reports/calibration_plots.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
 #include "estimator/response.h"

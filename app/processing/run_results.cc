@@ -9,6 +9,7 @@
 #include "app/processing/recording_fit.h"
 #include "app/reports/crb.h"
 #include "app/reports/report.h"
+#include "app/reports/validation_plots.h"
 
 namespace irdist {
 
