@@ -6,7 +6,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "app/display/show.h"
 #include "app/display/view_layout.h"
 

@@ -3,7 +3,7 @@
 #include <sstream>
 #include <vector>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "app/cli/errors.h"
 
 namespace irdist {

@@ -25,7 +25,7 @@
 #include <sstream>
 
 #include "acquisition/bracket.h"
-#include "acquisition/recording.h"
+#include "acquisition/recording_writer.h"
 #include "app/cli/errors.h"
 #include "app/cli/stop_signal.h"
 #include "app/inputs/provenance.h"

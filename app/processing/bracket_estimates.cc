@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "app/processing/position.h"
 #include "estimator/estimate.h"
 #include "estimator/health.h"
@@ -84,8 +84,9 @@ std::vector<EstimateRow> EmptyRows(const std::string& method, const EstimateRow&
 // `checks`, the bracket's calibration health and motion (from this method's rows) go there.
 void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& options,
                         const std::string& method, const EstimateRow& base,
-                        const std::vector<DifferencePair>& pairs, const FeatureMap& features, bool all_usable,
-                        std::vector<EstimateRow>* out, BracketEstimateRows* checks = nullptr) {
+                        const std::vector<DifferencePair>& pairs, const FeatureMap& features,
+                        bool all_usable, std::vector<EstimateRow>* out,
+                        BracketEstimateRows* checks = nullptr) {
   const FrameRecord& reference = *pairs.front().reference;
   std::vector<Features> measurements;
   std::vector<double> t_ms;

@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "acquisition/pixel_format.h"
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "estimator/blob_fit.h"
 
 namespace irdist {
@@ -81,13 +81,15 @@ void WriteFeaturesCsv(const std::string& path, const std::vector<FrameRecord>& r
     const EllipseFit& e = f.ellipse_moments.valid ? f.ellipse_moments : f.ellipse_contour;
     out << row.index << ',' << row.file << ',' << row.bracket_id << ',' << row.frame_in_bracket
         << ',' << FrameRoleName(row.role) << ',' << FeatureNumber(row.requested_exposure_us) << ','
-        << FeatureNumber(row.bias_ma_set) << ',' << FeatureNumber(row.slide_mm) << ',' << FeatureNumber(row.theta_deg) << ','
-        << (f.blob_found ? 1 : 0) << ',' << (f.Usable() ? 1 : 0) << ',' << f.saturated_pixels << ','
-        << (f.touches_border ? 1 : 0) << ',' << (f.blob_clipped_by_roi ? 1 : 0) << ',' << f.roi.x
-        << ',' << f.roi.y << ',' << f.roi.width << ',' << f.roi.height << ',' << f.roi_area_px
-        << ',' << FeatureNumber(f.background) << ',' << FeatureNumber(f.peak) << ',' << FeatureNumber(f.e_rel) << ','
-        << FeatureNumber(f.f00) << ',' << FeatureNumber(f.sigma) << ',' << FeatureNumber(f.centroid_px.x) << ','
-        << FeatureNumber(f.centroid_px.y) << ',' << FeatureNumber(e.major_px) << ',' << FeatureNumber(e.minor_px) << ','
+        << FeatureNumber(row.bias_ma_set) << ',' << FeatureNumber(row.slide_mm) << ','
+        << FeatureNumber(row.theta_deg) << ',' << (f.blob_found ? 1 : 0) << ','
+        << (f.Usable() ? 1 : 0) << ',' << f.saturated_pixels << ',' << (f.touches_border ? 1 : 0)
+        << ',' << (f.blob_clipped_by_roi ? 1 : 0) << ',' << f.roi.x << ',' << f.roi.y << ','
+        << f.roi.width << ',' << f.roi.height << ',' << f.roi_area_px << ','
+        << FeatureNumber(f.background) << ',' << FeatureNumber(f.peak) << ','
+        << FeatureNumber(f.e_rel) << ',' << FeatureNumber(f.f00) << ',' << FeatureNumber(f.sigma)
+        << ',' << FeatureNumber(f.centroid_px.x) << ',' << FeatureNumber(f.centroid_px.y) << ','
+        << FeatureNumber(e.major_px) << ',' << FeatureNumber(e.minor_px) << ','
         << FeatureNumber(e.angle_deg) << ',' << FeatureNumber(f.theta0_deg) << '\n';
   }
   std::ofstream file(path, std::ios::binary | std::ios::trunc);

@@ -17,7 +17,7 @@
 
 namespace irdist {
 
-// Forward declarations keep acquisition/recording.h out of the callers of this header.
+// Forward declarations keep acquisition/recording_reader.h out of the callers of this header.
 class RecordingReader;
 struct FrameRecord;
 struct RecordedBracket;

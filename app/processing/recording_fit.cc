@@ -6,7 +6,7 @@
 #include <sstream>
 #include <tuple>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "app/inputs/provenance.h"
 #include "app/inputs/recipe.h"
 #include "app/reports/calibration_plots.h"

@@ -3,7 +3,8 @@
 #include <ostream>
 #include <sstream>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_check.h"
+#include "acquisition/recording_reader.h"
 #include "app/cli/errors.h"
 #include "app/processing/bracket_estimates.h"
 #include "app/processing/recording_fit.h"

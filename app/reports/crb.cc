@@ -7,7 +7,7 @@
 #include <opencv2/core.hpp>
 #include <sstream>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "app/inputs/rig.h"
 #include "base/check.h"
 #include "sim/scene.h"

@@ -11,7 +11,7 @@
 #include <optional>
 #include <sstream>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "app/reports/calibration_plots.h"
 #include "base/process.h"
 #include "base/regular_file.h"

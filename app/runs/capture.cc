@@ -12,7 +12,8 @@
 
 #include "acquisition/aravis_camera.h"
 #include "acquisition/bracket.h"
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
+#include "acquisition/recording_writer.h"
 
 namespace irdist {
 

@@ -6,7 +6,9 @@
 #include <ostream>
 #include <set>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_check.h"
+#include "acquisition/recording_reader.h"
+#include "acquisition/recording_writer.h"
 #include "app/display/show.h"
 #include "app/inputs/provenance.h"
 #include "app/processing/bracket_estimates.h"

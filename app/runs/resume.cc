@@ -10,7 +10,7 @@
 #include <map>
 #include <sstream>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "app/cli/errors.h"
 #include "app/inputs/recipe.h"
 

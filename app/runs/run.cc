@@ -18,7 +18,7 @@
 #include <sstream>
 #include <thread>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "app/cli/stop_signal.h"
 #include "app/devices/station_setup.h"
 #include "app/inputs/provenance.h"

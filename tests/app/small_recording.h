@@ -15,7 +15,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_writer.h"
 #include "tests/integration/run_helpers.h"  // ReadAll
 
 namespace irdist::testing {

@@ -10,7 +10,8 @@
 #include <memory>
 #include <set>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_check.h"
+#include "acquisition/recording_reader.h"
 #include "app/reports/summary.h"
 #include "estimator/model_file.h"
 #include "tests/integration/measure_helpers.h"

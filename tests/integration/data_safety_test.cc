@@ -16,7 +16,7 @@
 #include <map>
 #include <set>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
 

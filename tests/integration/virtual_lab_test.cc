@@ -10,7 +10,7 @@
 #include <set>
 #include <tuple>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "app/inputs/recipe.h"
 #include "station/plan.h"
 #include "tests/integration/run_helpers.h"

@@ -5,7 +5,8 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
+#include "acquisition/recording_writer.h"
 #include "app/display/show.h"
 
 namespace irdist {

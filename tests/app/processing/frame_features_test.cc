@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "tests/app/small_recording.h"
 
 namespace irdist {

@@ -9,7 +9,8 @@
 #include <filesystem>
 #include <sstream>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
+#include "acquisition/recording_writer.h"
 #include "app/processing/frame_features.h"
 #include "tests/app/small_recording.h"
 

@@ -7,7 +7,7 @@
 
 #include <filesystem>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_writer.h"
 
 namespace irdist {
 namespace {

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_writer.h"
 #include "app/cli/errors.h"
 #include "app/runs/resume.h"
 #include "tests/app/small_recording.h"

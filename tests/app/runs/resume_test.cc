@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_writer.h"
 #include "app/cli/errors.h"
 
 namespace irdist {
