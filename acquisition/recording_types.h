@@ -1,8 +1,8 @@
 #pragma once
 // The recording's plain types (docs/recording-format.md): recording.yaml's header, a frames.csv row,
-// a bracket as recorded, and what `irdist check` reports. Shared by the writer and reader
-// (acquisition/recording.h) and the integrity checks (acquisition/recording_integrity.h), which
-// therefore never include each other's headers.
+// a bracket as recorded, what `irdist check` reports, and the error of a recording. Shared by the
+// writer, the reader and the check (acquisition/recording_writer.h, recording_reader.h,
+// recording_check.h) and the integrity checks (acquisition/recording_integrity.h).
 
 #include <cstdint>
 #include <map>
@@ -11,8 +11,15 @@
 
 #include "acquisition/bracket.h"
 #include "acquisition/camera.h"
+#include "base/check.h"
 
 namespace irdist {
+
+// A recording that cannot be written or read. The message names the file (and line) and the fix.
+class RecordingError : public Error {
+ public:
+  using Error::Error;
+};
 
 // Version 2 adds the time columns and the content hashes (frames.csv's utc_time,
 // host_monotonic_ns and sha256 columns, recording.yaml's

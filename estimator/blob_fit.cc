@@ -249,7 +249,8 @@ class WindowResiduals {
   void Compute(const double* v) const {
     const int reach = response_.reach;
     const int cols = cols_ + 2 * reach, rows = rows_ + 2 * reach;
-    std::vector<std::vector<double>> planes(6, std::vector<double>(static_cast<size_t>(cols) * rows));
+    std::vector<std::vector<double>> planes(
+        6, std::vector<double>(static_cast<size_t>(cols) * rows));
     double d[5];
     for (int row = 0; row < rows; ++row) {
       for (int col = 0; col < cols; ++col) {

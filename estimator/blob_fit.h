@@ -70,8 +70,9 @@ double BlobFitBlurVarPx2(const CalibrationModel& model, double d_mm);
 // The default path's hook: the blur (BlobFitBlurVarPx2) at the moments' geometric distance,
 // FitBlob with the model's crosstalk split, and the features' moment variances replaced by the
 // fit's (disc + that blur). The calibration fits its geometric model on these same sizes (a
-// second pass, app/offline.cc), so measurement and calibration see one size. Leaves the features
-// unchanged when the model has no geometric fit or the blob fit fails. Returns whether it replaced.
+// second pass, app/processing/recording_fit.cc), so measurement and calibration see one size.
+// Leaves the features unchanged when the model has no geometric fit or the blob fit fails.
+// Returns whether it replaced.
 bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
                        Features* features);
 

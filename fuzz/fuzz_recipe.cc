@@ -1,14 +1,15 @@
-// libFuzzer target: the recipe and rig-file parsers (app/recipe.h, app/rig.h) on one input, read
-// both as a rig file and as a recipe (whose rig is looked up in the shipped recipes/rigs/), and a
-// recipe that parses is planned (station/plan.h: grid, random draws, axis order, durations). Every
-// refusal must be an InputError (RecipeError) with the file named; a hang is a libFuzzer timeout.
+// libFuzzer target: the recipe and rig-file parsers (app/inputs/recipe.h, app/inputs/rig.h) on one
+// input, read both as a rig file and as a recipe (whose rig is looked up in the shipped
+// recipes/rigs/), and a recipe that parses is planned (station/plan.h: grid, random draws, axis
+// order, durations). Every refusal must be an InputError (RecipeError) with the file named; a hang
+// is a libFuzzer timeout.
 #include <cstddef>
 #include <cstdint>
 #include <string>
 
-#include "app/errors.h"
-#include "app/recipe.h"
-#include "app/rig.h"
+#include "app/cli/errors.h"
+#include "app/inputs/recipe.h"
+#include "app/inputs/rig.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

@@ -1,12 +1,13 @@
-// libFuzzer target: the recording readers (acquisition/recording.h) on one input cut in three at
-// the first two "\n%%\n": recording.yaml's text, frames.csv's text and a frame's PNG bytes. Every
-// problem must be a RecordingError (named) or an issue in the parsed result; nothing else.
+// libFuzzer target: the recording readers (acquisition/recording_reader.h) on one input cut in
+// three at the first two "\n%%\n": recording.yaml's text, frames.csv's text and a frame's PNG
+// bytes. Every problem must be a RecordingError (named) or an issue in the parsed result; nothing
+// else.
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 
 namespace {
 

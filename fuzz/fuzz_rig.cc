@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <string>
 
-#include "app/errors.h"
-#include "app/rig.h"
+#include "app/cli/errors.h"
+#include "app/inputs/rig.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

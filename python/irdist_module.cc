@@ -1,8 +1,9 @@
 // The compiled part of the Python module irdist (docs/python.md): a recording read with the
-// project's own reader and checks (acquisition/recording.h), and a calibration model that gives
-// a frame's features and a bracket's estimate through the same functions as measure and playback
-// (FrameFeatures, EstimateRecordedBracket, MeasureSampleOf, MeasureJson). Images cross as numpy
-// uint16 arrays: a recorded frame's pixels are handed over without a copy.
+// project's own reader and checks (acquisition/recording_reader.h, recording_check.h), and a
+// calibration model that gives a frame's features and a bracket's estimate through the same
+// functions as measure and playback (FrameFeatures, EstimateRecordedBracket, MeasureSampleOf,
+// MeasureJson). Images cross as numpy uint16 arrays: a recorded frame's pixels are handed over
+// without a copy.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -17,12 +18,14 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/recording.h"
-#include "app/errors.h"
-#include "app/measure.h"
-#include "app/offline.h"
-#include "app/position.h"
-#include "app/recipe.h"
+#include "acquisition/recording_check.h"
+#include "acquisition/recording_reader.h"
+#include "app/cli/errors.h"
+#include "app/inputs/recipe.h"
+#include "app/live/measure.h"
+#include "app/processing/bracket_estimates.h"
+#include "app/processing/frame_features.h"
+#include "app/processing/position.h"
 #include "base/utc_time.h"
 #include "estimator/model_file.h"
 

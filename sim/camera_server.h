@@ -7,7 +7,8 @@
 // UDP 3956: discovery, register and memory reads and writes, packet resend) served by its own
 // thread at all times, also while a frame is exposed or read out, and a sensor thread that exposes,
 // reads out and streams frames (GVSP: leader, payload packets, trailer). Aravis's ArvFakeCamera is
-// only its register map (bootstrap registers and the XML file in memory).
+// only its register map (bootstrap registers and the XML file in memory). The parts are defined in
+// sim/camera_server_{device,gvcp,gvsp,sensor}.cc over the state of sim/camera_server_impl.h.
 //
 // It powers up free-running (TriggerMode Off, 25 frames/s). With TriggerMode On, each trigger of
 // the selected TriggerSource starts a frame: a World::FireTrigger() pulse for Line1, the

@@ -15,9 +15,10 @@
 #include <sstream>
 #include <thread>
 
+#include "station/axes_motion.h"
 #include "station/driver.h"
-#include "station/serial_driver.h"
 #include "station/line_query.h"
+#include "station/serial_driver.h"
 
 namespace irdist {
 namespace {
@@ -75,7 +76,7 @@ bool FirstNumber(const std::string& text, double* value) {
   return false;
 }
 
-class FlirPtu : public DeviceDriver, public Motion {
+class FlirPtu : public AxesMotionDriver<PtuAxis> {
  public:
   FlirPtu(const DeviceSpec& spec, std::unique_ptr<Transport> link)
       : spec_(spec), link_(std::move(link)), query_(link_.get(), QueryOptions(spec)) {
@@ -95,25 +96,13 @@ class FlirPtu : public DeviceDriver, public Motion {
     }
   }
 
-  Motion* motion() override { return this; }
   DeviceIdentity Identify() override;
-  std::vector<Axis> Axes() const override {
-    std::vector<Axis> out;
-    for (const PtuAxis& a : axes_) out.push_back(a.axis);
-    return out;
-  }
   MotionState State() override;
   void Home() override;
   void StartMove(const StationPosition& target) override;
   void WaitSettled(milliseconds timeout) override;
   void ReadPosition(StationPosition* position) override;
   void Stop() noexcept override;
-  AxisSpeed Speed(Axis axis) const override {
-    for (const PtuAxis& a : axes_) {
-      if (a.axis == axis) return a.speed;
-    }
-    return {};
-  }
   void CheckAlive() override;
 
  private:
@@ -151,7 +140,6 @@ class FlirPtu : public DeviceDriver, public Motion {
   std::unique_ptr<Transport> link_;
   LineQuery query_;  // after link_: it writes and reads through it
   DeviceIdentity identity_;
-  std::vector<PtuAxis> axes_;
   milliseconds timeout_{1000};
   milliseconds home_timeout_{120000};
   milliseconds reset_wait_{60000};  // a unit silent this long after a lost reply is gone
@@ -518,7 +506,7 @@ void FlirPtu::MoveAxis(PtuAxis* a, long long position) {
 
 void FlirPtu::StartMove(const StationPosition& target) {
   for (PtuAxis& a : axes_) {
-    const double deg = a.axis == Axis::kPan ? target.pan_deg : target.tilt_deg;
+    const double deg = AxisValue(target, a.axis);
     const long long position = std::llround(deg / a.deg_per_position);
     if (position < a.min_pos || position > a.max_pos) {
       Fail("", AxisText(a) + " target " + std::to_string(deg) + " deg is outside the unit's [" +
@@ -532,7 +520,7 @@ void FlirPtu::StartMove(const StationPosition& target) {
   was_away_ = false;
   for (const PtuAxis& a : axes_) was_away_ = was_away_ || (a.has_target && a.target != 0);
   for (PtuAxis& a : axes_) {
-    const double deg = a.axis == Axis::kPan ? target.pan_deg : target.tilt_deg;
+    const double deg = AxisValue(target, a.axis);
     MoveAxis(&a, std::llround(deg / a.deg_per_position));
   }
 }
@@ -545,7 +533,7 @@ void FlirPtu::WaitSettled(milliseconds timeout) {
 void FlirPtu::ReadPosition(StationPosition* position) {
   for (const PtuAxis& a : axes_) {
     const double deg = static_cast<double>(StablePosition(a)) * a.deg_per_position;
-    (a.axis == Axis::kPan ? position->pan_deg : position->tilt_deg) = deg;
+    SetAxisValue(position, a.axis, deg);
   }
 }
 

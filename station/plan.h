@@ -5,8 +5,8 @@
 // (the moves with the axes' own settle, the exposures and the readout: what no software can save)
 // (moves + exposures + readout, no settle and no overhead).
 //
-// Plain data only: no Asio, no yaml-cpp. app/recipe.h fills a SweepSpec from a recipe file; the
-// station's sweep consumes the Pose list.
+// Plain data only: no Asio, no yaml-cpp. app/inputs/recipe.h fills a SweepSpec from a recipe file;
+// the station's sweep consumes the Pose list.
 
 #include <cstdint>
 #include <map>

@@ -1,8 +1,8 @@
 #pragma once
 // The one pose type, carried unchanged from the plan (station/plan.h) through the sweep
-// (station/sweep.h) to the live recorder (app/capture.h). The recording's row stays
-// acquisition's own (acquisition/recording.h FrameRecord); app/capture.cc fills its pose columns
-// from a Pose in one place.
+// (station/sweep.h) to the live recorder (app/runs/capture.h). The recording's row stays
+// acquisition's own (acquisition/recording_types.h FrameRecord); app/runs/capture.cc fills its pose
+// columns from a Pose in one place.
 
 #include <cstdint>
 

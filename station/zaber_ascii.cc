@@ -12,9 +12,10 @@
 #include <sstream>
 #include <thread>
 
+#include "station/axes_motion.h"
 #include "station/driver.h"
-#include "station/serial_driver.h"
 #include "station/line_query.h"
+#include "station/serial_driver.h"
 
 namespace irdist {
 namespace {
@@ -166,7 +167,7 @@ struct AxisState {
   bool has_target = false;
 };
 
-class ZaberAscii : public DeviceDriver, public Motion {
+class ZaberAscii : public AxesMotionDriver<AxisState> {
  public:
   ZaberAscii(const DeviceSpec& spec, std::unique_ptr<Transport> link)
       : spec_(spec),
@@ -190,26 +191,13 @@ class ZaberAscii : public DeviceDriver, public Motion {
   }
   ~ZaberAscii() override = default;
 
-  Motion* motion() override { return this; }
-
   DeviceIdentity Identify() override;
-  std::vector<Axis> Axes() const override {
-    std::vector<Axis> out;
-    for (const AxisState& s : axes_) out.push_back(s.axis);
-    return out;
-  }
   MotionState State() override;
   void Home() override;
   void StartMove(const StationPosition& target) override;
   void WaitSettled(milliseconds timeout) override;
   void ReadPosition(StationPosition* position) override;
   void Stop() noexcept override;
-  AxisSpeed Speed(Axis axis) const override {
-    for (const AxisState& s : axes_) {
-      if (s.axis == axis) return s.speed;
-    }
-    return {};
-  }
   void CheckAlive() override;
 
  private:
@@ -246,7 +234,6 @@ class ZaberAscii : public DeviceDriver, public Motion {
   std::unique_ptr<Transport> link_;
   LineQuery query_;  // after link_: it writes and reads through it
   DeviceIdentity identity_;
-  std::vector<AxisState> axes_;
   milliseconds timeout_{500};
   milliseconds home_timeout_{120000};
   bool checksum_ = true;
@@ -518,9 +505,7 @@ void ZaberAscii::IssueMove(AxisState* s, long long microsteps) {
 
 void ZaberAscii::StartMove(const StationPosition& target) {
   for (AxisState& s : axes_) {
-    const double value = s.axis == Axis::kSlide ? target.slide_mm
-                         : s.axis == Axis::kPan ? target.pan_deg
-                                                : target.tilt_deg;
+    const double value = AxisValue(target, s.axis);
     const long long microsteps = ToMicrosteps(s, value);
     if (microsteps < s.limit_min || microsteps > s.limit_max) {
       const double a = ToUnits(s, s.limit_min), b = ToUnits(s, s.limit_max);
@@ -573,10 +558,7 @@ void ZaberAscii::ReadPosition(StationPosition* position) {
   for (const AxisState& s : axes_) {
     const Reply r = Query(s.address, s.address.axis, "get pos", true);
     CheckFlag(s, r);
-    const double value = ToUnits(s, Number(r, "get pos"));
-    if (s.axis == Axis::kSlide) position->slide_mm = value;
-    if (s.axis == Axis::kPan) position->pan_deg = value;
-    if (s.axis == Axis::kTilt) position->tilt_deg = value;
+    SetAxisValue(position, s.axis, ToUnits(s, Number(r, "get pos")));
   }
 }
 

@@ -10,8 +10,8 @@
 //                         [--nonlinearity A]
 // Rigs with a blur after the pixels (issue 20): --rig recipes/rigs/virtual-crosstalk.yaml (0.6 px
 // of inter-pixel crosstalk) and virtual-sharp.yaml (0.3 px optics, 0.8 px crosstalk); the bound
-// below includes the crosstalk (app/crb.cc diffuses the charge as the sensor does).
-// It also prints the Cramer-Rao bound on d and theta at 2.7 m (app/crb.h, the code behind
+// below includes the crosstalk (app/reports/crb.cc diffuses the charge as the sensor does).
+// It also prints the Cramer-Rao bound on d and theta at 2.7 m (app/reports/crb.h, the code behind
 // summary.yaml's `crb:`) for the Fig. 14 conditions, for one (t_r, t_n) pair and for a whole
 // bracket, beside the measured dispersion of Fig. 14.
 #include <algorithm>
@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "app/crb.h"
+#include "app/reports/crb.h"
 #include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
 #include "estimator/features.h"
@@ -362,8 +362,8 @@ std::vector<double> Range(double a, double b, double step) {
 }
 
 // The blob fit's split of the calibrated blur (optics before the pixels, crosstalk after them),
-// fitted on calibration frames as `irdist calibrate` does (app/offline.cc CalibrateCrosstalk):
-// 32 measurement frames over the calibrated distances and angles.
+// fitted on calibration frames as `irdist calibrate` does (app/processing/recording_fit.cc,
+// CalibrateCrosstalk): 32 measurement frames over the calibrated distances and angles.
 void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipeline* pl) {
   std::vector<Pose> poses;
   for (double d : Range(1500, 3000, 500))
@@ -746,7 +746,7 @@ int Main(int argc, char** argv) {
     const auto brackets = sr.Run(calib, calib_t, pl.features);
     pl.model = Fit(Samples(brackets), pl.features, pl.fit);
     if (pl.blob_fit) {
-      // As `irdist calibrate` (app/offline.cc): the split, then the models fitted again on the
+      // As `irdist calibrate` (app/processing/recording_fit.cc): the split, then the models fitted again on the
       // blob fit's own sizes of the calibration frames.
       CalibrateBlurSplit(physics, seed, &pl);
       SweepRenderer again(physics, seed);

@@ -1,7 +1,8 @@
 // PNG encoding of one camera frame (256 x 256, 12 bits in 16: a Gaussian spot on a dark, noisy
 // background, as the virtual rig renders it) at zlib levels and strategies: time per frame and
 // bytes per frame (counter "bytes", and "ratio" = bytes / raw bytes). The recording writes frames
-// with the setting this measures fastest among lossless 16-bit PNGs (acquisition/recording.cc).
+// with the setting this measures fastest among lossless 16-bit PNGs
+// (acquisition/recording_writer.cc).
 //   bench_png
 #include <benchmark/benchmark.h>
 

@@ -33,9 +33,9 @@ void BM_ComputeFeatures(benchmark::State& state) {
 }
 BENCHMARK(BM_ComputeFeatures)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
-// What the app's estimation default costs per frame (app/offline.cc FrameFeatures with a model):
-// the moments, then FitBlob with the frame's blur (sigma 1 px, pixel area added). Compare with
-// BM_ComputeFeatures/0 of the same run.
+// What the app's estimation default costs per frame (app/runs/offline.cc FrameFeatures with a
+// model): the moments, then FitBlob with the frame's blur (sigma 1 px, pixel area added). Compare
+// with BM_ComputeFeatures/0 of the same run.
 void BM_FeaturesWithBlobFit(benchmark::State& state) {
   const cv::Mat frame = Frame();
   const FeatureOptions options;

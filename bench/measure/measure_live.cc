@@ -22,8 +22,8 @@
 #include <string>
 #include <vector>
 
-#include "app/cli.h"
-#include "app/recipe.h"
+#include "app/cli/cli.h"
+#include "app/inputs/recipe.h"
 
 namespace {
 

@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "app/cli.h"
-#include "app/recipe.h"
+#include "app/cli/cli.h"
+#include "app/inputs/recipe.h"
 #include "station/plan.h"
 
 namespace {

@@ -10,8 +10,9 @@
 #include <memory>
 #include <set>
 
-#include "acquisition/recording.h"
-#include "app/summary.h"
+#include "acquisition/recording_check.h"
+#include "acquisition/recording_reader.h"
+#include "app/reports/summary.h"
 #include "estimator/model_file.h"
 #include "tests/integration/measure_helpers.h"
 #include "tests/integration/run_helpers.h"
@@ -161,8 +162,9 @@ TEST_F(CalibrateValidate, ValidationWritesEstimatesSummaryAndReport) {
   EXPECT_NE(validate_output_[0].find("i0_free"), std::string::npos);
 }
 
-// The virtual rig's Cramer-Rao bound sits beside each method's figures (app/crb.h): the bound of
-// every pose of the recipe, the errors in units of it, and the report's header says the same.
+// The virtual rig's Cramer-Rao bound sits beside each method's figures (app/reports/crb.h): the
+// bound of every pose of the recipe, the errors in units of it, and the report's header says the
+// same.
 TEST_F(CalibrateValidate, ValidationSummaryCarriesTheCramerRaoBound) {
   ASSERT_EQ(validate_code_, 0) << validate_output_[0];
   const std::string run = *dir_ + "/val";

@@ -1,9 +1,9 @@
-// Data safety of a live run (app/run.cc, app/capture.cc): a bracket is committed to the recording
-// as soon as it is complete and the station confirmed alive, before anything moves again. For a
-// refused move, an emergency stop, a silent station and a kill -9 during the move after a bracket:
-// the brackets taken before are in the recording, and `--resume` completes the run with no frame
-// twice. An open IRED stops the run with the message. A real full disk (a small tmpfs) stops the
-// run with the first error, keeps the brackets before it and leaves a run that resumes.
+// Data safety of a live run (app/runs/run.cc, app/runs/capture.cc): a bracket is committed to the
+// recording as soon as it is complete and the station confirmed alive, before anything moves again.
+// For a refused move, an emergency stop, a silent station and a kill -9 during the move after a
+// bracket: the brackets taken before are in the recording, and `--resume` completes the run with no
+// frame twice. An open IRED stops the run with the message. A real full disk (a small tmpfs) stops
+// the run with the first error, keeps the brackets before it and leaves a run that resumes.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/mount.h>
@@ -16,7 +16,7 @@
 #include <map>
 #include <set>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_reader.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
 

@@ -14,7 +14,7 @@
 #include <string>
 #include <thread>
 
-#include "app/rig.h"
+#include "app/inputs/rig.h"
 #include "base/check.h"
 #include "sim/device_emulator.h"
 #include "sim/scpi_emulator.h"

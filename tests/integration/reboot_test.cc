@@ -5,7 +5,8 @@
 #include <map>
 #include <regex>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_check.h"
+#include "acquisition/recording_reader.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
 

@@ -9,7 +9,8 @@
 #include <set>
 #include <tuple>
 
-#include "acquisition/recording.h"
+#include "acquisition/recording_check.h"
+#include "acquisition/recording_reader.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
 

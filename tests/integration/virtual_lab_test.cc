@@ -10,8 +10,8 @@
 #include <set>
 #include <tuple>
 
-#include "acquisition/recording.h"
-#include "app/recipe.h"
+#include "acquisition/recording_reader.h"
+#include "app/inputs/recipe.h"
 #include "station/plan.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"

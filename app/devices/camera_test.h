@@ -1,0 +1,38 @@
+#pragma once
+// `irdist camera-test [CAMERA]`: a camera's GenICam features against what irdist needs, as a
+// PASS/FAIL table with the fix for each failure (like station-test), for a lab choosing or setting
+// up a camera. Needed: a monochrome pixel format irdist reads, a writable exposure time with timed
+// exposure, a frame trigger (TriggerSelector FrameStart, or a single trigger) on a line input,
+// automatic controls that can be Off, the other triggers and the frame-rate limit that can be
+// turned off, GigE Vision packet resend, and a setup and triggered frames that work. Exposure
+// chunks and TriggerOverlap ReadOut are reported as what they make faster.
+
+#include <string>
+#include <vector>
+
+#include "app/cli/command_args.h"
+#include "app/cli/errors.h"
+
+namespace irdist {
+
+class AravisCamera;
+
+// One line of the table.
+struct CameraCheck {
+  std::string name;    // e.g. "frame trigger"
+  bool passed = false;
+  std::string found;   // what the camera has
+  std::string fix;     // what to do (failures)
+};
+
+// Every check on an opened camera. The last checks configure it (Software trigger when it has
+// one) and take frames; a camera that cannot be configured is put back as it was found.
+std::vector<CameraCheck> CheckCamera(AravisCamera& camera);
+// The table: one line per check, the fix under each failure, the count of checks passed.
+std::string CameraCheckTable(const std::vector<CameraCheck>& checks);
+
+// The command: CAMERA (IP address, Aravis id or serial), or the camera of a running `irdist sim`
+// of --rig. Throws CheckFailedError (exit 1) when a check fails.
+void RunCameraTest(const CameraTestArgs& args, CommandIo io);
+
+}  // namespace irdist

@@ -1,0 +1,788 @@
+#include "app/live/measure.h"
+
+#include <sys/ioctl.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <future>
+#include <mutex>
+#include <thread>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <sstream>
+
+#include "acquisition/bracket.h"
+#include "acquisition/recording_writer.h"
+#include "app/cli/errors.h"
+#include "app/cli/stop_signal.h"
+#include "app/inputs/provenance.h"
+#include "app/live/live_camera.h"
+#include "app/processing/bracket_estimates.h"
+#include "app/processing/frame_features.h"
+#include "app/processing/position.h"
+#include "app/runs/resume.h"
+#include "base/utc_time.h"
+#include "base/yaml_fields.h"
+#include "estimator/model_file.h"
+
+namespace irdist {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kSoftwareVersion = "irdist 0.1.0";
+constexpr double kPi = 3.14159265358979323846;
+// Free space a recording leaves on its disk by default (or 5% of the disk when that is less).
+constexpr double kFreeMarginBytes = 1024.0 * 1024.0 * 1024.0;
+
+std::string JsonNumber(double value) {
+  if (!std::isfinite(value)) return "null";
+  char text[40];
+  std::snprintf(text, sizeof(text), "%.10g", value);
+  return text;
+}
+
+std::string Fixed(double value, int decimals) {
+  if (!std::isfinite(value)) return "-";
+  char text[40];
+  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
+  return text;
+}
+
+const char* JsonBool(bool value) { return value ? "true" : "false"; }
+
+// The bracket's absolute time keys (utc_time, host_monotonic_ns, camera_timestamp_ns), each with
+// its leading comma.
+std::string TimeJson(const MeasureSample& s) {
+  std::string out = ",\"utc_time\":";
+  out += s.utc_ns != 0 ? "\"" + FormatUtcIso8601(s.utc_ns) + "\"" : std::string("null");
+  out += ",\"host_monotonic_ns\":" + std::to_string(s.host_monotonic_ns);
+  out += ",\"camera_timestamp_ns\":";
+  out += s.camera_timestamp_ns != 0 ? std::to_string(s.camera_timestamp_ns) : std::string("null");
+  return out;
+}
+
+double Se(double value) { return value >= 0.0 ? value : std::nan(""); }
+
+}  // namespace
+
+std::string QualityFlags(const MeasureSample& s) {
+  std::string flags;
+  const auto add = [&flags](bool on, const std::string& name) {
+    if (on) flags += (flags.empty() ? "" : ",") + name;
+  };
+  add(!s.blob_found, "no_blob");
+  add(s.saturated, "saturated");
+  add(s.touches_border, "touches_border");
+  add(s.clipped, "clipped");
+  add(s.have_estimate && s.estimate.outside_range,
+      "outside_range(" + JoinNames(s.estimate.outside, " ") + ")");
+  add(s.health.flagged, std::string(s.health.Label()) + "(" +
+                            (s.health.sigma_change > 0.0 ? "+" : "") +
+                            Fixed(100.0 * s.health.sigma_change, 0) + "%)");
+  add(s.motion.moving, "moving(" + Fixed(s.motion.spread_mm, 1) + " mm)");
+  add(!s.have_estimate || !s.estimate.ok, "no_estimate");
+  return flags.empty() ? "ok" : flags;
+}
+
+namespace {
+
+// "health": the figure behind the flag (null when not assessed).
+std::string HealthJson(const HealthCheck& h) {
+  if (!h.assessed) return "null";
+  return std::string("{\"status\":\"") + h.Label() +
+         "\",\"blur_var_px2\":" + JsonNumber(h.blur_var_px2) +
+         ",\"calibrated_blur_var_px2\":" + JsonNumber(h.calibrated_px2) +
+         ",\"sigma_change\":" + JsonNumber(h.sigma_change) + ",\"z\":" + JsonNumber(h.z) + "}";
+}
+
+// "motion": the figure behind the flag (null when not assessed).
+std::string MotionJson(const MotionCheck& m) {
+  if (!m.assessed) return "null";
+  return "{\"spread_mm\":" + JsonNumber(m.spread_mm) + ",\"chi2\":" + JsonNumber(m.chi2) +
+         ",\"chi2_limit\":" + JsonNumber(m.chi2_limit) +
+         ",\"exposures\":" + std::to_string(m.exposures) + "}";
+}
+
+std::string NamesJson(const std::vector<std::string>& names) {
+  std::string out = "[";
+  for (const std::string& name : names) out += (out.size() > 1 ? ",\"" : "\"") + name + "\"";
+  return out + "]";
+}
+
+}  // namespace
+
+std::string MeasureJson(const MeasureSample& s) {
+  const EstimateRow& e = s.estimate;
+  const bool ok = s.have_estimate && e.ok;
+  std::ostringstream out;
+  out << "{\"schema\":\"irdist.measure/" << kMeasureJsonVersion << "\",\"bracket\":" << s.bracket
+      << ",\"time_s\":" << JsonNumber(s.time_s) << TimeJson(s)
+      << ",\"latency_ms\":" << JsonNumber(s.latency_ms) << ",\"ok\":" << JsonBool(ok)
+      << ",\"d_mm\":" << JsonNumber(ok ? e.d_mm : NAN)
+      << ",\"d_se_mm\":" << JsonNumber(ok ? Se(e.d_std_mm) : NAN)
+      << ",\"theta_deg\":" << JsonNumber(ok ? e.theta_deg : NAN)
+      << ",\"theta_se_deg\":" << JsonNumber(ok ? Se(e.theta_std_deg) : NAN)
+      << ",\"blob_x_px\":" << JsonNumber(s.blob_found ? s.blob_x_px : NAN)
+      << ",\"blob_y_px\":" << JsonNumber(s.blob_found ? s.blob_y_px : NAN) << ",\"flags\":{"
+      << "\"no_blob\":" << JsonBool(!s.blob_found) << ",\"saturated\":" << JsonBool(s.saturated)
+      << ",\"touches_border\":" << JsonBool(s.touches_border)
+      << ",\"clipped\":" << JsonBool(s.clipped)
+      << ",\"outside_range\":" << JsonBool(s.have_estimate && e.outside_range)
+      << ",\"unhealthy\":" << JsonBool(s.health.flagged)
+      << ",\"moving\":" << JsonBool(s.motion.moving) << "}"
+      << ",\"outside\":" << NamesJson(s.have_estimate ? e.outside : std::vector<std::string>{})
+      << ",\"health\":" << HealthJson(s.health) << ",\"motion\":" << MotionJson(s.motion)
+      << ",\"position\":";
+  if (ok && s.has_position) {
+    out << "{\"x_mm\":" << JsonNumber(s.x_mm) << ",\"y_mm\":" << JsonNumber(s.y_mm)
+        << ",\"z_mm\":" << JsonNumber(s.z_mm) << ",\"x_se_mm\":" << JsonNumber(s.x_se_mm)
+        << ",\"y_se_mm\":" << JsonNumber(s.y_se_mm) << ",\"z_se_mm\":" << JsonNumber(s.z_se_mm)
+        << "}";
+  } else {
+    out << "null";
+  }
+  out << "}";
+  return out.str();
+}
+
+namespace {
+
+// The live line's fields in display order, each with its rank: the lowest ranks are dropped
+// first when the line does not fit the terminal (the distance and the flags stay).
+struct LineField {
+  std::string text;
+  int rank;
+};
+
+std::vector<LineField> MeasureLineFields(const MeasureSample& s) {
+  const EstimateRow& e = s.estimate;
+  const bool ok = s.have_estimate && e.ok;
+  std::vector<LineField> fields;
+  fields.push_back({"#" + std::to_string(s.bracket), 5});
+  fields.push_back({"t " + Fixed(s.time_s, 2) + " s", 1});
+  fields.push_back({"d " + Fixed(ok ? e.d_mm : NAN, 1) + " +- " +
+                        Fixed(ok ? Se(e.d_std_mm) : NAN, 1) + " mm", 7});
+  fields.push_back({"theta " + Fixed(ok ? e.theta_deg : NAN, 2) + " +- " +
+                        Fixed(ok ? Se(e.theta_std_deg) : NAN, 2) + " deg", 4});
+  fields.push_back({"blob (" + Fixed(s.blob_found ? s.blob_x_px : NAN, 1) + ", " +
+                        Fixed(s.blob_found ? s.blob_y_px : NAN, 1) + ") px", 2});
+  if (ok && s.has_position) {
+    fields.push_back({"xyz (" + Fixed(s.x_mm, 1) + ", " + Fixed(s.y_mm, 1) + ", " +
+                          Fixed(s.z_mm, 1) + ") mm", 3});
+  }
+  fields.push_back({"[" + QualityFlags(s) + "]", 6});
+  return fields;
+}
+
+std::string JoinFields(const std::vector<LineField>& fields) {
+  std::string line;
+  for (const LineField& f : fields) line += (line.empty() ? "" : "  ") + f.text;
+  return line;
+}
+
+}  // namespace
+
+std::string MeasureLine(const MeasureSample& s) { return JoinFields(MeasureLineFields(s)); }
+
+std::string MeasureLine(const MeasureSample& s, std::size_t width_chars) {
+  std::vector<LineField> fields = MeasureLineFields(s);
+  // One column short of the width: a line that fills the last column wraps on some terminals.
+  const std::size_t fit_chars = width_chars > 1 ? width_chars - 1 : 1;
+  std::string line = JoinFields(fields);
+  while (line.size() > fit_chars && fields.size() > 1) {
+    const auto lowest = std::min_element(fields.begin(), fields.end(),
+        [](const LineField& a, const LineField& b) { return a.rank < b.rank; });
+    fields.erase(lowest);
+    line = JoinFields(fields);
+  }
+  return line.substr(0, fit_chars);
+}
+
+std::size_t TerminalWidthChars(int fd) {
+  winsize size{};
+  if (isatty(fd) == 1 && ioctl(fd, TIOCGWINSZ, &size) == 0 && size.ws_col > 0) {
+    return size.ws_col;
+  }
+  return 80;
+}
+
+void MeasureStats::Moments::Add(double value) {
+  ++n;
+  const double delta = value - mean;
+  mean += delta / n;
+  m2 += delta * (value - mean);
+}
+
+double MeasureStats::Moments::Sd() const { return n > 1 ? std::sqrt(m2 / (n - 1)) : NAN; }
+
+void MeasureStats::Add(const MeasureSample& s) {
+  ++count_;
+  if (std::isfinite(s.latency_ms)) latency_.Add(s.latency_ms);
+  health_assessed_ += s.health.assessed ? 1 : 0;
+  unhealthy_ += s.health.flagged ? 1 : 0;
+  motion_assessed_ += s.motion.assessed ? 1 : 0;
+  moving_ += s.motion.moving ? 1 : 0;
+  if (s.have_estimate && s.estimate.outside_range) {
+    ++outside_;
+    for (const std::string& name : s.estimate.outside) ++outside_by_range_[name];
+  }
+  if (!s.have_estimate || !s.estimate.ok) return;
+  ++estimated_;
+  d_.Add(s.estimate.d_mm);
+  theta_.Add(s.estimate.theta_deg);
+  if (!s.has_position) return;
+  x_.Add(s.x_mm);
+  y_.Add(s.y_mm);
+  z_.Add(s.z_mm);
+}
+
+std::string MeasureStats::Report(double wall_s) const {
+  std::ostringstream out;
+  out << "Measured " << count_ << " brackets in " << Fixed(wall_s, 2) << " s ("
+      << Fixed(wall_s > 0.0 ? count_ / wall_s : NAN, 2) << " brackets/s), " << estimated_
+      << " with an estimate\n";
+  const auto line = [&out](const char* name, const Moments& m, const char* unit, int decimals) {
+    if (m.n == 0) return;
+    out << "  " << name << ": mean " << Fixed(m.mean, decimals) << " " << unit << ", sd "
+        << Fixed(m.Sd(), decimals) << " " << unit << "\n";
+  };
+  line("d", d_, "mm", 2);
+  line("theta", theta_, "deg", 3);
+  line("x", x_, "mm", 2);
+  line("y", y_, "mm", 2);
+  line("z", z_, "mm", 2);
+  line("latency (last frame to estimate)", latency_, "ms", 3);
+  out << "  health: " << unhealthy_ << " of " << health_assessed_
+      << " assessed brackets unhealthy (blur off the calibration's)\n";
+  out << "  motion: " << moving_ << " of " << motion_assessed_ << " assessed brackets moving\n";
+  std::string ranges;
+  for (const auto& [name, n] : outside_by_range_) {
+    ranges += (ranges.empty() ? "" : ", ") + name + " " + std::to_string(n);
+  }
+  out << "  outside the calibrated ranges: " << outside_
+      << (ranges.empty() ? "" : " (" + ranges + ")") << "\n";
+  return out.str();
+}
+
+namespace {
+
+// The bracket measure takes: the flags', else the model's calibration bracket.
+struct MeasureBracket {
+  std::vector<double> exposures_us;  // t_r first
+  bool retake_reference = false;
+};
+
+MeasureBracket BracketFor(const MeasureArgs& args, const CalibrationModel& model) {
+  const ModelProvenance& p = model.provenance;
+  MeasureBracket b;
+  const double t_ref_ms = args.t_ref_ms > 0.0 ? args.t_ref_ms : p.t_ref_ms;
+  const std::vector<double>& t_meas_ms = args.t_meas_ms.empty() ? p.t_meas_ms : args.t_meas_ms;
+  if (!(t_ref_ms > 0.0) || t_meas_ms.empty()) {
+    throw UsageError("measure: the model " + args.model +
+                     " does not record its calibration bracket (written before provenance); "
+                     "give it with --t-ref-ms T_R --t-meas-ms T1,T2,...");
+  }
+  b.exposures_us.push_back(t_ref_ms * 1000.0);
+  for (double t : t_meas_ms) b.exposures_us.push_back(t * 1000.0);
+  b.retake_reference = args.t_meas_ms.empty() && p.retake_reference;
+  return b;
+}
+
+// The truth of a bracket: the --at pose on a virtual rig, NaN (unknown) otherwise.
+struct Truth {
+  double slide_mm = NAN, pan_deg = NAN, tilt_deg = NAN, theta_deg = NAN, bias_ma = NAN;
+};
+
+Truth TruthOf(const std::vector<double>& at) {
+  Truth t;
+  if (at.size() != 4) return t;
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  t.slide_mm = at[0];
+  t.pan_deg = at[1];
+  t.tilt_deg = at[2];
+  t.bias_ma = at[3];
+  t.theta_deg = std::acos(std::cos(at[1] * kDeg) * std::cos(at[2] * kDeg)) / kDeg;
+  return t;
+}
+
+// Threads that compute frames' features as the frames arrive, alive as long as the session: a
+// bracket's frames overlap on the host's cores without a thread started per frame, so the
+// process's thread count stays the same bracket after bracket.
+class FeatureWorkers {
+ public:
+  explicit FeatureWorkers(int count) {
+    for (int i = 0; i < count; ++i) threads_.emplace_back([this] { Loop(); });
+  }
+  ~FeatureWorkers() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+    }
+    wake_.notify_all();
+    for (std::thread& t : threads_) t.join();
+  }
+  FeatureWorkers(const FeatureWorkers&) = delete;
+  FeatureWorkers& operator=(const FeatureWorkers&) = delete;
+
+  std::future<Features> Submit(std::function<Features()> work) {
+    std::packaged_task<Features()> task(std::move(work));
+    std::future<Features> result = task.get_future();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      queue_.push_back(std::move(task));
+    }
+    wake_.notify_one();
+    return result;
+  }
+
+ private:
+  void Loop() {
+    while (true) {
+      std::packaged_task<Features()> task;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+        if (queue_.empty()) return;  // stopping, nothing left to compute
+        task = std::move(queue_.front());
+        queue_.pop_front();
+      }
+      task();  // an exception reaches the future
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::packaged_task<Features()>> queue_;
+  bool stopping_ = false;
+  std::vector<std::thread> threads_;
+};
+
+// One camera, one bracket after another; each bracket's frames recorded (optionally) and
+// estimated with the playback path.
+class Session {
+ public:
+  Session(const MeasureArgs& args, const CalibrationModel& model, CommandIo io)
+      : args_(args), model_(model), truth_(TruthOf(args.at)) {
+    const MeasureBracket bracket = BracketFor(args, model);
+    LiveCameraOptions options;
+    options.rig_spec = args.rig;
+    options.time_scale = args.time_scale;
+    options.at = args.at;
+    options.first_exposure_us = bracket.exposures_us.front();
+    options.longest_exposure_us =
+        *std::max_element(bracket.exposures_us.begin(), bracket.exposures_us.end());
+    options.buffer_count = static_cast<int>(2 * bracket.exposures_us.size() + 4);
+    options.quiet = args.json;
+    live_ = std::make_unique<LiveCamera>(options, io.err);
+    CheckModel(io);
+    geometry_ = GeometryOfRigText(ReadRigText(), live_->rig_path());
+    BracketOptions capture;
+    capture.exposures_us = bracket.exposures_us;
+    capture.interleave_reference = bracket.retake_reference;
+    capture.trigger_source = live_->trigger_source();
+    capture.frame_timeout = std::chrono::milliseconds(live_->frame_timeout_ms());
+    capture.trigger_in_readout = live_->rig().camera.trigger_in_readout;
+    capture_ = std::make_unique<BracketCapture>(live_->camera(), capture);
+    workers_ = std::make_unique<FeatureWorkers>(static_cast<int>(bracket.exposures_us.size()));
+    if (!args.out_dir.empty()) {
+      estimates_ = std::make_unique<EstimatesCsvWriter>(args.out_dir + "/estimates.csv");
+    }
+    if (args.record) OpenRecording();
+  }
+
+  MeasureSample Next(double time_s);
+  std::string StopReason() const;
+  void Finish();  // closes the recording as complete
+  const cv::Mat& last_image() const { return last_image_; }
+  const Features& last_features() const { return last_features_; }
+  LiveCamera& live() { return *live_; }
+  int bit_depth() const { return live_->bit_depth(); }
+
+ private:
+  void CheckModel(CommandIo io);
+  void OpenRecording();
+  // Captures one bracket (retaken once if incomplete); each frame's features are computed as it
+  // arrives, on a worker, while the next frame is exposed. `last_frame_at` = when the last frame
+  // was handed over.
+  BracketResult CaptureWithFeatures(std::vector<Features>* arrived,
+                                    std::chrono::steady_clock::time_point* last_frame_at);
+  std::vector<FrameRecord> Records(const BracketResult& result,
+                                   const std::vector<Features>& arrived, FeatureMap* features);
+
+  const MeasureArgs& args_;
+  const CalibrationModel& model_;
+  Truth truth_;
+  std::unique_ptr<LiveCamera> live_;
+  std::unique_ptr<BracketCapture> capture_;
+  std::unique_ptr<RecordingWriter> writer_;
+  std::string ReadRigText() const;
+  CameraGeometry geometry_;
+  std::int64_t next_bracket_ = 0;
+  std::int64_t next_index_ = 0;  // frame index when nothing is recorded
+  std::unique_ptr<EstimatesCsvWriter> estimates_;  // --out's estimates.csv, one bracket at a time
+  std::uint64_t recorded_bytes_ = 0;      // the recording's frames so far
+  std::uint64_t last_bracket_bytes_ = 0;  // ... of the last bracket: what the next one needs
+  cv::Mat last_image_;
+  Features last_features_;
+  std::unique_ptr<FeatureWorkers> workers_;  // last: stops before what its work uses
+};
+
+void Session::CheckModel(CommandIo io) {
+  const std::string serial = live_->camera().Identity().serial;
+  std::string warning;
+  CheckModelProvenance(model_.provenance, args_.model, ProvenanceOfRig(live_->rig(), serial),
+                       "the camera of rig " + live_->rig().name, args_.allow_model_mismatch,
+                       &warning);
+  if (!warning.empty()) io.err << warning << "\n";
+  for (const std::string& w : ModelFitnessWarnings(model_, args_.model)) io.err << w << "\n";
+}
+
+std::string Session::ReadRigText() const { return yaml_fields::ReadFile(live_->rig_path()); }
+
+void Session::OpenRecording() {
+  RecordingHeader header;
+  header.software_version = kSoftwareVersion;
+  header.bit_depth = live_->bit_depth();
+  header.pixel_format = live_->rig().camera.pixel_format;
+  header.camera = live_->camera().Identity();
+  header.camera_features = live_->camera().ReadBackFeatures();
+  header.station_identity = args_.at.empty() ? "none (irdist measure)"
+                                             : "virtual station (irdist measure --at)";
+  header.rig_path = live_->rig_path();
+  header.rig_text = ReadRigText();
+  writer_ = RecordingWriter::Open(args_.out_dir + "/recording", header);
+}
+
+std::vector<FrameRecord> Session::Records(const BracketResult& result,
+                                          const std::vector<Features>& arrived,
+                                          FeatureMap* features) {
+  std::vector<FrameRecord> records;
+  std::uint64_t bracket_bytes = 0;
+  const int size = static_cast<int>(result.frames.size());
+  for (std::size_t i = 0; i < result.frames.size(); ++i) {
+    const BracketFrame& frame = result.frames[i];
+    FrameRecord record = RecordFromFrame(frame, size);
+    record.bracket_id = next_bracket_;
+    record.bias_ma_set = truth_.bias_ma;
+    record.bias_ma_measured = std::nan("");
+    record.slide_mm = truth_.slide_mm;
+    record.pan_deg = truth_.pan_deg;
+    record.tilt_deg = truth_.tilt_deg;
+    record.theta_deg = truth_.theta_deg;
+    if (writer_) {
+      record = writer_->Append(frame.image, record);
+      struct stat written {};
+      const std::string png = writer_->dir() + "/" + record.file;
+      if (::stat(png.c_str(), &written) != 0) {
+        throw RecordingError(png + ": just written, cannot be read back (" +
+                             std::strerror(errno) + "); check the disk.");
+      }
+      bracket_bytes += static_cast<std::uint64_t>(written.st_size);
+    } else {
+      record.index = next_index_++;
+    }
+    (*features)[record.index] = arrived[i];
+    records.push_back(record);
+  }
+  recorded_bytes_ += bracket_bytes;
+  last_bracket_bytes_ = bracket_bytes;
+  return records;
+}
+
+BracketResult Session::CaptureWithFeatures(std::vector<Features>* arrived,
+                                           std::chrono::steady_clock::time_point* last_frame_at) {
+  // Each frame's features on a worker as it arrives (one worker per frame of the bracket): the
+  // capture never waits for them (the blob fit may take longer than the next exposure), and
+  // frames overlap on the host's cores.
+  std::vector<std::future<Features>> pending;
+  const int bit_depth = live_->bit_depth();
+  const CalibrationModel* blob_fit_model = BlobFitModelOf(model_);
+  const BracketCapture::FrameSink on_frame = [&](const BracketFrame& frame) {
+    *last_frame_at = std::chrono::steady_clock::now();
+    pending.push_back(workers_->Submit([this, image = frame.image, bit_depth,
+                                                      blob_fit_model] {
+      return FrameFeatures(image, bit_depth, model_.features, blob_fit_model);
+    }));
+  };
+  BracketResult result = capture_->Capture(live_->Trigger(), on_frame);
+  if (!result.complete) {
+    pending.clear();  // the incomplete bracket's features are computed and dropped
+    result = capture_->Capture(live_->Trigger(), on_frame);
+  }
+  if (!result.complete) {
+    throw CameraError("bracket " + std::to_string(next_bracket_) + " incomplete twice (" +
+                      result.failure + "; " + capture_->stats().BriefReport() +
+                      "). Check the camera link and its trigger.");
+  }
+  for (std::future<Features>& f : pending) arrived->push_back(f.get());
+  return result;
+}
+
+MeasureSample Session::Next(double time_s) {
+  std::vector<Features> arrived;
+  std::chrono::steady_clock::time_point last_frame_at;
+  const BracketResult result = CaptureWithFeatures(&arrived, &last_frame_at);
+  FeatureMap features;
+  RecordedBracket bracket;
+  bracket.frames = Records(result, arrived, &features);
+  bracket.bracket_id = next_bracket_++;
+  bracket.bracket_size = static_cast<int>(bracket.frames.size());
+  bracket.complete = true;
+  const BracketEstimateRows rows = EstimateRecordedBracket(bracket, features, model_, geometry_);
+  MeasureSample sample = MeasureSampleOf(bracket, features, rows, model_, geometry_);
+  sample.time_s = time_s;
+  sample.latency_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
+                                                                last_frame_at)
+                          .count();
+  // The bracket's time: its last frame's arrival, as estimates.csv's (the grabber's stamps).
+  sample.utc_ns = bracket.frames.back().host_time_ns;
+  sample.host_monotonic_ns = bracket.frames.back().host_monotonic_ns;
+  sample.camera_timestamp_ns = bracket.frames.back().camera_timestamp_ns;
+  if (estimates_) estimates_->Append(FlattenRows(rows));  // on disk before it is printed
+  last_image_ = result.frames.back().image;
+  last_features_ = features.at(bracket.frames.back().index);
+  return sample;
+}
+
+}  // namespace
+
+MeasureSample MeasureSampleOf(const RecordedBracket& bracket, const FeatureMap& features,
+                              const BracketEstimateRows& rows, const CalibrationModel& model,
+                              const CameraGeometry& geometry) {
+  MeasureSample s;
+  s.bracket = bracket.bracket_id;
+  s.health = rows.health;
+  s.motion = rows.motion;
+  if (!rows.i0_free.empty()) {
+    s.estimate = rows.i0_free.front();
+    s.have_estimate = true;
+    // theta from the calibrated ellipse correction (not solved): its calibration scatter, the sd
+    // of a normal law whose mean |error| the fit recorded.
+    const ThetaCorrection& tc = model.theta_correction;
+    if (s.estimate.theta_std_deg < 0.0 && tc.fitted()) {
+      s.estimate.theta_std_deg = std::sqrt(kPi / 2.0) * tc.summary.mean_relative_error;
+    }
+  }
+  const Features& last = features.at(bracket.frames.back().index);
+  s.blob_found = last.blob_found;
+  s.blob_x_px = last.centroid_px.x + geometry.roi_offset_x;
+  s.blob_y_px = last.centroid_px.y + geometry.roi_offset_y;
+  for (const FrameRecord& row : bracket.frames) {
+    const Features& f = features.at(row.index);
+    s.blob_found = s.blob_found && f.blob_found;
+    s.saturated = s.saturated || f.saturated_pixels > 0;
+    s.touches_border = s.touches_border || f.touches_border;
+    s.clipped = s.clipped || f.blob_clipped_by_roi;
+  }
+  s.has_position = s.have_estimate && std::isfinite(s.estimate.x_mm);
+  s.x_mm = s.estimate.x_mm;
+  s.y_mm = s.estimate.y_mm;
+  s.z_mm = s.estimate.z_mm;
+  s.x_se_mm = s.estimate.x_se_mm;
+  s.y_se_mm = s.estimate.y_se_mm;
+  s.z_se_mm = s.estimate.z_se_mm;
+  return s;
+}
+
+namespace {
+
+void Session::Finish() {
+  if (capture_ && live_->camera().streaming()) live_->camera().StopStream();
+  if (writer_) writer_->Close(Completion::kComplete);
+}
+
+// A size for a person: MB below a GB, GB above.
+std::string SizeText(double bytes) {
+  return bytes < 1e9 ? Fixed(bytes / 1e6, 1) + " MB" : Fixed(bytes / 1e9, 2) + " GB";
+}
+
+std::string Shortest(double value) {
+  char text[40];
+  std::snprintf(text, sizeof(text), "%g", value);
+  return text;
+}
+
+std::string Session::StopReason() const {
+  if (!writer_) return "";
+  const double recorded = static_cast<double>(recorded_bytes_);
+  const double next = static_cast<double>(last_bracket_bytes_);
+  if (args_.max_disk_gb > 0.0 && recorded + next > args_.max_disk_gb * 1e9) {
+    return "the recording (" + SizeText(recorded) + ") would exceed --max-disk-gb " +
+           Shortest(args_.max_disk_gb) + " with another bracket (" + SizeText(next) +
+           "); it is complete up to here. Give a larger --max-disk-gb to record longer.";
+  }
+  struct statvfs disk {};
+  if (::statvfs(writer_->dir().c_str(), &disk) != 0) {
+    return "the free space of " + writer_->dir() + " cannot be read (" + std::strerror(errno) +
+           "); stopped before the disk could fill.";
+  }
+  const double free_bytes = static_cast<double>(disk.f_bavail) * disk.f_frsize;
+  const double margin = std::min(kFreeMarginBytes, 0.05 * disk.f_blocks * disk.f_frsize);
+  if (free_bytes - next < margin) {
+    return "the disk of " + writer_->dir() + " has " + SizeText(free_bytes) +
+           " free; another bracket (" + SizeText(next) + ") would leave less than the margin of " +
+           SizeText(margin) + " (min(1 GiB, 5% of the disk)). Free space, or record to another "
+           "disk with --out.";
+  }
+  return "";
+}
+
+}  // namespace
+
+struct MeasureSession::Impl {
+  Session session;
+};
+
+MeasureSession::MeasureSession(const MeasureArgs& args, const CalibrationModel& model,
+                               CommandIo io)
+    : impl_(new Impl{Session(args, model, io)}) {}
+MeasureSession::~MeasureSession() = default;
+MeasureSample MeasureSession::Next(double time_s) { return impl_->session.Next(time_s); }
+std::string MeasureSession::StopReason() const { return impl_->session.StopReason(); }
+void MeasureSession::Finish() { impl_->session.Finish(); }
+const cv::Mat& MeasureSession::last_image() const { return impl_->session.last_image(); }
+const Features& MeasureSession::last_features() const { return impl_->session.last_features(); }
+int MeasureSession::bit_depth() const { return impl_->session.bit_depth(); }
+LiveCamera& MeasureSession::live() { return impl_->session.live(); }
+
+namespace {
+
+// Where the per-bracket output goes: JSON lines, a live line on a terminal, or plain lines.
+class MeasurePrinter {
+ public:
+  MeasurePrinter(std::ostream& out, bool json, bool tty) : out_(out), json_(json), tty_(tty) {}
+  void Print(const MeasureSample& s) {
+    if (json_) {
+      out_ << MeasureJson(s) << std::endl;
+    } else if (tty_) {
+      out_ << "\r\033[K" << MeasureLine(s, TerminalWidthChars(STDOUT_FILENO)) << std::flush;
+      line_open_ = true;
+    } else {
+      out_ << MeasureLine(s) << std::endl;
+    }
+  }
+  void Close() {
+    if (line_open_) out_ << "\n";
+    line_open_ = false;
+  }
+
+ private:
+  std::ostream& out_;
+  bool json_;
+  bool tty_;
+  bool line_open_ = false;
+};
+
+// The run's stderr warnings, each once: the optics fingerprint at the first bracket whose health
+// is assessed, the calibration health at the first unhealthy bracket (what to do), and the first
+// moving bracket.
+class MeasureWarnings {
+ public:
+  MeasureWarnings(const CalibrationModel& model, std::ostream& err) : model_(model), err_(err) {}
+  void Check(const MeasureSample& s) {
+    if (s.health.assessed && !fingerprint_done_) {
+      fingerprint_done_ = true;
+      const std::string w = OpticsFingerprintWarning(model_, s.health, s.estimate.d_mm);
+      if (!w.empty()) err_ << Break() << w << "\n";
+    }
+    if (s.health.flagged && !health_done_) {
+      health_done_ = true;
+      err_ << Break() << "warning: calibration health at bracket " << s.bracket << ": "
+           << s.health.Advice() << " (JSON health, live flag " << s.health.Label() << ").\n";
+    }
+    if (s.motion.moving && !motion_done_) {
+      motion_done_ = true;
+      err_ << Break() << "warning: bracket " << s.bracket << " moving: its per-exposure "
+           << "distances spread " << Fixed(s.motion.spread_mm, 1)
+           << " mm, beyond their noise; the IRED moved during the bracket. Its estimate mixes "
+              "positions: hold the IRED still, or discard brackets flagged moving.\n";
+    }
+  }
+
+ private:
+  // A warning under a live line starts on a line of its own.
+  const char* Break() const { return isatty(STDERR_FILENO) == 1 ? "\n" : ""; }
+  const CalibrationModel& model_;
+  std::ostream& err_;
+  bool fingerprint_done_ = false, health_done_ = false, motion_done_ = false;
+};
+
+bool StopNow(const MeasureArgs& args, int count, double elapsed_s) {
+  if (StopRequested().load()) return true;
+  if (args.count > 0 && count >= args.count) return true;
+  return args.duration_s > 0.0 && elapsed_s >= args.duration_s;
+}
+
+void CheckMeasureArgs(const MeasureArgs& args) {
+  if (args.record && args.out_dir.empty()) {
+    throw UsageError("measure: --record needs --out DIR (the recording goes to DIR/recording).");
+  }
+  if (args.max_disk_gb > 0.0 && !args.record) {
+    throw UsageError("measure: --max-disk-gb bounds a recording; give it with --record --out DIR.");
+  }
+  if (!args.out_dir.empty()) {
+    if (fs::exists(args.out_dir + "/recording") || fs::exists(args.out_dir + "/estimates.csv")) {
+      throw RunFolderError(args.out_dir +
+                           " holds an earlier measurement (estimates.csv or recording/); choose "
+                           "another --out folder.");
+    }
+    fs::create_directories(args.out_dir);
+  }
+}
+
+}  // namespace
+
+void RunMeasure(const MeasureArgs& args, CommandIo io) {
+  CheckMeasureArgs(args);
+  std::optional<RunFolderLock> folder_lock;  // one measurement per --out folder at a time
+  if (!args.out_dir.empty()) folder_lock.emplace(args.out_dir, "measure");
+  const CalibrationModel model = LoadModel(args.model);
+  SignalGuard guard;  // Ctrl-C ends the loop after the bracket in flight
+  MeasureSession session(args, model, io);
+  MeasurePrinter printer(io.out, args.json, !args.json && isatty(STDOUT_FILENO) == 1);
+  MeasureStats stats;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto elapsed = [&t0] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  std::string stopped;  // why the loop ended early, "" for --count, --duration and Ctrl-C
+  MeasureWarnings warnings(model, io.err);
+  while (!StopNow(args, stats.count(), elapsed())) {
+    stopped = session.StopReason();
+    if (!stopped.empty()) break;
+    const MeasureSample sample = session.Next(elapsed());
+    stats.Add(sample);
+    printer.Print(sample);
+    warnings.Check(sample);
+    if (!io.out) {
+      stopped = "stdout was closed (its reader went away) after bracket " +
+                std::to_string(sample.bracket) + ".";
+      break;
+    }
+  }
+  printer.Close();
+  const double wall_s = elapsed();
+  session.Finish();
+  std::ostream& summary = args.json || !io.out ? io.err : io.out;
+  summary << stats.Report(wall_s);
+  if (!stopped.empty()) summary << "Stopped: " << stopped << "\n";
+  if (!args.out_dir.empty()) summary << "Estimates: " << args.out_dir << "/estimates.csv\n";
+  if (args.record) summary << "Recording: " << args.out_dir << "/recording\n";
+}
+
+}  // namespace irdist

@@ -1,0 +1,370 @@
+#include "app/processing/bracket_estimates.h"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "acquisition/recording_reader.h"
+#include "app/processing/position.h"
+#include "estimator/estimate.h"
+#include "estimator/health.h"
+#include "estimator/models.h"
+
+namespace irdist {
+
+namespace {
+
+// The health of an estimate at d_mm from its measurement frames (estimator/health.h).
+HealthCheck HealthOfFrames(const CalibrationModel& model, double d_mm,
+                           const std::vector<Features>& measurements) {
+  std::vector<const Features*> frames;
+  for (const Features& f : measurements) frames.push_back(&f);
+  return CheckHealth(model, d_mm, frames);
+}
+
+// The range check's options for `model`: the calibration's error, its geometric fit's mean
+// relative error (what the distance leans on), beside each estimate's own.
+RangeOptions RangeOptionsOf(const CalibrationModel& model) {
+  RangeOptions options;
+  if (model.geometric.fitted()) {
+    options.calibration_rel_error = std::max(model.geometric.summary.mean_relative_error, 0.0);
+  }
+  return options;
+}
+
+// A row from estimate `e` of the exposures (t_ref_ms, t_ms) taken in `frames`: its values, the
+// calibrated ranges it lies outside, and whether it is an estimate at all.
+void FillRow(const CalibrationModel& model, const DistanceEstimate& e, double t_ref_ms,
+             const std::vector<double>& t_ms, const std::vector<const Features*>& frames,
+             EstimateRow* row) {
+  row->d_mm = e.d_mm;
+  row->theta_deg = e.theta_deg;
+  row->d_std_mm = e.d_std_mm;
+  row->theta_std_deg = e.theta_std_deg;
+  row->outside = OutsideRanges(model.ranges, e, t_ref_ms, t_ms, frames, RangeOptionsOf(model));
+  row->outside_range = !row->outside.empty();
+  // A fallback start (no root of Eq. 25 in range) is not a failure when the solver converged
+  // from it; a non-converged solve is.
+  row->ok = std::isfinite(e.d_mm) && e.d_mm > 0.0 && e.converged;
+}
+
+// Motion (estimator/estimate.h CheckMotion) of the joint row from its per-exposure rows.
+MotionCheck MotionOfRows(const std::vector<EstimateRow>& per_dt, EstimateRow* joint) {
+  if (!joint->ok) return MotionCheck{};
+  std::vector<double> d_mm, d_se_mm;
+  for (const EstimateRow& row : per_dt) {
+    if (!row.ok) continue;
+    d_mm.push_back(row.d_mm);
+    d_se_mm.push_back(row.d_std_mm);
+  }
+  const MotionCheck m = CheckMotion(joint->d_mm, d_mm, d_se_mm);
+  if (m.assessed) {
+    joint->motion = m.moving ? "moving" : "static";
+    joint->spread_mm = m.spread_mm;
+  }
+  return m;
+}
+
+// The rows of a bracket by one method before estimation: the joint (dt_ms = 0), then one per t_n.
+std::vector<EstimateRow> EmptyRows(const std::string& method, const EstimateRow& base,
+                                   const std::vector<DifferencePair>& pairs) {
+  std::vector<EstimateRow> rows(1 + pairs.size(), base);
+  for (size_t k = 0; k < rows.size(); ++k) {
+    rows[k].method = method;
+    rows[k].ok = false;
+    rows[k].dt_ms = k == 0 ? 0.0
+                           : (pairs[k - 1].measurement->requested_exposure_us -
+                              pairs[k - 1].reference->requested_exposure_us) /
+                                 1000.0;
+  }
+  return rows;
+}
+
+// One method's rows for a bracket: the joint estimate (dt_ms = 0), then one row per t_n. With
+// `checks`, the bracket's calibration health and motion (from this method's rows) go there.
+void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& options,
+                        const std::string& method, const EstimateRow& base,
+                        const std::vector<DifferencePair>& pairs, const FeatureMap& features,
+                        bool all_usable, std::vector<EstimateRow>* out,
+                        BracketEstimateRows* checks = nullptr) {
+  const FrameRecord& reference = *pairs.front().reference;
+  std::vector<Features> measurements;
+  std::vector<double> t_ms;
+  std::vector<const Features*> frames;  // every frame of the bracket, for the signal's range
+  for (const DifferencePair& pair : pairs) {
+    measurements.push_back(FeaturesOf(features, *pair.measurement));
+    t_ms.push_back(pair.measurement->requested_exposure_us / 1000.0);
+    frames.push_back(&FeaturesOf(features, *pair.reference));
+    frames.push_back(&FeaturesOf(features, *pair.measurement));
+  }
+  std::vector<EstimateRow> rows = EmptyRows(method, base, pairs);
+  DistanceEstimate none;  // without an estimate: the exposures' and the signal's ranges only
+  none.d_mm = none.theta_deg = NAN;
+  rows[0].outside = OutsideRanges(model.ranges, none, reference.requested_exposure_us / 1000.0,
+                                  t_ms, frames);
+  rows[0].outside_range = !rows[0].outside.empty();
+  if (all_usable && measurements.size() <= static_cast<size_t>(kMaxBracketExposures)) {
+    const double t_ref_ms = reference.requested_exposure_us / 1000.0;
+    const BracketEstimate estimate = EstimateBracket(model, FeaturesOf(features, reference),
+                                                     t_ref_ms, measurements, t_ms, options);
+    FillRow(model, estimate.joint, t_ref_ms, t_ms, frames, &rows[0]);
+    const HealthCheck health = HealthOfFrames(model, estimate.joint.d_mm, measurements);
+    rows[0].health = health.Label();
+    for (size_t k = 0; k < pairs.size(); ++k) {
+      // Each t_n with the reference it is differenced with (interleaved brackets).
+      const Features& ref = FeaturesOf(features, *pairs[k].reference);
+      const double ref_ms = pairs[k].reference->requested_exposure_us / 1000.0;
+      const DistanceEstimate e =
+          pairs[k].reference == &reference
+              ? estimate.per_exposure[k]
+              : EstimatePair(model, ref, ref_ms, measurements[k], t_ms[k], options);
+      FillRow(model, e, ref_ms, {t_ms[k]}, {&ref, &measurements[k]}, &rows[k + 1]);
+    }
+    const MotionCheck motion =
+        MotionOfRows(std::vector<EstimateRow>(rows.begin() + 1, rows.end()), &rows[0]);
+    if (checks != nullptr) {
+      checks->health = health;
+      checks->motion = motion;
+    }
+  }
+  out->insert(out->end(), rows.begin(), rows.end());
+}
+
+}  // namespace
+
+namespace {
+
+// The I0-dependent comparison's row of a bracket; it assumes the calibration's mean current.
+EstimateRow I0DependentRow(const CalibrationModel& model, const EstimateRow& base,
+                           const std::vector<DifferencePair>& pairs, const FeatureMap& features,
+                           bool all_usable) {
+  EstimateRow row = base;
+  row.method = "i0_dependent";
+  row.ok = false;
+  if (!all_usable) return row;
+  std::vector<Features> measurements;
+  std::vector<double> t_ms;
+  for (const DifferencePair& pair : pairs) {
+    measurements.push_back(FeaturesOf(features, *pair.measurement));
+    t_ms.push_back(pair.measurement->requested_exposure_us / 1000.0);
+  }
+  const FrameRecord& reference = *pairs.front().reference;
+  const I0DependentEstimate e =
+      EstimateI0Dependent(model, FeaturesOf(features, reference),
+                          reference.requested_exposure_us / 1000.0, measurements, t_ms,
+                          model.scaling.i0_scale_ma);
+  row.ok = e.valid;
+  row.d_mm = e.d_mm;
+  row.theta_deg = e.theta_deg;
+  row.outside_range = e.outside_calibrated_range;
+  if (row.outside_range) row.outside = {"distance"};
+  return row;
+}
+
+// Geometric baseline: the mean over the measurement frames; theta from their ellipses.
+EstimateRow GeometricRow(const CalibrationModel& model, const EstimateRow& base,
+                         const std::vector<DifferencePair>& pairs, const FeatureMap& features) {
+  EstimateRow row = base;
+  row.method = "geometric";
+  double sum_d = 0.0, sum_theta = 0.0;
+  int n = 0;
+  bool outside = false;
+  for (const DifferencePair& pair : pairs) {
+    const Features& f = FeaturesOf(features, *pair.measurement);
+    if (!f.Usable()) continue;
+    const GeometricEstimate g = EstimateGeometric(model, f);
+    if (!g.valid) continue;
+    sum_d += g.d_mm;
+    sum_theta += f.theta0_deg;
+    outside = outside || g.outside_calibrated_range;
+    ++n;
+  }
+  row.ok = n > 0;
+  row.d_mm = n > 0 ? sum_d / n : 0.0;
+  row.theta_deg = n > 0 ? sum_theta / n : 0.0;
+  row.outside_range = outside;
+  if (outside) row.outside = {"distance"};
+  return row;
+}
+
+// The bracket's row before estimation: its ids and ground truth. The truth is the geometry of
+// the recorded pose; a recording without pan and tilt (NaN) keeps its slide and theta.
+EstimateRow BaseRowOf(const RecordedBracket& bracket, const FrameRecord& first,
+                      const CameraGeometry& geometry) {
+  EstimateRow base;
+  base.bracket = static_cast<int>(bracket.bracket_id);
+  base.pose = static_cast<int>(bracket.bracket_id);
+  base.repeat = first.repeat;
+  base.true_d_mm = first.slide_mm;
+  base.true_theta_deg = first.theta_deg;
+  base.bias_ma = first.bias_ma_set;
+  // The bracket's time: its last frame's arrival (the estimate's data complete then).
+  const FrameRecord& last = bracket.frames.back();
+  base.utc_ns = last.host_time_ns;
+  base.host_monotonic_ns = last.host_monotonic_ns;
+  base.camera_timestamp_ns = last.camera_timestamp_ns;
+  const TrueGeometry truth =
+      TrueGeometryOf(geometry, first.slide_mm, first.pan_deg, first.tilt_deg);
+  if (std::isfinite(truth.d_mm)) {
+    base.true_d_mm = truth.d_mm;
+    base.true_theta_deg = truth.theta_deg;
+    base.true_x_mm = truth.x_mm;
+    base.true_y_mm = truth.y_mm;
+    base.true_z_mm = truth.z_mm;
+  }
+  return base;
+}
+
+}  // namespace
+
+namespace {
+
+// The blob's centre in the sensor's pixels: the mean centroid of the measurement frames (NaN
+// when some frame has no blob), with the standard error of that mean from their scatter (NaN
+// with one frame).
+BlobPoint BlobOf(const std::vector<DifferencePair>& pairs, const FeatureMap& features,
+                 const CameraGeometry& geometry) {
+  std::vector<cv::Point2d> centroids;
+  for (const DifferencePair& pair : pairs) {
+    const Features& f = FeaturesOf(features, *pair.measurement);
+    if (!f.blob_found) return BlobPoint{NAN, NAN, NAN, NAN};
+    centroids.push_back(f.centroid_px);
+  }
+  const double n = static_cast<double>(centroids.size());
+  cv::Point2d mean(0.0, 0.0);
+  for (const cv::Point2d& c : centroids) mean += c / n;
+  BlobPoint blob{mean.x + geometry.roi_offset_x, mean.y + geometry.roi_offset_y, NAN, NAN};
+  if (centroids.size() < 2) return blob;
+  double su = 0.0, sv = 0.0;
+  for (const cv::Point2d& c : centroids) {
+    su += (c.x - mean.x) * (c.x - mean.x);
+    sv += (c.y - mean.y) * (c.y - mean.y);
+  }
+  blob.u_se_px = std::sqrt(su / (n - 1.0) / n);
+  blob.v_se_px = std::sqrt(sv / (n - 1.0) / n);
+  return blob;
+}
+
+}  // namespace
+
+CameraGeometry GeometryOfRecording(const RecordingReader& reader) {
+  const RecordingHeader& h = reader.header();
+  if (h.rig_text.empty()) return CameraGeometry{};
+  return GeometryOfRigText(h.rig_text, h.rig_path.empty() ? reader.dir() + " (rig)" : h.rig_path);
+}
+
+BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
+                                            const FeatureMap& features,
+                                            const CalibrationModel& model,
+                                            const CameraGeometry& geometry) {
+  BracketEstimateRows rows;
+  if (!bracket.complete) return rows;
+  const std::vector<DifferencePair> pairs = DifferencePairsOf(bracket);
+  if (pairs.empty()) return rows;
+  const EstimateRow base = BaseRowOf(bracket, *pairs.front().measurement, geometry);
+  bool all_usable = true;
+  for (const DifferencePair& pair : pairs) {
+    all_usable = all_usable && FeaturesOf(features, *pair.reference).Usable() &&
+                 FeaturesOf(features, *pair.measurement).Usable();
+  }
+  EstimateMethodRows(model, EstimateOptions{}, "i0_free", base, pairs, features, all_usable,
+                     &rows.i0_free, &rows);
+  EstimateMethodRows(model, PaperEstimateOptions(), "paper", base, pairs, features, all_usable,
+                     &rows.paper);
+  if (model.Find(ModelKind::kDiffF) != nullptr) {
+    rows.i0_dependent.push_back(I0DependentRow(model, base, pairs, features, all_usable));
+  }
+  if (model.geometric.fitted()) rows.geometric.push_back(GeometricRow(model, base, pairs, features));
+  AddPositions(geometry, BlobOf(pairs, features, geometry),
+               {&rows.i0_free, &rows.paper, &rows.i0_dependent, &rows.geometric});
+  return rows;
+}
+
+std::vector<EstimateRow> FlattenRows(const BracketEstimateRows& bracket) {
+  std::vector<EstimateRow> rows = bracket.i0_free;
+  for (const auto* block : {&bracket.paper, &bracket.i0_dependent, &bracket.geometric}) {
+    rows.insert(rows.end(), block->begin(), block->end());
+  }
+  return rows;
+}
+
+std::vector<std::string> ModelFitnessWarnings(const CalibrationModel& model,
+                                              const std::string& model_path) {
+  std::vector<std::string> out;
+  const std::string head = "warning: model fitness (";
+  if (!model.provenance.known) {
+    out.push_back(head + "no_provenance): " + model_path +
+                  " has no provenance: block, so its camera, ROI and bracket cannot be checked "
+                  "against this one. Recalibrate with this build (irdist calibrate) to record it.");
+  } else if (model.provenance.camera_serial.empty()) {
+    out.push_back(head + "blank_serial): " + model_path +
+                  " names no camera serial (provenance.camera_serial is blank), so it is accepted "
+                  "for any camera. Write the calibration camera's serial there, or recalibrate.");
+  }
+  if (!model.blur_calibration.fitted()) {
+    out.push_back(head + "no_fingerprint): " + model_path +
+                  " has no calibrated blur (blur_calibration), the optics' fingerprint: neither "
+                  "its optics nor the calibration's health can be checked. Recalibrate with this "
+                  "build.");
+  }
+  return out;
+}
+
+std::string OpticsFingerprintWarning(const CalibrationModel& model, const HealthCheck& first,
+                                     double d_mm) {
+  if (!first.assessed || !first.flagged) return "";
+  const CalibratedRanges& r = model.ranges;
+  std::ostringstream out;
+  out.precision(3);
+  out << "warning: model fitness (optics_differ): the first bracket's blur is " << first.blur_var_px2
+      << " px^2 at " << std::lround(d_mm) << " mm, the model's " << first.calibrated_px2
+      << " px^2 there (its fingerprint:";
+  for (double d : {r.d_min_mm, 0.5 * (r.d_min_mm + r.d_max_mm), r.d_max_mm}) {
+    out << " " << std::lround(d) << " mm " << model.blur_calibration.BlurVarPx2(d) << " px^2";
+  }
+  out << "). The model was calibrated with other optics (another rig with this camera, another "
+         "lens or focus): use that rig's model, restore the focus, or recalibrate.";
+  return out.str();
+}
+
+std::string MotionWarning(int moving, int brackets) {
+  return std::to_string(moving) + " of " + std::to_string(brackets) +
+         " brackets flagged moving: their per-exposure distances disagree beyond their noise, "
+         "the IRED moved while the bracket was taken. Hold it still during a bracket (a station "
+         "settles after each move), or discard those estimates";
+}
+
+std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
+                                           const FeatureMap& features,
+                                           const CalibrationModel& model) {
+  std::vector<EstimateRow> all;
+  HealthCheck health;
+  const CameraGeometry geometry = GeometryOfRecording(reader);
+  int brackets = 0, moving = 0;
+  bool fingerprint_checked = false;
+  for (const RecordedBracket& bracket : reader.Brackets()) {
+    const BracketEstimateRows rows = EstimateRecordedBracket(bracket, features, model, geometry);
+    if (rows.health.assessed && !fingerprint_checked) {
+      fingerprint_checked = true;
+      const std::string warning =
+          OpticsFingerprintWarning(model, rows.health, rows.i0_free.front().d_mm);
+      if (!warning.empty()) std::fprintf(stderr, "%s\n", warning.c_str());
+    }
+    if (rows.health.flagged && !health.flagged) health = rows.health;
+    brackets += rows.i0_free.empty() ? 0 : 1;
+    moving += rows.motion.moving ? 1 : 0;
+    const std::vector<EstimateRow> flat = FlattenRows(rows);
+    all.insert(all.end(), flat.begin(), flat.end());
+  }
+  if (health.flagged) {  // once per recording
+    std::fprintf(stderr, "warning: calibration health: %s (estimates.csv column health).\n",
+                 health.Advice().c_str());
+  }
+  if (moving > 0) {
+    std::fprintf(stderr, "warning: %s (estimates.csv columns motion, spread_mm).\n",
+                 MotionWarning(moving, brackets).c_str());
+  }
+  return all;
+}
+
+}  // namespace irdist

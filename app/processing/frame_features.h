@@ -1,0 +1,68 @@
+#pragma once
+// The first link of the one chain from frames to distances (app/processing/): each frame's
+// features, computed the same way live (measure, calibrate and validate as frames arrive) and
+// offline (fit, playback), written to features.csv; and the differences of a bracket (each
+// measurement frame with its reference), which the calibration samples and the estimates share.
+// Live and offline call the same functions on the same rows, so the same recording (and model)
+// gives byte-identical files.
+
+#include <cstdint>
+#include <map>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "estimator/features.h"
+#include "estimator/fit.h"
+
+namespace irdist {
+
+// Forward declarations keep acquisition/recording_reader.h out of the callers of this header.
+class RecordingReader;
+struct FrameRecord;
+struct RecordedBracket;
+
+// Significant bits of a GenICam pixel format ("Mono12" -> 12); 16 when unknown.
+int BitDepthOfPixelFormat(const std::string& pixel_format);
+
+// Features of every row of a recording, by frame index.
+using FeatureMap = std::map<std::int64_t, Features>;
+
+// The features of one frame: the single function live and playback runs use. With a model
+// (`blob_fit_model` non-null: the estimation default), the blob's moment variances are replaced by
+// the likelihood fit with the calibrated blur (estimator/blob_fit.h, RefineWithBlobFit); without
+// one (calibration, or the moments path chosen), they stay the intensity-weighted moments.
+Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
+                       const CalibrationModel* blob_fit_model = nullptr);
+
+// The model FrameFeatures refines with (the blob fit): `model` unless its features.blob_fit is
+// false (the moments path), then nullptr.
+const CalibrationModel* BlobFitModelOf(const CalibrationModel& model);
+
+// Features of every row of `reader` (rows() order). Rows whose index is in `cache` (frames still
+// in memory from a live run, computed with the same model) are taken from it; the others are
+// computed from their PNG.
+FeatureMap RecordingFeatures(const RecordingReader& reader, const FeatureOptions& options,
+                             const FeatureMap& cache = {},
+                             const CalibrationModel* blob_fit_model = nullptr);
+
+// features.csv: one row per frame of the recording, in rows() order (columns in docs/reports.md).
+void WriteFeaturesCsv(const std::string& path, const std::vector<FrameRecord>& rows,
+                      const FeatureMap& features);
+
+// A number as features.csv writes it: %.10g, "nan" when not finite.
+std::string FeatureNumber(double value);
+
+// The features of `row` in `features`; a missing frame is a bug (IRDIST_CHECK).
+const Features& FeaturesOf(const FeatureMap& features, const FrameRecord& row);
+
+// A measurement frame of a bracket with the reference it is differenced with.
+struct DifferencePair {
+  const FrameRecord* reference = nullptr;
+  const FrameRecord* measurement = nullptr;
+};
+// The differences of a bracket: each measurement pairs with the nearest reference before it in
+// trigger order (interleaved brackets); a measurement before any reference is left out.
+std::vector<DifferencePair> DifferencePairsOf(const RecordedBracket& bracket);
+
+}  // namespace irdist

@@ -1,0 +1,354 @@
+#include "app/processing/recording_fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <ostream>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include "acquisition/recording_reader.h"
+#include "app/inputs/provenance.h"
+#include "app/inputs/recipe.h"
+#include "app/reports/calibration_plots.h"
+#include "app/reports/report.h"
+#include "estimator/blob_fit.h"
+#include "estimator/model_file.h"
+#include "estimator/models.h"
+
+namespace irdist {
+namespace {
+
+void Normalise(double poly[4]) {
+  double norm = 0.0;
+  for (int k = 0; k < 4; ++k) norm += poly[k] * poly[k];
+  norm = std::sqrt(norm);
+  if (norm > 0.0) {
+    for (int k = 0; k < 4; ++k) poly[k] /= norm;
+  }
+}
+
+}  // namespace
+
+std::vector<CalibrationSample> SamplesFromRecording(const RecordingReader& reader,
+                                                    const FeatureMap& features) {
+  std::vector<CalibrationSample> samples;
+  for (const RecordedBracket& bracket : reader.Brackets()) {
+    if (!bracket.complete) continue;
+    for (const DifferencePair& pair : DifferencePairsOf(bracket)) {
+      CalibrationSample s;
+      s.reference = FeaturesOf(features, *pair.reference);
+      s.measurement = FeaturesOf(features, *pair.measurement);
+      s.t_ref_ms = pair.reference->requested_exposure_us / 1000.0;
+      s.t_ms = pair.measurement->requested_exposure_us / 1000.0;
+      s.bias_ma = pair.measurement->bias_ma_set;
+      s.d_mm = pair.measurement->slide_mm;
+      s.theta_deg = std::fabs(pair.measurement->theta_deg);
+      samples.push_back(s);
+    }
+  }
+  return samples;
+}
+
+std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
+                                                  const std::vector<CalibrationSample>& samples,
+                                                  int eq25_curves) {
+  std::vector<CalibrationPoint> points;
+  const FittedModel* free_e = model.Find(ModelKind::kFreeE);
+  const FittedModel* free_s = model.Find(ModelKind::kFreeSigma);
+  if (free_e == nullptr || free_s == nullptr) return points;
+  const size_t stride =
+      eq25_curves > 0 ? std::max<size_t>(1, samples.size() / static_cast<size_t>(eq25_curves)) : 0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const CalibrationSample& s = samples[i];
+    if (!s.reference.Usable() || !s.measurement.Usable()) continue;
+    CalibrationPoint p;
+    p.d_mm = s.d_mm;
+    p.theta_deg = s.theta_deg;
+    p.bias_ma = s.bias_ma;
+    p.dt_ms = s.t_ms - s.t_ref_ms;
+    ModelInputs in;
+    in.d_mm = s.d_mm;
+    in.theta_deg = s.theta_deg;
+    in.bias_ma = s.bias_ma;
+    in.dt_ms = p.dt_ms;
+    in.df = s.measurement.f00 - s.reference.f00;
+    p.de_measured = s.measurement.e_rel - s.reference.e_rel;
+    p.ds_measured = s.measurement.sigma - s.reference.sigma;
+    p.de_model = free_e->Predict(model.scaling, in);
+    p.ds_model = free_s->Predict(model.scaling, in);
+    if (stride > 0 && i % stride == 0 && static_cast<int>(i / stride) < eq25_curves) {
+      // Eq. 25 (c - a) as a function of d at the true theta, each polynomial normalised.
+      std::array<double, kNumModelVars> vars = ScaleInputs(in, model.scaling);
+      double a[4], c[4];
+      vars[kVarRho] = Rho(s.theta_deg, free_s->sigma_deg);
+      AlgebraicPolynomialInD(GetModelSpec(ModelKind::kFreeSigma), free_s->coefficients.data(),
+                             vars.data(), p.ds_measured, c);
+      vars[kVarRho] = Rho(s.theta_deg, free_e->sigma_deg);
+      AlgebraicPolynomialInD(GetModelSpec(ModelKind::kFreeE), free_e->coefficients.data(),
+                             vars.data(), p.de_measured, a);
+      Normalise(a);
+      Normalise(c);
+      const double d_lo = 0.8 * model.ranges.d_min_mm, d_hi = 1.2 * model.ranges.d_max_mm;
+      for (int k = 0; k <= 60; ++k) {
+        const double d_mm = d_lo + (d_hi - d_lo) * k / 60.0;
+        const double x = model.scaling.ScaledD(d_mm);
+        double value = 0.0;
+        for (int j = 3; j >= 0; --j) value = value * x + (c[j] - a[j]);
+        p.eq25_d_mm.push_back(d_mm);
+        p.eq25_value.push_back(value);
+      }
+    }
+    points.push_back(std::move(p));
+  }
+  return points;
+}
+
+bool RecipeAsksForResponse(const RecordingReader& reader) {
+  const RecordingHeader& header = reader.header();
+  if (header.recipe_text.empty()) return false;
+  const std::string file =
+      header.recipe_path.empty() ? reader.dir() + "/recording.yaml (recipe)" : header.recipe_path;
+  return CameraResponseOfRecipeText(header.recipe_text, file) == CameraResponse::kRecover;
+}
+
+ResponseRecovery RecoverRecordingResponse(const RecordingReader& reader,
+                                          const FeatureOptions& options, std::ostream& out) {
+  const int bit_depth = reader.header().bit_depth;
+  ResponseOptions response_options;
+  response_options.neighbourhood_px = options.window_side_px;
+  ResponseRecoverer recoverer(bit_depth, response_options);
+  FeatureOptions locate = options;
+  locate.inverse_response = InverseResponse();
+  locate.response_scope = ResponseScope::kERelOnly;
+  int brackets = 0;
+  for (const RecordedBracket& bracket : reader.Brackets()) {
+    if (!bracket.complete) continue;
+    std::vector<cv::Mat> frames;
+    std::vector<double> exposures_us;
+    for (const FrameRecord& row : bracket.frames) {
+      cv::Mat image = reader.LoadImage(row);
+      if (image.type() != CV_16UC1) image.convertTo(image, CV_16UC1);
+      frames.push_back(image);
+      // The camera's own exposure when it reported one (the ratio is what the method uses).
+      exposures_us.push_back(row.actual_exposure_us > 0.0 ? row.actual_exposure_us
+                                                           : row.requested_exposure_us);
+    }
+    recoverer.AddStack(frames, exposures_us, locate);
+    ++brackets;
+  }
+  out << "Recovering the camera response from " << brackets << " brackets of " << reader.dir()
+      << "\n";
+  ResponseRecovery recovery = recoverer.Solve();
+  out << "  " << recovery.BriefReport() << "\n  f(M) at M =";
+  for (double m : {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9}) out << " " << FeatureNumber(m);
+  out << ":";
+  for (double m : {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9})
+    out << " " << FeatureNumber(std::round(recovery.curve.Apply(m) * 1e4) / 1e4);
+  out << "\n";
+  return recovery;
+}
+
+FeatureOptions WithResponse(const FeatureOptions& options, const ResponseRecovery& recovery) {
+  FeatureOptions out = options;
+  out.inverse_response = recovery.curve;
+  out.response_scope = ResponseScope::kAllPixels;
+  return out;
+}
+
+// The features a fit of `reader` uses: `options`, or with the camera response recovered from
+// the brackets when `force` or the recording's recipe asks for it (`*recovered` says which).
+FeatureOptions FitFeatureOptions(const RecordingReader& reader, const FeatureOptions& options,
+                                 bool force, std::ostream& out, bool* recovered) {
+  const bool recover = force || RecipeAsksForResponse(reader);
+  if (recovered != nullptr) *recovered = recover;
+  return recover ? WithResponse(options, RecoverRecordingResponse(reader, options, out)) : options;
+}
+
+// Fewer calibrated distances than Table 3's leave the I0-free Sigma model underdetermined
+// between them (docs/estimator.md).
+constexpr size_t kDenseDistances = 4;
+
+namespace {
+
+// Differences with a clean blob in both frames; throws when there is none.
+int CountUsableSamples(const RecordingReader& reader,
+                       const std::vector<CalibrationSample>& samples) {
+  int usable = 0;
+  for (const CalibrationSample& s : samples)
+    usable += s.reference.Usable() && s.measurement.Usable();
+  if (usable == 0) {
+    throw RecordingError(reader.dir() + ": no usable calibration sample (" +
+                         std::to_string(samples.size()) +
+                         " differences, none with a clean blob in both frames); check the "
+                         "exposures and the IRED current of the recipe.");
+  }
+  return usable;
+}
+
+void NoteSparseDistances(const std::vector<CalibrationSample>& samples, std::ostream& out) {
+  std::set<double> distances;
+  for (const CalibrationSample& s : samples) distances.insert(s.d_mm);
+  if (distances.size() < kDenseDistances) {
+    out << "  note: " << distances.size() << " calibrated distance"
+        << (distances.size() == 1 ? "" : "s") << ": the Sigma model interpolates poorly between "
+        << "so few (14% off halfway between 2 and 2.5 m on the virtual rig, against 0.1% with "
+        << "Table 3's 4); the estimates lean on the apparent size there. Calibrate at "
+        << kDenseDistances << " or more distances for the full accuracy.\n";
+  }
+}
+
+// Usable frames of the usable differences: each measurement, and each distinct reference once.
+int CountUsableFrames(const std::vector<CalibrationSample>& samples) {
+  std::set<std::tuple<double, double, double, double>> references;
+  int usable_frames = 0;
+  for (const CalibrationSample& s : samples) {
+    if (!s.reference.Usable() || !s.measurement.Usable()) continue;
+    usable_frames +=
+        1 + (references.insert({s.d_mm, s.theta_deg, s.bias_ma, s.t_ref_ms}).second ? 1 : 0);
+  }
+  return usable_frames;
+}
+
+// Unknowns of a model in its fitted form: its active coefficients and sigma.
+int ModelUnknowns(ModelKind kind, const FitOptions& fit_options) {
+  const bool free = kind == ModelKind::kFreeE || kind == ModelKind::kFreeSigma;
+  const ModelSpec& spec = GetModelSpec(kind);
+  int unknowns = 1;  // sigma
+  for (int i = 0; i < spec.num_coefficients(); ++i) {
+    unknowns += IsTermActive(spec, free ? fit_options.free_form : ModelForm::kFull, i) ? 1 : 0;
+  }
+  return unknowns;
+}
+
+// Models with more unknowns (coefficients + sigma) than observations are left out (a small
+// recipe with fewer than 25 differences cannot determine the 24-term direct Sigma model); an
+// undetermined I0-free model (Algorithm 1 needs both) is a RecordingError.
+std::vector<ModelKind> DeterminedModels(const RecordingReader& reader,
+                                        const std::vector<CalibrationSample>& samples, int usable,
+                                        const FitOptions& fit_options, std::ostream& out) {
+  const int usable_frames = CountUsableFrames(samples);
+  std::vector<ModelKind> kept;
+  for (ModelKind kind : fit_options.models) {
+    const bool direct = kind == ModelKind::kDirectE || kind == ModelKind::kDirectF ||
+                        kind == ModelKind::kDirectSigma;
+    const int observations = direct ? usable_frames : usable;
+    const int unknowns = ModelUnknowns(kind, fit_options);
+    if (observations > unknowns) {
+      kept.push_back(kind);
+    } else if (kind == ModelKind::kFreeE || kind == ModelKind::kFreeSigma) {
+      throw RecordingError(reader.dir() + ": " + std::to_string(observations) +
+                           " usable differences cannot determine the " + ToString(kind) +
+                           " model (" + std::to_string(unknowns) +
+                           " unknowns); record more poses (recipes/table3-calibration.yaml).");
+    } else {
+      out << "  " << ToString(kind) << ": not fitted (" << observations << " observations for "
+          << unknowns << " unknowns)\n";
+    }
+  }
+  return kept;
+}
+
+void PrintFitSummaries(const CalibrationModel& model, const std::string& model_path,
+                       std::ostream& out) {
+  for (const FittedModel& m : model.models) {
+    out << "  " << ToString(m.kind) << " (" << ToString(m.form) << "): " << m.summary.BriefReport()
+        << "\n";
+  }
+  out << "  geometric: " << model.geometric.summary.BriefReport() << "\n";
+  out << "Model: " << model_path << "\n";
+}
+
+// The calibration report; returns its index page.
+std::string WriteCalibrationReport(const RecordingReader& reader,
+                                   const std::vector<CalibrationSample>& samples,
+                                   const CalibrationModel& model, const std::string& model_path,
+                                   const std::string& report_dir) {
+  std::ostringstream text;
+  text << "Calibration from " << reader.dir() << "\n" << model.BriefReport() << "\n";
+  return WriteReport(report_dir, "irdist calibration",
+                     CalibrationReportFields(reader.dir(), model_path, model), text.str(),
+                     CalibrationPlots(CalibrationPointsOf(model, samples), model));
+}
+
+// The most calibration frames the crosstalk's split is fitted on (spread over the recording).
+constexpr std::size_t kCrosstalkFrames = 32;
+
+// The split of the calibrated blur into optics and crosstalk (estimator/blob_fit.h FitBlurSplit)
+// from up to kCrosstalkFrames usable measurement frames spread over the recording, each with the
+// blob fit's blur at its distance.
+void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& features,
+                        CalibrationModel* model, std::ostream& out) {
+  std::vector<const FrameRecord*> rows;
+  for (const FrameRecord& row : reader.rows()) {
+    const auto f = features.find(row.index);
+    if (row.role == FrameRole::kMeasurement && f != features.end() && f->second.Usable()) {
+      rows.push_back(&row);
+    }
+  }
+  std::vector<CrosstalkFrame> frames;
+  const std::size_t stride = std::max<std::size_t>(1, rows.size() / kCrosstalkFrames);
+  for (std::size_t i = 0; i < rows.size() && frames.size() < kCrosstalkFrames; i += stride) {
+    const Features& f = features.at(rows[i]->index);
+    const double d_mm = model->geometric.DistanceMm(f.moment_major_var_px2);
+    if (!std::isfinite(d_mm) || d_mm <= 0.0) continue;
+    frames.push_back({reader.LoadImage(*rows[i]), reader.header().bit_depth, f,
+                      BlobFitBlurVarPx2(*model, d_mm)});
+  }
+  const BlurSplit split = FitBlurSplit(frames);
+  model->blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
+  out << "  blur split: " << split.crosstalk_var_px2
+      << " px^2 after the pixels (crosstalk), the rest before them (optics); from " << split.frames
+      << " frames\n";
+}
+
+// The second pass of a calibration whose estimates use the blob fit: every frame's size from the
+// blob fit with the first pass's calibrated blur and split (what measurement computes), and the
+// models fitted again on those sizes, so the distance reads the size as measurement measures it
+// (any smooth difference between the moments and the fit calibrates out).
+CalibrationModel RefitOnBlobFitSizes(const RecordingReader& reader, const FeatureMap& features,
+                                     const FeatureOptions& feature_options,
+                                     const FitOptions& fit_options, const CalibrationModel& first,
+                                     std::ostream& out) {
+  FeatureMap refined = features;
+  int replaced = 0;
+  for (const FrameRecord& row : reader.rows()) {
+    const auto f = refined.find(row.index);
+    if (f == refined.end() || !f->second.Usable()) continue;
+    replaced += RefineWithBlobFit(reader.LoadImage(row), reader.header().bit_depth, first,
+                                  &f->second);
+  }
+  CalibrationModel model = Fit(SamplesFromRecording(reader, refined), feature_options, fit_options);
+  model.blur_calibration = first.blur_calibration;  // measured on the frames, unchanged
+  out << "  sizes from the blob fit on " << replaced << " frames; models fitted again on them\n";
+  return model;
+}
+
+}  // namespace
+
+CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
+                              const FeatureOptions& feature_options, const std::string& model_path,
+                              const std::string& report_dir, std::ostream& out) {
+  const std::vector<CalibrationSample> samples = SamplesFromRecording(reader, features);
+  const int usable = CountUsableSamples(reader, samples);
+  out << "Fitting " << samples.size() << " differences (" << usable << " usable) from "
+      << reader.dir() << "\n";
+  NoteSparseDistances(samples, out);
+  FitOptions fit_options;
+  fit_options.models = DeterminedModels(reader, samples, usable, fit_options, out);
+  CalibrationModel model = Fit(samples, feature_options, fit_options);
+  if (feature_options.blob_fit && model.geometric.fitted() && model.blur_calibration.fitted()) {
+    CalibrateCrosstalk(reader, features, &model, out);
+    model = RefitOnBlobFitSizes(reader, features, feature_options, fit_options, model, out);
+  }
+  model.provenance = ProvenanceOfRecording(reader);
+  SaveModel(model, model_path);
+  PrintFitSummaries(model, model_path, out);
+  if (!report_dir.empty()) {
+    out << "Report: " << WriteCalibrationReport(reader, samples, model, model_path, report_dir)
+        << "\n";
+  }
+  return model;
+}
+
+}  // namespace irdist

@@ -1,0 +1,56 @@
+#pragma once
+// Calibration from a recording (calibrate after its sweep, and `irdist fit`): the complete
+// brackets' differences as calibration samples, the camera response recovered when the recipe
+// asks for it, the fit of every model the samples determine, model.yaml and the calibration
+// report.
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "app/processing/frame_features.h"
+#include "app/reports/calibration_plots.h"
+#include "estimator/features.h"
+#include "estimator/fit.h"
+#include "estimator/response.h"
+
+namespace irdist {
+
+class RecordingReader;
+
+// Every (reference, measurement) pair of the recording's complete brackets; a measurement pairs
+// with the nearest reference before it in trigger order. Exposures are the requested ones.
+std::vector<CalibrationSample> SamplesFromRecording(const RecordingReader& reader,
+                                                    const FeatureMap& features);
+
+// Calibration: samples -> Fit (default options) -> SaveModel(model_path) -> report in report_dir
+// (measured vs modelled dE/dS, Eq. 25 curves). Prints each model's FitSummary to `out`.
+CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
+                              const FeatureOptions& feature_options, const std::string& model_path,
+                              const std::string& report_dir, std::ostream& out);
+
+// Whether a calibration of this recording recovers the camera response: its recipe's
+// `calibration: {camera_response: recover}` (read from the recording's copy of the recipe).
+bool RecipeAsksForResponse(const RecordingReader& reader);
+
+// The camera's inverse response from the complete brackets of `reader` (each bracket one static
+// stack at its frames' exposures; the neighbourhood is `options.window_side_px` around the blob).
+// Prints the recovery's BriefReport and the curve to `out`. Throws ResponseError when the brackets
+// cannot determine it (the message says how to fix the recipe).
+ResponseRecovery RecoverRecordingResponse(const RecordingReader& reader,
+                                          const FeatureOptions& options, std::ostream& out);
+
+// `options` with the recovered curve applied to every pixel (ResponseScope::kAllPixels).
+FeatureOptions WithResponse(const FeatureOptions& options, const ResponseRecovery& recovery);
+
+// The features a fit of `reader` uses: `options`, or with the camera response recovered from
+// the brackets when `force` or the recording's recipe asks for it (`*recovered` says which).
+FeatureOptions FitFeatureOptions(const RecordingReader& reader, const FeatureOptions& options,
+                                 bool force, std::ostream& out, bool* recovered = nullptr);
+
+// The report's calibration points (Fig. 7 and Fig. 8) for a fitted model.
+std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
+                                                  const std::vector<CalibrationSample>& samples,
+                                                  int eq25_curves = 4);
+
+}  // namespace irdist

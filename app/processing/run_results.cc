@@ -1,0 +1,86 @@
+#include "app/processing/run_results.h"
+
+#include <ostream>
+#include <sstream>
+
+#include "acquisition/recording_check.h"
+#include "acquisition/recording_reader.h"
+#include "app/cli/errors.h"
+#include "app/processing/bracket_estimates.h"
+#include "app/processing/recording_fit.h"
+#include "app/reports/crb.h"
+#include "app/reports/report.h"
+#include "app/reports/validation_plots.h"
+
+namespace irdist {
+
+// A recording with errors (what `irdist check` reports) is refused before anything is computed
+// from it: its first errors are listed with file:line.
+void RequireCleanRecording(const std::string& dir) {
+  const RecordingCheck check = CheckRecording(dir);
+  if (check.ok()) return;
+  std::ostringstream message;
+  message << dir << ": the recording has " << check.errors.size()
+          << " error(s); nothing is computed from it. First:";
+  for (size_t i = 0; i < check.errors.size() && i < 5; ++i) {
+    const RecordingCheck::Issue& issue = check.errors[i];
+    message << "\n  " << issue.file << (issue.line > 0 ? ":" + std::to_string(issue.line) : "")
+            << ": " << issue.message;
+  }
+  message << "\nRun `irdist check " << dir << "` for the full list, repair the recording (or "
+          << "restore it from a copy) and try again.";
+  throw CheckFailedError(message.str());
+}
+
+ValidationSummary WriteValidation(const std::string& dir, const std::vector<EstimateRow>& rows,
+                                  const std::map<std::string, std::string>& context,
+                                  std::ostream& out) {
+  WriteEstimatesCsv(dir + "/estimates.csv", rows);
+  ValidationSummary summary = Summarize(rows);
+  const std::map<std::string, CrbFigures> crb = ValidationCrb(context, summary);
+  WriteSummaryYaml(dir + "/summary.yaml", summary, context, crb);
+  const std::string index =
+      WriteReport(dir + "/report", "irdist validation",
+                  ValidationReportFields(context, summary, crb), summary.BriefReport(),
+                  ValidationPlots(rows, summary));
+  out << summary.BriefReport() << "\n";
+  out << "Estimates: " << dir << "/estimates.csv\nSummary: " << dir
+      << "/summary.yaml\nReport: " << index << "\n";
+  return summary;
+}
+
+void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& options,
+                          const FeatureMap& cache, std::ostream& out) {
+  RequireCleanRecording(run_dir + "/recording");
+  const RecordingReader reader(run_dir + "/recording");
+  const FeatureMap features = RecordingFeatures(reader, options, cache);
+  WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
+  out << "Recorded " << reader.rows().size()
+      << " frames (recipe: after: none); features: " << run_dir << "/features.csv\n";
+}
+
+void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
+                        const FeatureMap& cache, std::ostream& out) {
+  RequireCleanRecording(run_dir + "/recording");
+  const RecordingReader reader(run_dir + "/recording");
+  bool recovered = false;
+  const FeatureOptions fit_options = FitFeatureOptions(reader, options, false, out, &recovered);
+  // The live cache was computed without the curve: after a recovery every frame is recomputed.
+  const FeatureMap features =
+      RecordingFeatures(reader, fit_options, recovered ? FeatureMap{} : cache);
+  WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
+  FitRecording(reader, features, fit_options, run_dir + "/model.yaml", run_dir + "/report", out);
+}
+
+void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,
+                       const std::map<std::string, std::string>& context, const FeatureMap& cache,
+                       std::ostream& out) {
+  RequireCleanRecording(run_dir + "/recording");
+  const RecordingReader reader(run_dir + "/recording");
+  const FeatureMap features =
+      RecordingFeatures(reader, model.features, cache, BlobFitModelOf(model));
+  WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
+  WriteValidation(run_dir, EstimateRecording(reader, features, model), context, out);
+}
+
+}  // namespace irdist

@@ -1,0 +1,41 @@
+#pragma once
+// The last link of the chain: a run folder's results from its recording, the same for a live run
+// after its sweep (calibrate, validate) and the offline commands (fit, playback):
+// features.csv, then model.yaml + report/ (calibration) or estimates.csv + summary.yaml + report/
+// (validation). A recording with errors is refused first.
+
+#include <iosfwd>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "app/processing/frame_features.h"
+#include "app/reports/summary.h"
+#include "estimator/features.h"
+#include "estimator/fit.h"
+
+namespace irdist {
+
+// A recording with errors (what `irdist check` reports) is refused before anything is computed
+// from it: throws CheckFailedError listing its first errors with file:line.
+void RequireCleanRecording(const std::string& dir);
+
+// The processing after a live run, on DIR/recording: features.csv (frames in `cache` are taken
+// from it), then model.yaml + report/ (calibration) or estimates.csv + summary.yaml + report/
+// (validation, with `model`). A calibration whose recipe says `camera_response: recover` first
+// recovers the response from the brackets and recomputes every frame's features with it (the
+// cache, computed without it, is not used); the curve is stored in model.yaml.
+void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& options,
+                          const FeatureMap& cache, std::ostream& out);  // features.csv only
+void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
+                        const FeatureMap& cache, std::ostream& out);
+void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,
+                       const std::map<std::string, std::string>& context, const FeatureMap& cache,
+                       std::ostream& out);
+
+// Writes estimates.csv, summary.yaml and report/ into `dir`; prints the summary's BriefReport.
+ValidationSummary WriteValidation(const std::string& dir, const std::vector<EstimateRow>& rows,
+                                  const std::map<std::string, std::string>& context,
+                                  std::ostream& out);
+
+}  // namespace irdist

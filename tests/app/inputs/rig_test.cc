@@ -1,0 +1,384 @@
+#include "app/inputs/rig.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "app/cli/errors.h"
+#include "sim/rig_physics.h"
+
+namespace irdist {
+namespace {
+
+const std::string kRigs = std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs";
+
+TEST(RigTest, DefaultsAreValid) {
+  std::string why;
+  EXPECT_TRUE(CameraConfig().IsValid(&why)) << why;
+  EXPECT_TRUE(StationLimits().IsValid(&why)) << why;
+  EXPECT_TRUE(StationConfig().IsValid(&why)) << why;
+  EXPECT_TRUE(Rig().IsValid(&why)) << why;
+}
+
+TEST(RigTest, VirtualRigLoads) {
+  const Rig rig = LoadRig(kRigs + "/virtual.yaml");
+  EXPECT_EQ(rig.name, "virtual");
+  EXPECT_EQ(rig.kind, RigKind::kVirtual);
+  EXPECT_EQ(rig.camera.trigger_source, "Line1");
+  EXPECT_EQ(rig.station.limits.slide_mm.min, 1000.0);
+  EXPECT_EQ(rig.station.limits.slide_mm.max, 3500.0);
+  EXPECT_EQ(rig.station.limits.pan_deg.min, -45.0);
+  EXPECT_EQ(rig.station.limits.bias_ma.max, 600.0);
+  // A region around the sensor's centre, where the virtual IRED images at every pose.
+  EXPECT_EQ(rig.camera.roi_offset_x + rig.camera.roi_width / 2, 640);
+  EXPECT_EQ(rig.camera.roi_offset_y + rig.camera.roi_height / 2, 512);
+  std::string why;
+  EXPECT_TRUE(rig.IsValid(&why)) << why;
+}
+
+// The duration estimate and physical bound of a virtual rig use the rig file's camera.readout_ms;
+// the virtual camera reads out after virtual.camera.readout_ms. They must agree, or `irdist plan`
+// and bench/sweep measure against a wrong bound.
+TEST(RigTest, VirtualRigsEstimateWithTheirCamerasOwnReadout) {
+  for (const char* name : {"virtual.yaml", "virtual-cosm.yaml"}) {
+    const Rig rig = LoadRig(kRigs + "/" + name);
+    const sim::RigPhysics physics = sim::LoadRigPhysics(kRigs + "/" + name);
+    EXPECT_DOUBLE_EQ(rig.camera.readout_ms, physics.camera.readout_ms) << name;
+    EXPECT_DOUBLE_EQ(rig.station.motion.readout_ms, physics.camera.readout_ms) << name;
+  }
+}
+
+// The virtual rigs' intrinsics are those of their physics: f / pitch, the sensor's centre in
+// OpenCV's convention (pixel centres at whole numbers), no distortion.
+TEST(RigTest, VirtualRigsCarryTheIntrinsicsOfTheirPhysics) {
+  for (const char* name : {"virtual.yaml", "virtual-cosm.yaml", "virtual-offset.yaml"}) {
+    const Rig rig = LoadRig(kRigs + "/" + name);
+    const sim::RigPhysics physics = sim::LoadRigPhysics(kRigs + "/" + name);
+    const CameraIntrinsics& k = rig.camera.intrinsics;
+    ASSERT_TRUE(k.known) << name;
+    EXPECT_FALSE(k.in_roi_px) << name;
+    const double f_px = physics.optics.focal_length_mm / (physics.sensor.pixel_pitch_um * 1e-3);
+    EXPECT_NEAR(k.fx_px, f_px, 1e-5) << name;
+    EXPECT_NEAR(k.fy_px, f_px, 1e-5) << name;
+    EXPECT_DOUBLE_EQ(k.cx_px, 0.5 * physics.sensor.width_px - 0.5) << name;
+    EXPECT_DOUBLE_EQ(k.cy_px, 0.5 * physics.sensor.height_px - 0.5) << name;
+    for (double c : k.distortion) EXPECT_EQ(c, 0.0) << name;
+  }
+}
+
+TEST(RigTest, IntrinsicsNeedTheirKeysAndRefuseUnknownOnes) {
+  const std::string head =
+      "name: r\nkind: hardware\nstation:\n  port: /dev/ttyUSB0\ncamera:\n  id: 10.0.0.2\n"
+      "  intrinsics:\n";
+  const Rig rig = ParseRig(head + "    pixels: roi\n    fx: 2000\n    fy: 2001\n    cx: 127.5\n"
+                                  "    cy: 120\n    distortion: [-0.1, 0.01]\n",
+                           "r.yaml");
+  EXPECT_TRUE(rig.camera.intrinsics.in_roi_px);
+  EXPECT_EQ(rig.camera.intrinsics.fy_px, 2001.0);
+  EXPECT_EQ(rig.camera.intrinsics.distortion, (std::vector<double>{-0.1, 0.01}));
+  EXPECT_THROW(ParseRig(head + "    fx: 2000\n    fy: 2000\n    cx: 1\n", "r.yaml"), RecipeError);
+  EXPECT_THROW(ParseRig(head + "    fx: 2000\n    fy: 2000\n    cx: 1\n    cy: 1\n    k1: 0\n",
+                        "r.yaml"),
+               RecipeError);
+  EXPECT_THROW(ParseRig(head + "    fx: -1\n    fy: 2000\n    cx: 1\n    cy: 1\n", "r.yaml"),
+               RecipeError);
+  EXPECT_FALSE(LoadRig(kRigs + "/example-hardware.yaml").camera.intrinsics.known);
+}
+
+TEST(RigTest, EmitterOffsetIsThreeFiniteNumbersOnAHardwareRig) {
+  const std::string head = "name: r\nkind: hardware\ncamera:\n  id: 10.0.0.2\nstation:\n  port: "
+                           "/dev/ttyUSB0\n  emitter_offset_mm: ";
+  const Rig rig = ParseRig(head + "[5, 0, -80]\n", "r.yaml");
+  EXPECT_EQ(rig.station.emitter_offset_mm[0], 5.0);
+  EXPECT_EQ(rig.station.emitter_offset_mm[2], -80.0);
+  EXPECT_EQ(LoadRig(kRigs + "/example-hardware.yaml").station.emitter_offset_mm[2], 0.0);
+  EXPECT_THROW(ParseRig(head + "[5, 0]\n", "r.yaml"), RecipeError);
+  EXPECT_THROW(ParseRig(head + "[5, 0, .nan]\n", "r.yaml"), RecipeError);
+  // A virtual rig's emitter is placed by its physics (virtual.emitter.offset_*), not this key.
+  std::string text;
+  {
+    std::ifstream in(kRigs + "/virtual.yaml");
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const size_t at = text.find("  baud: 115200");
+  ASSERT_NE(at, std::string::npos);
+  text.insert(at, "  emitter_offset_mm: [0, 0, 10]\n");
+  EXPECT_THROW(ParseRig(text, "v.yaml"), RecipeError);
+}
+
+TEST(RigTest, ExampleHardwareRigLoads) {
+  const Rig rig = LoadRig(kRigs + "/example-hardware.yaml");
+  EXPECT_EQ(rig.kind, RigKind::kHardware);
+  EXPECT_EQ(rig.station.port, "/dev/ttyUSB0");
+  EXPECT_FALSE(rig.has_virtual_section);
+  EXPECT_EQ(rig.station.motion.slide.speed, 50.0);
+  EXPECT_EQ(rig.station.motion.pan.acceleration, 20.0);
+  EXPECT_EQ(rig.station.motion.readout_ms, rig.camera.readout_ms);
+  EXPECT_TRUE(rig.camera.FullFrame());  // no roi_px: the whole sensor until the user sets one
+}
+
+// Packed formats (PFNC Mono10p / Mono12p, GigE Vision Mono12Packed) are accepted as such.
+TEST(RigTest, PackedPixelFormatsAreAccepted) {
+  for (const char* format : {"Mono10p", "Mono12p", "Mono12Packed"}) {
+    const Rig rig = ParseRig(std::string("kind: virtual\ncamera:\n  pixel_format: ") + format +
+                                 "\n",
+                             "packed.yaml");
+    EXPECT_EQ(rig.camera.pixel_format, format);
+  }
+}
+
+TEST(RigTest, EveryKeyIsRead) {
+  const Rig rig = ParseRig(R"(name: lab
+kind: hardware
+camera:
+  id: "192.168.1.20"
+  pixel_format: Mono16
+  trigger_source: Line2
+  trigger_activation: FallingEdge
+  black_level: 12
+  packet_size: 8000
+  frame_timeout_ms: 2500
+  readout_ms: 40
+  roi_px: [300, 200, 320, 240]
+station:
+  port: /dev/ttyACM0
+  baud: 9600
+  reply_timeout_ms: 800
+  limits:
+    slide_mm: [1200, 3000]
+    pan_deg: [-30, 30]
+    tilt_deg: [-10, 10]
+    bias_ma: [100, 550]
+  motion:
+    slide: {speed: 80, acceleration: 100, settle_ms: 300}
+    pan: {speed: 10}
+    axes_move_together: false
+    frame_overhead_ms: 7
+    pose_overhead_ms: 90
+)",
+                           "lab.yaml");
+  EXPECT_EQ(rig.name, "lab");
+  EXPECT_EQ(rig.camera.id, "192.168.1.20");
+  EXPECT_EQ(rig.camera.pixel_format, "Mono16");
+  EXPECT_EQ(rig.camera.trigger_source, "Line2");
+  EXPECT_EQ(rig.camera.trigger_activation, "FallingEdge");
+  EXPECT_EQ(rig.camera.black_level, 12);
+  EXPECT_EQ(rig.camera.packet_size, 8000);
+  EXPECT_EQ(rig.camera.frame_timeout_ms, 2500);
+  EXPECT_FALSE(rig.camera.FullFrame());
+  EXPECT_EQ(rig.camera.roi_offset_x, 300);
+  EXPECT_EQ(rig.camera.roi_offset_y, 200);
+  EXPECT_EQ(rig.camera.roi_width, 320);
+  EXPECT_EQ(rig.camera.roi_height, 240);
+  EXPECT_EQ(rig.station.port, "/dev/ttyACM0");
+  EXPECT_EQ(rig.station.baud, 9600);
+  EXPECT_EQ(rig.station.reply_timeout_ms, 800);
+  EXPECT_EQ(rig.station.limits.slide_mm.min, 1200.0);
+  EXPECT_EQ(rig.station.limits.tilt_deg.max, 10.0);
+  EXPECT_EQ(rig.station.limits.bias_ma.min, 100.0);
+  const MotionModel& m = rig.station.motion;
+  EXPECT_EQ(m.slide.speed, 80.0);
+  EXPECT_EQ(m.slide.acceleration, 100.0);
+  EXPECT_EQ(m.slide.settle_ms, 300.0);
+  EXPECT_EQ(m.pan.speed, 10.0);
+  EXPECT_EQ(m.pan.acceleration, MotionModel().pan.acceleration);  // unspecified: default
+  EXPECT_FALSE(m.axes_move_together);
+  EXPECT_EQ(m.frame_overhead_ms, 7.0);
+  EXPECT_EQ(m.pose_overhead_ms, 90.0);
+  EXPECT_EQ(m.readout_ms, 40.0);
+}
+
+struct BadRig {
+  const char* what;
+  const char* text;
+  int line;
+  int column;
+  const char* message;
+};
+
+const BadRig kBadRigs[] = {
+    {"unknown camera key", "kind: virtual\ncamera:\n  exposure: 3\n", 3, 3,
+     "unknown key 'exposure' in camera"},
+    {"unknown top-level key", "kind: virtual\ncameras: {}\n", 2, 1, "did you mean 'camera'?"},
+    {"wrong type", "kind: virtual\nstation:\n  baud: fast\n", 3, 9, "must be a whole number"},
+    {"limits min above max", "kind: virtual\nstation:\n  limits:\n    pan_deg: [45, -45]\n", 4, 14,
+     "must have min < max"},
+    {"limits not a pair", "kind: virtual\nstation:\n  limits:\n    pan_deg: 45\n", 4, 14,
+     "a list [min, max]"},
+    {"bad pixel format", "kind: virtual\ncamera:\n  pixel_format: RGB8\n", 3, 17,
+     "valid: Mono8, Mono10, Mono10p, Mono12, Mono12p, Mono12Packed, Mono16"},
+    {"bad kind", "kind: imaginary\n", 1, 7, "valid: virtual, hardware"},
+    {"hardware with an automatic port", "kind: hardware\nstation:\n  port: auto\n", 3, 9,
+     "must name the serial device"},
+    {"roi not four numbers", "kind: virtual\ncamera:\n  roi_px: [0, 0, 256]\n", 3, 11,
+     "must be [offset_x, offset_y, width, height]"},
+    {"roi negative offset", "kind: virtual\ncamera:\n  roi_px: [-8, 0, 256, 256]\n", 3, 12,
+     "whole number >= 0"},
+    {"roi too small", "kind: virtual\ncamera:\n  roi_px: [0, 0, 64, 256]\n", 3, 11,
+     "width and height must be >= 96"},
+    {"negative speed", "kind: virtual\nstation:\n  motion:\n    tilt: {speed: -1}\n", 4, 19,
+     "speed must be > 0"},
+    // Huge numbers: refused before any cast or sum could overflow.
+    {"roi beyond any sensor", "kind: virtual\ncamera:\n  roi_px: [1e300, 0, 256, 256]\n", 3, 12,
+     "at most 1048576"},
+    {"limits beyond any station", "kind: virtual\nstation:\n  limits:\n    slide_mm: [0, 1e308]\n",
+     4, 15, "must lie within [-1000000, 1000000]"},
+    {"baud beyond any tty", "kind: virtual\nstation:\n  baud: 2000000000\n", 3, 9,
+     "1..4000000 bit/s"},
+    {"integer out of range", "kind: virtual\ncamera:\n  black_level: 2147483647\n", 3, 16,
+     "black_level '2147483647' is out of range"},
+    // A device key that is a list: was yaml-cpp's own "bad conversion", naming no file.
+    {"device name that is a list",
+     "kind: virtual\nstation:\n  roles: {motion: box, source: box, trigger: box}\n  devices:\n"
+     "    [a, b]: {driver: irdist_station, port: auto}\n",
+     5, 5, "the keys of station.devices must be names"},
+    {"device key that is a map",
+     "kind: virtual\nstation:\n  roles: {motion: box, source: box, trigger: box}\n  devices:\n"
+     "    box: {driver: irdist_station, port: auto, {a: 1}: 2}\n",
+     5, 47, "station.devices.box keys must be names"},
+};
+
+TEST(RigTest, BadRigFilesNameTheirLineAndColumn) {
+  for (const BadRig& bad : kBadRigs) {
+    SCOPED_TRACE(bad.what);
+    try {
+      ParseRig(bad.text, "rig.yaml");
+      ADD_FAILURE() << "no error";
+    } catch (const RecipeError& e) {
+      EXPECT_EQ(e.File(), "rig.yaml");
+      EXPECT_EQ(e.Line(), bad.line) << e.what();
+      EXPECT_EQ(e.Column(), bad.column) << e.what();
+      EXPECT_NE(e.Message().find(bad.message), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(RigTest, MissingRigFileIsARecipeError) {
+  EXPECT_THROW(LoadRig("/nonexistent/rig.yaml"), RecipeError);
+}
+
+// A legacy `station: {port, baud, ...}` is one irdist_station device filling every role.
+TEST(RigTest, ALegacyStationIsOneIrdistStationInEveryRole) {
+  const Rig rig = LoadRig(kRigs + "/example-hardware.yaml");
+  const StationSpec& spec = rig.station.composition;
+  ASSERT_EQ(spec.devices.size(), 1u);
+  EXPECT_EQ(spec.devices[0].name, "station");
+  EXPECT_EQ(spec.devices[0].driver, "irdist_station");
+  EXPECT_EQ(spec.devices[0].port, "/dev/ttyUSB0");
+  EXPECT_EQ(spec.devices[0].baud, 115200);
+  EXPECT_EQ(spec.motion, (std::vector<std::string>{"station"}));
+  EXPECT_EQ(spec.source, "station");
+  EXPECT_EQ(spec.trigger, "station");
+  EXPECT_FALSE(rig.station.composed);
+}
+
+constexpr const char* kComposed = R"(name: lab
+kind: hardware
+camera:
+  id: "192.168.1.20"
+  trigger_source: Line1
+station:
+  current_tolerance_ma: 2.5
+  roles:
+    motion: [box]
+    source: box
+    trigger: box
+  devices:
+    box:
+      driver: irdist_station
+      port: /dev/ttyUSB3
+      baud: 57600
+      trigger_width_us: 200
+)";
+
+TEST(RigTest, AComposedStationIsReadStrictly) {
+  const Rig rig = ParseRig(kComposed, "lab.yaml");
+  const StationSpec& spec = rig.station.composition;
+  EXPECT_TRUE(rig.station.composed);
+  ASSERT_EQ(spec.devices.size(), 1u);
+  EXPECT_EQ(spec.devices[0].port, "/dev/ttyUSB3");
+  EXPECT_EQ(spec.devices[0].baud, 57600);
+  EXPECT_EQ(spec.devices[0].settings.at("trigger_width_us").text, "200");
+  EXPECT_EQ(spec.devices[0].settings.at("trigger_width_us").line, 17);
+  EXPECT_DOUBLE_EQ(spec.current_tolerance_ma, 2.5);
+}
+
+TEST(RigTest, AMisspeltDriverKeyIsAnErrorWithItsLine) {
+  std::string text = kComposed;
+  text.replace(text.find("trigger_width_us"), 16, "trigger_widht_us");
+  try {
+    ParseRig(text, "lab.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.Line(), 17) << e.what();
+    EXPECT_NE(e.Message().find("trigger_width_us"), std::string::npos) << e.what();
+  }
+}
+
+TEST(RigTest, ARoleNamingNoDeviceIsAnError) {
+  std::string text = kComposed;
+  text.replace(text.find("source: box"), 11, "source: bx");
+  EXPECT_THROW(ParseRig(text, "lab.yaml"), RecipeError);
+}
+
+// Trigger settings are checked when the rig is loaded (plan time), with the fix.
+TEST(RigTest, TheTriggerMustMatchTheCamerasTriggerSource) {
+  std::string text = kComposed;
+  text.replace(text.find("trigger_source: Line1"), 21, "trigger_source: Software");
+  try {
+    ParseRig(text, "lab.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const RecipeError& e) {
+    EXPECT_NE(e.Message().find("Line1"), std::string::npos) << e.what();
+  }
+  text = kComposed;
+  text.replace(text.find("trigger: box"), 12, "trigger: camera_software");
+  try {
+    ParseRig(text, "lab.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const RecipeError& e) {
+    EXPECT_NE(e.Message().find("trigger_source: Software"), std::string::npos) << e.what();
+  }
+}
+
+// A composed lab: a Zaber stage and a source meter. `motion` and `source` are replaced below.
+std::string TwoDeviceRig(const std::string& motion, const std::string& slide_axes) {
+  return "kind: hardware\ncamera:\n  trigger_source: Software\nstation:\n  roles:\n"
+         "    motion: " + motion + "\n    source: meter\n    trigger: camera_software\n"
+         "  devices:\n    stage:\n      driver: zaber_ascii\n      port: /dev/ttyUSB0\n"
+         "      axes: " + slide_axes + "\n      fullstep_um: 6.35\n      fullstep_deg: 0.1\n"
+         "    meter:\n      driver: scpi_source\n      port: /dev/ttyUSB1\n"
+         "      compliance_v: 3\n";
+}
+
+// Roles and axes are checked when the rig is read (plan time), naming the rig file's line: a
+// source meter cannot move; an axis needs exactly one device (was station.cc's internal checks,
+// and "axis driven by 2 devices" without the file's name, at run time).
+TEST(RigTest, RolesDevicesCannotFillAndAxesWithoutOneDeviceNameTheRigFile) {
+  const std::string axes = "{slide: \"1 1\", pan: \"2 1\", tilt: \"3 1\"}";
+  EXPECT_NO_THROW(ParseRig(TwoDeviceRig("stage", axes), "lab.yaml"));
+  try {
+    ParseRig(TwoDeviceRig("[stage, meter]", axes), "lab.yaml");
+    ADD_FAILURE() << "a source meter accepted as a motion device";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.File(), "lab.yaml");
+    EXPECT_EQ(e.Line(), 17) << e.what();  // the meter's entry
+    EXPECT_NE(e.Message().find("station.roles.motion names device 'meter' (driver scpi_source), "
+                               "which cannot fill the motion role; name one that can: stage"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    ParseRig(TwoDeviceRig("stage", "{slide: \"1 1\", pan: \"2 1\"}"), "lab.yaml");
+    ADD_FAILURE() << "a rig without a tilt axis accepted";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.File(), "lab.yaml");
+    EXPECT_NE(e.Message().find("axis tilt is driven by 0 motion devices"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace irdist

@@ -1,0 +1,124 @@
+// Calibration from a recording: the pairing of measurement frames with their reference
+// (interleaved brackets; incomplete brackets left out), a recording too small for the models, and
+// the camera response recovered from the brackets.
+#include "app/processing/recording_fit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "acquisition/recording_reader.h"
+#include "acquisition/recording_writer.h"
+#include "app/processing/frame_features.h"
+#include "tests/app/small_recording.h"
+
+namespace irdist {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::SmallRecordingTest;
+using testing::Spot;
+
+TEST_F(SmallRecordingTest, MeasurementsPairWithThePrecedingReferenceOfCompleteBrackets) {
+  const RecordingReader reader((dir_ / "recording").string());
+  const FeatureMap features = RecordingFeatures(reader, FeatureOptions{});
+  const std::vector<CalibrationSample> samples = SamplesFromRecording(reader, features);
+  ASSERT_EQ(samples.size(), 2u);  // bracket 1 is incomplete
+  EXPECT_EQ(samples[0].t_ref_ms, 8.0);
+  EXPECT_EQ(samples[0].t_ms, 30.0);
+  EXPECT_EQ(samples[1].t_ms, 36.0);
+  EXPECT_EQ(samples[0].reference.e_rel, features.at(0).e_rel);
+  EXPECT_EQ(samples[1].reference.e_rel, features.at(2).e_rel);  // the retaken reference
+  EXPECT_NE(features.at(0).e_rel, features.at(2).e_rel);
+  EXPECT_EQ(samples[0].d_mm, 1800.0);
+  EXPECT_EQ(samples[0].theta_deg, 10.0);  // |theta|: the sign is not observable
+  EXPECT_EQ(samples[0].bias_ma, 500.0);
+}
+
+TEST_F(SmallRecordingTest, FitRefusesARecordingTooSmallForTheModels) {
+  const RecordingReader reader((dir_ / "recording").string());
+  const FeatureMap features = RecordingFeatures(reader, FeatureOptions{});
+  std::ostringstream out;
+  EXPECT_THROW(
+      FitRecording(reader, features, FeatureOptions{}, (dir_ / "model.yaml").string(), "", out),
+      RecordingError);
+  EXPECT_FALSE(fs::exists(dir_ / "model.yaml"));
+}
+
+// A recording whose recipe asks for the camera response, made with a compressive camera
+// (y = x - a x^2 / 4095 on the 12-bit value, sim/sensor.cc's form): the recovery reads the
+// brackets and returns the camera's inverse, and the features then use it on every pixel.
+TEST(OfflineResponse, RecoversTheCurveFromTheRecordingsBrackets) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("irdist-offline-response-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  const double a = 0.1;
+  auto compress = [a](const cv::Mat& linear) {
+    cv::Mat out(linear.size(), CV_16UC1);
+    for (int y = 0; y < linear.rows; ++y) {
+      for (int x = 0; x < linear.cols; ++x) {
+        const double v = linear.at<std::uint16_t>(y, x);
+        out.at<std::uint16_t>(y, x) =
+            static_cast<std::uint16_t>(std::lround(v - a * v * v / 4095.0));
+      }
+    }
+    return out;
+  };
+  RecordingHeader header;
+  header.bit_depth = 12;
+  header.pixel_format = "Mono12";
+  header.recipe_path = "recover.yaml";
+  header.recipe_text = "after: fit\ncalibration:\n  camera_response: recover\n";
+  {
+    auto writer = RecordingWriter::Open((dir / "recording").string(), header);
+    int bracket = 0;
+    for (double sigma_px : {3.0, 4.0, 5.0, 6.0}) {
+      const double exposures[] = {8.0, 30.0, 32.0, 34.0, 36.0};
+      for (int k = 0; k < 5; ++k) {
+        FrameRecord r;
+        r.bracket_id = bracket;
+        r.frame_in_bracket = k;
+        r.bracket_size = 5;
+        r.role = k == 0 ? FrameRole::kReference : FrameRole::kMeasurement;
+        r.requested_exposure_us = r.actual_exposure_us = exposures[k] * 1000.0;
+        r.slide_mm = 1800.0;
+        r.bias_ma_set = 500.0;
+        writer->Append(compress(Spot(exposures[k], sigma_px)), r);
+      }
+      ++bracket;
+    }
+    writer->Close(Completion::kComplete);
+  }
+  const RecordingReader reader((dir / "recording").string());
+  EXPECT_TRUE(RecipeAsksForResponse(reader));
+  std::ostringstream out;
+  const ResponseRecovery recovery = RecoverRecordingResponse(reader, FeatureOptions{}, out);
+  EXPECT_NE(out.str().find("camera response: 17 knots"), std::string::npos) << out.str();
+  EXPECT_EQ(recovery.stacks_used, 4);
+  // The camera's inverse from its formula: x(M) - 16 (black level), up to f's scale.
+  auto truth = [a](double m) {
+    return 4095.0 * (1.0 - std::sqrt(1.0 - 4.0 * a * m)) / (2.0 * a) - 16.0;
+  };
+  const double mid = 0.3;
+  for (double m = recovery.gray_min + 0.02; m < recovery.gray_max - 0.02; m += 0.02) {
+    EXPECT_NEAR(recovery.curve.Apply(m) / recovery.curve.Apply(mid), truth(m) / truth(mid), 0.005)
+        << "M = " << m << "; " << recovery.BriefReport();
+  }
+  const FeatureOptions with = WithResponse(FeatureOptions{}, recovery);
+  EXPECT_EQ(with.response_scope, ResponseScope::kAllPixels);
+  EXPECT_EQ(with.inverse_response.f, recovery.curve.f);
+  // A recording without the recipe key does not ask for it.
+  RecordingHeader plain = header;
+  plain.recipe_text = "after: fit\n";
+  {
+    auto writer = RecordingWriter::Open((dir / "plain").string(), plain);
+    writer->Close(Completion::kComplete);
+  }
+  EXPECT_FALSE(RecipeAsksForResponse(RecordingReader((dir / "plain").string())));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace irdist
