@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <Eigen/Dense>
+#include <boost/math/special_functions/bessel.hpp>
 #include <boost/math/tools/minima.hpp>
 #include <ceres/tiny_solver.h>
 
@@ -95,25 +96,54 @@ double SampledGaussian(double sd, int reach, std::vector<double>* kernel) {
   return var / sum;
 }
 
-// The response for a blur of `blur_var_px2` per axis (pixel area included) of which
-// `crosstalk_var_px2` comes after the sampling. The crosstalk kernel is the sampled Gaussian whose
-// variance on the grid is crosstalk_var_px2 (its sd found by bisection: at small variances the
-// sampled Gaussian's variance falls below sd^2).
-PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2) {
-  PixelResponse r;
-  r.optics_sd = std::sqrt(std::max(blur_var_px2 - kPixelAreaVarPx2 - crosstalk_var_px2, 0.01));
-  r.kernel = {1.0};
-  if (!(crosstalk_var_px2 > 1e-6)) return r;
+// The sampled, normalised Gaussian whose variance on the grid is `var` (its sd found by
+// bisection: at small variances the sampled Gaussian's variance falls below sd^2).
+std::vector<double> SampledGaussianOfVariance(double var) {
+  if (!(var > 1e-6)) return {1.0};
   double low = 0.05, high = 3.0;
   for (int i = 0; i < 50; ++i) {
     const double sd = 0.5 * (low + high);
     std::vector<double> k;
-    (SampledGaussian(sd, static_cast<int>(std::ceil(4.0 * sd)) + 1, &k) < crosstalk_var_px2
-         ? low
-         : high) = sd;
+    (SampledGaussian(sd, static_cast<int>(std::ceil(4.0 * sd)) + 1, &k) < var ? low : high) = sd;
   }
-  r.reach = static_cast<int>(std::ceil(4.0 * high)) + 1;
-  SampledGaussian(high, r.reach, &r.kernel);
+  std::vector<double> kernel;
+  SampledGaussian(high, static_cast<int>(std::ceil(4.0 * high)) + 1, &kernel);
+  return kernel;
+}
+
+// The lattice random walk of variance t: charge hopping between neighbouring pixels, e^-t I_n(t)
+// n pixels away (the modified Bessel function, Boost), to 1e-9.
+std::vector<double> LatticeWalk(double t) {
+  if (!(t > 1e-6)) return {1.0};
+  std::vector<double> half;
+  for (int n = 0; n == 0 || half.back() > 1e-9; ++n) {
+    half.push_back(std::exp(-t) * boost::math::cyl_bessel_i(n, t));
+  }
+  std::vector<double> kernel(2 * half.size() - 1);
+  const int reach = static_cast<int>(half.size()) - 1;
+  double sum = 0.0;
+  for (int n = -reach; n <= reach; ++n) sum += kernel[n + reach] = half[std::abs(n)];
+  for (double& w : kernel) w /= sum;
+  return kernel;
+}
+
+// The response for a blur of `blur_var_px2` per axis (pixel area included) of which
+// `crosstalk_var_px2` comes after the sampling: a kernel on the grid, a sampled Gaussian
+// convolved with a lattice random walk that carries `lattice_share` of the variance (sensors
+// and renderers spread charge either way; the split's fit tells them apart on a sharp edge).
+PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double lattice_share) {
+  PixelResponse r;
+  r.optics_sd = std::sqrt(std::max(blur_var_px2 - kPixelAreaVarPx2 - crosstalk_var_px2, 0.01));
+  r.kernel = {1.0};
+  if (!(crosstalk_var_px2 > 1e-6)) return r;
+  const double share = std::clamp(lattice_share, 0.0, 1.0);
+  const std::vector<double> g = SampledGaussianOfVariance((1.0 - share) * crosstalk_var_px2);
+  const std::vector<double> l = LatticeWalk(share * crosstalk_var_px2);
+  r.kernel.assign(g.size() + l.size() - 1, 0.0);
+  for (size_t i = 0; i < g.size(); ++i) {
+    for (size_t j = 0; j < l.size(); ++j) r.kernel[i + j] += g[i] * l[j];
+  }
+  r.reach = static_cast<int>(r.kernel.size() / 2);
   return r;
 }
 
@@ -414,7 +444,8 @@ double BlobEdgeValue(const double v[5], double x, double y, double optics_sd, do
 
 // FitBlob with `passes` IRLS passes (1: the read noise's weights alone, for FitBlurSplit).
 BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features& features,
-                            double blur_var_px2, double crosstalk_var_px2, int passes) {
+                            double blur_var_px2, const Crosstalk& crosstalk, int passes) {
+  const double crosstalk_var_px2 = crosstalk.var_px2;
   BlobFitResult out;
   out.blur_var_px2 = blur_var_px2;
   const double gauss_var = blur_var_px2 - kPixelAreaVarPx2;
@@ -432,7 +463,7 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
   const double scale = 1.0 / ((1 << bit_depth) - 1);
   const double read_var = std::max(ReadVariance(pixels, {v[0], v[1]}, reach), scale * scale / 12.0);
   WindowResiduals model(pixels, window.width, window.height,
-                        MakeResponse(blur_var_px2, out.crosstalk_var_px2));
+                        MakeResponse(blur_var_px2, out.crosstalk_var_px2, crosstalk.lattice_share));
   model.SetVariances(std::vector<double>(pixels.size(), read_var));
   bool ok = false;
   double chi2 = 0.0;
@@ -461,10 +492,10 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
 }
 
 BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& features,
-                      double blur_var_px2, double crosstalk_var_px2) {
+                      double blur_var_px2, const Crosstalk& crosstalk) {
   // IRLS, two passes: the read noise's weights, then the weights of the first pass's model (a
   // third pass, weights from the second's, moved no figure: docs/estimator.md "The blob fit").
-  return FitBlobPasses(image, bit_depth, features, blur_var_px2, crosstalk_var_px2, 2);
+  return FitBlobPasses(image, bit_depth, features, blur_var_px2, crosstalk, 2);
 }
 
 double BlobFitBlurVarPx2(const CalibrationModel& model, double d_mm) {
@@ -480,7 +511,9 @@ bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationMod
   if (!std::isfinite(d_mm) || d_mm <= 0.0) return false;
   const double blur = BlobFitBlurVarPx2(model, d_mm);
   const BlobFitResult fit =
-      FitBlob(image, bit_depth, *features, blur, model.blur_calibration.crosstalk_var_px2);
+      FitBlob(image, bit_depth, *features, blur,
+              {model.blur_calibration.crosstalk_var_px2,
+               model.blur_calibration.crosstalk_lattice_share});
   if (!fit.ok) return false;
   features->moment_major_var_px2 = fit.major_var_px2 + blur;
   features->moment_minor_var_px2 = fit.minor_var_px2 + blur;
@@ -489,14 +522,13 @@ bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationMod
 
 namespace {
 
-// The frames' summed first-pass cost with blur b + offset of which crosstalk_var comes after the
-// pixels; +inf when a frame's fit fails (no split may win by losing frames).
-double SplitCost(const std::vector<const CrosstalkFrame*>& frames, double crosstalk_var,
-                 double offset) {
+// The frames' summed first-pass cost with `crosstalk`; +inf when a frame's fit fails (no split
+// may win by losing frames).
+double SplitCost(const std::vector<const CrosstalkFrame*>& frames, const Crosstalk& crosstalk) {
   double sum = 0.0;
   for (const CrosstalkFrame* f : frames) {
-    const BlobFitResult fit = FitBlobPasses(f->image, f->bit_depth, f->features,
-                                            f->blur_var_px2 + offset, crosstalk_var, 1);
+    const BlobFitResult fit =
+        FitBlobPasses(f->image, f->bit_depth, f->features, f->blur_var_px2, crosstalk, 1);
     if (!fit.ok) return std::numeric_limits<double>::infinity();
     sum += fit.read_weighted_chi2 * fit.pixels;
   }
@@ -524,11 +556,21 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   }
   split.frames = static_cast<int>(usable.size());
   if (usable.empty()) return split;
-  // The optics keep at least 0.1 px of sd on every frame.
+  // The optics keep at least 0.1 px of sd on every frame. Coordinate descent, two rounds: the
+  // variance at the kernel's shape (a sampled Gaussian first), then the shape at the variance.
   constexpr double kMinOpticsVarPx2 = 0.01;
-  const auto cost = [&usable](double c) { return SplitCost(usable, c, 0.0); };
-  const double best = Minimise(cost, 0.0, min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2);
-  split.crosstalk_var_px2 = cost(best) <= cost(0.0) ? best : 0.0;
+  const double max_var = min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2;
+  Crosstalk best;
+  for (int round = 0; round < 2; ++round) {
+    const double share = best.lattice_share;
+    best.var_px2 = Minimise([&](double c) { return SplitCost(usable, {c, share}); }, 0.0, max_var);
+    const double var = best.var_px2;
+    best.lattice_share = Minimise([&](double l) { return SplitCost(usable, {var, l}); }, 0.0, 1.0);
+  }
+  if (SplitCost(usable, best) <= SplitCost(usable, {})) {
+    split.crosstalk_var_px2 = best.var_px2;
+    split.crosstalk_lattice_share = best.lattice_share;
+  }
   return split;
 }
 

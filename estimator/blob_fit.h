@@ -26,6 +26,16 @@
 
 namespace irdist {
 
+// The blur after the pixels sample the image (inter-pixel crosstalk): its variance (px^2 on the
+// grid) and the share of it spread as a lattice random walk (charge hopping to neighbours,
+// e^-t I_n(t)); the rest as a sampled Gaussian (a blur of the sampled image). Implicit from a
+// variance: a sampled Gaussian.
+struct Crosstalk {
+  Crosstalk(double var = 0.0, double share = 0.0) : var_px2(var), lattice_share(share) {}  // NOLINT
+  double var_px2;
+  double lattice_share;
+};
+
 struct BlobFitResult {
   bool ok = false;
   cv::Point2d center_px;
@@ -50,11 +60,11 @@ struct BlobFitResult {
 // Fits one frame's blob. image: the CV_16UC1 frame the features were computed on (bit_depth
 // significant bits); blur_var_px2: the blur variance per axis, pixel area included (> 1/12).
 // Returns ok = false when the features have no usable blob or the fit fails.
-// crosstalk_var_px2: the part of the blur that comes after the pixels sample the image
-// (inter-pixel crosstalk, charge diffusion), px^2 on the pixel grid; the rest, less the pixel's
-// area, is the optics' blur before them (BlurCalibration::crosstalk_var_px2, FitBlurSplit).
+// crosstalk: the part of the blur that comes after the pixels sample the image (inter-pixel
+// crosstalk), its variance on the pixel grid and its kernel's shape; the rest of the blur, less
+// the pixel's area, is the optics' before them (BlurCalibration::crosstalk_*, FitBlurSplit).
 BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& features,
-                      double blur_var_px2, double crosstalk_var_px2 = 0.0);
+                      double blur_var_px2, const Crosstalk& crosstalk = {});
 
 // The fit's model at one pixel (x, y) before crosstalk: the disc blurred by the optics' sd,
 // integrated over the pixel's square, relative to its amplitude, and its derivatives along
@@ -91,12 +101,13 @@ struct CrosstalkFrame {
 // residuals summed over the frames, minimised by Brent's method (Boost). The edge's shape on the
 // pixels tells the two blurs apart where the optics are sharp (a sharp image spread after the
 // sampling is not a blurred one sampled); at 0.7 px of optics and more they shape the edge alike
-// and either split serves. The crosstalk is modelled as a sampled Gaussian: a kernel of another
-// shape with the same variance (a lattice random walk, the virtual rig's) reads smaller
-// (docs/estimator.md). 0 when no frame is usable or the optics alone fit best. About 15 one-pass
-// blob fits per frame: give it a few dozen frames across the calibrated distances.
+// and either split serves. The kernel's shape is fitted too (Crosstalk::lattice_share): with a
+// sampled Gaussian alone a lattice walk of variance 0.64 read 0.25. Coordinate descent, two
+// rounds. 0 when no frame is usable or the optics alone fit best. About 60 one-pass blob fits per
+// frame: give it a few dozen frames across the calibrated distances.
 struct BlurSplit {
   double crosstalk_var_px2 = 0.0;
+  double crosstalk_lattice_share = 0.0;  // the kernel's shape (Crosstalk)
   int frames = 0;  // the frames that took part
 };
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);

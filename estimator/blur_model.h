@@ -19,6 +19,9 @@ struct BlurCalibration {
   // from calibration frames by the blob fit (blob_fit.h FitBlurSplit); 0 = all of it before
   // (optics), as in model files before it.
   double crosstalk_var_px2 = 0.0;
+  // The crosstalk kernel's shape: the share of its variance spread as a lattice random walk, the
+  // rest as a sampled Gaussian (blob_fit.h Crosstalk). 0 in files before it.
+  double crosstalk_lattice_share = 0.0;
   bool fitted() const { return noise_at_1m_px2 > 0.0; }
   double BlurVarPx2(double d_mm) const;
   double NoisePx2(double d_mm) const;

@@ -279,7 +279,10 @@ void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
   EmitDouble(out, "noise_at_1m_px2", b.noise_at_1m_px2);
   EmitDouble(out, "noise_exponent", b.noise_exponent);
   out << YAML::Key << "frames" << YAML::Value << b.frames;
-  if (b.crosstalk_var_px2 > 0.0) EmitDouble(out, "crosstalk_var_px2", b.crosstalk_var_px2);
+  if (b.crosstalk_var_px2 > 0.0) {
+    EmitDouble(out, "crosstalk_var_px2", b.crosstalk_var_px2);
+    EmitDouble(out, "crosstalk_lattice_share", b.crosstalk_lattice_share);
+  }
   out << YAML::EndMap;
 }
 
@@ -304,6 +307,14 @@ void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
     if (!(b->crosstalk_var_px2 >= 0.0) || !(b->crosstalk_var_px2 < b->c0_px2 + 10.0)) {
       rd.Fail(node["crosstalk_var_px2"], "blur_calibration.crosstalk_var_px2",
               "must be >= 0 and below the blur itself (px^2)");
+    }
+  }
+  if (Present(node, "crosstalk_lattice_share")) {  // optional: absent = a sampled Gaussian
+    b->crosstalk_lattice_share =
+        rd.Scalar<double>(node, "blur_calibration", "crosstalk_lattice_share");
+    if (!(b->crosstalk_lattice_share >= 0.0 && b->crosstalk_lattice_share <= 1.0)) {
+      rd.Fail(node["crosstalk_lattice_share"], "blur_calibration.crosstalk_lattice_share",
+              "must lie within [0, 1]");
     }
   }
   if (!(b->noise_at_1m_px2 > 0.0) || !std::isfinite(b->noise_exponent)) {

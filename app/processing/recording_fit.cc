@@ -297,8 +297,10 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
   }
   const BlurSplit split = FitBlurSplit(frames);
   model->blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
+  model->blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
   out << "  blur split: " << split.crosstalk_var_px2
-      << " px^2 after the pixels (crosstalk), the rest before them (optics); from " << split.frames
+      << " px^2 after the pixels (crosstalk; a lattice walk's share "
+      << split.crosstalk_lattice_share << "), the rest before them (optics); from " << split.frames
       << " frames\n";
 }
 

@@ -378,6 +378,7 @@ void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipe
   }
   const BlurSplit split = FitBlurSplit(frames);
   pl->model.blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
+  pl->model.blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
   std::printf("calibration %-10s blur split: %.4f px^2 after the pixels (crosstalk), %d frames\n",
               pl->name.c_str(), split.crosstalk_var_px2, split.frames);
 }

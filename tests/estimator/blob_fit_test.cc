@@ -198,15 +198,18 @@ TEST(BlobFit, TheModelsDerivativesAreItsFiniteDifferences) {
 // renderer of tests/estimator/disc_spectrum.h (exact in the Fourier domain: the disc, the optical
 // Gaussian before the pixels, their squares, the crosstalk after them): the disc's radius swept
 // over 5..6 px in 0.05 px steps (the virtual rig's far end) and over 10..11 px, the fit given the
-// blur and its split (the crosstalk's variance on the grid). For every mix of optics (0.3-1.0 px)
-// and crosstalk (0-1.0 px) the relative distance error stays within 0.05% peak to peak (the fit
+// blur and its split (the crosstalk's variance on the grid and its kernel: a sampled Gaussian, or a
+// lattice random walk). For every mix of optics (0.3-1.0 px) and crosstalk (0-1.0 px) the
+// relative distance error stays within 0.05% peak to peak (the fit
 // before issue 20, one Gaussian before the sampling, missed by 0.06-0.33%).
 struct BlurMix {
   double optics_px, crosstalk_px;
+  bool lattice = false;  // the crosstalk a lattice random walk, not a sampled Gaussian
 };
 
 double SizePeakToPeak(const BlurMix& mix, double first_radius_px, double* worst_bias) {
-  const double crosstalk_var = testing::CrosstalkVariance(mix.crosstalk_px);
+  const double crosstalk_var = mix.lattice ? mix.crosstalk_px * mix.crosstalk_px
+                                           : testing::CrosstalkVariance(mix.crosstalk_px);
   const double blur_var = mix.optics_px * mix.optics_px + 1.0 / 12.0 + crosstalk_var;
   std::vector<double> error;
   for (int k = 0; k <= 20; ++k) {
@@ -215,13 +218,15 @@ double SizePeakToPeak(const BlurMix& mix, double first_radius_px, double* worst_
     blob.a = blob.b = first_radius_px + 0.05 * k;
     blob.optics_sigma_px = mix.optics_px;
     blob.crosstalk_sigma_px = mix.crosstalk_px;
+    blob.crosstalk_lattice = mix.lattice;
     const cv::Mat frame =
         testing::DiscFrame16(testing::RenderDiscSpectrum(blob, 48), 50000.0, 1000.0);
     FeatureOptions options;
     options.window_side_px = 40;
     const Features f = ComputeFeatures(frame, 16, options);
     if (!f.Usable()) return 1.0;
-    const BlobFitResult fit = FitBlob(frame, 16, f, blur_var, crosstalk_var);
+    const BlobFitResult fit =
+        FitBlob(frame, 16, f, blur_var, {crosstalk_var, mix.lattice ? 1.0 : 0.0});
     if (!fit.ok) return 1.0;
     const double var = 0.5 * (fit.major_var_px2 + fit.minor_var_px2);
     error.push_back(-0.5 * (var / (blob.a * blob.a / 4.0) - 1.0));  // d ~ 1 / size
@@ -234,7 +239,7 @@ double SizePeakToPeak(const BlurMix& mix, double first_radius_px, double* worst_
 TEST(BlobFit, SizeDoesNotDependOnTheEdgesPhaseWhateverTheBlurMix) {
   for (const BlurMix mix : {BlurMix{0.7, 0.0}, BlurMix{0.3, 0.0}, BlurMix{0.3, 0.8},
                             BlurMix{0.5, 0.6}, BlurMix{0.7, 0.6}, BlurMix{1.0, 1.0},
-                            BlurMix{0.3, 0.4}}) {
+                            BlurMix{0.3, 0.4}, BlurMix{0.3, 0.8, true}}) {
     for (const double radius : {5.0, 10.0}) {
       double bias = 0.0;
       const double p2p = SizePeakToPeak(mix, radius, &bias);
@@ -242,20 +247,23 @@ TEST(BlobFit, SizeDoesNotDependOnTheEdgesPhaseWhateverTheBlurMix) {
                            << " px, radius " << radius << " px";
       // The size's own bias, phase aside: within 0.05% up to 0.7 px of optics; the first-order
       // edge model's third-order error shows at 1 px of optics on a 5 px disc (0.06%).
-      EXPECT_LT(bias, mix.optics_px <= 0.7 ? 5e-4 : 7.5e-4) << "optics " << mix.optics_px << " px, crosstalk "
+      EXPECT_LT(bias, mix.optics_px <= 0.7 ? 5e-4 : 7.5e-4)
+          << "optics " << mix.optics_px << " px, crosstalk "
                             << mix.crosstalk_px << " px, radius " << radius << " px";
     }
   }
 }
 
 // The split of the blur from the frames alone (FitBlurSplit): discs of 5-10 px rendered by the
-// independent renderer, each given its total blur; the crosstalk's variance comes back where the
+// independent renderer (crosstalk a sampled Gaussian or a lattice random walk), each given its
+// total blur; the crosstalk's variance and its kernel's shape come back where the
 // optics are sharp enough to show it, and at 0.7 px of optics (where the two blurs shape the edge
 // alike) the fit with the split found still holds the size (the phase sweep's bound).
 TEST(BlobFit, CalibrationFramesTellTheCrosstalkFromTheOptics) {
   for (const BlurMix mix : {BlurMix{0.3, 0.8}, BlurMix{0.5, 0.6}, BlurMix{0.3, 0.0},
-                            BlurMix{0.7, 0.6}}) {
-    const double crosstalk_var = testing::CrosstalkVariance(mix.crosstalk_px);
+                            BlurMix{0.7, 0.6}, BlurMix{0.3, 0.8, true}, BlurMix{0.5, 0.6, true}}) {
+    const double crosstalk_var = mix.lattice ? mix.crosstalk_px * mix.crosstalk_px
+                                             : testing::CrosstalkVariance(mix.crosstalk_px);
     std::vector<CrosstalkFrame> frames;
     for (const double radius : {5.0, 6.3, 7.7, 10.1}) {
       testing::DiscBlob blob;
@@ -264,6 +272,7 @@ TEST(BlobFit, CalibrationFramesTellTheCrosstalkFromTheOptics) {
       blob.a = blob.b = radius;
       blob.optics_sigma_px = mix.optics_px;
       blob.crosstalk_sigma_px = mix.crosstalk_px;
+      blob.crosstalk_lattice = mix.lattice;
       CrosstalkFrame frame;
       frame.image = testing::DiscFrame16(testing::RenderDiscSpectrum(blob, 48), 30000.0, 1000.0);
       frame.bit_depth = 16;
@@ -276,14 +285,19 @@ TEST(BlobFit, CalibrationFramesTellTheCrosstalkFromTheOptics) {
     const BlurSplit split = FitBlurSplit(frames);
     EXPECT_EQ(split.frames, 4);
     const std::string what = "optics " + std::to_string(mix.optics_px) + " px, crosstalk " +
-                             std::to_string(mix.crosstalk_px) + " px";
+                             std::to_string(mix.crosstalk_px) + " px" +
+                             (mix.lattice ? " (lattice)" : "");
     if (mix.optics_px <= 0.5) {
       EXPECT_NEAR(split.crosstalk_var_px2, crosstalk_var, 0.03) << what;
+      // The kernel's shape where there is crosstalk to see.
+      if (mix.crosstalk_px > 0.0) {
+        EXPECT_NEAR(split.crosstalk_lattice_share, mix.lattice ? 1.0 : 0.0, 0.25) << what;
+      }
       continue;
     }
     for (const CrosstalkFrame& f : frames) {
-      const BlobFitResult fit =
-          FitBlob(f.image, 16, f.features, f.blur_var_px2, split.crosstalk_var_px2);
+      const BlobFitResult fit = FitBlob(f.image, 16, f.features, f.blur_var_px2,
+                                        {split.crosstalk_var_px2, split.crosstalk_lattice_share});
       ASSERT_TRUE(fit.ok) << what;
       const double radius = 2.0 * std::sqrt(0.5 * (fit.major_var_px2 + fit.minor_var_px2));
       const double true_radius = 2.0 * std::sqrt(f.features.moment_major_var_px2 -

@@ -7,7 +7,8 @@
 // multiplies it by exp(-2 pi^2 s^2 |f|^2), the pixel's square by sinc(fx) sinc(fy); sampling at
 // the pixel centres folds the spectrum (the sum over the aliases f + k, k integer, which is what
 // makes a sharp image's sampled size depend on where its edge falls inside a pixel), and the
-// crosstalk multiplies the folded spectrum by its kernel's own transform. Nothing of the
+// crosstalk multiplies the folded spectrum by its kernel's own transform (a sampled Gaussian, or a
+// lattice random walk). Nothing of the
 // virtual rig's renderer (strips, erf) or of the estimator's edge model is used.
 
 #include <algorithm>
@@ -26,6 +27,9 @@ struct DiscBlob {
   double angle_deg = 0.0;           // major axis direction from +x
   double optics_sigma_px = 0.7;     // Gaussian blur before the pixels
   double crosstalk_sigma_px = 0.0;  // discrete Gaussian after them (sampled, normalised)
+  // true: the crosstalk is a lattice random walk of variance crosstalk_sigma_px^2 instead (charge
+  // hopping between neighbours: transform exp(-t (1 - cos 2 pi f)) per axis).
+  bool crosstalk_lattice = false;
 };
 
 // The crosstalk kernel's transform: a Gaussian of sigma sampled at the integers and normalised to
@@ -91,8 +95,13 @@ inline cv::Mat1d RenderDiscSpectrum(const DiscBlob& blob, int side) {
           folded += disc * optics * sx * sy * std::polar(1.0, phase);
         }
       }
-      folded *= CrosstalkTransform(blob.crosstalk_sigma_px, fx0) *
-                CrosstalkTransform(blob.crosstalk_sigma_px, fy0);
+      if (blob.crosstalk_lattice) {
+        const double t = blob.crosstalk_sigma_px * blob.crosstalk_sigma_px;
+        folded *= std::exp(-t * (2.0 - std::cos(2.0 * M_PI * fx0) - std::cos(2.0 * M_PI * fy0)));
+      } else {
+        folded *= CrosstalkTransform(blob.crosstalk_sigma_px, fx0) *
+                  CrosstalkTransform(blob.crosstalk_sigma_px, fy0);
+      }
       spectrum[static_cast<size_t>(ky) * side + kx] = folded;
     }
   }

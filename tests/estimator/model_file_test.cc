@@ -164,6 +164,35 @@ TEST(ModelFile, BlurTermsRoundTripAndNeedFormatFour) {
   }
 }
 
+// Issue 20: the blur's split (the crosstalk's variance and kernel shape) round trips; absent, the
+// whole blur is the optics'; out of range, refused at its line.
+TEST(ModelFile, CrosstalkSplitRoundTripsAndIsChecked) {
+  CalibrationModel model = SmallModel();
+  model.blur_calibration.c0_px2 = 0.9;
+  model.blur_calibration.noise_at_1m_px2 = 0.01;
+  model.blur_calibration.frames = 40;
+  EXPECT_EQ(ModelToYaml(model).find("crosstalk"), std::string::npos);  // none: no key
+  EXPECT_EQ(ModelFromYaml(ModelToYaml(model), "none.yaml").blur_calibration.crosstalk_var_px2, 0.0);
+  model.blur_calibration.crosstalk_var_px2 = 0.64 / 3.0;
+  model.blur_calibration.crosstalk_lattice_share = 0.7 / 3.0;
+  const std::string text = ModelToYaml(model);
+  const CalibrationModel back = ModelFromYaml(text, "split.yaml");
+  EXPECT_TRUE(BitEqual(back.blur_calibration.crosstalk_var_px2, 0.64 / 3.0));
+  EXPECT_TRUE(BitEqual(back.blur_calibration.crosstalk_lattice_share, 0.7 / 3.0));
+  EXPECT_EQ(ModelToYaml(back), text);
+  std::string bad = text;
+  const size_t at = bad.find("crosstalk_lattice_share: ");
+  ASSERT_NE(at, std::string::npos);
+  bad.replace(at, bad.find('\n', at) - at, "crosstalk_lattice_share: 1.5");
+  try {
+    ModelFromYaml(bad, "bad.yaml");
+    FAIL() << "a lattice share of 1.5 was accepted";
+  } catch (const ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("[0, 1]"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ModelFile, FileHoldsTheFitStatistics) {
   const std::string text = ModelToYaml(SmallModel());
   for (const char* key : {"format_version", "roi_policy", "mean_relative_error",
