@@ -15,7 +15,9 @@ namespace irdist {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kPixelAreaVarPx2 = 1.0 / 12.0;
+// The optics' variance keeps at least this (0.1 px of sd): the crosstalk cannot be the whole blur
+// (the edge model divides by the optics' sd).
+constexpr double kMinOpticsVarPx2 = 0.01;
 // A pass stops when a step changes the chi^2 by less than this: a parameter then moves by about
 // 1% of its standard error (TinySolver's function tolerance is absolute, in |f|^2 units).
 constexpr double kChi2Tolerance = 1e-4;
@@ -37,15 +39,15 @@ constexpr int kParams = 7;
 // but not the scatter (docs/estimator.md).
 constexpr double kCircleNoiseMultiple = 4.0;
 
-// The quantities of one pixel's edge geometry PixelMean and its derivatives share.
+// The quantities of one pixel's edge geometry SquareMean and its derivatives share.
 struct EdgeGeometry {
-  double dx, dy, gx, gy, pgx, pgy, r, n, dist, kappa, z;
+  double dx, dy, gx, gy, pgx, pgy, r, n, dist, kappa;
 };
 
-// d Phi(z) / d (x, y, P11, P12, P22) at one pixel (PixelMean's model), by the chain rule through
-// q = (p - c)^T P (p - c), g = P (p - c), n = |g|, dist = (sqrt q - q) / n and the curvature
-// kappa = (n^2 tr P - g^T P g) / n^3.
-// slope: the model's derivative along the edge's offset t = dist - shift kappa (SquareMean's).
+// d t / d (x, y, P11, P12, P22) times `slope` at one pixel, for SquareMean's edge offset
+// t = dist - shift kappa r: by the chain rule through q = (p - c)^T P (p - c), g = P (p - c),
+// n = |g|, dist = (sqrt q - q) / n, the level set's curvature kappa = (n^2 tr P - g^T P g) / n^3
+// and the edge's, kappa r (r = sqrt q). slope: the model's derivative along t.
 void DiscDerivatives(const double* v, const EdgeGeometry& e, double slope, double shift,
                      double* d) {
   const double n2 = e.n * e.n, inv_n = 1.0 / e.n, inv_n3 = inv_n / n2;
@@ -62,7 +64,8 @@ void DiscDerivatives(const double* v, const EdgeGeometry& e, double slope, doubl
     const double dgpg = 2.0 * (e.pgx * dgx[k] + e.pgy * dgy[k]) + dgpg_p[k];
     const double dkappa =
         (2.0 * e.n * dn * trace + n2 * dtrace[k] - dgpg) * inv_n3 - 3.0 * e.kappa * dn * inv_n;
-    d[k] = slope * (ddist - shift * dkappa);
+    const double dkappa_edge = e.r * dkappa + e.kappa * dq[k] * 0.5 / e.r;
+    d[k] = slope * (ddist - shift * dkappa_edge);
   }
 }
 
@@ -133,7 +136,8 @@ std::vector<double> LatticeWalk(double t) {
 // and renderers spread charge either way; the split's fit tells them apart on a sharp edge).
 PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double lattice_share) {
   PixelResponse r;
-  r.optics_sd = std::sqrt(std::max(blur_var_px2 - kPixelAreaVarPx2 - crosstalk_var_px2, 0.01));
+  r.optics_sd =
+      std::sqrt(std::max(blur_var_px2 - kPixelAreaVarPx2 - crosstalk_var_px2, kMinOpticsVarPx2));
   r.kernel = {1.0};
   if (!(crosstalk_var_px2 > 1e-6)) return r;
   const double share = std::clamp(lattice_share, 0.0, 1.0);
@@ -206,16 +210,13 @@ double SquareMean(const double* v, double x, double y, const PixelResponse& r, d
   const double sd = r.optics_sd * (1.0 + kappa_edge * kappa_edge * var_y2 / (8.0 * sd2));
   double slope = 0.0;
   const double value = SquareEdge(dist - shift * kappa_edge, gx / n, gy / n, sd, &slope);
-  // d kappa_edge = sqrt q d kappa + kappa d q / (2 sqrt q): the first through DiscDerivatives.
-  DiscDerivatives(v, {dx, dy, gx, gy, pgx, pgy, rq, n, dist, kappa, 0.0}, slope, shift * rq, d);
-  const double dq[5] = {-2.0 * gx, -2.0 * gy, dx * dx, 2.0 * dx * dy, dy * dy};
-  for (int k = 0; k < 5; ++k) d[k] -= slope * shift * kappa * dq[k] / (2.0 * rq);
+  DiscDerivatives(v, {dx, dy, gx, gy, pgx, pgy, rq, n, dist, kappa}, slope, shift, d);
   return value;
 }
 
 // `in` (rows x cols, row-major) convolved with `kernel` along x (dx = 1) or y, keeping the valid
 // part: (rows x (cols - 2 reach)) or ((rows - 2 reach) x cols).
-std::vector<double> Convolve(const std::vector<double>& in, int rows, int cols,
+std::vector<double> Convolve(const double* in, int rows, int cols,
                              const std::vector<double>& kernel, bool along_x) {
   const int reach = static_cast<int>(kernel.size() / 2);
   const int out_rows = along_x ? rows : rows - 2 * reach;
@@ -276,28 +277,29 @@ class WindowResiduals {
  private:
   // The model on the window grown by the crosstalk's reach (planes: the mean, then its five
   // derivatives), each pixel's square integrated, then spread by the crosstalk onto the window.
+  // Without crosstalk the grid is the window and the planes are mean_ and d_mean_ themselves.
   void Compute(const double* v) const {
     const int reach = response_.reach;
     const int cols = cols_ + 2 * reach, rows = rows_ + 2 * reach;
-    std::vector<std::vector<double>> planes(
-        6, std::vector<double>(static_cast<size_t>(cols) * rows));
+    const size_t grid = static_cast<size_t>(cols) * rows;
+    if (reach > 0) grown_.resize(6 * grid);
+    double* mean = reach > 0 ? grown_.data() : mean_.data();
+    double* d_mean = reach > 0 ? grown_.data() + grid : d_mean_.data();
     double d[5];
     for (int row = 0; row < rows; ++row) {
       for (int col = 0; col < cols; ++col) {
         const size_t i = static_cast<size_t>(row) * cols + col;
-        planes[0][i] = SquareMean(v, col - reach, row - reach, response_, d);
-        for (int k = 0; k < 5; ++k) planes[k + 1][i] = d[k];
+        mean[i] = SquareMean(v, col - reach, row - reach, response_, d);
+        for (int k = 0; k < 5; ++k) d_mean[k * grid + i] = d[k];
       }
     }
     const size_t n = pixels_.size();
-    for (int p = 0; p < 6; ++p) {
-      std::vector<double> spread = planes[p];
-      if (reach > 0) {
-        spread = Convolve(Convolve(spread, rows, cols, response_.kernel, true), rows, cols_,
-                          response_.kernel, false);
-      }
-      double* out = p == 0 ? mean_.data() : d_mean_.data() + (p - 1) * n;
-      std::copy(spread.begin(), spread.end(), out);
+    for (int p = 0; reach > 0 && p < 6; ++p) {
+      const std::vector<double> across =
+          Convolve(grown_.data() + p * grid, rows, cols, response_.kernel, true);
+      const std::vector<double> spread =
+          Convolve(across.data(), rows, cols_, response_.kernel, false);
+      std::copy(spread.begin(), spread.end(), p == 0 ? mean_.data() : d_mean_.data() + (p - 1) * n);
     }
     std::copy(v, v + kParams, at_);
     computed_ = true;
@@ -309,6 +311,7 @@ class WindowResiduals {
   std::vector<double> inv_sd_;
   // The last point computed and its model (TinySolver holds the functor const).
   mutable std::vector<double> mean_, d_mean_;
+  mutable std::vector<double> grown_;  // with crosstalk: the planes on the window grown by reach
   mutable double at_[kParams] = {};
   mutable bool computed_ = false;
 };
@@ -450,11 +453,10 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
   out.blur_var_px2 = blur_var_px2;
   const double gauss_var = blur_var_px2 - kPixelAreaVarPx2;
   if (!features.Usable() || !features.ellipse_moments.valid || image.type() != CV_16UC1 ||
-      !(gauss_var > 0.01) || !(crosstalk_var_px2 >= 0.0)) {
+      !(gauss_var > kMinOpticsVarPx2) || !(crosstalk_var_px2 >= 0.0)) {
     return out;
   }
-  // The optics keep at least a 0.1 px sd: the crosstalk cannot be the whole blur.
-  out.crosstalk_var_px2 = std::min(crosstalk_var_px2, gauss_var - 0.01);
+  out.crosstalk_var_px2 = std::min(crosstalk_var_px2, gauss_var - kMinOpticsVarPx2);
   cv::Rect window;
   const std::vector<Pixel> pixels = BlobPixels(image, bit_depth, features, blur_var_px2, &window);
   double v[kParams];
@@ -498,18 +500,19 @@ BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& featu
   return FitBlobPasses(image, bit_depth, features, blur_var_px2, crosstalk, 2);
 }
 
-double BlobFitBlurVarPx2(const CalibrationModel& model, double d_mm) {
+double BlobFitBlurVarPx2(const CalibrationModel& model, const Features& features) {
+  if (!model.geometric.fitted()) return 0.0;
+  const double d_mm = model.geometric.DistanceMm(features.moment_major_var_px2);
+  if (!std::isfinite(d_mm) || d_mm <= 0.0) return 0.0;
   const BlurCalibration& b = model.blur_calibration;
   return b.fitted() ? b.BlurVarPx2(d_mm) : model.geometric.BlurVarPx2(d_mm);
 }
 
 bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
                        Features* features) {
-  const GeometricModel& g = model.geometric;
-  if (!g.fitted() || !features->Usable()) return false;
-  const double d_mm = g.DistanceMm(features->moment_major_var_px2);
-  if (!std::isfinite(d_mm) || d_mm <= 0.0) return false;
-  const double blur = BlobFitBlurVarPx2(model, d_mm);
+  if (!features->Usable()) return false;
+  const double blur = BlobFitBlurVarPx2(model, *features);
+  if (!(blur > 0.0)) return false;
   const BlobFitResult fit =
       FitBlob(image, bit_depth, *features, blur,
               {model.blur_calibration.crosstalk_var_px2,
@@ -556,9 +559,8 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   }
   split.frames = static_cast<int>(usable.size());
   if (usable.empty()) return split;
-  // The optics keep at least 0.1 px of sd on every frame. Coordinate descent, two rounds: the
-  // variance at the kernel's shape (a sampled Gaussian first), then the shape at the variance.
-  constexpr double kMinOpticsVarPx2 = 0.01;
+  // Coordinate descent, two rounds: the variance at the kernel's shape (a sampled Gaussian first),
+  // then the shape at the variance; the optics keep kMinOpticsVarPx2 on every frame.
   const double max_var = min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2;
   Crosstalk best;
   for (int round = 0; round < 2; ++round) {

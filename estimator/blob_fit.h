@@ -72,17 +72,18 @@ BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& featu
 // Exposed for its test (the derivatives against finite differences).
 double BlobEdgeValue(const double v[5], double x, double y, double optics_sd, double d[5]);
 
-// The blur the blob fit is given at d_mm: the calibrated blur (BlurCalibration, measured on every
-// calibration frame from the blob's cumulants, crosstalk included) where the model has it, else
-// the geometric model's b(u).
-double BlobFitBlurVarPx2(const CalibrationModel& model, double d_mm);
+// The blur the blob fit is given for a frame: at the distance its moments give through the
+// geometric model, the calibrated blur (BlurCalibration, measured on every calibration frame from
+// the blob's cumulants, crosstalk included) where the model has it, else the geometric model's
+// b(u). 0 when the model has no geometric fit or the moments give no distance.
+double BlobFitBlurVarPx2(const CalibrationModel& model, const Features& features);
 
-// The default path's hook: the blur (BlobFitBlurVarPx2) at the moments' geometric distance,
-// FitBlob with the model's crosstalk split, and the features' moment variances replaced by the
-// fit's (disc + that blur). The calibration fits its geometric model on these same sizes (a
-// second pass, app/processing/recording_fit.cc), so measurement and calibration see one size.
-// Leaves the features unchanged when the model has no geometric fit or the blob fit fails.
-// Returns whether it replaced.
+// The default path's hook: the blur (BlobFitBlurVarPx2), FitBlob with the model's crosstalk
+// split, and the features' moment variances replaced by the fit's (disc + that blur). The
+// calibration fits its geometric model on these same sizes (a second pass,
+// app/processing/recording_fit.cc), so measurement and calibration see one size. Leaves the
+// features unchanged when the model has no geometric fit or the blob fit fails. Returns whether
+// it replaced.
 bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
                        Features* features);
 

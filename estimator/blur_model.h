@@ -7,6 +7,10 @@
 
 namespace irdist {
 
+// The pixel's own area, part of every blur variance measured on pixels (per axis, px^2): the
+// variance of a uniform over one pixel.
+constexpr double kPixelAreaVarPx2 = 1.0 / 12.0;
+
 // The calibrated blur: blur_var(u) = c0 + c1 u + c2 u^2, u = 1000 mm / d (the thin lens's defocus
 // variance is quadratic in u), and the per-frame sd of the measurement around it,
 // sd(d) = noise_at_1m (d / 1000 mm)^noise_exponent, both from the calibration frames.

@@ -7,11 +7,6 @@
 #include "estimator/fit.h"
 
 namespace irdist {
-namespace {
-
-constexpr double kPixelBoxVar = 1.0 / 12.0;  // the pixel's area, part of every measured blur
-
-}  // namespace
 
 const char* HealthCheck::Label() const {
   if (!assessed) return "-";
@@ -26,6 +21,12 @@ std::string HealthCheck::Advice() const {
          "% from the calibration's at this distance: the optics changed (focus ring, lens, "
          "temperature). Restore the calibration's focus, or recalibrate; distances from this "
          "model are biased until then";
+}
+
+double BlurSigmaChange(double measured_var_px2, double calibrated_var_px2) {
+  const double measured = std::max(measured_var_px2 - kPixelAreaVarPx2, 0.0);
+  const double calibrated = std::max(calibrated_var_px2 - kPixelAreaVarPx2, 1e-6);
+  return std::sqrt(measured / calibrated) - 1.0;
 }
 
 HealthCheck CheckHealth(const CalibrationModel& model, double d_mm,
@@ -44,9 +45,7 @@ HealthCheck CheckHealth(const CalibrationModel& model, double d_mm,
   h.blur_var_px2 = sum / h.frames;
   h.calibrated_px2 = cal.BlurVarPx2(d_mm);
   h.z = (h.blur_var_px2 - h.calibrated_px2) / (cal.NoisePx2(d_mm) / std::sqrt(h.frames));
-  const double measured = std::max(h.blur_var_px2 - kPixelBoxVar, 0.0);
-  const double calibrated = std::max(h.calibrated_px2 - kPixelBoxVar, 1e-6);
-  h.sigma_change = std::sqrt(measured / calibrated) - 1.0;
+  h.sigma_change = BlurSigmaChange(h.blur_var_px2, h.calibrated_px2);
   h.flagged = std::fabs(h.z) > options.z_limit && std::fabs(h.sigma_change) > options.min_sigma_change;
   return h;
 }

@@ -39,6 +39,10 @@ struct HealthCheck {
   std::string Advice() const;
 };
 
+// The relative change of the blur's sd, the pixel's area removed, from the calibrated blur
+// variance to the measured one (both pixel area included): HealthCheck::sigma_change.
+double BlurSigmaChange(double measured_var_px2, double calibrated_var_px2);
+
 // The health of one estimate at distance d_mm from its measurement frames.
 HealthCheck CheckHealth(const CalibrationModel& model, double d_mm,
                         const std::vector<const Features*>& frames,

@@ -14,7 +14,6 @@
 namespace irdist {
 namespace {
 
-constexpr double kPixelBoxVarPx2 = 1.0 / 12.0;  // the pixel's own area, in every measured blur
 // 10-90% width of an edge blurred by a Gaussian of unit sd: 2 x 1.2816 (the normal's 90% point).
 constexpr double kEdgeWidthPerSigma = 2.0 * 1.2815516;
 constexpr std::size_t kFocusFrames = 5;  // the running mean's length
@@ -148,7 +147,8 @@ cv::Mat FocusGauge(const FocusFigure& focus) {
 }
 
 void Paste(const cv::Mat& part, int x, int y, cv::Mat* canvas) {
-  const cv::Rect where(x, y, std::min(part.cols, canvas->cols - x), std::min(part.rows, canvas->rows - y));
+  const cv::Rect where(x, y, std::min(part.cols, canvas->cols - x),
+                       std::min(part.rows, canvas->rows - y));
   if (where.width <= 0 || where.height <= 0) return;
   part(cv::Rect(0, 0, where.width, where.height)).copyTo((*canvas)(where));
 }
@@ -222,7 +222,7 @@ FocusFigure FocusTracker::Add(const Features& f, double d_mm) {
   const double var = std::accumulate(recent_var_px2_.begin(), recent_var_px2_.end(), 0.0) /
                      static_cast<double>(recent_var_px2_.size());
   figure.valid = true;
-  figure.blur_sigma_px = std::sqrt(std::max(var - kPixelBoxVarPx2, 0.0));
+  figure.blur_sigma_px = std::sqrt(std::max(var - kPixelAreaVarPx2, 0.0));
   figure.edge_width_px = kEdgeWidthPerSigma * std::sqrt(var);
   if (best_edge_width_px_ <= 0.0 || figure.edge_width_px < best_edge_width_px_) {
     best_edge_width_px_ = figure.edge_width_px;
@@ -231,9 +231,9 @@ FocusFigure FocusTracker::Add(const Features& f, double d_mm) {
   if (calibration_ != nullptr && calibration_->fitted() && d_mm > 0.0) {
     figure.calibrated = true;
     figure.at_d_mm = d_mm;
-    figure.calibrated_sigma_px =
-        std::sqrt(std::max(calibration_->BlurVarPx2(d_mm) - kPixelBoxVarPx2, 1e-6));
-    figure.change = figure.blur_sigma_px / figure.calibrated_sigma_px - 1.0;
+    const double calibrated_var_px2 = calibration_->BlurVarPx2(d_mm);
+    figure.calibrated_sigma_px = std::sqrt(std::max(calibrated_var_px2 - kPixelAreaVarPx2, 1e-6));
+    figure.change = BlurSigmaChange(var, calibrated_var_px2);  // the health check's figure
   }
   return figure;
 }
@@ -253,7 +253,8 @@ cv::Mat ComposeView(const ViewPanel& panel, cv::Size window_size) {
   const cv::Mat zoom = ZoomPanel(panel, &factor);
   const int gauge_y = kLineHeightPx + zoom.rows + kMarginPx;
   const int side_height = gauge_y + kGaugeHeightPx + kLineHeightPx;
-  cv::Mat canvas(std::max(frame.rows, side_height) + text_height, width, CV_8UC3, cv::Scalar(0, 0, 0));
+  cv::Mat canvas(std::max(frame.rows, side_height) + text_height, width, CV_8UC3,
+                 cv::Scalar(0, 0, 0));
   Paste(frame, 0, 0, &canvas);
   const int side_x = frame.cols + kMarginPx;
   PutText("zoom x" + std::to_string(factor) + " on the blob", side_x, kLineHeightPx - 6, &canvas);

@@ -290,10 +290,9 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
   const std::size_t stride = std::max<std::size_t>(1, rows.size() / kCrosstalkFrames);
   for (std::size_t i = 0; i < rows.size() && frames.size() < kCrosstalkFrames; i += stride) {
     const Features& f = features.at(rows[i]->index);
-    const double d_mm = model->geometric.DistanceMm(f.moment_major_var_px2);
-    if (!std::isfinite(d_mm) || d_mm <= 0.0) continue;
-    frames.push_back({reader.LoadImage(*rows[i]), reader.header().bit_depth, f,
-                      BlobFitBlurVarPx2(*model, d_mm)});
+    const double blur_var_px2 = BlobFitBlurVarPx2(*model, f);
+    if (!(blur_var_px2 > 0.0)) continue;
+    frames.push_back({reader.LoadImage(*rows[i]), reader.header().bit_depth, f, blur_var_px2});
   }
   const BlurSplit split = FitBlurSplit(frames);
   model->blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;

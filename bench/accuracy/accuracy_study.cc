@@ -372,10 +372,7 @@ void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipe
   std::vector<CrosstalkFrame> frames;
   sr.KeepFrames(&frames);
   sr.Run(poses, {34, 36}, pl->features);
-  for (CrosstalkFrame& f : frames) {
-    const double d_mm = pl->model.geometric.DistanceMm(f.features.moment_major_var_px2);
-    f.blur_var_px2 = std::isfinite(d_mm) && d_mm > 0.0 ? BlobFitBlurVarPx2(pl->model, d_mm) : 0.0;
-  }
+  for (CrosstalkFrame& f : frames) f.blur_var_px2 = BlobFitBlurVarPx2(pl->model, f.features);
   const BlurSplit split = FitBlurSplit(frames);
   pl->model.blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
   pl->model.blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
