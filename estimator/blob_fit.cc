@@ -520,6 +520,10 @@ bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationMod
   if (!fit.ok) return false;
   features->moment_major_var_px2 = fit.major_var_px2 + blur;
   features->moment_minor_var_px2 = fit.minor_var_px2 + blur;
+  features->size_blur_var_px2 = blur;
+  // The fitted axes' direction with their variances: the moments' own is another (noisier, for a
+  // near-round blob unrelated) measurement, and the line of sight turns the matrix of the two.
+  if (features->ellipse_moments.valid) features->ellipse_moments.angle_deg = fit.angle_deg;
   return true;
 }
 

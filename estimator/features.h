@@ -146,6 +146,9 @@ struct Features {
   // uniformly bright disc); NaN when not measured. Calibration health compares it with the
   // calibrated blur (health.h).
   double blur_var_px2 = std::numeric_limits<double>::quiet_NaN();
+  // The blur variance (px^2, pixel area included) inside moment_*_var_px2 where the blob fit set
+  // them (its calibrated blur, estimator/blob_fit.h); NaN for the moments' own.
+  double size_blur_var_px2 = std::numeric_limits<double>::quiet_NaN();
   EllipseFit ellipse_moments;
   EllipseFit ellipse_contour;
   EllipseFit ellipse_model;     // kModelFit only (valid = false under the other methods)

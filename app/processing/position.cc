@@ -12,6 +12,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "app/reports/summary.h"
+#include "estimator/line_of_sight.h"
 #include "base/check.h"
 #include "base/yaml_fields.h"
 
@@ -30,6 +31,19 @@ cv::Vec3d RayOf(const cv::Matx33d& camera, const std::vector<double>& distortion
   return ray / cv::norm(ray);
 }
 
+// The camera matrix of `k` in the sensor's pixels (intrinsics in ROI pixels moved by its offset).
+cv::Matx33d SensorCameraMatrix(const CameraIntrinsics& k, int roi_offset_x, int roi_offset_y) {
+  const double du = k.in_roi_px ? roi_offset_x : 0.0;
+  const double dv = k.in_roi_px ? roi_offset_y : 0.0;
+  return cv::Matx33d(k.fx_px, 0.0, k.cx_px + du, 0.0, k.fy_px, k.cy_px + dv, 0.0, 0.0, 1.0);
+}
+
+std::vector<double> DistortionOf(const CameraIntrinsics& k) {
+  std::vector<double> distortion = k.distortion;
+  distortion.resize(5, 0.0);
+  return distortion;
+}
+
 // What a position needs from the image: the blob's unit ray, its derivatives along u and v, and
 // the centre's standard errors. One per bracket, whatever the number of estimates along it.
 struct BlobRay {
@@ -40,11 +54,8 @@ struct BlobRay {
 BlobRay RayOfBlob(const CameraIntrinsics& k, int roi_offset_x, int roi_offset_y,
                   const BlobPoint& blob) {
   IRDIST_CHECK(k.known, "PositionFromRange needs intrinsics");
-  const double du = k.in_roi_px ? roi_offset_x : 0.0;
-  const double dv = k.in_roi_px ? roi_offset_y : 0.0;
-  const cv::Matx33d camera(k.fx_px, 0.0, k.cx_px + du, 0.0, k.fy_px, k.cy_px + dv, 0.0, 0.0, 1.0);
-  std::vector<double> distortion = k.distortion;
-  distortion.resize(5, 0.0);
+  const cv::Matx33d camera = SensorCameraMatrix(k, roi_offset_x, roi_offset_y);
+  const std::vector<double> distortion = DistortionOf(k);
   BlobRay r;
   r.ray = RayOf(camera, distortion, blob.u_px, blob.v_px);
   // Central differences of the ray along u and v (0.5 px: the distortion is smooth at that scale).
@@ -82,6 +93,20 @@ Position3d AlongRay(const BlobRay& r, double range_mm, double range_se_mm) {
 }
 
 }  // namespace
+
+Features OnLineOfSight(const CameraGeometry& g, const Features& frame) {
+  if (!g.intrinsics.known || !frame.blob_found) return frame;
+  const cv::Matx33d camera = SensorCameraMatrix(g.intrinsics, g.roi_offset_x, g.roi_offset_y);
+  const std::vector<double> distortion = DistortionOf(g.intrinsics);
+  const cv::Point2d to_sensor(g.roi_offset_x, g.roi_offset_y);
+  const RayOfPixel ray_of = [&](const cv::Point2d& frame_px) {
+    const cv::Point2d p = frame_px + to_sensor;
+    return RayOf(camera, distortion, p.x, p.y);
+  };
+  const LineOfSight view =
+      LineOfSightAt(ray_of, frame.centroid_px, g.intrinsics.fx_px, g.intrinsics.fy_px);
+  return ToLineOfSight(frame, view);
+}
 
 Position3d PositionFromRange(const CameraIntrinsics& k, int roi_offset_x, int roi_offset_y,
                              const BlobPoint& blob, double range_mm, double range_se_mm) {
@@ -144,11 +169,8 @@ void AddPositions(const CameraGeometry& geometry, const BlobPoint& blob,
       if (!ray) {
         ray = RayOfBlob(geometry.intrinsics, geometry.roi_offset_x, geometry.roi_offset_y, blob);
       }
-      // The calibration (on the optical axis) maps the blob to its depth: off the axis a disc's
-      // image scales as f / z, not f / range. The range along the blob's ray is z / cos(field
-      // angle), cos = the unit ray's z.
-      row.d_mm /= (*ray).ray[2];
-      if (row.d_std_mm > 0.0) row.d_std_mm /= (*ray).ray[2];
+      // The estimate is the range along the blob's ray: its features were those of the camera
+      // turned onto the ray (OnLineOfSight), where the calibration's on-axis geometry holds.
       const Position3d p = AlongRay(*ray, row.d_mm, row.d_std_mm);
       row.x_mm = p.x_mm;
       row.y_mm = p.y_mm;

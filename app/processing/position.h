@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "app/inputs/rig.h"
+#include "estimator/features.h"
 
 namespace irdist {
 
@@ -67,12 +68,18 @@ TrueGeometry TrueGeometryOf(const CameraGeometry& geometry, double slide_mm, dou
 // this build does not read.
 CameraGeometry GeometryOfRigText(const std::string& text, const std::string& file);
 
+// A frame's features as the camera turned about its centre to look straight at the IRED sees
+// them (estimator/line_of_sight.h), at the frame's blob centroid through the rig's intrinsics
+// (distortion included): what the on-axis calibration's models read, so that an estimate is the
+// range from the camera's centre and theta from the line of sight. Without intrinsics, or
+// without a blob, the frame's own. The estimates and the calibration's samples both use it.
+Features OnLineOfSight(const CameraGeometry& geometry, const Features& frame);
+
 struct EstimateRow;
-// With intrinsics, turns every ok row's distance (the depth z the on-axis calibration reads from
-// the blob's size: off the axis a disc's image scales as f / z) into the range along the blob's
-// ray, z / cos(field angle), and fills x, y, z (and their standard errors) of the rows of `blocks`
-// (the estimates of one bracket, by method) from the blob's centre (sensor px). The rows'
-// true_x/y/z come with their truth (TrueGeometryOf). The blob's ray is computed once.
+// With intrinsics, fills x, y, z (and their standard errors) of every ok row of `blocks` (the
+// estimates of one bracket, by method: ranges along the blob's ray, from features OnLineOfSight)
+// from the blob's centre (sensor px). The rows' true_x/y/z come with their truth
+// (TrueGeometryOf). The blob's ray is computed once.
 void AddPositions(const CameraGeometry& geometry, const BlobPoint& blob,
                   std::initializer_list<std::vector<EstimateRow>*> blocks);
 

@@ -10,6 +10,8 @@
 #include "acquisition/recording_reader.h"
 #include "app/inputs/provenance.h"
 #include "app/inputs/recipe.h"
+#include "app/processing/bracket_estimates.h"
+#include "app/processing/position.h"
 #include "app/reports/calibration_plots.h"
 #include "app/reports/report.h"
 #include "estimator/blob_fit.h"
@@ -33,12 +35,14 @@ void Normalise(double poly[4]) {
 std::vector<CalibrationSample> SamplesFromRecording(const RecordingReader& reader,
                                                     const FeatureMap& features) {
   std::vector<CalibrationSample> samples;
+  const CameraGeometry geometry = GeometryOfRecording(reader);
   for (const RecordedBracket& bracket : reader.Brackets()) {
     if (!bracket.complete) continue;
     for (const DifferencePair& pair : DifferencePairsOf(bracket)) {
       CalibrationSample s;
-      s.reference = FeaturesOf(features, *pair.reference);
-      s.measurement = FeaturesOf(features, *pair.measurement);
+      // The models read the camera turned onto the line of sight, as the estimates do.
+      s.reference = OnLineOfSight(geometry, FeaturesOf(features, *pair.reference));
+      s.measurement = OnLineOfSight(geometry, FeaturesOf(features, *pair.measurement));
       s.t_ref_ms = pair.reference->requested_exposure_us / 1000.0;
       s.t_ms = pair.measurement->requested_exposure_us / 1000.0;
       s.bias_ma = pair.measurement->bias_ma_set;

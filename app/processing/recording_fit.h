@@ -19,7 +19,9 @@ namespace irdist {
 class RecordingReader;
 
 // Every (reference, measurement) pair of the recording's complete brackets; a measurement pairs
-// with the nearest reference before it in trigger order. Exposures are the requested ones.
+// with the nearest reference before it in trigger order. Exposures are the requested ones. With
+// the rig's intrinsics each frame's features are those on its line of sight (position.h
+// OnLineOfSight), as the estimates read them.
 std::vector<CalibrationSample> SamplesFromRecording(const RecordingReader& reader,
                                                     const FeatureMap& features);
 

@@ -19,8 +19,13 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kCanvasMarginPx = 6;  // beyond the unperturbed blob's window: room for the steps
 
+// d_mm moves the emitter along its line of sight from where it is at d0_mm (the rig's lateral
+// offset scales with it): the image stays in place and only x_px, y_px move it. Moving the slide
+// instead would also shift an off-axis blob (f X / d), and a shift of a px across the central
+// difference's 2 x 20 mm is not the translation the x/y columns take out: that remainder read as
+// information on d and made the bound 4x too small 50 mm off the axis at 1.5 m.
 struct Point {
-  double theta_deg, x_px, y_px, d_mm;
+  double theta_deg, x_px, y_px, d_mm, d0_mm;
 };
 
 // Central-difference steps: large enough that the disc's edge moves well across the strips,
@@ -34,8 +39,9 @@ cv::Mat1d Render(const sim::RigPhysics& base, const Point& p, const cv::Rect& ca
   sim::RigPhysics physics = base;
   const double mm_per_px =
       physics.sensor.pixel_pitch_um * 1e-3 * p.d_mm / physics.optics.focal_length_mm;
-  physics.emitter.offset_x_mm += p.x_px * mm_per_px;
-  physics.emitter.offset_y_mm += p.y_px * mm_per_px;
+  const double along_ray = p.d_mm / p.d0_mm;
+  physics.emitter.offset_x_mm = base.emitter.offset_x_mm * along_ray + p.x_px * mm_per_px;
+  physics.emitter.offset_y_mm = base.emitter.offset_y_mm * along_ray + p.y_px * mm_per_px;
   const sim::Scene scene(physics);
   sim::PoseState pose;
   pose.slide_mm = p.d_mm;
@@ -80,7 +86,7 @@ cv::Mat1d Derivative(const sim::RigPhysics& physics, const Point& at, const cv::
 // The expected image and its derivatives for one second at unit intensity; ln I0's derivative is
 // the image itself.
 FrameSensitivity UnitSensitivity(const sim::RigPhysics& physics, const CrbConditions& c) {
-  const Point at{c.theta_deg, 0.0, 0.0, c.d_mm};
+  const Point at{c.theta_deg, 0.0, 0.0, c.d_mm, c.d_mm};
   cv::Rect window;
   Render(physics, at, cv::Rect(), &window);
   const cv::Rect sensor(0, 0, physics.sensor.width_px, physics.sensor.height_px);

@@ -55,6 +55,26 @@ TEST(Crb, ShippedRigKeepsTheFig14Bound) {
   EXPECT_LT(at_zero.theta_sd_deg, 0.0);
 }
 
+// Off the optical axis the blob's position says nothing about the distance while the emitter's
+// lateral position is unknown (the blob's x and y are free): 50 mm off the axis at 1.5 m (field
+// angle 1.9 deg) the distance bound stays the on-axis one within the field's few 1e-3 (the
+// pinhole's cos terms, the blob moved by 57 px). A slide step that moved the off-axis blob by a
+// pixel across the central difference read 4x too small a bound here.
+TEST(Crb, OffTheAxisTheBlobsPositionGivesNoDistance) {
+  sim::RigPhysics physics = ShippedRig();
+  const double rise = SteadyJunctionRiseK(physics, 490.0);
+  for (double theta_deg : {0.0, 15.0, 30.0}) {
+    const CrbConditions c{1500.0, theta_deg, 490.0, rise, {8.0, 30.0, 32.0, 34.0, 36.0}};
+    physics.emitter.offset_x_mm = physics.emitter.offset_y_mm = 0.0;
+    const CrbResult on_axis = ComputeCrb(physics, c);
+    physics.emitter.offset_x_mm = 40.0;
+    physics.emitter.offset_y_mm = -30.0;
+    const CrbResult off_axis = ComputeCrb(physics, c);
+    ASSERT_TRUE(on_axis.valid && off_axis.valid);
+    EXPECT_NEAR(off_axis.d_sd_mm, on_axis.d_sd_mm, 0.05 * on_axis.d_sd_mm) << theta_deg;
+  }
+}
+
 // The bound beside a method's repetitions: the ratio is the repetitions' sample sd over the bound
 // of their condition; rows without repetitions enter the rms figures only.
 TEST(Crb, MethodCrbComparesEachRepeatedConditionWithItsBound) {
