@@ -459,14 +459,20 @@ DistanceEstimate Solve(const Problem& p, double theta0_deg, const EstimateOption
 // theta (deg) from moment variances with the calibrated blur removed, through the calibrated
 // correction when the model has one and the options ask for it; NaN when the blob is not larger
 // than the blur.
+// `size_blur_var_px2`: the blur inside the variances where it is known (the blob fit's, which
+// added it: then the ratio is the fitted disc's own), else NaN: the geometric model's b(u), whose
+// fit also takes up the size model's misfit (0.045 px^2 above the calibrated blur at 1.5 m on the
+// sharp rig: theta +0.05 deg there).
 double ThetaFromVariances(const CalibrationModel& model, double major_var_px2,
-                          double minor_var_px2, const EstimateOptions& options) {
+                          double minor_var_px2, const EstimateOptions& options,
+                          double size_blur_var_px2 = std::numeric_limits<double>::quiet_NaN()) {
   if (options.theta_correction && model.theta_correction.fitted()) {
     return model.theta_correction.ThetaDeg(major_var_px2, minor_var_px2, model.geometric);
   }
   const double d_geo_mm = model.geometric.DistanceMm(major_var_px2);
-  const double beta = std::isfinite(d_geo_mm) ? model.geometric.BlurVarPx2(d_geo_mm)
-                                              : model.geometric.beta_px2;
+  const double beta = std::isfinite(size_blur_var_px2) ? size_blur_var_px2
+                      : std::isfinite(d_geo_mm)        ? model.geometric.BlurVarPx2(d_geo_mm)
+                                                       : model.geometric.beta_px2;
   const double major = major_var_px2 - beta;
   const double minor = minor_var_px2 - beta;
   if (!(major > 0.0)) return std::numeric_limits<double>::quiet_NaN();
@@ -480,7 +486,7 @@ double Theta0(const CalibrationModel& model, const Features& f, const EstimateOp
     return f.theta0_deg;
   }
   const double theta = ThetaFromVariances(model, f.moment_major_var_px2, f.moment_minor_var_px2,
-                                          options);
+                                          options, f.size_blur_var_px2);
   return std::isfinite(theta) ? theta : f.theta0_deg;
 }
 

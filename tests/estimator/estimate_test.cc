@@ -226,6 +226,40 @@ TEST(Estimate, CalibratedThetaCorrectionFormsTheta0) {
   EXPECT_FALSE(PaperEstimateOptions().theta_correction);
 }
 
+// theta0 from a blob-fitted frame is its fitted disc's own axis ratio: the blur it was given
+// (Features::size_blur_var_px2) comes off, not the geometric model's b(u), whose fit also takes up
+// the size model's misfit (here 0.3 px^2 apart).
+TEST(Estimate, Theta0OfABlobFittedFrameIsItsDiscsOwnRatio) {
+  const testing::SyntheticRig rig;
+  CalibrationModel model = rig.ExactModel();
+  model.geometric = FitGeometric(rig.Table3());
+  constexpr double kD = 2300.0, kOtherBlurPx2 = 0.3;
+  const double b_geo = model.geometric.BlurVarPx2(kD);
+  Bracket b = MakeBracket(rig, 500.0, kD, 20.0, 0.0);
+  const double c = std::cos(20.0 * M_PI / 180.0);
+  auto tilt = [&](Features* f) {
+    f->moment_minor_var_px2 = b_geo + (f->moment_major_var_px2 - b_geo) * c * c;
+  };
+  tilt(&b.reference);
+  for (Features& m : b.measurements) tilt(&m);
+  const double disc_major = b.measurements[0].moment_major_var_px2 - b_geo;
+  const double disc_minor = b.measurements[0].moment_minor_var_px2 - b_geo;
+  const double want_deg = std::acos(std::sqrt(disc_minor / disc_major)) * 180.0 / M_PI;
+  auto fitted = [&](Features* f, double blur_px2) {
+    f->moment_major_var_px2 += blur_px2 - b_geo;
+    f->moment_minor_var_px2 += blur_px2 - b_geo;
+    f->size_blur_var_px2 = blur_px2;
+  };
+  fitted(&b.reference, b_geo + kOtherBlurPx2);
+  for (Features& m : b.measurements) fitted(&m, b_geo + kOtherBlurPx2);
+  const BracketEstimate e = EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, {});
+  EXPECT_NEAR(e.per_exposure[0].theta0_deg, want_deg, 1e-6);
+  // The same variances read with the geometric model's blur: another theta.
+  for (Features& m : b.measurements) m.size_blur_var_px2 = NAN;
+  const BracketEstimate g = EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, {});
+  EXPECT_GT(std::fabs(g.per_exposure[0].theta0_deg - want_deg), 0.05);
+}
+
 TEST(Estimate, ConvergedOnlyWhenTheSolverStoppedOnATolerance) {
   const testing::SyntheticRig rig;
   const CalibrationModel model = rig.ExactModel();
