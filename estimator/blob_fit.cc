@@ -18,6 +18,10 @@ constexpr double kPi = 3.14159265358979323846;
 // The optics' variance keeps at least this (0.1 px of sd): the crosstalk cannot be the whole blur
 // (the edge model divides by the optics' sd).
 constexpr double kMinOpticsVarPx2 = 0.01;
+// FitBlurSplit's reach for the total blur's correction (the cumulants err by a few 0.01 px^2).
+constexpr double kMaxBlurOffsetPx2 = 0.15;
+// FitBlurSplit's rounds of coordinate descent (the split and the blur trade along a valley).
+constexpr int kSplitRounds = 8;
 // A pass stops when a step changes the chi^2 by less than this: a parameter then moves by about
 // 1% of its standard error (TinySolver's function tolerance is absolute, in |f|^2 units).
 constexpr double kChi2Tolerance = 1e-4;
@@ -505,7 +509,7 @@ double BlobFitBlurVarPx2(const CalibrationModel& model, const Features& features
   const double d_mm = model.geometric.DistanceMm(features.moment_major_var_px2);
   if (!std::isfinite(d_mm) || d_mm <= 0.0) return 0.0;
   const BlurCalibration& b = model.blur_calibration;
-  return b.fitted() ? b.BlurVarPx2(d_mm) : model.geometric.BlurVarPx2(d_mm);
+  return b.fitted() ? b.FitBlurVarPx2(d_mm) : model.geometric.BlurVarPx2(d_mm);
 }
 
 bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
@@ -531,11 +535,12 @@ namespace {
 
 // The frames' summed first-pass cost with `crosstalk`; +inf when a frame's fit fails (no split
 // may win by losing frames).
-double SplitCost(const std::vector<const CrosstalkFrame*>& frames, const Crosstalk& crosstalk) {
+double SplitCost(const std::vector<const CrosstalkFrame*>& frames, const Crosstalk& crosstalk,
+                 double blur_offset_px2) {
   double sum = 0.0;
   for (const CrosstalkFrame* f : frames) {
-    const BlobFitResult fit =
-        FitBlobPasses(f->image, f->bit_depth, f->features, f->blur_var_px2, crosstalk, 1);
+    const BlobFitResult fit = FitBlobPasses(f->image, f->bit_depth, f->features,
+                                            f->blur_var_px2 + blur_offset_px2, crosstalk, 1);
     if (!fit.ok) return std::numeric_limits<double>::infinity();
     sum += fit.read_weighted_chi2 * fit.pixels;
   }
@@ -552,31 +557,80 @@ double Minimise(F f, double low, double high) {
 
 }  // namespace
 
+namespace {
+
+double InverseMetres(const CrosstalkFrame& f) { return f.d_mm > 0.0 ? 1000.0 / f.d_mm : 0.0; }
+
+// The offset's line o0 + o1 u (u = 1000 / d) through each frame's own best blur at `crosstalk`
+// (Brent on the frame's one-pass cost) less its given blur; a constant where the frames share
+// one distance or none is known.
+void FitBlurOffset(const std::vector<const CrosstalkFrame*>& given,
+                   const std::vector<CrosstalkFrame>& shifted, const Crosstalk& crosstalk,
+                   double* o0, double* o1) {
+  double su = 0.0, sr = 0.0, suu = 0.0, sur = 0.0;
+  for (size_t i = 0; i < shifted.size(); ++i) {
+    const std::vector<const CrosstalkFrame*> one = {&shifted[i]};
+    const double room = shifted[i].blur_var_px2 - kPixelAreaVarPx2 - kMinOpticsVarPx2 -
+                        crosstalk.var_px2;
+    const double low = -std::min(kMaxBlurOffsetPx2, std::max(room, 0.0));
+    const double o =
+        Minimise([&](double x) { return SplitCost(one, crosstalk, x); }, low, kMaxBlurOffsetPx2);
+    const double r = shifted[i].blur_var_px2 + o - given[i]->blur_var_px2;
+    const double u = InverseMetres(*given[i]);
+    su += u;
+    sr += r;
+    suu += u * u;
+    sur += u * r;
+  }
+  const double n = static_cast<double>(shifted.size());
+  const double det = n * suu - su * su;
+  *o1 = det > 1e-9 * std::max(n * suu, 1e-300) ? (n * sur - su * sr) / det : 0.0;
+  *o0 = (sr - *o1 * su) / n;
+}
+
+}  // namespace
+
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   BlurSplit split;
-  double min_blur = std::numeric_limits<double>::infinity();
   std::vector<const CrosstalkFrame*> usable;
   for (const CrosstalkFrame& f : frames) {
-    if (!f.features.Usable() || !(f.blur_var_px2 > kPixelAreaVarPx2 + 0.05)) continue;
-    usable.push_back(&f);
-    min_blur = std::min(min_blur, f.blur_var_px2);
+    if (f.features.Usable() && f.blur_var_px2 > kPixelAreaVarPx2 + 0.05) usable.push_back(&f);
   }
   split.frames = static_cast<int>(usable.size());
   if (usable.empty()) return split;
-  // Coordinate descent, two rounds: the variance at the kernel's shape (a sampled Gaussian first),
-  // then the shape at the variance; the optics keep kMinOpticsVarPx2 on every frame.
-  const double max_var = min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2;
+  // Coordinate descent: the crosstalk's variance at its kernel's shape (a sampled Gaussian first),
+  // then the shape at the variance (two rounds); from the second round on, each frame's own best
+  // blur at the split gives the offset's line, and the next round fits the variance at it (the
+  // split and the blur trade along a valley: kSplitRounds). The optics keep kMinOpticsVarPx2.
+  std::vector<CrosstalkFrame> shifted;
+  for (const CrosstalkFrame* f : usable) shifted.push_back(*f);
+  std::vector<const CrosstalkFrame*> now;
+  for (const CrosstalkFrame& f : shifted) now.push_back(&f);
   Crosstalk best;
-  for (int round = 0; round < 2; ++round) {
+  double o0 = 0.0, o1 = 0.0;
+  for (int round = 0; round < kSplitRounds; ++round) {
+    double min_blur = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < shifted.size(); ++i) {
+      shifted[i].blur_var_px2 = usable[i]->blur_var_px2 + o0 + o1 * InverseMetres(*usable[i]);
+      min_blur = std::min(min_blur, shifted[i].blur_var_px2);
+    }
+    const double max_var = std::max(min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2, 0.0);
     const double share = best.lattice_share;
-    best.var_px2 = Minimise([&](double c) { return SplitCost(usable, {c, share}); }, 0.0, max_var);
+    best.var_px2 =
+        Minimise([&](double c) { return SplitCost(now, {c, share}, 0.0); }, 0.0, max_var);
     const double var = best.var_px2;
-    best.lattice_share = Minimise([&](double l) { return SplitCost(usable, {var, l}); }, 0.0, 1.0);
+    if (round < 2) {
+      best.lattice_share =
+          Minimise([&](double l) { return SplitCost(now, {var, l}, 0.0); }, 0.0, 1.0);
+    }
+    if (round >= 1 && round + 1 < kSplitRounds) FitBlurOffset(usable, shifted, best, &o0, &o1);
   }
-  if (SplitCost(usable, best) <= SplitCost(usable, {})) {
+  if (SplitCost(now, best, 0.0) <= SplitCost(now, {}, 0.0)) {
     split.crosstalk_var_px2 = best.var_px2;
     split.crosstalk_lattice_share = best.lattice_share;
   }
+  split.blur_offset_px2 = o0;
+  split.blur_offset_u_px2 = o1;
   return split;
 }
 

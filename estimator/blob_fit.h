@@ -94,6 +94,7 @@ struct CrosstalkFrame {
   int bit_depth = 12;
   Features features;
   double blur_var_px2 = 0.0;
+  double d_mm = 0.0;  // the frame's distance (the offset's slope in 1000 / d); 0: unknown
 };
 
 // The split of the calibrated blur (issue 20): the variance (px^2) of the part that comes after
@@ -103,12 +104,20 @@ struct CrosstalkFrame {
 // pixels tells the two blurs apart where the optics are sharp (a sharp image spread after the
 // sampling is not a blurred one sampled); at 0.7 px of optics and more they shape the edge alike
 // and either split serves. The kernel's shape is fitted too (Crosstalk::lattice_share): with a
-// sampled Gaussian alone a lattice walk of variance 0.64 read 0.25. Coordinate descent, two
-// rounds. 0 when no frame is usable or the optics alone fit best. About 60 one-pass blob fits per
-// frame: give it a few dozen frames across the calibrated distances.
+// sampled Gaussian alone a lattice walk of variance 0.64 read 0.25. And the blob fit's own total
+// blur, as a line in 1000 / d from the frames' given blur (each frame's best blur at the split;
+// CrosstalkFrame::d_mm). Coordinate descent, kSplitRounds rounds. No crosstalk when no frame is
+// usable or the optics alone fit best. About 500 one-pass blob fits per frame (6 s for 32
+// frames): give it a few dozen frames across the calibrated distances.
 struct BlurSplit {
   double crosstalk_var_px2 = 0.0;
   double crosstalk_lattice_share = 0.0;  // the kernel's shape (Crosstalk)
+  // The total blur's correction (px^2): blur_offset_px2 + blur_offset_u_px2 x 1000 / d_mm added
+  // to the frames' given blur, fitted with the split: the blob fit's axis ratio needs the blur to
+  // a few 0.001 px^2 where the optics are sharp (0.03 px^2 off swings theta by 0.1-0.3 deg with
+  // the edges' phases), finer than the cumulants measure it.
+  double blur_offset_px2 = 0.0;
+  double blur_offset_u_px2 = 0.0;
   int frames = 0;  // the frames that took part
 };
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);

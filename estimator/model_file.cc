@@ -283,6 +283,10 @@ void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
     EmitDouble(out, "crosstalk_var_px2", b.crosstalk_var_px2);
     EmitDouble(out, "crosstalk_lattice_share", b.crosstalk_lattice_share);
   }
+  if (b.fit_offset_px2 != 0.0 || b.fit_offset_u_px2 != 0.0) {
+    EmitDouble(out, "fit_offset_px2", b.fit_offset_px2);
+    EmitDouble(out, "fit_offset_u_px2", b.fit_offset_u_px2);
+  }
   out << YAML::EndMap;
 }
 
@@ -315,6 +319,20 @@ void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
     if (!(b->crosstalk_lattice_share >= 0.0 && b->crosstalk_lattice_share <= 1.0)) {
       rd.Fail(node["crosstalk_lattice_share"], "blur_calibration.crosstalk_lattice_share",
               "must lie within [0, 1]");
+    }
+  }
+  if (Present(node, "fit_offset_px2")) {  // optional: absent = the cumulants' blur as it is
+    b->fit_offset_px2 = rd.Scalar<double>(node, "blur_calibration", "fit_offset_px2");
+    if (!(std::fabs(b->fit_offset_px2) <= 0.5)) {
+      rd.Fail(node["fit_offset_px2"], "blur_calibration.fit_offset_px2",
+              "must lie within [-0.5, 0.5] px^2 (a correction to the measured blur)");
+    }
+  }
+  if (Present(node, "fit_offset_u_px2")) {  // optional: absent = no slope
+    b->fit_offset_u_px2 = rd.Scalar<double>(node, "blur_calibration", "fit_offset_u_px2");
+    if (!(std::fabs(b->fit_offset_u_px2) <= 0.5)) {
+      rd.Fail(node["fit_offset_u_px2"], "blur_calibration.fit_offset_u_px2",
+              "must lie within [-0.5, 0.5] px^2 (a correction to the measured blur per 1/m)");
     }
   }
   if (!(b->noise_at_1m_px2 > 0.0) || !std::isfinite(b->noise_exponent)) {

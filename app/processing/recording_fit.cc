@@ -296,15 +296,23 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
     const Features& f = features.at(rows[i]->index);
     const double blur_var_px2 = BlobFitBlurVarPx2(*model, f);
     if (!(blur_var_px2 > 0.0)) continue;
-    frames.push_back({reader.LoadImage(*rows[i]), reader.header().bit_depth, f, blur_var_px2});
+    frames.push_back({reader.LoadImage(*rows[i]), reader.header().bit_depth, f, blur_var_px2,
+                      model->geometric.DistanceMm(f.moment_major_var_px2)});
   }
   const BlurSplit split = FitBlurSplit(frames);
   model->blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
   model->blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
+  model->blur_calibration.fit_offset_px2 = split.blur_offset_px2;
+  model->blur_calibration.fit_offset_u_px2 = split.blur_offset_u_px2;
+  const BlurCalibration& b = model->blur_calibration;
+  const double near_mm = model->ranges.d_min_mm, far_mm = model->ranges.d_max_mm;
   out << "  blur split: " << split.crosstalk_var_px2
       << " px^2 after the pixels (crosstalk; a lattice walk's share "
-      << split.crosstalk_lattice_share << "), the rest before them (optics); from " << split.frames
-      << " frames\n";
+      << split.crosstalk_lattice_share << "), the rest before them (optics); the blob fit's blur "
+      << std::showpos << b.FitBlurVarPx2(near_mm) - b.BlurVarPx2(near_mm) << " px^2 at "
+      << std::noshowpos << std::lround(near_mm) << " mm, " << std::showpos
+      << b.FitBlurVarPx2(far_mm) - b.BlurVarPx2(far_mm) << std::noshowpos << " px^2 at "
+      << std::lround(far_mm) << " mm from the cumulants'; from " << split.frames << " frames\n";
 }
 
 // The second pass of a calibration whose estimates use the blob fit: every frame's size from the

@@ -372,12 +372,19 @@ void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipe
   std::vector<CrosstalkFrame> frames;
   sr.KeepFrames(&frames);
   sr.Run(poses, {34, 36}, pl->features);
-  for (CrosstalkFrame& f : frames) f.blur_var_px2 = BlobFitBlurVarPx2(pl->model, f.features);
+  for (CrosstalkFrame& f : frames) {
+    f.blur_var_px2 = BlobFitBlurVarPx2(pl->model, f.features);
+    f.d_mm = pl->model.geometric.DistanceMm(f.features.moment_major_var_px2);
+  }
   const BlurSplit split = FitBlurSplit(frames);
   pl->model.blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
   pl->model.blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
-  std::printf("calibration %-10s blur split: %.4f px^2 after the pixels (crosstalk), %d frames\n",
-              pl->name.c_str(), split.crosstalk_var_px2, split.frames);
+  pl->model.blur_calibration.fit_offset_px2 = split.blur_offset_px2;
+  pl->model.blur_calibration.fit_offset_u_px2 = split.blur_offset_u_px2;
+  std::printf("calibration %-10s blur split: %.4f px^2 after the pixels (crosstalk), the fit's "
+              "blur %+.4f %+.4f (1000 / d) px^2 from the cumulants', %d frames\n",
+              pl->name.c_str(), split.crosstalk_var_px2, split.blur_offset_px2,
+              split.blur_offset_u_px2, split.frames);
 }
 
 // Per angle of Fig. 14: sd of d and of theta over the repetitions, and the mean error, for the

@@ -193,6 +193,35 @@ TEST(ModelFile, CrosstalkSplitRoundTripsAndIsChecked) {
   }
 }
 
+// The blob fit's blur offset (issue 20) round trips; absent, zero; out of range, refused at its
+// line with the range.
+TEST(ModelFile, FitBlurOffsetRoundTripsAndIsChecked) {
+  CalibrationModel model = SmallModel();
+  model.blur_calibration.c0_px2 = 0.9;
+  model.blur_calibration.noise_at_1m_px2 = 0.01;
+  model.blur_calibration.frames = 40;
+  EXPECT_EQ(ModelToYaml(model).find("fit_offset"), std::string::npos);
+  model.blur_calibration.fit_offset_px2 = -0.07 / 3.0;
+  model.blur_calibration.fit_offset_u_px2 = 0.09 / 7.0;
+  const std::string text = ModelToYaml(model);
+  const CalibrationModel back = ModelFromYaml(text, "offset.yaml");
+  EXPECT_TRUE(BitEqual(back.blur_calibration.fit_offset_px2, -0.07 / 3.0));
+  EXPECT_TRUE(BitEqual(back.blur_calibration.fit_offset_u_px2, 0.09 / 7.0));
+  EXPECT_NEAR(back.blur_calibration.FitBlurVarPx2(2000.0),
+              back.blur_calibration.BlurVarPx2(2000.0) - 0.07 / 3.0 + 0.5 * 0.09 / 7.0, 1e-15);
+  std::string bad = text;
+  const size_t at = bad.find("fit_offset_u_px2: ");
+  ASSERT_NE(at, std::string::npos);
+  bad.replace(at, bad.find('\n', at) - at, "fit_offset_u_px2: 3");
+  try {
+    ModelFromYaml(bad, "bad.yaml");
+    FAIL() << "an offset of 3 px^2 was accepted";
+  } catch (const ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("[-0.5, 0.5]"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ModelFile, FileHoldsTheFitStatistics) {
   const std::string text = ModelToYaml(SmallModel());
   for (const char* key : {"format_version", "roi_policy", "mean_relative_error",
