@@ -535,12 +535,11 @@ namespace {
 
 // The frames' summed first-pass cost with `crosstalk`; +inf when a frame's fit fails (no split
 // may win by losing frames).
-double SplitCost(const std::vector<const CrosstalkFrame*>& frames, const Crosstalk& crosstalk,
-                 double blur_offset_px2) {
+double SplitCost(const std::vector<const CrosstalkFrame*>& frames, const Crosstalk& crosstalk) {
   double sum = 0.0;
   for (const CrosstalkFrame* f : frames) {
-    const BlobFitResult fit = FitBlobPasses(f->image, f->bit_depth, f->features,
-                                            f->blur_var_px2 + blur_offset_px2, crosstalk, 1);
+    const BlobFitResult fit =
+        FitBlobPasses(f->image, f->bit_depth, f->features, f->blur_var_px2, crosstalk, 1);
     if (!fit.ok) return std::numeric_limits<double>::infinity();
     sum += fit.read_weighted_chi2 * fit.pixels;
   }
@@ -569,12 +568,17 @@ void FitBlurOffset(const std::vector<const CrosstalkFrame*>& given,
                    double* o0, double* o1) {
   double su = 0.0, sr = 0.0, suu = 0.0, sur = 0.0;
   for (size_t i = 0; i < shifted.size(); ++i) {
-    const std::vector<const CrosstalkFrame*> one = {&shifted[i]};
+    CrosstalkFrame trial = shifted[i];
+    const std::vector<const CrosstalkFrame*> one = {&trial};
     const double room = shifted[i].blur_var_px2 - kPixelAreaVarPx2 - kMinOpticsVarPx2 -
                         crosstalk.var_px2;
     const double low = -std::min(kMaxBlurOffsetPx2, std::max(room, 0.0));
-    const double o =
-        Minimise([&](double x) { return SplitCost(one, crosstalk, x); }, low, kMaxBlurOffsetPx2);
+    const double o = Minimise(
+        [&](double x) {
+          trial.blur_var_px2 = shifted[i].blur_var_px2 + x;
+          return SplitCost(one, crosstalk);
+        },
+        low, kMaxBlurOffsetPx2);
     const double r = shifted[i].blur_var_px2 + o - given[i]->blur_var_px2;
     const double u = InverseMetres(*given[i]);
     su += u;
@@ -617,15 +621,15 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
     const double max_var = std::max(min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2, 0.0);
     const double share = best.lattice_share;
     best.var_px2 =
-        Minimise([&](double c) { return SplitCost(now, {c, share}, 0.0); }, 0.0, max_var);
+        Minimise([&](double c) { return SplitCost(now, {c, share}); }, 0.0, max_var);
     const double var = best.var_px2;
     if (round < 2) {
       best.lattice_share =
-          Minimise([&](double l) { return SplitCost(now, {var, l}, 0.0); }, 0.0, 1.0);
+          Minimise([&](double l) { return SplitCost(now, {var, l}); }, 0.0, 1.0);
     }
     if (round >= 1 && round + 1 < kSplitRounds) FitBlurOffset(usable, shifted, best, &o0, &o1);
   }
-  if (SplitCost(now, best, 0.0) <= SplitCost(now, {}, 0.0)) {
+  if (SplitCost(now, best) <= SplitCost(now, {})) {
     split.crosstalk_var_px2 = best.var_px2;
     split.crosstalk_lattice_share = best.lattice_share;
   }

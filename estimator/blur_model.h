@@ -26,12 +26,13 @@ struct BlurCalibration {
   // The crosstalk kernel's shape: the share of its variance spread as a lattice random walk, the
   // rest as a sampled Gaussian (blob_fit.h Crosstalk). 0 in files before it.
   double crosstalk_lattice_share = 0.0;
-  // The blob fit's own correction to the cumulants' blur (px^2, every distance): the total blur
-  // that fits the calibration frames best with the split above (FitBlurSplit). The cumulants of
-  // a sharp edge read a few 0.01 px^2 off, and the fit's axis ratio is that sensitive to it.
-  // 0 in files before it. BlurVarPx2 and health keep the cumulants' own blur.
+  // The blob fit's own correction to the cumulants' blur, fit_offset_px2 + fit_offset_u_px2 x
+  // 1000 / d_mm (px^2): the total blur that fits the calibration frames best with the split
+  // above (blob_fit.h FitBlurSplit). The cumulants of a sharp edge read a few 0.01 px^2 off, and
+  // the fit's axis ratio is that sensitive to it. 0 in files before it. BlurVarPx2 and health
+  // keep the cumulants' own blur.
   double fit_offset_px2 = 0.0;
-  double fit_offset_u_px2 = 0.0;  // ... plus this x 1000 / d_mm
+  double fit_offset_u_px2 = 0.0;
   // The blur the blob fit is given at d_mm: BlurVarPx2 plus the fit's offset.
   double FitBlurVarPx2(double d_mm) const {
     return BlurVarPx2(d_mm) + fit_offset_px2 + fit_offset_u_px2 * 1000.0 / d_mm;

@@ -32,8 +32,6 @@ int TextWidthPx(const std::string& text) {
   return cv::getTextSize(text, kFont, kFontScale, 1, &baseline).width;
 }
 
-double FullScale(int bit_depth) { return std::ldexp(1.0, bit_depth) - 1.0; }
-
 // The frame as 8-bit BGR between `black` and `white` (gray levels), saturated pixels magenta.
 cv::Mat Rendered(const cv::Mat& image, int bit_depth, double black, double white) {
   const double span = std::max(1.0, white - black);

@@ -5,6 +5,7 @@
 // focus figure as a gauge; the text below, wrapped to the window's width. Pure drawing: no
 // camera, no window (tests/app/display/view_layout_test.cc checks it on synthetic frames).
 
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -65,6 +66,9 @@ inline const cv::Scalar kRoiColour(255, 255, 0);        // cyan
 inline const cv::Scalar kWindowColour(0, 255, 0);       // green: the features' window
 inline const cv::Scalar kEllipseColour(0, 0, 255);      // red: the moments' ellipse
 inline const cv::Scalar kTextColour(255, 255, 255);
+
+// The largest gray level of `bit_depth` bits (saturation).
+inline double FullScale(int bit_depth) { return std::ldexp(1.0, bit_depth) - 1.0; }
 
 // The window image for `panel`, `window_size` wide and at most as high (text included); a window
 // size below 640 x 480 is taken as 640 x 480.

@@ -68,17 +68,7 @@ void PlaceThroughStation(const std::string& port, const std::vector<double>& at,
 
 CameraSettings SettingsOf(const CameraConfig& c, const std::string& trigger_source,
                           const LiveCameraOptions& options) {
-  CameraSettings s;
-  s.pixel_format = c.pixel_format;
-  s.trigger_source = trigger_source;
-  s.trigger_activation = c.trigger_activation;
-  s.black_level = c.black_level;
-  s.packet_size = c.packet_size;
-  s.offset_x = c.roi_offset_x;
-  s.offset_y = c.roi_offset_y;
-  s.width = c.roi_width;
-  s.height = c.roi_height;
-  s.trigger_overlap_readout = c.trigger_in_readout;
+  CameraSettings s = CameraSettingsOf(c, trigger_source);
   s.exposure_us = options.first_exposure_us;
   s.buffer_count = std::max(s.buffer_count, options.buffer_count);
   return s;

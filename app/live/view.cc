@@ -137,7 +137,7 @@ void PrintNoBlob(const Rig& rig, const cv::Mat& image, int bit_depth, double exp
   }
   double max_level = 0.0;
   cv::minMaxLoc(image, nullptr, &max_level);
-  const double max_percent = 100.0 * max_level / (std::ldexp(1.0, bit_depth) - 1.0);
+  const double max_percent = 100.0 * max_level / FullScale(bit_depth);
   if (max_percent < 10.0) {
     char text[160];
     std::snprintf(text, sizeof(text),
@@ -178,8 +178,7 @@ std::string PreviewPath(const std::string& out) {
 cv::Mat PreviewImage(const cv::Mat& image, const Features& f, int bit_depth) {
   double min_level = 0.0, max_level = 0.0;
   cv::minMaxLoc(image, &min_level, &max_level);
-  const double full_scale = std::ldexp(1.0, bit_depth) - 1.0;
-  const double black = std::clamp(f.background * full_scale, min_level, max_level);
+  const double black = std::clamp(f.background * FullScale(bit_depth), min_level, max_level);
   const double span = std::max(1.0, max_level - black);
   cv::Mat preview;
   image.convertTo(preview, CV_8U, 255.0 / span, -black * 255.0 / span);

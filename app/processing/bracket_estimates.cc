@@ -247,27 +247,6 @@ BlobPoint BlobOf(const std::vector<DifferencePair>& pairs, const FeatureMap& fea
 
 }  // namespace
 
-CameraGeometry GeometryOfRecording(const RecordingReader& reader) {
-  const RecordingHeader& h = reader.header();
-  if (h.rig_text.empty()) return CameraGeometry{};
-  return GeometryOfRigText(h.rig_text, h.rig_path.empty() ? reader.dir() + " (rig)" : h.rig_path);
-}
-
-namespace {
-
-// The bracket's frames as the camera turned onto the IRED's line of sight sees them (position.h).
-FeatureMap OnLineOfSight(const RecordedBracket& bracket, const FeatureMap& features,
-                         const CameraGeometry& geometry) {
-  FeatureMap turned;
-  for (const FrameRecord& row : bracket.frames) {
-    const auto f = features.find(row.index);
-    if (f != features.end()) turned[row.index] = OnLineOfSight(geometry, f->second);
-  }
-  return turned;
-}
-
-}  // namespace
-
 BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
                                             const FeatureMap& frame_features,
                                             const CalibrationModel& model,
@@ -276,7 +255,7 @@ BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
   if (!bracket.complete) return rows;
   const std::vector<DifferencePair> pairs = DifferencePairsOf(bracket);
   if (pairs.empty()) return rows;
-  const FeatureMap features = OnLineOfSight(bracket, frame_features, geometry);
+  const FeatureMap features = BracketOnLineOfSight(bracket, frame_features, geometry);
   const EstimateRow base = BaseRowOf(bracket, *pairs.front().measurement, geometry);
   bool all_usable = true;
   for (const DifferencePair& pair : pairs) {

@@ -35,8 +35,6 @@ BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
                                             const FeatureMap& features,
                                             const CalibrationModel& model,
                                             const CameraGeometry& geometry);
-// The geometry of the rig a recording was made on (its header's rig text).
-CameraGeometry GeometryOfRecording(const RecordingReader& reader);
 // One bracket's rows in estimates.csv's order (the methods in the order above); estimates.csv
 // lists bracket after bracket, so that measure can append each as it is made.
 std::vector<EstimateRow> FlattenRows(const BracketEstimateRows& bracket);

@@ -11,6 +11,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "acquisition/recording_reader.h"
 #include "app/reports/summary.h"
 #include "estimator/line_of_sight.h"
 #include "base/check.h"
@@ -106,6 +107,22 @@ Features OnLineOfSight(const CameraGeometry& g, const Features& frame) {
   const LineOfSight view =
       LineOfSightAt(ray_of, frame.centroid_px, g.intrinsics.fx_px, g.intrinsics.fy_px);
   return ToLineOfSight(frame, view);
+}
+
+FeatureMap BracketOnLineOfSight(const RecordedBracket& bracket, const FeatureMap& features,
+                                const CameraGeometry& geometry) {
+  FeatureMap turned;
+  for (const FrameRecord& row : bracket.frames) {
+    const auto f = features.find(row.index);
+    if (f != features.end()) turned[row.index] = OnLineOfSight(geometry, f->second);
+  }
+  return turned;
+}
+
+CameraGeometry GeometryOfRecording(const RecordingReader& reader) {
+  const RecordingHeader& h = reader.header();
+  if (h.rig_text.empty()) return CameraGeometry{};
+  return GeometryOfRigText(h.rig_text, h.rig_path.empty() ? reader.dir() + " (rig)" : h.rig_path);
 }
 
 Position3d PositionFromRange(const CameraIntrinsics& k, int roi_offset_x, int roi_offset_y,

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "app/inputs/rig.h"
+#include "app/processing/frame_features.h"
 #include "estimator/features.h"
 
 namespace irdist {
@@ -67,6 +68,8 @@ TrueGeometry TrueGeometryOf(const CameraGeometry& geometry, double slide_mm, dou
 // virtual rig, its `virtual.emitter.offset_x_mm/offset_y_mm`. Throws RecipeError for a rig file
 // this build does not read.
 CameraGeometry GeometryOfRigText(const std::string& text, const std::string& file);
+// The geometry of the rig a recording was made on (its header's rig text).
+CameraGeometry GeometryOfRecording(const RecordingReader& reader);
 
 // A frame's features as the camera turned about its centre to look straight at the IRED sees
 // them (estimator/line_of_sight.h), at the frame's blob centroid through the rig's intrinsics
@@ -74,6 +77,9 @@ CameraGeometry GeometryOfRigText(const std::string& text, const std::string& fil
 // range from the camera's centre and theta from the line of sight. Without intrinsics, or
 // without a blob, the frame's own. The estimates and the calibration's samples both use it.
 Features OnLineOfSight(const CameraGeometry& geometry, const Features& frame);
+// The same for every frame of `bracket` found in `features`, each turned once.
+FeatureMap BracketOnLineOfSight(const RecordedBracket& bracket, const FeatureMap& features,
+                                const CameraGeometry& geometry);
 
 struct EstimateRow;
 // With intrinsics, fills x, y, z (and their standard errors) of every ok row of `blocks` (the

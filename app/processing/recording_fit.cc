@@ -10,7 +10,6 @@
 #include "acquisition/recording_reader.h"
 #include "app/inputs/provenance.h"
 #include "app/inputs/recipe.h"
-#include "app/processing/bracket_estimates.h"
 #include "app/processing/position.h"
 #include "app/reports/calibration_plots.h"
 #include "app/reports/report.h"
@@ -38,11 +37,12 @@ std::vector<CalibrationSample> SamplesFromRecording(const RecordingReader& reade
   const CameraGeometry geometry = GeometryOfRecording(reader);
   for (const RecordedBracket& bracket : reader.Brackets()) {
     if (!bracket.complete) continue;
+    // The models read the camera turned onto the line of sight, as the estimates do.
+    const FeatureMap turned = BracketOnLineOfSight(bracket, features, geometry);
     for (const DifferencePair& pair : DifferencePairsOf(bracket)) {
       CalibrationSample s;
-      // The models read the camera turned onto the line of sight, as the estimates do.
-      s.reference = OnLineOfSight(geometry, FeaturesOf(features, *pair.reference));
-      s.measurement = OnLineOfSight(geometry, FeaturesOf(features, *pair.measurement));
+      s.reference = FeaturesOf(turned, *pair.reference);
+      s.measurement = FeaturesOf(turned, *pair.measurement);
       s.t_ref_ms = pair.reference->requested_exposure_us / 1000.0;
       s.t_ms = pair.measurement->requested_exposure_us / 1000.0;
       s.bias_ma = pair.measurement->bias_ma_set;

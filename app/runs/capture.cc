@@ -122,17 +122,7 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   Impl& m = *impl_;
   m.setup = setup;
   m.camera = AravisCamera::Open(setup.camera_name, setup.camera_serial);
-  CameraSettings settings;
-  settings.pixel_format = setup.pixel_format;
-  settings.trigger_source = setup.trigger_source;
-  settings.trigger_activation = setup.trigger_activation;
-  settings.black_level = setup.black_level;
-  settings.packet_size = setup.packet_size;
-  settings.offset_x = setup.roi_offset_x;
-  settings.offset_y = setup.roi_offset_y;
-  settings.width = setup.roi_width;
-  settings.height = setup.roi_height;
-  settings.trigger_overlap_readout = setup.trigger_in_readout;
+  CameraSettings settings = setup.camera;
   IRDIST_CHECK(!setup.exposures_us.empty(), "a bracket needs exposures");
   settings.exposure_us = setup.exposures_us.front();
   settings.buffer_count =
@@ -148,8 +138,8 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   } else {
     RecordingHeader header;
     header.software_version = setup.software_version;
-    header.bit_depth = BitDepthOfPixelFormat(setup.pixel_format);
-    header.pixel_format = setup.pixel_format;
+    header.bit_depth = BitDepthOfPixelFormat(setup.camera.pixel_format);
+    header.pixel_format = setup.camera.pixel_format;
     header.camera = m.camera->Identity();
     header.camera_features = m.camera->ReadBackFeatures();
     header.station_identity = setup.station_identity;
@@ -164,9 +154,9 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   BracketOptions options;
   options.exposures_us = setup.exposures_us;
   options.interleave_reference = setup.interleave_reference;
-  options.trigger_source = setup.trigger_source;
+  options.trigger_source = setup.camera.trigger_source;
   options.frame_timeout = std::chrono::milliseconds(setup.frame_timeout_ms);
-  options.trigger_in_readout = setup.trigger_in_readout;
+  options.trigger_in_readout = setup.camera.trigger_overlap_readout;
   m.capture = std::make_unique<BracketCapture>(*m.camera, options);
   m.software_trigger = std::make_unique<CameraSoftwareTrigger>(*m.camera);
 }

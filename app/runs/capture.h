@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/camera.h"
 #include "app/processing/frame_features.h"
 #include "app/runs/bracket_committer.h"
 #include "estimator/features.h"
@@ -21,17 +22,12 @@ namespace irdist {
 struct LiveCaptureSetup {
   std::string camera_name;    // address, id or serial for AravisCamera::Open
   std::string camera_serial;  // expected serial ("" = no check)
-  std::string pixel_format = "Mono12";
-  std::string trigger_source = "Line1";
-  std::string trigger_activation = "RisingEdge";
-  double black_level = 0.0;
-  int packet_size = 0;
-  // Region of interest (sensor pixels); width 0 = the full sensor.
-  int roi_offset_x = 0, roi_offset_y = 0, roi_width = 0, roi_height = 0;
+  // Format, trigger, black level, packet size, region (app/inputs/rig.h CameraSettingsOf); the
+  // recorder sets the first exposure and enough buffers for a bracket.
+  CameraSettings camera;
   std::vector<double> exposures_us;  // t_r first, then the t_n
   bool interleave_reference = false;
   int frame_timeout_ms = 1000;
-  bool trigger_in_readout = false;  // the rig's camera.trigger_overlap is readout
   // The recording: a new one (header from these) or a cut one to continue.
   std::string recording_dir;
   bool resume = false;

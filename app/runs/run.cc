@@ -266,16 +266,7 @@ LiveCaptureSetup CaptureSetup(const Recipe& recipe, const RigEndpoints& rig,
   const CameraConfig& camera = recipe.rig.camera;
   setup.camera_name = rig.camera_name;
   setup.camera_serial = rig.camera_serial;
-  setup.pixel_format = camera.pixel_format;
-  setup.trigger_source = trigger_source;
-  setup.trigger_activation = camera.trigger_activation;
-  setup.trigger_in_readout = camera.trigger_in_readout;
-  setup.black_level = camera.black_level;
-  setup.packet_size = camera.packet_size;
-  setup.roi_offset_x = camera.roi_offset_x;
-  setup.roi_offset_y = camera.roi_offset_y;
-  setup.roi_width = camera.roi_width;
-  setup.roi_height = camera.roi_height;
+  setup.camera = CameraSettingsOf(camera, trigger_source);
   const BracketSpec& bracket = recipe.sweep.bracket;
   setup.exposures_us.push_back(bracket.t_ref_ms * 1000.0);
   double longest_ms = bracket.t_ref_ms;
