@@ -6,7 +6,6 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/camera.h"
 #include "station/plan.h"
 #include "station/station.h"
 
@@ -118,11 +117,5 @@ Rig ParseRig(const std::string& text, const std::string& file);
 // camera.trigger_source Software; a device's trigger line needs a Line source. Throws RecipeError
 // naming the rig file and the fix.
 void CheckTriggerSettings(const Rig& rig);
-
-// The camera's settings from the rig file's `camera:` section (format, trigger activation and
-// overlap, black level, packet size, region) with the FrameStart source the run fires
-// (devices/station_setup.h RigTriggerSource); exposure and buffers stay CameraSettings' defaults
-// for the caller. The one mapping every live command (calibrate, validate, measure, view) uses.
-CameraSettings CameraSettingsOf(const CameraConfig& camera, const std::string& trigger_source);
 
 }  // namespace irdist

@@ -10,6 +10,7 @@
 
 #include "acquisition/aravis_camera.h"
 #include "app/cli/errors.h"
+#include "app/inputs/camera_settings.h"
 #include "app/devices/tools.h"
 #include "app/inputs/recipe.h"
 #include "app/processing/frame_features.h"

@@ -21,6 +21,7 @@
 #include "acquisition/recording_reader.h"
 #include "app/cli/stop_signal.h"
 #include "app/devices/station_setup.h"
+#include "app/inputs/camera_settings.h"
 #include "app/inputs/provenance.h"
 #include "app/inputs/recipe.h"
 #include "app/processing/bracket_estimates.h"
