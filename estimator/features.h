@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "estimator/scene.h"
+
 namespace irdist {
 
 // How the region of interest is chosen. The same policy must be used in calibration and
@@ -155,6 +157,7 @@ struct Features {
   double model_blur_px = 0.0;   // kModelFit: the fitted Gaussian blur sigma (pixel area excluded)
   double model_rms = 0.0;       // kModelFit: rms residual of the fit, normalised gray levels
   double theta0_deg = 0.0;  // from the ellipse chosen by FeatureOptions::ellipse_method
+  SceneReport scene;        // what the scene pass found around the blob (estimator/scene.h)
   // True when the features can be used: a blob, no saturation, not on the border, not clipped.
   bool Usable() const {
     return blob_found && !touches_border && !blob_clipped_by_roi && saturated_pixels == 0;

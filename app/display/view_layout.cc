@@ -75,6 +75,13 @@ cv::Rect ScaledRect(const cv::Rect& r, double scale) {
 
 void DrawFeatures(const Features& f, double scale, cv::Mat* view) {
   cv::rectangle(*view, ScaledRect(f.roi, scale), kWindowColour, 1);
+  // The scene pass's findings: the defect pixels replaced, the other blobs masked.
+  for (const cv::Point& p : f.scene.defect_px) {  // a box around the pixel, seen at any scale
+    cv::rectangle(*view, ScaledRect(cv::Rect(p.x - 1, p.y - 1, 3, 3), scale), kDefectColour, 1);
+  }
+  for (const cv::Rect& r : f.scene.other_blob_rects) {
+    cv::rectangle(*view, ScaledRect(r, scale), kOtherBlobColour, 1);
+  }
   const EllipseFit& e = f.ellipse_moments;
   if (!e.valid) return;
   cv::ellipse(*view,

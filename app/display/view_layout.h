@@ -66,6 +66,8 @@ inline const cv::Scalar kRoiColour(255, 255, 0);        // cyan
 inline const cv::Scalar kWindowColour(0, 255, 0);       // green: the features' window
 inline const cv::Scalar kEllipseColour(0, 0, 255);      // red: the moments' ellipse
 inline const cv::Scalar kTextColour(255, 255, 255);
+inline const cv::Scalar kDefectColour(0, 255, 255);    // yellow: a defect pixel replaced
+inline const cv::Scalar kOtherBlobColour(0, 128, 255);  // orange: another blob masked
 
 // The largest gray level of `bit_depth` bits (saturation).
 inline double FullScale(int bit_depth) { return std::ldexp(1.0, bit_depth) - 1.0; }
@@ -74,7 +76,8 @@ inline double FullScale(int bit_depth) { return std::ldexp(1.0, bit_depth) - 1.0
 // size below 640 x 480 is taken as 640 x 480.
 cv::Mat ComposeView(const ViewPanel& panel, cv::Size window_size);
 
-// The features' window (green) and the moments' ellipse (red) on `view`, a frame enlarged or
+// The features' window (green), the moments' ellipse (red), the defect pixels replaced (yellow)
+// and the other blobs masked (orange) on `view`, a frame enlarged or
 // reduced by `scale` (pixel i covers [i - 0.5, i + 0.5) before scaling).
 void DrawFeatures(const Features& f, double scale, cv::Mat* view);
 

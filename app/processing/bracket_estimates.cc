@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "acquisition/recording_reader.h"
+#include "app/processing/estimate_flags.h"
 #include "app/processing/position.h"
 #include "estimator/estimate.h"
 #include "estimator/health.h"
@@ -245,6 +246,39 @@ BlobPoint BlobOf(const std::vector<DifferencePair>& pairs, const FeatureMap& fea
   return blob;
 }
 
+// Every frame of a bracket's pairs (a reference shared by pairs once) and its measurement
+// exposures (ms), in pair order.
+void FramesOfPairs(const std::vector<DifferencePair>& pairs, const FeatureMap& features,
+                   std::vector<const Features*>* frames, std::vector<double>* t_ms) {
+  const FrameRecord* last_reference = nullptr;
+  for (const DifferencePair& pair : pairs) {
+    if (pair.reference != last_reference) frames->push_back(&FeaturesOf(features, *pair.reference));
+    last_reference = pair.reference;
+    frames->push_back(&FeaturesOf(features, *pair.measurement));
+    t_ms->push_back(pair.measurement->requested_exposure_us / 1000.0);
+  }
+}
+
+// The flags of every row (app/processing/estimate_flags.h): the frames' for all, each row's own
+// ranges (a joint row over every t_n, a per-t_n row over its own), motion, and the default
+// method's health on its joint row.
+void FlagRows(const CalibrationModel& model, const std::vector<DifferencePair>& pairs,
+              const FeatureMap& features, BracketEstimateRows* rows) {
+  std::vector<const Features*> frames;
+  std::vector<double> t_ms;
+  FramesOfPairs(pairs, features, &frames, &t_ms);
+  const std::vector<EstimateFlag> frame_flags = FrameFlags(frames);
+  for (auto* block : {&rows->i0_free, &rows->paper, &rows->i0_dependent, &rows->geometric}) {
+    for (size_t k = 0; k < block->size(); ++k) {
+      EstimateRow& row = (*block)[k];
+      const bool per_dt = row.dt_ms != 0.0 && k >= 1 && k - 1 < t_ms.size();
+      const HealthCheck* health = block == &rows->i0_free && k == 0 ? &rows->health : nullptr;
+      FlagRow(frame_flags, model.ranges, per_dt ? std::vector<double>{t_ms[k - 1]} : t_ms, health,
+              &row);
+    }
+  }
+}
+
 }  // namespace
 
 BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
@@ -272,6 +306,7 @@ BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
   if (model.geometric.fitted()) rows.geometric.push_back(GeometricRow(model, base, pairs, features));
   AddPositions(geometry, BlobOf(pairs, features, geometry),
                {&rows.i0_free, &rows.paper, &rows.i0_dependent, &rows.geometric});
+  FlagRows(model, pairs, features, &rows);
   return rows;
 }
 

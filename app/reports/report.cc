@@ -235,6 +235,19 @@ std::string CrbFiguresText(const CrbFigures& c) {
   return out.str();
 }
 
+// A method's flags by cause, in one line of the header: the suspect rows, each flag's count
+// (notes marked) and the trusted rows no flag caught.
+std::string FlagsText(const MethodSummary& m) {
+  std::ostringstream out;
+  out << m.suspect << " of " << (m.all.count + m.all.failed) << " suspect";
+  for (const auto& [name, count] : m.flags) {
+    const FlagSpec* spec = FindFlagSpec(name);
+    out << "; " << name << " " << count << (spec != nullptr && !spec->suspect ? " (note)" : "");
+  }
+  out << "; silently wrong " << m.silently_wrong;
+  return out.str();
+}
+
 }  // namespace
 
 ReportFields ValidationReportFields(const std::map<std::string, std::string>& context,
@@ -254,6 +267,9 @@ ReportFields ValidationReportFields(const std::map<std::string, std::string>& co
   }
   for (const MethodSummary& m : summary.methods) {
     fields.push_back({"method " + m.method, ErrorFiguresText(m.all)});
+  }
+  for (const MethodSummary& m : summary.methods) {
+    fields.push_back({"flags " + m.method, FlagsText(m)});
   }
   for (const MethodSummary& m : summary.methods) {
     const auto it = crb.find(m.method);

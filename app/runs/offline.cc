@@ -15,6 +15,7 @@
 #include "app/processing/frame_features.h"
 #include "app/processing/recording_fit.h"
 #include "app/processing/run_results.h"
+#include "app/processing/scene_check.h"
 #include "app/runs/resume.h"
 #include "estimator/model_file.h"
 
@@ -161,6 +162,8 @@ void RunCheck(const CheckArgs& args, CommandIo io) {
     throw CheckFailedError(args.recording + ": " + std::to_string(check.errors.size()) +
                            " error(s) in the recording (listed above).");
   }
+  // The images, once the structure holds: what the scene shows (a report, never an error).
+  io.out << CheckScene(RecordingReader(args.recording)).BriefReport() << "\n";
 }
 
 }  // namespace irdist

@@ -1,0 +1,136 @@
+#include "app/processing/estimate_flags.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace irdist {
+
+namespace {
+
+std::string Fixed(double value, int decimals, const char* unit) {
+  char text[48];
+  std::snprintf(text, sizeof(text), "%.*f%s", decimals, value, unit);
+  return text;
+}
+
+// The worst of each scene figure over a bracket's frames.
+struct SceneWorst {
+  bool no_blob = false, touches_border = false, clipped = false;
+  int saturated = 0, defect_pixels = 0, other_blobs = 0;
+  bool second_source = false, occluded = false;
+  double second_source_gap_px = INFINITY;
+  double occluded_edge_fraction = 0.0;
+};
+
+SceneWorst WorstOf(const std::vector<const Features*>& frames) {
+  SceneWorst w;
+  for (const Features* f : frames) {
+    if (f == nullptr || !f->blob_found) {
+      w.no_blob = true;
+      continue;
+    }
+    w.touches_border = w.touches_border || f->touches_border;
+    w.clipped = w.clipped || f->blob_clipped_by_roi;
+    w.saturated = std::max(w.saturated, f->saturated_pixels);
+    const SceneReport& s = f->scene;
+    w.defect_pixels = std::max(w.defect_pixels, s.defect_pixels);
+    w.other_blobs = std::max(w.other_blobs, s.other_blobs);
+    if (s.second_source) {
+      w.second_source = true;
+      if (std::isfinite(s.second_source_gap_px)) {
+        w.second_source_gap_px = std::min(w.second_source_gap_px, s.second_source_gap_px);
+      }
+    }
+    if (s.occluded) {
+      w.occluded = true;
+      w.occluded_edge_fraction = std::max(w.occluded_edge_fraction, s.occluded_edge_fraction);
+    }
+  }
+  return w;
+}
+
+bool HasFlag(const std::vector<EstimateFlag>& flags, const char* name) {
+  return std::any_of(flags.begin(), flags.end(),
+                     [name](const EstimateFlag& f) { return f.name == name; });
+}
+
+// `t_meas` within kExposureExtrapolation of the calibrated exposures: the note's figure (the
+// farthest exposure, ms), or "" when some exposure lies beyond the tolerance.
+std::string GradedExposure(const CalibratedRanges& ranges, const std::vector<double>& t_ms) {
+  double farthest_ms = NAN, farthest_beyond = 0.0;
+  for (double t : t_ms) {
+    const double beyond = t > ranges.t_max_ms   ? t / ranges.t_max_ms - 1.0
+                          : t < ranges.t_min_ms ? 1.0 - t / ranges.t_min_ms
+                                                : 0.0;
+    if (!(beyond <= kExposureExtrapolation)) return "";
+    if (beyond > farthest_beyond) {
+      farthest_beyond = beyond;
+      farthest_ms = t;
+    }
+  }
+  return std::isfinite(farthest_ms) ? Fixed(farthest_ms, 1, "ms") : "";
+}
+
+// The row's outside ranges as its flags: a graded t_meas becomes a note and leaves the list.
+void FlagRanges(const CalibratedRanges& ranges, const std::vector<double>& t_ms,
+                EstimateRow* row) {
+  auto& outside = row->outside;
+  const auto t_meas = std::find(outside.begin(), outside.end(), "t_meas");
+  if (t_meas != outside.end() && ranges.t_max_ms > 0.0) {
+    const std::string figure = GradedExposure(ranges, t_ms);
+    if (!figure.empty()) {
+      outside.erase(t_meas);
+      row->flags.push_back({"t_meas_extrapolated", figure});
+    }
+  }
+  row->outside_range = !outside.empty();
+  if (row->outside_range) row->flags.push_back({"outside", JoinNames(outside, "+")});
+}
+
+}  // namespace
+
+std::string PercentFigure(double fraction) {
+  return (fraction > 0.0 ? "+" : "") + Fixed(100.0 * fraction, 0, "%");
+}
+
+std::vector<EstimateFlag> FrameFlags(const std::vector<const Features*>& frames) {
+  const SceneWorst w = WorstOf(frames);
+  std::vector<EstimateFlag> flags;
+  if (w.defect_pixels > 0) flags.push_back({"defect_pixels", std::to_string(w.defect_pixels)});
+  if (w.other_blobs > 0 && !w.second_source) {
+    flags.push_back({"other_blobs", std::to_string(w.other_blobs)});
+  }
+  if (w.no_blob) flags.push_back({"no_blob", ""});
+  if (w.saturated > 0) flags.push_back({"saturated", std::to_string(w.saturated)});
+  if (w.touches_border) flags.push_back({"touches_border", ""});
+  if (w.clipped) flags.push_back({"clipped", ""});
+  if (w.second_source) {
+    flags.push_back({"second_source", std::isfinite(w.second_source_gap_px)
+                                          ? Fixed(w.second_source_gap_px, 1, "px")
+                                          : ""});
+  }
+  if (w.occluded) {
+    flags.push_back({"occluded", Fixed(100.0 * w.occluded_edge_fraction, 0, "%")});
+  }
+  return flags;
+}
+
+void FlagRow(const std::vector<EstimateFlag>& frame_flags, const CalibratedRanges& ranges,
+             const std::vector<double>& t_ms, const HealthCheck* health, EstimateRow* row) {
+  row->flags = frame_flags;
+  // A second source or an occluder changes the blob's spread and the per-exposure distances: its
+  // own flag names the cause, never motion or focus.
+  const bool scene_cause =
+      HasFlag(frame_flags, "second_source") || HasFlag(frame_flags, "occluded");
+  if (!scene_cause && row->motion == "moving") {
+    row->flags.push_back({"moving", Fixed(row->spread_mm, 1, "mm")});
+  }
+  if (!scene_cause && health != nullptr && health->assessed && health->flagged) {
+    row->flags.push_back({health->Label(), PercentFigure(health->sigma_change)});
+  }
+  FlagRanges(ranges, t_ms, row);
+  if (!row->ok) row->flags.push_back({"no_estimate", ""});
+}
+
+}  // namespace irdist
