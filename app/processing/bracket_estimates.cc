@@ -267,7 +267,7 @@ void FlagRows(const CalibrationModel& model, const std::vector<DifferencePair>& 
   std::vector<const Features*> frames;
   std::vector<double> t_ms;
   FramesOfPairs(pairs, features, &frames, &t_ms);
-  const std::vector<EstimateFlag> frame_flags = FrameFlags(frames);
+  const BracketFrameFlags frame_flags = FrameFlags(frames);
   for (auto* block : {&rows->i0_free, &rows->paper, &rows->i0_dependent, &rows->geometric}) {
     for (size_t k = 0; k < block->size(); ++k) {
       EstimateRow& row = (*block)[k];

@@ -19,6 +19,7 @@ struct SceneWorst {
   bool no_blob = false, touches_border = false, clipped = false;
   int saturated = 0, defect_pixels = 0, other_blobs = 0;
   bool second_source = false, occluded = false;
+  double peak_min = 0.0, peak_max = 0.0;
   double second_source_gap_px = INFINITY;
   double occluded_edge_fraction = 0.0;
 };
@@ -33,6 +34,8 @@ SceneWorst WorstOf(const std::vector<const Features*>& frames) {
     w.touches_border = w.touches_border || f->touches_border;
     w.clipped = w.clipped || f->blob_clipped_by_roi;
     w.saturated = std::max(w.saturated, f->saturated_pixels);
+    w.peak_min = w.peak_max > 0.0 ? std::min(w.peak_min, f->peak) : f->peak;
+    w.peak_max = std::max(w.peak_max, f->peak);
     const SceneReport& s = f->scene;
     w.defect_pixels = std::max(w.defect_pixels, s.defect_pixels);
     w.other_blobs = std::max(w.other_blobs, s.other_blobs);
@@ -72,18 +75,35 @@ std::string GradedExposure(const CalibratedRanges& ranges, const std::vector<dou
   return std::isfinite(farthest_ms) ? Fixed(farthest_ms, 1, "ms") : "";
 }
 
-// The row's outside ranges as its flags: a graded t_meas becomes a note and leaves the list.
-void FlagRanges(const CalibratedRanges& ranges, const std::vector<double>& t_ms,
-                EstimateRow* row) {
+// The bracket's peak within kSignalExtrapolation of the calibrated peaks: the note's figure (the
+// farthest, % beyond the nearest edge), or "" when beyond the tolerance.
+std::string GradedSignal(const CalibratedRanges& ranges, const BracketFrameFlags& frames) {
+  if (!(ranges.peak_max > 0.0 && frames.peak_max > 0.0)) return "";
+  const double above = frames.peak_max / ranges.peak_max - 1.0;
+  const double below = 1.0 - frames.peak_min / ranges.peak_min;
+  const double beyond = std::max(above, below);
+  if (!(beyond <= kSignalExtrapolation)) return "";
+  return (above >= below ? "+" : "-") + Fixed(100.0 * beyond, 0, "%");
+}
+
+// Moves `name` from the row's outside list to the note `note` when `figure` grades it.
+void Grade(const char* name, const char* note, const std::string& figure, EstimateRow* row) {
   auto& outside = row->outside;
-  const auto t_meas = std::find(outside.begin(), outside.end(), "t_meas");
-  if (t_meas != outside.end() && ranges.t_max_ms > 0.0) {
-    const std::string figure = GradedExposure(ranges, t_ms);
-    if (!figure.empty()) {
-      outside.erase(t_meas);
-      row->flags.push_back({"t_meas_extrapolated", figure});
-    }
+  const auto it = std::find(outside.begin(), outside.end(), name);
+  if (it == outside.end() || figure.empty()) return;
+  outside.erase(it);
+  row->flags.push_back({note, figure});
+}
+
+// The row's outside ranges as its flags: a graded t_meas or signal becomes a note and leaves the
+// list.
+void FlagRanges(const CalibratedRanges& ranges, const BracketFrameFlags& frames,
+                const std::vector<double>& t_ms, EstimateRow* row) {
+  if (ranges.t_max_ms > 0.0) {
+    Grade("t_meas", "t_meas_extrapolated", GradedExposure(ranges, t_ms), row);
   }
+  Grade("signal", "signal_extrapolated", GradedSignal(ranges, frames), row);
+  const auto& outside = row->outside;
   row->outside_range = !outside.empty();
   if (row->outside_range) row->flags.push_back({"outside", JoinNames(outside, "+")});
 }
@@ -94,9 +114,12 @@ std::string PercentFigure(double fraction) {
   return (fraction > 0.0 ? "+" : "") + Fixed(100.0 * fraction, 0, "%");
 }
 
-std::vector<EstimateFlag> FrameFlags(const std::vector<const Features*>& frames) {
+BracketFrameFlags FrameFlags(const std::vector<const Features*>& frames) {
   const SceneWorst w = WorstOf(frames);
-  std::vector<EstimateFlag> flags;
+  BracketFrameFlags out;
+  out.peak_min = w.peak_min;
+  out.peak_max = w.peak_max;
+  std::vector<EstimateFlag>& flags = out.flags;
   if (w.defect_pixels > 0) flags.push_back({"defect_pixels", std::to_string(w.defect_pixels)});
   if (w.other_blobs > 0 && !w.second_source) {
     flags.push_back({"other_blobs", std::to_string(w.other_blobs)});
@@ -113,11 +136,12 @@ std::vector<EstimateFlag> FrameFlags(const std::vector<const Features*>& frames)
   if (w.occluded) {
     flags.push_back({"occluded", Fixed(100.0 * w.occluded_edge_fraction, 0, "%")});
   }
-  return flags;
+  return out;
 }
 
-void FlagRow(const std::vector<EstimateFlag>& frame_flags, const CalibratedRanges& ranges,
+void FlagRow(const BracketFrameFlags& frames, const CalibratedRanges& ranges,
              const std::vector<double>& t_ms, const HealthCheck* health, EstimateRow* row) {
+  const std::vector<EstimateFlag>& frame_flags = frames.flags;
   row->flags = frame_flags;
   // A second source or an occluder changes the blob's spread and the per-exposure distances: its
   // own flag names the cause, never motion or focus.
@@ -129,7 +153,7 @@ void FlagRow(const std::vector<EstimateFlag>& frame_flags, const CalibratedRange
   if (!scene_cause && health != nullptr && health->assessed && health->flagged) {
     row->flags.push_back({health->Label(), PercentFigure(health->sigma_change)});
   }
-  FlagRanges(ranges, t_ms, row);
+  FlagRanges(ranges, frames, t_ms, row);
   if (!row->ok) row->flags.push_back({"no_estimate", ""});
 }
 

@@ -23,18 +23,30 @@ namespace irdist {
 // (docs/estimator.md, "Exposures beyond the calibration").
 constexpr double kExposureExtrapolation = 0.15;
 
-// The scene's and the frames' flags of a bracket (every frame given: references and measurements),
-// the same for each of its rows: notes (defect_pixels, other_blobs) and suspects (no_blob,
-// saturated, touches_border, clipped, second_source, occluded), each with the worst figure over
-// the frames.
-std::vector<EstimateFlag> FrameFlags(const std::vector<const Features*>& frames);
+// How far beyond the calibration frames' peak levels (model.yaml ranges.peak) a bracket's peak is
+// still a graded note (`signal_extrapolated`) and not `outside`: relative to the nearest edge. The
+// features are linear in the signal on a linear camera (the response the calibration fits);
+// Fig. 10's 525 mA at 40 ms (up to 17% above Table 3's brightest frame) measures as well as the
+// brackets inside (docs/estimator.md, "Exposures beyond the calibration").
+constexpr double kSignalExtrapolation = 0.25;
 
-// A row's range, motion and health flags on top of `frame_flags`: `outside` with its ranges,
-// except a `t_meas` within kExposureExtrapolation of the calibrated exposures (`t_ms`, the row's
-// measurement exposures), which becomes the note `t_meas_extrapolated` and leaves the row's
-// outside list and outside_range; `moving` with the spread; `blur_larger`/`blur_smaller` with the
-// blur's change when `health` is given and flagged; `no_estimate` on a row without an estimate.
-void FlagRow(const std::vector<EstimateFlag>& frame_flags, const CalibratedRanges& ranges,
+// What a bracket's frames (every frame: references and measurements) say, the same for each of
+// its rows: the scene's and the frames' flags, notes (defect_pixels, other_blobs) and suspects
+// (no_blob, saturated, touches_border, clipped, second_source, occluded), each with the worst
+// figure over the frames; and the frames' blob peak levels (normalised).
+struct BracketFrameFlags {
+  std::vector<EstimateFlag> flags;
+  double peak_min = 0.0, peak_max = 0.0;  // over the frames with a blob (0: none)
+};
+BracketFrameFlags FrameFlags(const std::vector<const Features*>& frames);
+
+// A row's range, motion and health flags on top of its frames': `outside` with its ranges, except
+// a `t_meas` within kExposureExtrapolation of the calibrated exposures (`t_ms`, the row's
+// measurement exposures) and a `signal` within kSignalExtrapolation of the calibrated peaks, which
+// become the notes `t_meas_extrapolated` and `signal_extrapolated` and leave the row's outside
+// list and outside_range; `moving` with the spread; `blur_larger`/`blur_smaller` with the blur's
+// change when `health` is given and flagged; `no_estimate` on a row without an estimate.
+void FlagRow(const BracketFrameFlags& frames, const CalibratedRanges& ranges,
              const std::vector<double>& t_ms, const HealthCheck* health, EstimateRow* row);
 
 // "+14%" / "-8%": a relative change as a flag's figure.

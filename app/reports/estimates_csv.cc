@@ -221,6 +221,8 @@ const std::vector<FlagSpec>& FlagSpecs() {
       {"other_blobs", false, "other light sources or reflections masked out of the window (count)"},
       {"t_meas_extrapolated", false,
        "a measurement exposure beyond the calibrated ones, within the graded tolerance (ms)"},
+      {"signal_extrapolated", false,
+       "the blob's peak beyond the calibration frames', within the graded tolerance (%)"},
       // Suspect: the estimate is not trusted.
       {"no_blob", true, "a frame of the bracket has no blob"},
       {"saturated", true, "pixels at the format's maximum in the window (count)"},

@@ -375,7 +375,7 @@ std::string ValidationSummary::BriefReport() const {
     if (m.health_flagged) out << ", " << m.health_flagged << " unhealthy (optics)";
     if (m.motion_flagged) out << ", " << m.motion_flagged << " moving";
     if (m.suspect) out << ", " << m.suspect << " suspect";
-    if (m.silently_wrong) out << ", " << m.silently_wrong << " SILENTLY WRONG";
+    if (m.silently_wrong) out << ", " << m.silently_wrong << " silently wrong";
     out << "\n";
   }
   return out.str();

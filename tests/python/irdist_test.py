@@ -93,6 +93,12 @@ class ModelTest(unittest.TestCase):
             expected = playback[rows[0]["bracket_id"]]
             self.assertAlmostEqual(m["d_mm"], float(expected["d_mm"]), delta=0.01)
             self.assertAlmostEqual(m["theta_deg"], float(expected["theta_deg"]), delta=0.001)
+            # The same flags as estimates.csv's column: name=figure, notes leave it trusted.
+            causes = " ".join(c["name"] + ("=" + c["figure"] if c["figure"] else "")
+                              for c in m["causes"])
+            self.assertEqual(causes, expected["flags"], m)
+            self.assertEqual(m["trusted"], not any(c["suspect"] for c in m["causes"]), m)
+            self.assertAlmostEqual(m["d_se_mm"], float(expected["d_se_mm"]), delta=1e-3)
             checked += 1
         self.assertGreaterEqual(checked, 4)
 

@@ -42,7 +42,7 @@ std::string Cell(const EstimateRow& row) { return FlagsCell(row.flags); }
 
 TEST(FrameFlags, ACleanBracketHasNone) {
   const Features a = Frame(), b = Frame();
-  EXPECT_TRUE(FrameFlags({&a, &b}).empty());
+  EXPECT_TRUE(FrameFlags({&a, &b}).flags.empty());
 }
 
 TEST(FrameFlags, NameEachCauseWithTheWorstFigureOverTheFrames) {
@@ -56,18 +56,18 @@ TEST(FrameFlags, NameEachCauseWithTheWorstFigureOverTheFrames) {
   c.scene.occluded = true;
   c.scene.occluded_edge_fraction = 0.184;
   c.saturated_pixels = 7;
-  EXPECT_EQ(FlagsCell(FrameFlags({&a, &b, &c})),
+  EXPECT_EQ(FlagsCell(FrameFlags({&a, &b, &c}).flags),
             "defect_pixels=5 saturated=7 second_source=6.5px occluded=18%");
   Features none;  // no blob
-  EXPECT_EQ(FlagsCell(FrameFlags({&a, &none})), "defect_pixels=2 no_blob");
+  EXPECT_EQ(FlagsCell(FrameFlags({&a, &none}).flags), "defect_pixels=2 no_blob");
 }
 
 TEST(FrameFlags, OtherBlobsMaskedAreANoteUnlessOneIsTooClose) {
   Features a = Frame();
   a.scene.other_blobs = 2;
-  std::vector<EstimateFlag> flags = FrameFlags({&a});
-  ASSERT_EQ(flags.size(), 1u);
-  EXPECT_EQ(flags[0].name, "other_blobs");
+  const BracketFrameFlags flags = FrameFlags({&a});
+  ASSERT_EQ(flags.flags.size(), 1u);
+  EXPECT_EQ(flags.flags[0].name, "other_blobs");
   EstimateRow row = Estimated();
   FlagRow(flags, Table3(), {32.0}, nullptr, &row);
   EXPECT_TRUE(row.Trusted());
@@ -106,6 +106,25 @@ HealthCheck BlurLarger() {
   return h;
 }
 
+TEST(FlagRow, APeakJustBeyondTheCalibrationsIsAGradedNote) {
+  CalibratedRanges ranges = Table3();
+  ranges.peak_min = 0.10;
+  ranges.peak_max = 0.60;
+  Features ref = Frame(), meas = Frame();
+  ref.peak = 0.15;
+  meas.peak = 0.69;  // 15% above the brightest calibration frame
+  EstimateRow row = Estimated();
+  row.outside = {"signal"};
+  FlagRow(FrameFlags({&ref, &meas}), ranges, {32.0}, nullptr, &row);
+  EXPECT_EQ(Cell(row), "signal_extrapolated=+15%");
+  EXPECT_FALSE(row.outside_range);
+  meas.peak = 0.80;  // 33% above: outside
+  EstimateRow far = Estimated();
+  far.outside = {"signal"};
+  FlagRow(FrameFlags({&ref, &meas}), ranges, {32.0}, nullptr, &far);
+  EXPECT_EQ(Cell(far), "outside=signal");
+}
+
 TEST(FlagRow, MotionAndFocusCarryTheirFigures) {
   EstimateRow row = Estimated();
   row.motion = "moving";
@@ -121,7 +140,7 @@ TEST(FlagRow, AReflectionOrAnOccluderIsNeverCalledMotionOrFocus) {
     EstimateRow row = Estimated();
     row.motion = "moving";
     row.spread_mm = 40.0;
-    FlagRow({{cause, "1"}}, Table3(), {32.0}, &health, &row);
+    FlagRow({{{cause, "1"}}}, Table3(), {32.0}, &health, &row);
     ASSERT_EQ(row.flags.size(), 1u) << Cell(row);
     EXPECT_EQ(row.flags[0].name, cause);
     EXPECT_EQ(row.motion, "moving");  // the column keeps its assessment
@@ -131,7 +150,7 @@ TEST(FlagRow, AReflectionOrAnOccluderIsNeverCalledMotionOrFocus) {
 TEST(FlagRow, ARowWithoutAnEstimateSaysSo) {
   EstimateRow row = Estimated();
   row.ok = false;
-  FlagRow({{"no_blob", ""}}, Table3(), {32.0}, nullptr, &row);
+  FlagRow({{{"no_blob", ""}}}, Table3(), {32.0}, nullptr, &row);
   EXPECT_EQ(Cell(row), "no_blob no_estimate");
 }
 
