@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <fstream>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -277,6 +280,31 @@ TEST(LabScene, OccludedImageMovesLikeTheSegmentsCentroidAndAVanishingCutIsTheDis
   ASSERT_EQ(barely.rect, full.rect);
   EXPECT_LT(cv::norm(barely.electrons, full.electrons, cv::NORM_INF),
             1e-4 * cv::norm(full.electrons, cv::NORM_INF));
+}
+
+// docs/virtual-rig.md "A lab's scene": every example snippet loads and turns a fault on.
+TEST(LabScene, DocumentedExamplesLoad) {
+  std::ifstream in(std::string(IRDIST_SOURCE_DIR) + "/docs/virtual-rig.md");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string doc = text.str();
+  size_t at = doc.find("## A lab's scene");
+  const size_t end = doc.find("\n## ", at + 1);
+  ASSERT_NE(at, std::string::npos);
+  int examples = 0;
+  for (size_t open = doc.find("```yaml\n", at); open < end; open = doc.find("```yaml\n", at)) {
+    const size_t close = doc.find("```", open + 8);
+    const std::string path = std::string(IRDIST_BINARY_DIR) + "/sim_lab_scene_example_" +
+                             std::to_string(examples++) + ".yaml";
+    std::ofstream(path) << doc.substr(open + 8, close - open - 8);
+    const RigPhysics p = LoadRigPhysics(path);
+    const LabSceneOptions& s = p.scene;
+    EXPECT_TRUE(p.sensor.defects.Count() > 0 || s.ambient.On() || s.reflection.On() ||
+                s.second_source.On() || s.occluder.On())
+        << path;
+    at = close + 3;
+  }
+  EXPECT_EQ(examples, 6);
 }
 
 }  // namespace
