@@ -54,24 +54,52 @@ FrameConditions StaticConditions(double slide_mm, double pan_deg, double tilt_de
   return c;
 }
 
-Renderer::Renderer(const RigPhysics& physics) : scene_(physics), sensor_(physics.sensor) {}
+// The defects near the blob lie around the emitter's image centre at the default pose (on the
+// optical axis: the sensor's centre, whatever the slide).
+Renderer::Renderer(const RigPhysics& physics)
+    : scene_(physics),
+      lab_(scene_),
+      sensor_(physics.sensor, scene_.Project(PoseState{}).center_x_px,
+              scene_.Project(PoseState{}).center_y_px),
+      ambient_margin_px_(static_cast<int>(CrosstalkKernel(physics.sensor.crosstalk_sigma_px).size())) {}
+
+SignalWindow Renderer::EmitterSignal(const PoseState& pose, double intensity_mw_sr,
+                                     double exposure_s) const {
+  SignalWindow signal = scene_.RenderSignal(pose, intensity_mw_sr, exposure_s);
+  if (const auto mirror = lab_.ReflectionDisc(pose, intensity_mw_sr)) {
+    Accumulate(signal, scene_.RenderDisc(*mirror, exposure_s), 1.0);
+  }
+  return signal;
+}
 
 SignalWindow Renderer::Signal(const FrameConditions& c) const {
   const double i_start = scene_.OnAxisIntensityMwSr(c.pose_start.bias_ma, c.junction_rise_k);
   const double i_end = scene_.OnAxisIntensityMwSr(c.pose_end.bias_ma, c.junction_rise_k);
-  if (SameGeometry(c.pose_start, c.pose_end)) {
-    return scene_.RenderSignal(c.pose_start, 0.5 * (i_start + i_end), c.exposure_s);
-  }
-  // Moving during the exposure: half of it at each end (a two-point smear).
   SignalWindow acc;
-  Accumulate(acc, scene_.RenderSignal(c.pose_start, i_start, 0.5 * c.exposure_s), 1.0);
-  Accumulate(acc, scene_.RenderSignal(c.pose_end, i_end, 0.5 * c.exposure_s), 1.0);
+  if (SameGeometry(c.pose_start, c.pose_end)) {
+    acc = EmitterSignal(c.pose_start, 0.5 * (i_start + i_end), c.exposure_s);
+  } else {
+    // Moving during the exposure: half of it at each end (a two-point smear).
+    Accumulate(acc, EmitterSignal(c.pose_start, i_start, 0.5 * c.exposure_s), 1.0);
+    Accumulate(acc, EmitterSignal(c.pose_end, i_end, 0.5 * c.exposure_s), 1.0);
+  }
+  if (const auto second = lab_.SecondSourceDisc()) {
+    Accumulate(acc, scene_.RenderDisc(*second, c.exposure_s), 1.0);
+  }
   return acc;
 }
 
 void Renderer::Render(const FrameConditions& c, std::uint64_t frame_index, PixelFormat format,
                       cv::Point roi_origin, cv::Mat& out) const {
-  const SignalWindow signal = Signal(c);
+  SignalWindow signal = Signal(c);
+  if (lab_.AmbientOn()) {  // over the region and the reach of the crosstalk around it
+    const SensorOptions& s = sensor_.options();
+    const cv::Rect around =
+        cv::Rect(roi_origin.x - ambient_margin_px_, roi_origin.y - ambient_margin_px_,
+                 out.cols + 2 * ambient_margin_px_, out.rows + 2 * ambient_margin_px_) &
+        cv::Rect(0, 0, s.width_px, s.height_px);
+    Accumulate(signal, lab_.Ambient(around, c.exposure_s), 1.0);
+  }
   sensor_.Expose(signal, c.exposure_s, frame_index, format, roi_origin, out, c.black_offset_dn);
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // One frame of the virtual camera: the Scene's signal for the state of the world during the
-// exposure, exposed on the Sensor. Also the scene's ground truth for a pose (blob size, peak gray
+// exposure (the IRED, and the lab's other light when virtual.scene: turns it on: sim/lab_scene.h),
+// exposed on the Sensor. Also the scene's ground truth for a pose (blob size, peak gray
 // level) for reports. Thread-safe (const) once constructed.
 
 #include <cstdint>
@@ -9,6 +10,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "sim/lab_scene.h"
 #include "sim/rig_physics.h"
 #include "sim/scene.h"
 #include "sim/sensor.h"
@@ -50,8 +52,11 @@ class Renderer {
   const Scene& scene() const { return scene_; }
   const Sensor& sensor() const { return sensor_; }
 
+  const LabScene& lab() const { return lab_; }
+
   // Mean signal electrons for the conditions (averaging the start and end poses of a moving
-  // exposure, and the intensity at the bias currents of both).
+  // exposure, and the intensity at the bias currents of both): the IRED, its reflection and the
+  // second source (ambient light, which covers the sensor, is added by Render for its region).
   SignalWindow Signal(const FrameConditions& conditions) const;
 
   // Renders the region with top-left `roi_origin` and out's size into `out` (type from format).
@@ -61,13 +66,20 @@ class Renderer {
   cv::Mat Render(const FrameConditions& conditions, std::uint64_t frame_index,
                  PixelFormat format) const;
 
-  // Noise-free description of a static pose at `bias_ma` (junction at `junction_rise_k`).
+  // Noise-free description of a static pose at `bias_ma` (junction at `junction_rise_k`): the
+  // IRED's image alone (the occluder's cut included; no reflection, second source or ambient).
   GroundTruth Describe(const PoseState& pose, double exposure_s, PixelFormat format,
                        double junction_rise_k = 0.0) const;
 
  private:
+  // The IRED at one pose and intensity for `exposure_s`, with its reflection.
+  SignalWindow EmitterSignal(const PoseState& pose, double intensity_mw_sr,
+                             double exposure_s) const;
+
   Scene scene_;
+  LabScene lab_;
   Sensor sensor_;
+  int ambient_margin_px_ = 0;  // ambient light drawn this far around the region (crosstalk)
 };
 
 // Conditions for a static pose (start = end) and a cold emitter: a helper for tests and reports.

@@ -2,9 +2,12 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "base/input_error.h"
 #include "base/yaml_fields.h"
@@ -16,6 +19,9 @@ bool Fail(std::string* why, const std::string& message) {
   if (why != nullptr) *why = message;
   return false;
 }
+
+constexpr const char* kFix =
+    "; fix the value in the rig file (docs/virtual-rig.md lists the ranges)";
 
 bool Positive(double value) { return std::isfinite(value) && value > 0.0; }
 bool Fraction(double value) { return std::isfinite(value) && value >= 0.0 && value <= 1.0; }
@@ -118,6 +124,10 @@ bool SensorOptions::IsValid(std::string* why) const {
   if (!std::isfinite(crosstalk_sigma_px) || crosstalk_sigma_px < 0.0 || crosstalk_sigma_px > 5.0) {
     return Fail(why, "sensor.crosstalk_sigma_px must lie in [0, 5]");
   }
+  if (!defects.IsValid(AdcMax(), why)) return false;
+  if (defects.Count() > static_cast<double>(width_px) * height_px / 4.0) {
+    return Fail(why, "sensor.hot_pixels + stuck_pixels must be at most a quarter of the pixels");
+  }
   return true;
 }
 
@@ -147,7 +157,7 @@ bool RigPhysics::IsValid(std::string* why) const {
     return Fail(why, "time_scale must lie in [0.01, 1000]");
   }
   return emitter.IsValid(why) && optics.IsValid(why) && sensor.IsValid(why) &&
-         camera.IsValid(why);
+         camera.IsValid(why) && scene.IsValid(why);
 }
 
 namespace {
@@ -164,6 +174,75 @@ std::uint64_t ReadSeed(const MapReader& keys, const std::string& key, std::uint6
     yaml_fields::Fail(keys.File(), node.Mark(), key + " must be a whole number >= 0");
   }
   return value;
+}
+
+std::string FormatNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", value);
+  return text;
+}
+
+// A number checked against [lo, hi] at its own line.
+double CheckedNumber(const MapReader& keys, const std::string& context, const std::string& key,
+                     double fallback, double lo, double hi) {
+  if (!keys.Has(key)) return fallback;
+  const double value = keys.Number(key, fallback);
+  if (!std::isfinite(value) || value < lo || value > hi) {
+    yaml_fields::Fail(keys.File(), keys.Get(key).Mark(),
+                      context + "." + key + " must lie in [" + FormatNumber(lo) +
+                          ", " + FormatNumber(hi) + "], not " +
+                          FormatNumber(value) + kFix);
+  }
+  return value;
+}
+
+// A whole number checked against [lo, hi] at its own line.
+int CheckedInteger(const MapReader& keys, const std::string& context, const std::string& key,
+                   int fallback, int lo, int hi) {
+  if (!keys.Has(key)) return fallback;
+  const int value = keys.Integer(key, fallback);
+  if (value < lo || value > hi) {
+    yaml_fields::Fail(keys.File(), keys.Get(key).Mark(),
+                      context + "." + key + " must be " + std::to_string(lo) + ".." +
+                          std::to_string(hi) + ", not " + std::to_string(value) + kFix);
+  }
+  return value;
+}
+
+// A list of N finite numbers, e.g. [lo, hi] or [x, y, z].
+template <size_t N>
+std::array<double, N> ReadNumbers(const MapReader& keys, const std::string& context,
+                                  const std::string& key, const std::array<double, N>& fallback) {
+  if (!keys.Has(key)) return fallback;
+  const YAML::Node node = keys.Get(key);
+  const std::string what = context + "." + key;
+  if (!node.IsSequence() || node.size() != N) {
+    yaml_fields::Fail(keys.File(), node.Mark(),
+                      what + " must be a list of " + std::to_string(N) + " numbers" + kFix);
+  }
+  std::array<double, N> values{};
+  for (size_t i = 0; i < N; ++i) {
+    values[i] = yaml_fields::AsNumber(node[i], keys.File(), what);
+    if (!std::isfinite(values[i])) {
+      yaml_fields::Fail(keys.File(), node[i].Mark(), what + " must hold finite numbers" + kFix);
+    }
+  }
+  return values;
+}
+
+// A subsection's combined check (ranges, sums), at the line of the first of `keys_named` that the
+// reason names and the map holds, else at the subsection's first key.
+void CheckAt(const MapReader& keys, bool valid, const std::string& why,
+             const std::vector<std::string>& keys_named) {
+  if (valid) return;
+  YAML::Mark mark = keys.Mark();
+  for (const std::string& key : keys_named) {
+    if (why.find("." + key + " ") != std::string::npos && keys.Has(key)) {
+      mark = keys.Get(key).Mark();
+      break;
+    }
+  }
+  yaml_fields::Fail(keys.File(), mark, "virtual." + why + kFix);
 }
 
 EmissionPattern ReadPattern(const MapReader& keys, EmissionPattern fallback) {
@@ -215,13 +294,33 @@ void ReadOptics(const YAML::Node& node, const std::string& file, OpticsOptions* 
   o->supersample = k.Integer("supersample", o->supersample);
 }
 
+// The defect pixels' keys, flat in `virtual.sensor:` (sim/defect_pixels.h).
+void ReadDefects(const MapReader& k, SensorOptions* s) {
+  const std::string at = "virtual.sensor";
+  DefectPixelOptions& d = s->defects;
+  d.hot_pixels = CheckedInteger(k, at, "hot_pixels", d.hot_pixels, 0, 100000);
+  d.hot_rate_e_per_s = ReadNumbers(k, at, "hot_rate_e_per_s", d.hot_rate_e_per_s);
+  d.stuck_pixels = CheckedInteger(k, at, "stuck_pixels", d.stuck_pixels, 0, 100000);
+  d.stuck_level_dn = ReadNumbers(k, at, "stuck_level_dn", d.stuck_level_dn);
+  d.defect_seed = ReadSeed(k, "defect_seed", d.defect_seed);
+  d.defects_near_blob =
+      CheckedInteger(k, at, "defects_near_blob", d.defects_near_blob, 0, 100000);
+  d.near_blob_radius_px =
+      CheckedNumber(k, at, "near_blob_radius_px", d.near_blob_radius_px, 1.0, 200.0);
+  std::string why;
+  CheckAt(k, d.IsValid(s->AdcMax(), &why), why,
+          {"hot_rate_e_per_s", "stuck_level_dn", "defects_near_blob"});
+}
+
 void ReadSensor(const YAML::Node& node, const std::string& file, SensorOptions* s) {
   const MapReader k(node, file, "virtual.sensor",
                     {"width_px", "height_px", "pixel_pitch_um", "quantum_efficiency",
                      "full_well_e", "system_gain_dn_per_e", "read_noise_e",
                      "dark_current_e_per_s", "black_level_dn", "adc_bits", "nonlinearity",
                      "background_e_per_s", "temperature_c", "prnu_percent", "dsnu_e",
-                     "crosstalk_sigma_px"});
+                     "crosstalk_sigma_px", "hot_pixels", "hot_rate_e_per_s", "stuck_pixels",
+                     "stuck_level_dn", "defect_seed", "defects_near_blob",
+                     "near_blob_radius_px"});
   s->width_px = k.Integer("width_px", s->width_px);
   s->height_px = k.Integer("height_px", s->height_px);
   s->pixel_pitch_um = k.Number("pixel_pitch_um", s->pixel_pitch_um);
@@ -238,6 +337,7 @@ void ReadSensor(const YAML::Node& node, const std::string& file, SensorOptions* 
   s->prnu_percent = k.Number("prnu_percent", s->prnu_percent);
   s->dsnu_e = k.Number("dsnu_e", s->dsnu_e);
   s->crosstalk_sigma_px = k.Number("crosstalk_sigma_px", s->crosstalk_sigma_px);
+  ReadDefects(k, s);
 }
 
 void ReadCamera(const YAML::Node& node, const std::string& file, CameraOptions* c) {
@@ -251,13 +351,59 @@ void ReadCamera(const YAML::Node& node, const std::string& file, CameraOptions* 
   c->exposure_write_delay_ms = k.Number("exposure_write_delay_ms", c->exposure_write_delay_ms);
 }
 
+void ReadAmbient(const YAML::Node& node, const std::string& file, AmbientOptions* a) {
+  const std::string at = "virtual.scene.ambient";
+  const MapReader k(node, file, at, {"center_e_per_s", "gradient_x_percent", "gradient_y_percent"});
+  a->center_e_per_s = CheckedNumber(k, at, "center_e_per_s", a->center_e_per_s, 0.0, 1e8);
+  a->gradient_x_percent =
+      CheckedNumber(k, at, "gradient_x_percent", a->gradient_x_percent, -200.0, 200.0);
+  a->gradient_y_percent =
+      CheckedNumber(k, at, "gradient_y_percent", a->gradient_y_percent, -200.0, 200.0);
+  std::string why;
+  CheckAt(k, a->IsValid(&why), why, {"gradient_x_percent"});
+}
+
+void ReadReflection(const YAML::Node& node, const std::string& file, ReflectionOptions* r) {
+  const std::string at = "virtual.scene.reflection";
+  const MapReader k(node, file, at, {"plane_below_mm", "reflectance"});
+  r->plane_below_mm = CheckedNumber(k, at, "plane_below_mm", r->plane_below_mm, 0.0, 1000.0);
+  r->reflectance = CheckedNumber(k, at, "reflectance", r->reflectance, 0.0, 1.0);
+}
+
+void ReadSecondSource(const YAML::Node& node, const std::string& file, SecondSourceOptions* o) {
+  const std::string at = "virtual.scene.second_source";
+  const MapReader k(node, file, at, {"position_mm", "diameter_mm", "intensity_mw_sr"});
+  o->position_mm = ReadNumbers(k, at, "position_mm", o->position_mm);
+  o->diameter_mm = CheckedNumber(k, at, "diameter_mm", o->diameter_mm, 1e-3, 1000.0);
+  o->intensity_mw_sr = CheckedNumber(k, at, "intensity_mw_sr", o->intensity_mw_sr, 0.0, 1e6);
+  std::string why;
+  CheckAt(k, o->IsValid(&why), why, {"position_mm"});
+}
+
+void ReadOccluder(const YAML::Node& node, const std::string& file, OccluderOptions* o) {
+  const std::string at = "virtual.scene.occluder";
+  const MapReader k(node, file, at, {"covered_fraction", "edge_angle_deg"});
+  o->covered_fraction = CheckedNumber(k, at, "covered_fraction", o->covered_fraction, 0.0, 0.95);
+  o->edge_angle_deg = CheckedNumber(k, at, "edge_angle_deg", o->edge_angle_deg, -360.0, 360.0);
+}
+
+// `virtual.scene:` (sim/lab_scene_options.h), every key checked at its own line.
+void ReadScene(const YAML::Node& node, const std::string& file, LabSceneOptions* s) {
+  const MapReader k(node, file, "virtual.scene",
+                    {"ambient", "reflection", "second_source", "occluder"});
+  if (k.Has("ambient")) ReadAmbient(k.Get("ambient"), file, &s->ambient);
+  if (k.Has("reflection")) ReadReflection(k.Get("reflection"), file, &s->reflection);
+  if (k.Has("second_source")) ReadSecondSource(k.Get("second_source"), file, &s->second_source);
+  if (k.Has("occluder")) ReadOccluder(k.Get("occluder"), file, &s->occluder);
+}
+
 // The `virtual:` section. `devices` (the device emulators', sim/line_device.cc) and `station`
 // (the station emulator's, LoadEmulatorOptions) are skipped here: their owners read them strictly.
 RigPhysics ReadVirtualSection(const YAML::Node& section, const std::string& file) {
   RigPhysics physics;
   const MapReader k(section, file, "virtual",
                     {"time_scale", "seed", "serial", "emitter", "optics", "sensor", "camera",
-                     "devices", "station"});
+                     "scene", "devices", "station"});
   physics.time_scale = k.Number("time_scale", physics.time_scale);
   physics.sensor.seed = ReadSeed(k, "seed", physics.sensor.seed);
   physics.camera.serial = k.String("serial", physics.camera.serial);
@@ -265,6 +411,7 @@ RigPhysics ReadVirtualSection(const YAML::Node& section, const std::string& file
   if (k.Has("optics")) ReadOptics(k.Get("optics"), file, &physics.optics);
   if (k.Has("sensor")) ReadSensor(k.Get("sensor"), file, &physics.sensor);
   if (k.Has("camera")) ReadCamera(k.Get("camera"), file, &physics.camera);
+  if (k.Has("scene")) ReadScene(k.Get("scene"), file, &physics.scene);
   std::string why;
   if (!physics.IsValid(&why)) {
     yaml_fields::Fail(file, section.Mark(),

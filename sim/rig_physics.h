@@ -9,6 +9,7 @@
 
 #include "base/check.h"
 #include "base/input_error.h"
+#include "sim/lab_scene_options.h"
 
 namespace irdist::sim {
 
@@ -90,6 +91,8 @@ struct SensorOptions {
   // photo-electrons spread by (sim/sensor.h CrosstalkKernel). 0 = none.
   double crosstalk_sigma_px = 0.0;
   std::uint64_t seed = 1;             // noise of frame n is drawn from (seed, n)
+  // Hot and stuck pixels (sim/defect_pixels.h), none by default; keys flat in `virtual.sensor:`.
+  DefectPixelOptions defects;
   bool IsValid(std::string* why) const;
   int AdcMax() const { return (1 << adc_bits) - 1; }
 };
@@ -110,11 +113,12 @@ struct RigPhysics {
   OpticsOptions optics;
   SensorOptions sensor;
   CameraOptions camera;
+  LabSceneOptions scene;  // `virtual.scene:`: the lab's extra light and the occluder, all off
   bool IsValid(std::string* why) const;
 };
 
 // Reads the `virtual:` section of a rig file (keys: time_scale, seed, serial, emitter:, optics:,
-// sensor:, camera:, and station:, which is left to LoadEmulatorOptions). Absent keys keep their
+// sensor:, camera:, scene:, and station:, which is left to LoadEmulatorOptions). Absent keys keep their
 // defaults; an unknown key, a wrong type or an invalid combination throws RigFileError naming
 // the file and line.
 RigPhysics LoadRigPhysics(const std::string& rig_path);

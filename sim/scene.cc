@@ -6,6 +6,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "sim/disc_image.h"
+
 namespace irdist::sim {
 namespace {
 
@@ -14,10 +16,22 @@ constexpr double kDeg = kPi / 180.0;
 constexpr double kPlanck = 6.62607015e-34;  // J s
 constexpr double kLightSpeed = 2.99792458e8;  // m/s
 
-struct Vec3 {
-  double x, y, z;
-};
-double Dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+using disc_image::Dot;
+using disc_image::Vec3;
+
+Vec3 AsVec3(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
+
+// The chord's offset t (in radii, along the covered direction) that leaves `fraction` of the
+// disc's area beyond it: (acos t - t sqrt(1 - t^2)) / pi = fraction, by bisection.
+double SegmentOffset(double fraction) {
+  double lo = -1.0, hi = 1.0;  // the covered area falls from 1 to 0 over [-1, 1]
+  for (int i = 0; i < 100; ++i) {
+    const double t = 0.5 * (lo + hi);
+    const double covered = (std::acos(t) - t * std::sqrt(1.0 - t * t)) / kPi;
+    (covered > fraction ? lo : hi) = t;
+  }
+  return 0.5 * (lo + hi);
+}
 
 Vec3 EmissionAxis(const PoseState& pose) {
   const double p = pose.pan_deg * kDeg;
@@ -129,155 +143,151 @@ cv::Rect Scene::SignalRect(const EmitterImage& image, double blur_px) const {
   return wanted & cv::Rect(0, 0, s.width_px, s.height_px);
 }
 
-// One horizontal strip of the disc's image: its y (px), weight (px), chord ends (px), radiance.
-struct ImageStrip {
-  double y_px, weight_px, left_px, right_px, radiance;
-};
-
 namespace {
 
-// The disc's image in the image plane (mm): the ray (u, v, f) meets the disc's plane at
-// t (u, v, f), t = nc / n.ray; it lands inside the disc iff |nc ray - (n.ray) c|^2 <= R^2 (n.ray)^2.
-// With ray = (0, v, f) + u e_x this is A u^2 + 2 B(v) u + C(v) <= 0, B linear and C quadratic in v.
-struct DiscConic {
-  double qa = 0.0, b0 = 0.0, b1 = 0.0, c0 = 0.0, c1 = 0.0, c2 = 0.0;
-  double v_mid = 0.0, v_half = 0.0;  // the chord exists for |v - v_mid| <= v_half
-  bool in_view = false;
-  // Chord ends (mm) at height v.
-  void Chord(double v, double* u_left, double* u_right) const {
-    const double b = b0 + b1 * v;
-    const double d = std::max(0.0, b * b - qa * (c0 + 2.0 * c1 * v + c2 * v * v));
-    *u_left = (-b - std::sqrt(d)) / qa;
-    *u_right = (-b + std::sqrt(d)) / qa;
-  }
+// What the strips of one disc share: its plane, conic, optional cut, and the camera.
+struct StripGeometry {
+  Vec3 n;
+  double nc = 0.0;
+  disc_image::DiscConic conic;
+  const disc_image::ImageCut* cut = nullptr;  // null: the whole disc
+  double f = 0.0, pitch_mm = 0.0, half_width_px = 0.0, half_height_px = 0.0;
+  double area_m2 = 0.0, intensity_mw_sr = 0.0;
+  bool lambertian = false, vignetting = false;
+  int supersample = 8;
 };
 
-DiscConic MakeDiscConic(const Vec3& n, const Vec3& c, double radius2, double f) {
-  DiscConic k;
-  const double nc = Dot(n, c);
-  const Vec3 w1 = {nc - n.x * c.x, -n.x * c.y, -n.x * c.z};  // nc e_x - n_x c
-  const Vec3 a0 = {-n.z * f * c.x, -n.z * f * c.y, nc * f - n.z * f * c.z};  // w0 at v = 0
-  const Vec3 a1 = {-n.y * c.x, nc - n.y * c.y, -n.y * c.z};                  // dw0/dv
-  const double m0 = n.z * f, m1 = n.y;                                        // n.ray at u = 0
-  k.qa = Dot(w1, w1) - radius2 * n.x * n.x;
-  k.b0 = Dot(a0, w1) - radius2 * m0 * n.x;
-  k.b1 = Dot(a1, w1) - radius2 * m1 * n.x;
-  k.c0 = Dot(a0, a0) - radius2 * m0 * m0;
-  k.c1 = Dot(a0, a1) - radius2 * m0 * m1;
-  k.c2 = Dot(a1, a1) - radius2 * m1 * m1;
-  // The chord exists where B^2 - A C >= 0: a quadratic in v, negative outside [v_lo, v_hi].
-  const double d2 = k.b1 * k.b1 - k.qa * k.c2, d1 = k.b0 * k.b1 - k.qa * k.c1;
-  const double d0 = k.b0 * k.b0 - k.qa * k.c0;
-  const double disc_v = d1 * d1 - d2 * d0;
-  k.in_view = k.qa > 0.0 && d2 < 0.0 && disc_v > 0.0;
-  if (k.in_view) {
-    k.v_mid = -d1 / d2;
-    k.v_half = std::fabs(std::sqrt(disc_v) / d2);
+// The strip at height v (mm) of weight `weight_mm`, if its chord is visible and faces the camera.
+void AppendStrip(const Scene& scene, const StripGeometry& g, double v, double weight_mm,
+                 std::vector<ImageStrip>* strips) {
+  double u_left = 0.0, u_right = 0.0;
+  g.conic.Chord(v, &u_left, &u_right);
+  if (g.cut != nullptr) {
+    g.cut->Clip(v, &u_left, &u_right);
+    if (u_right <= u_left) return;
   }
-  return k;
+  const Vec3 ray = {0.5 * (u_left + u_right), v, g.f};
+  const double n_ray = Dot(g.n, ray);
+  if (std::fabs(n_ray) < 1e-12 || g.nc / n_ray <= 0.0) return;
+  const Vec3 p = {g.nc / n_ray * ray.x, g.nc / n_ray * ray.y, g.nc / n_ray * ray.z};
+  // Radiance of the disc towards the pinhole: I(a) / (A cos a), a = emission angle.
+  const double cos_a = -Dot(g.n, p) / std::sqrt(Dot(p, p));
+  if (cos_a <= 1e-6) return;
+  const double pattern = g.lambertian ? cos_a : scene.Pattern(std::acos(std::min(1.0, cos_a)));
+  double radiance = g.intensity_mw_sr * 1e-3 * pattern / (g.area_m2 * cos_a);
+  if (g.vignetting) radiance *= std::pow(g.f / std::sqrt(Dot(ray, ray)), 4);
+  strips->push_back({v / g.pitch_mm + g.half_height_px, weight_mm / g.pitch_mm,
+                     u_left / g.pitch_mm + g.half_width_px, u_right / g.pitch_mm + g.half_width_px,
+                     radiance});
 }
 
-// The pixel's response to a Gaussian blur of `sigma` px: h(x) = PSF convolved with the unit box,
-// and H(x) its integral from -infinity (closed forms with Phi and phi).
-class PixelResponse {
- public:
-  explicit PixelResponse(double sigma) : sigma_(sigma), reach_(0.5 + 8.0 * std::max(sigma, 1e-9)) {}
-  double h(double x) const { return std::fabs(x) >= reach_ ? 0.0 : Step(x + 0.5) - Step(x - 0.5); }
-  double H(double x) const {
-    if (x >= reach_) return 1.0;
-    if (x <= -reach_) return 0.0;
-    return Psi(x + 0.5) - Psi(x - 0.5);
-  }
-
- private:
-  double Psi(double z) const {  // integral of the PSF's step response: z Phi(z) + sigma phi(z)
-    if (sigma_ <= 1e-9) return std::max(z, 0.0);
-    const double t = z / sigma_;
-    if (t < -8.0) return 0.0;
-    if (t > 8.0) return z;
-    return z * 0.5 * std::erfc(-t / std::sqrt(2.0)) +
-           sigma_ * std::exp(-0.5 * t * t) / std::sqrt(2.0 * kPi);
-  }
-  double Step(double z) const {  // Phi(z / sigma)
-    if (sigma_ <= 1e-9) return z >= 0.0 ? 1.0 : 0.0;
-    return 0.5 * std::erfc(-z / (sigma_ * std::sqrt(2.0)));
-  }
-  double sigma_, reach_;
-};
-
-// Sums, per pixel of `out`, the strips weighted by h(row) and H across each chord, times `scale`.
-void IntegrateStrips(const std::vector<ImageStrip>& strips, const PixelResponse& response,
-                     double scale, const cv::Rect& rect, cv::Mat1f* out) {
-  const int rows = rect.height, cols = rect.width;
-  const int count = static_cast<int>(strips.size());
-  std::vector<double> row_weight(static_cast<size_t>(rows) * count);
-  std::vector<double> chord(static_cast<size_t>(count) * cols);
-  for (int r = 0; r < rows; ++r) {
-    const double y = rect.y + r + 0.5;
-    for (int k = 0; k < count; ++k) {
-      const ImageStrip& st = strips[k];
-      row_weight[static_cast<size_t>(r) * count + k] =
-          st.weight_px * st.radiance * response.h(st.y_px - y);
+// The strips of the rows |v - range.v_mid| <= range.v_half at Chebyshev-spaced heights v = mid +
+// half sin(phi): phi evenly spaced (the midpoint rule) for a whole disc, whose chord vanishes as a
+// square root at both ends; phi at Gauss-Legendre nodes for a cut disc's range, whose ends may be
+// where the edge meets the conic (a chord that does not vanish there).
+void AppendStrips(const Scene& scene, const StripGeometry& g, const disc_image::StripRange& range,
+                  std::vector<ImageStrip>* strips) {
+  const double height_px = 2.0 * range.v_half / g.pitch_mm;
+  const int nodes = std::max(32, static_cast<int>(std::ceil(g.supersample * height_px)));
+  strips->reserve(strips->size() + nodes);
+  if (g.cut == nullptr) {
+    for (int k = 0; k < nodes; ++k) {
+      const double phi = -0.5 * kPi + (k + 0.5) * kPi / nodes;
+      AppendStrip(scene, g, range.v_mid + range.v_half * std::sin(phi),
+                  range.v_half * std::cos(phi) * kPi / nodes, strips);
     }
+    return;
   }
-  for (int k = 0; k < count; ++k) {
-    for (int col = 0; col < cols; ++col) {
-      const double x = rect.x + col + 0.5;
-      chord[static_cast<size_t>(k) * cols + col] =
-          response.H(strips[k].right_px - x) - response.H(strips[k].left_px - x);
-    }
-  }
-  for (int r = 0; r < rows; ++r) {
-    float* dst = (*out)[r];
-    const double* wr = &row_weight[static_cast<size_t>(r) * count];
-    for (int col = 0; col < cols; ++col) {
-      double sum = 0.0;
-      for (int k = 0; k < count; ++k) sum += wr[k] * chord[static_cast<size_t>(k) * cols + col];
-      dst[col] = static_cast<float>(sum * scale);
-    }
+  std::vector<double> x, w;
+  disc_image::GaussLegendre(nodes, &x, &w);
+  for (int k = 0; k < nodes; ++k) {
+    const double phi = 0.5 * kPi * x[k];
+    AppendStrip(scene, g, range.v_mid + range.v_half * std::sin(phi),
+                range.v_half * std::cos(phi) * 0.5 * kPi * w[k], strips);
   }
 }
 
 }  // namespace
 
-std::vector<ImageStrip> Scene::DiscStrips(const PoseState& pose, double intensity_mw_sr) const {
-  const EmitterOptions& e = physics_.emitter;
+std::vector<ImageStrip> Scene::DiscStrips(const DiscSource& disc) const {
   const OpticsOptions& o = physics_.optics;
   const SensorOptions& s = physics_.sensor;
-  const double f = o.focal_length_mm;
-  const double pitch_mm = s.pixel_pitch_um * 1e-3;
-  const Vec3 n = EmissionAxis(pose);
-  const Vec3 c = {e.offset_x_mm, e.offset_y_mm, pose.slide_mm};
-  const double nc = Dot(n, c);
-  const double radius2 = 0.25 * e.diameter_mm * e.diameter_mm;
-  const double area_m2 = kPi * radius2 * 1e-6;
-  const DiscConic conic = MakeDiscConic(n, c, radius2, f);
+  StripGeometry g;
+  g.f = o.focal_length_mm;
+  g.pitch_mm = s.pixel_pitch_um * 1e-3;
+  g.half_width_px = 0.5 * s.width_px;
+  g.half_height_px = 0.5 * s.height_px;
+  g.n = AsVec3(disc.axis);
+  const Vec3 c = AsVec3(disc.center_mm);
+  g.nc = Dot(g.n, c);
+  const double radius2 = 0.25 * disc.diameter_mm * disc.diameter_mm;
+  g.area_m2 = kPi * radius2 * 1e-6;
+  g.intensity_mw_sr = disc.intensity_mw_sr;
+  g.lambertian = disc.lambertian;
+  g.vignetting = o.vignetting;
+  g.supersample = o.supersample;
+  g.conic = disc_image::MakeDiscConic(g.n, c, radius2, g.f);
   std::vector<ImageStrip> strips;
-  if (!conic.in_view) return strips;
-  const double height_px = 2.0 * conic.v_half / pitch_mm;
-  const int nodes = std::max(32, static_cast<int>(std::ceil(o.supersample * height_px)));
-  strips.reserve(nodes);
-  for (int k = 0; k < nodes; ++k) {
-    const double phi = -0.5 * kPi + (k + 0.5) * kPi / nodes;
-    const double v = conic.v_mid + conic.v_half * std::sin(phi);
-    double u_left = 0.0, u_right = 0.0;
-    conic.Chord(v, &u_left, &u_right);
-    const Vec3 ray = {0.5 * (u_left + u_right), v, f};
-    const double n_ray = Dot(n, ray);
-    if (std::fabs(n_ray) < 1e-12 || nc / n_ray <= 0.0) continue;
-    const Vec3 p = {nc / n_ray * ray.x, nc / n_ray * ray.y, nc / n_ray * ray.z};
-    // Radiance of the disc towards the pinhole: I(a) / (A cos a), a = emission angle.
-    const double cos_a = -Dot(n, p) / std::sqrt(Dot(p, p));
-    if (cos_a <= 1e-6) continue;
-    double radiance =
-        intensity_mw_sr * 1e-3 * Pattern(std::acos(std::min(1.0, cos_a))) / (area_m2 * cos_a);
-    if (o.vignetting) radiance *= std::pow(f / std::sqrt(Dot(ray, ray)), 4);
-    strips.push_back({v / pitch_mm + 0.5 * s.height_px,
-                      conic.v_half * std::cos(phi) * kPi / nodes / pitch_mm,
-                      u_left / pitch_mm + 0.5 * s.width_px, u_right / pitch_mm + 0.5 * s.width_px,
-                      radiance});
+  if (!g.conic.in_view) return strips;
+  if (!disc.cut) {
+    AppendStrips(*this, g, {g.conic.v_mid, g.conic.v_half}, &strips);
+    return strips;
+  }
+  const disc_image::ImageCut cut = disc_image::MakeImageCut(
+      g.n, c, AsVec3(disc.cut_direction), disc.cut_offset_mm, g.f);
+  g.cut = &cut;
+  for (const disc_image::StripRange& range : disc_image::VisibleRanges(g.conic, cut)) {
+    AppendStrips(*this, g, range, &strips);
   }
   return strips;
+}
+
+DiscSource Scene::EmitterDisc(const PoseState& pose, double intensity_mw_sr) const {
+  const EmitterOptions& e = physics_.emitter;
+  DiscSource disc;
+  disc.center_mm = {e.offset_x_mm, e.offset_y_mm, pose.slide_mm};
+  const Vec3 n = EmissionAxis(pose);
+  disc.axis = {n.x, n.y, n.z};
+  disc.diameter_mm = e.diameter_mm;
+  disc.intensity_mw_sr = intensity_mw_sr;
+  const OccluderOptions& occluder = physics_.scene.occluder;
+  if (occluder.On()) {
+    // The disc's own axes: the pan-tilt mount (pan about y, then tilt about x) carries the
+    // image's x and y, as it carries (0, 0, -1) to the emission axis.
+    const double p = pose.pan_deg * kDeg, t = pose.tilt_deg * kDeg;
+    const Vec3 x_axis = {std::cos(p), 0.0, std::sin(p)};
+    const Vec3 y_axis = {-std::sin(t) * std::sin(p), std::cos(t), std::sin(t) * std::cos(p)};
+    const double a = occluder.edge_angle_deg * kDeg;
+    disc.cut = true;
+    disc.cut_direction = {std::cos(a) * x_axis.x + std::sin(a) * y_axis.x,
+                          std::cos(a) * x_axis.y + std::sin(a) * y_axis.y,
+                          std::cos(a) * x_axis.z + std::sin(a) * y_axis.z};
+    disc.cut_offset_mm = 0.5 * e.diameter_mm * SegmentOffset(occluder.covered_fraction);
+  }
+  return disc;
+}
+
+SignalWindow Scene::RenderDisc(const DiscSource& disc, double exposure_s) const {
+  const SensorOptions& s = physics_.sensor;
+  const double f = physics_.optics.focal_length_mm;
+  const double pitch_mm = s.pixel_pitch_um * 1e-3;
+  const Vec3 c = AsVec3(disc.center_mm);
+  const double z = std::max(c.z, 1.0);
+  EmitterImage image;
+  image.center_x_px = 0.5 * s.width_px + f * c.x / z / pitch_mm;
+  image.center_y_px = 0.5 * s.height_px + f * c.y / z / pitch_mm;
+  image.major_px = disc.diameter_mm * f / std::sqrt(Dot(c, c)) / pitch_mm;
+  const double blur_px = BlurSigmaPx(c.z);
+  SignalWindow out;
+  out.rect = SignalRect(image, blur_px);
+  if (out.rect.empty()) return out;
+  out.electrons = cv::Mat1f::zeros(out.rect.height, out.rect.width);
+  if (disc.intensity_mw_sr <= 0.0 || exposure_s <= 0.0 || c.z <= 0.0) return out;
+  const std::vector<ImageStrip> strips = DiscStrips(disc);
+  if (strips.empty()) return out;
+  disc_image::IntegrateStrips(strips, disc_image::PixelResponse(blur_px),
+                              electrons_per_radiance_s_ * exposure_s, out.rect, &out.electrons);
+  return out;
 }
 
 SignalWindow Scene::RenderSignal(const PoseState& pose, double intensity_mw_sr,
@@ -299,10 +309,10 @@ SignalWindow Scene::RenderSignal(const PoseState& pose, double intensity_mw_sr,
   if (out.rect.empty()) return out;
   out.electrons = cv::Mat1f::zeros(out.rect.height, out.rect.width);
   if (intensity_mw_sr <= 0.0 || exposure_s <= 0.0) return out;
-  const std::vector<ImageStrip> strips = DiscStrips(pose, intensity_mw_sr);
+  const std::vector<ImageStrip> strips = DiscStrips(EmitterDisc(pose, intensity_mw_sr));
   if (strips.empty()) return out;
-  IntegrateStrips(strips, PixelResponse(blur_px), electrons_per_radiance_s_ * exposure_s, out.rect,
-                  &out.electrons);
+  disc_image::IntegrateStrips(strips, disc_image::PixelResponse(blur_px),
+                              electrons_per_radiance_s_ * exposure_s, out.rect, &out.electrons);
   return out;
 }
 

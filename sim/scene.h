@@ -11,6 +11,7 @@
 // emission axis is n = (sin(pan) cos(tilt), sin(tilt), -cos(pan) cos(tilt)), so at pan = tilt = 0
 // it points at the camera and cos(theta) = cos(pan) cos(tilt) (sim/world.h).
 
+#include <array>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -20,7 +21,24 @@
 
 namespace irdist::sim {
 
-struct ImageStrip;  // one horizontal strip of the disc's image (scene.cc)
+struct ImageStrip;  // one horizontal strip of the disc's image (sim/disc_image.h)
+
+// A uniformly bright circular disc in the camera's frame (mm): the IRED, its mirror image in the
+// table, a second source (sim/lab_scene.h). Its image is rendered exactly as the IRED's is.
+struct DiscSource {
+  std::array<double, 3> center_mm{};
+  std::array<double, 3> axis{};  // unit normal on the emitting side (towards the camera to be seen)
+  double diameter_mm = 0.0;
+  double intensity_mw_sr = 0.0;  // radiant intensity along the axis
+  // true: a uniform (Lambertian) radiance I / area in every direction; false: the IRED's emission
+  // pattern, I Pattern(a) / (area cos a) at emission angle a.
+  bool lambertian = false;
+  // An opaque straight edge in the disc's plane: the part where (p - centre) . cut_direction >
+  // cut_offset_mm is covered (cut_direction a unit vector in the plane). Off when `cut` is false.
+  bool cut = false;
+  std::array<double, 3> cut_direction{};
+  double cut_offset_mm = 0.0;
+};
 
 // Mean signal photo-electrons per pixel over a window of the full sensor (no dark signal).
 struct SignalWindow {
@@ -66,6 +84,13 @@ class Scene {
   SignalWindow RenderSignal(const PoseState& pose, double intensity_mw_sr,
                             double exposure_s) const;
 
+  // The IRED's disc at the pose: centre, emission axis, intensity and the occluder's cut
+  // (virtual.scene.occluder, which moves with the emitter).
+  DiscSource EmitterDisc(const PoseState& pose, double intensity_mw_sr) const;
+  // Mean signal electrons of any disc over a window around its image (its blur that of its
+  // distance along the optical axis), clipped to the sensor.
+  SignalWindow RenderDisc(const DiscSource& disc, double exposure_s) const;
+
   // Photo-electrons per second per pixel per unit scene radiance (W m^-2 sr^-1) on the axis.
   double ElectronsPerRadianceSecond() const { return electrons_per_radiance_s_; }
 
@@ -73,8 +98,9 @@ class Scene {
   // The window around the emitter's image holding its blur's reach, clipped to the sensor.
   cv::Rect SignalRect(const EmitterImage& image, double blur_px) const;
   // The disc's image as Chebyshev-spaced horizontal strips with their chords and radiance (W m^-2
-  // sr^-1, vignetting included); empty when the disc is not an ellipse in view.
-  std::vector<ImageStrip> DiscStrips(const PoseState& pose, double intensity_mw_sr) const;
+  // sr^-1, vignetting included); empty when the disc is not an ellipse in view. A cut disc's
+  // strips are spaced so over each range of rows where its visible chord is smooth.
+  std::vector<ImageStrip> DiscStrips(const DiscSource& disc) const;
 
   RigPhysics physics_;
   double electrons_per_radiance_s_ = 0.0;

@@ -27,6 +27,15 @@ std::uint64_t FrameSeed(std::uint64_t seed, std::uint64_t frame_index, std::uint
   return SplitMix64(state);
 }
 
+// SplitMix64 as a standard random bit generator: cheap to seed, one per defect pixel and frame.
+struct SplitMixEngine {
+  using result_type = std::uint64_t;
+  std::uint64_t state;
+  static constexpr result_type min() { return 0; }
+  static constexpr result_type max() { return ~0ull; }
+  result_type operator()() { return SplitMix64(state); }
+};
+
 template <typename T>
 void FillFromTable(cv::Mat& out, const std::vector<std::uint16_t>& table, std::uint64_t state) {
   for (int row = 0; row < out.rows; ++row) {
@@ -97,10 +106,18 @@ int FormatCvType(PixelFormat format) {
   return format == PixelFormat::kMono8 ? CV_8UC1 : CV_16UC1;
 }
 
-Sensor::Sensor(const SensorOptions& options) : options_(options) {
+Sensor::Sensor(const SensorOptions& options)
+    : Sensor(options, 0.5 * options.width_px, 0.5 * options.height_px) {}
+
+Sensor::Sensor(const SensorOptions& options, double near_x_px, double near_y_px)
+    : options_(options) {
   std::string why;
   IRDIST_CHECK(options_.IsValid(&why), why);
   DrawFixedPattern();
+  if (options_.defects.Count() > 0) {
+    defects_ = PlaceDefectPixels(options_.defects, options_.width_px, options_.height_px,
+                                 near_x_px, near_y_px);
+  }
 }
 
 void Sensor::DrawFixedPattern() {
@@ -200,8 +217,43 @@ void Sensor::Expose(const SignalWindow& signal, double exposure_s, std::uint64_t
   }
   const SignalWindow collected = CollectedCharge(signal);
   const cv::Rect window = collected.rect & roi;
-  if (window.empty()) return;
-  ExposeWindow(collected, window, dark_e, frame_index, format, roi, black_dn, out);
+  if (!window.empty()) {
+    ExposeWindow(collected, window, dark_e, frame_index, format, roi, black_dn, out);
+  }
+  ExposeDefects(collected, exposure_s, dark_e, frame_index, format, roi, black_dn, out);
+}
+
+void Sensor::ExposeDefects(const SignalWindow& collected, double exposure_s, double dark_e,
+                           std::uint64_t frame_index, PixelFormat format, cv::Rect roi,
+                           double black_dn, cv::Mat& out) const {
+  const SensorOptions& s = options_;
+  for (size_t k = 0; k < defects_.size(); ++k) {
+    const DefectPixel& d = defects_[k];
+    if (!roi.contains(cv::Point(d.x_px, d.y_px))) continue;
+    std::uint16_t value = 0;
+    if (d.kind == DefectPixel::Kind::kStuck) {
+      value = Pack(static_cast<int>(std::clamp(d.value, 0.0, static_cast<double>(s.AdcMax()))),
+                   format);
+    } else {
+      // What the pixel collects (light, dark) plus its own dark charge, from its own stream.
+      double mean = dark_e + d.value * exposure_s;
+      if (collected.rect.contains(cv::Point(d.x_px, d.y_px))) {
+        mean += collected.electrons(d.y_px - collected.rect.y, d.x_px - collected.rect.x);
+      }
+      SplitMixEngine rng{FrameSeed(s.seed ^ (0xDEFEC7ull * (k + 1)), frame_index, 5)};
+      const double electrons =
+          mean > 1e7 ? std::normal_distribution<double>(mean, std::sqrt(mean))(rng)
+                     : static_cast<double>(std::poisson_distribution<long>(mean)(rng));
+      const double read_e = std::normal_distribution<double>(0.0, s.read_noise_e)(rng) +
+                            PixelDarkOffsetE(d.x_px, d.y_px);
+      value = Pack(ToAdc(electrons, read_e, black_dn), format);
+    }
+    if (out.depth() == CV_8U) {
+      out.at<std::uint8_t>(d.y_px - roi.y, d.x_px - roi.x) = static_cast<std::uint8_t>(value);
+    } else {
+      out.at<std::uint16_t>(d.y_px - roi.y, d.x_px - roi.x) = value;
+    }
+  }
 }
 
 SignalWindow Sensor::CollectedCharge(const SignalWindow& signal) const {

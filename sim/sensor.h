@@ -23,12 +23,18 @@
 // Poisson field (displacement theorem): the counts after diffusion are independent Poisson draws
 // of the diffused mean. So the mean photo-electron image (after PRNU, which acts where the photon
 // is absorbed) is diffused, then drawn; dark current and read noise are added after it.
+//
+// Defect pixels (options.defects, sim/defect_pixels.h; none by default): a hot pixel is drawn
+// with its own extra dark charge (rate x exposure, Poisson) on top of what any pixel collects; a
+// stuck pixel always reads its fixed level. Their values come from their own stream per
+// (seed, frame, defect), so a region of interest never changes them.
 
 #include <cstdint>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
+#include "sim/defect_pixels.h"
 #include "sim/rig_physics.h"
 #include "sim/scene.h"
 
@@ -52,11 +58,16 @@ SignalWindow DiffuseCharge(const SignalWindow& electrons, double sigma_px, const
 class Sensor {
  public:
   explicit Sensor(const SensorOptions& options);
+  // The defects near the blob are placed around (near_x_px, near_y_px), full-sensor pixels (the
+  // emitter's image centre; the one-argument form uses the sensor's centre).
+  Sensor(const SensorOptions& options, double near_x_px, double near_y_px);
 
   const SensorOptions& options() const { return options_; }
   // The per-pixel gain (1 + PRNU) and dark offset (DSNU, electrons) at full-sensor pixel (x, y).
   double PixelGain(int x, int y) const;
   double PixelDarkOffsetE(int x, int y) const;
+  // The hot and stuck pixels, fixed for the camera's life.
+  const std::vector<DefectPixel>& defects() const { return defects_; }
 
   // Fills `out` (CV_8UC1 for Mono8, CV_16UC1 otherwise) with the frame seen through the region
   // whose top-left corner is `roi_origin` (full-sensor pixels; out's size is the region's size).
@@ -88,6 +99,10 @@ class Sensor {
   void ExposeWindow(const SignalWindow& signal, cv::Rect window, double dark_e,
                     std::uint64_t frame_index, PixelFormat format, cv::Rect roi, double black_dn,
                     cv::Mat& out) const;
+  // Draws the defect pixels inside `roi` over what ExposeWindow and the background drew.
+  void ExposeDefects(const SignalWindow& collected, double exposure_s, double dark_e,
+                     std::uint64_t frame_index, PixelFormat format, cv::Rect roi, double black_dn,
+                     cv::Mat& out) const;
   // Draws the PRNU/DSNU maps (left empty when off).
   void DrawFixedPattern();
   // The table-drawn background, each pixel shifted by its DSNU (used when dsnu_e > 0).
@@ -97,6 +112,7 @@ class Sensor {
   SensorOptions options_;
   cv::Mat1f gain_;       // full sensor; empty = 1 everywhere
   cv::Mat1f offset_e_;   // full sensor; empty = 0 everywhere
+  std::vector<DefectPixel> defects_;
 };
 
 }  // namespace irdist::sim

@@ -147,6 +147,86 @@ TEST(RigPhysics, ErrorsAreInputErrorsWithTheLine) {
   ExpectError("virtual:\n  seed: -3\n", "seed", "2", "seed");
 }
 
+// The lab's scene (docs/virtual-rig.md "A lab's scene"): off by default, every key read.
+TEST(RigPhysics, LabSceneKeysAreOffByDefaultAndRead) {
+  std::string why;
+  EXPECT_TRUE(LabSceneOptions{}.IsValid(&why)) << why;
+  EXPECT_TRUE(DefectPixelOptions{}.IsValid(4095, &why)) << why;
+  const RigPhysics d;
+  EXPECT_EQ(d.sensor.defects.Count(), 0);
+  EXPECT_FALSE(d.scene.ambient.On());
+  EXPECT_FALSE(d.scene.reflection.On());
+  EXPECT_FALSE(d.scene.second_source.On());
+  EXPECT_FALSE(d.scene.occluder.On());
+  const RigPhysics p = LoadRigPhysics(WriteRig(
+      "lab", "virtual:\n"
+             "  sensor:\n"
+             "    hot_pixels: 20\n"
+             "    hot_rate_e_per_s: [180000, 300000]\n"
+             "    stuck_pixels: 10\n"
+             "    stuck_level_dn: [1000, 4095]\n"
+             "    defect_seed: 7\n"
+             "    defects_near_blob: 3\n"
+             "    near_blob_radius_px: 12\n"
+             "  scene:\n"
+             "    ambient: {center_e_per_s: 6000, gradient_x_percent: 66, gradient_y_percent: -10}\n"
+             "    reflection: {plane_below_mm: 8.3, reflectance: 0.2}\n"
+             "    second_source: {position_mm: [40, 0, 2000], diameter_mm: 5, "
+             "intensity_mw_sr: 14}\n"
+             "    occluder: {covered_fraction: 0.15, edge_angle_deg: 270}\n"));
+  EXPECT_EQ(p.sensor.defects.hot_pixels, 20);
+  EXPECT_EQ(p.sensor.defects.hot_rate_e_per_s[1], 300000.0);
+  EXPECT_EQ(p.sensor.defects.stuck_pixels, 10);
+  EXPECT_EQ(p.sensor.defects.stuck_level_dn[0], 1000.0);
+  EXPECT_EQ(p.sensor.defects.defect_seed, 7u);
+  EXPECT_EQ(p.sensor.defects.defects_near_blob, 3);
+  EXPECT_EQ(p.sensor.defects.near_blob_radius_px, 12.0);
+  EXPECT_EQ(p.scene.ambient.center_e_per_s, 6000.0);
+  EXPECT_EQ(p.scene.ambient.gradient_x_percent, 66.0);
+  EXPECT_EQ(p.scene.ambient.gradient_y_percent, -10.0);
+  EXPECT_EQ(p.scene.reflection.plane_below_mm, 8.3);
+  EXPECT_EQ(p.scene.reflection.reflectance, 0.2);
+  EXPECT_EQ(p.scene.second_source.position_mm[0], 40.0);
+  EXPECT_EQ(p.scene.second_source.position_mm[2], 2000.0);
+  EXPECT_EQ(p.scene.second_source.diameter_mm, 5.0);
+  EXPECT_EQ(p.scene.second_source.intensity_mw_sr, 14.0);
+  EXPECT_EQ(p.scene.occluder.covered_fraction, 0.15);
+  EXPECT_EQ(p.scene.occluder.edge_angle_deg, 270.0);
+}
+
+// Every bad lab key is refused at its own line (or its subsection's first key's, for a
+// combination of keys).
+TEST(RigPhysics, BadLabSceneKeysNameFileAndLine) {
+  ExpectError("virtual:\n  scene:\n    reflection:\n      reflectance: 1.5\n", "lab1", "4",
+              "virtual.scene.reflection.reflectance must lie in [0, 1]");
+  ExpectError("virtual:\n  scene:\n    reflection:\n      plane_below_mm: .nan\n", "lab2", "4",
+              "plane_below_mm");
+  ExpectError("virtual:\n  scene:\n    occluder:\n      covered_fraction: 0.99\n", "lab3", "4",
+              "covered_fraction must lie in [0, 0.95]");
+  ExpectError("virtual:\n  scene:\n    ambient:\n      center_e_per_s: -5\n", "lab4", "4",
+              "center_e_per_s");
+  ExpectError("virtual:\n  scene:\n    ambient:\n      gradient_x_percent: 150\n"
+              "      gradient_y_percent: 150\n", "lab5", "4", "|gx| + |gy| <= 200");
+  ExpectError("virtual:\n  scene:\n    second_source:\n      position_mm: [1, 2]\n", "lab6",
+              "4", "position_mm must be a list of 3 numbers");
+  ExpectError("virtual:\n  scene:\n    second_source:\n      position_mm: [1, 2, -50]\n",
+              "lab7", "4", "in front of the camera");
+  ExpectError("virtual:\n  scene:\n    second_source:\n      intensity_mw_sr: inf\n", "lab8",
+              "4", "intensity_mw_sr");
+  ExpectError("virtual:\n  scene:\n    mirror: {}\n", "lab9", "3", "unknown key 'mirror'");
+  ExpectError("virtual:\n  sensor:\n    hot_pixels: -1\n", "lab10", "3", "hot_pixels must be");
+  ExpectError("virtual:\n  sensor:\n    hot_rate_e_per_s: [3, 2]\n", "lab11", "3",
+              "hot_rate_e_per_s must be [lo, hi]");
+  ExpectError("virtual:\n  sensor:\n    stuck_pixels: 2\n    stuck_level_dn: [0, 5000]\n",
+              "lab12", "4", "stuck_level_dn");
+  ExpectError("virtual:\n  sensor:\n    hot_pixels: 2\n    defects_near_blob: 3\n", "lab13",
+              "4", "defects_near_blob must be 0..hot_pixels + stuck_pixels");
+  ExpectError("virtual:\n  sensor:\n    near_blob_radius_px: 0.5\n", "lab14", "3",
+              "near_blob_radius_px must lie in [1, 200]");
+  ExpectError("virtual:\n  sensor:\n    hot_pixels: 400\n    defects_near_blob: 300\n",
+              "lab15", "4", "half the pixels within");
+}
+
 TEST(RigPhysics, MissingFileIsATypedError) {
   EXPECT_THROW(LoadRigPhysics("/nonexistent/rig.yaml"), RigFileError);
 }
