@@ -113,6 +113,10 @@ struct FeatureOptions {
   // fit with the calibrated blur (estimator/blob_fit.h). false = the moments path. Calibration
   // always uses the moments. model.yaml key features.blob_fit (absent = true).
   bool blob_fit = true;
+  // The scene pass before the features and the blob fit (estimator/scene.h): defect pixels,
+  // other blobs, occlusion. Run by FrameFeatures (app/processing/frame_features.h), not by
+  // ComputeFeatures, which measures the frame it is given; CleanScene checks these options.
+  SceneOptions scene;
   bool IsValid(std::string* why) const;
 };
 
@@ -157,7 +161,9 @@ struct Features {
   double model_blur_px = 0.0;   // kModelFit: the fitted Gaussian blur sigma (pixel area excluded)
   double model_rms = 0.0;       // kModelFit: rms residual of the fit, normalised gray levels
   double theta0_deg = 0.0;  // from the ellipse chosen by FeatureOptions::ellipse_method
-  SceneReport scene;        // what the scene pass found around the blob (estimator/scene.h)
+  // What the scene pass found on the frame before these features (assessed = false when it did
+  // not run: ComputeFeatures alone never runs it).
+  SceneReport scene;
   // True when the features can be used: a blob, no saturation, not on the border, not clipped.
   bool Usable() const {
     return blob_found && !touches_border && !blob_clipped_by_roi && saturated_pixels == 0;

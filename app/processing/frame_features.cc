@@ -42,11 +42,31 @@ int BitDepthOfPixelFormat(const std::string& pixel_format) {
   return format == nullptr ? 16 : format->bit_depth;
 }
 
+namespace {
+
+SceneFrame SceneOf(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
+                   const SceneContext* scene) {
+  SceneContext context = scene != nullptr ? *scene : SceneContext();
+  context.window_side_px = options.window_side_px;
+  return CleanScene(image, bit_depth, options.scene, context);
+}
+
+}  // namespace
+
 Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
-                       const CalibrationModel* blob_fit_model) {
-  Features features = ComputeFeatures(image, bit_depth, options);
-  if (blob_fit_model != nullptr) RefineWithBlobFit(image, bit_depth, *blob_fit_model, &features);
+                       const CalibrationModel* blob_fit_model, const SceneContext* scene) {
+  const SceneFrame cleaned = SceneOf(image, bit_depth, options, scene);
+  Features features = ComputeFeatures(cleaned.image, bit_depth, options);
+  if (blob_fit_model != nullptr) {
+    RefineWithBlobFit(cleaned.image, bit_depth, *blob_fit_model, &features);
+  }
+  features.scene = cleaned.report;
   return features;
+}
+
+cv::Mat SceneCleanedFrame(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
+                          const SceneContext* scene) {
+  return SceneOf(image, bit_depth, options, scene).image;
 }
 
 const CalibrationModel* BlobFitModelOf(const CalibrationModel& model) {

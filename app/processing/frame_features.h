@@ -28,12 +28,23 @@ int BitDepthOfPixelFormat(const std::string& pixel_format);
 // Features of every row of a recording, by frame index.
 using FeatureMap = std::map<std::int64_t, Features>;
 
-// The features of one frame: the single function live and playback runs use. With a model
-// (`blob_fit_model` non-null: the estimation default), the blob's moment variances are replaced by
-// the likelihood fit with the calibrated blur (estimator/blob_fit.h, RefineWithBlobFit); without
-// one (calibration, or the moments path chosen), they stay the intensity-weighted moments.
+// The features of one frame: the single function live and playback runs use. First the scene
+// pass (options.scene, estimator/scene.h CleanScene: defect pixels replaced, other blobs masked,
+// occlusion and second sources named in Features::scene), then the features of the cleaned frame;
+// with a model (`blob_fit_model` non-null: the estimation default), the blob's moment variances
+// are replaced by the likelihood fit with the calibrated blur (estimator/blob_fit.h,
+// RefineWithBlobFit) on the same cleaned frame; without one (calibration, or the moments path
+// chosen), they stay the intensity-weighted moments. `scene`: a known defect map, the frame's ROI
+// origin on the sensor, an expected blob centre (null: none).
 Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
-                       const CalibrationModel* blob_fit_model = nullptr);
+                       const CalibrationModel* blob_fit_model = nullptr,
+                       const SceneContext* scene = nullptr);
+
+// The frame every feature and the blob fit read (the scene pass of FrameFeatures): for the
+// callers that hand a recorded frame to the blob fit or the blur split themselves
+// (app/processing/recording_fit.cc), so they see what FrameFeatures saw.
+cv::Mat SceneCleanedFrame(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
+                          const SceneContext* scene = nullptr);
 
 // The model FrameFeatures refines with (the blob fit): `model` unless its features.blob_fit is
 // false (the moments path), then nullptr.

@@ -296,7 +296,9 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
     const Features& f = features.at(rows[i]->index);
     const double blur_var_px2 = BlobFitBlurVarPx2(*model, f);
     if (!(blur_var_px2 > 0.0)) continue;
-    frames.push_back({reader.LoadImage(*rows[i]), reader.header().bit_depth, f, blur_var_px2,
+    const int bit_depth = reader.header().bit_depth;  // the frame FrameFeatures measured
+    frames.push_back({SceneCleanedFrame(reader.LoadImage(*rows[i]), bit_depth, model->features),
+                      bit_depth, f, blur_var_px2,
                       model->geometric.DistanceMm(f.moment_major_var_px2)});
   }
   const BlurSplit split = FitBlurSplit(frames);
@@ -328,8 +330,10 @@ CalibrationModel RefitOnBlobFitSizes(const RecordingReader& reader, const Featur
   for (const FrameRecord& row : reader.rows()) {
     const auto f = refined.find(row.index);
     if (f == refined.end() || !f->second.Usable()) continue;
-    replaced += RefineWithBlobFit(reader.LoadImage(row), reader.header().bit_depth, first,
-                                  &f->second);
+    const int bit_depth = reader.header().bit_depth;  // the frame FrameFeatures measured
+    replaced += RefineWithBlobFit(
+        SceneCleanedFrame(reader.LoadImage(row), bit_depth, feature_options), bit_depth, first,
+        &f->second);
   }
   CalibrationModel model = Fit(SamplesFromRecording(reader, refined), feature_options, fit_options);
   model.blur_calibration = first.blur_calibration;  // measured on the frames, unchanged

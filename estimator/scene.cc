@@ -1,0 +1,129 @@
+// The scene pass (estimator/scene.h): its options, its report, and the pass in order.
+#include "estimator/scene.h"
+
+#include <cmath>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+#include "base/check.h"
+#include "estimator/scene_internal.h"
+
+namespace irdist {
+
+bool SceneOptions::IsValid(std::string* why) const {
+  auto fail = [why](const char* message) {
+    if (why != nullptr) *why = message;
+    return false;
+  };
+  if (!(defect_sigmas >= 3.0)) return fail("scene.defect_sigmas must be >= 3");
+  if (!(defect_edge_allowance >= 0.0 && defect_edge_allowance < 1.0))
+    return fail("scene.defect_edge_allowance must be in [0, 1)");
+  if (!(fallback_shot_gain_dn >= 0.0)) return fail("scene.fallback_shot_gain_dn must be >= 0");
+  if (!(segment_sigmas > 0.0)) return fail("scene.segment_sigmas must be > 0");
+  if (!(segment_peak_fraction >= 0.0 && segment_peak_fraction < 0.5))
+    return fail("scene.segment_peak_fraction must be in [0, 0.5)");
+  if (min_blob_area_px < 1) return fail("scene.min_blob_area_px must be >= 1");
+  if (!(halo_reach_px >= 0.0 && halo_reach_px <= 32.0))
+    return fail("scene.halo_reach_px must be in [0, 32]");
+  if (!(merged_reach_px > 0.0)) return fail("scene.merged_reach_px must be > 0");
+  if (occlusion_rays < 16) return fail("scene.occlusion_rays must be >= 16");
+  if (!(occlusion_residual_px > 0.0)) return fail("scene.occlusion_residual_px must be > 0");
+  if (!(occluded_min_fraction > 0.0 && occluded_min_fraction <= 1.0))
+    return fail("scene.occluded_min_fraction must be in (0, 1]");
+  if (occlusion_min_run < 1) return fail("scene.occlusion_min_run must be >= 1");
+  if (!(occlusion_min_radius_px >= 1.0)) return fail("scene.occlusion_min_radius_px must be >= 1");
+  return true;
+}
+
+std::string SceneReport::BriefReport() const {
+  if (!assessed) return "scene: not assessed";
+  std::ostringstream out;
+  out << "scene: " << defect_pixels << " defect pixels (" << defect_pixels_near_blob
+      << " near the blob), " << other_blobs << " other blobs";
+  if (std::isfinite(second_source_gap_px)) out << " (nearest " << second_source_gap_px << " px)";
+  if (second_source) out << ", SECOND SOURCE";
+  if (occluded) out << ", OCCLUDED (" << occluded_edge_fraction << " of the edge)";
+  out << ", ambient " << ambient_level << ", read noise " << read_noise_dn << " DN";
+  return out.str();
+}
+
+namespace {
+
+cv::Rect WindowAround(cv::Point2d c, int side) {
+  return cv::Rect(static_cast<int>(std::lround(c.x - 0.5 * (side - 1))),
+                  static_cast<int>(std::lround(c.y - 0.5 * (side - 1))), side, side);
+}
+
+// The defects found and the known map's, replaced in *cleaned (cloned from `image` first).
+void CleanDefects(const cv::Mat& image, const cv::Mat& median3, const scene::NoiseModel& noise,
+                  const SceneOptions& options, const SceneContext& context, cv::Mat* cleaned,
+                  SceneReport* report) {
+  cv::Mat defects = options.detect_defects ? scene::DetectDefects(image, median3, noise, options)
+                                           : cv::Mat::zeros(image.size(), CV_8U);
+  if (context.known_defects != nullptr) {
+    scene::AddKnownDefects(*context.known_defects, context.roi_origin, &defects);
+  }
+  if (cv::countNonZero(defects) == 0) return;
+  *cleaned = image.clone();
+  scene::ReplaceDefects(defects, median3, cleaned, &report->defect_px);
+}
+
+// The defects inside the feature window and, of them, those within the blob fit's reach (the
+// IRED's pixels grown by the halo and the fit's 2 px margin).
+void CountDefects(const scene::Segments& segments, const SceneOptions& options,
+                  const SceneContext& context, cv::Size frame, SceneReport* report) {
+  if (segments.ired < 0) {
+    report->defect_pixels = static_cast<int>(report->defect_px.size());
+    return;
+  }
+  const scene::Blob& ired = segments.blobs[static_cast<std::size_t>(segments.ired)];
+  const cv::Rect window = WindowAround(ired.centroid, context.window_side_px);
+  cv::Mat near;
+  if (!report->defect_px.empty()) {
+    near = scene::GrownMask(segments, ired, options.halo_reach_px + 2.0, frame);
+  }
+  for (const cv::Point& p : report->defect_px) {
+    if (!window.contains(p)) continue;
+    ++report->defect_pixels;
+    if (near.at<uint8_t>(p) != 0) ++report->defect_pixels_near_blob;
+  }
+}
+
+}  // namespace
+
+SceneFrame CleanScene(const cv::Mat& image, int bit_depth, const SceneOptions& options,
+                      const SceneContext& context) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), why);
+  IRDIST_CHECK(image.type() == CV_16UC1, "CleanScene needs a CV_16UC1 image, got type ",
+               image.type());
+  IRDIST_CHECK(bit_depth >= 8 && bit_depth <= 16, "bit_depth must be in [8,16], got ", bit_depth);
+  SceneFrame out;
+  out.image = image;
+  if (!options.enabled || image.rows < 3 || image.cols < 3) return out;
+  SceneReport& report = out.report;
+  report.assessed = true;
+  scene::NoiseModel noise = scene::MeasureBackgroundNoise(image, bit_depth);
+  cv::Mat median3;
+  cv::medianBlur(image, median3, 3);
+  scene::MeasureShotGain(image, median3, bit_depth, options.fallback_shot_gain_dn, &noise);
+  report.ambient_level = noise.background / ((1 << bit_depth) - 1);
+  report.read_noise_dn = noise.read_sd;
+  report.shot_gain_dn = noise.shot_gain;
+  CleanDefects(image, median3, noise, options, context, &out.image, &report);
+  scene::Segments segments;
+  if (options.segment) segments = scene::Segment(out.image, noise, options, context);
+  if (segments.ired >= 0) {
+    report.blob_center_px = segments.blobs[static_cast<std::size_t>(segments.ired)].centroid;
+    if (segments.blobs.size() > 1) {
+      if (out.image.data == image.data) out.image = image.clone();
+      scene::MaskOtherBlobs(segments, options, context, &out.image, &report);
+    }
+    scene::AssessShape(out.image, segments, noise, options, &report);
+  }
+  CountDefects(segments, options, context, image.size(), &report);
+  return out;
+}
+
+}  // namespace irdist
