@@ -38,6 +38,12 @@ std::vector<DefectPixel> PlaceDefectPixels(const DefectPixelOptions& options, in
   std::mt19937_64 rng(options.defect_seed ^ 0xD1FEC7ED5EEDull);
   std::vector<DefectPixel> defects = DrawKinds(options, rng);
   const double r = options.near_blob_radius_px;
+  IRDIST_CHECK(options.defects_near_blob == 0 ||
+                   (near_x_px > -r && near_x_px < width_px + r && near_y_px > -r &&
+                    near_y_px < height_px + r),
+               "the emitter's image centre (", near_x_px, ", ", near_y_px,
+               ") px is off the sensor: no defect pixel can lie near it; set "
+               "defects_near_blob to 0 or bring the emitter's offset into the field of view");
   std::unordered_set<std::int64_t> used;
   // Uniform over the square around the centre (near) or the sensor (far), kept when on the right
   // side of the radius and not yet taken.

@@ -78,8 +78,9 @@ bool SecondSourceOptions::IsValid(std::string* why) const {
     return Fail(why, "scene.second_source.position_mm must be [x, y, z] with |x|, |y| <= 10000 "
                      "and z in [100, 100000] (in front of the camera)");
   }
-  if (!In(diameter_mm, 1e-3, 1000.0)) {
-    return Fail(why, "scene.second_source.diameter_mm must lie in [0.001, 1000]");
+  if (!In(diameter_mm, 1e-3, 0.05 * position_mm[2])) {
+    return Fail(why, "scene.second_source.diameter_mm must lie in [0.001, 0.05 z] (a source "
+                     "seen under at most 0.05 rad, ~150 px with the default optics)");
   }
   if (!In(intensity_mw_sr, 0.0, 1e6)) {
     return Fail(why, "scene.second_source.intensity_mw_sr must lie in [0, 1e6]");

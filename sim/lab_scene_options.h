@@ -55,7 +55,7 @@ struct ReflectionOptions {
 // in the camera's frame (mm: x right, y down, z along the optical axis). 0 intensity = off.
 struct SecondSourceOptions {
   std::array<double, 3> position_mm = {0.0, 0.0, 2000.0};
-  double diameter_mm = 5.0;
+  double diameter_mm = 5.0;  // at most 0.05 x z (its image stays a small part of the sensor)
   double intensity_mw_sr = 0.0;  // radiant intensity towards the camera (radiance I / area)
   bool On() const { return intensity_mw_sr > 0.0; }
   bool IsValid(std::string* why) const;

@@ -377,7 +377,7 @@ void ReadSecondSource(const YAML::Node& node, const std::string& file, SecondSou
   o->diameter_mm = CheckedNumber(k, at, "diameter_mm", o->diameter_mm, 1e-3, 1000.0);
   o->intensity_mw_sr = CheckedNumber(k, at, "intensity_mw_sr", o->intensity_mw_sr, 0.0, 1e6);
   std::string why;
-  CheckAt(k, o->IsValid(&why), why, {"position_mm"});
+  CheckAt(k, o->IsValid(&why), why, {"position_mm", "diameter_mm"});
 }
 
 void ReadOccluder(const YAML::Node& node, const std::string& file, OccluderOptions* o) {

@@ -4,7 +4,9 @@
 // photo-electrons per pixel: the disc's exact perspective image (the conic where rays through the
 // pinhole meet the tilted disc) convolved with the optics' Gaussian PSF and integrated over each
 // pixel, in closed form per strip of the image (no sampling of the sharp disc, so no aliasing;
-// docs/virtual-rig.md). Noise, dark signal and quantisation are the Sensor's business.
+// docs/virtual-rig.md). Noise, dark signal and quantisation are the Sensor's business. An occluder
+// (virtual.scene.occluder) cuts the IRED's disc by a chord before the blur (EmitterDisc); the lab's
+// other light sources are discs rendered the same way (RenderDisc, sim/lab_scene.h).
 //
 // Geometry: the camera's pinhole is the origin, the optical axis is +z, image x/y follow the
 // sensor's columns/rows. The emitter's centre is at (offset_x_mm, offset_y_mm, slide_mm). Its

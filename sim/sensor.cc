@@ -241,9 +241,12 @@ void Sensor::ExposeDefects(const SignalWindow& collected, double exposure_s, dou
         mean += collected.electrons(d.y_px - collected.rect.y, d.x_px - collected.rect.x);
       }
       SplitMixEngine rng{FrameSeed(s.seed ^ (0xDEFEC7ull * (k + 1)), frame_index, 5)};
-      const double electrons =
-          mean > 1e7 ? std::normal_distribution<double>(mean, std::sqrt(mean))(rng)
-                     : static_cast<double>(std::poisson_distribution<long>(mean)(rng));
+      double electrons = 0.0;
+      if (mean > 1e7) {
+        electrons = std::normal_distribution<double>(mean, std::sqrt(mean))(rng);
+      } else if (mean > 0.0) {
+        electrons = static_cast<double>(std::poisson_distribution<long>(mean)(rng));
+      }
       const double read_e = std::normal_distribution<double>(0.0, s.read_noise_e)(rng) +
                             PixelDarkOffsetE(d.x_px, d.y_px);
       value = Pack(ToAdc(electrons, read_e, black_dn), format);

@@ -211,6 +211,8 @@ TEST(RigPhysics, BadLabSceneKeysNameFileAndLine) {
               "4", "position_mm must be a list of 3 numbers");
   ExpectError("virtual:\n  scene:\n    second_source:\n      position_mm: [1, 2, -50]\n",
               "lab7", "4", "in front of the camera");
+  ExpectError("virtual:\n  scene:\n    second_source:\n      position_mm: [0, 0, 1000]\n"
+              "      diameter_mm: 60\n", "lab16", "5", "diameter_mm must lie in [0.001, 0.05 z]");
   ExpectError("virtual:\n  scene:\n    second_source:\n      intensity_mw_sr: inf\n", "lab8",
               "4", "intensity_mw_sr");
   ExpectError("virtual:\n  scene:\n    mirror: {}\n", "lab9", "3", "unknown key 'mirror'");
