@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "base/check.h"
+#include "estimator/disc_fit.h"
 
 namespace irdist {
 namespace {
@@ -156,423 +157,8 @@ double ApertureBlurVariance(const cv::Mat& image, const cv::Rect& rect, const Mo
   return 0.5 * (blur(p2, p4) + blur(q2, q4));
 }
 
-double Theta0FromAxes(double minor, double major) {
-  if (major <= 0.0) return 0.0;
-  const double ratio = std::clamp(minor / major, 0.0, 1.0);
-  return std::acos(ratio) * 180.0 / kPi;
-}
-
-
-// kModelFit: a uniformly bright elliptical disc {d : d^T P d <= 1} (d = pixel - centre), blurred by
-// a Gaussian of sigma s and integrated over each pixel by 3x3 sub-samples. The blurred disc at a
-// point is approximated by the blurred straight edge B + A Phi(dist / s), with dist the signed
-// distance to the disc's edge to first order, (1 - q) / (2 |P d|), q = d^T P d: exact on the
-// edge, and the error away from it sits where Phi is ~0 or ~1 for blobs several blur sigmas wide;
-// the edge's curvature shifts the blurred edge inward by kappa s^2 / 2 (modelled).
-// Parameters: centre x, y (relative to the fit's origin), P11, P12, P22, s, A, B.
-constexpr int kDiscParams = 8;
-using DiscVector = cv::Matx<double, kDiscParams, 1>;
-using DiscMatrix = cv::Matx<double, kDiscParams, kDiscParams>;
-
-constexpr double kInvSqrt2 = 0.70710678118654752440;
-constexpr double kInvSqrt2Pi = 0.39894228040143267794;
-
-// A pixel whose centre lies more than 4 blur sigmas (plus its half-diagonal) inside or outside
-// the edge is flat: no sub-sampling. True with its value in *value (and gradient in *jac when
-// not null) for such a pixel.
-bool FlatDiscPixel(const DiscVector& v, double px, double py, DiscVector* jac, double* value) {
-  const double cx = v(0), cy = v(1), p11 = v(2), p12 = v(3), p22 = v(4), s = v(5);
-  const double dx = px - cx, dy = py - cy;
-  const double gx = p11 * dx + p12 * dy, gy = p12 * dx + p22 * dy;
-  const double n = std::sqrt(gx * gx + gy * gy);
-  const double dist = n > 1e-12 ? (1.0 - dx * gx - dy * gy) / (2.0 * n) : HUGE_VAL;
-  if (!(std::abs(dist) > 4.0 * s + 0.75)) return false;
-  const double inside = dist > 0.0 ? 1.0 : 0.0;
-  if (jac != nullptr) {
-    *jac = DiscVector::zeros();
-    (*jac)(6) = inside;
-    (*jac)(7) = 1.0;
-  }
-  *value = v(7) + v(6) * inside;
-  return true;
-}
-
-// The blurred edge Phi at the sub-sample (dx, dy) from the disc's centre; its gradient with
-// respect to the parameters 0-5, times A, added to *g_sum when g_sum is not null.
-double DiscSubSample(const DiscVector& v, double dx, double dy, DiscVector* g_sum) {
-  const double p11 = v(2), p12 = v(3), p22 = v(4), s = v(5), a = v(6);
-  const double gx = p11 * dx + p12 * dy, gy = p12 * dx + p22 * dy;
-  const double q = dx * gx + dy * gy;
-  const double n = std::sqrt(gx * gx + gy * gy);
-  if (n < 1e-12) return 1.0;
-  // A convex edge of curvature kappa blurs to Phi((dist - kappa s^2 / 2) / s) to first order:
-  // kappa of the level set of q through the point (its derivatives are left out of the
-  // Jacobian: a second-order term).
-  const double kappa = (n * n * (p11 + p22) - (gx * gx * p11 + 2.0 * gx * gy * p12 +
-                                               gy * gy * p22)) / (n * n * n);
-  const double dist = (1.0 - q) / (2.0 * n);
-  const double z = dist / s - 0.5 * kappa * s;
-  if (z > 4.0) return 1.0;
-  if (z < -4.0) return 0.0;
-  const double phi = 0.5 * std::erfc(-z * kInvSqrt2);
-  if (g_sum == nullptr) return phi;
-  const double k = a * kInvSqrt2Pi * std::exp(-0.5 * z * z) / s;
-  const double inv_n = 1.0 / n;
-  const double dq[5] = {-2.0 * gx, -2.0 * gy, dx * dx, 2.0 * dx * dy, dy * dy};
-  const double dn[5] = {-(gx * p11 + gy * p12) * inv_n, -(gx * p12 + gy * p22) * inv_n,
-                        gx * dx * inv_n, (gx * dy + gy * dx) * inv_n, gy * dy * inv_n};
-  for (int j = 0; j < 5; ++j) (*g_sum)(j) += k * (-0.5 * dq[j] * inv_n - dist * dn[j] * inv_n);
-  (*g_sum)(5) -= k * (dist / s + 0.5 * kappa * s);
-  return phi;
-}
-
-// Model value of the pixel centred at (px, py) (relative to the fit's origin); its gradient with
-// respect to the parameters in *jac when jac is not null.
-double DiscPixel(const DiscVector& v, double px, double py, DiscVector* jac) {
-  constexpr double kOffsets[3] = {-1.0 / 3.0, 0.0, 1.0 / 3.0};
-  double flat_value = 0.0;
-  if (FlatDiscPixel(v, px, py, jac, &flat_value)) return flat_value;
-  double sum_phi = 0.0;
-  DiscVector g_sum = DiscVector::zeros();
-  for (double oy : kOffsets) {
-    const double dy = py + oy - v(1);
-    for (double ox : kOffsets) {
-      sum_phi += DiscSubSample(v, px + ox - v(0), dy, jac != nullptr ? &g_sum : nullptr);
-    }
-  }
-  constexpr double kInvSamples = 1.0 / 9.0;
-  const double phi_mean = sum_phi * kInvSamples;
-  if (jac != nullptr) {
-    *jac = g_sum * kInvSamples;
-    (*jac)(6) = phi_mean;
-    (*jac)(7) = 1.0;
-  }
-  return v(7) + v(6) * phi_mean;
-}
-
-bool DiscIsValid(const DiscVector& v) {
-  return v(2) > 0.0 && v(4) > 0.0 && v(2) * v(4) - v(3) * v(3) > 0.0 && v(5) > 0.05 &&
-         v(5) < 20.0 && v(6) > 0.0;
-}
-
-// The pixels of `rect` as (x - ox, y - oy, normalised gray level).
-std::vector<cv::Vec3d> DiscSamples(const cv::Mat& image, const cv::Rect& rect, double max_gray,
-                                   double ox, double oy) {
-  std::vector<cv::Vec3d> samples;
-  samples.reserve(static_cast<size_t>(rect.area()));
-  for (int y = rect.y; y < rect.y + rect.height; ++y) {
-    const uint16_t* row = image.ptr<uint16_t>(y);
-    for (int x = rect.x; x < rect.x + rect.width; ++x)
-      samples.emplace_back(x - ox, y - oy, row[x] / max_gray);
-  }
-  return samples;
-}
-
-// Start: the disc whose covariance is the moments' minus blur and pixel variance (a uniform
-// ellipse of semi-axis a has variance a^2 / 4 along it), or the half-maximum contour's ellipse.
-DiscVector DiscStart(double max_gray, const Moments& m, const EllipseFit& contour,
-                     double background, double peak, double s0) {
-  const double remove = s0 * s0 + 1.0 / 12.0;
-  const double tr = m.sxx + m.syy;
-  const double root = std::sqrt(0.25 * (m.sxx - m.syy) * (m.sxx - m.syy) + m.sxy * m.sxy);
-  const double l1 = std::max(0.5 * tr + root - remove, 0.25);
-  const double l2 = std::max(0.5 * tr - root - remove, 0.25);
-  double phi = 0.5 * std::atan2(2.0 * m.sxy, m.sxx - m.syy);
-  double i1 = 1.0 / (4.0 * l1), i2 = 1.0 / (4.0 * l2);
-  if (contour.valid && contour.minor_px > 1.0) {
-    // The half-maximum contour of a blurred disc lies close to the disc's edge, and noise in the
-    // moments' wings does not move it: the better start when it exists.
-    phi = contour.angle_deg * kPi / 180.0;
-    i1 = 4.0 / (contour.major_px * contour.major_px);
-    i2 = 4.0 / (contour.minor_px * contour.minor_px);
-  }
-  const double c = std::cos(phi), sn = std::sin(phi);
-  DiscVector v;
-  v(0) = 0.0;
-  v(1) = 0.0;
-  v(2) = i1 * c * c + i2 * sn * sn;
-  v(3) = (i1 - i2) * c * sn;
-  v(4) = i1 * sn * sn + i2 * c * c;
-  v(5) = s0;
-  v(6) = std::max((peak - background) / max_gray, 1e-6);
-  v(7) = background / max_gray;
-  return v;
-}
-
-double DiscCost(const std::vector<cv::Vec3d>& samples, const DiscVector& p) {
-  double cost = 0.0;
-  for (const cv::Vec3d& s : samples) {
-    const double r = DiscPixel(p, s[0], s[1], nullptr) - s[2];
-    cost += r * r;
-  }
-  return cost;
-}
-
-// J^T J and J^T r of the disc model at v.
-void DiscNormalEquations(const std::vector<cv::Vec3d>& samples, const DiscVector& v,
-                         DiscMatrix* jtj, DiscVector* jtr) {
-  *jtj = DiscMatrix::zeros();
-  *jtr = DiscVector::zeros();
-  DiscVector jac;
-  for (const cv::Vec3d& s : samples) {
-    const double r = DiscPixel(v, s[0], s[1], &jac) - s[2];
-    for (int a = 0; a < kDiscParams; ++a) {
-      if (jac(a) == 0.0) continue;
-      (*jtr)(a) += jac(a) * r;
-      for (int b = a; b < kDiscParams; ++b) (*jtj)(a, b) += jac(a) * jac(b);
-    }
-  }
-  for (int a = 0; a < kDiscParams; ++a)
-    for (int b = 0; b < a; ++b) (*jtj)(a, b) = (*jtj)(b, a);
-}
-
-// One damped step from v (up to 10 tries with growing lambda); returns the relative decrease of
-// the cost, or a negative value when no try decreased it. The disc model's validity region
-// (positive definite shape, bounded blur) is enforced by rejecting steps that leave it.
-double DiscStep(const std::vector<cv::Vec3d>& samples, DiscVector* v, double* cost,
-                double* lambda) {
-  DiscMatrix jtj;
-  DiscVector jtr;
-  DiscNormalEquations(samples, *v, &jtj, &jtr);
-  for (int attempt = 0; attempt < 10; ++attempt) {
-    DiscMatrix damped = jtj;
-    for (int a = 0; a < kDiscParams; ++a) damped(a, a) += *lambda * (jtj(a, a) + 1e-12);
-    DiscVector step;
-    if (!cv::solve(damped, -jtr, step, cv::DECOMP_CHOLESKY)) {
-      *lambda *= 10.0;
-      continue;
-    }
-    const DiscVector next = *v + step;
-    const double next_cost = DiscIsValid(next) ? DiscCost(samples, next) : HUGE_VAL;
-    if (next_cost < *cost) {
-      const double relative_change = (*cost - next_cost) / std::max(*cost, 1e-300);
-      *v = next;
-      *cost = next_cost;
-      *lambda = std::max(*lambda * 0.3, 1e-9);
-      return relative_change;
-    }
-    *lambda *= 10.0;
-  }
-  return -1.0;
-}
-
-// The fitted disc's ellipse (centre offset by (ox, oy)); false when its shape is not an ellipse.
-bool DiscEllipse(const DiscVector& v, double ox, double oy, EllipseFit* fit) {
-  // Axes of the fitted disc: eigenvalues of P are 1 / semi-axis^2.
-  const double pt = v(2) + v(4);
-  const double pr = std::sqrt(0.25 * (v(2) - v(4)) * (v(2) - v(4)) + v(3) * v(3));
-  const double e_small = 0.5 * pt - pr, e_large = 0.5 * pt + pr;
-  if (!(e_small > 0.0)) return false;
-  fit->valid = true;
-  fit->center_px = cv::Point2d(ox + v(0), oy + v(1));
-  fit->major_px = 2.0 / std::sqrt(e_small);
-  fit->minor_px = 2.0 / std::sqrt(e_large);
-  // 0.5 atan2(2 P12, P11 - P22) is the direction of P's larger eigenvalue: the minor axis.
-  double angle = 0.5 * std::atan2(2.0 * v(3), v(2) - v(4)) * 180.0 / kPi + 90.0;
-  if (angle > 90.0) angle -= 180.0;
-  fit->angle_deg = angle;
-  fit->theta0_deg = Theta0FromAxes(fit->minor_px, fit->major_px);
-  return true;
-}
-
-// Fits the disc model to the pixels of `rect` (normalised gray levels); start from the moment
-// ellipse (centre, covariance) with blur s0. Returns false when the fit fails.
-bool FitDisc(const cv::Mat& image, const cv::Rect& rect, double max_gray, const Moments& m,
-             const EllipseFit& contour, double background, double peak, double s0,
-             EllipseFit* fit, double* blur_px, double* rms) {
-  const std::vector<cv::Vec3d> samples = DiscSamples(image, rect, max_gray, m.cx, m.cy);
-  if (samples.size() < 4 * kDiscParams) return false;
-  DiscVector v = DiscStart(max_gray, m, contour, background, peak, s0);
-  double cost = DiscCost(samples, v);
-  double lambda = 1e-3;
-  for (int iteration = 0; iteration < 20; ++iteration) {
-    if (DiscStep(samples, &v, &cost, &lambda) < 1e-5) break;  // no decrease, or too small
-  }
-  if (!DiscIsValid(v) || !DiscEllipse(v, m.cx, m.cy, fit)) return false;
-  *blur_px = v(5);
-  *rms = std::sqrt(cost / samples.size());
-  return true;
-}
 
 }  // namespace
-
-const char* ToString(RoiPolicy policy) {
-  switch (policy) {
-    case RoiPolicy::kFixedWindow:
-      return "fixed_window";
-    case RoiPolicy::kThreshold:
-      return "threshold";
-  }
-  return "unknown";
-}
-
-const char* ToString(MomentMethod method) {
-  switch (method) {
-    case MomentMethod::kThreshold:
-      return "threshold";
-    case MomentMethod::kAperture:
-      return "aperture";
-  }
-  return "unknown";
-}
-
-bool ParseMomentMethod(const std::string& name, MomentMethod* method) {
-  for (MomentMethod m : {MomentMethod::kThreshold, MomentMethod::kAperture}) {
-    if (name == ToString(m)) {
-      *method = m;
-      return true;
-    }
-  }
-  return false;
-}
-
-const char* ToString(ResponseScope scope) {
-  switch (scope) {
-    case ResponseScope::kERelOnly:
-      return "e_rel_only";
-    case ResponseScope::kAllPixels:
-      return "all_pixels";
-  }
-  return "unknown";
-}
-
-bool ParseResponseScope(const std::string& name, ResponseScope* scope) {
-  for (ResponseScope s : {ResponseScope::kERelOnly, ResponseScope::kAllPixels}) {
-    if (name == ToString(s)) {
-      *scope = s;
-      return true;
-    }
-  }
-  return false;
-}
-
-const char* ToString(EllipseMethod method) {
-  switch (method) {
-    case EllipseMethod::kMoments:
-      return "moments";
-    case EllipseMethod::kContour:
-      return "contour";
-    case EllipseMethod::kModelFit:
-      return "model_fit";
-  }
-  return "unknown";
-}
-
-bool ParseRoiPolicy(const std::string& name, RoiPolicy* policy) {
-  for (RoiPolicy p : {RoiPolicy::kFixedWindow, RoiPolicy::kThreshold}) {
-    if (name == ToString(p)) {
-      *policy = p;
-      return true;
-    }
-  }
-  return false;
-}
-
-bool ParseEllipseMethod(const std::string& name, EllipseMethod* method) {
-  for (EllipseMethod m :
-       {EllipseMethod::kMoments, EllipseMethod::kContour, EllipseMethod::kModelFit}) {
-    if (name == ToString(m)) {
-      *method = m;
-      return true;
-    }
-  }
-  return false;
-}
-
-double InverseResponse::Apply(double x) const {
-  if (m.empty()) return x;
-  if (x <= m.front()) return f.front();
-  if (x >= m.back()) return f.back();
-  const size_t k = std::upper_bound(m.begin(), m.end(), x) - m.begin();
-  const double u = (x - m[k - 1]) / (m[k] - m[k - 1]);
-  return f[k - 1] + u * (f[k] - f[k - 1]);
-}
-
-bool InverseResponse::IsValid(std::string* why) const {
-  auto fail = [why](const char* text) {
-    if (why) *why = text;
-    return false;
-  };
-  if (m.empty() && f.empty()) return true;
-  if (m.size() != f.size()) return fail("inverse_response: m and f differ in length");
-  if (m.size() < 2) return fail("inverse_response: needs at least two knots");
-  for (size_t k = 0; k < m.size(); ++k) {
-    if (!(m[k] >= 0.0 && m[k] <= 1.0)) return fail("inverse_response: knots m must lie in [0,1]");
-    if (k > 0 && !(m[k] > m[k - 1])) return fail("inverse_response: m must increase strictly");
-    if (k > 0 && !(f[k] >= f[k - 1])) return fail("inverse_response: f must be monotone");
-  }
-  return true;
-}
-
-bool FeatureOptions::IsValid(std::string* why) const {
-  auto fail = [why](const char* text) {
-    if (why) *why = text;
-    return false;
-  };
-  if (window_side_px < 8 || window_side_px > 1024)
-    return fail("window_side_px must be in [8,1024]");
-  if (!(threshold_fraction > 0.0 && threshold_fraction < 1.0))
-    return fail("threshold_fraction must be in (0,1)");
-  if (!(moment_threshold_fraction >= 0.0 && moment_threshold_fraction < 1.0))
-    return fail("moment_threshold_fraction must be in [0,1)");
-  if (!(psf_sigma_px >= 0.0)) return fail("psf_sigma_px must be >= 0");
-  if (!(aperture_margin_px >= 0.0)) return fail("aperture_margin_px must be >= 0");
-  if (detection_downsample < 1 || detection_downsample > 16)
-    return fail("detection_downsample must be in [1,16]");
-  if (!(min_contrast_fraction > 0.0 && min_contrast_fraction < 1.0))
-    return fail("min_contrast_fraction must be in (0,1)");
-  if (!inverse_response.IsValid(why)) return false;
-  if (response_scope == ResponseScope::kAllPixels && !inverse_response.IsIdentity() &&
-      !(inverse_response.Apply(1.0) > inverse_response.Apply(0.0)))
-    return fail("inverse_response: all_pixels scope needs f(1) > f(0)");
-  return true;
-}
-
-std::string Features::BriefReport() const {
-  std::ostringstream out;
-  if (!blob_found) return "no blob found";
-  out << "blob at (" << centroid_px.x << ", " << centroid_px.y << ") px, ROI " << roi.width << "x"
-      << roi.height << " A=" << roi_area_px << ": E_rel=" << e_rel << " F(0,0)=" << f00
-      << " Sigma=" << sigma << " theta0=" << theta0_deg << " deg";
-  if (saturated_pixels > 0) out << " SATURATED(" << saturated_pixels << " px)";
-  if (touches_border) out << " BORDER";
-  if (blob_clipped_by_roi) out << " CLIPPED_BY_ROI";
-  return out.str();
-}
-
-FeatureOptions PaperFeatureOptions() {
-  FeatureOptions options;
-  options.roi_policy = RoiPolicy::kFixedWindow;
-  options.window_side_px = 64;
-  return options;
-}
-
-cv::Mat LineariseFrame(const cv::Mat& image, int bit_depth, const InverseResponse& curve) {
-  std::string why;
-  IRDIST_CHECK(curve.IsValid(&why), why);
-  IRDIST_CHECK(!curve.IsIdentity(), "LineariseFrame needs a curve, not the identity");
-  IRDIST_CHECK(image.type() == CV_16UC1, "LineariseFrame needs a CV_16UC1 image, got type ",
-               image.type());
-  IRDIST_CHECK(bit_depth >= 8 && bit_depth <= 16, "bit_depth must be in [8,16], got ", bit_depth);
-  const double f0 = curve.Apply(0.0), f1 = curve.Apply(1.0);
-  IRDIST_CHECK(f1 > f0, "inverse response is flat: f(1) == f(0)");
-  const int levels = 1 << bit_depth;
-  const double max_gray = levels - 1.0;
-  std::vector<std::uint16_t> table(static_cast<size_t>(levels));
-  for (int g = 0; g < levels; ++g) {
-    const double l = std::clamp((curve.Apply(g / max_gray) - f0) / (f1 - f0), 0.0, 1.0);
-    table[static_cast<size_t>(g)] = static_cast<std::uint16_t>(std::lround(65535.0 * l));
-  }
-  // Values above the format's range (stray high bits) map to full scale.
-  const std::uint16_t top = table.back();
-  cv::Mat out(image.size(), CV_16UC1);
-  for (int y = 0; y < image.rows; ++y) {
-    const std::uint16_t* src = image.ptr<std::uint16_t>(y);
-    std::uint16_t* dst = out.ptr<std::uint16_t>(y);
-    for (int x = 0; x < image.cols; ++x) dst[x] = src[x] < levels ? table[src[x]] : top;
-  }
-  return out;
-}
 
 namespace {
 
@@ -673,6 +259,44 @@ void FlagBorders(const cv::Mat& image, const cv::Rect& window, const cv::Rect& f
   }
 }
 
+// The gray levels of the window's border ring, kBorderPx wide (away from the blob).
+constexpr int kBorderPx = 4;
+std::vector<double> BorderRing(const cv::Mat& image, const cv::Rect& window) {
+  std::vector<double> border;
+  for (int y = window.y; y < window.y + window.height; ++y) {
+    const uint16_t* row = image.ptr<uint16_t>(y);
+    const bool edge_row = y < window.y + kBorderPx || y >= window.y + window.height - kBorderPx;
+    for (int x = window.x; x < window.x + window.width; ++x) {
+      if (edge_row || x < window.x + kBorderPx || x >= window.x + window.width - kBorderPx) {
+        border.push_back(row[x]);
+      }
+    }
+  }
+  return border;
+}
+
+// The window's background (gray levels): the mean of its border ring within 5 robust sd of the
+// ring's median (a stray bright pixel does not move it). A smooth gradient's mean over the
+// symmetric ring is its value at the window's centre, so the window's sum loses exactly the
+// background under the blob.
+double WindowBackground(const cv::Mat& image, const cv::Rect& window) {
+  std::vector<double> ring = BorderRing(image, window);
+  if (ring.empty()) return 0.0;
+  std::vector<double> sorted = ring;
+  const auto mid = sorted.begin() + sorted.size() / 2;
+  std::nth_element(sorted.begin(), mid, sorted.end());
+  const double median = *mid;
+  const double limit = 5.0 * std::max(RobustNoiseSd(&sorted), 1.0);
+  double sum = 0.0;
+  int n = 0;
+  for (double g : ring) {
+    if (std::abs(g - median) > limit) continue;
+    sum += g;
+    ++n;
+  }
+  return n > 0 ? sum / n : median;
+}
+
 // ROI statistics: E_rel, F(0,0), Sigma, saturation, the ROI itself. Returns false when the ROI is
 // empty.
 bool RoiStatistics(const cv::Mat& image, const cv::Rect& window, double roi_threshold,
@@ -703,8 +327,11 @@ bool RoiStatistics(const cv::Mat& image, const cv::Rect& window, double roi_thre
   out->roi = fixed ? window : cv::Rect(min_x, min_y, max_x - min_x + 1, max_y - min_y + 1);
   out->roi_area_px = area;
   out->saturated_pixels = saturated;
-  out->f00 = sum;
-  out->e_rel = sum_f / area;
+  out->window_background = WindowBackground(image, window) / max_gray;
+  const double bg = options.subtract_background ? out->window_background : 0.0;
+  const double bg_f = options.subtract_background && !f.IsIdentity() ? f.Apply(bg) : bg;
+  out->f00 = sum - area * bg;
+  out->e_rel = sum_f / area - bg_f;
   const double mean = sum / area;
   out->sigma = std::sqrt(std::max(0.0, sum_sq / area - mean * mean));
   return true;
@@ -801,7 +428,8 @@ void ModelFitEllipse(const cv::Mat& image, const cv::Rect& window, double max_gr
   const int x1 = static_cast<int>(std::ceil(m.cx + half));
   const int y1 = static_cast<int>(std::ceil(m.cy + half));
   const cv::Rect box = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1) & window;
-  FitDisc(image, box, max_gray, m, out->ellipse_contour, at.background, at.peak, s0,
+  FitDisc(image, box, max_gray, DiscMoments{m.cx, m.cy, m.sxx, m.syy, m.sxy},
+          out->ellipse_contour, at.background, at.peak, s0,
           &out->ellipse_model, &out->model_blur_px, &out->model_rms);
 }
 
@@ -820,17 +448,7 @@ const EllipseFit& ChosenEllipse(const Features& f, EllipseMethod method) {
 // The read noise's sd (gray levels) on the window's border (a 4 px frame, away from the blob):
 // RobustNoiseSd. 0 when the border is too small to say.
 double BorderNoiseSd(const cv::Mat& image, const cv::Rect& window) {
-  constexpr int kBorderPx = 4;
-  std::vector<double> border;
-  for (int y = window.y; y < window.y + window.height; ++y) {
-    const uint16_t* row = image.ptr<uint16_t>(y);
-    const bool edge_row = y < window.y + kBorderPx || y >= window.y + window.height - kBorderPx;
-    for (int x = window.x; x < window.x + window.width; ++x) {
-      if (edge_row || x < window.x + kBorderPx || x >= window.x + window.width - kBorderPx) {
-        border.push_back(row[x]);
-      }
-    }
-  }
+  std::vector<double> border = BorderRing(image, window);
   return border.size() < 32 ? 0.0 : RobustNoiseSd(&border);
 }
 

@@ -117,6 +117,13 @@ struct FeatureOptions {
   // other blobs, occlusion. Run by FrameFeatures (app/processing/frame_features.h), not by
   // ComputeFeatures, which measures the frame it is given; CleanScene checks these options.
   SceneOptions scene;
+  // E_rel and F(0,0) of the IRED's light alone: the window's own background (the clipped mean of
+  // its 4 px border ring, where the frame holds no blob; Features::window_background) is taken
+  // off every pixel first, so light that does not come from the IRED (ambient light, growing
+  // with the exposure) does not enter the differences dE and dF; a constant background (black
+  // level) cancels in them either way. Sigma is the same either way. model.yaml key
+  // features.subtract_background (absent: false, the paper's features of older models).
+  bool subtract_background = true;
   bool IsValid(std::string* why) const;
 };
 
@@ -138,7 +145,10 @@ struct Features {
   int bit_depth = 0;
   cv::Rect roi;             // fixed window, or the bounding box of the threshold mask
   int roi_area_px = 0;      // A
-  double background = 0.0;  // normalised gray level of the background
+  double background = 0.0;  // normalised gray level of the background (the frame's median)
+  // The window's own background: the clipped mean of its 4 px border ring (normalised), what
+  // FeatureOptions::subtract_background takes off E_rel and F(0,0).
+  double window_background = 0.0;
   double peak = 0.0;        // normalised gray level of the brightest blob pixel
   double e_rel = 0.0;
   double f00 = 0.0;

@@ -366,6 +366,7 @@ void EmitFeatures(YAML::Emitter& out, const FeatureOptions& f) {
   out << YAML::Key << "response_scope" << YAML::Value << ToString(f.response_scope);
   // Written only when the moments path is chosen: files without it keep the default (blob fit).
   if (!f.blob_fit) out << YAML::Key << "blob_fit" << YAML::Value << false;
+  out << YAML::Key << "subtract_background" << YAML::Value << f.subtract_background;
   out << YAML::EndMap;
 }
 
@@ -438,7 +439,7 @@ FeatureOptions ReadFeatures(const Reader& rd, const YAML::Node& root, int versio
           {"roi_policy", "window_side_px", "threshold_fraction", "moment_threshold_fraction",
            "moment_method", "aperture_margin_px", "psf_sigma_px", "detection_downsample",
            "min_contrast_fraction", "ellipse_method", "inverse_response_m", "inverse_response_f",
-           "response_scope", "blob_fit"});
+           "response_scope", "blob_fit", "subtract_background"});
   FeatureOptions fo;
   if (!ParseRoiPolicy(rd.Scalar<std::string>(f, "features", "roi_policy"), &fo.roi_policy))
     rd.Fail(f["roi_policy"], "features.roi_policy", "unknown ROI policy");
@@ -478,6 +479,8 @@ FeatureOptions ReadFeatures(const Reader& rd, const YAML::Node& root, int versio
               "unknown response scope (e_rel_only or all_pixels)");
   }
   if (Present(f, "blob_fit")) fo.blob_fit = rd.Scalar<bool>(f, "features", "blob_fit");
+  fo.subtract_background = Present(f, "subtract_background") &&
+                           rd.Scalar<bool>(f, "features", "subtract_background");
   std::string why;
   if (!fo.IsValid(&why)) rd.Fail(f, "features", why);
   return fo;

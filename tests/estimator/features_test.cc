@@ -225,7 +225,7 @@ TEST(Features, ModelFitBeatsMomentsOnSmallBlurredEllipses) {
 TEST(Features, F00EqualsDftDcTermOfRoi) {
   Blob b;
   const cv::Mat image = Render(b, 12);
-  const Features f = ComputeFeatures(image, 12, FeatureOptions());
+  const Features f = ComputeFeatures(image, 12, PaperFeatureOptions());
   ASSERT_TRUE(f.blob_found);
   cv::Mat roi;
   image(f.roi).convertTo(roi, CV_64F);
@@ -234,9 +234,14 @@ TEST(Features, F00EqualsDftDcTermOfRoi) {
   const cv::Vec2d dc = spectrum.at<cv::Vec2d>(0, 0);
   EXPECT_NEAR(f.f00, dc[0] / 4095.0, 1e-9 * f.f00);
   EXPECT_NEAR(dc[1], 0.0, 1e-6);
+  // The default takes the window's background off: the DC term less the window's area times it.
+  const Features d = ComputeFeatures(image, 12, FeatureOptions());
+  EXPECT_GT(d.window_background, 0.0);
+  EXPECT_NEAR(d.f00, dc[0] / 4095.0 - 64 * 64 * d.window_background, 1e-9 * d.f00);
   // Fixed window and identity response: E_rel = F(0,0) / A (NOTES.md: the E equation degenerates).
   EXPECT_EQ(f.roi_area_px, 64 * 64);
   EXPECT_NEAR(f.e_rel, f.f00 / f.roi_area_px, 1e-12);
+  EXPECT_NEAR(d.e_rel, d.f00 / d.roi_area_px, 1e-12);
   EXPECT_GT(f.sigma, 0.0);
   EXPECT_NEAR(f.centroid_px.x, b.cx, 0.05);
   EXPECT_NEAR(f.centroid_px.y, b.cy, 0.05);
@@ -481,6 +486,36 @@ TEST(Features, ApertureMomentsSizeDoesNotDependOnTheEdgesPhase) {
       }
     }
   }
+}
+
+}  // namespace
+}  // namespace irdist
+
+namespace irdist {
+namespace {
+
+// Ambient light proportional to the exposure, with a gradient across the frame, adds to every
+// pixel: taken off by the window's background, E_rel and F(0,0) are the IRED's light alone (what
+// the clean frame gives), while the paper's features carry the ambient's whole window sum.
+TEST(Features, TheWindowsBackgroundTakesAmbientLightOffERelAndF00) {
+  Blob b;
+  const cv::Mat clean = Render(b, 12);
+  cv::Mat lit = clean.clone();
+  for (int y = 0; y < lit.rows; ++y) {
+    for (int x = 0; x < lit.cols; ++x) {
+      const double ambient = 80.0 * (1.0 + 0.5 * (x - lit.cols / 2.0) / lit.cols);  // 2% of 12 bit
+      lit.at<uint16_t>(y, x) = cv::saturate_cast<uint16_t>(lit.at<uint16_t>(y, x) + ambient);
+    }
+  }
+  const Features c = ComputeFeatures(clean, 12, FeatureOptions());
+  const Features a = ComputeFeatures(lit, 12, FeatureOptions());
+  ASSERT_TRUE(c.blob_found && a.blob_found);
+  EXPECT_NEAR(a.f00, c.f00, 2e-3 * c.f00);  // rounding of the added light only
+  EXPECT_NEAR(a.e_rel, c.e_rel, 2e-3 * c.e_rel);
+  EXPECT_NEAR(a.sigma, c.sigma, 2e-3 * c.sigma);
+  const Features pc = ComputeFeatures(clean, 12, PaperFeatureOptions());
+  const Features pa = ComputeFeatures(lit, 12, PaperFeatureOptions());
+  EXPECT_GT(pa.f00 - pc.f00, 0.5 * 64 * 64 * 80.0 / 4095.0);  // the paper's features carry it
 }
 
 }  // namespace

@@ -29,7 +29,7 @@ std::string ValidationRecipe(const std::string& rig_path) {
   return "name: lab-scene\nrig: " + rig_path + R"(
 after: estimate
 axes:
-  slide_mm: [1700, 2300, 2900]
+  slide_mm: [1700, 2100, 2450]
   theta_deg: [0, 25]
   bias_ma: [490]
 bracket:
