@@ -32,6 +32,8 @@ bool SceneOptions::IsValid(std::string* why) const {
   if (!(occluded_min_fraction > 0.0 && occluded_min_fraction <= 1.0))
     return fail("scene.occluded_min_fraction must be in (0, 1]");
   if (occlusion_min_run < 1) return fail("scene.occlusion_min_run must be >= 1");
+  if (defect_map.roi.width < 0 || defect_map.roi.height < 0)
+    return fail("scene.defect_map.roi must have a non-negative size");
   if (!(occlusion_min_radius_px >= 1.0)) return fail("scene.occlusion_min_radius_px must be >= 1");
   return true;
 }
@@ -61,8 +63,13 @@ void CleanDefects(const cv::Mat& image, const cv::Mat& median3, const scene::Noi
                   SceneReport* report) {
   cv::Mat defects = options.detect_defects ? scene::DetectDefects(image, median3, noise, options)
                                            : cv::Mat::zeros(image.size(), CV_8U);
-  if (context.known_defects != nullptr) {
-    scene::AddKnownDefects(*context.known_defects, context.roi_origin, &defects);
+  for (const DefectMap* map : {&options.defect_map, context.known_defects}) {
+    if (map == nullptr || map->empty()) continue;
+    if (context.roi_origin_known) {
+      scene::AddKnownDefects(*map, context.roi_origin, &defects);
+    } else if (map->roi.empty() || map->roi.size() == image.size()) {
+      scene::AddKnownDefects(*map, map->roi.tl(), &defects);  // the frame is the map's ROI
+    }
   }
   if (cv::countNonZero(defects) == 0) return;
   *cleaned = image.clone();

@@ -6,7 +6,13 @@
 
 #include <opencv2/core.hpp>
 
-#include "estimator/scene.h"
+// The public types, declared only: scene.h's unit includes this header (no cycle of units).
+namespace irdist {
+struct DefectMap;
+struct SceneContext;
+struct SceneOptions;
+struct SceneReport;
+}  // namespace irdist
 
 namespace irdist::scene {
 

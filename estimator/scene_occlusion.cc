@@ -9,6 +9,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "estimator/scene.h"
 #include "estimator/scene_internal.h"
 
 namespace irdist::scene {

@@ -170,10 +170,17 @@ TEST(SceneDefects, KnownMapIsAlwaysMasked) {
   map.sensor_px = {{110, 210}, {5, 5}};  // sensor coordinates; the frame's ROI starts at (100, 200)
   SceneContext context;
   context.known_defects = &map;
+  context.roi_origin_known = true;
   context.roi_origin = cv::Point(100, 200);
   const Measured m = Measure(frame, context);
   EXPECT_TRUE(Contains(m.r.defect_px, cv::Point(10, 10)));
   EXPECT_EQ(m.r.defect_px.size(), 1u) << m.r.BriefReport();
+  // The options' map (a calibration's, found in this ROI): the frame is that ROI.
+  SceneOptions options;
+  options.defect_map.sensor_px = {{103, 207}};
+  options.defect_map.roi = cv::Rect(100, 200, kSide, kSide);
+  const SceneFrame out = CleanScene(frame, 12, options);
+  EXPECT_EQ(out.report.defect_px, std::vector<cv::Point>{cv::Point(3, 7)});
 }
 
 // Clean noisy frames (sizes, tilts, blurs, levels): the detectors' false alarms, and the features
