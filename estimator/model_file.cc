@@ -11,19 +11,13 @@
 
 #include "base/regular_file.h"
 #include "base/safe_file.h"
+#include "estimator/defect_map_file.h"
+#include "estimator/model_file_reader.h"
 
 namespace irdist {
 namespace {
 
-std::string Message(const std::string& path, const std::string& key, int line,
-                    const std::string& problem) {
-  std::ostringstream out;
-  out << "model file " << path;
-  if (line > 0) out << ":" << line;
-  if (!key.empty()) out << ": key '" << key << "'";
-  out << ": " << problem << ". Re-run the calibration (irdist fit) to write a valid model file.";
-  return out.str();
-}
+using model_file::Reader;
 
 void EmitDouble(YAML::Emitter& out, const char* key, double value) {
   out << YAML::Key << key << YAML::Value << value;
@@ -62,134 +56,6 @@ void EmitProvenance(YAML::Emitter& out, const ModelProvenance& p) {
   out << YAML::Key << "retake_reference" << YAML::Value << p.retake_reference;
   out << YAML::EndMap;
 }
-
-// Reads with the key path and line in every error.
-class Reader {
- public:
-  explicit Reader(std::string path) : path_(std::move(path)) {}
-
-  [[noreturn]] void Fail(const YAML::Node& node, const std::string& key,
-                         const std::string& problem) const {
-    const int line = node.IsDefined() && node.Mark().line >= 0 ? node.Mark().line + 1 : 0;
-    throw ModelFileError(path_, key, line, problem);
-  }
-
-  YAML::Node Child(const YAML::Node& parent, const std::string& parent_key,
-                   const std::string& name) const {
-    const std::string key = parent_key.empty() ? name : parent_key + "." + name;
-    if (!parent.IsMap()) Fail(parent, parent_key, "expected a map");
-    YAML::Node child = parent[name];
-    if (!child.IsDefined() || child.IsNull()) Fail(parent, key, "missing");
-    return child;
-  }
-
-  template <typename T>
-  T Scalar(const YAML::Node& parent, const std::string& parent_key, const std::string& name) const {
-    const YAML::Node node = Child(parent, parent_key, name);
-    const std::string key = parent_key.empty() ? name : parent_key + "." + name;
-    if (!node.IsScalar()) Fail(node, key, "expected a scalar");
-    T value{};
-    try {
-      value = node.as<T>();
-    } catch (const YAML::Exception&) {
-      Fail(node, key, "cannot read '" + node.Scalar() + "' as a number");
-    }
-    if constexpr (std::is_floating_point_v<T>) {
-      if (!std::isfinite(value)) Fail(node, key, "'" + node.Scalar() + "' is not a finite number");
-    }
-    return value;
-  }
-
-  // A fit statistic: finite, or .inf / .nan where the fit could not say (a singular fit's
-  // condition number); it only describes the fit, no estimate uses it.
-  double Statistic(const YAML::Node& parent, const std::string& parent_key,
-                   const std::string& name) const {
-    const YAML::Node node = Child(parent, parent_key, name);
-    try {
-      return node.as<double>();
-    } catch (const YAML::Exception&) {
-      Fail(node, parent_key + "." + name, "cannot read '" + node.Scalar() + "' as a number");
-    }
-  }
-
-  // Every key of the map `node` is in `allowed` (a misspelt key is an error, not a default).
-  void Keys(const YAML::Node& node, const std::string& key,
-            const std::vector<std::string>& allowed) const {
-    if (!node.IsMap()) Fail(node, key, "expected a map");
-    for (const auto& entry : node) {
-      const std::string name = entry.first.Scalar();
-      if (std::find(allowed.begin(), allowed.end(), name) == allowed.end()) {
-        std::string valid;
-        for (const std::string& a : allowed) valid += (valid.empty() ? "" : ", ") + a;
-        Fail(entry.first, key.empty() ? name : key + "." + name,
-             "unknown key; valid keys here: " + valid);
-      }
-    }
-  }
-
-  std::vector<double> Doubles(const YAML::Node& parent, const std::string& parent_key,
-                              const std::string& name, bool allow_empty) const {
-    const std::string key = parent_key.empty() ? name : parent_key + "." + name;
-    YAML::Node node = parent[name];
-    if (allow_empty && (!node.IsDefined() || node.IsNull())) return {};
-    node = Child(parent, parent_key, name);
-    if (!node.IsSequence()) Fail(node, key, "expected a sequence of numbers");
-    std::vector<double> out;
-    for (size_t i = 0; i < node.size(); ++i) {
-      double value = 0.0;
-      try {
-        value = node[i].as<double>();
-      } catch (const YAML::Exception&) {
-        Fail(node[i], key + "[" + std::to_string(i) + "]", "not a number");
-      }
-      if (!std::isfinite(value))
-        Fail(node[i], key + "[" + std::to_string(i) + "]", "not a finite number");
-      out.push_back(value);
-    }
-    return out;
-  }
-
-  void Range(const YAML::Node& parent, const std::string& parent_key, const std::string& name,
-             double* lo, double* hi) const {
-    const std::vector<double> v = Doubles(parent, parent_key, name, false);
-    if (v.size() != 2 || !(v[0] <= v[1]))
-      Fail(parent[name], parent_key + "." + name, "expected [min, max] with min <= max");
-    *lo = v[0];
-    *hi = v[1];
-  }
-
-  FitSummary Fit(const YAML::Node& parent, const std::string& parent_key) const {
-    const std::string key = parent_key + ".fit";
-    const YAML::Node node = Child(parent, parent_key, "fit");
-    Keys(node, key, {"termination", "message", "mean_relative_error", "max_relative_error",
-                     "condition_number", "samples", "iterations", "gauge_index"});
-    FitSummary s;
-    const std::string termination = Scalar<std::string>(node, key, "termination");
-    bool known = false;
-    for (auto t : {FitSummary::Termination::kConverged, FitSummary::Termination::kNoConvergence,
-                   FitSummary::Termination::kFailed, FitSummary::Termination::kDegenerate,
-                   FitSummary::Termination::kIllConditioned}) {
-      if (termination == ToString(t)) {
-        s.termination = t;
-        known = true;
-      }
-    }
-    if (!known) Fail(node["termination"], key + ".termination", "unknown termination");
-    s.message = node["message"] && !node["message"].IsNull()
-                    ? Scalar<std::string>(node, key, "message")
-                    : std::string();
-    s.mean_relative_error = Statistic(node, key, "mean_relative_error");
-    s.max_relative_error = Statistic(node, key, "max_relative_error");
-    s.condition_number = Statistic(node, key, "condition_number");
-    s.samples = Scalar<int>(node, key, "samples");
-    s.iterations = Scalar<int>(node, key, "iterations");
-    s.gauge_index = Scalar<int>(node, key, "gauge_index");
-    return s;
-  }
-
- private:
-  std::string path_;
-};
 
 // provenance.roi_px: [x, y, width, height], whole pixels inside any sensor, width and height 0
 // for the full sensor; checked before the cast to int (1e300 would be undefined behaviour).
@@ -343,10 +209,6 @@ void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
 
 }  // namespace
 
-ModelFileError::ModelFileError(const std::string& path, const std::string& key, int line,
-                               const std::string& problem)
-    : Error(Message(path, key, line, problem)), path_(path), key_(key), line_(line) {}
-
 namespace {
 
 void EmitFeatures(YAML::Emitter& out, const FeatureOptions& f) {
@@ -367,6 +229,7 @@ void EmitFeatures(YAML::Emitter& out, const FeatureOptions& f) {
   // Written only when the moments path is chosen: files without it keep the default (blob fit).
   if (!f.blob_fit) out << YAML::Key << "blob_fit" << YAML::Value << false;
   out << YAML::Key << "subtract_background" << YAML::Value << f.subtract_background;
+  if (!f.scene.defect_map.empty()) model_file::EmitDefectMap(out, f.scene.defect_map);
   out << YAML::EndMap;
 }
 
@@ -439,7 +302,7 @@ FeatureOptions ReadFeatures(const Reader& rd, const YAML::Node& root, int versio
           {"roi_policy", "window_side_px", "threshold_fraction", "moment_threshold_fraction",
            "moment_method", "aperture_margin_px", "psf_sigma_px", "detection_downsample",
            "min_contrast_fraction", "ellipse_method", "inverse_response_m", "inverse_response_f",
-           "response_scope", "blob_fit", "subtract_background"});
+           "response_scope", "blob_fit", "subtract_background", "defect_map"});
   FeatureOptions fo;
   if (!ParseRoiPolicy(rd.Scalar<std::string>(f, "features", "roi_policy"), &fo.roi_policy))
     rd.Fail(f["roi_policy"], "features.roi_policy", "unknown ROI policy");
@@ -481,6 +344,7 @@ FeatureOptions ReadFeatures(const Reader& rd, const YAML::Node& root, int versio
   if (Present(f, "blob_fit")) fo.blob_fit = rd.Scalar<bool>(f, "features", "blob_fit");
   fo.subtract_background = Present(f, "subtract_background") &&
                            rd.Scalar<bool>(f, "features", "subtract_background");
+  if (Present(f, "defect_map")) fo.scene.defect_map = model_file::ReadDefectMap(rd, f, "features");
   std::string why;
   if (!fo.IsValid(&why)) rd.Fail(f, "features", why);
   return fo;

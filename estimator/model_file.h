@@ -5,8 +5,8 @@
 
 #include <string>
 
-#include "base/check.h"
 #include "estimator/fit.h"
+#include "estimator/model_file_error.h"
 
 namespace irdist {
 
@@ -16,22 +16,6 @@ namespace irdist {
 // e_rel_only (the inverse response entered E_rel only).
 constexpr int kModelFormatVersion = 4;  // 4: geometric blur varying with distance, health
 constexpr int kOldestModelFormatVersion = 1;
-
-// A model file that cannot be written, read or understood. what() names the file, the key and,
-// when known, the line.
-class ModelFileError : public Error {
- public:
-  ModelFileError(const std::string& path, const std::string& key, int line,
-                 const std::string& problem);
-  const std::string& path() const { return path_; }
-  const std::string& key() const { return key_; }
-  int line() const { return line_; }  // 1-based, 0 when unknown
-
- private:
-  std::string path_;
-  std::string key_;
-  int line_;
-};
 
 // The YAML text of a model (what SaveModel writes).
 std::string ModelToYaml(const CalibrationModel& model);

@@ -32,6 +32,8 @@ bool SceneOptions::IsValid(std::string* why) const {
   if (!(occluded_min_fraction > 0.0 && occluded_min_fraction <= 1.0))
     return fail("scene.occluded_min_fraction must be in (0, 1]");
   if (occlusion_min_run < 1) return fail("scene.occlusion_min_run must be >= 1");
+  if (defect_map.roi.width < 0 || defect_map.roi.height < 0)
+    return fail("scene.defect_map.roi must have a non-negative size");
   if (!(occlusion_min_radius_px >= 1.0)) return fail("scene.occlusion_min_radius_px must be >= 1");
   return true;
 }
@@ -55,18 +57,53 @@ cv::Rect WindowAround(cv::Point2d c, int side) {
                   static_cast<int>(std::lround(c.y - 0.5 * (side - 1))), side, side);
 }
 
-// The defects found and the known map's, replaced in *cleaned (cloned from `image` first).
-void CleanDefects(const cv::Mat& image, const cv::Mat& median3, const scene::NoiseModel& noise,
-                  const SceneOptions& options, const SceneContext& context, cv::Mat* cleaned,
-                  SceneReport* report) {
-  cv::Mat defects = options.detect_defects ? scene::DetectDefects(image, median3, noise, options)
-                                           : cv::Mat::zeros(image.size(), CV_8U);
-  if (context.known_defects != nullptr) {
-    scene::AddKnownDefects(*context.known_defects, context.roi_origin, &defects);
+// Where the defects are looked for: the IRED's feature window (and its blob, grown), first, and
+// every other component's box grown by 3 px (a hot pixel far out is a component of its own);
+// the whole frame when there is no IRED. A 256 x 256 ROI's median and tests run on a 16th of it.
+std::vector<cv::Rect> DefectRegions(const scene::Segments& segments, const SceneContext& context,
+                                    cv::Size size) {
+  const cv::Rect frame(cv::Point(0, 0), size);
+  if (segments.ired < 0) return {frame};
+  const scene::Blob& ired = segments.blobs[static_cast<std::size_t>(segments.ired)];
+  const cv::Rect grown_blob = ired.rect - cv::Point(8, 8) + cv::Size(16, 16);
+  std::vector<cv::Rect> regions = {
+      (WindowAround(ired.centroid, context.window_side_px) | grown_blob) & frame};
+  for (std::size_t i = 0; i < segments.blobs.size(); ++i) {
+    if (static_cast<int>(i) == segments.ired) continue;
+    regions.push_back((segments.blobs[i].rect - cv::Point(3, 3) + cv::Size(6, 6)) & frame);
   }
-  if (cv::countNonZero(defects) == 0) return;
-  *cleaned = image.clone();
-  scene::ReplaceDefects(defects, median3, cleaned, &report->defect_px);
+  return regions;
+}
+
+// The defect pixels of each region (255 in *defects, frame-sized); the shot noise's gain
+// measured first, on the first region (the IRED's).
+void FindDefects(const cv::Mat& image, int bit_depth, const std::vector<cv::Rect>& regions,
+                 const SceneOptions& options, scene::NoiseModel* noise, cv::Mat* defects) {
+  const cv::Rect frame(0, 0, image.cols, image.rows);
+  for (std::size_t i = 0; i < regions.size(); ++i) {
+    const cv::Rect r = (regions[i] - cv::Point(1, 1) + cv::Size(2, 2)) & frame;  // + neighbours
+    if (r.width < 3 || r.height < 3) continue;
+    cv::Mat median3;
+    cv::medianBlur(image(r), median3, 3);
+    if (i == 0) {
+      scene::MeasureShotGain(image(r), median3, bit_depth, options.fallback_shot_gain_dn, noise);
+    }
+    if (!options.detect_defects) break;
+    cv::Mat local = (*defects)(r);
+    cv::bitwise_or(local, scene::DetectDefects(image(r), median3, *noise, options), local);
+  }
+}
+
+// The known maps' pixels (the options' and the context's) set in *defects.
+void AddKnownMaps(const SceneOptions& options, const SceneContext& context, cv::Mat* defects) {
+  for (const DefectMap* map : {&options.defect_map, context.known_defects}) {
+    if (map == nullptr || map->empty()) continue;
+    if (context.roi_origin_known) {
+      scene::AddKnownDefects(*map, context.roi_origin, defects);
+    } else if (map->roi.empty() || map->roi.size() == defects->size()) {
+      scene::AddKnownDefects(*map, map->roi.tl(), defects);  // the frame is the map's ROI
+    }
+  }
 }
 
 // The defects inside the feature window and, of them, those within the blob fit's reach (the
@@ -105,15 +142,22 @@ SceneFrame CleanScene(const cv::Mat& image, int bit_depth, const SceneOptions& o
   SceneReport& report = out.report;
   report.assessed = true;
   scene::NoiseModel noise = scene::MeasureBackgroundNoise(image, bit_depth);
-  cv::Mat median3;
-  cv::medianBlur(image, median3, 3);
-  scene::MeasureShotGain(image, median3, bit_depth, options.fallback_shot_gain_dn, &noise);
+  // The components of the raw frame say where to look for defects; found, they are replaced and
+  // the frame segmented again (a hot pixel is then no component).
+  scene::Segments segments;
+  if (options.segment) segments = scene::Segment(image, noise, options, context);
+  cv::Mat defects = cv::Mat::zeros(image.size(), CV_8U);
+  FindDefects(image, bit_depth, DefectRegions(segments, context, image.size()), options, &noise,
+              &defects);
+  AddKnownMaps(options, context, &defects);
   report.ambient_level = noise.background / ((1 << bit_depth) - 1);
   report.read_noise_dn = noise.read_sd;
   report.shot_gain_dn = noise.shot_gain;
-  CleanDefects(image, median3, noise, options, context, &out.image, &report);
-  scene::Segments segments;
-  if (options.segment) segments = scene::Segment(out.image, noise, options, context);
+  if (cv::countNonZero(defects) > 0) {
+    out.image = image.clone();
+    scene::ReplaceDefects(defects, &out.image, &report.defect_px);
+    if (options.segment) segments = scene::Segment(out.image, noise, options, context);
+  }
   if (segments.ired >= 0) {
     report.blob_center_px = segments.blobs[static_cast<std::size_t>(segments.ired)].centroid;
     if (segments.blobs.size() > 1) {

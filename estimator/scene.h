@@ -71,12 +71,18 @@ struct SceneOptions {
   double occluded_min_fraction = 0.03;
   int occlusion_min_run = 3;
   double occlusion_min_radius_px = 3.0;  // smaller blobs: too few edge pixels to tell
+  // Known defect pixels, always replaced: the calibration's map (estimator/defect_map.h
+  // FindDefectMap; model.yaml features.defect_map), so it travels with the model's feature
+  // options to every frame measured with them. Applied where the frame is its ROI (same size) or
+  // the whole sensor (empty roi); elsewhere SceneContext::roi_origin places it.
+  DefectMap defect_map;
   bool IsValid(std::string* why) const;
 };
 
 // Where the frame sits and what is known about it before it is seen.
 struct SceneContext {
-  const DefectMap* known_defects = nullptr;  // not owned; null: none
+  const DefectMap* known_defects = nullptr;  // not owned; null: none (besides the options' map)
+  bool roi_origin_known = false;             // roi_origin given (else taken from the map's roi)
   cv::Point roi_origin{0, 0};                // the frame's (0, 0) on the sensor
   bool has_expected_center = false;          // pick the component nearest expected_center_px
   cv::Point2d expected_center_px;            // frame coordinates

@@ -6,6 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "estimator/scene.h"
 #include "estimator/scene_internal.h"
 
 namespace irdist::scene {
@@ -13,6 +14,9 @@ namespace {
 
 // Quantisation alone (a noise-free frame) still moves a pixel by up to half a gray level.
 constexpr double kMinReadSd = 0.5;
+// The background and the read noise from every kNoiseRowStride-th row, a pair of neighbours in
+// each two columns (a 256 px frame: 8k pairs).
+constexpr int kNoiseRowStride = 4;
 // A plateau needs this many interior pixels to measure the shot noise on.
 constexpr int kMinPlateauPixels = 16;
 
@@ -89,11 +93,11 @@ NoiseModel MeasureBackgroundNoise(const cv::Mat& image, int bit_depth) {
   const int levels = 1 << bit_depth;
   std::vector<int> gray(static_cast<std::size_t>(levels), 0);
   std::vector<int> step(1024, 0);
-  for (int y = 0; y < image.rows; y += 2) {
+  for (int y = 0; y < image.rows; y += kNoiseRowStride) {
     const uint16_t* row = image.ptr<uint16_t>(y);
-    for (int x = 0; x < image.cols; ++x) {
+    for (int x = 0; x + 1 < image.cols; x += 2) {  // pairs of neighbours
       ++gray[std::min<int>(row[x], levels - 1)];
-      if (x + 1 < image.cols) ++step[std::min(std::abs(row[x + 1] - row[x]), 1023)];
+      ++step[std::min(std::abs(row[x + 1] - row[x]), 1023)];
     }
   }
   NoiseModel noise;
@@ -113,12 +117,14 @@ void MeasureShotGain(const cv::Mat& image, const cv::Mat& median3, int bit_depth
   if (!(top - noise->background > 10.0 * noise->read_sd)) return;
   const cv::Rect box = cv::Rect(at.x - 24, at.y - 24, 49, 49) &
                        cv::Rect(1, 1, image.cols - 2, image.rows - 2);
+  cv::Mat interior;  // the 3x3 minimum of the median: all of a pixel's neighbours on the plateau
+  cv::erode(median3(box + cv::Size(2, 2) - cv::Point(1, 1)), interior, cv::Mat());
   std::vector<double> departures, levels;
   double n[8];
   for (int y = box.y; y < box.br().y; ++y) {
+    const uint16_t* inside = interior.ptr<uint16_t>(y - box.y + 1);
     for (int x = box.x; x < box.br().x; ++x) {
-      Neighbours(median3, x, y, n);
-      if (*std::min_element(n, n + 8) <= floor) continue;
+      if (inside[x - box.x + 1] <= floor) continue;
       Neighbours(image, x, y, n);
       const double g = image.at<uint16_t>(y, x);
       departures.push_back(g - 0.25 * (n[1] + n[3] + n[4] + n[6]));
@@ -169,29 +175,27 @@ void AddKnownDefects(const DefectMap& map, cv::Point roi_origin, cv::Mat* mask) 
   }
 }
 
-void ReplaceDefects(const cv::Mat& mask, const cv::Mat& median3, cv::Mat* image,
-                    std::vector<cv::Point>* where) {
+void ReplaceDefects(const cv::Mat& mask, cv::Mat* image, std::vector<cv::Point>* where) {
   std::vector<cv::Point> defects;
   cv::findNonZero(mask, defects);
   const cv::Mat original = image->clone();
   for (const cv::Point& p : defects) {
-    double good[8];
-    int count = 0;
+    double good[8], all[8];
+    int count = 0, n_all = 0;
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
         const cv::Point q(p.x + dx, p.y + dy);
-        if ((dx == 0 && dy == 0) || q.x < 0 || q.y < 0 || q.x >= mask.cols || q.y >= mask.rows ||
-            mask.at<uint8_t>(q) != 0) {
+        if ((dx == 0 && dy == 0) || q.x < 0 || q.y < 0 || q.x >= mask.cols || q.y >= mask.rows) {
           continue;
         }
-        good[count++] = original.at<uint16_t>(q);
+        all[n_all++] = original.at<uint16_t>(q);
+        if (mask.at<uint8_t>(q) == 0) good[count++] = original.at<uint16_t>(q);
       }
     }
-    double value = median3.at<uint16_t>(p);
-    if (count > 0) {
-      std::sort(good, good + count);
-      value = count % 2 == 1 ? good[count / 2] : 0.5 * (good[count / 2 - 1] + good[count / 2]);
-    }
+    double* values = count > 0 ? good : all;
+    const int n = count > 0 ? count : n_all;
+    std::sort(values, values + n);
+    const double value = n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
     image->at<uint16_t>(p) = static_cast<uint16_t>(std::lround(value));
     where->push_back(p);
   }

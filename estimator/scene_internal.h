@@ -6,7 +6,13 @@
 
 #include <opencv2/core.hpp>
 
-#include "estimator/scene.h"
+// The public types, declared only: scene.h's unit includes this header (no cycle of units).
+namespace irdist {
+struct DefectMap;
+struct SceneContext;
+struct SceneOptions;
+struct SceneReport;
+}  // namespace irdist
 
 namespace irdist::scene {
 
@@ -31,10 +37,9 @@ cv::Mat DetectDefects(const cv::Mat& image, const cv::Mat& median3, const NoiseM
                       const SceneOptions& options);
 // The known map's pixels that fall in the frame, set in *mask.
 void AddKnownDefects(const DefectMap& map, cv::Point roi_origin, cv::Mat* mask);
-// Each masked pixel of *image replaced by the median of its unmasked 8 neighbours (the 3x3
-// median when all are masked); their coordinates appended to *where.
-void ReplaceDefects(const cv::Mat& mask, const cv::Mat& median3, cv::Mat* image,
-                    std::vector<cv::Point>* where);
+// Each masked pixel of *image replaced by the median of its unmasked 8 neighbours (of all 8 when
+// every one is masked); their coordinates appended to *where.
+void ReplaceDefects(const cv::Mat& mask, cv::Mat* image, std::vector<cv::Point>* where);
 
 // One connected component of the thresholded frame.
 struct Blob {

@@ -9,13 +9,14 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "estimator/scene.h"
 #include "estimator/scene_internal.h"
 
 namespace irdist::scene {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kRayStepPx = 0.25;
+constexpr double kRayStepPx = 0.5;  // an edge spans 2 px and more: linear between samples
 
 double Bilinear(const cv::Mat& image, double x, double y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
@@ -26,14 +27,14 @@ double Bilinear(const cv::Mat& image, double x, double y) {
   return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
 }
 
-// One ray's edge: the outermost fall through `level` within `reach` px of `c`, sub-pixel by
-// linear interpolation between samples. false when the ray finds none.
-bool RayEdge(const cv::Mat& image, cv::Point2d c, double angle, double level, double reach,
-             double* radius) {
+// One ray's edge: the outermost fall through `level` between `start` and `reach` px from `c`,
+// sub-pixel by linear interpolation between samples. false when the ray finds none.
+bool RayEdge(const cv::Mat& image, cv::Point2d c, double angle, double level, double start,
+             double reach, double* radius) {
   const double dx = std::cos(angle), dy = std::sin(angle);
   bool found = false;
-  double previous = Bilinear(image, c.x, c.y);
-  for (double t = kRayStepPx; t <= reach; t += kRayStepPx) {
+  double previous = Bilinear(image, c.x + start * dx, c.y + start * dy);
+  for (double t = start + kRayStepPx; t <= reach; t += kRayStepPx) {
     const double v = Bilinear(image, c.x + t * dx, c.y + t * dy);
     if (previous >= level && v < level) {
       *radius = t - kRayStepPx * (level - v) / (previous - v);
@@ -44,20 +45,64 @@ bool RayEdge(const cv::Mat& image, cv::Point2d c, double angle, double level, do
   return found;
 }
 
-// Radial residual of p against the ellipse e: |p - centre| less the ellipse's radius along it.
-double RadialResidual(const cv::RotatedRect& e, cv::Point2d p) {
-  const double a = 0.5 * e.size.width, b = 0.5 * e.size.height;
-  const double t = e.angle * kPi / 180.0;
-  const double x = p.x - e.center.x, y = p.y - e.center.y;
-  const double u = std::cos(t) * x + std::sin(t) * y, v = -std::sin(t) * x + std::cos(t) * y;
-  const double r = std::hypot(u, v);
-  if (r <= 0.0 || a <= 0.0 || b <= 0.0) return r;
-  const double cu = u / r, cv = v / r;
-  return r - 1.0 / std::sqrt(cu * cu / (a * a) + cv * cv / (b * b));
+// An ellipse (cv::RotatedRect) ready for radial residuals: |p - centre| less the ellipse's
+// radius along p - centre.
+class RadialEllipse {
+ public:
+  explicit RadialEllipse(const cv::RotatedRect& e)
+      : cx_(e.center.x), cy_(e.center.y), c_(std::cos(e.angle * kPi / 180.0)),
+        s_(std::sin(e.angle * kPi / 180.0)), ia2_(4.0 / (e.size.width * e.size.width)),
+        ib2_(4.0 / (e.size.height * e.size.height)) {}
+  double Residual(cv::Point2d p) const {
+    const double x = p.x - cx_, y = p.y - cy_;
+    const double u = c_ * x + s_ * y, v = -s_ * x + c_ * y;
+    const double r2 = u * u + v * v;
+    if (!(r2 > 0.0) || !std::isfinite(ia2_ + ib2_)) return std::sqrt(r2);
+    return std::sqrt(r2) * (1.0 - 1.0 / std::sqrt(u * u * ia2_ + v * v * ib2_));
+  }
+
+ private:
+  double cx_, cy_, c_, s_, ia2_, ib2_;
+};
+
+
+// The least-squares conic A u^2 + B uv + C v^2 + D u + E v = 1 through the points (u, v taken
+// from their mean, for conditioning) as an ellipse; false when the conic is not one. A 5 x 5
+// solve: the rays' points are dense and nearly round, where the plain algebraic fit is sound.
+bool FitConicEllipse(const std::vector<cv::Point2d>& points, cv::RotatedRect* ellipse) {
+  if (points.size() < 6) return false;
+  cv::Point2d mean(0.0, 0.0);
+  for (const cv::Point2d& p : points) mean += p;
+  mean *= 1.0 / points.size();
+  cv::Matx<double, 5, 5> ata = cv::Matx<double, 5, 5>::zeros();
+  cv::Matx<double, 5, 1> atb = cv::Matx<double, 5, 1>::zeros();
+  for (const cv::Point2d& p : points) {
+    const double u = p.x - mean.x, v = p.y - mean.y;
+    const cv::Matx<double, 5, 1> row(u * u, u * v, v * v, u, v);
+    ata += row * row.t();
+    atb += row;
+  }
+  cv::Matx<double, 5, 1> k;
+  if (!cv::solve(ata, atb, k, cv::DECOMP_CHOLESKY)) return false;
+  const double a = k(0), b = 0.5 * k(1), c = k(2);
+  const double det = a * c - b * b;
+  if (!(det > 0.0)) return false;
+  // Centre: the gradient's zero; the constant there, -1 + (D u0 + E v0) / 2.
+  const double u0 = (-k(3) * c + k(4) * b) / (2.0 * det), v0 = (-k(4) * a + k(3) * b) / (2.0 * det);
+  const double f0 = -1.0 + 0.5 * (k(3) * u0 + k(4) * v0);
+  const double mid = 0.5 * (a + c), root = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+  const double l1 = mid - root, l2 = mid + root;  // l1 <= l2: the major axis along l1
+  if (!(l1 > 0.0) || !(f0 < 0.0)) return false;
+  const double angle = 0.5 * std::atan2(2.0 * b, a - c) + 0.5 * kPi;  // l1's direction
+  *ellipse = cv::RotatedRect(cv::Point2f(static_cast<float>(mean.x + u0), static_cast<float>(mean.y + v0)),
+                             cv::Size2f(static_cast<float>(2.0 * std::sqrt(-f0 / l1)),
+                                        static_cast<float>(2.0 * std::sqrt(-f0 / l2))),
+                             static_cast<float>(angle * 180.0 / kPi));
+  return true;
 }
 
 // An ellipse through most of the points: started as the circle of the points' median distance
-// from c, then fitted (cv::fitEllipse) to the points within a band of it, tightened over rounds.
+// from c, then fitted (FitConicEllipse) to the points within a band of it, tightened over rounds.
 bool RobustEllipse(const std::vector<cv::Point2d>& points, cv::Point2d c, double band_px,
                    cv::RotatedRect* ellipse) {
   std::vector<double> r;
@@ -67,25 +112,29 @@ bool RobustEllipse(const std::vector<cv::Point2d>& points, cv::Point2d c, double
                              0.0f);
   const double bands[4] = {2.5 * band_px, 1.5 * band_px, band_px, band_px};
   for (double band : bands) {
-    std::vector<cv::Point2f> inliers;
+    const RadialEllipse e(*ellipse);
+    std::vector<cv::Point2d> inliers;
     for (const cv::Point2d& p : points) {
-      if (std::abs(RadialResidual(*ellipse, p)) < band) inliers.emplace_back(p);
+      if (std::abs(e.Residual(p)) < band) inliers.push_back(p);
     }
-    if (inliers.size() < std::max<std::size_t>(6, points.size() / 2)) return false;
-    *ellipse = cv::fitEllipse(inliers);
+    if (inliers.size() < std::max<std::size_t>(6, points.size() / 2) ||
+        !FitConicEllipse(inliers, ellipse)) {
+      return false;
+    }
   }
   return true;
 }
 
 // The rays' edge points (departed[i] when ray i finds no edge).
 std::vector<cv::Point2d> EdgePoints(const cv::Mat& image, cv::Point2d c, double level,
-                                    double reach, int rays, std::vector<bool>* departed) {
+                                    double start, double reach, int rays,
+                                    std::vector<bool>* departed) {
   std::vector<cv::Point2d> points(static_cast<std::size_t>(rays));
   departed->assign(static_cast<std::size_t>(rays), false);
   for (int i = 0; i < rays; ++i) {
     const double angle = 2.0 * kPi * i / rays;
     double radius = 0.0;
-    if (RayEdge(image, c, angle, level, reach, &radius)) {
+    if (RayEdge(image, c, angle, level, start, reach, &radius)) {
       points[i] = c + radius * cv::Point2d(std::cos(angle), std::sin(angle));
     } else {
       (*departed)[i] = true;
@@ -127,13 +176,14 @@ double PlateauLevel(const cv::Mat& image, const Segments& segments, const Blob& 
 }
 
 // Pixels of the IRED's component farther than `reach` outside the ellipse.
-int PixelsBeyond(const Segments& segments, const Blob& b, const cv::RotatedRect& e,
+int PixelsBeyond(const Segments& segments, const Blob& b, const cv::RotatedRect& ellipse,
                  double reach) {
+  const RadialEllipse e(ellipse);
   int count = 0;
   for (int y = b.rect.y; y < b.rect.br().y; ++y) {
     for (int x = b.rect.x; x < b.rect.br().x; ++x) {
       if (segments.labels.at<int32_t>(y, x) == b.label &&
-          RadialResidual(e, cv::Point2d(x, y)) > reach) {
+          e.Residual(cv::Point2d(x, y)) > reach) {
         ++count;
       }
     }
@@ -152,12 +202,17 @@ bool HoldsADimmerSource(const cv::Mat& image, const Segments& segments, const Bl
   above &= own;
   const int n = cv::connectedComponentsWithStats(above, labels, stats, centroids, 8, CV_32S);
   if (n < 3) return false;
-  std::vector<std::pair<int, double>> pieces;  // area, peak
-  for (int label = 1; label < n; ++label) {
-    double peak = 0.0;
-    cv::minMaxLoc(image(b.rect), nullptr, &peak, nullptr, nullptr, labels == label);
-    pieces.emplace_back(stats.at<int>(label, cv::CC_STAT_AREA), peak);
+  std::vector<std::pair<int, double>> pieces(static_cast<std::size_t>(n));  // area, peak
+  for (int y = 0; y < labels.rows; ++y) {
+    const int32_t* label = labels.ptr<int32_t>(y);
+    const uint16_t* row = image.ptr<uint16_t>(b.rect.y + y) + b.rect.x;
+    for (int x = 0; x < labels.cols; ++x) {
+      double& peak = pieces[static_cast<std::size_t>(label[x])].second;
+      peak = std::max<double>(peak, row[x]);
+    }
   }
+  for (int label = 1; label < n; ++label) pieces[label].first = stats.at<int>(label, cv::CC_STAT_AREA);
+  pieces.erase(pieces.begin());  // the background
   std::sort(pieces.rbegin(), pieces.rend());
   for (std::size_t i = 1; i < pieces.size(); ++i) {
     if (pieces[i].first >= std::max(4.0, 0.05 * pieces[0].first) &&
@@ -176,34 +231,39 @@ void AssessShape(const cv::Mat& image, const Segments& segments, const NoiseMode
   if (std::sqrt(ired.area / kPi) < options.occlusion_min_radius_px) return;
   const double plateau = PlateauLevel(image, segments, ired);
   const double level = noise.background + 0.5 * (plateau - noise.background);
-  if (HoldsADimmerSource(image, segments, ired,
-                         noise.background + 0.35 * (plateau - noise.background))) {
-    report->second_source = true;
-    report->second_source_gap_px = 0.0;
-  }
   const double reach = 0.5 * std::hypot(ired.rect.width, ired.rect.height) + 3.0;
   std::vector<bool> departed;
+  // The rays start well inside the disc (a quarter of its box's smaller side from the centroid).
+  const double start = 0.25 * std::min(ired.rect.width, ired.rect.height);
   const std::vector<cv::Point2d> points =
-      EdgePoints(image, ired.centroid, level, reach, options.occlusion_rays, &departed);
+      EdgePoints(image, ired.centroid, level, start, reach, options.occlusion_rays, &departed);
   std::vector<cv::Point2d> found;
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!departed[i]) found.push_back(points[i]);
   }
   cv::RotatedRect ellipse;
   const double band = options.occlusion_residual_px;
-  if (found.size() < 6 || !RobustEllipse(found, ired.centroid, band, &ellipse)) {
-    report->occluded = options.detect_occlusion;
-    report->occluded_edge_fraction = 1.0;
-    return;
-  }
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!departed[i] && std::abs(RadialResidual(ellipse, points[i])) > band) departed[i] = true;
+  const bool shaped = found.size() >= 6 && RobustEllipse(found, ired.centroid, band, &ellipse);
+  double fraction = 1.0;  // no ellipse: the whole edge is in doubt
+  if (shaped) {
+    const RadialEllipse fitted(ellipse);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (!departed[i] && std::abs(fitted.Residual(points[i])) > band) departed[i] = true;
+    }
+    fraction = DepartedFraction(departed, options.occlusion_min_run);
   }
   if (options.detect_occlusion) {
-    report->occluded_edge_fraction = DepartedFraction(departed, options.occlusion_min_run);
-    report->occluded = report->occluded_edge_fraction >= options.occluded_min_fraction;
+    report->occluded_edge_fraction = fraction;
+    report->occluded = fraction >= options.occluded_min_fraction;
   }
-  if (PixelsBeyond(segments, ired, ellipse, options.merged_reach_px) >= 3) {
+  // A dimmer source merged with the disc: its pixels beyond the ellipse, or (where the edge is in
+  // doubt) a dimmer piece of the component.
+  const bool merged =
+      (shaped && PixelsBeyond(segments, ired, ellipse, options.merged_reach_px) >= 3) ||
+      (fraction >= options.occluded_min_fraction &&
+       HoldsADimmerSource(image, segments, ired,
+                          noise.background + 0.35 * (plateau - noise.background)));
+  if (merged) {
     report->second_source = true;
     report->second_source_gap_px = 0.0;
   }

@@ -7,6 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "estimator/scene.h"
 #include "estimator/scene_internal.h"
 
 namespace irdist::scene {
@@ -137,13 +138,19 @@ Segments Segment(const cv::Mat& image, const NoiseModel& noise, const SceneOptio
   out.threshold = noise.background + std::max(options.segment_sigmas * noise.read_sd,
                                                options.segment_peak_fraction *
                                                    (peak - noise.background));
-  cv::Mat mask, stats, centroids;
+  cv::Mat mask, labels, stats, centroids;
   cv::compare(image, cv::Scalar(out.threshold), mask, cv::CMP_GT);
-  const int n = cv::connectedComponentsWithStats(mask, out.labels, stats, centroids, 8, CV_32S);
+  // The components within the mask's bounding box only (most of a frame is background).
+  const cv::Rect box = cv::boundingRect(mask);
+  out.labels = cv::Mat::zeros(image.size(), CV_32S);
+  if (box.empty()) return out;
+  const int n = cv::connectedComponentsWithStats(mask(box), labels, stats, centroids, 8, CV_32S);
+  labels.copyTo(out.labels(box));
   for (int label = 1; label < n; ++label) {
     Blob b;
     b.label = label;
-    b.rect = cv::Rect(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP),
+    b.rect = cv::Rect(stats.at<int>(label, cv::CC_STAT_LEFT) + box.x,
+                      stats.at<int>(label, cv::CC_STAT_TOP) + box.y,
                       stats.at<int>(label, cv::CC_STAT_WIDTH),
                       stats.at<int>(label, cv::CC_STAT_HEIGHT));
     b.area = stats.at<int>(label, cv::CC_STAT_AREA);

@@ -14,6 +14,7 @@
 #include "app/reports/calibration_plots.h"
 #include "app/reports/report.h"
 #include "estimator/blob_fit.h"
+#include "estimator/defect_map.h"
 #include "estimator/model_file.h"
 #include "estimator/models.h"
 
@@ -341,6 +342,28 @@ CalibrationModel RefitOnBlobFitSizes(const RecordingReader& reader, const Featur
   return model;
 }
 
+// The most frames the defect map is found on (spread over the recording).
+constexpr std::size_t kDefectMapFrames = 64;
+
+// The sensor's defect map from up to kDefectMapFrames frames of the recording (estimator/
+// defect_map.h), in the camera's ROI of the model's provenance (the full sensor when unknown).
+DefectMap RecordingDefectMap(const RecordingReader& reader, const SceneOptions& scene,
+                             const ModelProvenance& provenance, std::ostream& out) {
+  DefectMapFinder finder(reader.header().bit_depth, scene);
+  const std::vector<FrameRecord>& rows = reader.rows();
+  const std::size_t stride = std::max<std::size_t>(1, rows.size() / kDefectMapFrames);
+  for (std::size_t i = 0; i < rows.size(); i += stride) {
+    cv::Mat image = reader.LoadImage(rows[i]);
+    if (image.type() != CV_16UC1) image.convertTo(image, CV_16UC1);
+    finder.Add(image);
+  }
+  const DefectMap map = finder.Map(cv::Rect(provenance.roi_offset_x, provenance.roi_offset_y,
+                                            provenance.roi_width, provenance.roi_height));
+  out << "  defect map: " << map.sensor_px.size() << " pixels flagged on most of "
+      << finder.frames() << " frames\n";
+  return map;
+}
+
 }  // namespace
 
 CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
@@ -359,6 +382,10 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
     model = RefitOnBlobFitSizes(reader, features, feature_options, fit_options, model, out);
   }
   model.provenance = ProvenanceOfRecording(reader);
+  if (feature_options.scene.enabled && feature_options.scene.detect_defects) {
+    model.features.scene.defect_map =
+        RecordingDefectMap(reader, model.features.scene, model.provenance, out);
+  }
   SaveModel(model, model_path);
   PrintFitSummaries(model, model_path, out);
   if (!report_dir.empty()) {

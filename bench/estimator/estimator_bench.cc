@@ -7,6 +7,8 @@
 #include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
 #include "estimator/features.h"
+#include "estimator/scene.h"
+#include "tests/estimator/scene_render.h"
 #include "tests/estimator/synthetic.h"
 
 namespace irdist {
@@ -46,6 +48,43 @@ void BM_FeaturesWithBlobFit(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_FeaturesWithBlobFit)->Unit(benchmark::kMicrosecond);
+
+// The scene pass (estimator/scene.h) per frame at a 256 x 256 ROI, beside ComputeFeatures on the
+// same frame (goal: the pass at most 20 % of it): a clean frame (Arg 0), and one with 30 hot
+// pixels and a reflection 15 px from the disc (Arg 1).
+cv::Mat RoiFrame(bool cluttered) {
+  std::mt19937_64 rng(42);
+  testing::SceneDisc disc;
+  disc.cx = 127.4, disc.cy = 121.8, disc.a = 8.0, disc.b = 7.4, disc.angle_deg = 25.0;
+  std::vector<testing::SceneDisc> discs = {disc};
+  if (cluttered) {
+    testing::SceneDisc reflection = disc;
+    reflection.cy += 31.0;
+    reflection.amplitude_e *= 0.2;
+    discs.push_back(reflection);
+  }
+  cv::Mat frame = testing::SensorFrame(testing::RenderScene(256, 50.0, discs, 0.7),
+                                       testing::NormalField(256, &rng));
+  std::uniform_int_distribution<int> at(2, 253), level(2457, 4095);
+  for (int i = 0; cluttered && i < 30; ++i) {
+    frame.at<std::uint16_t>(at(rng), at(rng)) = static_cast<std::uint16_t>(level(rng));
+  }
+  return frame;
+}
+
+void BM_RoiComputeFeatures(benchmark::State& state) {
+  const cv::Mat frame = RoiFrame(state.range(0) != 0);
+  const FeatureOptions options;
+  for (auto _ : state) benchmark::DoNotOptimize(ComputeFeatures(frame, 12, options));
+}
+BENCHMARK(BM_RoiComputeFeatures)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+void BM_RoiScenePass(benchmark::State& state) {
+  const cv::Mat frame = RoiFrame(state.range(0) != 0);
+  const SceneOptions options;
+  for (auto _ : state) benchmark::DoNotOptimize(CleanScene(frame, 12, options));
+}
+BENCHMARK(BM_RoiScenePass)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 void BM_EstimatePair(benchmark::State& state) {
   const testing::SyntheticRig rig;

@@ -301,6 +301,29 @@ TEST(ModelFile, BlobFitFlagRoundTripsAndDefaultsToTheFit) {
   EXPECT_THROW(ModelFromYaml(bad, "m.yaml"), Error);
 }
 
+// features.defect_map (the calibration's defect map, estimator/defect_map_file.h): absent = none,
+// round-trips, and a bad pixel names its key.
+TEST(ModelFile, DefectMapRoundTripsAndIsOptional) {
+  CalibrationModel model = SmallModel();
+  EXPECT_EQ(ModelToYaml(model).find("defect_map"), std::string::npos);
+  EXPECT_TRUE(ModelFromYaml(ModelToYaml(model), "m.yaml").features.scene.defect_map.empty());
+  model.features.scene.defect_map.roi = cv::Rect(320, 256, 640, 512);
+  model.features.scene.defect_map.sensor_px = {{330, 300}, {331, 300}, {900, 700}};
+  const std::string text = ModelToYaml(model);
+  const CalibrationModel back = ModelFromYaml(text, "m.yaml");
+  EXPECT_EQ(back.features.scene.defect_map.sensor_px, model.features.scene.defect_map.sensor_px);
+  EXPECT_EQ(back.features.scene.defect_map.roi, model.features.scene.defect_map.roi);
+  EXPECT_EQ(ModelToYaml(back), text);
+  std::string bad = text;
+  bad.replace(bad.find("[331, 300]"), 10, "[331, -3]");
+  try {
+    ModelFromYaml(bad, "m.yaml");
+    FAIL() << "accepted a negative pixel";
+  } catch (const ModelFileError& e) {
+    EXPECT_EQ(e.key(), "features.defect_map.pixels[1]");
+  }
+}
+
 TEST(ModelFile, BadThetaCorrectionNamesTheKey) {
   std::string text = ModelToYaml(SmallModel());
   const size_t section = text.find("theta_correction:");

@@ -84,7 +84,8 @@ TEST(Scene, OffLeavesTheFrameAlone) {
 }
 
 // Hot pixels at the blob's centre, on its edge and in the background, pairs, stuck pixels at 0
-// and mid-scale: every one caught and replaced; the features equal the clean frame's.
+// and mid-scale: every one caught and replaced; the features equal the clean frame's. (Defects are
+// looked for in the feature window and around every blob: a dark pixel elsewhere touches nothing.)
 TEST(SceneDefects, HotAndStuckPixelsAreCaughtAndReplaced) {
   std::mt19937_64 rng(7);
   SceneDisc d;
@@ -94,7 +95,7 @@ TEST(SceneDefects, HotAndStuckPixelsAreCaughtAndReplaced) {
   const std::vector<std::pair<cv::Point, int>> defects = {
       {{64, 64}, 3276},  {{72, 64}, 2457},  {{56, 62}, 3900},  {{30, 30}, 3700},
       {{62, 66}, 0},     {{100, 40}, 2048}, {{20, 100}, 2900}, {{21, 100}, 2900},
-      {{66, 62}, 4095},  {{66, 63}, 4095},  {{64, 72}, 2600},  {{10, 10}, 0}};
+      {{66, 62}, 4095},  {{66, 63}, 4095},  {{64, 72}, 2600},  {{36, 92}, 0}};
   for (const auto& [p, g] : defects) bad.at<uint16_t>(p) = static_cast<uint16_t>(g);
   const Measured m = Measure(bad), c = Measure(clean);
   for (const auto& [p, g] : defects) {
@@ -170,10 +171,17 @@ TEST(SceneDefects, KnownMapIsAlwaysMasked) {
   map.sensor_px = {{110, 210}, {5, 5}};  // sensor coordinates; the frame's ROI starts at (100, 200)
   SceneContext context;
   context.known_defects = &map;
+  context.roi_origin_known = true;
   context.roi_origin = cv::Point(100, 200);
   const Measured m = Measure(frame, context);
   EXPECT_TRUE(Contains(m.r.defect_px, cv::Point(10, 10)));
   EXPECT_EQ(m.r.defect_px.size(), 1u) << m.r.BriefReport();
+  // The options' map (a calibration's, found in this ROI): the frame is that ROI.
+  SceneOptions options;
+  options.defect_map.sensor_px = {{103, 207}};
+  options.defect_map.roi = cv::Rect(100, 200, kSide, kSide);
+  const SceneFrame out = CleanScene(frame, 12, options);
+  EXPECT_EQ(out.report.defect_px, std::vector<cv::Point>{cv::Point(3, 7)});
 }
 
 // Clean noisy frames (sizes, tilts, blurs, levels): the detectors' false alarms, and the features
