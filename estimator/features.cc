@@ -275,21 +275,49 @@ std::vector<double> BorderRing(const cv::Mat& image, const cv::Rect& window) {
   return border;
 }
 
-// The window's background (gray levels): the mean of its border ring within 5 robust sd of the
-// ring's median (a stray bright pixel does not move it). A smooth gradient's mean over the
-// symmetric ring is its value at the window's centre, so the window's sum loses exactly the
-// background under the blob.
-double WindowBackground(const cv::Mat& image, const cv::Rect& window) {
-  std::vector<double> ring = BorderRing(image, window);
-  if (ring.empty()) return 0.0;
-  std::vector<double> sorted = ring;
+// Squared distance from (cx, cy) of the farthest pixel of `window` above `threshold`.
+double FarthestAbove2(const cv::Mat& image, const cv::Rect& window, double threshold, double cx,
+                      double cy) {
+  double farthest2 = 0.0;
+  for (int y = window.y; y < window.y + window.height; ++y) {
+    const uint16_t* row = image.ptr<uint16_t>(y);
+    for (int x = window.x; x < window.x + window.width; ++x) {
+      if (row[x] <= threshold) continue;
+      farthest2 = std::max(farthest2, (x - cx) * (x - cx) + (y - cy) * (y - cy));
+    }
+  }
+  return farthest2;
+}
+
+// How far the blob's light reaches beyond its farthest pixel above the ROI threshold (px): the
+// blur's tail, a few sigma.
+constexpr double kBackgroundMarginPx = 4.0;
+
+// The window's background (gray levels): the mean of the window's pixels beyond the blob's reach
+// (the farthest pixel above `threshold` from (cx, cy), plus kBackgroundMarginPx), within 5 robust
+// sd of their median (a stray bright pixel does not move it). The window is centred on the blob,
+// so a smooth gradient's mean over what is left is its value under the blob: the window's sum
+// loses exactly the background there. Most of the window enters, so the mean adds little noise.
+double WindowBackground(const cv::Mat& image, const cv::Rect& window, double threshold,
+                        double cx, double cy) {
+  const double reach = std::sqrt(FarthestAbove2(image, window, threshold, cx, cy)) +
+                       kBackgroundMarginPx;
+  std::vector<double> outside;
+  for (int y = window.y; y < window.y + window.height; ++y) {
+    const uint16_t* row = image.ptr<uint16_t>(y);
+    for (int x = window.x; x < window.x + window.width; ++x) {
+      if (std::hypot(x - cx, y - cy) > reach) outside.push_back(row[x]);
+    }
+  }
+  if (outside.size() < 32) outside = BorderRing(image, window);
+  std::vector<double> sorted = outside;
   const auto mid = sorted.begin() + sorted.size() / 2;
   std::nth_element(sorted.begin(), mid, sorted.end());
   const double median = *mid;
   const double limit = 5.0 * std::max(RobustNoiseSd(&sorted), 1.0);
   double sum = 0.0;
   int n = 0;
-  for (double g : ring) {
+  for (double g : outside) {
     if (std::abs(g - median) > limit) continue;
     sum += g;
     ++n;
@@ -300,7 +328,8 @@ double WindowBackground(const cv::Mat& image, const cv::Rect& window) {
 // ROI statistics: E_rel, F(0,0), Sigma, saturation, the ROI itself. Returns false when the ROI is
 // empty.
 bool RoiStatistics(const cv::Mat& image, const cv::Rect& window, double roi_threshold,
-                   double max_gray, const FeatureOptions& options, Features* out) {
+                   double max_gray, const cv::Point2d& centre, const FeatureOptions& options,
+                   Features* out) {
   const bool fixed = options.roi_policy == RoiPolicy::kFixedWindow;
   const InverseResponse& f = options.inverse_response;
   const uint16_t saturated_level = static_cast<uint16_t>(max_gray);
@@ -327,7 +356,8 @@ bool RoiStatistics(const cv::Mat& image, const cv::Rect& window, double roi_thre
   out->roi = fixed ? window : cv::Rect(min_x, min_y, max_x - min_x + 1, max_y - min_y + 1);
   out->roi_area_px = area;
   out->saturated_pixels = saturated;
-  out->window_background = WindowBackground(image, window) / max_gray;
+  out->window_background =
+      WindowBackground(image, window, roi_threshold, centre.x, centre.y) / max_gray;
   const double bg = options.subtract_background ? out->window_background : 0.0;
   const double bg_f = options.subtract_background && !f.IsIdentity() ? f.Apply(bg) : bg;
   out->f00 = sum - area * bg;
@@ -335,20 +365,6 @@ bool RoiStatistics(const cv::Mat& image, const cv::Rect& window, double roi_thre
   const double mean = sum / area;
   out->sigma = std::sqrt(std::max(0.0, sum_sq / area - mean * mean));
   return true;
-}
-
-// Squared distance from (cx, cy) of the farthest pixel of `window` above `threshold`.
-double FarthestAbove2(const cv::Mat& image, const cv::Rect& window, double threshold, double cx,
-                      double cy) {
-  double farthest2 = 0.0;
-  for (int y = window.y; y < window.y + window.height; ++y) {
-    const uint16_t* row = image.ptr<uint16_t>(y);
-    for (int x = window.x; x < window.x + window.width; ++x) {
-      if (row[x] <= threshold) continue;
-      farthest2 = std::max(farthest2, (x - cx) * (x - cx) + (y - cy) * (y - cy));
-    }
-  }
-  return farthest2;
 }
 
 // Background-subtracted second moments of the window (MomentMethod::kAperture: inside an aperture
@@ -466,7 +482,8 @@ void MeasureBlob(const cv::Mat& image, double max_gray, const BlobLocation& at,
   const double roi_threshold = at.background + options.threshold_fraction * contrast;
   const double half_threshold = at.background + 0.5 * contrast;
   FlagBorders(image, window, full_window, roi_threshold, options, out);
-  if (!RoiStatistics(image, window, roi_threshold, max_gray, options, out)) {
+  if (!RoiStatistics(image, window, roi_threshold, max_gray, cv::Point2d(at.cx, at.cy), options,
+                     out)) {
     out->blob_found = false;
     return;
   }

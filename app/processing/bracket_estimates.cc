@@ -268,6 +268,7 @@ void FlagRows(const CalibrationModel& model, const std::vector<DifferencePair>& 
   std::vector<double> t_ms;
   FramesOfPairs(pairs, features, &frames, &t_ms);
   const BracketFrameFlags frame_flags = FrameFlags(frames);
+  const EstimateRow* size = rows->geometric.empty() ? nullptr : &rows->geometric.front();
   for (auto* block : {&rows->i0_free, &rows->paper, &rows->i0_dependent, &rows->geometric}) {
     for (size_t k = 0; k < block->size(); ++k) {
       EstimateRow& row = (*block)[k];
@@ -275,6 +276,11 @@ void FlagRows(const CalibrationModel& model, const std::vector<DifferencePair>& 
       const HealthCheck* health = block == &rows->i0_free && k == 0 ? &rows->health : nullptr;
       FlagRow(frame_flags, model.ranges, per_dt ? std::vector<double>{t_ms[k - 1]} : t_ms, health,
               &row);
+      // The radiometric methods' joint rows against the blob's size, an independent reading.
+      const bool radiometric = block == &rows->i0_free || block == &rows->paper;
+      if (radiometric && k == 0 && size != nullptr) {
+        FlagDisagreement(*size, DisagreementTolerance(model), &row);
+      }
     }
   }
 }

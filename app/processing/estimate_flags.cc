@@ -110,6 +110,21 @@ void FlagRanges(const CalibratedRanges& ranges, const BracketFrameFlags& frames,
 
 }  // namespace
 
+double DisagreementTolerance(const CalibrationModel& model) {
+  const double fit_error = model.geometric.fitted()
+                               ? std::max(model.geometric.summary.mean_relative_error, 0.0)
+                               : 0.0;
+  return std::max(0.005, 10.0 * fit_error);
+}
+
+void FlagDisagreement(const EstimateRow& size, double tolerance, EstimateRow* row) {
+  if (!row->ok || !size.ok || !(size.d_mm > 0.0)) return;
+  const double departure = row->d_mm / size.d_mm - 1.0;
+  if (std::abs(departure) <= tolerance) return;
+  row->flags.push_back({"disagrees", (departure > 0.0 ? "+" : "") +
+                                         Fixed(100.0 * departure, 1, "%")});
+}
+
 std::string PercentFigure(double fraction) {
   return (fraction > 0.0 ? "+" : "") + Fixed(100.0 * fraction, 0, "%");
 }

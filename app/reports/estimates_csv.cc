@@ -234,6 +234,8 @@ const std::vector<FlagSpec>& FlagSpecs() {
       {"blur_larger", true, "the blob is more blurred than calibrated: focus changed (%)"},
       {"blur_smaller", true, "the blob is less blurred than calibrated: focus changed (%)"},
       {"outside", true, "outside the calibrated ranges (their names, joined by +)"},
+      {"disagrees", true,
+       "the radiometric estimate departs from the apparent size's (geometric) reading (%)"},
       {"no_estimate", true, "no estimate could be made"},
   };
   return specs;
