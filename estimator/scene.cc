@@ -116,14 +116,11 @@ void CountDefects(const scene::Segments& segments, const SceneOptions& options,
   }
   const scene::Blob& ired = segments.blobs[static_cast<std::size_t>(segments.ired)];
   const cv::Rect window = WindowAround(ired.centroid, context.window_side_px);
-  cv::Mat near;
-  if (!report->defect_px.empty()) {
-    near = scene::GrownMask(segments, ired, options.halo_reach_px + 2.0, frame);
-  }
+  const scene::LocalMask near = scene::GrownMask(segments, ired, options.halo_reach_px + 2.0, frame);
   for (const cv::Point& p : report->defect_px) {
     if (!window.contains(p)) continue;
     ++report->defect_pixels;
-    if (near.at<uint8_t>(p) != 0) ++report->defect_pixels_near_blob;
+    if (near.Has(p)) ++report->defect_pixels_near_blob;
   }
 }
 
@@ -143,7 +140,7 @@ SceneFrame CleanScene(const cv::Mat& image, int bit_depth, const SceneOptions& o
   report.assessed = true;
   scene::NoiseModel noise = scene::MeasureBackgroundNoise(image, bit_depth);
   // The components of the raw frame say where to look for defects; found, they are replaced and
-  // the frame segmented again (a hot pixel is then no component).
+  // leave their components (a hot pixel alone is then no component).
   scene::Segments segments;
   if (options.segment) segments = scene::Segment(image, noise, options, context);
   cv::Mat defects = cv::Mat::zeros(image.size(), CV_8U);
@@ -156,7 +153,7 @@ SceneFrame CleanScene(const cv::Mat& image, int bit_depth, const SceneOptions& o
   if (cv::countNonZero(defects) > 0) {
     out.image = image.clone();
     scene::ReplaceDefects(defects, &out.image, &report.defect_px);
-    if (options.segment) segments = scene::Segment(out.image, noise, options, context);
+    scene::ForgetDefects(out.image, report.defect_px, options, context, &segments);
   }
   if (segments.ired >= 0) {
     report.blob_center_px = segments.blobs[static_cast<std::size_t>(segments.ired)].centroid;

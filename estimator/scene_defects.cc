@@ -58,13 +58,17 @@ void SortDescending(double n[8]) {
   }
 }
 
-// A thin line (a cable's shadow, the valley between two blobs) is not a defect: its pixels have a
-// pair of opposite neighbours (n in Neighbours' order) on their own side of the median, near them.
-bool OnALine(double g, const double n[8], double m) {
-  constexpr int kOpposite[4][2] = {{0, 7}, {1, 6}, {2, 5}, {3, 4}};
-  const double near = 0.5 * std::abs(g - m);
-  for (const auto& pair : kOpposite) {
-    if (std::abs(n[pair[0]] - g) < near && std::abs(n[pair[1]] - g) < near) return true;
+// A thin line (a cable's shadow, the valley between two blobs) is not a defect: its pixels have
+// two neighbours on roughly opposite sides (135-225 deg apart around them, any line's direction)
+// near their own value, where a defect's neighbours all sit near the median.
+bool OnALine(double g, const double n[8], double m, double sd) {
+  // Neighbours' order (Neighbours) to their order around the pixel.
+  constexpr int kAround[8] = {0, 1, 2, 4, 7, 6, 5, 3};
+  const double near = 0.5 * std::abs(g - m) + sd;
+  bool close[8];
+  for (int k = 0; k < 8; ++k) close[k] = std::abs(n[kAround[k]] - g) < near;
+  for (int k = 0; k < 8; ++k) {
+    if (close[k] && (close[(k + 3) % 8] || close[(k + 4) % 8] || close[(k + 5) % 8])) return true;
   }
   return false;
 }
@@ -80,7 +84,7 @@ bool IsDefect(double g, const double n[8], const double sorted[8], double m,
   if (g - sorted[1] > k * noise.Sd(sorted[1])) return true;
   if (sorted[6] - g > k * noise.Sd(sorted[6])) return true;
   const double allowance = options.defect_edge_allowance * (sorted[1] - sorted[6]);
-  return std::abs(g - m) > k * noise.Sd(m) + allowance && !OnALine(g, n, m);
+  return std::abs(g - m) > k * noise.Sd(m) + allowance && !OnALine(g, n, m, noise.Sd(g));
 }
 
 }  // namespace

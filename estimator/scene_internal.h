@@ -58,8 +58,19 @@ struct Segments {
 };
 Segments Segment(const cv::Mat& image, const NoiseModel& noise, const SceneOptions& options,
                  const SceneContext& context);
-// The mask of blob `b` (255) grown by `reach_px`, on the frame.
-cv::Mat GrownMask(const Segments& segments, const Blob& b, double reach_px, cv::Size frame);
+// The segments after the defects were replaced in `cleaned`: a replaced pixel no longer above the
+// threshold leaves its component, a component left empty (a hot pixel alone) is gone, and the
+// IRED is picked again (cheaper than segmenting the frame again).
+void ForgetDefects(const cv::Mat& cleaned, const std::vector<cv::Point>& defects,
+                   const SceneOptions& options, const SceneContext& context, Segments* segments);
+// A mask on a box of the frame (255 = set).
+struct LocalMask {
+  cv::Rect box;  // frame coordinates
+  cv::Mat mask;  // CV_8U, box.size()
+  bool Has(cv::Point p) const { return box.contains(p) && mask.at<uint8_t>(p - box.tl()) != 0; }
+};
+// The pixels of blob `b` grown by `reach_px` (on its box grown by as much, within the frame).
+LocalMask GrownMask(const Segments& segments, const Blob& b, double reach_px, cv::Size frame);
 // Every blob but the IRED replaced by its local background beyond the IRED's reach; the report's
 // other_blobs, other_blob_rects, second_source and second_source_gap_px.
 void MaskOtherBlobs(const Segments& segments, const SceneOptions& options,

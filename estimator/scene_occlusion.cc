@@ -231,7 +231,7 @@ void AssessShape(const cv::Mat& image, const Segments& segments, const NoiseMode
   if (std::sqrt(ired.area / kPi) < options.occlusion_min_radius_px) return;
   const double plateau = PlateauLevel(image, segments, ired);
   const double level = noise.background + 0.5 * (plateau - noise.background);
-  const double reach = 0.5 * std::hypot(ired.rect.width, ired.rect.height) + 3.0;
+  const double reach = 0.5 * std::max(ired.rect.width, ired.rect.height) + 3.0;
   std::vector<bool> departed;
   // The rays start well inside the disc (a quarter of its box's smaller side from the centroid).
   const double start = 0.25 * std::min(ired.rect.width, ired.rect.height);

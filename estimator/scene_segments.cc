@@ -90,14 +90,15 @@ double EdgeGap(const cv::Mat& labels, const Blob& a, const Blob& b, double near_
   return std::max(0.0, std::sqrt(best2) - 1.0);
 }
 
-// Mean gray level of the pixels of `ring` (255) that belong to no component: the local background
+// Mean gray level of the pixels of `ring` (255) that belong to no component (image, labels and
+// ring: views of one box): the local background
 // (the mean, not the median: a fill at the median of a quantised, skewed noise biases E_rel).
 double LocalBackground(const cv::Mat& image, const cv::Mat& labels, const cv::Mat& ring,
-                       const cv::Rect& box, double fallback) {
+                       double fallback) {
   double sum = 0.0;
   int n = 0;
-  for (int y = box.y; y < box.br().y; ++y) {
-    for (int x = box.x; x < box.br().x; ++x) {
+  for (int y = 0; y < ring.rows; ++y) {
+    for (int x = 0; x < ring.cols; ++x) {
       if (ring.at<uint8_t>(y, x) != 0 && labels.at<int32_t>(y, x) == 0) {
         sum += image.at<uint16_t>(y, x);
         ++n;
@@ -110,14 +111,14 @@ double LocalBackground(const cv::Mat& image, const cv::Mat& labels, const cv::Ma
 // The pixels of `mask` (255) set to `level` on average: each the integer step of a running sum,
 // so the fill's mean is the level itself and not its rounding (300 pixels rounded by up to half
 // a gray level each would move F(0,0) by a few 1e-4).
-void FillAtLevel(const cv::Mat& mask, double level, cv::Mat* image) {
+void FillAtLevel(const cv::Mat& mask, double level, cv::Mat image) {  // a view of mask's box
   std::vector<cv::Point> pixels;
   cv::findNonZero(mask, pixels);
   double acc = 0.0;
   for (const cv::Point& p : pixels) {
     const double before = std::floor(acc);
     acc += level;
-    image->at<uint16_t>(p) = static_cast<uint16_t>(std::floor(acc) - before);
+    image.at<uint16_t>(p) = static_cast<uint16_t>(std::floor(acc) - before);
   }
 }
 
@@ -125,6 +126,74 @@ void FillAtLevel(const cv::Mat& mask, double level, cv::Mat* image) {
 cv::Rect WindowAround(cv::Point2d c, int side) {
   return cv::Rect(static_cast<int>(std::lround(c.x - 0.5 * (side - 1))),
                   static_cast<int>(std::lround(c.y - 0.5 * (side - 1))), side, side);
+}
+
+// The pixels above `threshold`, in row order: each row's maximum first (a loop the compiler
+// vectorises), the row scanned only when it holds one (most rows of a frame hold none).
+std::vector<cv::Point> PixelsAbove(const cv::Mat& image, double threshold) {
+  std::vector<cv::Point> out;
+  const uint16_t t = static_cast<uint16_t>(std::clamp(std::floor(threshold), 0.0, 65535.0));
+  for (int y = 0; y < image.rows; ++y) {
+    const uint16_t* row = image.ptr<uint16_t>(y);
+    uint16_t top = 0;
+    for (int x = 0; x < image.cols; ++x) top = std::max(top, row[x]);
+    if (top <= t) continue;
+    for (int x = 0; x < image.cols; ++x) {
+      if (row[x] > t) out.emplace_back(x, y);
+    }
+  }
+  return out;
+}
+
+int Root(std::vector<int>* parent, int i) {
+  while ((*parent)[i] != i) i = (*parent)[i] = (*parent)[(*parent)[i]];
+  return i;
+}
+
+// 8-connected components of a frame's few set pixels (row order) (a frame's blobs and specks: hundreds of
+// pixels among tens of thousands), by union-find over them in row order; labels 1..n in *labels
+// (CV_32S, frame-sized), one Blob (label, box, area) each. cv::connectedComponentsWithStats
+// scans the whole frame, 5-10x slower on a 256 x 256 ROI with a few scattered hot pixels.
+std::vector<Blob> LabelSparse(const std::vector<cv::Point>& set, cv::Size size, cv::Mat* labels) {
+  *labels = cv::Mat::zeros(size, CV_32S);
+  std::vector<int> parent = {0};
+  for (const cv::Point& p : set) {
+    int label = 0;
+    for (const cv::Point& d : {cv::Point(-1, 0), cv::Point(-1, -1), cv::Point(0, -1), cv::Point(1, -1)}) {
+      const cv::Point q = p + d;
+      if (q.x < 0 || q.y < 0 || q.x >= size.width) continue;
+      const int n = labels->at<int32_t>(q);
+      if (n == 0) continue;
+      const int root = Root(&parent, n);
+      if (label == 0) {
+        label = root;
+      } else if (root != label) {
+        parent[std::max(root, label)] = std::min(root, label);
+        label = std::min(root, label);
+      }
+    }
+    if (label == 0) {
+      label = static_cast<int>(parent.size());
+      parent.push_back(label);
+    }
+    labels->at<int32_t>(p) = label;
+  }
+  std::vector<int> compact(parent.size(), 0);
+  std::vector<Blob> blobs;
+  for (const cv::Point& p : set) {
+    const int root = Root(&parent, labels->at<int32_t>(p));
+    if (compact[root] == 0) {
+      compact[root] = static_cast<int>(blobs.size()) + 1;
+      blobs.emplace_back();
+      blobs.back().label = compact[root];
+      blobs.back().rect = cv::Rect(p, cv::Size(1, 1));
+    }
+    Blob& b = blobs[compact[root] - 1];
+    labels->at<int32_t>(p) = b.label;
+    b.rect |= cv::Rect(p, cv::Size(1, 1));
+    ++b.area;
+  }
+  return blobs;
 }
 
 }  // namespace
@@ -138,42 +207,45 @@ Segments Segment(const cv::Mat& image, const NoiseModel& noise, const SceneOptio
   out.threshold = noise.background + std::max(options.segment_sigmas * noise.read_sd,
                                                options.segment_peak_fraction *
                                                    (peak - noise.background));
-  cv::Mat mask, labels, stats, centroids;
-  cv::compare(image, cv::Scalar(out.threshold), mask, cv::CMP_GT);
-  // The components within the mask's bounding box only (most of a frame is background).
-  const cv::Rect box = cv::boundingRect(mask);
-  out.labels = cv::Mat::zeros(image.size(), CV_32S);
-  if (box.empty()) return out;
-  const int n = cv::connectedComponentsWithStats(mask(box), labels, stats, centroids, 8, CV_32S);
-  labels.copyTo(out.labels(box));
-  for (int label = 1; label < n; ++label) {
-    Blob b;
-    b.label = label;
-    b.rect = cv::Rect(stats.at<int>(label, cv::CC_STAT_LEFT) + box.x,
-                      stats.at<int>(label, cv::CC_STAT_TOP) + box.y,
-                      stats.at<int>(label, cv::CC_STAT_WIDTH),
-                      stats.at<int>(label, cv::CC_STAT_HEIGHT));
-    b.area = stats.at<int>(label, cv::CC_STAT_AREA);
-    out.blobs.push_back(b);
-  }
+  out.blobs = LabelSparse(PixelsAbove(image, out.threshold), image.size(), &out.labels);
   MeasureBlobs(image, out.labels, noise.background, &out.blobs);
   out.ired = PickIred(out.blobs, options, context);
   return out;
 }
 
-cv::Mat GrownMask(const Segments& segments, const Blob& b, double reach_px, cv::Size frame) {
-  const int r = static_cast<int>(std::ceil(reach_px));
-  const cv::Rect box =
-      cv::Rect(b.rect.x - r, b.rect.y - r, b.rect.width + 2 * r, b.rect.height + 2 * r) &
-      cv::Rect(cv::Point(0, 0), frame);
-  cv::Mat out = cv::Mat::zeros(frame, CV_8U);
-  cv::Mat local;
-  cv::compare(segments.labels(box), cv::Scalar(b.label), local, cv::CMP_EQ);
-  if (r > 0) {
-    const cv::Mat disc = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * r + 1, 2 * r + 1));
-    cv::dilate(local, local, disc);
+void ForgetDefects(const cv::Mat& cleaned, const std::vector<cv::Point>& defects,
+                   const SceneOptions& options, const SceneContext& context, Segments* segments) {
+  if (segments->blobs.empty()) return;
+  for (const cv::Point& p : defects) {
+    int32_t& label = segments->labels.at<int32_t>(p);
+    if (label == 0 || cleaned.at<uint16_t>(p) > segments->threshold) continue;
+    for (Blob& b : segments->blobs) {
+      if (b.label == label) --b.area;
+    }
+    label = 0;
   }
-  local.copyTo(out(box));
+  std::vector<Blob> kept;
+  for (Blob b : segments->blobs) {
+    if (b.area <= 0) continue;
+    b.flux = 0.0;
+    kept.push_back(b);
+  }
+  segments->blobs = kept;
+  MeasureBlobs(cleaned, segments->labels, segments->background, &segments->blobs);
+  segments->ired = PickIred(segments->blobs, options, context);
+}
+
+LocalMask GrownMask(const Segments& segments, const Blob& b, double reach_px, cv::Size frame) {
+  const int r = static_cast<int>(std::ceil(reach_px));
+  LocalMask out;
+  out.box = cv::Rect(b.rect.x - r, b.rect.y - r, b.rect.width + 2 * r, b.rect.height + 2 * r) &
+            cv::Rect(cv::Point(0, 0), frame);
+  cv::compare(segments.labels(out.box), cv::Scalar(b.label), out.mask, cv::CMP_EQ);
+  if (r > 0) {
+    const cv::Mat disc =
+        cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * r + 1, 2 * r + 1));
+    cv::dilate(out.mask, out.mask, disc);
+  }
   return out;
 }
 
@@ -181,29 +253,32 @@ void MaskOtherBlobs(const Segments& segments, const SceneOptions& options,
                     const SceneContext& context, cv::Mat* image, SceneReport* report) {
   const Blob& ired = segments.blobs[static_cast<std::size_t>(segments.ired)];
   const cv::Size frame = image->size();
-  const cv::Mat ired_reach = GrownMask(segments, ired, options.halo_reach_px, frame);
+  const LocalMask ired_reach = GrownMask(segments, ired, options.halo_reach_px, frame);
   const cv::Rect window = WindowAround(ired.centroid, context.window_side_px);
   const cv::Mat original = image->clone();
   for (std::size_t i = 0; i < segments.blobs.size(); ++i) {
     const Blob& b = segments.blobs[i];
     if (static_cast<int>(i) == segments.ired) continue;
-    cv::Mat grown = GrownMask(segments, b, options.halo_reach_px, frame);
-    const cv::Rect box = cv::boundingRect(grown);
+    LocalMask grown = GrownMask(segments, b, options.halo_reach_px, frame);
     if (b.area >= options.min_blob_area_px) {
       const double gap = EdgeGap(segments.labels, ired, b, 4.0 * options.halo_reach_px + 8.0);
       if (!(gap >= report->second_source_gap_px)) report->second_source_gap_px = gap;
       if (gap < 2.0 * options.halo_reach_px) report->second_source = true;
-      if ((box & window).area() > 0) {
+      if ((grown.box & window).area() > 0) {
         ++report->other_blobs;
         report->other_blob_rects.push_back(b.rect);
       }
     }
-    grown.setTo(0, ired_reach);  // the IRED's own light is never masked
-    cv::Mat ring = GrownMask(segments, b, options.halo_reach_px + 2.0, frame);
-    ring.setTo(0, grown);
-    const double level = LocalBackground(original, segments.labels, ring,
-                                         cv::boundingRect(ring), segments.background);
-    FillAtLevel(grown, level, image);
+    const cv::Rect shared = grown.box & ired_reach.box;  // the IRED's own light is never masked
+    if (!shared.empty()) {
+      grown.mask(shared - grown.box.tl()).setTo(0, ired_reach.mask(shared - ired_reach.box.tl()));
+    }
+    LocalMask ring = GrownMask(segments, b, options.halo_reach_px + 2.0, frame);
+    ring.mask(grown.box - ring.box.tl()).setTo(0, grown.mask);
+    const double level =
+        LocalBackground(original(ring.box), segments.labels(ring.box), ring.mask,
+                        segments.background);
+    FillAtLevel(grown.mask, level, (*image)(grown.box));
   }
 }
 

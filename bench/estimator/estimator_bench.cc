@@ -86,6 +86,14 @@ void BM_RoiScenePass(benchmark::State& state) {
 }
 BENCHMARK(BM_RoiScenePass)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
+// The same on BM_ComputeFeatures' full 1280 x 1024 frame (compare with BM_ComputeFeatures/0).
+void BM_ScenePass(benchmark::State& state) {
+  const cv::Mat frame = Frame();
+  const SceneOptions options;
+  for (auto _ : state) benchmark::DoNotOptimize(CleanScene(frame, 12, options));
+}
+BENCHMARK(BM_ScenePass)->Unit(benchmark::kMicrosecond);
+
 void BM_EstimatePair(benchmark::State& state) {
   const testing::SyntheticRig rig;
   const CalibrationModel model = rig.ExactModel();

@@ -25,6 +25,10 @@ struct SceneDisc {
   double amplitude_e = 5000.0;
   double cut = 0.0;           // share of the disc's area a straight occluder removes
   double cut_angle_deg = 0.0; // direction of the occluder's normal (towards the removed part)
+  // A cable: a dark straight band of band_px width (0: none) across the disc, its centre line
+  // band_offset_px from the disc's centre, its normal at cut_angle_deg.
+  double band_px = 0.0;
+  double band_offset_px = 0.0;
 };
 
 // h in [-1, 1] such that the unit disc's segment beyond the line at distance h has area `cut`.
@@ -52,7 +56,8 @@ inline void AddDisc(const SceneDisc& d, double blur_px, cv::Mat1d* electrons) {
     for (int col = 0; col < fine.cols; ++col) {
       const double x = x0 + (col + 0.5) / kSuper - 0.5 - d.cx, y = y0 + (row + 0.5) / kSuper - 0.5 - d.cy;
       const double u = (c * x + s * y) / d.a, v = (-s * x + c * y) / d.b;
-      if (u * u + v * v <= 1.0 && nc * u + ns * v <= h) fine(row, col) = 1.0f;
+      const bool cable = std::abs(nc * x + ns * y - d.band_offset_px) < 0.5 * d.band_px;
+      if (u * u + v * v <= 1.0 && nc * u + ns * v <= h && !cable) fine(row, col) = 1.0f;
     }
   }
   cv::GaussianBlur(fine, fine, cv::Size(0, 0), blur_px * kSuper);

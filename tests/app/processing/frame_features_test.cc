@@ -10,6 +10,7 @@
 
 #include "acquisition/recording_reader.h"
 #include "tests/app/small_recording.h"
+#include "tests/estimator/scene_render.h"
 
 namespace irdist {
 namespace {
@@ -23,6 +24,41 @@ TEST(OfflineBitDepth, FollowsThePixelFormat) {
   EXPECT_EQ(BitDepthOfPixelFormat("Mono10"), 10);
   EXPECT_EQ(BitDepthOfPixelFormat("Mono12"), 12);
   EXPECT_EQ(BitDepthOfPixelFormat("Mono16"), 16);
+}
+
+// The scene pass runs inside FrameFeatures: a frame with hot pixels and a reflection gives the
+// clean frame's features and says what it masked (Features::scene); SceneCleanedFrame is the frame
+// FrameFeatures measured (what recording_fit hands to the blob fit and the blur split).
+TEST(FrameFeatures, MeasuresTheSceneCleanedFrame) {
+  std::mt19937_64 rng(8);
+  testing::SceneDisc disc;
+  disc.cx = 60.3, disc.cy = 58.8, disc.a = 8.0, disc.b = 7.3, disc.angle_deg = 40.0;
+  testing::SceneDisc reflection = disc;
+  reflection.cy += 8.0 + 8.0 + 15.0;
+  reflection.amplitude_e *= 0.2;
+  const cv::Mat1d z = testing::NormalField(128, &rng);
+  const cv::Mat clean = testing::SensorFrame(testing::RenderScene(128, 50.0, {disc}, 0.7), z);
+  cv::Mat bench = testing::SensorFrame(testing::RenderScene(128, 50.0, {disc, reflection}, 0.7), z);
+  bench.at<uint16_t>(60, 60) = 3900;  // on the plateau
+  bench.at<uint16_t>(40, 45) = 3000;  // in the background
+  const FeatureOptions options;
+  const Features a = FrameFeatures(bench, 12, options), b = FrameFeatures(clean, 12, options);
+  ASSERT_TRUE(a.scene.assessed && a.Usable());
+  EXPECT_EQ(a.scene.other_blobs, 1) << a.scene.BriefReport();
+  EXPECT_EQ(a.scene.defect_pixels, 2) << a.scene.BriefReport();
+  EXPECT_FALSE(a.scene.second_source || a.scene.occluded);
+  EXPECT_NEAR(a.e_rel / b.e_rel, 1.0, 5e-4);
+  EXPECT_NEAR(a.sigma / b.sigma, 1.0, 5e-4);
+  EXPECT_NEAR(a.moment_major_var_px2 / b.moment_major_var_px2, 1.0, 2e-3);
+  const Features c = ComputeFeatures(SceneCleanedFrame(bench, 12, options), 12, options);
+  EXPECT_EQ(c.e_rel, a.e_rel);
+  EXPECT_EQ(c.moment_major_var_px2, a.moment_major_var_px2);
+  // Off: the frame as it is (the reflection inside the window).
+  FeatureOptions off = options;
+  off.scene.enabled = false;
+  const Features raw = FrameFeatures(bench, 12, off);
+  EXPECT_FALSE(raw.scene.assessed);
+  EXPECT_GT(std::abs(raw.e_rel / b.e_rel - 1.0), 0.01);
 }
 
 TEST_F(SmallRecordingTest, FeaturesFromPngEqualFeaturesFromMemory) {
