@@ -293,20 +293,27 @@ double FarthestAbove2(const cv::Mat& image, const cv::Rect& window, double thres
 // blur's tail, a few sigma.
 constexpr double kBackgroundMarginPx = 4.0;
 
-// The window's background (gray levels): the mean of the window's pixels beyond the blob's reach
-// (the farthest pixel above `threshold` from (cx, cy), plus kBackgroundMarginPx), within 5 robust
-// sd of their median (a stray bright pixel does not move it). The window is centred on the blob,
-// so a smooth gradient's mean over what is left is its value under the blob: the window's sum
-// loses exactly the background there. Most of the window enters, so the mean adds little noise.
+// The window's background (gray levels): the mean of the pixels of a square twice the window's
+// side around the blob, beyond the blob's reach (the farthest pixel of the window above
+// `threshold` from (cx, cy), plus kBackgroundMarginPx), within 5 robust sd of their median (a
+// stray bright pixel does not move it). The square is centred on the blob, so a smooth gradient's
+// mean over it is its value under the blob: the window's sum loses exactly the background there.
+// Its area is 4x the window's, so the mean's noise, times the window's area in F(0,0), stays
+// small beside the signal's (the Fig. 14 pose's d scatter: 1.12 mm without subtraction, 1.24 with
+// the window alone, 1.14 with the square).
 double WindowBackground(const cv::Mat& image, const cv::Rect& window, double threshold,
                         double cx, double cy) {
   const double reach = std::sqrt(FarthestAbove2(image, window, threshold, cx, cy)) +
                        kBackgroundMarginPx;
+  const cv::Rect around =
+      SquareAround(cx, cy, 2 * window.width) & cv::Rect(0, 0, image.cols, image.rows);
   std::vector<double> outside;
-  for (int y = window.y; y < window.y + window.height; ++y) {
+  outside.reserve(static_cast<size_t>(around.area()));
+  const double reach2 = reach * reach;
+  for (int y = around.y; y < around.y + around.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
-    for (int x = window.x; x < window.x + window.width; ++x) {
-      if (std::hypot(x - cx, y - cy) > reach) outside.push_back(row[x]);
+    for (int x = around.x; x < around.x + around.width; ++x) {
+      if ((x - cx) * (x - cx) + (y - cy) * (y - cy) > reach2) outside.push_back(row[x]);
     }
   }
   if (outside.size() < 32) outside = BorderRing(image, window);
