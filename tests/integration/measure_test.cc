@@ -269,11 +269,13 @@ TEST_F(Measure, KillNineKeepsEveryPrintedBracketInEstimatesCsv) {
   for (const auto& [bracket, count] : rows) {
     EXPECT_EQ(count, rows.begin()->second) << "bracket " << bracket << " is partial";
   }
-  // Each row ends in the bracket's time: UTC, the host's monotonic clock, the camera's timestamp.
+  // Each row ends in the bracket's time (UTC, the host's monotonic clock, the camera's timestamp),
+  // then the standard errors and the flags.
   const std::string text = ReadAll(out + "/estimates.csv");
   const std::string last = text.substr(text.rfind('\n', text.size() - 2) + 1);
   EXPECT_TRUE(std::regex_search(
-      last, std::regex(R"(,\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{6}Z,[1-9]\d*,[1-9]\d*\n$)")))
+      last, std::regex(R"(,\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{6}Z,[1-9]\d*,[1-9]\d*,[0-9.e+-]*,)"
+                       R"([0-9.e+-]*,[^,]*\n$)")))
       << last;
   std::string output;
   EXPECT_EQ(RunIrdist({"check", out + "/estimates.csv"}, *dir_ + "/killed-check.log", &output), 0)
@@ -467,8 +469,9 @@ TEST_F(Measure, ValidateWritesThePositionBesideItsTruth) {
     std::stringstream fields(line);
     for (std::string f; std::getline(fields, f, ',');) c.push_back(f);
     if (line.back() == ',') c.emplace_back();  // an empty last column
-    // health at 12, the 3D columns, motion, spread, outside, then the 3 time columns
-    ASSERT_EQ(c.size(), 28u) << line;
+    // health at 12, the 3D columns, motion, spread, outside, the 3 time columns, d_se_mm,
+    // theta_se_deg and flags
+    ASSERT_EQ(c.size(), 31u) << line;
     const double x = std::stod(c[13]), y = std::stod(c[14]), z = std::stod(c[15]);
     const double tx = std::stod(c[19]), ty = std::stod(c[20]), tz = std::stod(c[21]);
     EXPECT_EQ(tx, 40.0);
