@@ -5,7 +5,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "estimator/features.h"
+#include "estimator/ellipse_fit.h"
 
 namespace irdist {
 

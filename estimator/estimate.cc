@@ -428,12 +428,9 @@ void ChooseStart(const Problem& p, double theta0_deg, const EstimateOptions& opt
     if (try_poly(c, RootSource::kSingleModel, false)) return;
     if (try_poly(a, RootSource::kSingleModel, false)) return;
   }
-  // No root in range: start from the blob's size (the geometric estimate) where there is one,
-  // else from the middle of the range; a start far from the answer can stall on a flat cost.
   out->root_source = RootSource::kFallback;
   out->root_index = -1;
-  out->d0_mm = std::isfinite(tie_geo_ln_d) ? std::exp(tie_geo_ln_d)
-                                           : 0.5 * (cr.d_min_mm + cr.d_max_mm);
+  out->d0_mm = 0.5 * (cr.d_min_mm + cr.d_max_mm);
 }
 
 void Prepare(const CalibrationModel& model, const FittedModel** e, const FittedModel** s) {

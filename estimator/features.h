@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "estimator/ellipse_fit.h"
 #include "estimator/scene.h"
 
 namespace irdist {
@@ -125,15 +126,6 @@ struct FeatureOptions {
   // features.subtract_background (absent: false, the paper's features of older models).
   bool subtract_background = true;
   bool IsValid(std::string* why) const;
-};
-
-struct EllipseFit {
-  bool valid = false;
-  cv::Point2d center_px;
-  double major_px = 0.0;  // full axis lengths
-  double minor_px = 0.0;
-  double angle_deg = 0.0;   // direction of the major axis in the image, degrees from +x
-  double theta0_deg = 0.0;  // acos(minor / major)
 };
 
 struct Features {

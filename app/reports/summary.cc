@@ -107,9 +107,15 @@ bool SilentlyWrong(const EstimateRow& r) {
   return error_mm > std::max(0.003 * r.true_d_mm, 4.0 * se_mm);
 }
 
-// The rows' flags by name, the suspect rows and the silently wrong ones.
+// The rows outside a range, with their health and motion assessed and flagged, their flags by
+// name, the suspect rows and the silently wrong ones.
 void CountFlags(const std::vector<const EstimateRow*>& rows, MethodSummary* m) {
   for (const EstimateRow* r : rows) {
+    m->outside_calibrated_range += r->outside_range ? 1 : 0;
+    m->health_assessed += r->health != "-" ? 1 : 0;
+    m->health_flagged += r->health != "-" && r->health != "ok" ? 1 : 0;
+    m->motion_assessed += r->motion != "-" ? 1 : 0;
+    m->motion_flagged += r->motion == "moving" ? 1 : 0;
     for (const EstimateFlag& f : r->flags) ++m->flags[f.name];
     m->suspect += r->Trusted() ? 0 : 1;
     m->silently_wrong += SilentlyWrong(*r) ? 1 : 0;
@@ -134,13 +140,6 @@ MethodSummary SummarizeMethod(const std::string& method, const std::vector<Estim
   }
   m.all = Figures(main_rows);
   m.conditions = ConditionsOf(main_rows);
-  for (const EstimateRow* r : main_rows) m.outside_calibrated_range += r->outside_range ? 1 : 0;
-  for (const EstimateRow* r : main_rows) {
-    m.health_assessed += r->health != "-" ? 1 : 0;
-    m.health_flagged += r->health != "-" && r->health != "ok" ? 1 : 0;
-    m.motion_assessed += r->motion != "-" ? 1 : 0;
-    m.motion_flagged += r->motion == "moving" ? 1 : 0;
-  }
   CountFlags(main_rows, &m);
 
   std::map<PoseKey, std::map<long, std::vector<double>>> by_pose_current;
