@@ -91,10 +91,11 @@ std::string SceneCheck::BriefReport() const {
   out << "scene (the images, a report): " << brackets.size() << " brackets; " << suspect
       << " with a second source, an occluded disc, saturation or no blob; " << with_defects
       << " with defect pixels and " << with_others
-      << " with other blobs (both measured through); ambient up to " << ambient
+      << " with other blobs (both measured through); background (black level and ambient) up to "
+      << ambient
       << " of full scale";
   if (!rows.empty()) {
-    out << "\n  bracket frames no_blob defects others 2nd_src occluded   ambient\n" << rows;
+    out << "\n  bracket frames no_blob defects others 2nd_src occluded background\n" << rows;
     out << "  (docs/reports.md, \"Flags\": a second source or an occluded disc makes the "
            "estimates suspect; move the source, mask the reflection or clear the disc)";
   }

@@ -227,3 +227,30 @@ TEST_F(LabScene, AMergedReflectionAndACableAreNamed) {
 
 }  // namespace
 }  // namespace irdist
+
+namespace irdist {
+namespace {
+
+// `irdist check` looks at the images too: each bracket's scene, as a report (exit 0).
+TEST_F(LabScene, CheckReportsEachBracketsScene) {
+  const std::map<std::string, std::string> expected = {
+      {"control", "6 brackets; 0 with a second source"},
+      {"reflection8", "6 brackets; 6 with a second source"},
+      {"cable15", "6 brackets; 6 with a second source, an occluded disc"},
+      {"defects", "6 with defect pixels"},
+      {"second_led", "6 with other blobs"}};
+  for (const auto& [name, text] : expected) {
+    std::string output;
+    EXPECT_EQ(RunIrdist({"check", *dir_ + "/" + name + "/recording"},
+                        *dir_ + "/check-" + name + ".log", &output),
+              0)
+        << output;
+    EXPECT_NE(output.find(text), std::string::npos) << name << ":\n" << output;
+  }
+  std::string output;
+  RunIrdist({"check", *dir_ + "/cable15/recording"}, *dir_ + "/check-cable.log", &output);
+  EXPECT_NE(output.find("occluded"), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace irdist
