@@ -167,3 +167,28 @@ TEST(FocusTracker, WithoutAModelGivesTheEdgeWidthAndTheBestSeen) {
 
 }  // namespace
 }  // namespace irdist
+
+namespace irdist {
+namespace {
+
+// The scene pass's findings are drawn where they are: a box around each defect pixel replaced
+// (yellow), each other blob masked outlined (orange); nothing of either colour without them.
+TEST(DrawFeatures, MarksTheDefectPixelsAndTheOtherBlobsTheScenePassFound) {
+  Features f;
+  f.blob_found = true;
+  f.roi = cv::Rect(10, 10, 64, 64);
+  cv::Mat view(256, 256, CV_8UC3, cv::Scalar(0, 0, 0));
+  DrawFeatures(f, 2.0, &view);
+  EXPECT_EQ(CountColour(view, kDefectColour), 0);
+  EXPECT_EQ(CountColour(view, kOtherBlobColour), 0);
+  f.scene.defect_px = {cv::Point(30, 40)};
+  f.scene.other_blob_rects = {cv::Rect(80, 20, 10, 8)};
+  DrawFeatures(f, 2.0, &view);
+  // At 2x, pixel (30, 40) covers [60, 62) x [80, 82): its box is drawn around it.
+  EXPECT_GT(CountColour(view, kDefectColour, cv::Rect(56, 76, 10, 10)), 8);
+  EXPECT_EQ(CountColour(view, kDefectColour, cv::Rect(61, 81, 1, 1)), 0);  // the pixel stays seen
+  EXPECT_GT(CountColour(view, kOtherBlobColour, cv::Rect(158, 38, 24, 20)), 40);
+}
+
+}  // namespace
+}  // namespace irdist
