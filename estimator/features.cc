@@ -363,9 +363,12 @@ bool RoiStatistics(const cv::Mat& image, const cv::Rect& window, double roi_thre
   out->roi = fixed ? window : cv::Rect(min_x, min_y, max_x - min_x + 1, max_y - min_y + 1);
   out->roi_area_px = area;
   out->saturated_pixels = saturated;
-  out->window_background =
-      WindowBackground(image, window, roi_threshold, centre.x, centre.y) / max_gray;
-  const double bg = options.subtract_background ? out->window_background : 0.0;
+  // Measured only where it is taken off (the paper's features and older models skip the scan).
+  if (options.subtract_background) {
+    out->window_background =
+        WindowBackground(image, window, roi_threshold, centre.x, centre.y) / max_gray;
+  }
+  const double bg = out->window_background;
   const double bg_f = options.subtract_background && !f.IsIdentity() ? f.Apply(bg) : bg;
   out->f00 = sum - area * bg;
   out->e_rel = sum_f / area - bg_f;

@@ -119,7 +119,8 @@ struct FeatureOptions {
   // ComputeFeatures, which measures the frame it is given; CleanScene checks these options.
   SceneOptions scene;
   // E_rel and F(0,0) of the IRED's light alone: the window's own background (the clipped mean of
-  // its 4 px border ring, where the frame holds no blob; Features::window_background) is taken
+  // a square twice the window around the blob, beyond its reach; Features::window_background) is
+  // taken
   // off every pixel first, so light that does not come from the IRED (ambient light, growing
   // with the exposure) does not enter the differences dE and dF; a constant background (black
   // level) cancels in them either way. Sigma is the same either way. model.yaml key
@@ -138,8 +139,8 @@ struct Features {
   cv::Rect roi;             // fixed window, or the bounding box of the threshold mask
   int roi_area_px = 0;      // A
   double background = 0.0;  // normalised gray level of the background (the frame's median)
-  // The window's own background: the clipped mean of its 4 px border ring (normalised), what
-  // FeatureOptions::subtract_background takes off E_rel and F(0,0).
+  // The window's own background (normalised): what FeatureOptions::subtract_background takes off
+  // E_rel and F(0,0), measured only then (0 otherwise).
   double window_background = 0.0;
   double peak = 0.0;        // normalised gray level of the brightest blob pixel
   double e_rel = 0.0;

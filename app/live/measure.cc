@@ -48,13 +48,6 @@ constexpr const char* kSoftwareVersion = "irdist 0.1.0";
 // Free space a recording leaves on its disk by default (or 5% of the disk when that is less).
 constexpr double kFreeMarginBytes = 1024.0 * 1024.0 * 1024.0;
 
-std::string Fixed(double value, int decimals) {
-  if (!std::isfinite(value)) return "-";
-  char text[40];
-  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
-  return text;
-}
-
 // The bracket measure takes: the flags', else the model's calibration bracket.
 struct MeasureBracket {
   std::vector<double> exposures_us;  // t_r first
@@ -344,7 +337,7 @@ void Session::Finish() {
 
 // A size for a person: MB below a GB, GB above.
 std::string SizeText(double bytes) {
-  return bytes < 1e9 ? Fixed(bytes / 1e6, 1) + " MB" : Fixed(bytes / 1e9, 2) + " GB";
+  return bytes < 1e9 ? FixedText(bytes / 1e6, 1) + " MB" : FixedText(bytes / 1e9, 2) + " GB";
 }
 
 std::string Shortest(double value) {
@@ -444,7 +437,7 @@ class MeasureWarnings {
     if (s.motion.moving && !motion_done_) {
       motion_done_ = true;
       err_ << Break() << "warning: bracket " << s.bracket << " moving: its per-exposure "
-           << "distances spread " << Fixed(s.motion.spread_mm, 1)
+           << "distances spread " << FixedText(s.motion.spread_mm, 1)
            << " mm, beyond their noise; the IRED moved during the bracket. Its estimate mixes "
               "positions: hold the IRED still, or discard brackets flagged moving.\n";
     }

@@ -13,6 +13,13 @@
 
 namespace irdist {
 
+std::string FixedText(double value, int decimals) {
+  if (!std::isfinite(value)) return "-";
+  char text[40];
+  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
+  return text;
+}
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -21,13 +28,6 @@ std::string JsonNumber(double value) {
   if (!std::isfinite(value)) return "null";
   char text[40];
   std::snprintf(text, sizeof(text), "%.10g", value);
-  return text;
-}
-
-std::string Fixed(double value, int decimals) {
-  if (!std::isfinite(value)) return "-";
-  char text[40];
-  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
   return text;
 }
 
@@ -56,13 +56,6 @@ bool IsSceneFlag(const std::string& name) {
   for (const char* scene : {"defect_pixels", "other_blobs", "second_source", "occluded",
                             "t_meas_extrapolated"}) {
     if (name == scene) return true;
-  }
-  return false;
-}
-
-bool HasFlag(const EstimateRow& e, const char* name) {
-  for (const EstimateFlag& f : e.flags) {
-    if (f.name == name) return true;
   }
   return false;
 }
@@ -98,8 +91,8 @@ std::string QualityFlags(const MeasureSample& s) {
       "outside_range(" + JoinNames(s.estimate.outside, " ") + ")");
   add(s.health.flagged, std::string(s.health.Label()) + "(" +
                             (s.health.sigma_change > 0.0 ? "+" : "") +
-                            Fixed(100.0 * s.health.sigma_change, 0) + "%)");
-  add(s.motion.moving, "moving(" + Fixed(s.motion.spread_mm, 1) + " mm)");
+                            FixedText(100.0 * s.health.sigma_change, 0) + "%)");
+  add(s.motion.moving, "moving(" + FixedText(s.motion.spread_mm, 1) + " mm)");
   add(!s.have_estimate || !s.estimate.ok, "no_estimate");
   return flags.empty() ? "ok" : flags;
 }
@@ -150,8 +143,8 @@ std::string MeasureJson(const MeasureSample& s) {
       << ",\"outside_range\":" << JsonBool(s.have_estimate && e.outside_range)
       << ",\"unhealthy\":" << JsonBool(s.health.flagged)
       << ",\"moving\":" << JsonBool(s.motion.moving)
-      << ",\"second_source\":" << JsonBool(HasFlag(e, "second_source"))
-      << ",\"occluded\":" << JsonBool(HasFlag(e, "occluded")) << "}"
+      << ",\"second_source\":" << JsonBool(HasFlag(e.flags, "second_source"))
+      << ",\"occluded\":" << JsonBool(HasFlag(e.flags, "occluded")) << "}"
       << ",\"trusted\":" << JsonBool(ok && e.Trusted()) << ",\"causes\":" << CausesJson(s)
       << ",\"outside\":" << NamesJson(s.have_estimate ? e.outside : std::vector<std::string>{})
       << ",\"health\":" << HealthJson(s.health) << ",\"motion\":" << MotionJson(s.motion)
@@ -182,16 +175,16 @@ std::vector<LineField> MeasureLineFields(const MeasureSample& s) {
   const bool ok = s.have_estimate && e.ok;
   std::vector<LineField> fields;
   fields.push_back({"#" + std::to_string(s.bracket), 5});
-  fields.push_back({"t " + Fixed(s.time_s, 2) + " s", 1});
-  fields.push_back({"d " + Fixed(ok ? e.d_mm : NAN, 1) + " +- " +
-                        Fixed(ok ? Se(e.d_std_mm) : NAN, 1) + " mm", 7});
-  fields.push_back({"theta " + Fixed(ok ? e.theta_deg : NAN, 2) + " +- " +
-                        Fixed(ok ? Se(e.theta_std_deg) : NAN, 2) + " deg", 4});
-  fields.push_back({"blob (" + Fixed(s.blob_found ? s.blob_x_px : NAN, 1) + ", " +
-                        Fixed(s.blob_found ? s.blob_y_px : NAN, 1) + ") px", 2});
+  fields.push_back({"t " + FixedText(s.time_s, 2) + " s", 1});
+  fields.push_back({"d " + FixedText(ok ? e.d_mm : NAN, 1) + " +- " +
+                        FixedText(ok ? Se(e.d_std_mm) : NAN, 1) + " mm", 7});
+  fields.push_back({"theta " + FixedText(ok ? e.theta_deg : NAN, 2) + " +- " +
+                        FixedText(ok ? Se(e.theta_std_deg) : NAN, 2) + " deg", 4});
+  fields.push_back({"blob (" + FixedText(s.blob_found ? s.blob_x_px : NAN, 1) + ", " +
+                        FixedText(s.blob_found ? s.blob_y_px : NAN, 1) + ") px", 2});
   if (ok && s.has_position) {
-    fields.push_back({"xyz (" + Fixed(s.x_mm, 1) + ", " + Fixed(s.y_mm, 1) + ", " +
-                          Fixed(s.z_mm, 1) + ") mm", 3});
+    fields.push_back({"xyz (" + FixedText(s.x_mm, 1) + ", " + FixedText(s.y_mm, 1) + ", " +
+                          FixedText(s.z_mm, 1) + ") mm", 3});
   }
   fields.push_back({"[" + QualityFlags(s) + "]", 6});
   return fields;
@@ -265,13 +258,13 @@ void MeasureStats::Add(const MeasureSample& s) {
 
 std::string MeasureStats::Report(double wall_s) const {
   std::ostringstream out;
-  out << "Measured " << count_ << " brackets in " << Fixed(wall_s, 2) << " s ("
-      << Fixed(wall_s > 0.0 ? count_ / wall_s : NAN, 2) << " brackets/s), " << estimated_
+  out << "Measured " << count_ << " brackets in " << FixedText(wall_s, 2) << " s ("
+      << FixedText(wall_s > 0.0 ? count_ / wall_s : NAN, 2) << " brackets/s), " << estimated_
       << " with an estimate\n";
   const auto line = [&out](const char* name, const Moments& m, const char* unit, int decimals) {
     if (m.n == 0) return;
-    out << "  " << name << ": mean " << Fixed(m.mean, decimals) << " " << unit << ", sd "
-        << Fixed(m.Sd(), decimals) << " " << unit << "\n";
+    out << "  " << name << ": mean " << FixedText(m.mean, decimals) << " " << unit << ", sd "
+        << FixedText(m.Sd(), decimals) << " " << unit << "\n";
   };
   line("d", d_, "mm", 2);
   line("theta", theta_, "deg", 3);

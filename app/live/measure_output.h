@@ -62,6 +62,9 @@ MeasureSample MeasureSampleOf(const RecordedBracket& bracket, const FeatureMap& 
                               const BracketEstimateRows& rows, const CalibrationModel& model,
                               const CameraGeometry& geometry);
 
+// `value` with `decimals` decimals, "-" when not finite: the text of every figure measure prints.
+std::string FixedText(double value, int decimals);
+
 // The JSON object of one bracket (one line, no trailing newline).
 std::string MeasureJson(const MeasureSample& s);
 // The one-line text form (piped output; the terminal's live line is the same text).

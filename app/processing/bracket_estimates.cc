@@ -81,6 +81,19 @@ std::vector<EstimateRow> EmptyRows(const std::string& method, const EstimateRow&
   return rows;
 }
 
+// Every frame of a bracket's pairs (a reference shared by pairs once) and its measurement
+// exposures (ms), in pair order.
+void FramesOfPairs(const std::vector<DifferencePair>& pairs, const FeatureMap& features,
+                   std::vector<const Features*>* frames, std::vector<double>* t_ms) {
+  const FrameRecord* last_reference = nullptr;
+  for (const DifferencePair& pair : pairs) {
+    if (pair.reference != last_reference) frames->push_back(&FeaturesOf(features, *pair.reference));
+    last_reference = pair.reference;
+    frames->push_back(&FeaturesOf(features, *pair.measurement));
+    t_ms->push_back(pair.measurement->requested_exposure_us / 1000.0);
+  }
+}
+
 // One method's rows for a bracket: the joint estimate (dt_ms = 0), then one row per t_n. With
 // `checks`, the bracket's calibration health and motion (from this method's rows) go there.
 void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& options,
@@ -89,14 +102,12 @@ void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& op
                         bool all_usable, std::vector<EstimateRow>* out,
                         BracketEstimateRows* checks = nullptr) {
   const FrameRecord& reference = *pairs.front().reference;
-  std::vector<Features> measurements;
-  std::vector<double> t_ms;
   std::vector<const Features*> frames;  // every frame of the bracket, for the signal's range
+  std::vector<double> t_ms;
+  FramesOfPairs(pairs, features, &frames, &t_ms);
+  std::vector<Features> measurements;
   for (const DifferencePair& pair : pairs) {
     measurements.push_back(FeaturesOf(features, *pair.measurement));
-    t_ms.push_back(pair.measurement->requested_exposure_us / 1000.0);
-    frames.push_back(&FeaturesOf(features, *pair.reference));
-    frames.push_back(&FeaturesOf(features, *pair.measurement));
   }
   std::vector<EstimateRow> rows = EmptyRows(method, base, pairs);
   DistanceEstimate none;  // without an estimate: the exposures' and the signal's ranges only
@@ -244,19 +255,6 @@ BlobPoint BlobOf(const std::vector<DifferencePair>& pairs, const FeatureMap& fea
   blob.u_se_px = std::sqrt(su / (n - 1.0) / n);
   blob.v_se_px = std::sqrt(sv / (n - 1.0) / n);
   return blob;
-}
-
-// Every frame of a bracket's pairs (a reference shared by pairs once) and its measurement
-// exposures (ms), in pair order.
-void FramesOfPairs(const std::vector<DifferencePair>& pairs, const FeatureMap& features,
-                   std::vector<const Features*>* frames, std::vector<double>* t_ms) {
-  const FrameRecord* last_reference = nullptr;
-  for (const DifferencePair& pair : pairs) {
-    if (pair.reference != last_reference) frames->push_back(&FeaturesOf(features, *pair.reference));
-    last_reference = pair.reference;
-    frames->push_back(&FeaturesOf(features, *pair.measurement));
-    t_ms->push_back(pair.measurement->requested_exposure_us / 1000.0);
-  }
 }
 
 // The flags of every row (app/processing/estimate_flags.h): the frames' for all, each row's own

@@ -14,49 +14,6 @@ std::string Fixed(double value, int decimals, const char* unit) {
   return text;
 }
 
-// The worst of each scene figure over a bracket's frames.
-struct SceneWorst {
-  bool no_blob = false, touches_border = false, clipped = false;
-  int saturated = 0, defect_pixels = 0, other_blobs = 0;
-  bool second_source = false, occluded = false;
-  double peak_min = 0.0, peak_max = 0.0;
-  double second_source_gap_px = INFINITY;
-  double occluded_edge_fraction = 0.0;
-};
-
-SceneWorst WorstOf(const std::vector<const Features*>& frames) {
-  SceneWorst w;
-  for (const Features* f : frames) {
-    if (f == nullptr || !f->blob_found) {
-      w.no_blob = true;
-      continue;
-    }
-    w.touches_border = w.touches_border || f->touches_border;
-    w.clipped = w.clipped || f->blob_clipped_by_roi;
-    w.saturated = std::max(w.saturated, f->saturated_pixels);
-    w.peak_min = w.peak_max > 0.0 ? std::min(w.peak_min, f->peak) : f->peak;
-    w.peak_max = std::max(w.peak_max, f->peak);
-    const SceneReport& s = f->scene;
-    w.defect_pixels = std::max(w.defect_pixels, s.defect_pixels);
-    w.other_blobs = std::max(w.other_blobs, s.other_blobs);
-    if (s.second_source) {
-      w.second_source = true;
-      if (std::isfinite(s.second_source_gap_px)) {
-        w.second_source_gap_px = std::min(w.second_source_gap_px, s.second_source_gap_px);
-      }
-    }
-    if (s.occluded) {
-      w.occluded = true;
-      w.occluded_edge_fraction = std::max(w.occluded_edge_fraction, s.occluded_edge_fraction);
-    }
-  }
-  return w;
-}
-
-bool HasFlag(const std::vector<EstimateFlag>& flags, const char* name) {
-  return std::any_of(flags.begin(), flags.end(),
-                     [name](const EstimateFlag& f) { return f.name == name; });
-}
 
 // `t_meas` within kExposureExtrapolation of the calibrated exposures: the note's figure (the
 // farthest exposure, ms), or "" when some exposure lies beyond the tolerance.
@@ -110,6 +67,35 @@ void FlagRanges(const CalibratedRanges& ranges, const BracketFrameFlags& frames,
 
 }  // namespace
 
+void SceneFigures::Add(const Features* f) {
+  ++frames;
+  if (f != nullptr) background_max = std::max(background_max, f->background);
+  if (f == nullptr || !f->blob_found) {
+    ++no_blob;
+    return;
+  }
+  touches_border = touches_border || f->touches_border;
+  clipped = clipped || f->blob_clipped_by_roi;
+  saturated_frames += f->saturated_pixels > 0 ? 1 : 0;
+  saturated_px = std::max(saturated_px, f->saturated_pixels);
+  peak_min = peak_max > 0.0 ? std::min(peak_min, f->peak) : f->peak;
+  peak_max = std::max(peak_max, f->peak);
+  const SceneReport& s = f->scene;
+  defect_pixels = std::max(defect_pixels, s.defect_pixels);
+  other_blobs = std::max(other_blobs, s.other_blobs);
+  if (s.second_source) {
+    ++second_source;
+    if (std::isfinite(s.second_source_gap_px) &&
+        !(second_source_gap_px <= s.second_source_gap_px)) {
+      second_source_gap_px = s.second_source_gap_px;
+    }
+  }
+  if (s.occluded) {
+    ++occluded;
+    occluded_edge_fraction = std::max(occluded_edge_fraction, s.occluded_edge_fraction);
+  }
+}
+
 double DisagreementTolerance(const CalibrationModel& model) {
   const double fit_error = model.geometric.fitted()
                                ? std::max(model.geometric.summary.mean_relative_error, 0.0)
@@ -130,25 +116,26 @@ std::string PercentFigure(double fraction) {
 }
 
 BracketFrameFlags FrameFlags(const std::vector<const Features*>& frames) {
-  const SceneWorst w = WorstOf(frames);
+  SceneFigures w;
+  for (const Features* f : frames) w.Add(f);
   BracketFrameFlags out;
   out.peak_min = w.peak_min;
   out.peak_max = w.peak_max;
   std::vector<EstimateFlag>& flags = out.flags;
   if (w.defect_pixels > 0) flags.push_back({"defect_pixels", std::to_string(w.defect_pixels)});
-  if (w.other_blobs > 0 && !w.second_source) {
+  if (w.other_blobs > 0 && w.second_source == 0) {
     flags.push_back({"other_blobs", std::to_string(w.other_blobs)});
   }
-  if (w.no_blob) flags.push_back({"no_blob", ""});
-  if (w.saturated > 0) flags.push_back({"saturated", std::to_string(w.saturated)});
+  if (w.no_blob > 0) flags.push_back({"no_blob", ""});
+  if (w.saturated_px > 0) flags.push_back({"saturated", std::to_string(w.saturated_px)});
   if (w.touches_border) flags.push_back({"touches_border", ""});
   if (w.clipped) flags.push_back({"clipped", ""});
-  if (w.second_source) {
+  if (w.second_source > 0) {
     flags.push_back({"second_source", std::isfinite(w.second_source_gap_px)
                                           ? Fixed(w.second_source_gap_px, 1, "px")
                                           : ""});
   }
-  if (w.occluded) {
+  if (w.occluded > 0) {
     flags.push_back({"occluded", Fixed(100.0 * w.occluded_edge_fraction, 0, "%")});
   }
   return out;

@@ -6,6 +6,7 @@
 // other blobs, a second source, an occluded disc; saturation, the window's border); each row adds
 // its own ranges, motion and calibration health.
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,21 @@ constexpr double kExposureExtrapolation = 0.15;
 // Fig. 10's 525 mA at 40 ms (up to 17% above Table 3's brightest frame) measures as well as the
 // brackets inside (docs/estimator.md, "Exposures beyond the calibration").
 constexpr double kSignalExtrapolation = 0.25;
+
+// The worst of each scene figure over a bracket's frames (a frame without a blob counts in
+// no_blob): what the flags and `irdist check` (scene_check.h) say of a bracket.
+struct SceneFigures {
+  int frames = 0, no_blob = 0;
+  int saturated_frames = 0, saturated_px = 0;  // frames with saturation; the most pixels in one
+  int defect_pixels = 0, other_blobs = 0;       // the most in one frame
+  int second_source = 0, occluded = 0;          // frames
+  bool touches_border = false, clipped = false;
+  double second_source_gap_px = NAN;  // the smallest gap over the frames with a second source
+  double occluded_edge_fraction = 0.0;
+  double peak_min = 0.0, peak_max = 0.0;  // over the frames with a blob (0: none)
+  double background_max = 0.0;           // the frames' background, normalised
+  void Add(const Features* f);           // null: a frame without features (no blob)
+};
 
 // What a bracket's frames (every frame: references and measurements) say, the same for each of
 // its rows: the scene's and the frames' flags, notes (defect_pixels, other_blobs) and suspects

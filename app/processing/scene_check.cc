@@ -12,51 +12,33 @@ namespace irdist {
 
 namespace {
 
-void AddFrame(const Features& f, BracketScene* b) {
-  ++b->frames;
-  b->ambient_pct = std::max(b->ambient_pct, 100.0 * f.background);
-  if (!f.blob_found) {
-    ++b->no_blob;
-    return;
-  }
-  const SceneReport& s = f.scene;
-  b->defect_pixels = std::max(b->defect_pixels, s.defect_pixels);
-  b->other_blobs = std::max(b->other_blobs, s.other_blobs);
-  b->saturated += f.saturated_pixels > 0 ? 1 : 0;
-  if (s.second_source) {
-    ++b->second_source;
-    if (!(b->second_source_gap_px <= s.second_source_gap_px)) {
-      b->second_source_gap_px = s.second_source_gap_px;
-    }
-  }
-  if (s.occluded) {
-    ++b->occluded;
-    b->occluded_edge_pct = std::max(b->occluded_edge_pct, 100.0 * s.occluded_edge_fraction);
-  }
-}
-
 std::string Row(const BracketScene& b) {
+  const SceneFigures& f = b.figures;
   char line[200];
   std::snprintf(line, sizeof(line), "  %7lld %6d %7d %7d %7d %7d %9d %8.2f%%",
-                static_cast<long long>(b.bracket), b.frames, b.no_blob, b.defect_pixels,
-                b.other_blobs, b.second_source, b.occluded, b.ambient_pct);
+                static_cast<long long>(b.bracket), f.frames, f.no_blob, f.defect_pixels,
+                f.other_blobs, f.second_source, f.occluded, 100.0 * f.background_max);
   std::string out = line;
-  if (b.second_source > 0 && std::isfinite(b.second_source_gap_px)) {
-    std::snprintf(line, sizeof(line), "  second source %.1f px away", b.second_source_gap_px);
+  if (f.second_source > 0 && std::isfinite(f.second_source_gap_px)) {
+    std::snprintf(line, sizeof(line), "  second source %.1f px away", f.second_source_gap_px);
     out += line;
   }
-  if (b.occluded > 0) {
-    std::snprintf(line, sizeof(line), "  occluded %.0f%% of the edge", b.occluded_edge_pct);
+  if (f.occluded > 0) {
+    std::snprintf(line, sizeof(line), "  occluded %.0f%% of the edge",
+                  100.0 * f.occluded_edge_fraction);
     out += line;
   }
-  if (b.saturated > 0) out += "  saturated in " + std::to_string(b.saturated) + " frame(s)";
+  if (f.saturated_frames > 0) {
+    out += "  saturated in " + std::to_string(f.saturated_frames) + " frame(s)";
+  }
   return out;
 }
 
 }  // namespace
 
 bool BracketScene::Suspect() const {
-  return no_blob > 0 || second_source > 0 || occluded > 0 || saturated > 0;
+  const SceneFigures& f = figures;
+  return f.no_blob > 0 || f.second_source > 0 || f.occluded > 0 || f.saturated_frames > 0;
 }
 
 SceneCheck CheckScene(const RecordingReader& reader) {
@@ -67,7 +49,8 @@ SceneCheck CheckScene(const RecordingReader& reader) {
     BracketScene b;
     b.bracket = bracket.bracket_id;
     for (const FrameRecord& row : bracket.frames) {
-      AddFrame(FrameFeatures(reader.LoadImage(row), bit_depth, options), &b);
+      const Features f = FrameFeatures(reader.LoadImage(row), bit_depth, options);
+      b.figures.Add(&f);
     }
     check.brackets.push_back(b);
   }
@@ -81,10 +64,12 @@ std::string SceneCheck::BriefReport() const {
   std::string rows;
   for (const BracketScene& b : brackets) {
     suspect += b.Suspect() ? 1 : 0;
-    with_defects += b.defect_pixels > 0 ? 1 : 0;
-    with_others += b.other_blobs > 0 ? 1 : 0;
-    ambient_max = std::max(ambient_max, b.ambient_pct);
-    if (b.Suspect() || b.defect_pixels > 0 || b.other_blobs > 0) rows += Row(b) + "\n";
+    with_defects += b.figures.defect_pixels > 0 ? 1 : 0;
+    with_others += b.figures.other_blobs > 0 ? 1 : 0;
+    ambient_max = std::max(ambient_max, 100.0 * b.figures.background_max);
+    if (b.Suspect() || b.figures.defect_pixels > 0 || b.figures.other_blobs > 0) {
+      rows += Row(b) + "\n";
+    }
   }
   char ambient[32];
   std::snprintf(ambient, sizeof(ambient), "%.2f%%", ambient_max);

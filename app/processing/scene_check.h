@@ -4,28 +4,20 @@
 // source too close, an occluded disc, saturation and the ambient level. A report, not an error:
 // a lab sees its scene's problems before it fits.
 
-#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "app/processing/estimate_flags.h"
 
 namespace irdist {
 
 class RecordingReader;
 
-// One bracket's scene: the worst figure over its frames.
+// One bracket's scene: the worst figure over its frames (the flags' own aggregate).
 struct BracketScene {
   std::int64_t bracket = 0;
-  int frames = 0;
-  int no_blob = 0;                    // frames without a blob
-  int defect_pixels = 0;              // most defect pixels replaced in one frame's window
-  int other_blobs = 0;                // most other blobs masked in one frame
-  int second_source = 0;              // frames with another source's light on the IRED's
-  double second_source_gap_px = NAN;  // the smallest gap over those
-  int occluded = 0;                   // frames whose disc is occluded
-  double occluded_edge_pct = 0.0;     // the largest share of the edge affected
-  int saturated = 0;                  // frames with saturated pixels
-  double ambient_pct = 0.0;           // the largest background level, % of full scale
+  SceneFigures figures;
   // Anything a lab should look at (not defects or other blobs alone, which are measured through).
   bool Suspect() const;
 };

@@ -248,6 +248,13 @@ const FlagSpec* FindFlagSpec(const std::string& name) {
   return nullptr;
 }
 
+bool HasFlag(const std::vector<EstimateFlag>& flags, const char* name) {
+  for (const EstimateFlag& f : flags) {
+    if (f.name == name) return true;
+  }
+  return false;
+}
+
 std::string FlagsCell(const std::vector<EstimateFlag>& flags) {
   std::string cell;
   for (const EstimateFlag& f : flags) {

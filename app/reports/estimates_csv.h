@@ -31,6 +31,8 @@ struct FlagSpec {
 const std::vector<FlagSpec>& FlagSpecs();
 // The spec of `name`; nullptr when it is not a documented flag.
 const FlagSpec* FindFlagSpec(const std::string& name);
+// Whether `flags` holds the flag `name`.
+bool HasFlag(const std::vector<EstimateFlag>& flags, const char* name);
 // estimates.csv's flags cell: "name" or "name=figure", separated by spaces ("" when none).
 std::string FlagsCell(const std::vector<EstimateFlag>& flags);
 // The flags of a cell written by FlagsCell. Throws EstimatesFileError naming `where` on a name

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "app/reports/estimates_csv.h"
+#include "tests/integration/measure_helpers.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
 
@@ -25,20 +26,7 @@ using testing::WriteAll;
 
 // 5 distances x 4 angles x 2 currents: a calibration whose I0-free Sigma model is well posed
 // (the 3-distance one of the other tests leaves it ill-conditioned, a pole inside the range).
-constexpr const char* kCalibrationRecipe = R"(name: lab-calibration
-rig: virtual
-after: fit
-axes:
-  slide_mm: [1500, 1750, 2000, 2250, 2500]
-  theta_deg: [0, 10, 20, 30]
-  bias_ma: [475, 500]
-bracket:
-  t_ref_ms: 8
-  t_meas_ms: [30, 33, 36]
-settle:
-  after_move_ms: 200
-  after_current_ms: 500
-)";
+const char* const kCalibrationSlidesMm = "[1500, 1750, 2000, 2250, 2500]";
 
 // 3 distances x 2 angles at one current: 6 brackets per fault.
 std::string ValidationRecipe(const std::string& rig_path) {
@@ -100,7 +88,8 @@ class LabScene : public ::testing::Test {
     rows_ = new std::map<std::string, Rows>;
     logs_ = new std::map<std::string, std::string>;
     testing::LoopbackGvcpLock lock;
-    WriteAll(*dir_ + "/calibration.yaml", kCalibrationRecipe);
+    WriteAll(*dir_ + "/calibration.yaml",
+             testing::SmallCalibrationRecipe("lab-calibration", kCalibrationSlidesMm));
     std::string log;
     calibrated_ = RunIrdist({"calibrate", *dir_ + "/calibration.yaml", "--out", *dir_ + "/cal",
                              "--time-scale", "50", "--quiet"},

@@ -11,13 +11,14 @@
 namespace irdist::testing {
 
 // A 3-distance x 4-angle x 2-current calibration on the virtual rig, fitted after recording
-// (the measure tests and integration/calibrate_validate).
-inline std::string SmallCalibrationRecipe(const std::string& name) {
+// (the measure tests and integration/calibrate_validate); `slides_mm` another list of distances.
+inline std::string SmallCalibrationRecipe(const std::string& name,
+                                          const std::string& slides_mm = "[1500, 2000, 2500]") {
   return "name: " + name + R"(
 rig: virtual
 after: fit
 axes:
-  slide_mm: [1500, 2000, 2500]
+  slide_mm: )" + slides_mm + R"(
   theta_deg: [0, 10, 20, 30]
   bias_ma: [475, 500]
 bracket:
