@@ -293,20 +293,21 @@ double FarthestAbove2(const cv::Mat& image, const cv::Rect& window, double thres
 // blur's tail, a few sigma.
 constexpr double kBackgroundMarginPx = 4.0;
 
-// The window's background (gray levels): the mean of the pixels of a square twice the window's
-// side around the blob, beyond the blob's reach (the farthest pixel of the window above
-// `threshold` from (cx, cy), plus kBackgroundMarginPx), within 5 robust sd of their median (a
-// stray bright pixel does not move it). The square is centred on the blob, so a smooth gradient's
-// mean over it is its value under the blob: the window's sum loses exactly the background there.
-// Its area is 4x the window's, so the mean's noise, times the window's area in F(0,0), stays
-// small beside the signal's (the Fig. 14 pose's d scatter: 1.12 mm without subtraction, 1.24 with
-// the window alone, 1.14 with the square).
+// The window's background (gray levels): the mean of the pixels of a square four times the
+// window's side around the blob (the whole 256 px ROI at the default 64 px window), beyond the
+// blob's reach (the farthest pixel of the window above `threshold` from (cx, cy), plus
+// kBackgroundMarginPx), within 5 robust sd of their median (a stray bright pixel does not move
+// it). The square is centred on the blob, so a smooth gradient's mean over it is its value under
+// the blob: the window's sum loses exactly the background there. Its area keeps the mean's noise,
+// times the window's area in F(0,0), below the signal's: the Fig. 14 pose's d scatter is 1.12 mm
+// as without subtraction (1.24 from the window's border alone, 1.14 from a square of twice its
+// side, whose noise also raised the motion check's false alarms).
 double WindowBackground(const cv::Mat& image, const cv::Rect& window, double threshold,
                         double cx, double cy) {
   const double reach = std::sqrt(FarthestAbove2(image, window, threshold, cx, cy)) +
                        kBackgroundMarginPx;
   const cv::Rect around =
-      SquareAround(cx, cy, 2 * window.width) & cv::Rect(0, 0, image.cols, image.rows);
+      SquareAround(cx, cy, 4 * window.width) & cv::Rect(0, 0, image.cols, image.rows);
   std::vector<double> outside;
   outside.reserve(static_cast<size_t>(around.area()));
   const double reach2 = reach * reach;

@@ -119,7 +119,7 @@ struct FeatureOptions {
   // ComputeFeatures, which measures the frame it is given; CleanScene checks these options.
   SceneOptions scene;
   // E_rel and F(0,0) of the IRED's light alone: the window's own background (the clipped mean of
-  // a square twice the window around the blob, beyond its reach; Features::window_background) is
+  // a square four times the window around the blob, beyond its reach; window_background) is
   // taken
   // off every pixel first, so light that does not come from the IRED (ambient light, growing
   // with the exposure) does not enter the differences dE and dF; a constant background (black
