@@ -10,6 +10,7 @@
 
 #include "base/check.h"
 #include "estimator/disc_fit.h"
+#include "estimator/gray_histogram.h"
 
 namespace irdist {
 namespace {
@@ -18,6 +19,8 @@ constexpr double kPi = 3.14159265358979323846;
 // The moments' threshold is at least this many noise sd above the background: a noise pixel
 // passes 5 sd in 3e-7 of draws, once in about 800 windows of 64 x 64.
 constexpr double kMomentNoiseSigmas = 5.0;
+// A normal distribution's sd over its median absolute deviation.
+constexpr double kMadToSd = 1.4826;
 
 // Median and median absolute deviation of a strided subsample of a CV_16UC1 image.
 void RobustBackground(const cv::Mat& coarse, double* median, double* mad) {
@@ -28,12 +31,9 @@ void RobustBackground(const cv::Mat& coarse, double* median, double* mad) {
     for (int x = (y % 3); x < coarse.cols; x += 3) values.push_back(row[x]);
   }
   IRDIST_CHECK(!values.empty(), "empty image");
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  *median = values[mid];
-  for (uint16_t& v : values) v = static_cast<uint16_t>(std::abs(static_cast<int>(v) - *median));
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  *mad = values[mid];
+  const GrayHistogram levels(values);
+  *median = levels.Median();
+  *mad = levels.MedianAbsoluteDeviation();
 }
 
 cv::Rect SquareAround(double cx, double cy, int side) {
@@ -214,7 +214,7 @@ bool DetectCoarse(const cv::Mat& image, double max_gray, const FeatureOptions& o
   cv::Point coarse_at;
   cv::minMaxLoc(coarse, nullptr, &coarse_peak, nullptr, &coarse_at);
   const double min_contrast =
-      std::max(options.min_contrast_fraction * max_gray, 8.0 * 1.4826 * mad);
+      std::max(options.min_contrast_fraction * max_gray, 8.0 * kMadToSd * mad);
   at->cx = coarse_at.x * k + 0.5 * (k - 1);
   at->cy = coarse_at.y * k + 0.5 * (k - 1);
   return coarse_peak - at->background >= min_contrast;
@@ -261,8 +261,8 @@ void FlagBorders(const cv::Mat& image, const cv::Rect& window, const cv::Rect& f
 
 // The gray levels of the window's border ring, kBorderPx wide (away from the blob).
 constexpr int kBorderPx = 4;
-std::vector<double> BorderRing(const cv::Mat& image, const cv::Rect& window) {
-  std::vector<double> border;
+std::vector<uint16_t> BorderRing(const cv::Mat& image, const cv::Rect& window) {
+  std::vector<uint16_t> border;
   for (int y = window.y; y < window.y + window.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
     const bool edge_row = y < window.y + kBorderPx || y >= window.y + window.height - kBorderPx;
@@ -303,34 +303,24 @@ constexpr double kBackgroundMarginPx = 4.0;
 // as without subtraction (1.24 from the window's border alone, 1.14 from a square of twice its
 // side, whose noise also raised the motion check's false alarms).
 double WindowBackground(const cv::Mat& image, const cv::Rect& window, double threshold,
-                        double cx, double cy) {
+                        double max_gray, double cx, double cy) {
   const double reach = std::sqrt(FarthestAbove2(image, window, threshold, cx, cy)) +
                        kBackgroundMarginPx;
   const cv::Rect around =
       SquareAround(cx, cy, 4 * window.width) & cv::Rect(0, 0, image.cols, image.rows);
-  std::vector<double> outside;
-  outside.reserve(static_cast<size_t>(around.area()));
+  GrayHistogram levels(static_cast<int>(max_gray));
   const double reach2 = reach * reach;
   for (int y = around.y; y < around.y + around.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
     for (int x = around.x; x < around.x + around.width; ++x) {
-      if ((x - cx) * (x - cx) + (y - cy) * (y - cy) > reach2) outside.push_back(row[x]);
+      if ((x - cx) * (x - cx) + (y - cy) * (y - cy) > reach2) levels.Add(row[x]);
     }
   }
-  if (outside.size() < 32) outside = BorderRing(image, window);
-  std::vector<double> sorted = outside;
-  const auto mid = sorted.begin() + sorted.size() / 2;
-  std::nth_element(sorted.begin(), mid, sorted.end());
-  const double median = *mid;
-  const double limit = 5.0 * std::max(RobustNoiseSd(&sorted), 1.0);
-  double sum = 0.0;
+  if (levels.size() < 32) levels = GrayHistogram(BorderRing(image, window));
+  const double median = levels.Median();
+  const double limit = 5.0 * std::max(kMadToSd * levels.MedianAbsoluteDeviation(), 1.0);
   int n = 0;
-  for (double g : outside) {
-    if (std::abs(g - median) > limit) continue;
-    sum += g;
-    ++n;
-  }
-  return n > 0 ? sum / n : median;
+  return levels.ClippedMean(median, limit, &n);
 }
 
 // ROI statistics: E_rel, F(0,0), Sigma, saturation, the ROI itself. Returns false when the ROI is
@@ -367,7 +357,7 @@ bool RoiStatistics(const cv::Mat& image, const cv::Rect& window, double roi_thre
   // Measured only where it is taken off (the paper's features and older models skip the scan).
   if (options.subtract_background) {
     out->window_background =
-        WindowBackground(image, window, roi_threshold, centre.x, centre.y) / max_gray;
+        WindowBackground(image, window, roi_threshold, max_gray, centre.x, centre.y) / max_gray;
   }
   const double bg = out->window_background;
   const double bg_f = options.subtract_background && !f.IsIdentity() ? f.Apply(bg) : bg;
@@ -475,8 +465,8 @@ const EllipseFit& ChosenEllipse(const Features& f, EllipseMethod method) {
 // The read noise's sd (gray levels) on the window's border (a 4 px frame, away from the blob):
 // RobustNoiseSd. 0 when the border is too small to say.
 double BorderNoiseSd(const cv::Mat& image, const cv::Rect& window) {
-  std::vector<double> border = BorderRing(image, window);
-  return border.size() < 32 ? 0.0 : RobustNoiseSd(&border);
+  const GrayHistogram border(BorderRing(image, window));
+  return border.size() < 32 ? 0.0 : kMadToSd * border.MedianAbsoluteDeviation();
 }
 
 // Steps 3-7 of ComputeFeatures on a located blob: borders, ROI statistics, the three ellipses.
@@ -545,7 +535,7 @@ double RobustNoiseSd(std::vector<double>* values) {
   const double median = *mid;
   for (double& x : *values) x = std::abs(x - median);
   std::nth_element(values->begin(), mid, values->end());
-  return 1.4826 * *mid;
+  return kMadToSd * *mid;
 }
 
 }  // namespace irdist

@@ -79,6 +79,24 @@ void BM_RoiComputeFeatures(benchmark::State& state) {
 }
 BENCHMARK(BM_RoiComputeFeatures)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
+// The estimation default's per-frame cost on a live ROI (256 x 256, the default 64 px window),
+// as app/processing/frame_features.cc runs it: the scene pass, the moments, then FitBlob with the
+// frame's blur (the rendering's 0.7 px optics, pixel area added); a clean frame (Arg 0) and a
+// cluttered one (Arg 1). The figure tracking needs (issue 34: <= 1.5 ms a frame).
+void BM_RoiFrameWithBlobFit(benchmark::State& state) {
+  const cv::Mat frame = RoiFrame(state.range(0) != 0);
+  const FeatureOptions options;
+  const double blur_var_px2 = 0.7 * 0.7 + 1.0 / 12.0;
+  for (auto _ : state) {
+    const SceneFrame cleaned = CleanScene(frame, 12, options.scene);
+    const Features features = ComputeFeatures(cleaned.image, 12, options);
+    const BlobFitResult fit = FitBlob(cleaned.image, 12, features, blur_var_px2);
+    if (!fit.ok) state.SkipWithError("the blob fit failed");
+    benchmark::DoNotOptimize(fit);
+  }
+}
+BENCHMARK(BM_RoiFrameWithBlobFit)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
 void BM_RoiScenePass(benchmark::State& state) {
   const cv::Mat frame = RoiFrame(state.range(0) != 0);
   const SceneOptions options;
