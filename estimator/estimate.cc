@@ -14,6 +14,8 @@
 #include <utility>
 
 #include "base/check.h"
+#include "estimator/polynomial_roots.h"
+#include "estimator/theta_start.h"
 
 namespace irdist {
 namespace {
@@ -251,27 +253,13 @@ void ReportConditioning(const Problem& p, const double x[2], bool solve_theta,
   if (p.fused) FusedUncertainty(p, h_equations, h_prior, solve_theta, out);
 }
 
-constexpr double kRangeZ = 3.0;  // RangeOptions::z_limit's default
-
-// Is `value` (standard error `se`; <= 0 or NaN: none) outside [lo, hi] beyond z standard errors?
-// `floor` is the smallest margin (the solver's own precision).
-bool OutsideEdges(double value, double se, double lo, double hi, double z, double floor) {
-  const double margin = std::max(floor, se > 0.0 ? z * se : 0.0);
-  return value < lo - margin || value > hi + margin;
-}
-
-bool OutsideDistance(const CalibratedRanges& cr, const DistanceEstimate& e, double z) {
-  return OutsideEdges(e.d_mm, e.d_std_mm, cr.d_min_mm, cr.d_max_mm, z, 1e-6 * cr.d_max_mm);
-}
-
-bool OutsideTheta(const CalibratedRanges& cr, const DistanceEstimate& e, double z) {
-  return OutsideEdges(e.theta_deg, e.theta_std_deg, cr.theta_min_deg, cr.theta_max_deg, z, 1e-4);
-}
+constexpr double kRangeZ = 3.0;  // RangeOptions::z_limit's default (bracket_checks.h)
 
 // Distance, and theta when solved, each edge widened by 3 standard errors of the estimate.
 bool OutsideCalibratedRange(const CalibratedRanges& cr, const DistanceEstimate& e,
                             bool solve_theta) {
-  return OutsideDistance(cr, e, kRangeZ) || (solve_theta && OutsideTheta(cr, e, kRangeZ));
+  return cr.DistanceOutside(e.d_mm, e.d_std_mm, kRangeZ) ||
+         (solve_theta && cr.ThetaOutside(e.theta_deg, e.theta_std_deg, kRangeZ));
 }
 
 // Eq. 26 by ceres::TinySolver on 2 (or 1, theta fixed) unknowns, from out->d0_mm, theta0_deg.
@@ -286,62 +274,6 @@ void SolveLm(const Problem& p, bool solve_theta, const EstimateOptions& options,
   ReportPlainResiduals(p, x, out);
   ReportConditioning(p, x, solve_theta, out);
   out->outside_calibrated_range = OutsideCalibratedRange(p.model->ranges, *out, solve_theta);
-}
-
-// Real roots of the polynomial c[0] + c[1] x + ... + c[kDegree] x^kDegree by Eigen's
-// PolynomialSolver (eigenvalues of the companion matrix). A root counts as real when its
-// imaginary part is below 1e-9 (1 + |real part|): a double root comes out of the eigen solver as
-// a pair with imaginary parts of about sqrt(machine epsilon) times its size.
-template <int kDegree>
-int RealRootsOfDegree(const double* c, double* roots) {
-  Eigen::Matrix<double, kDegree + 1, 1> coefficients;
-  for (int k = 0; k <= kDegree; ++k) coefficients(k) = c[k];
-  Eigen::PolynomialSolver<double, kDegree> solver(coefficients);
-  int n = 0;
-  for (int i = 0; i < kDegree; ++i) {
-    const std::complex<double> z = solver.roots()(i);
-    if (std::abs(z.imag()) <= 1e-9 * (1.0 + std::abs(z.real()))) roots[n++] = z.real();
-  }
-  return n;
-}
-
-// Real roots of poly[0] + poly[1] x + poly[2] x^2 + poly[3] x^3, ascending, each polished by
-// three Newton steps. Leading coefficients below 1e-12 of the largest are taken as zero (a lower
-// degree). Returns the count.
-int RealRoots(const double poly[4], double roots[3]) {
-  double scale = 0.0;
-  for (int k = 0; k < 4; ++k) scale = std::max(scale, std::abs(poly[k]));
-  if (scale == 0.0) return 0;
-  double c[4];
-  for (int k = 0; k < 4; ++k) c[k] = poly[k] / scale;
-  int n = 0;
-  if (std::abs(c[3]) > 1e-12) {
-    n = RealRootsOfDegree<3>(c, roots);
-  } else if (std::abs(c[2]) > 1e-12) {
-    n = RealRootsOfDegree<2>(c, roots);
-  } else if (std::abs(c[1]) > 1e-12) {
-    roots[n++] = -c[0] / c[1];
-  }
-  for (int i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      const double x = roots[i];
-      const double f = ((c[3] * x + c[2]) * x + c[1]) * x + c[0];
-      const double df = (3.0 * c[3] * x + 2.0 * c[2]) * x + c[1];
-      if (df != 0.0) roots[i] = x - f / df;
-    }
-  }
-  for (int i = 1; i < n; ++i) {  // ascending (insertion sort of at most three)
-    for (int j = i; j > 0 && roots[j - 1] > roots[j]; --j) std::swap(roots[j - 1], roots[j]);
-  }
-  return n;
-}
-
-void Normalise(double poly[4]) {
-  double norm = 0.0;
-  for (int k = 0; k < 4; ++k) norm += poly[k] * poly[k];
-  norm = std::sqrt(norm);
-  if (norm > 0.0)
-    for (int k = 0; k < 4; ++k) poly[k] /= norm;
 }
 
 // Sum of |relative residual| of the voting equations at scaled D, theta0, over all differences.
@@ -387,10 +319,10 @@ void ChooseStart(const Problem& p, double theta0_deg, const EstimateOptions& opt
   vars[kVarRho] = Rho(theta0_deg, p.s->sigma_deg);
   AlgebraicPolynomialInD(GetModelSpec(ModelKind::kFreeSigma), p.s->coefficients.data(), vars, df.ds,
                          c);
-  Normalise(c);
+  NormaliseToUnitNorm(c);
   vars[kVarRho] = Rho(theta0_deg, p.e->sigma_deg);
   AlgebraicPolynomialInD(GetModelSpec(ModelKind::kFreeE), p.e->coefficients.data(), vars, df.de, a);
-  Normalise(a);
+  NormaliseToUnitNorm(a);
 
   auto try_poly = [&](const double poly[4], RootSource source, bool count) {
     double roots[3];
@@ -456,69 +388,12 @@ DistanceEstimate Solve(const Problem& p, double theta0_deg, const EstimateOption
   return out;
 }
 
-// theta (deg) from moment variances with the calibrated blur removed, through the calibrated
-// correction when the model has one and the options ask for it; NaN when the blob is not larger
-// than the blur.
-// `size_blur_var_px2`: the blur inside the variances where it is known (the blob fit's, which
-// added it: then the ratio is the fitted disc's own), else NaN: the geometric model's b(u), whose
-// fit also takes up the size model's misfit (0.045 px^2 above the calibrated blur at 1.5 m on the
-// sharp rig: theta +0.05 deg there).
-double ThetaFromVariances(const CalibrationModel& model, double major_var_px2,
-                          double minor_var_px2, const EstimateOptions& options,
-                          double size_blur_var_px2 = std::numeric_limits<double>::quiet_NaN()) {
-  if (options.theta_correction && model.theta_correction.fitted()) {
-    return model.theta_correction.ThetaDeg(major_var_px2, minor_var_px2, model.geometric);
-  }
-  const double d_geo_mm = model.geometric.DistanceMm(major_var_px2);
-  const double beta = std::isfinite(size_blur_var_px2) ? size_blur_var_px2
-                      : std::isfinite(d_geo_mm)        ? model.geometric.BlurVarPx2(d_geo_mm)
-                                                       : model.geometric.beta_px2;
-  const double major = major_var_px2 - beta;
-  const double minor = minor_var_px2 - beta;
-  if (!(major > 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  const double ratio = std::clamp(std::sqrt(std::max(0.0, minor) / major), 0.0, 1.0);
-  return std::acos(ratio) / kRad;
-}
-
-// theta0 of one frame under the chosen source.
-double Theta0(const CalibrationModel& model, const Features& f, const EstimateOptions& options) {
-  if (options.theta_source == ThetaSource::kFeatures || !model.geometric.fitted()) {
-    return f.theta0_deg;
-  }
-  const double theta = ThetaFromVariances(model, f.moment_major_var_px2, f.moment_minor_var_px2,
-                                          options, f.size_blur_var_px2);
-  return std::isfinite(theta) ? theta : f.theta0_deg;
-}
-
-// theta0 from the signal-weighted mean of the frames' moment matrices (kBracketMoments), with the
-// calibrated blur removed; falls back to Theta0 of `fallback` when no frame has moments.
-double Theta0Combined(const CalibrationModel& model, const Features* const* frames, int count,
-                      const Features& fallback, const EstimateOptions& options) {
-  if (options.theta_source != ThetaSource::kBracketMoments || !model.geometric.fitted()) {
-    return Theta0(model, fallback, options);
-  }
-  double xx = 0.0, yy = 0.0, xy = 0.0, weight = 0.0;
-  for (int i = 0; i < count; ++i) {
-    const Features& f = *frames[i];
-    if (!f.blob_found || !f.ellipse_moments.valid) continue;
-    const double signal = f.f00 - f.background * f.roi_area_px;  // normalised gray levels
-    if (!(signal > 0.0)) continue;
-    const double a = f.ellipse_moments.angle_deg * kRad;
-    const double c = std::cos(a), s = std::sin(a);
-    const double l1 = f.moment_major_var_px2, l2 = f.moment_minor_var_px2;
-    xx += signal * (l1 * c * c + l2 * s * s);
-    yy += signal * (l1 * s * s + l2 * c * c);
-    xy += signal * (l1 - l2) * s * c;
-    weight += signal;
-  }
-  if (!(weight > 0.0)) return Theta0(model, fallback, options);
-  xx /= weight;
-  yy /= weight;
-  xy /= weight;
-  const double root = std::sqrt(std::max(0.0, 0.25 * (xx - yy) * (xx - yy) + xy * xy));
-  const double theta =
-      ThetaFromVariances(model, 0.5 * (xx + yy) + root, 0.5 * (xx + yy) - root, options);
-  return std::isfinite(theta) ? theta : Theta0(model, fallback, options);
+ThetaStartOptions ThetaStartOf(const EstimateOptions& options) {
+  ThetaStartOptions t;
+  t.from_features = options.theta_source == ThetaSource::kFeatures;
+  t.bracket_moments = options.theta_source == ThetaSource::kBracketMoments;
+  t.correction = options.theta_correction;
+  return t;
 }
 
 // ln of the frame's geometric distance, NaN when there is none.
@@ -634,7 +509,7 @@ DistanceEstimate EstimatePair(const CalibrationModel& model, const Features& ref
   const Difference diff = MakeDifference(model.scaling, reference, t_ref_ms, measurement, t_ms);
   const double geo = GeometricLnD(model, measurement);
   const Features* pair[2] = {&reference, &measurement};
-  const double theta0 = Theta0Combined(model, pair, 2, measurement, options);
+  const double theta0 = Theta0Combined(model, pair, 2, measurement, ThetaStartOf(options));
   Problem p{&model, e, s, !e->degenerate, &diff, 1};
   SetUpFused(model, options, &geo, theta0, &p);
   SetUpReferenceSize(model, options, reference, t_ref_ms, &t_ms, 1, &p);
@@ -663,14 +538,14 @@ BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& r
     diffs[i] = MakeDifference(model.scaling, reference, t_ref_ms, measurements[i], t_ms[i]);
     geo[i] = GeometricLnD(model, measurements[i]);
     const Features* pair[2] = {&reference, &measurements[i]};
-    thetas[i] = Theta0Combined(model, pair, 2, measurements[i], options);
+    thetas[i] = Theta0Combined(model, pair, 2, measurements[i], ThetaStartOf(options));
     theta0 += thetas[i] / n;
   }
   if (options.theta_source == ThetaSource::kBracketMoments) {
     const Features* frames[kMaxBracketExposures + 1];
     frames[0] = &reference;
     for (int i = 0; i < n; ++i) frames[i + 1] = &measurements[i];
-    theta0 = Theta0Combined(model, frames, n + 1, measurements[0], options);
+    theta0 = Theta0Combined(model, frames, n + 1, measurements[0], ThetaStartOf(options));
   }
   for (int i = 0; i < n; ++i) {
     Problem p{&model, e, s, !e->degenerate, &diffs[i], 1};
@@ -693,27 +568,6 @@ BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& r
   out.joint.d0_mm = best->d_mm;
   out.joint.d_geometric_mm = MeanFinite(geo, n);
   SolveLm(joint, !e->degenerate, options, &out.joint);
-  return out;
-}
-
-std::string GeometricEstimate::BriefReport() const {
-  if (!valid) return "geometric: no estimate (no blob or size below the calibrated blur)";
-  std::ostringstream out;
-  out << "geometric: d = " << d_mm << " mm" << (outside_calibrated_range ? " (OUTSIDE RANGE)" : "");
-  return out.str();
-}
-
-GeometricEstimate EstimateGeometric(const CalibrationModel& model, const Features& features) {
-  GeometricEstimate out;
-  const GeometricModel& g = model.geometric;
-  IRDIST_CHECK(g.fitted(), "the model has no fitted geometric baseline");
-  if (!features.blob_found) return out;
-  const double d_mm = g.DistanceMm(features.moment_major_var_px2);
-  if (!std::isfinite(d_mm)) return out;
-  out.valid = true;
-  out.d_mm = d_mm;
-  out.outside_calibrated_range =
-      out.d_mm < model.ranges.d_min_mm || out.d_mm > model.ranges.d_max_mm;
   return out;
 }
 
@@ -742,122 +596,6 @@ const char* ToString(ThetaSource source) {
 }
 const char* ToString(RootTieBreaker tie_breaker) {
   return tie_breaker == RootTieBreaker::kResidualVote ? "residual_vote" : "geometric";
-}
-
-std::string I0DependentEstimate::BriefReport() const {
-  if (!valid) return "i0_dependent: no estimate";
-  std::ostringstream out;
-  out << "i0_dependent: d = " << d_mm << " mm at an assumed " << assumed_bias_ma
-      << " mA, theta = " << theta_deg << " deg (ellipse)"
-      << (outside_calibrated_range ? " (OUTSIDE RANGE)" : "");
-  return out.str();
-}
-
-I0DependentEstimate EstimateI0Dependent(const CalibrationModel& model, const Features& reference,
-                                        double t_ref_ms, const std::vector<Features>& measurements,
-                                        const std::vector<double>& t_ms, double assumed_bias_ma) {
-  IRDIST_CHECK(measurements.size() == t_ms.size(), "measurements and t_ms differ in length");
-  I0DependentEstimate out;
-  out.assumed_bias_ma = assumed_bias_ma;
-  const FittedModel* f = model.Find(ModelKind::kDiffF);
-  if (f == nullptr || f->coefficients.empty() || !reference.blob_found) return out;
-  const ModelSpec& spec = GetModelSpec(ModelKind::kDiffF);
-  // dF = u + v D at fixed theta: least squares of (u + v D) / y - 1 over the bracket.
-  double num = 0.0, den = 0.0, theta = 0.0;
-  int n = 0;
-  for (size_t i = 0; i < measurements.size(); ++i) {
-    const Features& m = measurements[i];
-    if (!m.blob_found) continue;
-    theta += m.theta0_deg;
-    ++n;
-  }
-  if (n == 0) return out;
-  theta /= n;
-  for (size_t i = 0; i < measurements.size(); ++i) {
-    const Features& m = measurements[i];
-    if (!m.blob_found) continue;
-    ModelInputs in;
-    in.bias_ma = assumed_bias_ma;
-    in.dt_ms = t_ms[i] - t_ref_ms;
-    in.theta_deg = theta;
-    std::array<double, kNumModelVars> vars = ScaleInputs(in, model.scaling);
-    vars[kVarRho] = Rho(theta, f->sigma_deg);
-    vars[kVarD] = 0.0;
-    const double u = EvaluateModel(spec, f->coefficients.data(), vars.data());
-    vars[kVarD] = 1.0;
-    const double v = EvaluateModel(spec, f->coefficients.data(), vars.data()) - u;
-    const double y = m.f00 - reference.f00;
-    if (!(std::abs(y) > 0.0)) continue;
-    num += (v / y) * (1.0 - u / y);
-    den += (v / y) * (v / y);
-  }
-  if (!(den > 0.0) || !(num / den > 0.0)) return out;
-  out.valid = true;
-  out.d_mm = model.scaling.DistanceFromScaledD(num / den);
-  out.theta_deg = theta;
-  out.outside_calibrated_range =
-      out.d_mm < model.ranges.d_min_mm || out.d_mm > model.ranges.d_max_mm;
-  return out;
-}
-
-MotionCheck CheckMotion(double joint_d_mm, const std::vector<double>& d_mm,
-                        const std::vector<double>& d_se_mm, const MotionOptions& options) {
-  IRDIST_CHECK(d_mm.size() == d_se_mm.size(), "d_mm and d_se_mm differ in length");
-  IRDIST_CHECK(options.false_alarm > 0.0 && options.false_alarm < 1.0,
-               "MotionOptions::false_alarm must be in (0, 1)");
-  MotionCheck m;
-  if (!std::isfinite(joint_d_mm)) return m;
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (size_t i = 0; i < d_mm.size(); ++i) {
-    if (!std::isfinite(d_mm[i]) || !(d_se_mm[i] > 0.0) || !std::isfinite(d_se_mm[i])) continue;
-    const double z = (d_mm[i] - joint_d_mm) / d_se_mm[i];
-    m.chi2 += z * z;
-    lo = std::min(lo, d_mm[i]);
-    hi = std::max(hi, d_mm[i]);
-    ++m.exposures;
-  }
-  if (m.exposures < 2) return MotionCheck{};
-  m.assessed = true;
-  m.spread_mm = hi - lo;
-  const boost::math::chi_squared law(m.exposures - 1);
-  m.chi2_limit = boost::math::quantile(boost::math::complement(law, options.false_alarm));
-  m.moving = m.chi2 > m.chi2_limit;
-  return m;
-}
-
-std::vector<std::string> OutsideRanges(const CalibratedRanges& ranges,
-                                       const DistanceEstimate& estimate, double t_ref_ms,
-                                       const std::vector<double>& t_ms,
-                                       const std::vector<const Features*>& frames,
-                                       const RangeOptions& options) {
-  std::vector<std::string> outside;
-  DistanceEstimate widened = estimate;  // the distance's se with the calibration's error
-  const double calibration_mm = options.calibration_rel_error * estimate.d_mm;
-  widened.d_std_mm = std::hypot(std::max(estimate.d_std_mm, 0.0), calibration_mm);
-  if (OutsideDistance(ranges, widened, options.z_limit)) outside.push_back("distance");
-  if (OutsideTheta(ranges, estimate, options.z_limit)) outside.push_back("theta");
-  const auto beyond = [](double value, double lo, double hi, double tolerance) {
-    return value < lo * (1.0 - tolerance) || value > hi * (1.0 + tolerance);
-  };
-  if (beyond(t_ref_ms, ranges.t_ref_min_ms, ranges.t_ref_max_ms, options.exposure_tolerance)) {
-    outside.push_back("t_ref");
-  }
-  for (double t : t_ms) {
-    if (beyond(t, ranges.t_min_ms, ranges.t_max_ms, options.exposure_tolerance)) {
-      outside.push_back("t_meas");
-      break;
-    }
-  }
-  if (ranges.peak_max > 0.0) {
-    for (const Features* f : frames) {
-      if (f != nullptr && f->blob_found &&
-          beyond(f->peak, ranges.peak_min, ranges.peak_max, options.signal_tolerance)) {
-        outside.push_back("signal");
-        break;
-      }
-    }
-  }
-  return outside;
 }
 
 }  // namespace irdist

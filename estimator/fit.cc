@@ -191,64 +191,7 @@ bool EProportionalToF(ModelKind kind, const std::vector<CalibrationSample>& samp
   return true;
 }
 
-void FillErrors(FitSummary* s) {
-  double sum = 0.0, worst = 0.0;
-  for (double r : s->residuals) {
-    sum += std::abs(r);
-    worst = std::max(worst, std::abs(r));
-  }
-  s->mean_relative_error = s->residuals.empty() ? -1.0 : sum / s->residuals.size();
-  s->max_relative_error = s->residuals.empty() ? -1.0 : worst;
-}
-
-// Monomials of total degree <= `degree` in (x, z), graded order (ThetaCorrection).
-int ThetaBasis(int degree, double x, double z, double* out) {
-  int n = 0;
-  for (int total = 0; total <= degree; ++total) {
-    for (int zp = 0; zp <= total; ++zp) {
-      out[n++] = std::pow(x, total - zp) * std::pow(z, zp);
-    }
-  }
-  return n;
-}
-
-// x = (minor - beta) / (major - beta) and the geometric distance (mm); false without a blob
-// larger than the blur.
-bool RatioAndDistance(double major, double minor, const GeometricModel& g, double* x,
-                      double* d_mm) {
-  if (!(g.alpha_px2 > 0.0)) return false;
-  *d_mm = g.DistanceMm(major);
-  if (!std::isfinite(*d_mm)) return false;
-  const double blur = g.BlurVarPx2(*d_mm);
-  const double a = major - blur;
-  if (!(a > 0.0)) return false;
-  *x = std::clamp(std::max(0.0, minor - blur) / a, 0.0, 1.0);
-  return true;
-}
-
 }  // namespace
-
-double ThetaCorrection::ThetaDeg(double major_var_px2, double minor_var_px2,
-                                 const GeometricModel& g) const {
-  double x, d_mm;
-  if (!RatioAndDistance(major_var_px2, minor_var_px2, g, &x, &d_mm)) {
-    return std::numeric_limits<double>::quiet_NaN();
-  }
-  double cos2 = x;
-  if (fitted()) {
-    x = std::clamp(x, ratio_sq_min, ratio_sq_max);
-    const double half = 0.5 * (d_max_mm - d_min_mm);
-    const double z = half > 0.0 ? (std::clamp(d_mm, d_min_mm, d_max_mm) - d_min_mm) / half - 1.0
-                                : 0.0;
-    double basis[10];
-    const int n = ThetaBasis(degree, x, z, basis);
-    IRDIST_CHECK(static_cast<int>(coefficients.size()) == n, "theta correction of degree ", degree,
-                 " needs ", n, " coefficients, has ", coefficients.size());
-    cos2 = 0.0;
-    for (int k = 0; k < n; ++k) cos2 += coefficients[k] * basis[k];
-  }
-  return std::acos(std::sqrt(std::clamp(cos2, 0.0, 1.0))) * 180.0 / 3.14159265358979323846;
-}
 
 FitOptions PaperFitOptions() {
   FitOptions options;
@@ -299,6 +242,16 @@ std::string FitSummary::BriefReport() const {
       << "%, condition number " << condition_number << ", " << iterations << " iterations";
   if (!message.empty()) out << " (" << message << ")";
   return out.str();
+}
+
+void FitSummary::SetErrorsFromResiduals() {
+  double sum = 0.0, worst = 0.0;
+  for (double r : residuals) {
+    sum += std::abs(r);
+    worst = std::max(worst, std::abs(r));
+  }
+  mean_relative_error = residuals.empty() ? -1.0 : sum / residuals.size();
+  max_relative_error = residuals.empty() ? -1.0 : worst;
 }
 
 const FittedModel* CalibrationModel::Find(ModelKind kind) const {
@@ -561,7 +514,7 @@ FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<Calibrati
     return model;
   }
   RelativeCost(*in.spec, model.coefficients, model.sigma_deg, in.obs, &model.summary.residuals);
-  FillErrors(&model.summary);
+  model.summary.SetErrorsFromResiduals();
   if (kind == ModelKind::kDirectE || kind == ModelKind::kDiffE || kind == ModelKind::kFreeE) {
     model.degenerate = EProportionalToF(kind, samples, scaling, options);
     if (model.degenerate) model.summary.message += "; E proportional to F: degenerate";
@@ -569,69 +522,8 @@ FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<Calibrati
   return model;
 }
 
-namespace {
-
-// The residuals' rms at each calibrated distance (groups of >= 3 samples), then
-// ln rms = ln c + k ln(d / 1000 mm) by least squares weighted by the group sizes. With one
-// distance only, k = 0 and c = that rms.
-void FitGeometricNoise(const std::vector<std::pair<double, double>>& points, GeometricModel* g) {
-  std::map<double, std::pair<double, int>> groups;  // D -> (sum of r^2, count)
-  for (size_t i = 0; i < points.size(); ++i) {
-    const double r = g->summary.residuals[i];
-    if (!std::isfinite(r)) continue;
-    auto& acc = groups[points[i].first];
-    acc.first += r * r;
-    ++acc.second;
-  }
-  std::vector<NoiseGroup> noise_groups;
-  for (const auto& [big_d, acc] : groups) {
-    noise_groups.push_back({std::log(1.0 / std::sqrt(big_d)), acc.first, acc.second});
-  }
-  FitNoiseLaw(noise_groups, &g->noise_rel_at_1m, &g->noise_exponent);
-}
-
-}  // namespace
-
-double GeometricModel::BlurVarPx2(double d_mm) const {
-  const double u = 1000.0 / d_mm;
-  return beta_px2 + blur_u1_px2 * u + blur_u2_px2 * u * u;
-}
-
-double GeometricModel::DistanceMm(double major_var_px2) const {
-  const double a = alpha_px2 + blur_u2_px2, b = blur_u1_px2, c = beta_px2 - major_var_px2;
-  if (!(a > 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  const double disc = b * b - 4.0 * a * c;
-  if (!(disc >= 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  // The larger root; written without cancellation when b > 0.
-  const double u = b > 0.0 ? -2.0 * c / (b + std::sqrt(disc)) : (-b + std::sqrt(disc)) / (2.0 * a);
-  return u > 0.0 ? 1000.0 / u : std::numeric_limits<double>::quiet_NaN();
-}
 
 namespace {
-
-// Rows of the relative least squares [u^2 s / var, 1 / var, u / var, u^2 / var] . x = 1 for the
-// major axis (s = 1) and, when the blur varies with d, the minor axis (s = cos^2 theta).
-struct GeometricRows {
-  std::vector<std::array<double, 4>> rows;
-  std::vector<std::pair<double, double>> major_points;  // (D, major var): residuals, noise model
-};
-
-GeometricRows CollectGeometricRows(const std::vector<CalibrationSample>& samples, bool with_minor) {
-  GeometricRows g;
-  for (const CalibrationSample& s : samples) {
-    const Features& f = s.measurement;
-    if (!f.blob_found || f.moment_major_var_px2 <= 0.0) continue;
-    const double u = 1000.0 / s.d_mm;
-    const double v = f.moment_major_var_px2;
-    g.major_points.push_back({u * u, v});
-    g.rows.push_back({u * u / v, 1.0 / v, u / v, u * u / v});
-    if (!with_minor || f.moment_minor_var_px2 <= 0.0) continue;
-    const double cos_t = std::cos(s.theta_deg * 3.14159265358979323846 / 180.0);
-    const double m = f.moment_minor_var_px2;
-    g.rows.push_back({cos_t * cos_t * u * u / m, 1.0 / m, u / m, u * u / m});
-  }
-  return g;
-}
 
 // The measured blur of every usable measurement frame, at its true distance.
 std::vector<BlurPoint> MeasuredBlur(const std::vector<CalibrationSample>& samples) {
@@ -643,50 +535,6 @@ std::vector<BlurPoint> MeasuredBlur(const std::vector<CalibrationSample>& sample
   return points;
 }
 
-}  // namespace
-
-GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples,
-                            bool blur_varies_with_distance) {
-  GeometricModel g;
-  const GeometricRows data = CollectGeometricRows(samples, blur_varies_with_distance);
-  const int unknowns = blur_varies_with_distance ? 4 : 2;
-  g.summary.samples = static_cast<int>(data.major_points.size());
-  if (data.major_points.size() < 3 || static_cast<int>(data.rows.size()) < 2 * unknowns) {
-    g.summary.message = "fewer than 3 samples with a blob";
-    return g;
-  }
-  Eigen::MatrixXd a(data.rows.size(), unknowns);
-  for (size_t i = 0; i < data.rows.size(); ++i) {
-    for (int k = 0; k < unknowns; ++k) a(i, k) = data.rows[i][k];
-  }
-  const Eigen::VectorXd x = a.colPivHouseholderQr().solve(Eigen::VectorXd::Ones(a.rows()));
-  g.alpha_px2 = x(0);
-  g.beta_px2 = x(1);
-  if (blur_varies_with_distance) {
-    g.blur_u1_px2 = x(2);
-    g.blur_u2_px2 = x(3);
-  }
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a);
-  g.summary.condition_number =
-      svd.singularValues()(0) / svd.singularValues()(svd.singularValues().size() - 1);
-  for (const auto& p : data.major_points) {
-    // Relative error of the distance it implies.
-    const double d_true = 1000.0 / std::sqrt(p.first);
-    const double d_est = g.DistanceMm(p.second);
-    g.summary.residuals.push_back(std::isfinite(d_est) ? d_est / d_true - 1.0 : -1.0);
-  }
-  FillErrors(&g.summary);
-  FitGeometricNoise(data.major_points, &g);
-  g.summary.termination =
-      g.alpha_px2 > 0.0 ? FitSummary::Termination::kConverged : FitSummary::Termination::kFailed;
-  g.summary.message = blur_varies_with_distance
-                          ? "linear least squares, blur quadratic in 1/d; residuals are relative "
-                            "distance errors"
-                          : "linear least squares; residuals are relative distance errors";
-  return g;
-}
-
-namespace {
 
 // The blob's peak level over the usable frames of the calibration (CalibratedRanges::peak_*).
 void RecordPeakRange(const std::vector<CalibrationSample>& samples, CalibratedRanges* r) {
@@ -745,115 +593,6 @@ CalibrationModel Fit(const std::vector<CalibrationSample>& samples,
   }
   model.blur_calibration = FitBlurCalibration(MeasuredBlur(samples));
   return model;
-}
-
-namespace {
-
-// One usable calibration frame of the theta correction: its squared axis ratio x, geometric
-// distance and true theta.
-struct ThetaFrame {
-  double x, d_mm, theta_deg;
-};
-
-std::vector<ThetaFrame> ThetaFrames(const std::vector<CalibrationSample>& samples,
-                                    const GeometricModel& geometric) {
-  std::vector<ThetaFrame> frames;
-  if (!geometric.fitted()) return frames;
-  for (const CalibrationSample& s : samples) {
-    const Features& m = s.measurement;
-    if (!m.Usable()) continue;
-    ThetaFrame f{0.0, 0.0, s.theta_deg};
-    if (RatioAndDistance(m.moment_major_var_px2, m.moment_minor_var_px2, geometric, &f.x,
-                         &f.d_mm)) {
-      frames.push_back(f);
-    }
-  }
-  return frames;
-}
-
-// The calibrated ranges of x and of the geometric distance.
-void SetThetaRanges(const std::vector<ThetaFrame>& frames, ThetaCorrection* tc) {
-  tc->ratio_sq_min = tc->d_min_mm = std::numeric_limits<double>::infinity();
-  tc->ratio_sq_max = tc->d_max_mm = -std::numeric_limits<double>::infinity();
-  for (const ThetaFrame& f : frames) {
-    tc->ratio_sq_min = std::min(tc->ratio_sq_min, f.x);
-    tc->ratio_sq_max = std::max(tc->ratio_sq_max, f.x);
-    tc->d_min_mm = std::min(tc->d_min_mm, f.d_mm);
-    tc->d_max_mm = std::max(tc->d_max_mm, f.d_mm);
-  }
-}
-
-// The weighted least-squares system a c = y of cos^2(theta) in the basis of tc's degree.
-void ThetaSystem(const std::vector<ThetaFrame>& frames, const ThetaCorrection& tc,
-                 Eigen::MatrixXd* a, Eigen::VectorXd* y) {
-  const int terms = ThetaCorrection::NumTerms(tc.degree);
-  const double half = 0.5 * (tc.d_max_mm - tc.d_min_mm);
-  a->resize(frames.size(), terms);
-  y->resize(frames.size());
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const double z = half > 0.0 ? (frames[i].d_mm - tc.d_min_mm) / half - 1.0 : 0.0;
-    double basis[10];
-    ThetaBasis(tc.degree, frames[i].x, z, basis);
-    for (int k = 0; k < terms; ++k) (*a)(i, k) = basis[k];
-    // Rows at theta >= 10 deg weighted by 1 / (d cos^2 / d theta) = 1 / sin(2 theta): their
-    // residuals are then theta errors (rad). Nearly round blobs (theta < 10 deg: the eigenvalue
-    // noise floor dominates their axis ratio) get a small constant weight, so that they do not
-    // bend the fit at the angles where theta is observable.
-    const double th = frames[i].theta_deg * 3.14159265358979323846 / 180.0;
-    const double w = frames[i].theta_deg >= 10.0 ? 1.0 / std::sin(2.0 * th) : 0.25;
-    const double c = std::cos(th);
-    (*y)(i) = c * c * w;
-    a->row(i) *= w;
-  }
-}
-
-// Corrected minus true theta (deg) of every usable calibration frame, and the errors.
-void FillThetaResiduals(const std::vector<CalibrationSample>& samples,
-                        const GeometricModel& geometric, ThetaCorrection* tc) {
-  for (const CalibrationSample& s : samples) {
-    const Features& m = s.measurement;
-    if (!m.Usable()) continue;
-    const double t = tc->ThetaDeg(m.moment_major_var_px2, m.moment_minor_var_px2, geometric);
-    if (std::isfinite(t)) tc->summary.residuals.push_back(t - s.theta_deg);
-  }
-  FillErrors(&tc->summary);
-}
-
-}  // namespace
-
-ThetaCorrection FitThetaCorrection(const std::vector<CalibrationSample>& samples,
-                                   const GeometricModel& geometric, int degree) {
-  IRDIST_CHECK(degree >= 1 && degree <= 3, "theta correction degree ", degree, " not in [1, 3]");
-  ThetaCorrection tc;
-  const std::vector<ThetaFrame> frames = ThetaFrames(samples, geometric);
-  const int terms = ThetaCorrection::NumTerms(degree);
-  tc.summary.samples = static_cast<int>(frames.size());
-  if (!geometric.fitted() || static_cast<int>(frames.size()) < 2 * terms) {
-    tc.summary.message = geometric.fitted() ? "too few usable frames for the theta correction"
-                                            : "no geometric model (blur variance) to correct";
-    return tc;
-  }
-  tc.degree = degree;
-  SetThetaRanges(frames, &tc);
-  Eigen::MatrixXd a;
-  Eigen::VectorXd y;
-  ThetaSystem(frames, tc, &a, &y);
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const Eigen::VectorXd sv = svd.singularValues();
-  tc.summary.condition_number = sv(sv.size() - 1) > 0.0 ? sv(0) / sv(sv.size() - 1)
-                                                        : std::numeric_limits<double>::infinity();
-  if (!(sv(sv.size() - 1) > 1e-12 * sv(0))) {
-    tc.summary.message = "rank-deficient: the calibration needs several angles and distances";
-    tc.degree = 0;
-    return tc;
-  }
-  const Eigen::VectorXd c = svd.solve(y);
-  tc.coefficients.assign(c.data(), c.data() + c.size());
-  FillThetaResiduals(samples, geometric, &tc);
-  tc.summary.termination = FitSummary::Termination::kConverged;
-  tc.summary.message =
-      "linear least squares of cos^2(theta); residuals are theta errors in degrees";
-  return tc;
 }
 
 }  // namespace irdist

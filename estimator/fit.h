@@ -4,6 +4,7 @@
 // with the scale gauge of the ratio models fixed by holding one coefficient at 1. Also fits the
 // purely geometric baseline (distance from the blob's second-moment size).
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -78,6 +79,8 @@ struct FitSummary {
   int gauge_index = -1;           // coefficient held at 1 (ratio models), -1 if none
   std::vector<double> residuals;  // relative residual per observation, in input order
   std::string BriefReport() const;
+  // mean_relative_error and max_relative_error from |residuals| (-1 when there are none).
+  void SetErrorsFromResiduals();
 };
 
 const char* ToString(FitSummary::Termination termination);
@@ -104,6 +107,22 @@ struct CalibratedRanges {
   // Signal level: the blob's peak gray level (Features::peak, normalised) over the calibration's
   // frames, reference and measurement; 0, 0 = not recorded (a model file before it).
   double peak_min = 0.0, peak_max = 0.0;
+  // Whether d_mm (standard error se_mm; <= 0 or NaN: none) lies outside [d_min, d_max] by more
+  // than z standard errors (and at least 1e-6 of d_max: the solver's own precision); theta
+  // likewise (at least 1e-4 deg).
+  bool DistanceOutside(double d_mm, double se_mm, double z) const {
+    return OutsideEdges(d_mm, se_mm, d_min_mm, d_max_mm, z, 1e-6 * d_max_mm);
+  }
+  bool ThetaOutside(double theta_deg, double se_deg, double z) const {
+    return OutsideEdges(theta_deg, se_deg, theta_min_deg, theta_max_deg, z, 1e-4);
+  }
+
+ private:
+  static bool OutsideEdges(double value, double se, double lo, double hi, double z,
+                           double floor) {
+    const double margin = std::max(floor, se > 0.0 ? z * se : 0.0);
+    return value < lo - margin || value > hi + margin;
+  }
 };
 
 // Geometric baseline: the blob's second moment along the disc's major axis (px^2) is

@@ -13,6 +13,7 @@
 #include "app/processing/bracket_estimates.h"
 #include "app/reports/summary.h"
 #include "estimator/estimate.h"
+#include "estimator/bracket_checks.h"
 #include "estimator/health.h"
 
 namespace irdist {

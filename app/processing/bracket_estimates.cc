@@ -8,6 +8,8 @@
 #include "app/processing/estimate_flags.h"
 #include "app/processing/position.h"
 #include "estimator/estimate.h"
+#include "estimator/bracket_checks.h"
+#include "estimator/estimate_baselines.h"
 #include "estimator/health.h"
 #include "estimator/models.h"
 
@@ -49,7 +51,7 @@ void FillRow(const CalibrationModel& model, const DistanceEstimate& e, double t_
   row->ok = std::isfinite(e.d_mm) && e.d_mm > 0.0 && e.converged;
 }
 
-// Motion (estimator/estimate.h CheckMotion) of the joint row from its per-exposure rows.
+// Motion (estimator/bracket_checks.h CheckMotion) of the joint row from its per-exposure rows.
 MotionCheck MotionOfRows(const std::vector<EstimateRow>& per_dt, EstimateRow* joint) {
   if (!joint->ok) return MotionCheck{};
   std::vector<double> d_mm, d_se_mm;

@@ -10,6 +10,7 @@
 #include "app/processing/frame_features.h"
 #include "app/reports/summary.h"
 #include "estimator/estimate.h"
+#include "estimator/bracket_checks.h"
 #include "estimator/fit.h"
 #include "estimator/health.h"
 
@@ -23,7 +24,7 @@ struct CameraGeometry;
 struct BracketEstimateRows {
   std::vector<EstimateRow> i0_free, paper, i0_dependent, geometric;
   HealthCheck health;  // the default method's calibration health (estimator/health.h)
-  MotionCheck motion;  // the default method's motion check (estimator/estimate.h)
+  MotionCheck motion;  // the default method's motion check (estimator/bracket_checks.h)
 };
 // The rows of one complete bracket (none for an incomplete one): the single estimate path of
 // validate, playback and measure, so the same frames give the same rows everywhere.

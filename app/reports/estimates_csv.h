@@ -66,12 +66,12 @@ struct EstimateRow {
   // Calibration health (estimator/health.h): "ok", "-" (not assessed), "blur_larger" or
   // "blur_smaller" (the optics no longer match the calibration).
   std::string health = "-";
-  // Motion inside the bracket (estimator/estimate.h CheckMotion), on rows whose per-exposure
+  // Motion inside the bracket (estimator/bracket_checks.h CheckMotion), on rows whose per-exposure
   // estimates have standard errors (the default method's joint row): "moving", "static", or "-"
   // (not assessed); spread_mm = largest minus smallest per-exposure distance (NaN: "-").
   std::string motion = "-";
   double spread_mm = NAN;
-  // The calibrated ranges the estimate lies outside (estimator/estimate.h OutsideRanges:
+  // The calibrated ranges the estimate lies outside (estimator/bracket_checks.h OutsideRanges:
   // "distance", "theta", "t_ref", "t_meas", "signal"); outside_range = !outside.empty().
   std::vector<std::string> outside;
   // When the bracket's data was complete: its last frame's arrival on the host's wall clock (ns

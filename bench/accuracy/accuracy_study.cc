@@ -28,6 +28,7 @@
 #include "app/reports/crb.h"
 #include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
+#include "estimator/estimate_baselines.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
 #include "estimator/health.h"

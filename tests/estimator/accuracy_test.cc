@@ -13,6 +13,7 @@
 
 #include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
+#include "estimator/estimate_baselines.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
 #include "estimator/health.h"

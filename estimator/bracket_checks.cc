@@ -1,0 +1,77 @@
+#include "estimator/bracket_checks.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <boost/math/distributions/chi_squared.hpp>
+
+#include "base/check.h"
+
+namespace irdist {
+
+MotionCheck CheckMotion(double joint_d_mm, const std::vector<double>& d_mm,
+                        const std::vector<double>& d_se_mm, const MotionOptions& options) {
+  IRDIST_CHECK(d_mm.size() == d_se_mm.size(), "d_mm and d_se_mm differ in length");
+  IRDIST_CHECK(options.false_alarm > 0.0 && options.false_alarm < 1.0,
+               "MotionOptions::false_alarm must be in (0, 1)");
+  MotionCheck m;
+  if (!std::isfinite(joint_d_mm)) return m;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (size_t i = 0; i < d_mm.size(); ++i) {
+    if (!std::isfinite(d_mm[i]) || !(d_se_mm[i] > 0.0) || !std::isfinite(d_se_mm[i])) continue;
+    const double z = (d_mm[i] - joint_d_mm) / d_se_mm[i];
+    m.chi2 += z * z;
+    lo = std::min(lo, d_mm[i]);
+    hi = std::max(hi, d_mm[i]);
+    ++m.exposures;
+  }
+  if (m.exposures < 2) return MotionCheck{};
+  m.assessed = true;
+  m.spread_mm = hi - lo;
+  const boost::math::chi_squared law(m.exposures - 1);
+  m.chi2_limit = boost::math::quantile(boost::math::complement(law, options.false_alarm));
+  m.moving = m.chi2 > m.chi2_limit;
+  return m;
+}
+
+std::vector<std::string> OutsideRanges(const CalibratedRanges& ranges,
+                                       const DistanceEstimate& estimate, double t_ref_ms,
+                                       const std::vector<double>& t_ms,
+                                       const std::vector<const Features*>& frames,
+                                       const RangeOptions& options) {
+  std::vector<std::string> outside;
+  DistanceEstimate widened = estimate;  // the distance's se with the calibration's error
+  const double calibration_mm = options.calibration_rel_error * estimate.d_mm;
+  widened.d_std_mm = std::hypot(std::max(estimate.d_std_mm, 0.0), calibration_mm);
+  if (ranges.DistanceOutside(widened.d_mm, widened.d_std_mm, options.z_limit)) {
+    outside.push_back("distance");
+  }
+  if (ranges.ThetaOutside(estimate.theta_deg, estimate.theta_std_deg, options.z_limit)) {
+    outside.push_back("theta");
+  }
+  const auto beyond = [](double value, double lo, double hi, double tolerance) {
+    return value < lo * (1.0 - tolerance) || value > hi * (1.0 + tolerance);
+  };
+  if (beyond(t_ref_ms, ranges.t_ref_min_ms, ranges.t_ref_max_ms, options.exposure_tolerance)) {
+    outside.push_back("t_ref");
+  }
+  for (double t : t_ms) {
+    if (beyond(t, ranges.t_min_ms, ranges.t_max_ms, options.exposure_tolerance)) {
+      outside.push_back("t_meas");
+      break;
+    }
+  }
+  if (ranges.peak_max > 0.0) {
+    for (const Features* f : frames) {
+      if (f != nullptr && f->blob_found &&
+          beyond(f->peak, ranges.peak_min, ranges.peak_max, options.signal_tolerance)) {
+        outside.push_back("signal");
+        break;
+      }
+    }
+  }
+  return outside;
+}
+
+}  // namespace irdist
