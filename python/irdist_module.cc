@@ -171,15 +171,18 @@ class PyRecording {
   const std::string& dir() const { return reader_.dir(); }
 
  private:
-  // A Python int as a C++ one; out of its range, a value no index has (LLONG_MIN). TypeError for a
-  // non-integer (a bool or float too), as Python's sequences do.
+  // An index (a Python int, or any object with __index__ such as numpy's integers) as a C++ one;
+  // out of its range, a value no index has (LLONG_MIN). TypeError for a float or a str, as
+  // Python's sequences raise.
   static long long IndexOf(const py::object& i, const char* what) {
-    if (!py::isinstance<py::int_>(i) || py::isinstance<py::bool_>(i)) {
-      throw py::type_error(std::string(what) + " must be an int, not " +
+    if (!PyIndex_Check(i.ptr())) {
+      throw py::type_error(std::string(what) + " must be an integer, not " +
                            py::str(py::type::of(i).attr("__name__")).cast<std::string>());
     }
+    const py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(i.ptr()));
+    if (!index) throw py::error_already_set();
     int overflow = 0;
-    const long long k = PyLong_AsLongLongAndOverflow(i.ptr(), &overflow);
+    const long long k = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
     if (overflow != 0) return std::numeric_limits<long long>::min();
     return k;
   }

@@ -76,6 +76,7 @@ class RecordingTest(unittest.TestCase):
                 self.rec.image(bad)
         with self.assertRaises(TypeError):
             self.rec["3"]
+        self.assertEqual(self.rec[np.int64(3)][1]["index"], 3)
         self.assertEqual(self.rec.image(n - 1).shape, self.rec[-1][0].shape)
         with self.assertRaisesRegex(ValueError, "NUL character"):
             irdist.Recording(RECORDING + "\0junk")
