@@ -111,6 +111,8 @@ py::dict HeaderDict(const RecordingHeader& h) {
   d["station_identity"] = h.station_identity;
   d["recipe_path"] = h.recipe_path;
   d["rig_path"] = h.rig_path;
+  d["command"] = h.run_command;
+  d["unverified_rows"] = h.unverified_rows;
   return d;
 }
 

@@ -57,6 +57,8 @@ class RecordingTest(unittest.TestCase):
             self.assertEqual(len({r["bracket_id"] for r in rows}), 1)
             self.assertEqual([r["frame_in_bracket"] for r in rows], list(range(len(rows))))
         self.assertEqual(self.rec.header["completion"], "complete")
+        self.assertEqual(self.rec.header["command"], "calibrate")
+        self.assertEqual(self.rec.header["unverified_rows"], 0)
 
     def test_a_damaged_recording_is_refused_with_its_file_and_line(self):
         with tempfile.TemporaryDirectory() as tmp:
