@@ -182,6 +182,16 @@ class SmallDisk {
   bool mounted_ = false;
 };
 
+// `irdist calibrate` of the test's recipe on the virtual rig (both written into `dir`) into `run`;
+// its exit code, and its output in `output`.
+int CalibrateInto(const std::string& dir, const std::string& run, std::string* output) {
+  testing::WriteAll(dir + "/rig.yaml", RigWith(""));
+  testing::WriteAll(dir + "/recipe.yaml", kRecipe);
+  return testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--out", run, "--time-scale",
+                             kTimeScale, "--quiet"},
+                            dir + "/run.log", output);
+}
+
 // The disk fills during the sweep (room for a few of its 46 KB frames): the run stops with the
 // write's own error (ENOSPC), the recording is closed as cut with its complete brackets, and the
 // resume command is printed; with room again, --resume completes it with every frame once.
@@ -189,15 +199,10 @@ TEST(DataSafetyDisk, AFullDiskStopsWithTheFirstErrorAndTheRunResumes) {
   const std::string dir = testing::ScratchDir("data-safety-full");
   SmallDisk disk(dir + "/disk", "200k");
   if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs (" << disk.why() << "): needs root";
-  testing::WriteAll(dir + "/rig.yaml", RigWith(""));
-  testing::WriteAll(dir + "/recipe.yaml", kRecipe);
   testing::LoopbackGvcpLock lock;
   std::string output;
   const std::string run = dir + "/disk/run";
-  EXPECT_EQ(testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--out", run, "--time-scale",
-                                kTimeScale, "--quiet"},
-                               dir + "/run.log", &output),
-            1);
+  EXPECT_EQ(CalibrateInto(dir, run, &output), 1);
   const std::size_t first = output.find("No space left on device");
   EXPECT_NE(first, std::string::npos) << output;
   EXPECT_EQ(output.find("also: "), std::string::npos) << "the first error, once: " << output;
@@ -234,16 +239,10 @@ TEST(DataSafetyDisk, AProcessingCutByAFullDiskNamesTheResumeThatCompletesIt) {
   const std::string dir = testing::ScratchDir("data-safety-results");
   SmallDisk disk(dir + "/disk", "4m");
   if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs (" << disk.why() << "): needs root";
-  testing::WriteAll(dir + "/rig.yaml", RigWith(""));
-  testing::WriteAll(dir + "/recipe.yaml", kRecipe);
   testing::LoopbackGvcpLock lock;
   std::string output;
   const std::string run = dir + "/disk/run";
-  ASSERT_EQ(testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--out", run, "--time-scale",
-                                kTimeScale, "--quiet"},
-                               dir + "/run.log", &output),
-            0)
-      << output;
+  ASSERT_EQ(CalibrateInto(dir, run, &output), 0) << output;
   std::filesystem::remove(run + "/features.csv");  // as if the processing had been cut
   FillDisk(dir + "/disk");
   const std::vector<std::string> resume = {"calibrate", dir + "/recipe.yaml", "--resume", run};
