@@ -11,6 +11,7 @@
 #include "acquisition/recording_files.h"
 #include "acquisition/recording_integrity.h"
 #include "acquisition/recording_reader.h"
+#include "acquisition/recording_writer.h"
 
 namespace irdist {
 
@@ -21,7 +22,9 @@ namespace fs = std::filesystem;
 std::string RecordingCheck::BriefReport() const {
   std::ostringstream out;
   out << "recording " << CompletionName(completion)
-      << (completion == Completion::kRunning ? " (the writer did not finish: treat as cut)" : "")
+      << (completion != Completion::kRunning ? ""
+          : live_writer.empty() ? " (the writer died: treat as cut, its rows unverified)"
+                                : " (being written by process " + live_writer + ")")
       << ", " << rows << " frames, " << complete_brackets << "/" << brackets
       << " brackets complete, " << errors.size() << " errors, " << warnings.size()
       << " warnings\n";
@@ -37,29 +40,52 @@ std::string RecordingCheck::BriefReport() const {
 
 namespace {
 
-// Every row's PNG: its recorded content (SHA-256), readable, 16-bit gray, all of one size.
-// Returns each decoded frame's signal.
+std::string SizeText(const cv::Size& size) {
+  return std::to_string(size.width) + " x " + std::to_string(size.height) + " px";
+}
+
+// The size most frames have (the first of those with the most frames on a tie).
+cv::Size CommonSize(const std::vector<std::pair<const FrameRecord*, cv::Size>>& sizes) {
+  std::map<std::pair<int, int>, int> count;
+  cv::Size common;
+  int best = 0;
+  for (const auto& [row, size] : sizes) {
+    const int n = ++count[{size.width, size.height}];
+    if (n > best) {
+      best = n;
+      common = size;
+    }
+  }
+  return common;
+}
+
+// Every row's PNG: its recorded content (SHA-256), readable, 16-bit gray, all of one size (a frame
+// of another size than most is the one blamed). Returns each decoded frame's signal.
 std::map<std::int64_t, FrameSignal> CheckFrames(const std::string& dir,
                                                 const std::vector<FrameRecord>& rows,
                                                 RecordingCheck* check) {
   std::map<std::int64_t, FrameSignal> signals;
-  cv::Size size;
+  std::vector<std::pair<const FrameRecord*, cv::Size>> sizes;
   for (const FrameRecord& row : rows) {
     std::string why;
     const cv::Mat image = LoadFramePng(dir, row, &why);
-    const std::string at = " (row at frames.csv:" + std::to_string(row.line) + ")";
     if (image.empty()) {
-      check->errors.push_back({row.file, 0, why + at});
+      check->errors.push_back({row.file, 0, why + " (row at frames.csv:" +
+                                                std::to_string(row.line) + ")"});
       continue;
     }
-    if (size.area() == 0) {
-      size = image.size();
-    } else if (image.size() != size) {
-      check->errors.push_back({row.file, 0, "size differs from the first frame" + at});
-    }
+    sizes.emplace_back(&row, image.size());
     double max_value = 0.0;
     cv::minMaxLoc(image, nullptr, &max_value);
     signals[row.index] = {cv::sum(image)[0], max_value};
+  }
+  const cv::Size common = CommonSize(sizes);
+  for (const auto& [row, size] : sizes) {
+    if (size == common) continue;
+    check->errors.push_back({row->file, 0, "its size " + SizeText(size) + " differs from the " +
+                                               SizeText(common) + " of the recording's other "
+                                               "frames (row at frames.csv:" +
+                                               std::to_string(row->line) + ")"});
   }
   return signals;
 }
@@ -104,11 +130,30 @@ void AddIssues(const std::vector<RecordingIssue>& issues, std::vector<RecordingI
   to->insert(to->end(), issues.begin(), issues.end());
 }
 
+void CheckRunning(const RecordingHeader& header, RecordingCheck* check) {
+  if (!check->live_writer.empty()) {
+    check->warnings.push_back({kRecordingYaml, 0,
+                               "completion is 'running': the recording is being written by "
+                               "process " + check->live_writer + " (a live run holds its "
+                               "writer.lock); check it again once that run has ended"});
+  } else if (!header.end_time.empty() || header.frame_count >= 0) {
+    check->errors.push_back({kRecordingYaml, 0,
+                             "completion is 'running' but end_time and frame_count are set, as "
+                             "only a close sets them: the header was edited (its hash dropped). "
+                             "Restore it from a copy of the recording"});
+  } else {
+    check->warnings.push_back(
+        {kRecordingYaml, 0,
+         "completion is 'running': the writer died; the run is cut. UNVERIFIED: frames.csv has no "
+         "hash, so an edit of its rows (poses, currents, exposures) cannot be detected; only each "
+         "frame's hash and the rows' consistency were checked. Resume the run to close it"});
+  }
+}
+
 void CheckCompletion(const RecordingHeader& header, RecordingCheck* check) {
   switch (check->completion) {
     case Completion::kRunning:
-      check->warnings.push_back(
-          {kRecordingYaml, 0, "completion is 'running': the writer died; the run is cut"});
+      CheckRunning(header, check);
       break;
     case Completion::kCut:
       check->warnings.push_back(
@@ -122,6 +167,14 @@ void CheckCompletion(const RecordingHeader& header, RecordingCheck* check) {
                                      " rows"});
       }
       break;
+  }
+  if (header.unverified_rows > 0) {
+    check->warnings.push_back(
+        {kRecordingYaml, 0,
+         "UNVERIFIED: the first " + std::to_string(header.unverified_rows) + " rows of frames.csv "
+         "(lines 2 to " + std::to_string(header.unverified_rows + 1) + ") were written by a "
+         "writer that died; the resume that continued them could check them only against their "
+         "frames and for consistency, so an edit of them made before it cannot be detected"});
   }
 }
 
@@ -139,6 +192,7 @@ RecordingCheck CheckRecording(const std::string& dir) {
   }
   RecordingHeader header;
   check.completion = Completion::kRunning;
+  check.live_writer = LiveWriterOf(dir);
   bool header_ok = true;
   try {
     header = ReadRecordingHeader(dir);
@@ -163,10 +217,14 @@ RecordingCheck CheckRecording(const std::string& dir) {
   CheckLeftovers(dir, csv.rows, &check);
   CheckBrackets(csv.rows, &check);
   AddIssues(ExposureOrderIssues(BracketsOfRows(csv.rows), signals), &check.errors);
+  AddIssues(BracketPoseIssues(BracketsOfRows(csv.rows)), &check.errors);
   if (!header_ok) return check;
   CheckCompletion(header, &check);
   AddCsvHashIssues(header, csv_text, &check);
-  AddIssues(BitDepthIssues(header), &check.errors);
+  const bool csv_header_ok = std::none_of(csv.errors.begin(), csv.errors.end(),
+                                          [](const RecordingIssue& e) { return e.line == 1; });
+  if (csv_header_ok) AddIssues(HeaderFormatIssues(header, csv.hashed), &check.errors);
+  AddIssues(PixelFormatIssues(header), &check.errors);
   AddIssues(ValueRangeIssues(csv.rows, signals, header.bit_depth), &check.errors);
   return check;
 }

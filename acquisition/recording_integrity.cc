@@ -5,8 +5,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <tuple>
 
 #include "acquisition/content_hash.h"
+#include "acquisition/pixel_format.h"
 #include "base/safe_file.h"
 
 namespace irdist {
@@ -67,19 +69,79 @@ void AddCsvHashIssues(const RecordingHeader& header, const std::string& csv_text
 }
 
 int BitsOfMonoFormat(const std::string& pixel_format) {
-  for (const int bits : {8, 10, 12, 14, 16}) {
-    if (pixel_format == "Mono" + std::to_string(bits)) return bits;
-  }
-  return 0;
+  const PixelFormatInfo* format = FindPixelFormat(pixel_format);
+  return format == nullptr ? 0 : format->bit_depth;
 }
 
-std::vector<RecordingIssue> BitDepthIssues(const RecordingHeader& header) {
+std::vector<RecordingIssue> PixelFormatIssues(const RecordingHeader& header) {
+  if (header.pixel_format.empty()) return {};
   const int bits = BitsOfMonoFormat(header.pixel_format);
-  if (bits == 0 || bits == header.bit_depth) return {};
-  return {{"recording.yaml", 0,
-           "image.bit_depth " + std::to_string(header.bit_depth) + " contradicts " +
-               "image.pixel_format " + header.pixel_format + ", which delivers " +
-               std::to_string(bits) + " bits; set image.bit_depth: " + std::to_string(bits)}};
+  if (bits == 0) {
+    return {{"recording.yaml", 0,
+             "image.pixel_format " + header.pixel_format + " is not a format irdist records (" +
+                 SupportedPixelFormatNames() + "): the header was edited or the recording is "
+                 "not irdist's. Restore it from a copy of the recording"}};
+  }
+  std::vector<RecordingIssue> issues;
+  if (bits != header.bit_depth) {
+    issues.push_back({"recording.yaml", 0,
+                      "image.bit_depth " + std::to_string(header.bit_depth) + " contradicts " +
+                          "image.pixel_format " + header.pixel_format + ", which delivers " +
+                          std::to_string(bits) + " bits; set image.bit_depth: " +
+                          std::to_string(bits)});
+  }
+  const auto camera = header.camera_features.find("PixelFormat");
+  if (camera != header.camera_features.end() && camera->second != header.pixel_format) {
+    issues.push_back({"recording.yaml", 0,
+                      "image.pixel_format " + header.pixel_format + " contradicts the camera's "
+                      "camera.features.PixelFormat " + camera->second + " (read back when the "
+                      "recording started): the header was edited. Restore it from a copy of the "
+                      "recording"});
+  }
+  return issues;
+}
+
+std::vector<RecordingIssue> HeaderFormatIssues(const RecordingHeader& header, bool csv_hashed) {
+  const std::string version = "format_version " + std::to_string(header.format_version);
+  const std::string fix = ": the header was edited. Restore it from a copy of the recording";
+  if (header.format_version < 2 && (csv_hashed || !header.frames_csv_sha256.empty())) {
+    return {{"recording.yaml", 0,
+             version + " (before content hashes) but " +
+                 (csv_hashed ? "frames.csv has format 2's sha256 column"
+                             : "it carries a frames_csv_sha256") +
+                 fix + " (a downgrade would leave the rows and frames unverified)"}};
+  }
+  if (header.format_version >= 2 && !csv_hashed) {
+    return {{"frames.csv", 1, "has format 1's columns (no sha256) but recording.yaml says " +
+                                  version + fix + " or frames.csv"}};
+  }
+  return {};
+}
+
+std::vector<RecordingIssue> BracketPoseIssues(const std::vector<RecordedBracket>& brackets) {
+  std::vector<RecordingIssue> issues;
+  for (const RecordedBracket& bracket : brackets) {
+    if (bracket.frames.empty()) continue;
+    const FrameRecord& first = bracket.frames.front();
+    const auto pose = [](const FrameRecord& r) {
+      return std::make_tuple(r.slide_mm, r.pan_deg, r.tilt_deg, r.theta_deg, r.bias_ma_set,
+                             r.repeat);
+    };
+    for (const FrameRecord& row : bracket.frames) {
+      if (pose(row) == pose(first)) continue;
+      issues.push_back({"frames.csv", row.line,
+                        "bracket " + std::to_string(bracket.bracket_id) + ": " + row.file +
+                            " is at slide " + Number(row.slide_mm) + " mm, pan " +
+                            Number(row.pan_deg) + " deg, tilt " + Number(row.tilt_deg) +
+                            " deg, theta " + Number(row.theta_deg) + " deg, " +
+                            Number(row.bias_ma_set) + " mA, repeat " +
+                            std::to_string(row.repeat) + ", not at its bracket's pose and "
+                            "current (those of " + first.file + " at frames.csv:" +
+                            std::to_string(first.line) + "): a bracket is taken at one pose. "
+                            "Restore frames.csv from a copy of the recording"});
+    }
+  }
+  return issues;
 }
 
 std::vector<RecordingIssue> ValueRangeIssues(const std::vector<FrameRecord>& rows,

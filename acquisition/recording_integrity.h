@@ -1,7 +1,8 @@
 #pragma once
 // What `irdist check` verifies beyond the format (docs/recording-format.md "irdist check"): that
-// no part of the recording is a link, that frames.csv is the one closed, that the header's bit depth is the pixel format's, that no frame holds a value beyond it, and that
-// within a bracket a longer exposure never gives a clearly lower signal (frames swapped, or
+// no part of the recording is a link, that frames.csv is the one closed, that the header's format, pixel format and bit depth
+// agree with each other and the rows, that no frame holds a value beyond the bit depth, that every
+// row of a bracket has its pose and current, and that within a bracket a longer exposure never gives a clearly lower signal (frames swapped, or
 // exposures edited). Each problem is a RecordingIssue naming the file and line.
 
 #include <cstdint>
@@ -24,12 +25,22 @@ std::string LinkedPartMessage(const std::string& dir, const std::string& part);
 void AddCsvHashIssues(const RecordingHeader& header, const std::string& csv_text,
                       RecordingCheck* check);
 
-// Significant bits of a GenICam MonoN pixel format (Mono8 -> 8, ..., Mono16 -> 16); 0 for any
-// other format (not checked).
+// Significant bits of a pixel format irdist records (Mono8 -> 8, Mono12p -> 12, Mono16 -> 16); 0
+// for any other format.
 int BitsOfMonoFormat(const std::string& pixel_format);
 
-// image.bit_depth against image.pixel_format (an issue on recording.yaml when they differ).
-std::vector<RecordingIssue> BitDepthIssues(const RecordingHeader& header);
+// image.pixel_format against the formats irdist records, image.bit_depth and the camera's
+// read-back camera.features.PixelFormat (issues on recording.yaml; an empty format, as hand-made
+// recordings have, is not checked).
+std::vector<RecordingIssue> PixelFormatIssues(const RecordingHeader& header);
+
+// A header that contradicts its frames.csv's format: format_version 1 with format 2's columns or
+// a frames_csv_sha256 (a downgrade that would drop the hashes), or format 2 without them.
+std::vector<RecordingIssue> HeaderFormatIssues(const RecordingHeader& header, bool csv_hashed);
+
+// Rows of a bracket at another pose or current than the bracket's first row (slide_mm, pan_deg,
+// tilt_deg, theta_deg, bias_ma_set, repeat): one bracket is taken at one pose. One issue per row.
+std::vector<RecordingIssue> BracketPoseIssues(const std::vector<RecordedBracket>& brackets);
 
 // What check measured of one decoded frame.
 struct FrameSignal {

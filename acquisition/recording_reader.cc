@@ -15,7 +15,6 @@
 
 #include <boost/crc.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "acquisition/content_hash.h"
 #include "acquisition/recording_files.h"
@@ -32,7 +31,6 @@ namespace fs = std::filesystem;
 
 constexpr int kColumns = 23;    // format 2: ..., status, utc_time, host_monotonic_ns, sha256
 constexpr int kColumnsV1 = 20;  // format 1: ends at status
-constexpr std::int64_t kMaxPngBytes = std::int64_t{1} << 28;
 
 std::vector<std::string> Split(const std::string& line) {
   std::vector<std::string> fields;
@@ -210,6 +208,17 @@ Completion ParseCompletionField(const yf::MapReader& root) {
            "completion '" + text + "' is not running, complete or cut; fix the key by hand");
 }
 
+// The command that made the recording and the rows a resume could not verify.
+void ParseHeaderRun(const yf::MapReader& root, RecordingHeader* h) {
+  h->run_command = root.String("command", "");
+  if (!root.Has("unverified_rows")) return;
+  const YAML::Node rows = root.Get("unverified_rows");
+  h->unverified_rows = yf::AsInteger(rows, root.File(), "unverified_rows");
+  if (h->unverified_rows < 0) {
+    yf::Fail(root.File(), rows.Mark(), "unverified_rows must be 0 or more (a count of rows)");
+  }
+}
+
 struct TextFiles {
   std::string recipe_file, recipe_crc, rig_file, rig_crc;
 };
@@ -219,7 +228,8 @@ RecordingHeader ParseHeaderFields(const std::string& text, const std::string& pa
   const yf::MapReader root(yf::Parse(text, path), path, "recording.yaml",
                            {"format", "format_version", "completion", "software_version",
                             "start_time", "end_time", "frame_count", "resumed", "image", "camera",
-                            "station", "recipe", "rig", "frames_csv_sha256"});
+                            "station", "recipe", "rig", "frames_csv_sha256", "unverified_rows",
+                            "command"});
   if (root.String("format", "") != "irdist-recording") {
     yf::Fail(path, root.Mark(), "'format' is not irdist-recording; this is not an irdist "
                                 "recording header");
@@ -239,6 +249,7 @@ RecordingHeader ParseHeaderFields(const std::string& text, const std::string& pa
              "frames_csv_sha256 must be 64 lowercase hex digits (the SHA-256 of frames.csv)");
   }
   h.completion = ParseCompletionField(root);
+  ParseHeaderRun(root, &h);
   h.software_version = root.String("software_version", "");
   h.start_time = root.String("start_time", "");
   h.end_time = root.String("end_time", "");
@@ -294,10 +305,6 @@ RecordingHeader ReadHeader(const std::string& dir) {
   return h;
 }
 
-std::uint32_t BigEndian32(const unsigned char* p) {
-  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
-         std::uint32_t{p[3]};
-}
 
 }  // namespace
 
@@ -409,20 +416,6 @@ std::vector<RecordedBracket> BracketsOfRows(const std::vector<FrameRecord>& rows
   return brackets;
 }
 
-cv::Mat LoadFramePng(const std::string& dir, const FrameRecord& row, std::string* why) {
-  std::string bytes;
-  if (!ReadRegularFile((fs::path(dir) / row.file).string(), kMaxPngBytes, &bytes, why)) {
-    return cv::Mat();
-  }
-  cv::Mat image = DecodeFramePng(std::vector<unsigned char>(bytes.begin(), bytes.end()), why);
-  if (!image.empty() && !row.sha256.empty() && Sha256Hex(bytes) != row.sha256) {
-    *why = "its content is not the frame recorded in its row (SHA-256 " + Sha256Hex(bytes) +
-           ", frames.csv says " + row.sha256 + "): the file was replaced, swapped or edited. "
-           "Restore it from a copy of the recording";
-    return cv::Mat();
-  }
-  return image;
-}
 
 std::string ReadFramesCsvText(const std::string& dir) {
   const std::string path = (fs::path(dir) / kFramesCsv).string();
@@ -541,39 +534,6 @@ RecordingHeader ParseRecordingHeader(const std::string& text, const std::string&
 
 RecordingHeader ReadRecordingHeader(const std::string& dir) { return ReadHeader(dir); }
 
-cv::Mat DecodeFramePng(const std::vector<unsigned char>& bytes, std::string* why) {
-  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (bytes.size() < 33 || std::memcmp(bytes.data(), kSignature, 8) != 0 ||
-      std::memcmp(bytes.data() + 12, "IHDR", 4) != 0) {
-    *why = "not a PNG file (no PNG signature and IHDR header)";
-    return cv::Mat();
-  }
-  const std::int64_t width = BigEndian32(bytes.data() + 16);
-  const std::int64_t height = BigEndian32(bytes.data() + 20);
-  if (width < 1 || height < 1 || width > kMaxFrameSidePx || height > kMaxFrameSidePx ||
-      width * height > kMaxFramePixels) {
-    *why = "PNG header claims " + std::to_string(width) + " x " + std::to_string(height) +
-           " px, beyond the limit of " + std::to_string(kMaxFrameSidePx) + " px a side and " +
-           std::to_string(kMaxFramePixels) + " px; the file is damaged or not a frame";
-    return cv::Mat();
-  }
-  if (bytes[24] != 16 || bytes[25] != 0) {
-    *why = "not a single-channel 16-bit PNG (bit depth " + std::to_string(bytes[24]) +
-           ", colour type " + std::to_string(bytes[25]) + ")";
-    return cv::Mat();
-  }
-  cv::Mat image;
-  try {
-    image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& error) {
-    image = cv::Mat();
-  }
-  if (image.empty() || image.type() != CV_16UC1) {
-    *why = "damaged PNG: its image data cannot be decoded as 16-bit gray";
-    return cv::Mat();
-  }
-  return image;
-}
 
 // --- RecordingReader --------------------------------------------------------------------------
 

@@ -31,7 +31,8 @@ class RecordingReader {
 
   const std::string& dir() const { return dir_; }
   const RecordingHeader& header() const { return header_; }
-  // Completion as written, with kRunning meaning the writer died (treat as cut).
+  // Completion as written: kRunning is a live writer's (LiveWriterOf names it) or, with none
+  // alive, a writer's that died (treat as cut).
   Completion completion() const { return header_.completion; }
   bool IsComplete() const { return header_.completion == Completion::kComplete; }
   const std::vector<FrameRecord>& rows() const { return rows_; }

@@ -49,6 +49,10 @@ struct RecordingHeader {
   std::string rig_path;
   std::string rig_text;                 // the rig file as used, byte for byte (rig.yaml beside)
   std::string frames_csv_sha256;        // SHA-256 of frames.csv, set by Close() ("" while open)
+  // The first rows of frames.csv a resume found with no frames_csv_sha256 to verify them against
+  // (their writer died): checked then only against their frames and for consistency. 0 = none.
+  std::int64_t unverified_rows = 0;
+  std::string run_command;              // the irdist command that made it ("calibrate"; "" unknown)
 };
 
 // One problem found in a recording: file relative to the recording, line (0 = not about a line).
@@ -104,6 +108,7 @@ struct RecordingCheck {
   std::int64_t complete_brackets = 0;
   std::vector<Issue> errors;    // the recording is damaged: bad rows, missing or bad PNGs, gaps
   std::vector<Issue> warnings;  // expected after a crash: leftovers, partial last line, cut
+  std::string live_writer;      // pid of the live process writing it (writer.lock held), or ""
   bool ok() const { return errors.empty(); }
   std::string BriefReport() const;  // one line per issue, "file:line: message"
 };

@@ -124,6 +124,8 @@ std::string HeaderYaml(const RecordingHeader& h) {
   out << YAML::Key << "end_time" << YAML::Value << h.end_time;
   out << YAML::Key << "frame_count" << YAML::Value << h.frame_count;
   out << YAML::Key << "resumed" << YAML::Value << YAML::Flow << h.resumed;
+  if (h.unverified_rows > 0) out << YAML::Key << "unverified_rows" << YAML::Value << h.unverified_rows;
+  if (!h.run_command.empty()) out << YAML::Key << "command" << YAML::Value << h.run_command;
   if (h.format_version >= 2) {
     out << YAML::Key << "frames_csv_sha256" << YAML::Value << YAML::DoubleQuoted
         << h.frames_csv_sha256;
@@ -232,6 +234,26 @@ std::string MoveAside(const std::string& dir, const std::vector<std::string>& na
   return aside.string();
 }
 
+// A resume hashes frames.csv again at its close: it appends only to rows it can vouch for. A
+// frames.csv edited since its hash was written, or a header that claims an older format than its
+// rows (the hashes dropped), is refused with the fix.
+void RefuseUnverifiedResume(const std::string& dir, const RecordingHeader& header,
+                            const std::string& csv_text, const FramesCsv& csv) {
+  const std::string yaml = (fs::path(dir) / kRecordingYaml).string();
+  if (csv.hashed && header.format_version < 2) {
+    throw RecordingError(yaml + ": format_version " + std::to_string(header.format_version) +
+                         " but frames.csv has format 2's sha256 column: the header was edited "
+                         "(its hashes dropped). Restore recording.yaml from a copy of the "
+                         "recording; it is not resumed.");
+  }
+  if (header.frames_csv_sha256.empty() || Sha256Hex(csv_text) == header.frames_csv_sha256) return;
+  throw RecordingError((fs::path(dir) / kFramesCsv).string() + ": its SHA-256 is " +
+                       Sha256Hex(csv_text) + ", recording.yaml's frames_csv_sha256 is " +
+                       header.frames_csv_sha256 + ": frames.csv was edited after the recording "
+                       "was closed, and a resume would hash the edit as its own. Restore it from "
+                       "a copy of the recording (irdist check lists the problems).");
+}
+
 }  // namespace
 
 FrameRecord RecordFromFrame(const BracketFrame& frame, int bracket_size) {
@@ -327,8 +349,10 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir)
                          "Start a new recording instead.");
   }
   const std::string csv_path = (fs::path(dir) / kFramesCsv).string();
-  const FramesCsv csv = ParseFramesCsv(ReadFramesCsvText(dir));
+  const std::string csv_text = ReadFramesCsvText(dir);
+  const FramesCsv csv = ParseFramesCsv(csv_text);
   if (!csv.errors.empty()) ThrowRecordingIssue(dir, csv.errors.front());
+  RefuseUnverifiedResume(dir, header, csv_text, csv);
   std::int64_t next_index = 0;
   for (const FrameRecord& row : csv.rows) next_index = std::max(next_index, row.index + 1);
   // The partial last line (the row in flight) is dropped; leftover files are moved aside.
@@ -342,6 +366,9 @@ std::unique_ptr<RecordingWriter> RecordingWriter::Resume(const std::string& dir)
   header.end_time.clear();
   header.frame_count = -1;
   header.resumed.push_back(UtcNowIso8601());
+  if (header.frames_csv_sha256.empty()) {  // the writer died: its rows stay marked unverified
+    header.unverified_rows = std::max<std::int64_t>(header.unverified_rows, csv.rows.size());
+  }
   writer->header_ = std::move(header);
   writer->header_.frames_csv_sha256.clear();  // frames.csv grows again: hashed at Close()
   writer->hashed_ = csv.hashed;

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -110,6 +111,8 @@ py::dict HeaderDict(const RecordingHeader& h) {
   d["station_identity"] = h.station_identity;
   d["recipe_path"] = h.recipe_path;
   d["rig_path"] = h.rig_path;
+  d["command"] = h.run_command;
+  d["unverified_rows"] = h.unverified_rows;
   return d;
 }
 
@@ -122,18 +125,28 @@ class PyRecording {
 
   std::size_t size() const { return reader_.rows().size(); }
 
-  py::tuple At(std::int64_t i) const {
-    const auto n = static_cast<std::int64_t>(size());
-    if (i < 0) i += n;
-    if (i < 0 || i >= n) throw py::index_error("recording index out of range");
-    const FrameRecord& row = reader_.rows()[static_cast<std::size_t>(i)];
+  // rec[i]: the i-th row (negative from the end) and its frame; any int, IndexError out of range.
+  py::tuple At(const py::object& i) const {
+    const auto n = static_cast<long long>(size());
+    long long k = IndexOf(i, "recording index");
+    if (k < 0) k += n;
+    if (k < 0 || k >= n) {
+      throw py::index_error("recording index " + py::str(i).cast<std::string>() +
+                            " out of range: the recording has " + std::to_string(n) +
+                            " rows (0.." + std::to_string(n - 1) + ", or -" + std::to_string(n) +
+                            "..-1 from the end)");
+    }
+    const FrameRecord& row = reader_.rows()[static_cast<std::size_t>(k)];
     return py::make_tuple(ArrayOf(reader_.LoadImage(row)), RowDict(row));
   }
 
-  py::array_t<std::uint16_t> Image(std::int64_t frame_index) const {
-    const auto it = position_.find(frame_index);
+  // rec.image(frame_index): the frame of that index (frames.csv's index column); IndexError
+  // when the recording has no such frame.
+  py::array_t<std::uint16_t> Image(const py::object& frame_index) const {
+    const auto it = position_.find(IndexOf(frame_index, "frame_index"));
     if (it == position_.end()) {
-      throw py::key_error("no frame " + std::to_string(frame_index) + " in " + reader_.dir());
+      throw py::index_error("no frame " + py::str(frame_index).cast<std::string>() + " in " +
+                            reader_.dir() + ": its frames.csv has the indices " + IndexRange());
     }
     return ArrayOf(reader_.LoadImage(reader_.rows()[it->second]));
   }
@@ -160,9 +173,40 @@ class PyRecording {
   const std::string& dir() const { return reader_.dir(); }
 
  private:
+  // An index (a Python int, or any object with __index__ such as numpy's integers) as a C++ one;
+  // out of its range, a value no index has (LLONG_MIN). TypeError for a float or a str, as
+  // Python's sequences raise.
+  static long long IndexOf(const py::object& i, const char* what) {
+    if (!PyIndex_Check(i.ptr())) {
+      throw py::type_error(std::string(what) + " must be an integer, not " +
+                           py::str(py::type::of(i).attr("__name__")).cast<std::string>());
+    }
+    const py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(i.ptr()));
+    if (!index) throw py::error_already_set();
+    int overflow = 0;
+    const long long k = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
+    if (overflow != 0) return std::numeric_limits<long long>::min();
+    return k;
+  }
+
+  std::string IndexRange() const {
+    if (position_.empty()) return "none (no rows)";
+    return std::to_string(position_.begin()->first) + ".." +
+           std::to_string(position_.rbegin()->first);
+  }
+
   static std::string Checked(const std::string& path, bool check) {
+    if (path.find('\0') != std::string::npos) {
+      throw py::value_error("the recording path contains a NUL character (\\0), which no file "
+                            "name can hold; give the folder's path without it");
+    }
+    const RecordingCheck result = check ? CheckRecording(path) : RecordingCheck{};
+    if (!result.live_writer.empty()) {
+      throw RecordingError(path + " is being written by process " + result.live_writer +
+                           " (a live run holds its writer.lock); open it once that run has "
+                           "ended, or with check=False to read the rows written so far.");
+    }
     if (!check) return path;
-    const RecordingCheck result = CheckRecording(path);
     if (!result.ok()) {
       throw RecordingError(path + " has errors (irdist check " + path + " lists them):\n" +
                            result.BriefReport() + "Open it with check=False to read it anyway.");

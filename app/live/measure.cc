@@ -33,6 +33,7 @@
 #include "app/processing/bracket_estimates.h"
 #include "app/processing/frame_features.h"
 #include "app/processing/position.h"
+#include "app/processing/run_results.h"
 #include "app/runs/resume.h"
 #include "base/utc_time.h"
 #include "base/yaml_fields.h"
@@ -470,17 +471,30 @@ void CheckMeasureArgs(const MeasureArgs& args) {
                            " holds an earlier measurement (estimates.csv or recording/); choose "
                            "another --out folder.");
     }
-    fs::create_directories(args.out_dir);
+    CreateRunFolder(args.out_dir);
   }
 }
 
+void Measure(const MeasureArgs& args, const CalibrationModel& model, CommandIo io);
+
 }  // namespace
 
+// An estimates.csv or recording that cannot be written (a full disk) ends the run; --out keeps
+// what was measured, so the next measurement goes to another folder.
 void RunMeasure(const MeasureArgs& args, CommandIo io) {
   CheckMeasureArgs(args);
   std::optional<RunFolderLock> folder_lock;  // one measurement per --out folder at a time
   if (!args.out_dir.empty()) folder_lock.emplace(args.out_dir, "measure");
   const CalibrationModel model = LoadModel(args.model);
+  if (args.out_dir.empty()) return Measure(args, model, io);
+  WriteResults("measure again with another --out folder (" + args.out_dir + " keeps the "
+               "brackets measured so far, and measure never writes into an earlier "
+               "measurement's folder)", [&] { Measure(args, model, io); });
+}
+
+namespace {
+
+void Measure(const MeasureArgs& args, const CalibrationModel& model, CommandIo io) {
   SignalGuard guard;  // Ctrl-C ends the loop after the bracket in flight
   MeasureSession session(args, model, io);
   MeasurePrinter printer(io.out, args.json, !args.json && isatty(STDOUT_FILENO) == 1);
@@ -513,5 +527,7 @@ void RunMeasure(const MeasureArgs& args, CommandIo io) {
   if (!args.out_dir.empty()) summary << "Estimates: " << args.out_dir << "/estimates.csv\n";
   if (args.record) summary << "Recording: " << args.out_dir << "/recording\n";
 }
+
+}  // namespace
 
 }  // namespace irdist

@@ -2,11 +2,11 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 
 #include "acquisition/pixel_format.h"
 #include "acquisition/recording_reader.h"
+#include "base/regular_file.h"
 #include "estimator/blob_fit.h"
 
 namespace irdist {
@@ -112,13 +112,10 @@ void WriteFeaturesCsv(const std::string& path, const std::vector<FrameRecord>& r
         << FeatureNumber(e.major_px) << ',' << FeatureNumber(e.minor_px) << ','
         << FeatureNumber(e.angle_deg) << ',' << FeatureNumber(f.theta0_deg) << '\n';
   }
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  file << out.str();
-  file.flush();
-  if (!file) {
-    throw RecordingError(path +
-                         ": cannot write features.csv; check the folder exists and is "
-                         "writable.");
+  // Whole or not at all: a features.csv cut by a full disk would read as a finished result.
+  std::string why;
+  if (!WriteRegularFile(path, out.str(), &why)) {
+    throw RecordingError(path + ": " + why + "; free space or check the folder is writable.");
   }
 }
 

@@ -9,19 +9,21 @@
 #include "app/processing/bracket_estimates.h"
 #include "app/processing/recording_fit.h"
 #include "app/reports/crb.h"
+#include "app/reports/estimates_csv.h"
 #include "app/reports/report.h"
 #include "app/reports/validation_plots.h"
+#include "estimator/model_file.h"
 
 namespace irdist {
 
 // A recording with errors (what `irdist check` reports) is refused before anything is computed
 // from it: its first errors are listed with file:line.
-void RequireCleanRecording(const std::string& dir) {
+void RequireCleanRecording(const std::string& dir, const std::string& refused) {
   const RecordingCheck check = CheckRecording(dir);
   if (check.ok()) return;
   std::ostringstream message;
-  message << dir << ": the recording has " << check.errors.size()
-          << " error(s); nothing is computed from it. First:";
+  message << dir << ": the recording has " << check.errors.size() << " error(s); " << refused
+          << ". First:";
   for (size_t i = 0; i < check.errors.size() && i < 5; ++i) {
     const RecordingCheck::Issue& issue = check.errors[i];
     message << "\n  " << issue.file << (issue.line > 0 ? ":" + std::to_string(issue.line) : "")
@@ -30,6 +32,23 @@ void RequireCleanRecording(const std::string& dir) {
   message << "\nRun `irdist check " << dir << "` for the full list, repair the recording (or "
           << "restore it from a copy) and try again.";
   throw CheckFailedError(message.str());
+}
+
+void WriteResults(const std::string& then, const std::function<void()>& write) {
+  const auto refused = [&then](const Error& error) {
+    return RunFolderError(std::string(error.what()) + "\nOnce that is fixed, " + then);
+  };
+  try {
+    write();
+  } catch (const ReportError& error) {
+    throw refused(error);
+  } catch (const EstimatesFileError& error) {
+    throw refused(error);
+  } catch (const ModelFileError& error) {
+    throw refused(error);
+  } catch (const RecordingError& error) {
+    throw refused(error);
+  }
 }
 
 ValidationSummary WriteValidation(const std::string& dir, const std::vector<EstimateRow>& rows,

@@ -4,6 +4,7 @@
 // features.csv, then model.yaml + report/ (calibration) or estimates.csv + summary.yaml + report/
 // (validation). A recording with errors is refused first.
 
+#include <functional>
 #include <iosfwd>
 #include <map>
 #include <string>
@@ -17,8 +18,17 @@
 namespace irdist {
 
 // A recording with errors (what `irdist check` reports) is refused before anything is computed
-// from it: throws CheckFailedError listing its first errors with file:line.
-void RequireCleanRecording(const std::string& dir);
+// from it: throws CheckFailedError listing its first errors with file:line, saying `refused`
+// ("nothing is computed from it").
+void RequireCleanRecording(const std::string& dir,
+                           const std::string& refused = "nothing is computed from it");
+
+// Runs `write`, which writes a folder's results. When a result cannot be written (a full disk, a
+// folder not writable: ReportError, EstimatesFileError, ModelFileError, RecordingError), the error
+// leaves as a RunFolderError with its message and "Once that is fixed, " + `then`: what to run
+// then (a plain rerun would be refused by the results already there), e.g. "complete the
+// results with: irdist playback REC --force".
+void WriteResults(const std::string& then, const std::function<void()>& write);
 
 // The processing after a live run, on DIR/recording: features.csv (frames in `cache` are taken
 // from it), then model.yaml + report/ (calibration) or estimates.csv + summary.yaml + report/

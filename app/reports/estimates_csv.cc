@@ -301,7 +301,13 @@ EstimatesCsvWriter::EstimatesCsvWriter(const std::string& path) : path_(path) {
                              "); check the folder exists and is writable, and that the name is "
                              "not a symbolic link.");
   }
-  WriteAll(std::string(kEstimatesHeader) + "\n");
+  try {
+    WriteAll(std::string(kEstimatesHeader) + "\n");
+  } catch (const EstimatesFileError&) {
+    ::close(fd_);  // no empty estimates.csv left behind (a full disk): the name stays free
+    ::unlink(path.c_str());
+    throw;
+  }
 }
 
 EstimatesCsvWriter::~EstimatesCsvWriter() {
@@ -319,7 +325,7 @@ void EstimatesCsvWriter::WriteAll(const std::string& text) {
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
       throw EstimatesFileError(path_ + ": write failed (" + std::strerror(errno) +
-                               "; disk full?); free space and rerun.");
+                               "; disk full?); free space.");
     }
     done += static_cast<std::size_t>(n);
   }

@@ -51,7 +51,7 @@ std::string HtmlEscape(const std::string& text) {
 // What to do when a report file cannot be written: the disk is the usual cause.
 std::string WriteFix(const fs::path& path) {
   return "; free disk space (df -h " + path.parent_path().string() +
-         ") or fix the folder's permissions, then run the command again";
+         ") or fix the folder's permissions";
 }
 
 // Whole or not at all (temporary file, sync, rename): a full disk never leaves a cut file.

@@ -138,6 +138,7 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   } else {
     RecordingHeader header;
     header.software_version = setup.software_version;
+    header.run_command = setup.command;
     header.bit_depth = BitDepthOfPixelFormat(setup.camera.pixel_format);
     header.pixel_format = setup.camera.pixel_format;
     header.camera = m.camera->Identity();

@@ -32,6 +32,7 @@ struct LiveCaptureSetup {
   std::string recording_dir;
   bool resume = false;
   std::string software_version;
+  std::string command;  // the irdist command recording ("calibrate"), kept in recording.yaml
   std::string station_identity;
   std::string recipe_path, recipe_text, rig_path, rig_text;
   FeatureOptions feature_options;  // features of every frame, computed while it is in memory

@@ -52,14 +52,19 @@ std::string ParentOf(const std::string& dir) {
   return parent.empty() ? "." : parent.string();
 }
 
+// A recording a live process is writing is read once that run has ended, never as a dead one.
+void RefuseLiveWriter(const std::string& recording, const std::string& command) {
+  const std::string writer = LiveWriterOf(recording);
+  if (writer.empty()) return;
+  throw RunFolderError(recording + " is being written by process " + writer + " (a live run "
+                       "holds its writer.lock); irdist " + command + " reads it once that run "
+                       "has ended (or stop it and resume it).");
+}
+
 }  // namespace
 
 void RunFit(const FitArgs& args, CommandIo io) {
-  const std::string writer = LiveWriterOf(args.recording);
-  if (!writer.empty()) {
-    throw RunFolderError(args.recording + " is being written by a live run (process " + writer +
-                         "); fit it once that run has ended (or stop it and resume it).");
-  }
+  RefuseLiveWriter(args.recording, "fit");
   RequireCleanRecording(args.recording);
   const RecordingReader reader(args.recording);
   if (!reader.IsComplete()) {
@@ -72,12 +77,17 @@ void RunFit(const FitArgs& args, CommandIo io) {
   RefuseExistingResults(out_dir, {fs::path(model_path).filename().string(), "features.csv", "report"},
                         args.force, "fit");
   RefuseLiveRun(out_dir, "fit");
-  fs::create_directories(out_dir);
-  const FeatureOptions options =
-      FitFeatureOptions(reader, FeatureOptions{}, args.recover_response, io.out);
-  const FeatureMap features = RecordingFeatures(reader, options);
-  WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
-  FitRecording(reader, features, options, model_path, out_dir + "/report", io.out);
+  CreateRunFolder(out_dir);
+  const std::string again = "irdist fit " + ShellQuoted(args.recording) +
+                            (args.out.empty() ? "" : " --out " + ShellQuoted(args.out)) +
+                            (args.recover_response ? " --recover-response" : "") + " --force";
+  WriteResults("complete the results with: " + again, [&] {
+    const FeatureOptions options =
+        FitFeatureOptions(reader, FeatureOptions{}, args.recover_response, io.out);
+    const FeatureMap features = RecordingFeatures(reader, options);
+    WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
+    FitRecording(reader, features, options, model_path, out_dir + "/report", io.out);
+  });
 }
 
 namespace {
@@ -89,9 +99,39 @@ bool HasGroundTruth(const std::vector<EstimateRow>& rows) {
   return false;
 }
 
+// estimates.csv of a recording's brackets, and with ground truth summary.yaml and report/.
+std::vector<EstimateRow> WritePlaybackEstimates(const RecordingReader& reader,
+                                                const FeatureMap& features,
+                                                const CalibrationModel& model,
+                                                const PlaybackArgs& args,
+                                                const std::string& out_dir, std::ostream& out) {
+  std::vector<EstimateRow> rows = EstimateRecording(reader, features, model);
+  if (HasGroundTruth(rows)) {
+    WriteValidation(out_dir, rows,
+                    {{"recipe", reader.header().recipe_path},
+                     {"model", args.model},
+                     {"recording", args.recording}},
+                    out);
+  } else {  // a recording of `irdist measure`: no ground truth to summarise against
+    WriteEstimatesCsv(out_dir + "/estimates.csv", rows);
+    out << "Estimates: " << out_dir << "/estimates.csv (no ground truth)\n";
+  }
+  return rows;
+}
+
+// The playback command that replaces what a failed playback wrote.
+std::string PlaybackAgain(const PlaybackArgs& args) {
+  std::string line = "irdist playback " + ShellQuoted(args.recording);
+  if (!args.model.empty()) line += " --model " + ShellQuoted(args.model);
+  if (!args.out_dir.empty()) line += " --out " + ShellQuoted(args.out_dir);
+  if (args.allow_model_mismatch) line += " --allow-model-mismatch";
+  return line + " --force";
+}
+
 }  // namespace
 
 void RunPlayback(const PlaybackArgs& args, CommandIo io) {
+  RefuseLiveWriter(args.recording, "playback");
   RequireCleanRecording(args.recording);
   const RecordingReader reader(args.recording);
   std::optional<CalibrationModel> model;
@@ -107,25 +147,15 @@ void RunPlayback(const PlaybackArgs& args, CommandIo io) {
   const std::string out_dir = args.out_dir.empty() ? ParentOf(args.recording) : args.out_dir;
   RefuseExistingResults(out_dir, {"features.csv", "estimates.csv", "summary.yaml", "report"},
                         args.force, "playback");
-  fs::create_directories(out_dir);
- const FeatureMap features =
-      RecordingFeatures(reader, options, {}, model ? BlobFitModelOf(*model) : nullptr);
-  WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
-  io.out << "Features: " << out_dir << "/features.csv (" << features.size() << " frames)\n";
+  CreateRunFolder(out_dir);
+  FeatureMap features;
   std::vector<EstimateRow> rows;
-  if (model) {
-    rows = EstimateRecording(reader, features, *model);
-    if (HasGroundTruth(rows)) {
-      WriteValidation(out_dir, rows,
-                      {{"recipe", reader.header().recipe_path},
-                       {"model", args.model},
-                       {"recording", args.recording}},
-                      io.out);
-    } else {  // a recording of `irdist measure`: no ground truth to summarise against
-      WriteEstimatesCsv(out_dir + "/estimates.csv", rows);
-      io.out << "Estimates: " << out_dir << "/estimates.csv (no ground truth)\n";
-    }
-  }
+  WriteResults("complete the results with: " + PlaybackAgain(args), [&] {
+    features = RecordingFeatures(reader, options, {}, model ? BlobFitModelOf(*model) : nullptr);
+    WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
+    io.out << "Features: " << out_dir << "/features.csv (" << features.size() << " frames)\n";
+    if (model) rows = WritePlaybackEstimates(reader, features, *model, args, out_dir, io.out);
+  });
   if (args.show) ShowPlayback(reader, features, rows);
 }
 

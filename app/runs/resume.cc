@@ -13,6 +13,7 @@
 #include "acquisition/recording_reader.h"
 #include "app/cli/errors.h"
 #include "app/inputs/recipe.h"
+#include "app/processing/run_results.h"
 
 namespace irdist {
 namespace {
@@ -91,6 +92,16 @@ void RefuseLinkedRunParts(const std::string& run_dir) {
   }
 }
 
+// `made_by` is the command that made the folder (run.lock's, or recording.yaml's command), ""
+// when not recorded.
+void RefuseOtherCommand(const std::string& run_dir, const std::string& command,
+                        const std::string& made_by) {
+  if (made_by.empty() || made_by == command) return;
+  throw RunFolderError(run_dir + " is the folder of an `irdist " + made_by + "` run; `irdist " +
+                       command + " --resume` continues only its own runs. Resume it with "
+                       "`irdist " + made_by + "`, or start a new run.");
+}
+
 // The first of `results` missing from `run_dir` ("" when every one is there).
 std::string FirstMissing(const std::string& run_dir, const std::vector<std::string>& results) {
   for (const std::string& name : results) {
@@ -117,10 +128,24 @@ void RefuseLiveRun(const std::string& run_dir, const std::string& command) {
   }
 }
 
-RunFolderLock::RunFolderLock(const std::string& run_dir, const std::string& command) {
+void CreateRunFolder(const std::string& run_dir) {
   std::error_code ec;
+  const fs::file_status status = fs::symlink_status(run_dir, ec);
+  if (fs::exists(status) && !fs::is_directory(status)) {
+    throw RunFolderError(run_dir + " exists and is not a folder (" +
+                         (fs::is_symlink(status) ? "a symbolic link" : "a file") +
+                         "); a run writes its recording and results into a folder of its own. "
+                         "Give a new folder (or an existing one) with --out.");
+  }
   fs::create_directories(run_dir, ec);
-  if (ec) throw RunFolderError("cannot create the run folder " + run_dir + ": " + ec.message());
+  if (ec) {
+    throw RunFolderError("cannot create the run folder " + run_dir + ": " + ec.message() +
+                         "; give a folder you may write in with --out.");
+  }
+}
+
+RunFolderLock::RunFolderLock(const std::string& run_dir, const std::string& command) {
+  CreateRunFolder(run_dir);
   const std::string path = (fs::path(run_dir) / "run.lock").string();
   fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (fd_ < 0) throw RunFolderError("cannot create " + path + ": " + std::strerror(errno));
@@ -168,13 +193,13 @@ ResumeState CheckResume(const std::string& run_dir, const std::string& command,
     throw RunFolderError(recording_dir + ": no recording to resume (recording.yaml missing); "
                          "pass the folder of a cut run to --resume.");
   }
-  const std::string made_by = CommandOfFolder(run_dir);
-  if (!made_by.empty() && made_by != command) {
-    throw RunFolderError(run_dir + " is the folder of an `irdist " + made_by + "` run; `irdist " +
-                         command + " --resume` continues only its own runs. Resume it with "
-                         "`irdist " + made_by + "`, or start a new run.");
-  }
+  RefuseOtherCommand(run_dir, command, CommandOfFolder(run_dir));
+  // What check finds is refused before anything is appended: a resume hashes frames.csv again
+  // at its close and must not vouch for rows or frames edited since.
+  RequireCleanRecording(recording_dir, "it is not resumed (a resume would append to it and "
+                                       "close it with a new hash over the edit)");
   const RecordingReader reader(recording_dir);
+  RefuseOtherCommand(run_dir, command, reader.header().run_command);
   CheckSameText("recipe", expected.recipe_path, expected.recipe_text, reader.header().recipe_text,
                 recording_dir);
   CheckSameText("rig file", expected.rig_path, expected.rig_text, reader.header().rig_text,

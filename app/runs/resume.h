@@ -24,6 +24,10 @@ class RunFolderLock {
   int fd_ = -1;
 };
 
+// Creates the run folder `run_dir` (and its parents) when missing; throws RunFolderError naming
+// the path and the fix when it is a file, a link or cannot be created.
+void CreateRunFolder(const std::string& run_dir);
+
 // Refuses (RunFolderError naming the pid and command) while a live run holds `run_dir`'s lock;
 // `command` is the one refused ("fit"). Never takes the lock; a folder without run.lock is free.
 void RefuseLiveRun(const std::string& run_dir, const std::string& command);
@@ -52,8 +56,10 @@ struct ResumeState {
 };
 
 // Checks that `run_dir` can be resumed by `command` with `expected`: a recording is there, made
-// by the same command, with the same recipe and rig bytes, pixel format and ROI, and no part of
-// the folder (recording, frames/, recording.yaml, model.yaml, ...) is a symbolic link. A cut
+// by the same command (run.lock's, and recording.yaml's `command`), with the same recipe and rig
+// bytes, pixel format and ROI, no error of `irdist check` in the recording (CheckFailedError
+// listing them: a resume never hashes rows or frames edited since), and no part of the folder
+// (recording, frames/, recording.yaml, model.yaml, ...) is a symbolic link. A cut
 // recording is continued; a complete one only when one of its results is missing (the run was
 // killed while processing); with every result there they stand and the resume is refused.
 // Throws RunFolderError or RecipeError (InputError) naming the file and what differs.

@@ -204,7 +204,7 @@ bool PrepareRunFolder(const RunRequest& request, const Recipe& recipe, const Pla
     recorded->dir =
         request.out_dir.empty() ? recipe.output_dir + "-" + Timestamp() : request.out_dir;
     RefuseOtherResults(recorded->dir, request.kind);
-    fs::create_directories(recorded->dir);
+    CreateRunFolder(recorded->dir);
     return true;
   }
   recorded->dir = request.resume_dir;
@@ -418,6 +418,7 @@ LiveCaptureSetup RecorderSetup(const RunRequest& request, const Recipe& recipe,
   LiveCaptureSetup setup = CaptureSetup(recipe, rig, RigTriggerSource(recipe.rig));
   setup.recording_dir = run_dir + "/recording";
   setup.resume = !request.resume_dir.empty();
+  setup.command = CommandName(request.kind);
   setup.station_identity = station.IdentityBrief();
   setup.recipe_text = recipe_text;
   setup.feature_options = feature_options;
@@ -528,17 +529,22 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
                                          request.model_path, recorded.dir));
   }
 
-  if (recipe.after == AfterRecording::kNone) {
-    ProcessRecordingOnly(recorded.dir, feature_options, recorded.cache, io.out);
-  } else if (request.kind == RunKind::kCalibrate) {
-    ProcessCalibration(recorded.dir, feature_options, recorded.cache, io.out);
-  } else {
-    ProcessValidation(recorded.dir, *model,
-                      {{"recipe", recipe.path},
-                       {"model", request.model_path},
-                       {"recording", recorded.dir + "/recording"}},
-                      recorded.cache, io.out);
-  }
+  // A result that cannot be written (a full disk): the resume completes them.
+  WriteResults("complete the results with: " +
+                   ResumeCommand(CommandName(request.kind), recipe.path, request.model_path,
+                                 recorded.dir), [&] {
+    if (recipe.after == AfterRecording::kNone) {
+      ProcessRecordingOnly(recorded.dir, feature_options, recorded.cache, io.out);
+    } else if (request.kind == RunKind::kCalibrate) {
+      ProcessCalibration(recorded.dir, feature_options, recorded.cache, io.out);
+    } else {
+      ProcessValidation(recorded.dir, *model,
+                        {{"recipe", recipe.path},
+                         {"model", request.model_path},
+                         {"recording", recorded.dir + "/recording"}},
+                        recorded.cache, io.out);
+    }
+  });
   io.out << "Run folder: " << recorded.dir << "\n";
 }
 

@@ -165,5 +165,106 @@ TEST(RecordingSafety, LinkedFramesFolderOrHeaderIsRefusedEverywhere) {
   }
 }
 
+// The issue: check on a recording a live calibrate was writing said "the writer died".
+TEST(RecordingLive, ARecordingBeingWrittenIsNamedWithItsWriterNeverAsDead) {
+  const std::string dir = TempDir("livecheck");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, kBracketSize);
+  const RecordingCheck check = CheckRecording(dir);
+  const std::string report = check.BriefReport();
+  EXPECT_EQ(check.live_writer, std::to_string(getpid()));
+  EXPECT_NE(report.find("being written by process " + std::to_string(getpid())),
+            std::string::npos) << report;
+  EXPECT_EQ(report.find("died"), std::string::npos) << report;
+  writer.reset();  // killed: the lock is released, the header stays "running"
+  const std::string dead = CheckRecording(dir).BriefReport();
+  EXPECT_NE(dead.find("the writer died"), std::string::npos) << dead;
+  EXPECT_NE(dead.find("UNVERIFIED: frames.csv has no hash"), std::string::npos) << dead;
+  EXPECT_TRUE(CheckRecording(dir).ok()) << dead;
+  fs::remove_all(dir);
+}
+
+// The issue: a closed header set to what a kill -9 leaves (running, no hash) let edited rows pass.
+TEST(RecordingIntegrity, AClosedHeaderMadeToLookKilledIsAnError) {
+  const std::string dir = CompleteRecording("fakekill", kBracketSize);
+  std::string yaml = Slurp(fs::path(dir) / "recording.yaml");
+  yaml = std::regex_replace(yaml, std::regex("completion: complete"), "completion: running");
+  yaml = std::regex_replace(yaml, std::regex("frames_csv_sha256: \"[0-9a-f]+\""),
+                            "frames_csv_sha256: \"\"");
+  WriteText(fs::path(dir) / "recording.yaml", yaml);
+  const std::string report = CheckRecording(dir).BriefReport();
+  EXPECT_NE(report.find("error: recording.yaml: completion is 'running' but end_time and "
+                        "frame_count are set"), std::string::npos) << report;
+  fs::remove_all(dir);
+}
+
+// The issue: a header downgraded to format 1 let edited rows and frames pass unverified.
+TEST(RecordingIntegrity, AHeaderDowngradedToFormat1IsAnError) {
+  const std::string dir = CompleteRecording("downgrade", kBracketSize);
+  const std::string yaml = Slurp(fs::path(dir) / "recording.yaml");
+  WriteText(fs::path(dir) / "recording.yaml",
+            std::regex_replace(yaml, std::regex("format_version: 2"), "format_version: 1"));
+  const std::string report = CheckRecording(dir).BriefReport();
+  EXPECT_NE(report.find("error: recording.yaml: format_version 1 (before content hashes) but "
+                        "frames.csv has format 2's sha256 column"), std::string::npos) << report;
+  fs::remove_all(dir);
+}
+
+// The issue: a row at another slide position than its bracket's siblings was never checked.
+TEST(RecordingIntegrity, ARowAtAnotherPoseThanItsBracketIsAnError) {
+  const std::string dir = CompleteRecording("pose", 2 * kBracketSize);
+  EditCsvLine(dir, 4, [](std::string line) {  // frame 2 of bracket 0 at slide 1500
+    return std::regex_replace(line, std::regex(",1500,10,"), ",1600,10,");
+  });
+  const RecordingCheck check = CheckRecording(dir);
+  const std::string report = check.BriefReport();
+  EXPECT_NE(report.find("error: frames.csv:4: bracket 0: frames/000002.png is at slide 1600 mm"),
+            std::string::npos) << report;
+  EXPECT_NE(report.find("not at its bracket's pose and current (those of frames/000000.png at "
+                        "frames.csv:2)"), std::string::npos) << report;
+  EXPECT_EQ(report.find("frames.csv:3: bracket"), std::string::npos) << report;
+  fs::remove_all(dir);
+}
+
+// The issue: a wrong-size frame 0 made check blame the 95 good frames after it.
+TEST(Recording, AFrameOfAnotherSizeThanMostIsTheOneBlamed) {
+  const std::string dir = TempDir("oddsize");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  writer->Append(cv::Mat(12, 16, CV_16UC1, cv::Scalar(0)), TestRecord(0));
+  WriteFrames(*writer, 1, 2 * kBracketSize);
+  writer->Close(Completion::kComplete);
+  const RecordingCheck check = CheckRecording(dir);
+  int size_errors = 0;
+  for (const RecordingIssue& issue : check.errors) {
+    if (issue.message.find("size") == std::string::npos) continue;
+    ++size_errors;
+    EXPECT_EQ(issue.file, "frames/000000.png");
+    EXPECT_NE(issue.message.find("its size 16 x 12 px differs from the 32 x 24 px of the "
+                                 "recording's other frames"), std::string::npos) << issue.message;
+  }
+  EXPECT_EQ(size_errors, 1) << check.BriefReport();
+  fs::remove_all(dir);
+}
+
+// The issue: BayerRG8, or Mono16 over a camera that read back Mono12, passed check.
+TEST(RecordingIntegrity, APixelFormatThatIsNotTheCamerasOrUnknownFailsCheck) {
+  const std::string dir = CompleteRecording("pixfmt", kBracketSize);
+  const std::string yaml = Slurp(fs::path(dir) / "recording.yaml");
+  WriteText(fs::path(dir) / "recording.yaml",
+            std::regex_replace(std::regex_replace(yaml, std::regex("bit_depth: 12"),
+                                                  "bit_depth: 16"),
+                               std::regex("pixel_format: Mono12"), "pixel_format: Mono16"));
+  std::string report = CheckRecording(dir).BriefReport();
+  EXPECT_NE(report.find("error: recording.yaml: image.pixel_format Mono16 contradicts the "
+                        "camera's camera.features.PixelFormat Mono12"), std::string::npos)
+      << report;
+  WriteText(fs::path(dir) / "recording.yaml",
+            std::regex_replace(yaml, std::regex("pixel_format: Mono12"), "pixel_format: BayerRG8"));
+  report = CheckRecording(dir).BriefReport();
+  EXPECT_NE(report.find("error: recording.yaml: image.pixel_format BayerRG8 is not a format irdist "
+                        "records"), std::string::npos) << report;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace irdist

@@ -27,17 +27,44 @@ TEST(RecordingIntegrity, BitDepthMustBeThePixelFormats) {
   RecordingHeader header;
   header.pixel_format = "Mono12";
   header.bit_depth = 16;
-  const auto issues = BitDepthIssues(header);
+  const auto issues = PixelFormatIssues(header);
   ASSERT_EQ(issues.size(), 1u);
   EXPECT_EQ(issues[0].file, "recording.yaml");
   EXPECT_NE(issues[0].message.find("bit_depth: 12"), std::string::npos) << issues[0].message;
   header.bit_depth = 12;
-  EXPECT_TRUE(BitDepthIssues(header).empty());
-  header.pixel_format = "BayerRG8";  // not a Mono format: not checked
-  EXPECT_TRUE(BitDepthIssues(header).empty());
+  EXPECT_TRUE(PixelFormatIssues(header).empty());
+  header.pixel_format = "Mono12p";  // packed: 12 bits too
+  EXPECT_TRUE(PixelFormatIssues(header).empty());
+  header.pixel_format = "BayerRG8";  // not a format irdist records
+  ASSERT_EQ(PixelFormatIssues(header).size(), 1u);
+  EXPECT_NE(PixelFormatIssues(header)[0].message.find("not a format irdist records"),
+            std::string::npos);
+  header.pixel_format = "Mono12";
+  header.camera_features["PixelFormat"] = "Mono12Packed";  // the camera's read-back differs
+  ASSERT_EQ(PixelFormatIssues(header).size(), 1u);
+  header.pixel_format.clear();  // a hand-made header without one: not checked
+  EXPECT_TRUE(PixelFormatIssues(header).empty());
   EXPECT_EQ(BitsOfMonoFormat("Mono8"), 8);
   EXPECT_EQ(BitsOfMonoFormat("Mono16"), 16);
   EXPECT_EQ(BitsOfMonoFormat("Mono9"), 0);
+}
+
+TEST(RecordingIntegrity, EveryRowOfABracketHasItsPoseAndCurrent) {
+  RecordedBracket bracket;
+  bracket.bracket_id = 7;
+  for (int k = 0; k < 3; ++k) {
+    FrameRecord r = Row(k, 8000 + 1000 * k, k + 2);
+    r.slide_mm = 1500;
+    r.bias_ma_set = 20;
+    r.bias_ma_measured = 19.9 + 0.01 * k;  // measured, not set: may differ
+    bracket.frames.push_back(r);
+  }
+  EXPECT_TRUE(BracketPoseIssues({bracket}).empty());
+  bracket.frames[2].bias_ma_set = 21;
+  const auto issues = BracketPoseIssues({bracket});
+  ASSERT_EQ(issues.size(), 1u);
+  EXPECT_EQ(issues[0].line, 4);
+  EXPECT_NE(issues[0].message.find("bracket 7"), std::string::npos) << issues[0].message;
 }
 
 TEST(RecordingIntegrity, AValueBeyondTheBitDepthNamesTheFrame) {

@@ -12,6 +12,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <regex>
 #include <sstream>
 #include <thread>
 
@@ -270,6 +271,61 @@ TEST(RecordingIntegrity, AResumedRecordingIsHashedAgainAtItsClose) {
   EXPECT_EQ(ReadRecordingHeader(dir).frames_csv_sha256,
             Sha256Hex(Slurp(fs::path(dir) / "frames.csv")));
   EXPECT_TRUE(CheckRecording(dir).ok()) << CheckRecording(dir).BriefReport();
+  fs::remove_all(dir);
+}
+
+// The issue: a resume appended to a frames.csv edited after its close and hashed the edit as its
+// own; check then said 0 errors. The resume refuses, and the recording keeps its old hash.
+TEST(RecordingIntegrity, ResumeRefusesAFramesCsvEditedAfterItsClose) {
+  const std::string dir = TempDir("resumeedited");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, kBracketSize);
+  writer->Close(Completion::kCut);
+  const std::string hash = ReadRecordingHeader(dir).frames_csv_sha256;
+  EditCsvLine(dir, 3, [](std::string line) {
+    return std::regex_replace(line, std::regex(",1500,10,"), ",1600,10,");
+  });
+  try {
+    RecordingWriter::Resume(dir);
+    FAIL() << "an edited frames.csv was resumed";
+  } catch (const RecordingError& e) {
+    EXPECT_NE(std::string(e.what()).find("frames.csv was edited after the recording was closed"),
+              std::string::npos) << e.what();
+  }
+  EXPECT_EQ(ReadRecordingHeader(dir).frames_csv_sha256, hash);
+  EXPECT_EQ(ReadRecordingHeader(dir).completion, Completion::kCut);
+  EXPECT_FALSE(CheckRecording(dir).ok());
+  fs::remove_all(dir);
+}
+
+// A header downgraded to format 1 (hashes dropped) is not resumed either.
+TEST(RecordingIntegrity, ResumeRefusesAHeaderDowngradedToFormat1) {
+  const std::string dir = TempDir("resumedowngrade");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, kBracketSize);
+  writer->Close(Completion::kCut);
+  const std::string yaml = Slurp(fs::path(dir) / "recording.yaml");
+  WriteText(fs::path(dir) / "recording.yaml",
+            std::regex_replace(yaml, std::regex("format_version: 2"), "format_version: 1"));
+  EXPECT_THROW(RecordingWriter::Resume(dir), RecordingError);
+  fs::remove_all(dir);
+}
+
+// A writer that died left no hash of frames.csv: the resume cannot vouch for those rows, and
+// says so in recording.yaml for good (check names them), while its own rows are hashed at close.
+TEST(RecordingIntegrity, RowsOfAWriterThatDiedStayMarkedUnverifiedAfterAResume) {
+  const std::string dir = TempDir("resumedied");
+  auto writer = RecordingWriter::Open(dir, TestHeader());
+  WriteFrames(*writer, 0, kBracketSize);
+  writer.reset();  // killed: completion stays running, no hash
+  auto resumed = RecordingWriter::Resume(dir);
+  WriteFrames(*resumed, kBracketSize, 2 * kBracketSize);
+  resumed->Close(Completion::kComplete);
+  EXPECT_EQ(ReadRecordingHeader(dir).unverified_rows, kBracketSize);
+  const RecordingCheck check = CheckRecording(dir);
+  EXPECT_TRUE(check.ok()) << check.BriefReport();
+  EXPECT_NE(check.BriefReport().find("UNVERIFIED: the first 5 rows of frames.csv (lines 2 to 6)"),
+            std::string::npos) << check.BriefReport();
   fs::remove_all(dir);
 }
 

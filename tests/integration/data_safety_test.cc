@@ -182,6 +182,16 @@ class SmallDisk {
   bool mounted_ = false;
 };
 
+// `irdist calibrate` of the test's recipe on the virtual rig (both written into `dir`) into `run`;
+// its exit code, and its output in `output`.
+int CalibrateInto(const std::string& dir, const std::string& run, std::string* output) {
+  testing::WriteAll(dir + "/rig.yaml", RigWith(""));
+  testing::WriteAll(dir + "/recipe.yaml", kRecipe);
+  return testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--out", run, "--time-scale",
+                             kTimeScale, "--quiet"},
+                            dir + "/run.log", output);
+}
+
 // The disk fills during the sweep (room for a few of its 46 KB frames): the run stops with the
 // write's own error (ENOSPC), the recording is closed as cut with its complete brackets, and the
 // resume command is printed; with room again, --resume completes it with every frame once.
@@ -189,15 +199,10 @@ TEST(DataSafetyDisk, AFullDiskStopsWithTheFirstErrorAndTheRunResumes) {
   const std::string dir = testing::ScratchDir("data-safety-full");
   SmallDisk disk(dir + "/disk", "200k");
   if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs (" << disk.why() << "): needs root";
-  testing::WriteAll(dir + "/rig.yaml", RigWith(""));
-  testing::WriteAll(dir + "/recipe.yaml", kRecipe);
   testing::LoopbackGvcpLock lock;
   std::string output;
   const std::string run = dir + "/disk/run";
-  EXPECT_EQ(testing::RunIrdist({"calibrate", dir + "/recipe.yaml", "--out", run, "--time-scale",
-                                kTimeScale, "--quiet"},
-                               dir + "/run.log", &output),
-            1);
+  EXPECT_EQ(CalibrateInto(dir, run, &output), 1);
   const std::size_t first = output.find("No space left on device");
   EXPECT_NE(first, std::string::npos) << output;
   EXPECT_EQ(output.find("also: "), std::string::npos) << "the first error, once: " << output;
@@ -218,6 +223,39 @@ TEST(DataSafetyDisk, AFullDiskStopsWithTheFirstErrorAndTheRunResumes) {
             0)
       << output;
   ExpectEveryFrameOnce(run + "/recording");
+}
+
+// Fills the disk holding `dir` with `dir`/filler until a write fails (no space left).
+void FillDisk(const std::string& dir) {
+  std::ofstream filler(dir + "/filler", std::ios::binary);
+  const std::string block(64 * 1024, '\0');
+  while (filler.write(block.data(), block.size()) && filler.flush()) {
+  }
+}
+
+// The issue: results cut by a full disk said "run again", which was then refused. A live run's
+// processing cut by a full disk now names the --resume that completes it, and that command does.
+TEST(DataSafetyDisk, AProcessingCutByAFullDiskNamesTheResumeThatCompletesIt) {
+  const std::string dir = testing::ScratchDir("data-safety-results");
+  SmallDisk disk(dir + "/disk", "4m");
+  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs (" << disk.why() << "): needs root";
+  testing::LoopbackGvcpLock lock;
+  std::string output;
+  const std::string run = dir + "/disk/run";
+  ASSERT_EQ(CalibrateInto(dir, run, &output), 0) << output;
+  std::filesystem::remove(run + "/features.csv");  // as if the processing had been cut
+  FillDisk(dir + "/disk");
+  const std::vector<std::string> resume = {"calibrate", dir + "/recipe.yaml", "--resume", run};
+  EXPECT_EQ(testing::RunIrdist(resume, dir + "/full.log", &output), 1);
+  EXPECT_NE(output.find("No space left on device"),
+            std::string::npos) << output;
+  EXPECT_FALSE(std::filesystem::exists(run + "/features.csv")) << "never a cut result";
+  const std::string advice =
+      "complete the results with: irdist calibrate " + dir + "/recipe.yaml --resume " + run;
+  ASSERT_NE(output.find(advice), std::string::npos) << output;
+  std::filesystem::remove(dir + "/disk/filler");
+  EXPECT_EQ(testing::RunIrdist(resume, dir + "/again.log", &output), 0) << output;
+  EXPECT_TRUE(std::filesystem::exists(run + "/features.csv"));
 }
 
 }  // namespace

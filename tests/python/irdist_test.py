@@ -57,6 +57,8 @@ class RecordingTest(unittest.TestCase):
             self.assertEqual(len({r["bracket_id"] for r in rows}), 1)
             self.assertEqual([r["frame_in_bracket"] for r in rows], list(range(len(rows))))
         self.assertEqual(self.rec.header["completion"], "complete")
+        self.assertEqual(self.rec.header["command"], "calibrate")
+        self.assertEqual(self.rec.header["unverified_rows"], 0)
 
     def test_a_damaged_recording_is_refused_with_its_file_and_line(self):
         with tempfile.TemporaryDirectory() as tmp:
@@ -65,6 +67,35 @@ class RecordingTest(unittest.TestCase):
             os.remove(os.path.join(copy, "frames", "000002.png"))
             with self.assertRaisesRegex(irdist.RecordingError, "000002.png"):
                 irdist.Recording(copy)
+
+    def test_bad_indices_raise_index_error_with_a_message_and_a_nul_path_is_refused(self):
+        n = len(self.rec)
+        for bad in (10**20, -10**20, n, -n - 1):
+            with self.assertRaisesRegex(IndexError, "out of range: the recording has %d rows" % n):
+                self.rec[bad]
+        for bad in (-1, n, 10**20):
+            with self.assertRaisesRegex(IndexError, r"no frame %d in .*indices 0\.\.%d" % (bad, n - 1)):
+                self.rec.image(bad)
+        with self.assertRaises(TypeError):
+            self.rec["3"]
+        self.assertEqual(self.rec[np.int64(3)][1]["index"], 3)
+        self.assertEqual(self.rec.image(n - 1).shape, self.rec[-1][0].shape)
+        with self.assertRaisesRegex(ValueError, "NUL character"):
+            irdist.Recording(RECORDING + "\0junk")
+
+    def test_a_recording_being_written_is_named_with_its_writer(self):
+        import fcntl
+        with tempfile.TemporaryDirectory() as tmp:
+            copy = os.path.join(tmp, "recording")
+            subprocess.run(["cp", "-r", RECORDING, copy], check=True)
+            with open(os.path.join(copy, "writer.lock"), "w") as lock:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                lock.write("%d\n" % os.getpid())
+                lock.flush()
+                with self.assertRaisesRegex(irdist.RecordingError,
+                                            "being written by process %d" % os.getpid()):
+                    irdist.Recording(copy)
+            self.assertEqual(len(irdist.Recording(copy)), len(self.rec))
 
 
 def playback_rows(out_dir):

@@ -9,6 +9,8 @@
 #include <fstream>
 #include <string>
 
+#include "tests/full_disk.h"
+
 namespace irdist {
 namespace {
 
@@ -112,6 +114,19 @@ TEST_F(EstimatesCsvTest, AnUnknownFlagIsRefusedWithItsLine) {
     EXPECT_NE(std::string(e.what()).find("bad.csv:2: flag 'sunny'"), std::string::npos)
         << e.what();
   }
+}
+
+// The issue: measure on a full disk left an empty estimates.csv, and its rerun was refused for it.
+TEST_F(EstimatesCsvTest, AHeaderThatCannotBeWrittenLeavesNoFile) {
+  std::string error;
+  try {
+    const testing::FullDisk full;
+    EstimatesCsvWriter writer(Path("estimates.csv"));
+  } catch (const EstimatesFileError& e) {
+    error = e.what();
+  }
+  EXPECT_NE(error.find("write failed"), std::string::npos) << error;
+  EXPECT_FALSE(fs::exists(Path("estimates.csv")));
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "acquisition/recording_writer.h"
 #include "app/cli/errors.h"
 #include "app/runs/resume.h"
+#include "tests/full_disk.h"
 #include "tests/app/small_recording.h"
 
 namespace irdist {
@@ -81,6 +82,62 @@ TEST_F(SmallRecordingTest, FitRefusesARecordingALiveRunIsWriting) {
   }
   EXPECT_FALSE(fs::exists(dir_ / "model.yaml"));
   EXPECT_FALSE(fs::exists(dir_ / "features.csv"));
+}
+
+// The issue's item 4 for playback: a recording a live process is writing is named as such.
+TEST_F(SmallRecordingTest, PlaybackRefusesARecordingALiveRunIsWriting) {
+  std::ostringstream out, err;
+  PlaybackArgs args;
+  args.recording = (dir_ / "recording").string();
+  auto live = RecordingWriter::Resume(args.recording);
+  try {
+    RunPlayback(args, {out, err});
+    FAIL() << "playback beside a live writer";
+  } catch (const RunFolderError& e) {
+    EXPECT_NE(std::string(e.what()).find("is being written by process " +
+                                         std::to_string(getpid())), std::string::npos) << e.what();
+  }
+  live->Close(Completion::kCut);
+  EXPECT_FALSE(fs::exists(dir_ / "features.csv"));
+}
+
+// The issue: a result cut by a full disk said "run again", which was then refused without
+// --force. The advice is now the command that completes the results, and it does.
+TEST_F(SmallRecordingTest, AResultCutByAFullDiskAdvisesACommandThatWorks) {
+  std::ostringstream out, err;
+  PlaybackArgs args;
+  args.recording = (dir_ / "recording").string();
+  args.out_dir = (dir_ / "pb dir").string();
+  std::string error;
+  try {
+    const testing::FullDisk full;
+    RunPlayback(args, {out, err});
+  } catch (const RunFolderError& e) {
+    error = e.what();
+  }
+  const std::string advice = "complete the results with: irdist playback " + args.recording +
+                             " --out '" + args.out_dir + "' --force";
+  ASSERT_NE(error.find(advice), std::string::npos) << error;
+  EXPECT_EQ(error.find("run the command again"), std::string::npos) << error;
+  args.force = true;  // what the advice says
+  EXPECT_NO_THROW(RunPlayback(args, {out, err}));
+  EXPECT_TRUE(fs::exists(fs::path(args.out_dir) / "features.csv"));
+}
+
+// The issue: `fit --out` naming a file's folder said "filesystem error".
+TEST_F(SmallRecordingTest, FitIntoAFolderThatIsAFileIsRefusedNamingIt) {
+  std::ostringstream out, err;
+  std::ofstream(dir_ / "plain") << "a file\n";
+  FitArgs fit;
+  fit.recording = (dir_ / "recording").string();
+  fit.out = (dir_ / "plain" / "model.yaml").string();
+  try {
+    RunFit(fit, {out, err});
+    FAIL() << "fit into a file";
+  } catch (const RunFolderError& e) {
+    EXPECT_NE(std::string(e.what()).find("exists and is not a folder"), std::string::npos)
+        << e.what();
+  }
 }
 
 // A result that is a link is never written through, --force or not.

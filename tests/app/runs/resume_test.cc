@@ -30,6 +30,8 @@ class ResumeTest : public ::testing::Test {
     { const RunFolderLock lock(run_, command); }
     RecordingHeader header;
     header.pixel_format = "Mono12";
+    header.bit_depth = 12;
+    header.run_command = command;
     header.camera_features = {{"OffsetX", "512"}, {"OffsetY", "384"}, {"Width", "256"},
                               {"Height", "256"}};
     header.recipe_text = kCrlfRecipe;
@@ -40,7 +42,7 @@ class ResumeTest : public ::testing::Test {
       r.frame_in_bracket = k;
       r.bracket_size = 2;
       r.role = k == 0 ? FrameRole::kReference : FrameRole::kMeasurement;
-      writer->Append(cv::Mat(8, 8, CV_16UC1, cv::Scalar(7)), r);
+      writer->Append(cv::Mat(8, 8, CV_16UC1, cv::Scalar(7 + k)), r);
     }
     writer->Close(completion);
   }
@@ -121,6 +123,53 @@ TEST_F(ResumeTest, ChangedRigOrCameraSettingsAreRefused) {
   ResumeExpectation lf = Same();
   lf.recipe_text = "name: crlf\naxes:\n  slide_mm: 2000\n";
   EXPECT_THROW(CheckResume(run_, "calibrate", lf), InputError);
+}
+
+// The issue: `--resume` appended to a recording with a replaced frame (found only after the
+// whole resumed sweep) or edited rows, and hashed them as its own. Check's errors come first.
+TEST_F(ResumeTest, ARecordingWithErrorsIsNotResumedAndItsErrorsAreListed) {
+  MakeCutRun("calibrate");
+  const fs::path frame = fs::path(run_) / "recording/frames/000001.png";
+  fs::copy_file(fs::path(run_) / "recording/frames/000000.png", frame,
+                fs::copy_options::overwrite_existing);
+  try {
+    CheckResume(run_, "calibrate", Same());
+    FAIL() << "a recording with a replaced frame was resumed";
+  } catch (const CheckFailedError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("it is not resumed"), std::string::npos) << what;
+    EXPECT_NE(what.find("frames/000001.png: its content is not the frame recorded in its row"),
+              std::string::npos) << what;
+  }
+}
+
+// The issue: once run.lock was deleted, validate --resume took over a calibrate folder.
+TEST_F(ResumeTest, FolderOfAnotherCommandIsRefusedWithoutItsRunLock) {
+  MakeCutRun("calibrate");
+  fs::remove(fs::path(run_) / "run.lock");
+  try {
+    CheckResume(run_, "validate", Same());
+    FAIL() << "validate --resume accepted a calibrate folder without its run.lock";
+  } catch (const RunFolderError& e) {
+    EXPECT_NE(std::string(e.what()).find("`irdist calibrate` run"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(CheckResume(run_, "calibrate", Same()));
+}
+
+// The issue: `calibrate --out FILE` said "filesystem error".
+TEST_F(ResumeTest, ARunFolderThatIsAFileIsRefusedNamingIt) {
+  std::ofstream(run_) << "not a folder\n";
+  try {
+    CreateRunFolder(run_);
+    FAIL() << "a file was taken as a run folder";
+  } catch (const RunFolderError& e) {
+    EXPECT_NE(std::string(e.what()).find(run_ + " exists and is not a folder (a file)"),
+              std::string::npos) << e.what();
+  }
+  EXPECT_THROW(RunFolderLock(run_, "calibrate"), RunFolderError);
+  fs::remove(run_);
+  CreateRunFolder(run_ + "/a/b");
+  EXPECT_TRUE(fs::is_directory(run_ + "/a/b"));
 }
 
 TEST(ResumeCommandTest, NamesTheCommandRecipeModelAndFolder) {
