@@ -6,12 +6,14 @@
 #include <vector>
 
 #include "app/cli/errors.h"
+#include "base/bounds.h"
 #include "base/yaml_fields.h"
 #include "station/serial_transport.h"
 
 namespace irdist {
 namespace {
 
+using yaml_fields::AsBounded;
 using yaml_fields::AsNumber;
 using yaml_fields::Fail;
 using yaml_fields::MapReader;
@@ -55,7 +57,8 @@ double Positive(const MapReader& map, const std::string& key, double fallback) {
   return value;
 }
 
-// camera.intrinsics: {pixels: sensor|roi, fx, fy, cx, cy, distortion: [k1, k2, p1, p2, k3]}.
+// camera.intrinsics: {pixels: sensor|roi, fx, fy, cx, cy, distortion: [k1, k2, p1, p2, k3]}, each
+// inside its physical bound (base/bounds.h); CheckIntrinsicsAgainstPixels the cross-checks.
 CameraIntrinsics ReadIntrinsics(const YAML::Node& node, const std::string& file) {
   const MapReader map(node, file, "camera.intrinsics",
                       {"pixels", "fx", "fy", "cx", "cy", "distortion"});
@@ -64,12 +67,11 @@ CameraIntrinsics ReadIntrinsics(const YAML::Node& node, const std::string& file)
   const std::string pixels = map.String("pixels", "sensor");
   OneOf(map, "pixels", pixels, {"sensor", "roi"});
   k.in_roi_px = pixels == "roi";
-  map.Require("fx");
-  map.Require("fy");
-  k.fx_px = Positive(map, "fx", 0.0);
-  k.fy_px = Positive(map, "fy", 0.0);
-  k.cx_px = AsNumber(map.Require("cx"), file, "camera.intrinsics.cx");
-  k.cy_px = AsNumber(map.Require("cy"), file, "camera.intrinsics.cy");
+  const std::string fix = "give the lens's calibration (OpenCV's calibrateCamera)";
+  k.fx_px = AsBounded(map.Require("fx"), file, "camera.intrinsics.fx", bounds::kFocalPx, fix);
+  k.fy_px = AsBounded(map.Require("fy"), file, "camera.intrinsics.fy", bounds::kFocalPx, fix);
+  k.cx_px = AsBounded(map.Require("cx"), file, "camera.intrinsics.cx", bounds::kSensorPx, fix);
+  k.cy_px = AsBounded(map.Require("cy"), file, "camera.intrinsics.cy", bounds::kSensorPx, fix);
   if (map.Has("distortion")) {
     const YAML::Node d = map.Get("distortion");
     if (!d.IsSequence() || d.size() > 5) {
@@ -77,10 +79,47 @@ CameraIntrinsics ReadIntrinsics(const YAML::Node& node, const std::string& file)
                            "order; up to 5 numbers)");
     }
     for (size_t i = 0; i < d.size(); ++i) {
-      k.distortion.push_back(AsNumber(d[i], file, "camera.intrinsics.distortion"));
+      const bool tangential = i == 2 || i == 3;
+      k.distortion.push_back(AsBounded(
+          d[i], file, "camera.intrinsics.distortion[" + std::to_string(i) + "]",
+          tangential ? bounds::kTangentialDistortion : bounds::kRadialDistortion, fix));
     }
   }
   return k;
+}
+
+// The intrinsics against the pixels they are stated in: the principal point inside them (the
+// ROI's with `pixels: roi`), and the distortion moving the ROI's farthest corner by less than
+// bounds::kMaxCornerDistortion of its radius.
+void CheckIntrinsicsAgainstPixels(const CameraConfig& camera, const YAML::Node& node,
+                                  const std::string& file) {
+  const CameraIntrinsics& k = camera.intrinsics;
+  const bool roi = camera.roi_width > 0;
+  if (k.in_roi_px && roi && !(k.cx_px <= camera.roi_width && k.cy_px <= camera.roi_height)) {
+    Fail(file, node["cx"].Mark(),
+         "camera.intrinsics (pixels: roi): the principal point (" + BoundNumber(k.cx_px) + ", " +
+             BoundNumber(k.cy_px) + ") lies outside the " + std::to_string(camera.roi_width) +
+             " x " + std::to_string(camera.roi_height) + " px ROI it is stated in; give cx, cy in "
+             "the ROI's pixels (sensor value - roi offset) or set pixels: sensor");
+  }
+  if (!roi) return;  // the sensor's size is the camera's: the corner is unknown here
+  const double x0 = k.in_roi_px ? 0.0 : camera.roi_offset_x;
+  const double y0 = k.in_roi_px ? 0.0 : camera.roi_offset_y;
+  const double dx = std::max(std::fabs(x0 - k.cx_px), std::fabs(x0 + camera.roi_width - k.cx_px));
+  const double dy = std::max(std::fabs(y0 - k.cy_px), std::fabs(y0 + camera.roi_height - k.cy_px));
+  const double r2 = (dx / k.fx_px) * (dx / k.fx_px) + (dy / k.fy_px) * (dy / k.fy_px);
+  double radial = 0.0, power = r2;
+  for (size_t i : {size_t{0}, size_t{1}, size_t{4}}) {
+    if (i < k.distortion.size()) radial += k.distortion[i] * power;
+    power *= r2;
+  }
+  if (!(std::fabs(radial) <= bounds::kMaxCornerDistortion)) {
+    Fail(file, node["distortion"].Mark(),
+         "camera.intrinsics.distortion moves the ROI's farthest corner by " +
+             BoundNumber(100.0 * radial) + "% of its radius (at most " +
+             BoundNumber(100.0 * bounds::kMaxCornerDistortion) + "%: a measurement lens, not a "
+             "fisheye); check k1, k2, k3 and the units of fx, fy");
+  }
 }
 
 CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
@@ -129,7 +168,10 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
     camera.roi_width = v[2];
     camera.roi_height = v[3];
   }
-  if (map.Has("intrinsics")) camera.intrinsics = ReadIntrinsics(map.Get("intrinsics"), file);
+  if (map.Has("intrinsics")) {
+    camera.intrinsics = ReadIntrinsics(map.Get("intrinsics"), file);
+    CheckIntrinsicsAgainstPixels(camera, map.Get("intrinsics"), file);
+  }
   return camera;
 }
 

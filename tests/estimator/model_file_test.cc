@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -43,6 +44,15 @@ CalibrationModel SmallModel() {
   tc.summary.mean_relative_error = 0.1 / 7.0;
   tc.summary.max_relative_error = 0.5;
   tc.summary.samples = 256;
+  return model;
+}
+
+// SmallModel with a fitted blur c0_px2 (flat in distance) and its noise, over 40 frames.
+CalibrationModel WithBlur(double c0_px2) {
+  CalibrationModel model = SmallModel();
+  model.blur_calibration.c0_px2 = c0_px2;
+  model.blur_calibration.noise_at_1m_px2 = 0.01;
+  model.blur_calibration.frames = 40;
   return model;
 }
 
@@ -167,10 +177,7 @@ TEST(ModelFile, BlurTermsRoundTripAndNeedFormatFour) {
 // Issue 20: the blur's split (the crosstalk's variance and kernel shape) round trips; absent, the
 // whole blur is the optics'; out of range, refused at its line.
 TEST(ModelFile, CrosstalkSplitRoundTripsAndIsChecked) {
-  CalibrationModel model = SmallModel();
-  model.blur_calibration.c0_px2 = 0.9;
-  model.blur_calibration.noise_at_1m_px2 = 0.01;
-  model.blur_calibration.frames = 40;
+  CalibrationModel model = WithBlur(0.9);
   EXPECT_EQ(ModelToYaml(model).find("crosstalk"), std::string::npos);  // none: no key
   EXPECT_EQ(ModelFromYaml(ModelToYaml(model), "none.yaml").blur_calibration.crosstalk_var_px2, 0.0);
   model.blur_calibration.crosstalk_var_px2 = 0.64 / 3.0;
@@ -196,10 +203,7 @@ TEST(ModelFile, CrosstalkSplitRoundTripsAndIsChecked) {
 // The blob fit's blur offset (issue 20) round trips; absent, zero; out of range, refused at its
 // line with the range.
 TEST(ModelFile, FitBlurOffsetRoundTripsAndIsChecked) {
-  CalibrationModel model = SmallModel();
-  model.blur_calibration.c0_px2 = 0.9;
-  model.blur_calibration.noise_at_1m_px2 = 0.01;
-  model.blur_calibration.frames = 40;
+  CalibrationModel model = WithBlur(0.9);
   EXPECT_EQ(ModelToYaml(model).find("fit_offset"), std::string::npos);
   model.blur_calibration.fit_offset_px2 = -0.07 / 3.0;
   model.blur_calibration.fit_offset_u_px2 = 0.09 / 7.0;
@@ -212,13 +216,67 @@ TEST(ModelFile, FitBlurOffsetRoundTripsAndIsChecked) {
   std::string bad = text;
   const size_t at = bad.find("fit_offset_u_px2: ");
   ASSERT_NE(at, std::string::npos);
-  bad.replace(at, bad.find('\n', at) - at, "fit_offset_u_px2: 3");
+  bad.replace(at, bad.find('\n', at) - at, "fit_offset_u_px2: -3");
   try {
     ModelFromYaml(bad, "bad.yaml");
-    FAIL() << "an offset of 3 px^2 was accepted";
+    FAIL() << "an offset making the blur negative was accepted";
   } catch (const ModelFileError& e) {
+    EXPECT_EQ(e.key(), "blur_calibration.fit_offset_u_px2");
     EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("[-0.5, 0.5]"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("(0, 16] px^2"), std::string::npos) << e.what();
+  }
+}
+
+// Issue 38 item 3: a defocused lens's fit (fit_offset_u_px2 -0.573 on a blur of about 1 px^2)
+// is written and read back (it was refused by every reader, outside [-0.5, 0.5]).
+TEST(ModelFile, ADefocusedLensModelIsWrittenAndRead) {
+  CalibrationModel model = WithBlur(1.2);
+  model.blur_calibration.fit_offset_u_px2 = -0.573;
+  const std::string path = TempPath("defocus");
+  SaveModel(model, path);
+  const CalibrationModel back = LoadModel(path);
+  std::remove(path.c_str());
+  EXPECT_EQ(back.blur_calibration.fit_offset_u_px2, -0.573);
+}
+
+// Issue 38 item 3: a fit that lands outside the bounds is refused by the writer naming the
+// parameter and why; no file is left for the next command to reject.
+TEST(ModelFile, AFitOutsideTheBoundsIsNotWritten) {
+  CalibrationModel model = WithBlur(0.2);
+  model.blur_calibration.fit_offset_u_px2 = -0.573;
+  const std::string path = TempPath("outside");
+  std::remove(path.c_str());
+  try {
+    SaveModel(model, path);
+    ADD_FAILURE() << "written";
+  } catch (const ModelFileError& e) {
+    EXPECT_EQ(e.key(), "blur_calibration.fit_offset_u_px2");
+    EXPECT_NE(std::string(e.what()).find("not written"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("a variance is > 0"), std::string::npos) << e.what();
+  }
+  struct stat st;
+  EXPECT_NE(stat(path.c_str(), &st), 0) << "a file was left at " << path;
+}
+
+// Issue 33 item 2: blur_var_px2 [-5, 0, 0] and [1e300, 0, 0] were loaded and used; refused at the
+// key's line now.
+TEST(ModelFile, ABlurThatIsNoVarianceIsRefusedAtItsLine) {
+  CalibrationModel model = WithBlur(0.9);
+  const std::string good = ModelToYaml(model);
+  const size_t at = good.find("blur_var_px2: ");
+  ASSERT_NE(at, std::string::npos);
+  const int line = 1 + static_cast<int>(std::count(good.begin(), good.begin() + at, '\n'));
+  for (const char* bad : {"blur_var_px2: [-5, 0, 0]", "blur_var_px2: [1e300, 0, 0]"}) {
+    SCOPED_TRACE(bad);
+    std::string text = good;
+    text.replace(at, text.find('\n', at) - at, bad);
+    try {
+      ModelFromYaml(text, "m.yaml");
+      ADD_FAILURE() << "accepted";
+    } catch (const ModelFileError& e) {
+      EXPECT_EQ(e.key(), "blur_calibration.blur_var_px2");
+      EXPECT_EQ(e.line(), line);
+    }
   }
 }
 
@@ -450,6 +508,41 @@ TEST(ModelFileSafety, MisspeltKeyIsAnErrorNotADefault) {
   } catch (const ModelFileError& e) {
     EXPECT_NE(std::string(e.what()).find("unknown key"), std::string::npos) << e.what();
     EXPECT_GT(e.line(), 1);
+  }
+}
+
+// Issue 33 item 2: t_ref_ms 1e300 and t_meas_ms [-30, 0] in a provenance passed; refused naming
+// the key (an element of a list by its index) at its line.
+TEST(ModelFileSafety, ProvenanceExposuresOutsideTheBoundsAreRefused) {
+  CalibrationModel model = SmallModel();
+  ModelProvenance& p = model.provenance;
+  p.known = true;
+  p.bit_depth = 12;
+  p.t_ref_ms = 8.0;
+  p.t_meas_ms = {30.0, 32.0};
+  const std::string good = ModelToYaml(model);
+  const struct {
+    const char* from;
+    const char* to;
+    const char* key;
+  } cases[] = {{"t_ref_ms: 8", "t_ref_ms: 1e300", "provenance.t_ref_ms"},
+               {"t_meas_ms: [30, 32]", "t_meas_ms: [-30, 0]", "provenance.t_meas_ms[0]"},
+               {"t_meas_ms: [30, 32]", "t_meas_ms: [30, 1e6]", "provenance.t_meas_ms[1]"}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.to);
+    std::string text = good;
+    const size_t at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << text;
+    text.replace(at, std::string(c.from).size(), c.to);
+    const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + at, '\n'));
+    try {
+      ModelFromYaml(text, "m.yaml");
+      ADD_FAILURE() << "accepted";
+    } catch (const ModelFileError& e) {
+      EXPECT_EQ(e.key(), c.key);
+      EXPECT_EQ(e.line(), line);
+      EXPECT_NE(std::string(e.what()).find("(0, 100000] ms"), std::string::npos) << e.what();
+    }
   }
 }
 
