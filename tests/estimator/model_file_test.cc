@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <random>
 
 #include "tests/estimator/synthetic.h"
 
@@ -256,6 +257,56 @@ TEST(ModelFile, AFitOutsideTheBoundsIsNotWritten) {
   }
   struct stat st;
   EXPECT_NE(stat(path.c_str(), &st), 0) << "a file was left at " << path;
+}
+
+// Issue 38 item 3, as a property: whatever a fit lands on (blurs, offsets, noise, exposures and
+// windows drawn over and beyond their bounds), SaveModel either writes a file that LoadModel (the
+// reader of playback, measure and Python) accepts, identical when written again, or refuses with
+// the parameter named and leaves no file.
+TEST(ModelFile, EveryModelTheWriterWritesTheReaderAccepts) {
+  std::mt19937_64 random(38);
+  auto uniform = [&random](double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(random);
+  };
+  const std::string path = TempPath("property");
+  int written = 0, refused = 0;
+  const CalibrationModel fitted = WithBlur(1.0);
+  for (int i = 0; i < 200; ++i) {
+    CalibrationModel model = fitted;
+    BlurCalibration& b = model.blur_calibration;
+    b.c0_px2 = uniform(-1.0, 20.0);
+    b.c1_px2 = uniform(-2.0, 2.0);
+    b.c2_px2 = uniform(-1.0, 1.0);
+    b.fit_offset_px2 = uniform(-2.0, 2.0);
+    b.fit_offset_u_px2 = uniform(-2.0, 2.0);
+    b.noise_exponent = uniform(-12.0, 12.0);
+    ModelProvenance& p = model.provenance;
+    p.known = true;
+    p.bit_depth = 12;
+    p.roi_width = p.roi_height = 256;
+    p.t_ref_ms = uniform(-1.0, 20.0);
+    p.t_meas_ms = {uniform(0.0, 60.0), uniform(0.0, 1.2e5)};
+    model.features.window_side_px = i % 10 == 0 ? 512 : 48;
+    std::remove(path.c_str());
+    try {
+      SaveModel(model, path);
+    } catch (const ModelFileError& e) {
+      EXPECT_FALSE(e.key().empty()) << e.what();
+      struct stat st;
+      EXPECT_NE(stat(path.c_str(), &st), 0) << "a refused model left a file: " << e.what();
+      ++refused;
+      continue;
+    }
+    ++written;
+    try {
+      EXPECT_EQ(ModelToYaml(LoadModel(path)), ModelToYaml(model));
+    } catch (const ModelFileError& e) {
+      ADD_FAILURE() << "written, then refused by the reader: " << e.what();
+    }
+  }
+  std::remove(path.c_str());
+  EXPECT_GT(written, 20) << refused;  // both sides of the bounds are drawn
+  EXPECT_GT(refused, 20);
 }
 
 // Issue 33 item 2: blur_var_px2 [-5, 0, 0] and [1e300, 0, 0] were loaded and used; refused at the
