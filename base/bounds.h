@@ -36,6 +36,8 @@ inline constexpr Bound kExposureMs{"exposure", "ms", 0.0, 100000.0, true,
                                    "a camera's exposure (100 s is far beyond any GigE camera's)"};
 inline constexpr Bound kDurationS{"duration or wait", "s", 0.0, 86400.0, true,
                                   "a run's duration or a device's wait lies within a day"};
+inline constexpr Bound kDelayMs{"delay", "ms", 0.0, 86400000.0, false,
+                                "a device's readout, settling or overhead lies within a day"};
 // Sizes and counts.
 inline constexpr Bound kDiskGb{"disk budget", "GB", 0.0, 1.0e6, true,
                                "no disk holds more than a petabyte"};

@@ -45,10 +45,9 @@ int AtLeast(const MapReader& map, const std::string& key, int fallback, int mini
   return value;
 }
 
-double NonNegative(const MapReader& map, const std::string& key, double fallback) {
-  const double value = map.Number(key, fallback);
-  if (value < 0.0) Fail(map.File(), map.Get(key).Mark(), key + " must be >= 0");
-  return value;
+// A delay or wait in ms: within a day (bounds::kDelayMs; 1e308 would overflow the plan's sums).
+double DelayMs(const MapReader& map, const std::string& key, double fallback) {
+  return map.Bounded(key, fallback, bounds::kDelayMs);
 }
 
 double Positive(const MapReader& map, const std::string& key, double fallback) {
@@ -138,7 +137,7 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   camera.black_level = AtLeast(map, "black_level", camera.black_level, 0);
   camera.packet_size = AtLeast(map, "packet_size", camera.packet_size, 0);
   camera.frame_timeout_ms = AtLeast(map, "frame_timeout_ms", camera.frame_timeout_ms, 1);
-  camera.readout_ms = NonNegative(map, "readout_ms", camera.readout_ms);
+  camera.readout_ms = DelayMs(map, "readout_ms", camera.readout_ms);
   const std::string overlap = map.String("trigger_overlap", "off");
   OneOf(map, "trigger_overlap", overlap, {"off", "readout"});
   camera.trigger_in_readout = overlap == "readout";
@@ -202,7 +201,7 @@ AxisMotion ReadAxisMotion(const MapReader& motion, const std::string& key, AxisM
   AxisMotion axis;
   axis.speed = Positive(map, "speed", fallback.speed);
   axis.acceleration = Positive(map, "acceleration", fallback.acceleration);
-  axis.settle_ms = NonNegative(map, "settle_ms", fallback.settle_ms);
+  axis.settle_ms = DelayMs(map, "settle_ms", fallback.settle_ms);
   axis.home = map.Has("home") ? map.Number("home", fallback.home) : fallback.home;
   return axis;
 }
@@ -228,8 +227,8 @@ MotionModel ReadMotionModel(const MapReader& map, MotionModel model) {
   model.pan = ReadAxisMotion(motion, "pan", model.pan);
   model.tilt = ReadAxisMotion(motion, "tilt", model.tilt);
   model.axes_move_together = motion.Boolean("axes_move_together", model.axes_move_together);
-  model.frame_overhead_ms = NonNegative(motion, "frame_overhead_ms", model.frame_overhead_ms);
-  model.pose_overhead_ms = NonNegative(motion, "pose_overhead_ms", model.pose_overhead_ms);
+  model.frame_overhead_ms = DelayMs(motion, "frame_overhead_ms", model.frame_overhead_ms);
+  model.pose_overhead_ms = DelayMs(motion, "pose_overhead_ms", model.pose_overhead_ms);
   return model;
 }
 

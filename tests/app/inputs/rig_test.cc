@@ -142,6 +142,24 @@ TEST(RigTest, APrincipalPointOutsideTheRoiItIsStatedInIsRefused) {
   EXPECT_NE(refusal.find("pixels: sensor"), std::string::npos) << refusal;
 }
 
+// The rig's delays (readout, settling, overheads) lie within a day: 1e308 ms overflowed the plan's
+// sums; each is refused at its line with the range.
+TEST(RigTest, DelaysBeyondADayAreRefused) {
+  const std::string head = "name: r\nkind: hardware\ncamera:\n  id: 10.0.0.2\n";
+  const std::string station = "station:\n  port: /dev/ttyUSB0\n";
+  EXPECT_EQ(RefusalOf(head + "  readout_ms: 86400000\n" + station), "");
+  EXPECT_NE(RefusalOf(head + "  readout_ms: 1e308\n" + station)
+                .find("r.yaml:5:15: camera.readout_ms = 1e+308 is outside [0, 86400000] ms"),
+            std::string::npos)
+      << RefusalOf(head + "  readout_ms: 1e308\n" + station);
+  EXPECT_NE(RefusalOf(head + station + "  motion:\n    slide: {settle_ms: -1}\n")
+                .find("settle_ms = -1 is outside"),
+            std::string::npos);
+  EXPECT_NE(RefusalOf(head + station + "  motion:\n    pose_overhead_ms: 1e300\n")
+                .find("pose_overhead_ms = 1e+300 is outside"),
+            std::string::npos);
+}
+
 TEST(RigTest, EmitterOffsetIsThreeFiniteNumbersOnAHardwareRig) {
   const std::string head = "name: r\nkind: hardware\ncamera:\n  id: 10.0.0.2\nstation:\n  port: "
                            "/dev/ttyUSB0\n  emitter_offset_mm: ";
