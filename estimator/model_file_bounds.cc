@@ -71,10 +71,29 @@ void CheckBlur(Checker* c, const BlurCalibration& b, const CalibratedRanges& r) 
                 "the blob fit's blur (the calibrated blur + fit_offset_px2 + fit_offset_u_px2 u)");
 }
 
+// The bits of a monochrome GenICam format ("Mono12", "Mono12p", "Mono12Packed": 12), 0 for
+// another name.
+int BitsOfMonoFormat(const std::string& name) {
+  for (const int bits : {8, 10, 12, 14, 16}) {
+    const std::string mono = "Mono" + std::to_string(bits);
+    if (name == mono || name == mono + "p" || name == mono + "Packed") return bits;
+  }
+  return 0;
+}
+
 void CheckProvenance(Checker* c, const ModelProvenance& p, const FeatureOptions& f) {
   if (!p.known) return;
   const std::string k = "provenance.";
   c->Value(k + "bit_depth", p.bit_depth, bounds::kBitDepth);
+  const int format_bits = BitsOfMonoFormat(p.pixel_format);
+  if (format_bits == 0) {
+    c->Failure(k + "pixel_format", "'" + p.pixel_format + "' is not a monochrome camera format "
+                                   "(Mono8, Mono10(p), Mono12(p), Mono12Packed, Mono14, Mono16)");
+  } else if (format_bits != p.bit_depth) {
+    c->Failure(k + "bit_depth", "bit_depth " + std::to_string(p.bit_depth) + " contradicts "
+                                "pixel_format " + p.pixel_format + ", which delivers " +
+                                std::to_string(format_bits) + " bits");
+  }
   c->Value(k + "t_ref_ms", p.t_ref_ms, bounds::kExposureMs);
   if (p.t_meas_ms.empty()) c->Failure(k + "t_meas_ms", "no measurement exposure");
   for (size_t i = 0; i < p.t_meas_ms.size(); ++i) {

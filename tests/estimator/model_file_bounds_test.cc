@@ -20,6 +20,7 @@ CalibrationModel Fitted() {
   b.frames = 40;
   ModelProvenance& p = model.provenance;
   p.known = true;
+  p.pixel_format = "Mono12p";
   p.bit_depth = 12;
   p.roi_width = 256;
   p.roi_height = 256;
@@ -89,6 +90,17 @@ TEST(ModelFileBounds, ProvenanceExposuresOutsideAreRefused) {
   const std::string keys = Keys(CheckModelBounds(model));
   EXPECT_NE(keys.find("provenance.t_meas_ms[0]"), std::string::npos) << keys;
   EXPECT_NE(keys.find("provenance.t_meas_ms[1]"), std::string::npos) << keys;
+}
+
+// The provenance's pixel format is a monochrome camera format agreeing with its bit depth.
+TEST(ModelFileBounds, APixelFormatThatContradictsTheBitDepthIsRefused) {
+  CalibrationModel model = Fitted();
+  model.provenance.pixel_format = "Mono16";
+  EXPECT_EQ(Keys(CheckModelBounds(model)), "provenance.bit_depth; ");
+  model.provenance.pixel_format = "BayerRG8";
+  EXPECT_EQ(Keys(CheckModelBounds(model)), "provenance.pixel_format; ");
+  model.provenance.pixel_format = "Mono12Packed";
+  EXPECT_EQ(Keys(CheckModelBounds(model)), "");
 }
 
 // Issue 33 item 7: features.window_side_px 512 on a 256 px ROI was an internal check failure.

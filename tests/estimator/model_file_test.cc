@@ -282,6 +282,7 @@ TEST(ModelFile, EveryModelTheWriterWritesTheReaderAccepts) {
     b.noise_exponent = uniform(-12.0, 12.0);
     ModelProvenance& p = model.provenance;
     p.known = true;
+    p.pixel_format = "Mono12";
     p.bit_depth = 12;
     p.roi_width = p.roi_height = 256;
     p.t_ref_ms = uniform(-1.0, 20.0);
@@ -568,6 +569,7 @@ TEST(ModelFileSafety, ProvenanceExposuresOutsideTheBoundsAreRefused) {
   CalibrationModel model = SmallModel();
   ModelProvenance& p = model.provenance;
   p.known = true;
+  p.pixel_format = "Mono12";
   p.bit_depth = 12;
   p.t_ref_ms = 8.0;
   p.t_meas_ms = {30.0, 32.0};
