@@ -43,6 +43,9 @@ inline constexpr Bound kDiskGb{"disk budget", "GB", 0.0, 1.0e6, true,
                                "no disk holds more than a petabyte"};
 inline constexpr Bound kCount{"count", "", 1.0, 1.0e9, false,
                               "at least one, and a billion brackets is decades of measuring"};
+inline constexpr Bound kToleranceSteps{"position tolerance", "steps", 0.0, 1.0e6, false,
+                                       "a motor's tolerance is a few steps; a million is more "
+                                       "than an axis's travel"};
 inline constexpr Bound kSensorPx{"sensor coordinate", "px", 0.0, 1048576.0, false,
                                  "no sensor is wider than 2^20 pixels"};
 inline constexpr Bound kBitDepth{"bit depth", "bit", 1.0, 16.0, false,

@@ -597,7 +597,9 @@ void Validate(const DeviceSpec& spec) {
       if (!refusal.empty()) Invalid(spec, refusal);
     }
   }
-  if (spec.Number("tolerance_positions", 0) < 0) Invalid(spec, "tolerance_positions must be >= 0");
+  const std::string tolerance = bounds::kToleranceSteps.Refusal(  // cast to an integer later
+      "tolerance_positions", spec.Number("tolerance_positions", 0));
+  if (!tolerance.empty()) Invalid(spec, tolerance);
   const double retries = spec.Number("retries", 4);
   if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
 }

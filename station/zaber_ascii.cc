@@ -618,7 +618,9 @@ void Validate(const DeviceSpec& spec) {
   if (angular) CheckStepKeys(spec, "deg");
   const double direction = spec.Number("direction", 1.0);
   if (direction != 1.0 && direction != -1.0) Invalid(spec, "direction must be 1 or -1");
-  if (spec.Number("tolerance_microsteps", 2) < 0) Invalid(spec, "tolerance_microsteps >= 0");
+  const std::string tolerance = bounds::kToleranceSteps.Refusal(  // cast to an integer later
+      "tolerance_microsteps", spec.Number("tolerance_microsteps", 2));
+  if (!tolerance.empty()) Invalid(spec, tolerance);
   if (spec.Number("retries", 4) < 0 || spec.Number("retries", 4) > 20) Invalid(spec, "retries 0-20");
   const std::string home_wait = bounds::kDurationS.Refusal("home_timeout_s",
                                                            spec.Number("home_timeout_s", 120));

@@ -41,6 +41,7 @@ TEST(Bounds, ARefusalSaysRangeAndWhyInPlainNumbers) {
 TEST(Bounds, EveryBoundIsAFiniteRangeWithItsReason) {
   for (const Bound& b :
        {bounds::kExposureMs, bounds::kDurationS, bounds::kDelayMs, bounds::kDiskGb, bounds::kCount,
+        bounds::kToleranceSteps,
         bounds::kSensorPx, bounds::kBitDepth, bounds::kFrameBitDepth, bounds::kFocalPx,
         bounds::kRadialDistortion, bounds::kTangentialDistortion, bounds::kBlurVarPx2,
         bounds::kBlurOffsetPx2, bounds::kBlurNoisePx2, bounds::kNoiseExponent, bounds::kShare}) {

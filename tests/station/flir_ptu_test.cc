@@ -514,6 +514,9 @@ TEST(FlirPtu, ValidateRefusesWaitsBeyondADay) {
   DeviceSpec day = HeadSpec();
   day.settings["reset_wait_s"] = {"86400", 12};
   EXPECT_NO_THROW(info->validate(day));
+  DeviceSpec tolerance = HeadSpec();  // cast to an integer count of positions later
+  tolerance.settings["tolerance_positions"] = {"1e308", 12};
+  EXPECT_THROW(info->validate(tolerance), InputError);
 }
 
 }  // namespace
