@@ -149,6 +149,12 @@ double MapReader::Number(const std::string& key, double fallback) const {
   return Has(key) ? AsNumber(Get(key), file_, key) : fallback;
 }
 
+double MapReader::Bounded(const std::string& key, double fallback, const Bound& bound,
+                          const std::string& fix) const {
+  if (!Has(key)) return fallback;
+  return AsBounded(Get(key), file_, context_ + "." + key, bound, fix);
+}
+
 int MapReader::Integer(const std::string& key, int fallback) const {
   return Has(key) ? AsInteger(Get(key), file_, key) : fallback;
 }
@@ -166,6 +172,14 @@ double AsNumber(const YAML::Node& node, const std::string& file, const std::stri
   if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value)) {
     Fail(file, node.Mark(), what + " must be a number, not " + TypeName(node));
   }
+  return value;
+}
+
+double AsBounded(const YAML::Node& node, const std::string& file, const std::string& what,
+                 const Bound& bound, const std::string& fix) {
+  const double value = AsNumber(node, file, what);
+  const std::string refusal = bound.Refusal(what, value, fix);
+  if (!refusal.empty()) Fail(file, node.Mark(), refusal);
   return value;
 }
 

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "base/bounds.h"
 #include "base/input_error.h"
 
 namespace irdist::yaml_fields {
@@ -46,6 +47,10 @@ class MapReader {
   const std::string& File() const { return file_; }
 
   double Number(const std::string& key, double fallback) const;
+  // A number inside `bound` (base/bounds.h), refused at its file:line:column with the range,
+  // the physics and `fix`; `fallback` when absent.
+  double Bounded(const std::string& key, double fallback, const Bound& bound,
+                 const std::string& fix = "") const;
   int Integer(const std::string& key, int fallback) const;
   bool Boolean(const std::string& key, bool fallback) const;
   std::string String(const std::string& key, const std::string& fallback) const;
@@ -65,6 +70,9 @@ constexpr int kMaxInteger = 2000000000;
 // most 40 characters of a value.
 double AsNumber(const YAML::Node& node, const std::string& file, const std::string& what);
 int AsInteger(const YAML::Node& node, const std::string& file, const std::string& what);
+// A number inside `bound`, refused at the node's position with the range, the physics and `fix`.
+double AsBounded(const YAML::Node& node, const std::string& file, const std::string& what,
+                 const Bound& bound, const std::string& fix = "");
 bool AsBoolean(const YAML::Node& node, const std::string& file, const std::string& what);
 std::string AsString(const YAML::Node& node, const std::string& file, const std::string& what);
 

@@ -12,6 +12,7 @@
 #include "base/regular_file.h"
 #include "base/safe_file.h"
 #include "estimator/defect_map_file.h"
+#include "estimator/model_file_bounds.h"
 #include "estimator/model_file_reader.h"
 
 namespace irdist {
@@ -187,19 +188,12 @@ void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
               "must lie within [0, 1]");
     }
   }
-  if (Present(node, "fit_offset_px2")) {  // optional: absent = the cumulants' blur as it is
+  // Optional (absent: the cumulants' blur as it is, no slope); bounded by model_file_bounds.h.
+  if (Present(node, "fit_offset_px2")) {
     b->fit_offset_px2 = rd.Scalar<double>(node, "blur_calibration", "fit_offset_px2");
-    if (!(std::fabs(b->fit_offset_px2) <= 0.5)) {
-      rd.Fail(node["fit_offset_px2"], "blur_calibration.fit_offset_px2",
-              "must lie within [-0.5, 0.5] px^2 (a correction to the measured blur)");
-    }
   }
-  if (Present(node, "fit_offset_u_px2")) {  // optional: absent = no slope
+  if (Present(node, "fit_offset_u_px2")) {
     b->fit_offset_u_px2 = rd.Scalar<double>(node, "blur_calibration", "fit_offset_u_px2");
-    if (!(std::fabs(b->fit_offset_u_px2) <= 0.5)) {
-      rd.Fail(node["fit_offset_u_px2"], "blur_calibration.fit_offset_u_px2",
-              "must lie within [-0.5, 0.5] px^2 (a correction to the measured blur per 1/m)");
-    }
   }
   if (!(b->noise_at_1m_px2 > 0.0) || !std::isfinite(b->noise_exponent)) {
     rd.Fail(node["noise_at_1m_px2"], "blur_calibration.noise_at_1m_px2",
@@ -461,6 +455,27 @@ ThetaCorrection ReadThetaCorrection(const Reader& rd, const YAML::Node& root) {
   return tc;
 }
 
+// The node of a model file's key ("provenance.t_meas_ms[1]"), or an undefined node.
+YAML::Node Locate(const YAML::Node& root, const std::string& key) {
+  YAML::Node node = root;
+  std::string::size_type start = 0;
+  while (start <= key.size() && node.IsDefined()) {
+    const std::string::size_type end = std::min(key.find('.', start), key.size());
+    const std::string part = key.substr(start, end - start);
+    const std::string::size_type bracket = part.find('[');
+    const YAML::Node& parent = node;  // const lookups: the tree is never changed
+    YAML::Node child = parent[part.substr(0, bracket)];
+    if (bracket != std::string::npos && child.IsSequence()) {
+      const YAML::Node& sequence = child;
+      const size_t index = std::stoul(part.substr(bracket + 1));
+      child.reset(index < sequence.size() ? sequence[index] : YAML::Node());
+    }
+    node.reset(child);
+    start = end + 1;
+  }
+  return node;
+}
+
 YAML::Node ParseModelText(const std::string& text, const std::string& path) {
   try {
     return YAML::Load(text);
@@ -509,13 +524,27 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   model.theta_correction = ReadThetaCorrection(rd, root);
   model.provenance = ReadProvenance(rd, root);
   ReadBlurCalibration(rd, root, version, &model.blur_calibration);
+  for (const ModelBoundFailure& failure : CheckModelBounds(model)) {
+    rd.Fail(Locate(root, failure.key), failure.key,
+            failure.message + "; irdist fit never writes such a model: restore the file as fit "
+                              "wrote it, or calibrate again");
+  }
   return model;
 }
 
 // Written to path.tmp (created new: a stale or planted one is unlinked, never followed), synced,
 // then renamed: a crash leaves the old file or the new one, whole. A model.yaml that is a
 // symbolic link is refused.
+// A model outside its bounds (model_file_bounds.h) is refused, never written: every reader would
+// refuse it.
 void SaveModel(const CalibrationModel& model, const std::string& path) {
+  const std::vector<ModelBoundFailure> failures = CheckModelBounds(model);
+  if (!failures.empty()) {
+    throw ModelFileError(path, failures.front().key, 0,
+                         "not written: the calibration landed outside the bounds every reader "
+                         "checks: " + failures.front().message + "; check the calibration's "
+                         "frames and the lens (docs/recipes.md, Bounds)");
+  }
   std::string why;
   if (!WriteFileAtomically(path, ModelToYaml(model), 0644, &why)) {
     throw ModelFileError(path, "", 0, why + "; check the folder (and the disk)");

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <string>
 
+#include "base/bounds.h"
 #include "base/check.h"
 #include "station/plan.h"
 
@@ -89,6 +90,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const irdist::MotionModel motion = AnyMotion(in);
   std::string why;
   if (!spec.IsValid(&why) || !motion.IsValid(&why)) return 0;
+  // Accepted implies in the table (base/bounds.h): the bracket's exposures.
+  if (!irdist::bounds::kExposureMs.Contains(spec.bracket.t_ref_ms)) __builtin_trap();
+  for (double t_ms : spec.bracket.t_meas_ms) {
+    if (!irdist::bounds::kExposureMs.Contains(t_ms)) __builtin_trap();
+  }
   try {
     const irdist::Plan plan = irdist::MakePlan(spec, motion);
     if (plan.summary.frame_count < 0 || !(plan.summary.total_s >= 0.0)) __builtin_trap();

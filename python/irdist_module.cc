@@ -27,6 +27,7 @@
 #include "app/processing/bracket_estimates.h"
 #include "app/processing/frame_features.h"
 #include "app/processing/position.h"
+#include "base/bounds.h"
 #include "base/utc_time.h"
 #include "estimator/model_file.h"
 
@@ -281,7 +282,7 @@ class PyModel {
 
   py::dict Features(const py::handle& image, int bit_depth) const {
     Gray16 keep;
-    const cv::Mat mat = MatOf(image, &keep);
+    const cv::Mat mat = ImageOf(image, &keep);
     const int bits = BitDepth(bit_depth);
     irdist::Features f;
     {
@@ -298,10 +299,26 @@ class PyModel {
 
  private:
   int BitDepth(int given) const {
-    if (given > 0) return given;
+    if (given != 0) {
+      const std::string refusal = bounds::kFrameBitDepth.Refusal("bit_depth", given);
+      if (!refusal.empty()) throw py::value_error(refusal + "; give the camera's (12: Mono12)");
+      return given;
+    }
     if (model_.provenance.bit_depth > 0) return model_.provenance.bit_depth;
     throw py::value_error("the model " + path_ +
                           " does not record its camera's bit depth; give bit_depth= (12: Mono12)");
+  }
+  // An image at least as large as the features' window (a smaller one holds no blob).
+  cv::Mat ImageOf(const py::handle& image, Gray16* keep) const {
+    const cv::Mat mat = MatOf(image, keep);
+    const int side_px = model_.features.window_side_px;
+    if (mat.rows < side_px || mat.cols < side_px) {
+      throw py::value_error("the image is " + std::to_string(mat.rows) + " x " +
+                            std::to_string(mat.cols) + " px, smaller than the model's window (" +
+                            "features.window_side_px " + std::to_string(side_px) + " x " +
+                            std::to_string(side_px) + "); give whole frames of the ROI");
+    }
+    return mat;
   }
   // The bracket as measure records it: frame i taken at exposures_us[i]; roles "ref"/"meas"
   // (default: the first a reference, the others measurements).
@@ -349,7 +366,7 @@ py::object PyModel::EstimateBracket(const py::sequence& images,
   const RecordedBracket bracket = BracketOf(exposures_us, roles);
   std::vector<Gray16> keep(exposures_us.size());
   std::vector<cv::Mat> mats;
-  for (std::size_t i = 0; i < keep.size(); ++i) mats.push_back(MatOf(images[i], &keep[i]));
+  for (std::size_t i = 0; i < keep.size(); ++i) mats.push_back(ImageOf(images[i], &keep[i]));
   const int bits = BitDepth(bit_depth);
   std::string json;
   {
@@ -396,6 +413,17 @@ PYBIND11_MODULE(_irdist, m) {
            py::arg("exposures_us"), py::arg("bit_depth") = 0, py::arg("roles") = py::none())
       .def_property_readonly("path", &PyModel::path);
 
+  m.def(
+      "_check_argument",
+      [](const std::string& name, double value) {
+        const irdist::Bound& bound =
+            name == "count" ? irdist::bounds::kCount : irdist::bounds::kDurationS;
+        const std::string refusal = bound.Refusal(name, value);
+        if (!refusal.empty()) throw py::value_error(refusal);
+      },
+      py::arg("name"), py::arg("value"),
+      "Refuses (ValueError) a measure() argument outside its bound (base/bounds.h): count or "
+      "duration_s");
   m.attr("MEASURE_JSON_SCHEMA") = "irdist.measure/" + std::to_string(irdist::kMeasureJsonVersion);
   m.def("format_utc", &irdist::FormatUtcIso8601, py::arg("unix_ns"),
         "ns since the Unix epoch as ISO 8601 UTC with microseconds (frames.csv's utc_time)");

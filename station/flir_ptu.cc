@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "base/bounds.h"
 #include "station/axes_motion.h"
 #include "station/driver.h"
 #include "station/line_query.h"
@@ -585,12 +586,20 @@ void Validate(const DeviceSpec& spec) {
     }
     used.push_back(address);
   }
-  for (const char* key : {"speed_deg_s", "accel_deg_s2", "home_timeout_s", "reset_wait_s"}) {
+  for (const char* key : {"speed_deg_s", "accel_deg_s2"}) {
     if (spec.settings.count(key) && !(spec.Number(key, 0) > 0)) {
       Invalid(spec, key + std::string(" must be > 0"));
     }
   }
-  if (spec.Number("tolerance_positions", 0) < 0) Invalid(spec, "tolerance_positions must be >= 0");
+  for (const char* key : {"home_timeout_s", "reset_wait_s"}) {  // in ms later: 1e308 overflows
+    if (spec.settings.count(key)) {
+      const std::string refusal = bounds::kDurationS.Refusal(key, spec.Number(key, 0));
+      if (!refusal.empty()) Invalid(spec, refusal);
+    }
+  }
+  const std::string tolerance = bounds::kToleranceSteps.Refusal(  // cast to an integer later
+      "tolerance_positions", spec.Number("tolerance_positions", 0));
+  if (!tolerance.empty()) Invalid(spec, tolerance);
   const double retries = spec.Number("retries", 4);
   if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
 }

@@ -1,5 +1,6 @@
 #include "station/irdist_station.h"
 
+#include "base/bounds.h"
 #include "base/input_error.h"
 
 namespace irdist {
@@ -26,9 +27,12 @@ void ValidateSpec(const DeviceSpec& spec) {
                      "station.devices." + spec.name +
                          ": trigger_width_us must be >= 1 and below trigger_period_us");
   }
-  if (!(spec.Number("move_timeout_ms", 300000) >= 1.0)) {
+  const double move_timeout_ms = spec.Number("move_timeout_ms", 300000);
+  if (!(move_timeout_ms >= 1.0 && bounds::kDelayMs.Contains(move_timeout_ms))) {
     throw InputError(spec.file, spec.line, 0,
-                     "station.devices." + spec.name + ".move_timeout_ms must be >= 1");
+                     "station.devices." + spec.name + ".move_timeout_ms must lie in [1, " +
+                         BoundNumber(bounds::kDelayMs.max) + "] ms (" + bounds::kDelayMs.why +
+                         "; cast to an integer count later)");
   }
   if (!spec.axes.empty() && spec.axes.size() != 3) {
     throw InputError(spec.file, spec.line, 0,

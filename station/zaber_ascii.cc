@@ -12,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "base/bounds.h"
 #include "station/axes_motion.h"
 #include "station/driver.h"
 #include "station/line_query.h"
@@ -617,9 +618,13 @@ void Validate(const DeviceSpec& spec) {
   if (angular) CheckStepKeys(spec, "deg");
   const double direction = spec.Number("direction", 1.0);
   if (direction != 1.0 && direction != -1.0) Invalid(spec, "direction must be 1 or -1");
-  if (spec.Number("tolerance_microsteps", 2) < 0) Invalid(spec, "tolerance_microsteps >= 0");
+  const std::string tolerance = bounds::kToleranceSteps.Refusal(  // cast to an integer later
+      "tolerance_microsteps", spec.Number("tolerance_microsteps", 2));
+  if (!tolerance.empty()) Invalid(spec, tolerance);
   if (spec.Number("retries", 4) < 0 || spec.Number("retries", 4) > 20) Invalid(spec, "retries 0-20");
-  if (spec.Number("home_timeout_s", 120) <= 0) Invalid(spec, "home_timeout_s must be > 0");
+  const std::string home_wait = bounds::kDurationS.Refusal("home_timeout_s",
+                                                           spec.Number("home_timeout_s", 120));
+  if (!home_wait.empty()) Invalid(spec, home_wait);  // in ms later: 1e308 would overflow
   const std::string checksum = spec.Text("checksum", "true");
   if (checksum != "true" && checksum != "false") Invalid(spec, "checksum must be true or false");
 }

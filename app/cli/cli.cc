@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <ostream>
@@ -15,6 +16,8 @@
 #include "app/live/view.h"
 #include "app/runs/offline.h"
 #include "app/runs/run.h"
+#include "base/bounds.h"
+#include "sim/rig_physics.h"
 #include "station/plan.h"
 #include "station/serial_transport.h"
 
@@ -149,6 +152,22 @@ CLI::Validator NumberIn(const std::string& flag, double min, double max, bool mi
       range_text);
 }
 
+static_assert(kMaxExposureMs == bounds::kExposureMs.max, "one exposure bound (base/bounds.h)");
+
+// A number flag of a quantity of the bounds table (base/bounds.h): finite and inside its range
+// ("nan" and "0" refused by the flag's name, the range in plain numbers and an example).
+CLI::Validator Bounded(const std::string& flag, const Bound& bound, const std::string& example) {
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        double value = std::nan("");
+        if (!CLI::detail::lexical_cast(text, value)) value = std::nan("");
+        if (bound.Contains(value)) return "";
+        return flag + " " + text + " is outside " + bound.RangeText() + " (" + bound.name + ": " +
+               bound.why + "); e.g. " + example;
+      },
+      bound.RangeText());
+}
+
 // An output folder flag: absent, or a folder; never an existing file (or a path through one).
 CLI::Validator FolderPath(const std::string& flag) {
   return CLI::Validator(
@@ -177,6 +196,9 @@ void RunPlan(const PlanArgs& args, CommandIo io) {
     return;
   }
   const Recipe recipe = LoadRecipe(args.recipe);
+  // The rig exactly as sim and calibrate load it: a virtual rig's physics too (its refusals,
+  // e.g. a crosstalk of NaN or 5.0001, at file:line:column before any plan is printed).
+  if (recipe.rig.kind == RigKind::kVirtual) sim::LoadRigPhysics(recipe.rig_path);
   PrintPlan(recipe, PlanRecipe(recipe), args.show_poses, io.out);
 }
 
@@ -364,12 +386,14 @@ void AddMeasure(CommandTable& table) {
   sub->add_option("--model", a.model, "model.yaml from a calibration")->required();
   sub->add_option("--rig", a.rig, "Rig name or rig file")->capture_default_str();
   sub->add_option("--t-ref-ms", a.t_ref_ms, "Reference exposure (default: the model's)")
-      ->check(NumberIn("--t-ref-ms", 0.0, kMaxExposureMs, true, "ms", "--t-ref-ms 8"));
+      ->check(Bounded("--t-ref-ms", bounds::kExposureMs, "--t-ref-ms 8"));
   sub->add_option("--t-meas-ms", a.t_meas_ms, "Measurement exposures (default: the model's)")
       ->delimiter(',')
-      ->check(NumberIn("--t-meas-ms", 0.0, kMaxExposureMs, true, "ms", "--t-meas-ms 30,32,34,36"));
-  sub->add_option("--count", a.count, "Stop after N brackets")->check(CLI::PositiveNumber);
-  sub->add_option("--duration", a.duration_s, "Stop after S seconds")->check(CLI::PositiveNumber);
+      ->check(Bounded("--t-meas-ms", bounds::kExposureMs, "--t-meas-ms 30,32,34,36"));
+  sub->add_option("--count", a.count, "Stop after N brackets")
+      ->check(Bounded("--count", bounds::kCount, "--count 100"));
+  sub->add_option("--duration", a.duration_s, "Stop after S seconds")
+      ->check(Bounded("--duration", bounds::kDurationS, "--duration 60"));
   sub->add_flag("--json", a.json, "One JSON object per bracket on stdout (docs/measure.md)");
   sub->add_option("--out", a.out_dir, "Folder for estimates.csv (and recording/ with --record)")
       ->check(FolderPath("--out"));
@@ -377,7 +401,7 @@ void AddMeasure(CommandTable& table) {
   sub->add_option("--max-disk-gb", a.max_disk_gb,
                   "With --record: stop before the recording exceeds this many GB (default: stop "
                   "before the disk's free space falls below min(1 GiB, 5% of the disk))")
-      ->check(CLI::PositiveNumber);
+      ->check(Bounded("--max-disk-gb", bounds::kDiskGb, "--max-disk-gb 20"));
   AddAt(sub, a.at);
   AddTimeScale(sub, a.time_scale);
   sub->add_flag("--allow-model-mismatch", a.allow_model_mismatch,
@@ -390,7 +414,8 @@ void AddSnapAndView(CommandTable& table) {
   sub->add_option("--rig", s.rig, "Rig name or rig file")->capture_default_str();
   sub->add_option("--out", s.out, "PNG file to write")->required();
   sub->add_flag("--force", s.force, "Replace an existing --out file");
-  sub->add_option("--exposure-ms", s.exposure_ms, "Exposure")->check(CLI::PositiveNumber);
+  sub->add_option("--exposure-ms", s.exposure_ms, "Exposure")
+      ->check(Bounded("--exposure-ms", bounds::kExposureMs, "--exposure-ms 8"));
   AddAt(sub, s.at);
   AddTimeScale(sub, s.time_scale);
 
@@ -400,7 +425,7 @@ void AddSnapAndView(CommandTable& table) {
   sub->add_option("--model", v.model, "model.yaml: show the live estimate");
   sub->add_option("--exposure-ms", v.exposure_ms,
                   "Exposure of single frames: without a model, and of the whole sensor")
-      ->check(CLI::PositiveNumber);
+      ->check(Bounded("--exposure-ms", bounds::kExposureMs, "--exposure-ms 8"));
   sub->add_flag("--whole-sensor", v.whole_sensor,
                 "Start on the whole sensor with the ROI drawn (the w key toggles)");
   AddAt(sub, v.at);

@@ -49,8 +49,8 @@ void CheckCount(const StationArgs& args, std::size_t count, const char* usage) {
 
 void CheckWithin(const Rig& rig, const char* what, double value, const AxisRange& range) {
   if (!range.Contains(value)) {
-    char text[200];
-    std::snprintf(text, sizeof(text), "%s %.2f is outside station.limits [%.2f, %.2f]", what,
+    char text[200];  // %g: 1e308 prints as 1e+308, never as 309 digits
+    std::snprintf(text, sizeof(text), "%s %.10g is outside station.limits [%.10g, %.10g]", what,
                   value, range.min, range.max);
     throw RecipeError(rig.path, 0, 0, text);
   }

@@ -105,7 +105,18 @@ void CheckModelProvenance(const ModelProvenance& model, const std::string& model
                           bool allow, std::string* warn) {
   if (!model.known || !actual.known) return;
   const std::vector<std::string> diffs = Differences(model, actual);
-  if (diffs.empty()) return;
+  if (diffs.empty()) {
+    // Another rig's name with the same camera setup (rigs/virtual-offset.yaml shares virtual's
+    // camera) is allowed, never silent.
+    if (warn != nullptr && !model.rig_name.empty() && !actual.rig_name.empty() &&
+        model.rig_name != actual.rig_name) {
+      *warn = "warning: the model " + model_path + " was calibrated on rig " + model.rig_name +
+              ", not on " + actual_source + " (rig " + actual.rig_name + "); the camera serial, "
+              "pixel format and ROI agree, so it is used. Calibrate on " + actual.rig_name +
+              " if its lens or station differ.";
+    }
+    return;
+  }
   std::string text = "the model " + model_path + " (rig " + model.rig_name + ") was calibrated ";
   text += "with another camera setup than " + actual_source + ": ";
   for (size_t i = 0; i < diffs.size(); ++i) text += (i > 0 ? "; " : "") + diffs[i];

@@ -30,7 +30,9 @@ ModelProvenance ProvenanceOfRig(const Rig& rig, const std::string& camera_serial
 // Throws ModelMismatchError naming both sides (`model_path` and `actual_source`) when the model
 // was calibrated with another camera serial, pixel format or ROI than `actual`, unless `allow`
 // (then `warn` gets the same text as a warning, when not null). A model without provenance, or an
-// unknown serial on either side, is not compared on that point.
+// unknown serial on either side, is not compared on that point. A model of another rig name with
+// the same camera setup passes with a warning in `warn` (rigs sharing a camera, e.g. virtual and
+// virtual-offset).
 void CheckModelProvenance(const ModelProvenance& model, const std::string& model_path,
                           const ModelProvenance& actual, const std::string& actual_source,
                           bool allow, std::string* warn = nullptr);

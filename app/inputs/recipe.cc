@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <vector>
 
+#include "base/bounds.h"
 #include "base/yaml_fields.h"
 
 #ifndef IRDIST_SOURCE_DIR
@@ -402,11 +403,8 @@ void ReadAxes(const MapReader& map, const std::string& file, Recipe* recipe) {
 void ReadBracket(const MapReader& map, const std::string& file, BracketSpec* spec) {
   const MapReader bracket(map.Require("bracket"), file, "bracket",
                           {"t_ref_ms", "t_meas_ms", "repeats", "retake_reference"});
-  spec->t_ref_ms = AsNumber(bracket.Require("t_ref_ms"), file, "bracket.t_ref_ms");
-  if (!(spec->t_ref_ms > 0.0 && spec->t_ref_ms <= kMaxExposureMs)) {
-    Fail(file, bracket.Get("t_ref_ms").Mark(),
-         "bracket.t_ref_ms must lie in (0, " + Number(kMaxExposureMs) + "] ms");
-  }
+  spec->t_ref_ms = yaml_fields::AsBounded(bracket.Require("t_ref_ms"), file, "bracket.t_ref_ms",
+                                          bounds::kExposureMs);
   const ParsedAxis t_meas =
       ReadAxis(bracket.Require("t_meas_ms"), file, "bracket.t_meas_ms", false);
   spec->t_meas_ms = t_meas.values.values;
@@ -416,12 +414,10 @@ void ReadBracket(const MapReader& map, const std::string& file, BracketSpec* spe
            "bracket.t_meas_ms " + Number(spec->t_meas_ms[i]) + " must be longer than t_ref_ms " +
                Number(spec->t_ref_ms) + " (the method differences t_n - t_r > 0)");
     }
-    if (!(spec->t_meas_ms[i] <= kMaxExposureMs)) {
-      Fail(file, t_meas.marks[i],
-           "bracket.t_meas_ms " + Number(spec->t_meas_ms[i]) + " is longer than " +
-               Number(kMaxExposureMs) + " ms; give exposures in (t_ref_ms, " +
-               Number(kMaxExposureMs) + "] ms");
-    }
+    const std::string refusal = bounds::kExposureMs.Refusal(
+        "bracket.t_meas_ms " + Number(spec->t_meas_ms[i]), spec->t_meas_ms[i],
+        "give exposures in (t_ref_ms, " + Number(bounds::kExposureMs.max) + "] ms");
+    if (!refusal.empty()) Fail(file, t_meas.marks[i], refusal);
   }
   spec->repeats = bracket.Integer("repeats", 1);
   if (spec->repeats < 1) Fail(file, bracket.Get("repeats").Mark(), "bracket.repeats must be >= 1");

@@ -6,12 +6,14 @@
 #include <vector>
 
 #include "app/cli/errors.h"
+#include "base/bounds.h"
 #include "base/yaml_fields.h"
 #include "station/serial_transport.h"
 
 namespace irdist {
 namespace {
 
+using yaml_fields::AsBounded;
 using yaml_fields::AsNumber;
 using yaml_fields::Fail;
 using yaml_fields::MapReader;
@@ -43,10 +45,9 @@ int AtLeast(const MapReader& map, const std::string& key, int fallback, int mini
   return value;
 }
 
-double NonNegative(const MapReader& map, const std::string& key, double fallback) {
-  const double value = map.Number(key, fallback);
-  if (value < 0.0) Fail(map.File(), map.Get(key).Mark(), key + " must be >= 0");
-  return value;
+// A delay or wait in ms: within a day (bounds::kDelayMs; 1e308 would overflow the plan's sums).
+double DelayMs(const MapReader& map, const std::string& key, double fallback) {
+  return map.Bounded(key, fallback, bounds::kDelayMs);
 }
 
 double Positive(const MapReader& map, const std::string& key, double fallback) {
@@ -55,7 +56,8 @@ double Positive(const MapReader& map, const std::string& key, double fallback) {
   return value;
 }
 
-// camera.intrinsics: {pixels: sensor|roi, fx, fy, cx, cy, distortion: [k1, k2, p1, p2, k3]}.
+// camera.intrinsics: {pixels: sensor|roi, fx, fy, cx, cy, distortion: [k1, k2, p1, p2, k3]}, each
+// inside its physical bound (base/bounds.h); CheckIntrinsicsAgainstPixels the cross-checks.
 CameraIntrinsics ReadIntrinsics(const YAML::Node& node, const std::string& file) {
   const MapReader map(node, file, "camera.intrinsics",
                       {"pixels", "fx", "fy", "cx", "cy", "distortion"});
@@ -64,12 +66,11 @@ CameraIntrinsics ReadIntrinsics(const YAML::Node& node, const std::string& file)
   const std::string pixels = map.String("pixels", "sensor");
   OneOf(map, "pixels", pixels, {"sensor", "roi"});
   k.in_roi_px = pixels == "roi";
-  map.Require("fx");
-  map.Require("fy");
-  k.fx_px = Positive(map, "fx", 0.0);
-  k.fy_px = Positive(map, "fy", 0.0);
-  k.cx_px = AsNumber(map.Require("cx"), file, "camera.intrinsics.cx");
-  k.cy_px = AsNumber(map.Require("cy"), file, "camera.intrinsics.cy");
+  const std::string fix = "give the lens's calibration (OpenCV's calibrateCamera)";
+  k.fx_px = AsBounded(map.Require("fx"), file, "camera.intrinsics.fx", bounds::kFocalPx, fix);
+  k.fy_px = AsBounded(map.Require("fy"), file, "camera.intrinsics.fy", bounds::kFocalPx, fix);
+  k.cx_px = AsBounded(map.Require("cx"), file, "camera.intrinsics.cx", bounds::kSensorPx, fix);
+  k.cy_px = AsBounded(map.Require("cy"), file, "camera.intrinsics.cy", bounds::kSensorPx, fix);
   if (map.Has("distortion")) {
     const YAML::Node d = map.Get("distortion");
     if (!d.IsSequence() || d.size() > 5) {
@@ -77,10 +78,47 @@ CameraIntrinsics ReadIntrinsics(const YAML::Node& node, const std::string& file)
                            "order; up to 5 numbers)");
     }
     for (size_t i = 0; i < d.size(); ++i) {
-      k.distortion.push_back(AsNumber(d[i], file, "camera.intrinsics.distortion"));
+      const bool tangential = i == 2 || i == 3;
+      k.distortion.push_back(AsBounded(
+          d[i], file, "camera.intrinsics.distortion[" + std::to_string(i) + "]",
+          tangential ? bounds::kTangentialDistortion : bounds::kRadialDistortion, fix));
     }
   }
   return k;
+}
+
+// The intrinsics against the pixels they are stated in: the principal point inside them (the
+// ROI's with `pixels: roi`), and the distortion moving the ROI's farthest corner by less than
+// bounds::kMaxCornerDistortion of its radius.
+void CheckIntrinsicsAgainstPixels(const CameraConfig& camera, const YAML::Node& node,
+                                  const std::string& file) {
+  const CameraIntrinsics& k = camera.intrinsics;
+  const bool roi = camera.roi_width > 0;
+  if (k.in_roi_px && roi && !(k.cx_px <= camera.roi_width && k.cy_px <= camera.roi_height)) {
+    Fail(file, node["cx"].Mark(),
+         "camera.intrinsics (pixels: roi): the principal point (" + BoundNumber(k.cx_px) + ", " +
+             BoundNumber(k.cy_px) + ") lies outside the " + std::to_string(camera.roi_width) +
+             " x " + std::to_string(camera.roi_height) + " px ROI it is stated in; give cx, cy in "
+             "the ROI's pixels (sensor value - roi offset) or set pixels: sensor");
+  }
+  if (!roi) return;  // the sensor's size is the camera's: the corner is unknown here
+  const double x0 = k.in_roi_px ? 0.0 : camera.roi_offset_x;
+  const double y0 = k.in_roi_px ? 0.0 : camera.roi_offset_y;
+  const double dx = std::max(std::fabs(x0 - k.cx_px), std::fabs(x0 + camera.roi_width - k.cx_px));
+  const double dy = std::max(std::fabs(y0 - k.cy_px), std::fabs(y0 + camera.roi_height - k.cy_px));
+  const double r2 = (dx / k.fx_px) * (dx / k.fx_px) + (dy / k.fy_px) * (dy / k.fy_px);
+  double radial = 0.0, power = r2;
+  for (size_t i : {size_t{0}, size_t{1}, size_t{4}}) {
+    if (i < k.distortion.size()) radial += k.distortion[i] * power;
+    power *= r2;
+  }
+  if (!(std::fabs(radial) <= bounds::kMaxCornerDistortion)) {
+    Fail(file, node["distortion"].Mark(),
+         "camera.intrinsics.distortion moves the ROI's farthest corner by " +
+             BoundNumber(100.0 * radial) + "% of its radius (at most " +
+             BoundNumber(100.0 * bounds::kMaxCornerDistortion) + "%: a measurement lens, not a "
+             "fisheye); check k1, k2, k3 and the units of fx, fy");
+  }
 }
 
 CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
@@ -99,7 +137,7 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   camera.black_level = AtLeast(map, "black_level", camera.black_level, 0);
   camera.packet_size = AtLeast(map, "packet_size", camera.packet_size, 0);
   camera.frame_timeout_ms = AtLeast(map, "frame_timeout_ms", camera.frame_timeout_ms, 1);
-  camera.readout_ms = NonNegative(map, "readout_ms", camera.readout_ms);
+  camera.readout_ms = DelayMs(map, "readout_ms", camera.readout_ms);
   const std::string overlap = map.String("trigger_overlap", "off");
   OneOf(map, "trigger_overlap", overlap, {"off", "readout"});
   camera.trigger_in_readout = overlap == "readout";
@@ -129,7 +167,10 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
     camera.roi_width = v[2];
     camera.roi_height = v[3];
   }
-  if (map.Has("intrinsics")) camera.intrinsics = ReadIntrinsics(map.Get("intrinsics"), file);
+  if (map.Has("intrinsics")) {
+    camera.intrinsics = ReadIntrinsics(map.Get("intrinsics"), file);
+    CheckIntrinsicsAgainstPixels(camera, map.Get("intrinsics"), file);
+  }
   return camera;
 }
 
@@ -160,7 +201,7 @@ AxisMotion ReadAxisMotion(const MapReader& motion, const std::string& key, AxisM
   AxisMotion axis;
   axis.speed = Positive(map, "speed", fallback.speed);
   axis.acceleration = Positive(map, "acceleration", fallback.acceleration);
-  axis.settle_ms = NonNegative(map, "settle_ms", fallback.settle_ms);
+  axis.settle_ms = DelayMs(map, "settle_ms", fallback.settle_ms);
   axis.home = map.Has("home") ? map.Number("home", fallback.home) : fallback.home;
   return axis;
 }
@@ -186,8 +227,8 @@ MotionModel ReadMotionModel(const MapReader& map, MotionModel model) {
   model.pan = ReadAxisMotion(motion, "pan", model.pan);
   model.tilt = ReadAxisMotion(motion, "tilt", model.tilt);
   model.axes_move_together = motion.Boolean("axes_move_together", model.axes_move_together);
-  model.frame_overhead_ms = NonNegative(motion, "frame_overhead_ms", model.frame_overhead_ms);
-  model.pose_overhead_ms = NonNegative(motion, "pose_overhead_ms", model.pose_overhead_ms);
+  model.frame_overhead_ms = DelayMs(motion, "frame_overhead_ms", model.frame_overhead_ms);
+  model.pose_overhead_ms = DelayMs(motion, "pose_overhead_ms", model.pose_overhead_ms);
   return model;
 }
 

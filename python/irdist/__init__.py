@@ -82,8 +82,13 @@ def measure(model, rig=None, count=None, duration_s=None, args=(), stderr=None):
 
     Closing the iterator (a `break` out of a for loop, .close(), or its garbage collection) stops
     measure as Ctrl-C does: SIGTERM, then it finishes the bracket in flight, stops the camera and
-    exits; the child is always waited for. Raises Error when measure fails on its own.
+    exits; the child is always waited for. Raises Error when measure fails on its own, and
+    ValueError at once for a count or duration_s outside its bound (NaN, 0, more than a day).
     """
+    if count is not None:
+        _irdist._check_argument("count", count)
+    if duration_s is not None:
+        _irdist._check_argument("duration_s", duration_s)  # NaN would never end
     path = model.path if isinstance(model, _irdist.Model) else os.fspath(model)
     argv = [executable(), "measure", "--model", path, "--json"]
     if rig is not None:
@@ -93,6 +98,11 @@ def measure(model, rig=None, count=None, duration_s=None, args=(), stderr=None):
     if duration_s is not None:
         argv += ["--duration", str(float(duration_s))]
     argv += [str(a) for a in args]
+    return _measure_lines(argv, stderr)  # the arguments above are checked before any child runs
+
+
+def _measure_lines(argv, stderr):
+    """The generator behind measure(): the child's JSON lines, the child stopped at the end."""
     child = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=stderr, text=True)
     stopped = False
     try:

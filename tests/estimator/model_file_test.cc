@@ -4,9 +4,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <random>
 
 #include "tests/estimator/synthetic.h"
 
@@ -43,6 +45,15 @@ CalibrationModel SmallModel() {
   tc.summary.mean_relative_error = 0.1 / 7.0;
   tc.summary.max_relative_error = 0.5;
   tc.summary.samples = 256;
+  return model;
+}
+
+// SmallModel with a fitted blur c0_px2 (flat in distance) and its noise, over 40 frames.
+CalibrationModel WithBlur(double c0_px2) {
+  CalibrationModel model = SmallModel();
+  model.blur_calibration.c0_px2 = c0_px2;
+  model.blur_calibration.noise_at_1m_px2 = 0.01;
+  model.blur_calibration.frames = 40;
   return model;
 }
 
@@ -167,10 +178,7 @@ TEST(ModelFile, BlurTermsRoundTripAndNeedFormatFour) {
 // Issue 20: the blur's split (the crosstalk's variance and kernel shape) round trips; absent, the
 // whole blur is the optics'; out of range, refused at its line.
 TEST(ModelFile, CrosstalkSplitRoundTripsAndIsChecked) {
-  CalibrationModel model = SmallModel();
-  model.blur_calibration.c0_px2 = 0.9;
-  model.blur_calibration.noise_at_1m_px2 = 0.01;
-  model.blur_calibration.frames = 40;
+  CalibrationModel model = WithBlur(0.9);
   EXPECT_EQ(ModelToYaml(model).find("crosstalk"), std::string::npos);  // none: no key
   EXPECT_EQ(ModelFromYaml(ModelToYaml(model), "none.yaml").blur_calibration.crosstalk_var_px2, 0.0);
   model.blur_calibration.crosstalk_var_px2 = 0.64 / 3.0;
@@ -196,10 +204,7 @@ TEST(ModelFile, CrosstalkSplitRoundTripsAndIsChecked) {
 // The blob fit's blur offset (issue 20) round trips; absent, zero; out of range, refused at its
 // line with the range.
 TEST(ModelFile, FitBlurOffsetRoundTripsAndIsChecked) {
-  CalibrationModel model = SmallModel();
-  model.blur_calibration.c0_px2 = 0.9;
-  model.blur_calibration.noise_at_1m_px2 = 0.01;
-  model.blur_calibration.frames = 40;
+  CalibrationModel model = WithBlur(0.9);
   EXPECT_EQ(ModelToYaml(model).find("fit_offset"), std::string::npos);
   model.blur_calibration.fit_offset_px2 = -0.07 / 3.0;
   model.blur_calibration.fit_offset_u_px2 = 0.09 / 7.0;
@@ -212,13 +217,118 @@ TEST(ModelFile, FitBlurOffsetRoundTripsAndIsChecked) {
   std::string bad = text;
   const size_t at = bad.find("fit_offset_u_px2: ");
   ASSERT_NE(at, std::string::npos);
-  bad.replace(at, bad.find('\n', at) - at, "fit_offset_u_px2: 3");
+  bad.replace(at, bad.find('\n', at) - at, "fit_offset_u_px2: -3");
   try {
     ModelFromYaml(bad, "bad.yaml");
-    FAIL() << "an offset of 3 px^2 was accepted";
+    FAIL() << "an offset making the blur negative was accepted";
   } catch (const ModelFileError& e) {
+    EXPECT_EQ(e.key(), "blur_calibration.fit_offset_u_px2");
     EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("[-0.5, 0.5]"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("(0, 16] px^2"), std::string::npos) << e.what();
+  }
+}
+
+// Issue 38 item 3: a defocused lens's fit (fit_offset_u_px2 -0.573 on a blur of about 1 px^2)
+// is written and read back (it was refused by every reader, outside [-0.5, 0.5]).
+TEST(ModelFile, ADefocusedLensModelIsWrittenAndRead) {
+  CalibrationModel model = WithBlur(1.2);
+  model.blur_calibration.fit_offset_u_px2 = -0.573;
+  const std::string path = TempPath("defocus");
+  SaveModel(model, path);
+  const CalibrationModel back = LoadModel(path);
+  std::remove(path.c_str());
+  EXPECT_EQ(back.blur_calibration.fit_offset_u_px2, -0.573);
+}
+
+// Issue 38 item 3: a fit that lands outside the bounds is refused by the writer naming the
+// parameter and why; no file is left for the next command to reject.
+TEST(ModelFile, AFitOutsideTheBoundsIsNotWritten) {
+  CalibrationModel model = WithBlur(0.2);
+  model.blur_calibration.fit_offset_u_px2 = -0.573;
+  const std::string path = TempPath("outside");
+  std::remove(path.c_str());
+  try {
+    SaveModel(model, path);
+    ADD_FAILURE() << "written";
+  } catch (const ModelFileError& e) {
+    EXPECT_EQ(e.key(), "blur_calibration.fit_offset_u_px2");
+    EXPECT_NE(std::string(e.what()).find("not written"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("a variance is > 0"), std::string::npos) << e.what();
+  }
+  struct stat st;
+  EXPECT_NE(stat(path.c_str(), &st), 0) << "a file was left at " << path;
+}
+
+// Issue 38 item 3, as a property: whatever a fit lands on (blurs, offsets, noise, exposures and
+// windows drawn over and beyond their bounds), SaveModel either writes a file that LoadModel (the
+// reader of playback, measure and Python) accepts, identical when written again, or refuses with
+// the parameter named and leaves no file.
+TEST(ModelFile, EveryModelTheWriterWritesTheReaderAccepts) {
+  std::mt19937_64 random(38);
+  auto uniform = [&random](double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(random);
+  };
+  const std::string path = TempPath("property");
+  int written = 0, refused = 0;
+  const CalibrationModel fitted = WithBlur(1.0);
+  for (int i = 0; i < 200; ++i) {
+    CalibrationModel model = fitted;
+    BlurCalibration& b = model.blur_calibration;
+    b.c0_px2 = uniform(-1.0, 20.0);
+    b.c1_px2 = uniform(-2.0, 2.0);
+    b.c2_px2 = uniform(-1.0, 1.0);
+    b.fit_offset_px2 = uniform(-2.0, 2.0);
+    b.fit_offset_u_px2 = uniform(-2.0, 2.0);
+    b.noise_exponent = uniform(-12.0, 12.0);
+    ModelProvenance& p = model.provenance;
+    p.known = true;
+    p.pixel_format = "Mono12";
+    p.bit_depth = 12;
+    p.roi_width = p.roi_height = 256;
+    p.t_ref_ms = uniform(-1.0, 20.0);
+    p.t_meas_ms = {uniform(0.0, 60.0), uniform(0.0, 1.2e5)};
+    model.features.window_side_px = i % 10 == 0 ? 512 : 48;
+    std::remove(path.c_str());
+    try {
+      SaveModel(model, path);
+    } catch (const ModelFileError& e) {
+      EXPECT_FALSE(e.key().empty()) << e.what();
+      struct stat st;
+      EXPECT_NE(stat(path.c_str(), &st), 0) << "a refused model left a file: " << e.what();
+      ++refused;
+      continue;
+    }
+    ++written;
+    try {
+      EXPECT_EQ(ModelToYaml(LoadModel(path)), ModelToYaml(model));
+    } catch (const ModelFileError& e) {
+      ADD_FAILURE() << "written, then refused by the reader: " << e.what();
+    }
+  }
+  std::remove(path.c_str());
+  EXPECT_GT(written, 20) << refused;  // both sides of the bounds are drawn
+  EXPECT_GT(refused, 20);
+}
+
+// Issue 33 item 2: blur_var_px2 [-5, 0, 0] and [1e300, 0, 0] were loaded and used; refused at the
+// key's line now.
+TEST(ModelFile, ABlurThatIsNoVarianceIsRefusedAtItsLine) {
+  CalibrationModel model = WithBlur(0.9);
+  const std::string good = ModelToYaml(model);
+  const size_t at = good.find("blur_var_px2: ");
+  ASSERT_NE(at, std::string::npos);
+  const int line = 1 + static_cast<int>(std::count(good.begin(), good.begin() + at, '\n'));
+  for (const char* bad : {"blur_var_px2: [-5, 0, 0]", "blur_var_px2: [1e300, 0, 0]"}) {
+    SCOPED_TRACE(bad);
+    std::string text = good;
+    text.replace(at, text.find('\n', at) - at, bad);
+    try {
+      ModelFromYaml(text, "m.yaml");
+      ADD_FAILURE() << "accepted";
+    } catch (const ModelFileError& e) {
+      EXPECT_EQ(e.key(), "blur_calibration.blur_var_px2");
+      EXPECT_EQ(e.line(), line);
+    }
   }
 }
 
@@ -450,6 +560,42 @@ TEST(ModelFileSafety, MisspeltKeyIsAnErrorNotADefault) {
   } catch (const ModelFileError& e) {
     EXPECT_NE(std::string(e.what()).find("unknown key"), std::string::npos) << e.what();
     EXPECT_GT(e.line(), 1);
+  }
+}
+
+// Issue 33 item 2: t_ref_ms 1e300 and t_meas_ms [-30, 0] in a provenance passed; refused naming
+// the key (an element of a list by its index) at its line.
+TEST(ModelFileSafety, ProvenanceExposuresOutsideTheBoundsAreRefused) {
+  CalibrationModel model = SmallModel();
+  ModelProvenance& p = model.provenance;
+  p.known = true;
+  p.pixel_format = "Mono12";
+  p.bit_depth = 12;
+  p.t_ref_ms = 8.0;
+  p.t_meas_ms = {30.0, 32.0};
+  const std::string good = ModelToYaml(model);
+  const struct {
+    const char* from;
+    const char* to;
+    const char* key;
+  } cases[] = {{"t_ref_ms: 8", "t_ref_ms: 1e300", "provenance.t_ref_ms"},
+               {"t_meas_ms: [30, 32]", "t_meas_ms: [-30, 0]", "provenance.t_meas_ms[0]"},
+               {"t_meas_ms: [30, 32]", "t_meas_ms: [30, 1e6]", "provenance.t_meas_ms[1]"}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.to);
+    std::string text = good;
+    const size_t at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << text;
+    text.replace(at, std::string(c.from).size(), c.to);
+    const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + at, '\n'));
+    try {
+      ModelFromYaml(text, "m.yaml");
+      ADD_FAILURE() << "accepted";
+    } catch (const ModelFileError& e) {
+      EXPECT_EQ(e.key(), c.key);
+      EXPECT_EQ(e.line(), line);
+      EXPECT_NE(std::string(e.what()).find("(0, 100000] ms"), std::string::npos) << e.what();
+    }
   }
 }
 

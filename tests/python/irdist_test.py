@@ -146,6 +146,18 @@ class ModelTest(unittest.TestCase):
         with self.assertRaises(ValueError):
             model.features(np.zeros(5, dtype=np.uint16))
 
+    def test_bad_bit_depths_and_tiny_images_are_refused_with_a_message(self):
+        # Issue 33 item 7: bit_depth=99 and a 1x1 image were internal check failures.
+        model = irdist.Model(MODEL)
+        image, _ = irdist.Recording(RECORDING)[1]
+        for bits in (99, 7, -12):
+            with self.assertRaisesRegex(ValueError, r"bit_depth = -?\d+ is outside \[8, 16\] bit"):
+                model.features(image, bit_depth=bits)
+        with self.assertRaisesRegex(ValueError, r"1 x 1 px, smaller than the model's window"):
+            model.features(np.zeros((1, 1), dtype=np.uint16))
+        with self.assertRaisesRegex(ValueError, r"smaller than the model's window"):
+            model.estimate_bracket([image, np.zeros((1, 1), dtype=np.uint16)], [8000, 30000])
+
 
 def child_pids():
     """This process's children (running or not yet reaped)."""
@@ -163,6 +175,15 @@ class MeasureTest(unittest.TestCase):
                                     stderr=subprocess.DEVNULL))
         self.assertEqual([m["bracket"] for m in lines], [0, 1])
         self.assertEqual(lines[0]["schema"], irdist.MEASURE_JSON_SCHEMA)
+
+    def test_arguments_outside_their_bounds_are_refused_before_measure_starts(self):
+        # Issue 33 item 7: duration_s NaN passed (a measure that never ends).
+        before = child_pids()
+        for kwargs in ({"duration_s": float("nan")}, {"duration_s": 0}, {"duration_s": 1e9},
+                       {"count": 0}):
+            with self.assertRaisesRegex(ValueError, r"is outside"):
+                irdist.measure(MODEL, rig="virtual", **kwargs)
+        self.assertEqual(child_pids() - before, set(), "no measure was started")
 
     def test_closing_the_iterator_stops_measure_and_waits_for_it(self):
         before = child_pids()

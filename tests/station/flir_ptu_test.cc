@@ -494,5 +494,30 @@ TEST(FlirPtu, ValidateRejectsBadAxesAndUnknownKeys) {
   EXPECT_THROW(info->validate(unknown), InputError);
 }
 
+// Issue 33 item 2: reset_wait_s 1e308 overflowed to a negative count of milliseconds (undefined
+// behaviour) and the PTU was declared absent at once; waits lie in (0, a day].
+TEST(FlirPtu, ValidateRefusesWaitsBeyondADay) {
+  const DriverInfo* info = FindDriver("flir_ptu");
+  for (const char* key : {"reset_wait_s", "home_timeout_s"}) {
+    for (const char* value : {"1e308", "86401", "0", "-5"}) {
+      SCOPED_TRACE(std::string(key) + " " + value);
+      DeviceSpec spec = HeadSpec();
+      spec.settings[key] = {value, 12};
+      try {
+        info->validate(spec);
+        ADD_FAILURE() << "accepted";
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("(0, 86400] s"), std::string::npos) << e.what();
+      }
+    }
+  }
+  DeviceSpec day = HeadSpec();
+  day.settings["reset_wait_s"] = {"86400", 12};
+  EXPECT_NO_THROW(info->validate(day));
+  DeviceSpec tolerance = HeadSpec();  // cast to an integer count of positions later
+  tolerance.settings["tolerance_positions"] = {"1e308", 12};
+  EXPECT_THROW(info->validate(tolerance), InputError);
+}
+
 }  // namespace
 }  // namespace irdist

@@ -30,6 +30,25 @@ TEST(IrdistStation, ValidatesItsKeysWithTheirLine) {
   }
 }
 
+// move_timeout_ms 1e308 was cast to a count of milliseconds (undefined behaviour): within a day.
+TEST(IrdistStation, AMoveTimeoutBeyondADayIsRefused) {
+  DeviceSpec spec = VirtualStationRig::Spec("/dev/null", 5.0).devices[0];
+  for (const char* value : {"1e308", "86400001", "0.5"}) {
+    SCOPED_TRACE(value);
+    spec.settings["move_timeout_ms"] = {value, 9};
+    try {
+      FindDriver("irdist_station")->validate(spec);
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(e.Message().find("move_timeout_ms must lie in [1, 86400000] ms"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  spec.settings["move_timeout_ms"] = {"86400000", 9};
+  EXPECT_NO_THROW(FindDriver("irdist_station")->validate(spec));
+}
+
 TEST(IrdistStation, ARebootIsADeviceRestartAlreadyRecovered) {
   VirtualStationRig rig(100.0);
   rig.station->Identify();

@@ -346,6 +346,20 @@ TEST(ZaberAscii, ValidateRejectsUnknownKeysAndMissingStepSize) {
   DeviceSpec bad_direction = SlideSpec();
   bad_direction.settings["direction"] = {"2", 4};
   EXPECT_THROW(info->validate(bad_direction), InputError);
+  // Cast to integers later: 1e308 would be undefined behaviour (base/bounds.h).
+  for (const char* key : {"tolerance_microsteps", "home_timeout_s"}) {
+    SCOPED_TRACE(key);
+    DeviceSpec huge = SlideSpec();
+    huge.settings[key] = {"1e308", 5};
+    try {
+      info->validate(huge);
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(key) + " = 1e+308 is outside"),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 // --- Against the Zaber emulator (sim/zaber_emulator.cc, written from the manual) over a pty.

@@ -74,6 +74,21 @@ TEST_F(StationCommand, RefusesAPoseOutsideTheRigsLimitsBeforeMoving) {
   EXPECT_FALSE(world_.Pose().moving);
 }
 
+// Issue 33 item 7: `station move 1e308` printed a 190-digit number.
+TEST_F(StationCommand, AHugeTargetIsRefusedInPlainNumbers) {
+  try {
+    Run("move", {1e308, 0.0, 0.0});
+    FAIL() << "moved";
+  } catch (const RecipeError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("slide_mm 1e+308 is outside station.limits [1000, 3500]"),
+              std::string::npos)
+        << what;
+    EXPECT_LT(what.size(), 200u) << what;
+  }
+  EXPECT_FALSE(world_.Pose().moving);
+}
+
 TEST_F(StationCommand, AnUnknownDeviceInPortIsAUsageError) {
   StationArgs args;
   args.rig = std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml";

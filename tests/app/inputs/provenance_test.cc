@@ -62,6 +62,21 @@ TEST(CheckModelProvenance, OverrideWarnsInstead) {
   EXPECT_NE(warning.find("IRDV0002"), std::string::npos);
 }
 
+// Issue 33 item 7: a model from another rig name passed silently. The same camera setup under
+// another rig name (virtual-offset shares virtual's camera) is used, with a warning naming both.
+TEST(CheckModelProvenance, AnotherRigNameWarns) {
+  ModelProvenance other = Calibrated();
+  other.rig_name = "virtual-offset";
+  std::string warning;
+  EXPECT_NO_THROW(CheckModelProvenance(Calibrated(), "m.yaml", other, "rig virtual-offset", false,
+                                       &warning));
+  EXPECT_NE(warning.find("calibrated on rig virtual,"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("(rig virtual-offset)"), std::string::npos) << warning;
+  warning.clear();
+  CheckModelProvenance(Calibrated(), "m.yaml", Calibrated(), "rig virtual", false, &warning);
+  EXPECT_EQ(warning, "");
+}
+
 TEST(CheckModelProvenance, UnknownSideIsNotCompared) {
   ModelProvenance old;  // a model file written before provenance
   ModelProvenance other = Calibrated();

@@ -87,6 +87,79 @@ TEST(RigTest, IntrinsicsNeedTheirKeysAndRefuseUnknownOnes) {
   EXPECT_FALSE(LoadRig(kRigs + "/example-hardware.yaml").camera.intrinsics.known);
 }
 
+// The refusal of ParseRig(text), or "" when it accepts.
+std::string RefusalOf(const std::string& text) {
+  try {
+    ParseRig(text, "r.yaml");
+  } catch (const RecipeError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Issue 33 item 2: out-of-range intrinsics gave wrong distances marked ok (distortion 1e10 gave
+// 2015.7 mm for 2000; cx 1e300 and fx 1e-300 dropped the position). Each is refused at its
+// line and column with the range; the rest of the intrinsics as before.
+TEST(RigTest, IntrinsicsOutsideTheirPhysicalBoundsAreRefused) {
+  const std::string head =
+      "name: r\nkind: hardware\nstation:\n  port: /dev/ttyUSB0\ncamera:\n  id: 10.0.0.2\n"
+      "  roi_px: [512, 384, 256, 256]\n  intrinsics:\n    pixels: sensor\n";
+  const std::string focal = "    fx: 3000\n    fy: 3000\n";
+  const std::string centre = "    cx: 639.5\n    cy: 511.5\n";
+  EXPECT_EQ(RefusalOf(head + focal + centre + "    distortion: [-0.2, 0.05, 0.001, 0, 0.1]\n"), "");
+  const struct {
+    std::string text;
+    std::string expected;
+  } cases[] = {
+      {focal + centre + "    distortion: [1e10, 0, 0, 0, 0]\n",
+       "r.yaml:14:18: camera.intrinsics.distortion[0] = 1e+10 is outside [-5, 5]"},
+      {focal + centre + "    distortion: [-1e6, 0, 0, 0, 0]\n", "distortion[0] = -1000000"},
+      {focal + centre + "    distortion: [0, 0, 0.5, 0, 0]\n", "distortion[2] = 0.5 is outside"},
+      {focal + "    cx: 1e300\n    cy: 511.5\n", "r.yaml:12:9: camera.intrinsics.cx = 1e+300"},
+      {"    fx: 1e-300\n    fy: 3000\n" + centre, "camera.intrinsics.fx = 1e-300 is outside "
+                                                     "[10, 1000000] px"},
+      {"    fx: 30\n    fy: 30\n" + centre + "    distortion: [-4, 0, 0, 0, 0]\n",
+       "moves the ROI's farthest corner by"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.text);
+    EXPECT_NE(RefusalOf(head + c.text).find(c.expected), std::string::npos)
+        << RefusalOf(head + c.text);
+  }
+}
+
+// Issue 33 item 2: intrinsics in sensor pixels stated as `pixels: roi` gave theta 14 deg for 10;
+// the principal point must lie inside the pixels it is stated in.
+TEST(RigTest, APrincipalPointOutsideTheRoiItIsStatedInIsRefused) {
+  const std::string head =
+      "name: r\nkind: hardware\nstation:\n  port: /dev/ttyUSB0\ncamera:\n  id: 10.0.0.2\n"
+      "  roi_px: [512, 384, 256, 256]\n  intrinsics:\n    pixels: roi\n    fx: 3000\n"
+      "    fy: 3000\n";
+  EXPECT_EQ(RefusalOf(head + "    cx: 127.5\n    cy: 127.5\n"), "");
+  const std::string refusal = RefusalOf(head + "    cx: 639.5\n    cy: 511.5\n");
+  EXPECT_NE(refusal.find("r.yaml:12:"), std::string::npos) << refusal;
+  EXPECT_NE(refusal.find("outside the 256 x 256 px ROI"), std::string::npos) << refusal;
+  EXPECT_NE(refusal.find("pixels: sensor"), std::string::npos) << refusal;
+}
+
+// The rig's delays (readout, settling, overheads) lie within a day: 1e308 ms overflowed the plan's
+// sums; each is refused at its line with the range.
+TEST(RigTest, DelaysBeyondADayAreRefused) {
+  const std::string head = "name: r\nkind: hardware\ncamera:\n  id: 10.0.0.2\n";
+  const std::string station = "station:\n  port: /dev/ttyUSB0\n";
+  EXPECT_EQ(RefusalOf(head + "  readout_ms: 86400000\n" + station), "");
+  EXPECT_NE(RefusalOf(head + "  readout_ms: 1e308\n" + station)
+                .find("r.yaml:5:15: camera.readout_ms = 1e+308 is outside [0, 86400000] ms"),
+            std::string::npos)
+      << RefusalOf(head + "  readout_ms: 1e308\n" + station);
+  EXPECT_NE(RefusalOf(head + station + "  motion:\n    slide: {settle_ms: -1}\n")
+                .find("settle_ms = -1 is outside"),
+            std::string::npos);
+  EXPECT_NE(RefusalOf(head + station + "  motion:\n    pose_overhead_ms: 1e300\n")
+                .find("pose_overhead_ms = 1e+300 is outside"),
+            std::string::npos);
+}
+
 TEST(RigTest, EmitterOffsetIsThreeFiniteNumbersOnAHardwareRig) {
   const std::string head = "name: r\nkind: hardware\ncamera:\n  id: 10.0.0.2\nstation:\n  port: "
                            "/dev/ttyUSB0\n  emitter_offset_mm: ";

@@ -1,0 +1,84 @@
+#pragma once
+// The one table of bounds: every number a file or a flag carries (rig file, recipe, model file
+// and its provenance, command-line options, Python arguments) is checked against a named quantity
+// here, with a finite range set by physics (never by the virtual rig's values) and the reason.
+// Readers refuse a value outside it at file:line:column or by the option's name; the model writer
+// refuses to write one (docs/recipes.md "Bounds" lists the table).
+
+#include <string>
+
+namespace irdist {
+
+// A named physical quantity and its range: [min, max], or (min, max] when min_open.
+struct Bound {
+  const char* name;  // "blur variance"
+  const char* unit;  // "px^2"; "" for a pure number
+  double min;
+  double max;
+  bool min_open;
+  const char* why;  // the physics behind the range, said in a refusal
+
+  // Finite and inside the range (NaN and infinities never are).
+  bool Contains(double value) const;
+  // "(0, 16] px^2"
+  std::string RangeText() const;
+  // "" when `value` is inside; else "<what> = <value> is outside <range>: <why>; <fix>".
+  std::string Refusal(const std::string& what, double value, const std::string& fix = "") const;
+};
+
+// A number in at most 10 significant digits ("1e+308", never 309 digits).
+std::string BoundNumber(double value);
+
+namespace bounds {
+
+// Times.
+inline constexpr Bound kExposureMs{"exposure", "ms", 0.0, 100000.0, true,
+                                   "a camera's exposure (100 s is far beyond any GigE camera's)"};
+inline constexpr Bound kDurationS{"duration or wait", "s", 0.0, 86400.0, true,
+                                  "a run's duration or a device's wait lies within a day"};
+inline constexpr Bound kDelayMs{"delay", "ms", 0.0, 86400000.0, false,
+                                "a device's readout, settling or overhead lies within a day"};
+// Sizes and counts.
+inline constexpr Bound kDiskGb{"disk budget", "GB", 0.0, 1.0e6, true,
+                               "no disk holds more than a petabyte"};
+inline constexpr Bound kCount{"count", "", 1.0, 1.0e9, false,
+                              "at least one, and a billion brackets is decades of measuring"};
+inline constexpr Bound kToleranceSteps{"position tolerance", "steps", 0.0, 1.0e6, false,
+                                       "a motor's tolerance is a few steps; a million is more "
+                                       "than an axis's travel"};
+inline constexpr Bound kSensorPx{"sensor coordinate", "px", 0.0, 1048576.0, false,
+                                 "no sensor is wider than 2^20 pixels"};
+inline constexpr Bound kBitDepth{"bit depth", "bit", 1.0, 16.0, false,
+                                 "a camera's pixels carry 1 to 16 bits (Mono8: 8, Mono12: 12)"};
+inline constexpr Bound kFrameBitDepth{"bit depth of a frame", "bit", 8.0, 16.0, false,
+                                      "the features read Mono8 to Mono16 frames"};
+// Camera intrinsics (OpenCV's pinhole with distortion [k1, k2, p1, p2, k3]).
+inline constexpr Bound kFocalPx{"focal length", "px", 10.0, 1.0e6, false,
+                                "focal length / pixel pitch: 1 mm / 20 um = 50 px to "
+                                "1000 mm / 1 um = 1e6 px"};
+inline constexpr Bound kRadialDistortion{"radial distortion coefficient", "", -5.0, 5.0, false,
+                                         "lenses for measurement bend rays by a few percent; a "
+                                         "larger k is a fisheye or a typo"};
+inline constexpr Bound kTangentialDistortion{"tangential distortion coefficient", "", -0.1, 0.1,
+                                             false,
+                                             "decentring of a lens's elements is a fraction of "
+                                             "a percent"};
+// The largest share of the image radius that distortion may move a point at the sensor's corner.
+inline constexpr double kMaxCornerDistortion = 0.5;
+// Blur (the blob's variance per axis, px^2).
+inline constexpr Bound kBlurVarPx2{"blur variance", "px^2", 0.0, 16.0, true,
+                                   "a variance is > 0; 16 px^2 is a defocus disc of 8 px radius "
+                                   "(variance R^2/4), beyond any focused measurement optic"};
+inline constexpr Bound kBlurOffsetPx2{"blur correction", "px^2", -16.0, 16.0, false,
+                                      "a correction to a blur variance is smaller than the "
+                                      "largest blur (the corrected blur is checked as well)"};
+inline constexpr Bound kBlurNoisePx2{"blur noise", "px^2", 0.0, 16.0, true,
+                                     "the scatter of a blur variance is > 0 and below the "
+                                     "largest blur"};
+inline constexpr Bound kNoiseExponent{"noise exponent", "", -10.0, 10.0, false,
+                                      "noise grows with a power of the distance: shot noise "
+                                      "d^1, a dark floor d^2 or d^4"};
+inline constexpr Bound kShare{"share", "", 0.0, 1.0, false, "a share of a whole"};
+
+}  // namespace bounds
+}  // namespace irdist
