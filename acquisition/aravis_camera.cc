@@ -1,89 +1,13 @@
 #include "acquisition/aravis_camera.h"
 
-#include "acquisition/pixel_format.h"
-
-#include <arv.h>
-
-#include <algorithm>
-#include <cmath>
-#include <cstring>
-#include <optional>
 #include <sstream>
 #include <utility>
 
-#include "base/utc_time.h"
+#include "acquisition/aravis_internal.h"
+#include "acquisition/pixel_format.h"
 
 namespace irdist {
 namespace {
-
-// --- C API at the edge ----------------------------------------------------------------------------
-
-struct GObjectUnref {
-  void operator()(gpointer object) const {
-    if (object != nullptr) g_object_unref(object);
-  }
-};
-template <typename T>
-using GPtr = std::unique_ptr<T, GObjectUnref>;
-
-// Throws a CameraError naming the failed call, the camera and the caller's line when `error` is
-// set; frees the GError.
-void ThrowOnError(GError* error, const std::string& what, const std::string& camera,
-                  const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
-  if (error == nullptr) return;
-  std::ostringstream out;
-  out << "camera " << camera << ": " << what << " failed: " << error->message << " (" << file
-      << ":" << line << "). Check that the camera is powered, reachable and not controlled by "
-      << "another application.";
-  g_error_free(error);
-  throw CameraError(out.str());
-}
-
-std::string OrEmpty(const char* text) { return text == nullptr ? std::string() : std::string(text); }
-
-bool LooksLikeIpv4(const std::string& name) {
-  int dots = 0;
-  for (char c : name) {
-    if (c == '.') {
-      ++dots;
-    } else if (c < '0' || c > '9') {
-      return false;
-    }
-  }
-  return dots == 3;
-}
-
-bool IsLoopback(const std::string& address) { return address.rfind("127.", 0) == 0; }
-
-FrameStatus MapStatus(ArvBufferStatus status) {
-  switch (status) {
-    case ARV_BUFFER_STATUS_SUCCESS:
-      return FrameStatus::kOk;
-    case ARV_BUFFER_STATUS_TIMEOUT:
-      return FrameStatus::kTimeout;
-    case ARV_BUFFER_STATUS_MISSING_PACKETS:
-      return FrameStatus::kMissingPackets;
-    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
-      return FrameStatus::kWrongPacketId;
-    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
-      return FrameStatus::kSizeMismatch;
-    case ARV_BUFFER_STATUS_FILLING:
-      return FrameStatus::kFilling;
-    case ARV_BUFFER_STATUS_ABORTED:
-      return FrameStatus::kAborted;
-    case ARV_BUFFER_STATUS_CLEARED:
-      return FrameStatus::kUnknown;
-    case ARV_BUFFER_STATUS_UNKNOWN:
-      return FrameStatus::kUnknown;
-  }
-  return FrameStatus::kUnknown;
-}
-
-std::string Join(const std::vector<std::string>& items) {
-  std::string out;
-  for (const auto& item : items) out += (out.empty() ? "" : ", ") + item;
-  return out;
-}
 
 // Features read back for recording.yaml, when the camera has them.
 const char* const kRecordedFeatures[] = {
@@ -98,12 +22,11 @@ const char* const kRecordedFeatures[] = {
     "TriggerSelector", "TriggerMode", "TriggerSource", "TriggerOverlap",
     "TriggerActivation", "TriggerDelay",      "TriggerDelayAbs",    "ChunkModeActive",
     "PayloadSize",       "GevSCPSPacketSize", "GevSCPD",            "DeviceTemperature",
-    "SensorWidth",       "SensorHeight",
+    "SensorWidth",       "SensorHeight",      "AcquisitionFrameRateEnabled", "PixelColorFilter",
 };
 
-}  // namespace
 
-// --- DeviceInfo / identity ------------------------------------------------------------------------
+}  // namespace
 
 std::string CameraIdentity::BriefReport() const {
   std::ostringstream out;
@@ -111,569 +34,6 @@ std::string CameraIdentity::BriefReport() const {
   if (!address.empty()) out << " at " << address;
   return out.str();
 }
-
-std::vector<DeviceInfo> ListCameras() {
-  arv_update_device_list();
-  std::vector<DeviceInfo> devices;
-  const unsigned int count = arv_get_n_devices();
-  for (unsigned int i = 0; i < count; ++i) {
-    DeviceInfo info;
-    info.id = OrEmpty(arv_get_device_id(i));
-    info.vendor = OrEmpty(arv_get_device_vendor(i));
-    info.model = OrEmpty(arv_get_device_model(i));
-    info.serial = OrEmpty(arv_get_device_serial_nbr(i));
-    info.address = OrEmpty(arv_get_device_address(i));
-    info.protocol = OrEmpty(arv_get_device_protocol(i));
-    devices.push_back(std::move(info));
-  }
-  return devices;
-}
-
-DeviceInfo ResolveCamera(const std::string& id_serial_or_ip,
-                         const std::vector<DeviceInfo>& devices) {
-  for (const auto& device : devices) {
-    if (device.id == id_serial_or_ip || device.serial == id_serial_or_ip) return device;
-  }
-  std::vector<std::string> names;
-  for (const auto& device : devices) names.push_back(device.id + " (" + device.address + ")");
-  throw CameraError("no camera named '" + id_serial_or_ip + "' (id, serial or IP) answers; " +
-                    "cameras found: [" + Join(names) +
-                    "]. Check power and cabling, or give the camera's IP address in the rig "
-                    "file (camera: id:).");
-}
-
-// --- Impl -----------------------------------------------------------------------------------------
-
-struct AravisCamera::Impl {
-  GPtr<ArvCamera> camera;
-  GPtr<ArvStream> stream;
-  GPtr<ArvChunkParser> chunk_parser;
-  CameraIdentity identity;
-  CameraSettings settings;
-  bool configured = false;
-  bool streaming = false;
-  bool exposure_chunks = false;
-  int payload_bytes = 0;
-  int packet_size = 0;
-  int bit_depth = 16;
-  int warmup_discarded = 0;
-  double exposure_min_us = 0.0;
-  double exposure_max_us = 0.0;
-  std::string pixel_format;
-
-  std::string Name() const { return identity.serial + "@" + identity.address; }
-  ArvDevice* Device() const { return arv_camera_get_device(camera.get()); }
-
-  bool Has(const char* feature) const {
-    GError* error = nullptr;
-    const gboolean available = arv_camera_is_feature_available(camera.get(), feature, &error);
-    if (error != nullptr) {
-      g_error_free(error);
-      return false;
-    }
-    return available != FALSE;
-  }
-
-  std::string GetString(const char* feature) {
-    GError* error = nullptr;
-    const char* value = arv_camera_get_string(camera.get(), feature, &error);
-    ThrowOnError(error, std::string("reading ") + feature, Name());
-    return OrEmpty(value);
-  }
-
-  std::vector<std::string> EnumEntries(const char* feature) {
-    GError* error = nullptr;
-    guint count = 0;
-    const char** entries =
-        arv_camera_dup_available_enumerations_as_strings(camera.get(), feature, &count, &error);
-    ThrowOnError(error, std::string("listing ") + feature, Name());
-    std::vector<std::string> out;
-    for (guint i = 0; i < count; ++i) out.emplace_back(OrEmpty(entries[i]));
-    g_free(static_cast<void*>(entries));
-    return out;
-  }
-
-  // Sets an enumeration feature and reads it back. `why` explains what the value is for.
-  void SetEnum(const char* feature, const std::string& value, const std::string& fix) {
-    if (!Has(feature)) {
-      throw CameraError("camera " + Name() + " has no feature " + feature + " (needed to set it to " +
-                        value + "). " + fix);
-    }
-    const std::vector<std::string> entries = EnumEntries(feature);
-    if (std::find(entries.begin(), entries.end(), value) == entries.end()) {
-      throw CameraError("camera " + Name() + ": " + feature + " cannot be " + value +
-                        "; it offers: " + Join(entries) + ". " + fix);
-    }
-    GError* error = nullptr;
-    arv_camera_set_string(camera.get(), feature, value.c_str(), &error);
-    ThrowOnError(error, std::string("setting ") + feature + "=" + value, Name());
-    const std::string back = GetString(feature);
-    if (back != value) {
-      throw CameraError("camera " + Name() + ": " + feature + " was set to " + value +
-                        " but reads back " + back + ". " + fix);
-    }
-  }
-
-  // Sets an "...Auto" enumeration to Off when the camera has it (absent = nothing automatic).
-  void AutoOff(const char* feature) {
-    if (!Has(feature)) return;
-    SetEnum(feature, "Off", "Automatic control must be off for radiometric measurements.");
-  }
-
-  void CheckFloat(const char* feature, double wanted, double got) const {
-    const double tolerance = std::max(1e-6, settings.readback_tolerance * std::fabs(wanted));
-    if (std::fabs(got - wanted) > tolerance) {
-      std::ostringstream out;
-      out << "camera " << Name() << ": " << feature << " was set to " << wanted
-          << " but reads back " << got
-          << " (the camera clamped or rounded it). Use a value within the camera's range.";
-      throw CameraError(out.str());
-    }
-  }
-
-  void SetRegion(const CameraSettings& s) {
-    GError* error = nullptr;
-    gint width_min = 0, width_max = 0, height_min = 0, height_max = 0;
-    arv_camera_get_width_bounds(camera.get(), &width_min, &width_max, &error);
-    ThrowOnError(error, "reading Width bounds", Name());
-    arv_camera_get_height_bounds(camera.get(), &height_min, &height_max, &error);
-    ThrowOnError(error, "reading Height bounds", Name());
-    // Offsets first at 0 so the full size is allowed, then the size, then the offsets.
-    const bool has_offsets = Has("OffsetX") && Has("OffsetY");
-    if (has_offsets) {
-      arv_camera_set_integer(camera.get(), "OffsetX", 0, &error);
-      ThrowOnError(error, "setting OffsetX", Name());
-      arv_camera_set_integer(camera.get(), "OffsetY", 0, &error);
-      ThrowOnError(error, "setting OffsetY", Name());
-      arv_camera_get_width_bounds(camera.get(), &width_min, &width_max, &error);
-      ThrowOnError(error, "reading Width bounds", Name());
-      arv_camera_get_height_bounds(camera.get(), &height_min, &height_max, &error);
-      ThrowOnError(error, "reading Height bounds", Name());
-    } else if (s.offset_x != 0 || s.offset_y != 0) {
-      throw CameraError("camera " + Name() +
-                        " has no OffsetX/OffsetY; set the region offsets to 0 in the rig file.");
-    }
-    const int width = s.width > 0 ? s.width : width_max;
-    const int height = s.height > 0 ? s.height : height_max;
-    const std::pair<const char*, int> wanted[] = {
-        {"Width", width}, {"Height", height}, {"OffsetX", s.offset_x}, {"OffsetY", s.offset_y}};
-    for (const auto& [feature, value] : wanted) {
-      if (!has_offsets && (std::strcmp(feature, "OffsetX") == 0 ||
-                           std::strcmp(feature, "OffsetY") == 0)) {
-        continue;
-      }
-      arv_camera_set_integer(camera.get(), feature, value, &error);
-      ThrowOnError(error, std::string("setting ") + feature, Name());
-      const gint64 back = arv_camera_get_integer(camera.get(), feature, &error);
-      ThrowOnError(error, std::string("reading ") + feature, Name());
-      if (back != value) {
-        throw CameraError("camera " + Name() + ": " + feature + " was set to " +
-                          std::to_string(value) + " but reads back " + std::to_string(back) +
-                          " (width max " + std::to_string(width_max) + ", height max " +
-                          std::to_string(height_max) +
-                          "). Choose a region inside the sensor and on its increments.");
-      }
-    }
-  }
-
-  // GigE Vision: packet socket off on loopback, the rig's packet size or a negotiated one.
-  void SetupPacketSize() {
-    if (arv_camera_is_gv_device(camera.get()) == FALSE) return;
-    GError* error = nullptr;
-    arv_camera_gv_set_stream_options(camera.get(),
-                                     IsLoopback(identity.address)
-                                         ? ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED
-                                         : ARV_GV_STREAM_OPTION_NONE);
-    if (settings.packet_size > 0) {
-      arv_camera_gv_set_packet_size(camera.get(), settings.packet_size, &error);
-      ThrowOnError(error, "setting the packet size", Name());
-      const guint back = arv_camera_gv_get_packet_size(camera.get(), &error);
-      ThrowOnError(error, "reading the packet size", Name());
-      if (static_cast<int>(back) != settings.packet_size) {
-        throw CameraError("camera " + Name() + ": packet size " +
-                          std::to_string(settings.packet_size) + " reads back " +
-                          std::to_string(back) +
-                          "; use a packet size the network path supports or 0 to negotiate.");
-      }
-      packet_size = static_cast<int>(back);
-    } else {
-      packet_size = static_cast<int>(arv_camera_gv_auto_packet_size(camera.get(), &error));
-      ThrowOnError(error, "negotiating the packet size", Name());
-    }
-  }
-
-  // GigE Vision stream: fixed socket buffer, packet resend when the camera supports it (GVCP
-  // capability bit), the frame retention.
-  void TuneGvStream(ArvStream* raw_stream) {
-    if (!ARV_IS_GV_STREAM(raw_stream)) return;
-    const int socket_bytes = settings.socket_buffer_bytes > 0
-                                 ? settings.socket_buffer_bytes
-                                 : std::max(4 << 20, 2 * payload_bytes);
-    const bool resend = DeclaresResend();
-    g_object_set(raw_stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
-                 "socket-buffer-size", socket_bytes, "packet-resend",
-                 resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS : ARV_GV_STREAM_PACKET_RESEND_NEVER,
-                 "frame-retention", static_cast<guint>(settings.frame_retention_ms * 1000),
-                 "packet-request-ratio", settings.packet_request_ratio, nullptr);
-    gint size_back = 0;
-    guint retention_back = 0;
-    double ratio_back = 0.0;
-    g_object_get(raw_stream, "socket-buffer-size", &size_back, "frame-retention",
-                 &retention_back, "packet-request-ratio", &ratio_back, nullptr);
-    if (size_back != socket_bytes ||
-        retention_back != static_cast<guint>(settings.frame_retention_ms * 1000) ||
-        std::fabs(ratio_back - settings.packet_request_ratio) > 1e-9) {
-      throw CameraError("camera " + Name() +
-                        ": the stream did not keep its socket buffer / frame retention / packet request ratio "
-                        "settings; this Aravis version is not supported (need 0.8.x).");
-    }
-  }
-
-  // The GVCP capability register's PACKETRESEND_CMD bit (GigE Vision devices only).
-  bool DeclaresResend() {
-    if (arv_camera_is_gv_device(camera.get()) == FALSE) return false;
-    GError* error = nullptr;
-    guint32 capabilities = 0;
-    arv_device_read_register(Device(), 0x0934, &capabilities, &error);
-    ThrowOnError(error, "reading the GVCP capability register", Name());
-    return (capabilities & (1u << 2)) != 0;
-  }
-
-  void SetupStream() {
-    GError* error = nullptr;
-    stream.reset();
-    SetupPacketSize();
-    payload_bytes = static_cast<int>(arv_camera_get_payload(camera.get(), &error));
-    ThrowOnError(error, "reading PayloadSize", Name());
-    if (payload_bytes <= 0) {
-      throw CameraError("camera " + Name() + " reports a payload of " +
-                        std::to_string(payload_bytes) + " bytes; check Width/Height/PixelFormat.");
-    }
-
-    ArvStream* raw_stream = arv_camera_create_stream(camera.get(), nullptr, nullptr, &error);
-    ThrowOnError(error, "creating the stream", Name());
-    if (raw_stream == nullptr) {
-      throw CameraError("camera " + Name() + ": Aravis could not create a stream; check the " +
-                        "network interface and firewall (UDP from the camera).");
-    }
-    stream.reset(raw_stream);
-
-    TuneGvStream(raw_stream);
-    for (int i = 0; i < settings.buffer_count; ++i) {
-      arv_stream_push_buffer(raw_stream, arv_buffer_new_allocate(payload_bytes));
-    }
-  }
-
-  // Automatic controls off, gain at its minimum, the rig's black level and gamma.
-  void ConfigureAnalog(const CameraSettings& s) {
-    AutoOff("ExposureAuto");
-    AutoOff("GainAuto");
-    AutoOff("BlackLevelAuto");
-    GError* error = nullptr;
-    if (arv_camera_is_gain_available(camera.get(), nullptr) != FALSE) {
-      double gain_min = 0.0, gain_max = 0.0;
-      arv_camera_get_gain_bounds(camera.get(), &gain_min, &gain_max, &error);
-      ThrowOnError(error, "reading Gain bounds", Name());
-      arv_camera_set_gain(camera.get(), gain_min, &error);
-      ThrowOnError(error, "setting Gain to its minimum", Name());
-      const double gain = arv_camera_get_gain(camera.get(), &error);
-      ThrowOnError(error, "reading Gain", Name());
-      CheckFloat("Gain", gain_min, gain);
-    }
-    ConfigureBlackLevel(s);
-    if (s.gamma > 0.0 && Has("Gamma")) {
-      if (Has("GammaEnable")) {
-        arv_camera_set_boolean(camera.get(), "GammaEnable", s.gamma != 1.0, &error);
-        ThrowOnError(error, "setting GammaEnable", Name());
-      }
-      arv_camera_set_float(camera.get(), "Gamma", s.gamma, &error);
-      ThrowOnError(error, "setting Gamma", Name());
-      const double gamma = arv_camera_get_float(camera.get(), "Gamma", &error);
-      ThrowOnError(error, "reading Gamma", Name());
-      CheckFloat("Gamma", s.gamma, gamma);
-    }
-  }
-
-  void ConfigureBlackLevel(const CameraSettings& s) {
-    if (s.black_level < 0.0) return;
-    GError* error = nullptr;
-    if (arv_camera_is_black_level_available(camera.get(), nullptr) != FALSE) {
-      arv_camera_set_black_level(camera.get(), s.black_level, &error);
-      ThrowOnError(error, "setting BlackLevel", Name());
-      const double black = arv_camera_get_black_level(camera.get(), &error);
-      ThrowOnError(error, "reading BlackLevel", Name());
-      CheckFloat("BlackLevel", s.black_level, black);
-    } else if (s.black_level > 0.0) {
-      throw CameraError("camera " + Name() + " has no BlackLevel feature but the rig asks for " +
-                        std::to_string(s.black_level) +
-                        "; set camera.black_level to 0 (or -1 to leave it).");
-    }
-  }
-
-  void SetBoolean(const char* feature, bool value, const std::string& fix) {
-    GError* error = nullptr;
-    arv_camera_set_boolean(camera.get(), feature, value ? TRUE : FALSE, &error);
-    ThrowOnError(error, std::string("setting ") + feature, Name());
-    const bool back = arv_camera_get_boolean(camera.get(), feature, &error) != FALSE;
-    ThrowOnError(error, std::string("reading ") + feature, Name());
-    if (back != value) {
-      throw CameraError("camera " + Name() + ": " + feature + " was set to " +
-                        (value ? "true" : "false") + " but reads back " +
-                        (back ? "true" : "false") + ". " + fix);
-    }
-  }
-
-  // The exposure is the time irdist writes (not the trigger pulse's width, nor automatic).
-  void SetExposureModeTimed() {
-    if (!Has("ExposureMode")) return;  // SFNC: absent means Timed
-    SetEnum("ExposureMode", "Timed",
-            "irdist sets each frame's exposure time: the camera needs ExposureMode Timed (a "
-            "TriggerWidth mode would let the trigger pulse set the exposure).");
-  }
-
-  // Every trigger but FrameStart off (an AcquisitionStart or FrameBurstStart trigger left On by
-  // a previous user would hold frames back), then FrameStart selected.
-  void OtherTriggersOff() {
-    for (const std::string& selector : EnumEntries("TriggerSelector")) {
-      if (selector == "FrameStart") continue;
-      SetEnum("TriggerSelector", selector, "The camera must let irdist select its triggers.");
-      if (!Has("TriggerMode")) continue;  // that trigger has no mode to switch
-      SetEnum("TriggerMode", "Off",
-              "irdist triggers frames with FrameStart only: every other trigger must be Off.");
-    }
-    SetEnum("TriggerSelector", "FrameStart",
-            "irdist triggers each frame; the camera needs a FrameStart trigger.");
-  }
-
-  // No TriggerSelector: the SFNC allows it on a camera with one trigger, which then is the
-  // frame's. Its mode and source must be there (and its software command for Software).
-  void RequireSingleTrigger(const CameraSettings& s) const {
-    std::vector<std::string> missing;
-    for (const char* feature : {"TriggerMode", "TriggerSource"}) {
-      if (!Has(feature)) missing.emplace_back(feature);
-    }
-    if (s.triggered && s.trigger_source == "Software" && !Has("TriggerSoftware")) {
-      missing.emplace_back("TriggerSoftware");
-    }
-    if (missing.empty()) return;
-    throw CameraError("camera " + Name() + " has no TriggerSelector and no single trigger (" +
-                      Join(missing) + " missing); irdist triggers each frame. Use a camera with a "
-                      "FrameStart trigger (irdist camera-test lists what it lacks).");
-  }
-
-  // The frame-rate limit: off when triggered (each trigger starts a frame), the rig's rate when
-  // free-running with one, left alone otherwise.
-  void ConfigureFrameRate(const CameraSettings& s) {
-    const bool has_enable = Has("AcquisitionFrameRateEnable");
-    if (s.triggered) {
-      if (has_enable) {
-        SetBoolean("AcquisitionFrameRateEnable", false,
-                   "A frame-rate limit would hold triggered frames back.");
-      }
-      return;
-    }
-    if (!(s.frame_rate_hz > 0.0)) return;
-    if (has_enable) SetBoolean("AcquisitionFrameRateEnable", true, "The rig asks for a frame rate.");
-    GError* error = nullptr;
-    arv_camera_set_frame_rate(camera.get(), s.frame_rate_hz, &error);
-    ThrowOnError(error, "setting AcquisitionFrameRate", Name());
-    const double rate = arv_camera_get_frame_rate(camera.get(), &error);
-    ThrowOnError(error, "reading AcquisitionFrameRate", Name());
-    CheckFloat("AcquisitionFrameRate", s.frame_rate_hz, rate);
-  }
-
-  // Continuous acquisition, timed exposure, the FrameStart trigger alone (or the free-running
-  // frame rate).
-  void ConfigureTrigger(const CameraSettings& s) {
-    if (Has("AcquisitionMode")) {
-      SetEnum("AcquisitionMode", "Continuous", "The camera must support continuous acquisition.");
-    }
-    SetExposureModeTimed();
-    if (Has("TriggerSelector")) {
-      OtherTriggersOff();
-    } else {
-      RequireSingleTrigger(s);
-    }
-    SetEnum("TriggerMode", s.triggered ? "On" : "Off",
-            "irdist needs TriggerMode On/Off for FrameStart.");
-    if (s.triggered) {
-      SetEnum("TriggerSource", s.trigger_source,
-              "Set camera.trigger_source in the rig file to the input wired to the station.");
-      if (s.trigger_source != "Software" && Has("TriggerActivation")) {
-        SetEnum("TriggerActivation", s.trigger_activation,
-                "Set camera.trigger_activation in the rig file to a value the camera offers.");
-      }
-      if (s.trigger_overlap_readout && Has("TriggerOverlap")) {
-        SetEnum("TriggerOverlap", "ReadOut",
-                "Set camera.trigger_overlap: off in the rig file: this camera has no ReadOut "
-                "overlap.");
-      }
-    }
-    ConfigureFrameRate(s);
-  }
-
-  // --- the state found, put back after a failed setup -------------------------------------------
-
-  // One writable feature's value as found, under a TriggerSelector entry (or none).
-  struct SavedFeature {
-    std::string selector;
-    std::string feature;
-    std::string value;
-  };
-
-  // The feature's node when the camera has it readable and writable now, else nullptr.
-  ArvGcFeatureNode* WritableNode(const char* feature) const {
-    if (!Has(feature)) return nullptr;
-    ArvGcNode* node = arv_device_get_feature(Device(), feature);
-    if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node)) return nullptr;
-    ArvGcFeatureNode* feature_node = ARV_GC_FEATURE_NODE(node);
-    if (arv_gc_feature_node_get_actual_access_mode(feature_node) != ARV_GC_ACCESS_MODE_RW) {
-      return nullptr;
-    }
-    return feature_node;
-  }
-
-  std::optional<std::string> ValueAsString(ArvGcFeatureNode* node) const {
-    GError* error = nullptr;
-    const char* value = arv_gc_feature_node_get_value_as_string(node, &error);
-    if (error != nullptr) {
-      g_error_free(error);  // unreadable now: nothing to save or compare
-      return std::nullopt;
-    }
-    return OrEmpty(value);
-  }
-
-  void SaveFeature(const std::string& selector, const char* feature,
-                   std::vector<SavedFeature>* saved) const {
-    ArvGcFeatureNode* node = WritableNode(feature);
-    if (node == nullptr) return;
-    if (const auto value = ValueAsString(node)) saved->push_back({selector, feature, *value});
-  }
-
-  // The features Configure() may change, in the order they are put back.
-  std::vector<SavedFeature> SaveState() {
-    static const char* const kGlobal[] = {
-        "PixelFormat", "Width", "Height", "OffsetX", "OffsetY", "ExposureMode", "ExposureAuto",
-        "ExposureTime", "ExposureTimeAbs", "GainAuto", "Gain", "GainRaw", "BlackLevelAuto",
-        "BlackLevel", "BlackLevelRaw", "GammaEnable", "Gamma", "AcquisitionMode",
-        "AcquisitionFrameRateEnable", "AcquisitionFrameRate", "ChunkModeActive"};
-    static const char* const kPerTrigger[] = {"TriggerSource", "TriggerActivation",
-                                              "TriggerOverlap", "TriggerMode"};
-    std::vector<SavedFeature> saved;
-    for (const char* feature : kGlobal) SaveFeature("", feature, &saved);
-    if (WritableNode("TriggerSelector") == nullptr) {
-      for (const char* feature : kPerTrigger) SaveFeature("", feature, &saved);
-      return saved;
-    }
-    const std::string selected = GetString("TriggerSelector");
-    for (const std::string& selector : EnumEntries("TriggerSelector")) {
-      if (WriteFeature("", "TriggerSelector", selector).empty()) {
-        for (const char* feature : kPerTrigger) SaveFeature(selector, feature, &saved);
-      }
-    }
-    WriteFeature("", "TriggerSelector", selected);
-    saved.push_back({"", "TriggerSelector", selected});
-    return saved;
-  }
-
-  // Writes `value` (under `selector` when not empty) unless the feature holds it already;
-  // returns why it failed, or an empty string.
-  std::string WriteFeature(const std::string& selector, const char* feature,
-                           const std::string& value) {
-    if (!selector.empty()) {
-      const std::string why = WriteFeature("", "TriggerSelector", selector);
-      if (!why.empty()) return why;
-    }
-    ArvGcFeatureNode* node = WritableNode(feature);
-    if (node == nullptr) return std::string(feature) + " not writable";
-    if (ValueAsString(node) == value) return "";
-    GError* error = nullptr;
-    arv_gc_feature_node_set_value_from_string(node, value.c_str(), &error);
-    if (error == nullptr) return "";
-    const std::string why = std::string(feature) + ": " + error->message;
-    g_error_free(error);
-    return why;
-  }
-
-  // Puts back every saved feature (offsets at 0 first, so the saved size fits); returns the text
-  // that ends the setup's error message.
-  std::string RestoreState(const std::vector<SavedFeature>& saved) {
-    for (const char* offset : {"OffsetX", "OffsetY"}) {
-      if (WritableNode(offset) != nullptr) WriteFeature("", offset, "0");
-    }
-    std::vector<std::string> failed;
-    for (const SavedFeature& f : saved) {
-      const std::string why = WriteFeature(f.selector, f.feature.c_str(), f.value);
-      if (!why.empty()) failed.push_back((f.selector.empty() ? "" : f.selector + " ") + why);
-    }
-    if (failed.empty()) return " The camera was put back as it was found.";
-    return " The camera could not be put back as it was found (" + Join(failed) +
-           "); it is left with acquisition stopped: power-cycle it before another application "
-           "uses it.";
-  }
-
-  // Exposure chunks, where the camera offers them.
-  void ConfigureChunks() {
-    exposure_chunks = false;
-    chunk_parser.reset();
-    if (arv_camera_are_chunks_available(camera.get(), nullptr) == FALSE || !Has("ChunkSelector")) {
-      return;
-    }
-    GError* error = nullptr;
-    const std::vector<std::string> chunks = EnumEntries("ChunkSelector");
-    if (!settings.exposure_chunks ||
-        std::find(chunks.begin(), chunks.end(), "ExposureTime") == chunks.end()) {
-      arv_camera_set_chunk_mode(camera.get(), FALSE, &error);  // none left on by a previous client
-      ThrowOnError(error, "turning chunk mode off", Name());
-      return;
-    }
-    arv_camera_set_chunks(camera.get(), "ExposureTime", &error);
-    ThrowOnError(error, "enabling the ExposureTime chunk", Name());
-    chunk_parser.reset(arv_camera_create_chunk_parser(camera.get()));
-    exposure_chunks = chunk_parser != nullptr;
-  }
-
-  void ReadExposureBounds() {
-    if (arv_camera_is_exposure_time_available(camera.get(), nullptr) == FALSE) {
-      throw CameraError("camera " + Name() +
-                        " has no ExposureTime (or ExposureTimeAbs) feature; irdist needs it.");
-    }
-    GError* error = nullptr;
-    arv_camera_get_exposure_time_bounds(camera.get(), &exposure_min_us, &exposure_max_us, &error);
-    ThrowOnError(error, "reading ExposureTime bounds", Name());
-  }
-
-  void CheckExposureRange(double exposure_us) const {
-    if (exposure_us >= exposure_min_us && exposure_us <= exposure_max_us) return;
-    std::ostringstream out;
-    out << "camera " << Name() << ": exposure " << exposure_us << " us is outside the camera's "
-        << "range [" << exposure_min_us << ", " << exposure_max_us
-        << "] us; change the recipe's exposures.";
-    throw CameraError(out.str());
-  }
-
-  void WriteExposure(double exposure_us) {
-    CheckExposureRange(exposure_us);
-    GError* error = nullptr;
-    arv_camera_set_exposure_time(camera.get(), exposure_us, &error);
-    ThrowOnError(error, "setting ExposureTime", Name());
-  }
-
-  // The frame's image as CV_16UC1 (packed formats unpacked), or empty when the buffer does not
-  // hold a whole image of a supported format.
-  static cv::Mat ToMat(ArvBuffer* buffer) {
-    const int width = arv_buffer_get_image_width(buffer);
-    const int height = arv_buffer_get_image_height(buffer);
-    size_t size = 0;
-    const void* data = arv_buffer_get_image_data(buffer, &size);
-    const PixelFormatInfo* format =
-        FindPixelFormat(static_cast<std::uint32_t>(arv_buffer_get_image_pixel_format(buffer)));
-    if (format == nullptr) return cv::Mat();
-    return UnpackMono(*format, static_cast<const std::uint8_t*>(data), size, width, height);
-  }
-};
-
-// --- AravisCamera ---------------------------------------------------------------------------------
 
 AravisCamera::AravisCamera(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
@@ -745,12 +105,16 @@ void AravisCamera::Configure(const CameraSettings& settings) {
   d.stream.reset();
   d.configured = false;
   const std::vector<Impl::SavedFeature> found = d.SaveState();
+  if (d.found_state.empty()) d.found_state = found;  // as the camera was before irdist's first setup
   try {
     d.SetEnum("PixelFormat", settings.pixel_format,
               "Set camera.pixel_format in the rig file to a Mono format the camera offers.");
     d.pixel_format = settings.pixel_format;
     d.bit_depth = FindPixelFormat(settings.pixel_format)->bit_depth;
+    d.RefuseRawMosaic();
     d.ConfigureAnalog(settings);
+    d.ConfigureGamma(settings);
+    d.ConfigurePixelPipeline();
     d.SetRegion(settings);
     d.ConfigureTrigger(settings);
     d.ConfigureChunks();
@@ -779,6 +143,17 @@ std::map<std::string, std::string> AravisCamera::ReadBackFeatures() {
       continue;
     }
     values[feature] = OrEmpty(value);
+  }
+  for (const PixelFeatureState& state : impl_->pixel_pipeline) values[state.feature] = state.now;
+  const std::string not_neutral = NotNeutralSummary(impl_->pixel_pipeline);
+  values["irdist.PixelPipeline"] = not_neutral.empty() ? "neutral" : "not neutral: " + not_neutral;
+  const std::string colour = impl_->ColourSensor();
+  values["irdist.Sensor"] = colour.empty() ? "monochrome"
+                                           : "colour (" + colour + "): Mono output interpolated "
+                                             "by the camera";
+  if (impl_->configured) {
+    values["irdist.FrameTrigger"] =
+        impl_->frame_trigger.empty() ? "single trigger" : impl_->frame_trigger;
   }
   if (impl_->packet_size > 0) values["irdist.PacketSize"] = std::to_string(impl_->packet_size);
   values["irdist.ExposureChunks"] = impl_->exposure_chunks ? "true" : "false";
@@ -809,114 +184,17 @@ double AravisCamera::ExposureUs() {
   return value;
 }
 
-void AravisCamera::StartStream() {
-  Impl& d = *impl_;
-  IRDIST_CHECK(d.configured && d.stream != nullptr, "StartStream() before Configure()");
-  if (d.streaming) return;
-  GError* error = nullptr;
-  arv_camera_start_acquisition(d.camera.get(), &error);
-  ThrowOnError(error, "starting acquisition", d.Name());
-  d.streaming = true;
-  const bool self_timed = !d.settings.triggered || d.settings.trigger_source == "Software";
-  for (int i = 0; self_timed && i < d.settings.warmup_frames; ++i) {
-    if (d.settings.triggered) SoftwareTrigger();
-    const auto frame = WaitFrame(std::chrono::milliseconds(2000));
-    if (!frame) break;  // nothing to warm up with; the capture's retries take over
-    ++d.warmup_discarded;
-  }
-}
+std::vector<PixelFeatureState> AravisCamera::PixelPipeline() const { return impl_->pixel_pipeline; }
 
-int AravisCamera::warmup_discarded() const { return impl_->warmup_discarded; }
+std::string AravisCamera::ColourSensor() { return impl_->ColourSensor(); }
 
-void AravisCamera::StopStream() {
-  Impl& d = *impl_;
-  if (!d.streaming) return;
-  d.streaming = false;
-  GError* error = nullptr;
-  arv_camera_stop_acquisition(d.camera.get(), &error);
-  ThrowOnError(error, "stopping acquisition", d.Name());
-}
-
-bool AravisCamera::streaming() const { return impl_->streaming; }
-
-std::optional<RawFrame> AravisCamera::WaitFrame(std::chrono::milliseconds timeout) {
-  Impl& d = *impl_;
-  IRDIST_CHECK(d.stream != nullptr, "WaitFrame() before Configure()");
-  const auto timeout_us = static_cast<guint64>(std::max<std::int64_t>(0, timeout.count()) * 1000);
-  ArvBuffer* buffer = arv_stream_timeout_pop_buffer(d.stream.get(), timeout_us);
-  if (buffer == nullptr) return std::nullopt;
-  RawFrame frame;
-  // Received: stamped the moment the complete frame is taken from the stream, before any copy.
-  frame.host_time_ns = UtcNowNs();
-  frame.host_monotonic_ns = MonotonicNowNs();
-  frame.status = MapStatus(arv_buffer_get_status(buffer));
-  frame.frame_id = arv_buffer_get_frame_id(buffer);
-  frame.timestamp_ns = arv_buffer_get_timestamp(buffer);
-  frame.bit_depth = d.bit_depth;
-  if (frame.status == FrameStatus::kOk) {
-    frame.image = d.ToMat(buffer);
-    if (frame.image.empty()) frame.status = FrameStatus::kSizeMismatch;
-    if (d.exposure_chunks && arv_buffer_has_chunks(buffer) != FALSE) {
-      GError* error = nullptr;
-      const double chunk = arv_chunk_parser_get_float_value(d.chunk_parser.get(), buffer,
-                                                            "ChunkExposureTime", &error);
-      if (error == nullptr) {
-        frame.chunk_exposure_us = chunk;
-      } else {
-        g_error_free(error);  // a frame without a readable chunk falls back to the read-back
-      }
-    }
-  }
-  arv_stream_push_buffer(d.stream.get(), buffer);
-  return frame;
-}
-
-int AravisCamera::Flush() {
-  Impl& d = *impl_;
-  if (d.stream == nullptr) return 0;
-  int count = 0;
-  while (ArvBuffer* buffer = arv_stream_try_pop_buffer(d.stream.get())) {
-    arv_stream_push_buffer(d.stream.get(), buffer);
-    ++count;
-  }
-  return count;
-}
-
-void AravisCamera::SoftwareTrigger() {
-  GError* error = nullptr;
-  arv_camera_software_trigger(impl_->camera.get(), &error);
-  ThrowOnError(error, "TriggerSoftware", impl_->Name());
-}
-
-bool AravisCamera::HasExposureChunks() const { return impl_->exposure_chunks; }
-
-std::map<std::string, std::uint64_t> AravisCamera::StreamStatistics() const {
-  std::map<std::string, std::uint64_t> out;
-  if (impl_->stream == nullptr) return out;
-  ArvStream* stream = impl_->stream.get();
-  const guint count = arv_stream_get_n_infos(stream);
-  for (guint i = 0; i < count; ++i) {
-    if (arv_stream_get_info_type(stream, i) == G_TYPE_UINT64) {
-      out[OrEmpty(arv_stream_get_info_name(stream, i))] = arv_stream_get_info_uint64(stream, i);
-    }
-  }
-  return out;
-}
-
-TransferStats AravisCamera::Transfer() const {
-  TransferStats out;
-  if (impl_->stream == nullptr || !ARV_IS_GV_STREAM(impl_->stream.get())) return out;
-  const std::map<std::string, std::uint64_t> infos = StreamStatistics();
-  auto get = [&infos](const char* name) {
-    const auto it = infos.find(name);
-    return it == infos.end() ? std::uint64_t{0} : it->second;
-  };
-  out.resend_requests = get("n_resend_requests");
-  out.resent_packets = get("n_resent_packets");
-  out.missing_packets = get("n_missing_packets");
-  out.completed_frames = get("n_completed_buffers");
-  out.failed_frames = get("n_failures");
-  return out;
+std::string AravisCamera::RestoreFound() {
+  IRDIST_CHECK(!impl_->streaming, "RestoreFound() while streaming; call StopStream() first");
+  if (impl_->found_state.empty()) return "";
+  const std::string outcome = impl_->RestoreState(impl_->found_state);
+  impl_->configured = false;
+  impl_->stream.reset();
+  return outcome;
 }
 
 FeatureInfo AravisCamera::Describe(const std::string& feature, const std::string& selector) {
@@ -955,10 +233,5 @@ FeatureInfo AravisCamera::Describe(const std::string& feature, const std::string
   if (!selected.empty()) d.WriteFeature("", "TriggerSelector", selected);
   return info;
 }
-
-bool AravisCamera::DeclaresPacketResend() { return impl_->DeclaresResend(); }
-
-int AravisCamera::PayloadBytes() const { return impl_->payload_bytes; }
-int AravisCamera::PacketSizeBytes() const { return impl_->packet_size; }
 
 }  // namespace irdist

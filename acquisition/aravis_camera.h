@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "acquisition/camera.h"
+#include "acquisition/pixel_pipeline.h"
 
 namespace irdist {
 
@@ -74,9 +75,19 @@ class AravisCamera final : public Camera {
   // Whether the camera declares GVCP packet resend (GigE Vision capability register; false for
   // other transports).
   bool DeclaresPacketResend();
+  // The pixel-shaping features the camera has (acquisition/pixel_pipeline.h), as found and as left
+  // by the last Configure (empty before).
+  std::vector<PixelFeatureState> PixelPipeline() const;
+  // What makes the sensor a colour one (a PixelColorFilter, Bayer formats offered), or "" for a
+  // monochrome sensor. Configure refuses a raw mosaic (a Mono format whose PixelColorFilter is
+  // not None); a colour camera's own interpolated Mono output is accepted and named.
+  std::string ColourSensor();
+  // Puts back every feature the first Configure changed, as it was found (stopped first); returns
+  // " The camera was put back as it was found." or what could not be. Configure again to use it.
+  std::string RestoreFound();
 
  private:
-  struct Impl;
+  struct Impl;  // acquisition/aravis_internal.h (acquisition-internal)
   explicit AravisCamera(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };

@@ -402,5 +402,55 @@ TEST(VendorCameras, MinimalCameraWithoutTriggerIsRefusedAndLeftAsFound) {
   EXPECT_EQ(check.Get("", "Width"), "512");
 }
 
+// SFNC: ExposureStart starts one frame's exposure; with ExposureMode Timed (a previous user left
+// TriggerWidth) and one exposure per trigger it is the camera's frame trigger.
+TEST(VendorCameras, ExposureStartOnlyIsTheFrameTrigger) {
+  testing::FakeCameraProcess fake("IRDEXS01", {"-g", Genicam("exposure_start_only.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  camera->Configure(Triggered("Mono12"));
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.at("TriggerSelector"), "ExposureStart");
+  EXPECT_EQ(features.at("ExposureMode"), "Timed");
+  EXPECT_EQ(features.at("TriggerMode"), "On");
+  EXPECT_EQ(features.at("irdist.FrameTrigger"), "ExposureStart");
+  ExpectTriggeredFrames(*camera, 12);
+}
+
+// A read-only TriggerSelector (derived from the exposure mode) with writable trigger controls is
+// taken as it is: configured, triggered, never written.
+TEST(VendorCameras, ReadOnlySelectorWithWritableControlsCaptures) {
+  testing::FakeCameraProcess fake("IRDROS01", {"-g", Genicam("read_only_selector.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  CameraSettings settings = Triggered("Mono12");
+  settings.black_level = -1.0;  // its BlackLevel is locked (the next test)
+  camera->Configure(settings);
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.at("TriggerSelector"), "FrameStart");
+  EXPECT_EQ(features.at("irdist.FrameTrigger"), "FrameStart");
+  EXPECT_EQ(features.at("TriggerSource"), "Software");
+  ExpectTriggeredFrames(*camera, 12);
+}
+
+// Aravis 0.8 writes a locked feature without a word: irdist checks first, and the message names
+// the feature and the fix, never a source path; the camera is put back as found.
+TEST(VendorCameras, ALockedFeatureIsRefusedByNameWithItsFix) {
+  testing::FakeCameraProcess fake("IRDROS02", {"-g", Genicam("read_only_selector.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  try {
+    camera->Configure(Triggered("Mono12"));  // black_level 0 asks to write BlackLevel
+    FAIL() << "expected CameraError";
+  } catch (const CameraError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("BlackLevel is locked"), std::string::npos) << message;
+    EXPECT_NE(message.find("camera.black_level to -1"), std::string::npos) << message;
+    EXPECT_NE(message.find("put back as it was found"), std::string::npos) << message;
+    EXPECT_EQ(message.find(".cc:"), std::string::npos) << message;
+    EXPECT_EQ(message.find("powered, reachable"), std::string::npos) << message;
+  }
+  camera.reset();
+  OtherClient check;
+  EXPECT_EQ(check.Get("", "BlackLevel"), "4");
+}
+
 }  // namespace
 }  // namespace irdist
