@@ -105,7 +105,7 @@ void AravisCamera::Configure(const CameraSettings& settings) {
   d.stream.reset();
   d.configured = false;
   const std::vector<Impl::SavedFeature> found = d.SaveState();
-  if (d.found_state.empty()) d.found_state = found;  // as the camera was before irdist's first setup
+  if (d.found_state.empty()) d.found_state = found;  // as before irdist's first setup
   try {
     d.SetEnum("PixelFormat", settings.pixel_format,
               "Set camera.pixel_format in the rig file to a Mono format the camera offers.");
@@ -185,6 +185,10 @@ double AravisCamera::ExposureUs() {
 }
 
 std::vector<PixelFeatureState> AravisCamera::PixelPipeline() const { return impl_->pixel_pipeline; }
+
+std::pair<double, double> AravisCamera::ExposureBoundsUs() const {
+  return {impl_->exposure_min_us, impl_->exposure_max_us};
+}
 
 std::string AravisCamera::ColourSensor() { return impl_->ColourSensor(); }
 

@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "acquisition/camera.h"
@@ -85,6 +86,8 @@ class AravisCamera final : public Camera {
   // Puts back every feature the first Configure changed, as it was found (stopped first); returns
   // " The camera was put back as it was found." or what could not be. Configure again to use it.
   std::string RestoreFound();
+  // The exposure's bounds (us) as read by the last Configure ({0, 0} before).
+  std::pair<double, double> ExposureBoundsUs() const;
 
  private:
   struct Impl;  // acquisition/aravis_internal.h (acquisition-internal)

@@ -19,7 +19,9 @@ void ThrowOnError(GError* error, const std::string& what, const std::string& cam
   throw CameraError(out.str());
 }
 
-std::string OrEmpty(const char* text) { return text == nullptr ? std::string() : std::string(text); }
+std::string OrEmpty(const char* text) {
+  return text == nullptr ? std::string() : std::string(text);
+}
 
 std::string JoinNames(const std::vector<std::string>& items) {
   std::string out;
@@ -50,21 +52,26 @@ ArvGcFeatureNode* AravisCamera::Impl::RequireWritable(const char* feature,
   ArvGcFeatureNode* node = FeatureNode(feature);
   const std::string head = "camera " + Name() + ": " + feature;
   if (node == nullptr) {
-    throw CameraError(head + " is not available on this camera now, and irdist needs to write "
-                      "it. " + fix);
+    throw CameraError(head +
+                      " is not available on this camera now, and irdist needs to write "
+                      "it. " +
+                      fix);
   }
   const ArvGcAccessMode mode = arv_gc_feature_node_get_actual_access_mode(node);
   if (mode != ARV_GC_ACCESS_MODE_RW && mode != ARV_GC_ACCESS_MODE_WO) {
-    throw CameraError(head + " is read-only on this camera (the camera derives it from another "
-                      "setting), and irdist needs to write it. " + fix);
+    throw CameraError(head +
+                      " is read-only on this camera (the camera derives it from another "
+                      "setting), and irdist needs to write it. " +
+                      fix);
   }
   GError* error = nullptr;
   const gboolean locked = arv_gc_feature_node_is_locked(node, &error);
   ThrowOnError(error, std::string("reading whether ") + feature + " is locked", Name());
   if (locked != FALSE) {
-    throw CameraError(head + " is locked now (the camera holds it while acquiring, or another "
-                      "setting fixes it), and irdist needs to write it. " + fix +
-                      " Stop any other application using the camera and run again.");
+    throw CameraError(head +
+                      " is locked now (the camera holds it while acquiring, or another "
+                      "setting fixes it), and irdist needs to write it. " +
+                      fix + " Stop any other application using the camera and run again.");
   }
   return node;
 }
@@ -121,8 +128,8 @@ void AravisCamera::Impl::SetBoolean(const char* feature, bool value, const std::
   ThrowOnError(error, std::string("reading ") + feature, Name());
   if (back != value) {
     throw CameraError("camera " + Name() + ": " + feature + " was set to " +
-                      (value ? "true" : "false") + " but reads back " +
-                      (back ? "true" : "false") + ". " + fix);
+                      (value ? "true" : "false") + " but reads back " + (back ? "true" : "false") +
+                      ". " + fix);
   }
 }
 
@@ -146,9 +153,8 @@ void AravisCamera::Impl::CheckFloat(const char* feature, double wanted, double g
   const double tolerance = std::max(1e-6, settings.readback_tolerance * std::fabs(wanted));
   if (std::fabs(got - wanted) > tolerance) {
     std::ostringstream out;
-    out << "camera " << Name() << ": " << feature << " was set to " << wanted
-        << " but reads back " << got
-        << " (the camera clamped or rounded it). Use a value within the camera's range.";
+    out << "camera " << Name() << ": " << feature << " was set to " << wanted << " but reads back "
+        << got << " (the camera clamped or rounded it). Use a value within the camera's range.";
     throw CameraError(out.str());
   }
 }
@@ -187,13 +193,28 @@ void AravisCamera::Impl::SaveFeature(const std::string& selector, const char* fe
 // The features Configure() may change, in the order they are put back: the pixel pipeline's
 // (acquisition/pixel_pipeline.h) after the analog ones.
 std::vector<AravisCamera::Impl::SavedFeature> AravisCamera::Impl::SaveState() {
-  static const char* const kGlobal[] = {
-      "PixelFormat", "Width", "Height", "OffsetX", "OffsetY", "ExposureMode", "ExposureAuto",
-      "ExposureTime", "ExposureTimeAbs", "GainAuto", "Gain", "GainRaw", "BlackLevelAuto",
-      "BlackLevel", "BlackLevelRaw", "AcquisitionMode", "AcquisitionFrameRateEnable",
-      "AcquisitionFrameRateEnabled", "AcquisitionFrameRate", "ChunkModeActive"};
-  static const char* const kPerTrigger[] = {"TriggerSource", "TriggerActivation",
-                                            "TriggerOverlap", "TriggerMode"};
+  static const char* const kGlobal[] = {"PixelFormat",
+                                        "Width",
+                                        "Height",
+                                        "OffsetX",
+                                        "OffsetY",
+                                        "ExposureMode",
+                                        "ExposureAuto",
+                                        "ExposureTime",
+                                        "ExposureTimeAbs",
+                                        "GainAuto",
+                                        "Gain",
+                                        "GainRaw",
+                                        "BlackLevelAuto",
+                                        "BlackLevel",
+                                        "BlackLevelRaw",
+                                        "AcquisitionMode",
+                                        "AcquisitionFrameRateEnable",
+                                        "AcquisitionFrameRateEnabled",
+                                        "AcquisitionFrameRate",
+                                        "ChunkModeActive"};
+  static const char* const kPerTrigger[] = {"TriggerSource", "TriggerActivation", "TriggerOverlap",
+                                            "TriggerMode"};
   std::vector<SavedFeature> saved;
   for (const char* feature : kGlobal) SaveFeature("", feature, &saved);
   for (const PixelFeatureSpec& spec : PixelPipelineTable()) {

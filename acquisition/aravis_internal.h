@@ -53,7 +53,7 @@ struct AravisCamera::Impl {
   ArvGcFeatureNode* exposure_node = nullptr;  // ExposureTime (or ExposureTimeAbs), found by
                                               // ReadExposureBounds; checked before each write
   std::string pixel_format;
-  std::string frame_trigger;        // FrameStart, ExposureStart, or "" (a single trigger)
+  std::string frame_trigger;  // FrameStart, ExposureStart, or "" (a single trigger)
   std::vector<PixelFeatureState> pixel_pipeline;  // as found and as set, by Configure
 
   // One writable feature's value as found, under a TriggerSelector entry (or none).

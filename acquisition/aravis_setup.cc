@@ -110,8 +110,8 @@ void AravisCamera::Impl::ConfigureGamma(const CameraSettings& s) {
 PixelFeatureState AravisCamera::Impl::SetNeutral(const PixelFeatureSpec& spec, const char* feature,
                                                  bool write) {
   ArvGcFeatureNode* node = FeatureNode(feature);
-  PixelFeatureState state{spec.what, feature, ValueAsString(node).value_or("<unreadable>"), "",
-                          true, ""};
+  PixelFeatureState state{spec.what, feature, ValueAsString(node).value_or("<unreadable>"),
+                          "",        true,    ""};
   if (write && !IsNeutralValue(state.found, spec.neutral)) {
     state.why = WriteFeature("", feature, spec.neutral);
   }
@@ -133,7 +133,8 @@ void AravisCamera::Impl::ConfigurePixelPipeline() {
     if (gamma_row && !(settings.gamma > 0.0)) continue;  // the rig leaves gamma as it is
     const bool write = *spec.neutral != '\0' && (!gamma_row || settings.gamma == 1.0);
     for (const char* feature : spec.spellings) {
-      if (FeatureNode(feature) != nullptr) pixel_pipeline.push_back(SetNeutral(spec, feature, write));
+      if (FeatureNode(feature) != nullptr)
+        pixel_pipeline.push_back(SetNeutral(spec, feature, write));
     }
   }
 }
@@ -163,8 +164,11 @@ void AravisCamera::Impl::RefuseRawMosaic() {
   if (!Has("PixelColorFilter")) return;
   const std::string filter = GetString("PixelColorFilter");
   if (filter.empty() || filter == "None") return;
-  throw CameraError("camera " + Name() + ": " + pixel_format + " is a raw colour mosaic "
-                    "(PixelColorFilter " + filter + "): the filters modulate the blob's gray "
+  throw CameraError("camera " + Name() + ": " + pixel_format +
+                    " is a raw colour mosaic "
+                    "(PixelColorFilter " +
+                    filter +
+                    "): the filters modulate the blob's gray "
                     "levels pixel by pixel, and irdist reads distance from them. Use a monochrome "
                     "camera, or a Mono format the camera interpolates itself (PixelColorFilter "
                     "None).");

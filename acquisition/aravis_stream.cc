@@ -86,8 +86,8 @@ void AravisCamera::Impl::TuneGvStream(ArvStream* raw_stream) {
       retention_back != static_cast<guint>(settings.frame_retention_ms * 1000) ||
       std::fabs(ratio_back - settings.packet_request_ratio) > 1e-9) {
     throw CameraError("camera " + Name() +
-                      ": the stream did not keep its socket buffer / frame retention / packet request ratio "
-                      "settings; this Aravis version is not supported (need 0.8.x).");
+                      ": the stream did not keep its socket buffer / frame retention / packet "
+                      "request ratio settings; this Aravis version is not supported (need 0.8.x).");
   }
 }
 

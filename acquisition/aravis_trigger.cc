@@ -64,7 +64,8 @@ void AravisCamera::Impl::RequireTriggerControls(const CameraSettings& s,
   if (missing.empty() && read_only.empty()) return;
   std::string lacks;
   if (!missing.empty()) lacks = JoinNames(missing) + " missing";
-  if (!read_only.empty()) lacks += (lacks.empty() ? "" : "; ") + JoinNames(read_only) + " read-only";
+  if (!read_only.empty())
+    lacks += (lacks.empty() ? "" : "; ") + JoinNames(read_only) + " read-only";
   throw CameraError("camera " + Name() + ": " + what + " cannot be used as the frame trigger (" +
                     lacks + "). " + kNoFrameTrigger);
 }

@@ -1,10 +1,12 @@
 #include "acquisition/linearity.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
-#include <opencv2/imgproc.hpp>
+#include "acquisition/camera.h"
 
 namespace irdist {
 
@@ -76,9 +78,9 @@ LinearityResult FitLinearity(double dark_dn, double full_scale_dn,
   }
   r.slope_dn_per_us = (n * sty - st * sy) / det;
   r.intercept_dn = (sy - r.slope_dn_per_us * st) / n;
-  const auto [lo, hi] = std::minmax_element(used.begin(), used.end(), [](const auto& a, const auto& b) {
-    return a.exposure_us < b.exposure_us;
-  });
+  const auto [lo, hi] = std::minmax_element(
+      used.begin(), used.end(),
+      [](const auto& a, const auto& b) { return a.exposure_us < b.exposure_us; });
   const double span = r.slope_dn_per_us * (hi->exposure_us - lo->exposure_us);
   if (!(span > 0.05 * range)) {
     std::ostringstream why;
@@ -89,7 +91,8 @@ LinearityResult FitLinearity(double dark_dn, double full_scale_dn,
   }
   double worst = 0.0;
   for (const LinearityPoint& p : used) {
-    worst = std::max(worst, std::fabs(p.mean_dn - (r.intercept_dn + r.slope_dn_per_us * p.exposure_us)));
+    worst = std::max(worst,
+                     std::fabs(p.mean_dn - (r.intercept_dn + r.slope_dn_per_us * p.exposure_us)));
   }
   r.error_percent = 100.0 * worst / span;
   r.measured = true;
@@ -147,8 +150,8 @@ Probe FindWindow(const GrabAt& grab, double exposure_us, double min_us, double m
     }
   }
   if (p.peak_dn >= dark_dn + options.saturation_fraction * range) {
-    p.why = "the window saturates even at the shortest exposure (" +
-            std::to_string(p.exposure_us) + " us): dim the source";
+    p.why = "the window saturates even at the shortest exposure (" + std::to_string(p.exposure_us) +
+            " us): dim the source";
   }
   return p;
 }
@@ -200,6 +203,30 @@ LinearityResult MeasureLinearity(const GrabAt& grab,
     points.push_back({exposure_us, cv::mean((*frame)(probe.window))[0]});
   }
   return FitLinearity(dark_dn, full_scale_dn, points, options);
+}
+
+LinearityResult MeasureCameraLinearity(Camera& camera, const std::function<void()>& fire,
+                                       double probe_exposure_us, double min_exposure_us,
+                                       double max_exposure_us, int bit_depth,
+                                       const LinearityOptions& options) {
+  const GrabAt grab = [&camera, &fire](double exposure_us) -> std::optional<cv::Mat> {
+    camera.SetExposureUs(exposure_us);
+    camera.Flush();
+    fire();
+    const auto timeout = std::chrono::milliseconds(3000 + static_cast<int>(exposure_us / 1000));
+    const std::optional<RawFrame> frame = camera.WaitFrame(timeout);
+    if (!frame || frame->status != FrameStatus::kOk) return std::nullopt;
+    return frame->image;
+  };
+  const bool was_streaming = camera.streaming();
+  if (!was_streaming) camera.StartStream();
+  const LinearityResult result = MeasureLinearity(
+      grab, [&grab, min_exposure_us] { return grab(min_exposure_us); }, probe_exposure_us,
+      min_exposure_us, max_exposure_us, static_cast<double>((1 << bit_depth) - 1), options);
+  camera.Flush();
+  if (!was_streaming) camera.StopStream();
+  camera.SetExposureUs(probe_exposure_us);
+  return result;
 }
 
 }  // namespace irdist

@@ -17,7 +17,7 @@ struct PixelFeatureSpec {
   // The value written (as GenICam's string form: "false", "Off", "1", "0"); empty = only stated
   // (recorded and shown, never written: binning mode, linear either way).
   const char* neutral;
-  const char* effect;                  // what it does to the gray levels when not neutral
+  const char* effect;  // what it does to the gray levels when not neutral
 };
 
 // Every pixel-shaping feature irdist knows, in the order they are set.

@@ -83,7 +83,8 @@ std::string FrameTriggerOf(const FeatureInfo& selector) {
   const std::vector<std::string> candidates =
       selector.writable ? selector.entries : std::vector<std::string>{selector.value};
   for (const char* trigger : {"FrameStart", "ExposureStart"}) {
-    if (std::find(candidates.begin(), candidates.end(), trigger) != candidates.end()) return trigger;
+    const auto found = std::find(candidates.begin(), candidates.end(), trigger);
+    if (found != candidates.end()) return trigger;
   }
   return "";
 }
@@ -173,7 +174,7 @@ CameraCheck FrameRateLimitCheck(AravisCamera& camera) {
   if (!enable.present) return {"frame-rate limit off", true, "no AcquisitionFrameRateEnable", ""};
   return {"frame-rate limit off", enable.writable,
           name + " " + enable.value + " (irdist sets it false when triggered)",
-          "a frame-rate limit delays triggered frames: AcquisitionFrameRateEnable must be writable"};
+          "a frame-rate limit delays triggered frames: " + name + " must be writable"};
 }
 
 CameraCheck PacketResendCheck(AravisCamera& camera) {
@@ -203,8 +204,6 @@ struct SetupOutcome {
   bool configured = false;
   bool software = false;
   int bit_depth = 12;
-  double exposure_min_us = 0.0;
-  double exposure_max_us = 0.0;
 };
 
 // The settings a run would use: the deepest format, a 512 x 512 region (the features, not the
@@ -243,13 +242,6 @@ std::vector<CameraCheck> SetupAndFrames(AravisCamera& camera, SetupOutcome* outc
   outcome->configured = true;
   outcome->software = software;
   outcome->bit_depth = FindPixelFormat(settings.pixel_format)->bit_depth;
-  for (const char* name : {"ExposureTime", "ExposureTimeAbs"}) {
-    const FeatureInfo f = camera.Describe(name);
-    if (!f.present || !f.min || !f.max) continue;
-    outcome->exposure_min_us = *f.min;
-    outcome->exposure_max_us = *f.max;
-    break;
-  }
   CameraCheck setup{"setup", true,
                     settings.pixel_format + ", " + settings.trigger_source + " trigger", ""};
   if (!software) return {setup, {"triggered frames", true, "not taken: no software trigger", ""}};
@@ -309,20 +301,10 @@ CameraCheck LinearityCheck(AravisCamera& camera, const SetupOutcome& setup) {
     return {"linearity", true, "not measured: no software trigger (a calibration's first pose "
                                "measures it)", ""};
   }
-  const GrabAt grab = [&camera](double exposure_us) -> std::optional<cv::Mat> {
-    camera.SetExposureUs(exposure_us);
-    camera.Flush();
-    camera.SoftwareTrigger();
-    const auto frame = camera.WaitFrame(std::chrono::milliseconds(3000));
-    if (!frame || frame->status != FrameStatus::kOk) return std::nullopt;
-    return frame->image;
-  };
-  const double min_us = setup.exposure_min_us;
-  camera.StartStream();
-  const LinearityResult result = MeasureLinearity(
-      grab, [&grab, min_us] { return grab(min_us); }, 10000.0, min_us,
-      std::min(setup.exposure_max_us, 200000.0), (1 << setup.bit_depth) - 1, LinearityOptions{});
-  camera.StopStream();
+  const auto [min_us, max_us] = camera.ExposureBoundsUs();
+  const LinearityResult result =
+      MeasureCameraLinearity(camera, [&camera] { camera.SoftwareTrigger(); }, 10000.0, min_us,
+                             std::min(max_us, 200000.0), setup.bit_depth, LinearityOptions{});
   if (!result.measured && result.why.rfind("no light", 0) == 0) {
     return {"linearity", false, "not measured: " + result.why,
             "point the camera at a lit scene (the IRED on) and run again"};

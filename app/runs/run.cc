@@ -131,6 +131,7 @@ struct RunRequest {
   double time_scale = 0.0;
   bool quiet = false;
   bool allow_model_mismatch = false;  // validate
+  bool allow_nonlinear = false;       // calibrate: --allow-nonlinear
   // validate on hardware: the model's camera serial, which AravisCamera::Open then requires
   // ("" = none: another camera is allowed, or the model does not say).
   std::string expected_serial;
@@ -418,6 +419,8 @@ LiveCaptureSetup RecorderSetup(const RunRequest& request, const Recipe& recipe,
   LiveCaptureSetup setup = CaptureSetup(recipe, rig, RigTriggerSource(recipe.rig));
   setup.recording_dir = run_dir + "/recording";
   setup.resume = !request.resume_dir.empty();
+  setup.check_linearity = request.kind == RunKind::kCalibrate && !setup.resume;
+  setup.allow_nonlinear = request.allow_nonlinear;
   setup.station_identity = station.IdentityBrief();
   setup.recipe_text = recipe_text;
   setup.feature_options = feature_options;
@@ -706,7 +709,9 @@ RunRequest RequestFrom(RunKind kind, const Args& args) {
 }  // namespace
 
 void RunCalibrate(const CalibrateArgs& args, CommandIo io) {
-  RunRecipe(RequestFrom(RunKind::kCalibrate, args), io);
+  RunRequest request = RequestFrom(RunKind::kCalibrate, args);
+  request.allow_nonlinear = args.allow_nonlinear;
+  RunRecipe(request, io);
 }
 
 void RunValidate(const ValidateArgs& args, CommandIo io) {

@@ -88,8 +88,8 @@ GrabAt BlobCamera(double rate_dn_per_us, const std::function<double(double)>& cu
 
 TEST(MeasureLinearity, ALinearCameraPassesWithTheDarkOffset) {
   const GrabAt grab = BlobCamera(0.5, [](double v) { return v; });
-  const LinearityResult r = MeasureLinearity(grab, [&grab] { return grab(0.0); }, 50000.0, 10.0,
-                                             1e6, kFullScale, {});
+  const LinearityResult r =
+      MeasureLinearity(grab, [&grab] { return grab(0.0); }, 50000.0, 10.0, 1e6, kFullScale, {});
   ASSERT_TRUE(r.measured) << r.why;
   EXPECT_LT(r.error_percent, 0.3);  // integer rounding only
   EXPECT_NEAR(r.dark_dn, kDark, 0.5);
@@ -100,8 +100,8 @@ TEST(MeasureLinearity, ALinearCameraPassesWithTheDarkOffset) {
 TEST(MeasureLinearity, ALutCurveFails) {
   const auto lut = [](double v) { return kFullScale * std::pow(v / kFullScale, 0.45); };
   const GrabAt grab = BlobCamera(0.5, lut);
-  const LinearityResult r = MeasureLinearity(grab, [&grab] { return grab(0.0); }, 1000.0, 10.0,
-                                             1e6, kFullScale, {});
+  const LinearityResult r =
+      MeasureLinearity(grab, [&grab] { return grab(0.0); }, 1000.0, 10.0, 1e6, kFullScale, {});
   ASSERT_TRUE(r.measured) << r.why;
   EXPECT_GT(r.error_percent, 1.0);
   EXPECT_FALSE(r.Passed());
@@ -109,8 +109,8 @@ TEST(MeasureLinearity, ALutCurveFails) {
 
 TEST(MeasureLinearity, ADarkSceneSaysSo) {
   const GrabAt grab = BlobCamera(0.0, [](double v) { return v; });
-  const LinearityResult r = MeasureLinearity(grab, [&grab] { return grab(0.0); }, 1000.0, 10.0,
-                                             20000.0, kFullScale, {});
+  const LinearityResult r =
+      MeasureLinearity(grab, [&grab] { return grab(0.0); }, 1000.0, 10.0, 20000.0, kFullScale, {});
   EXPECT_FALSE(r.measured);
   EXPECT_EQ(r.why.rfind("no light", 0), 0u) << r.why;
 }

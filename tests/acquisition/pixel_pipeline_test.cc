@@ -16,9 +16,9 @@ TEST(PixelPipeline, TheTableHoldsEveryVendorSpellingOnce) {
     EXPECT_FALSE(spec.spellings.empty()) << spec.what;
     for (const char* name : spec.spellings) EXPECT_TRUE(seen.insert(name).second) << name;
   }
-  for (const char* name : {"GammaEnable", "GammaEnabled", "Gamma", "LUTEnable", "DigitalShift",
-                           "BlackLevelAuto", "DefectCorrectionEnable", "NoiseReduction",
-                           "BinningHorizontalMode"}) {
+  for (const char* name :
+       {"GammaEnable", "GammaEnabled", "Gamma", "LUTEnable", "DigitalShift", "BlackLevelAuto",
+        "DefectCorrectionEnable", "NoiseReduction", "BinningHorizontalMode"}) {
     EXPECT_EQ(seen.count(name), 1u) << name;
   }
 }

@@ -17,6 +17,7 @@
 #include "sim/virtual_rig.h"
 #include "tests/acquisition/fake_camera_process.h"
 #include "tests/loopback_gvcp.h"
+#include "tests/virtual_rig_with.h"
 
 namespace irdist {
 namespace {
@@ -126,20 +127,8 @@ TEST(CameraTest, AnExceptionInOneCheckLeavesTheTableWhole) {
   EXPECT_NE(table.find("PASS  triggered frames"), std::string::npos) << table;
 }
 
-// --- the virtual camera (sim/), its blob lit ------------------------------------------------------
+// --- the virtual camera (sim/), its blob lit -----------------------------------------------------
 
-// recipes/rigs/virtual.yaml with `extra` keys under virtual.camera, written next to the test.
-std::string VirtualRig(const std::string& name, const std::string& extra) {
-  std::ifstream in(IRDIST_SOURCE_DIR "/recipes/rigs/virtual.yaml");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string anchor = "  camera:\n    readout_ms: 12.0\n";
-  const std::size_t at = text.find(anchor);
-  EXPECT_NE(at, std::string::npos);
-  text.insert(at + anchor.size(), extra);
-  const std::string path = ::testing::TempDir() + "/" + name + ".yaml";
-  std::ofstream(path) << text;
-  return path;
-}
 
 struct VirtualChecks {
   std::vector<CameraCheck> checks;
@@ -170,7 +159,8 @@ VirtualChecks CheckVirtualCamera(const std::string& rig_path, const char* serial
 }
 
 TEST(CameraTest, VirtualCameraIsLinearWithinThreeTenthsOfAPercent) {
-  const VirtualChecks v = CheckVirtualCamera(VirtualRig("linear", ""), "IRDCTV1");
+  const VirtualChecks v =
+      CheckVirtualCamera(testing::VirtualRigWithCameraKeys("linear", ""), "IRDCTV1");
   const CameraCheck& linearity = Find(v.checks, "linearity");
   EXPECT_TRUE(linearity.passed) << linearity.found;
   EXPECT_NE(linearity.found.find("dark offset"), std::string::npos) << linearity.found;
@@ -186,7 +176,9 @@ TEST(CameraTest, VirtualCameraIsLinearWithinThreeTenthsOfAPercent) {
 // A LUT a previous user left on: switched off for the checks (linear again), and back on after.
 TEST(CameraTest, VirtualCameraLutLeftOnIsSwitchedNeutralAndPutBack) {
   const VirtualChecks v =
-      CheckVirtualCamera(VirtualRig("lut", "    lut_enable: true\n    lut_gamma: 0.45\n"), "IRDCTV2");
+      CheckVirtualCamera(testing::VirtualRigWithCameraKeys(
+                             "lut", "    lut_enable: true\n    lut_gamma: 0.45\n"),
+                         "IRDCTV2");
   const CameraCheck& pipeline = Find(v.checks, "neutral pixel pipeline");
   EXPECT_TRUE(pipeline.passed) << pipeline.found;
   EXPECT_NE(pipeline.found.find("LUTEnable true -> false"), std::string::npos) << pipeline.found;
@@ -199,7 +191,8 @@ TEST(CameraTest, VirtualCameraLutLeftOnIsSwitchedNeutralAndPutBack) {
 // the probable causes.
 TEST(CameraTest, VirtualCameraFixedGammaFailsLinearity) {
   const VirtualChecks v =
-      CheckVirtualCamera(VirtualRig("gamma", "    fixed_gamma: 0.45\n"), "IRDCTV3");
+      CheckVirtualCamera(testing::VirtualRigWithCameraKeys("gamma", "    fixed_gamma: 0.45\n"),
+                         "IRDCTV3");
   const CameraCheck& linearity = Find(v.checks, "linearity");
   EXPECT_FALSE(linearity.passed) << linearity.found;
   EXPECT_NE(linearity.found.find("linearity error"), std::string::npos) << linearity.found;
