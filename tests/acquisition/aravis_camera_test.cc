@@ -1,5 +1,6 @@
 // Tests of AravisCamera against Aravis's own fake GigE Vision camera on 127.0.0.1.
 #include "acquisition/aravis_camera.h"
+#include "acquisition/bracket.h"
 
 #include <arv.h>
 #include <gtest/gtest.h>
@@ -414,6 +415,18 @@ TEST(VendorCameras, ExposureStartOnlyIsTheFrameTrigger) {
   EXPECT_EQ(features.at("TriggerMode"), "On");
   EXPECT_EQ(features.at("irdist.FrameTrigger"), "ExposureStart");
   ExpectTriggeredFrames(*camera, 12);
+  // A bracket through it: every frame taken, each with the exposure asked for.
+  BracketOptions options;
+  options.exposures_us = {4000.0, 12000.0, 8000.0};
+  options.trigger_source = "Software";
+  BracketCapture capture(*camera, options);
+  const BracketResult result = capture.Capture([&](int) { camera->SoftwareTrigger(); });
+  camera->StopStream();
+  ASSERT_TRUE(result.complete) << result.BriefReport();
+  ASSERT_EQ(result.frames.size(), 3u);
+  for (std::size_t i = 0; i < result.frames.size(); ++i) {
+    EXPECT_NEAR(result.frames[i].actual_exposure_us, options.exposures_us[i], 1.0) << i;
+  }
 }
 
 // A read-only TriggerSelector (derived from the exposure mode) with writable trigger controls is
