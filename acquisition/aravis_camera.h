@@ -1,6 +1,7 @@
 #pragma once
 // The Aravis (GenICam / GigE Vision) implementation of Camera. The only client code in irdist that
-// includes <arv.h> is in aravis_camera.cc; this header carries no GLib or Aravis type.
+// includes <arv.h> is in its parts (aravis_internal.h lists them); this header carries no GLib or
+// Aravis type.
 
 #include <chrono>
 #include <map>

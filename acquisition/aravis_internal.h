@@ -5,7 +5,9 @@
 // for access mode and lock first; the state found, saved and put back), aravis_setup.cc (pixel
 // format, region, analog controls, the neutral pixel pipeline, exposure), aravis_trigger.cc (the
 // frame trigger as the SFNC defines it), aravis_stream.cc (packets, stream, buffers, frames),
-// aravis_discovery.cc (listing and naming cameras), aravis_camera.cc (the Camera interface).
+// aravis_discovery.cc (listing and naming cameras), aravis_configure.cc (the Camera interface:
+// open, configure, read back, exposure, describe, put back). No aravis_camera.cc: its header and
+// this one would include each other.
 
 #include <arv.h>
 
