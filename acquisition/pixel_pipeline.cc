@@ -38,6 +38,8 @@ const std::vector<PixelFeatureSpec>& PixelPipelineTable() {
        "interpolated pixels (irdist keeps its own defect map instead)"},
       {"digital shift", {"DigitalShift"}, "0", "a bit shift: multiplies gray levels, clips early"},
       {"black-level auto", {"BlackLevelAuto"}, "Off", "an offset that follows the scene"},
+      {"black-level switch", {"BlackLevelEnable", "BlackLevelEnabled"}, "true",
+       "off, the dark noise clips at 0: a bend at the bottom of the response"},
       {"contrast", {"BslContrast"}, "0", "an S-curve on the gray levels"},
       {"brightness", {"BslBrightness"}, "0", "an offset or curve on the gray levels"},
       {"contrast mode", {"BslContrastMode"}, "Linear", "the contrast curve's shape"},

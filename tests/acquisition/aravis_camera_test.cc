@@ -465,5 +465,38 @@ TEST(VendorCameras, ALockedFeatureIsRefusedByNameWithItsFix) {
   EXPECT_EQ(check.Get("", "BlackLevel"), "4");
 }
 
+// An older camera's spellings and the pixel processing a previous user left on: each set neutral
+// and recorded, the switches put back by a failed setup.
+TEST(VendorCameras, OlderSpellingsAndPixelProcessingAreSetNeutralRecordedAndPutBack) {
+  testing::FakeCameraProcess fake("IRDOLD01", {"-g", Genicam("older_spellings.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  CameraSettings settings = Triggered("Mono12");
+  settings.black_level = -1.0;  // no BlackLevel on this camera
+  camera->Configure(settings);
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.at("GammaEnabled"), "false");
+  EXPECT_EQ(features.at("Gamma"), "1");
+  EXPECT_EQ(features.at("LUTEnable"), "false");
+  EXPECT_EQ(features.at("DigitalShift"), "0");
+  EXPECT_EQ(features.at("BlackLevelEnabled"), "true");
+  EXPECT_EQ(features.at("AcquisitionFrameRateEnabled"), "false");
+  EXPECT_EQ(features.at("BinningHorizontalMode"), "Sum");  // stated, not written
+  EXPECT_EQ(features.at("irdist.PixelPipeline"), "neutral");
+  bool lut_found_on = false;
+  for (const PixelFeatureState& state : camera->PixelPipeline()) {
+    if (state.feature == "LUTEnable") lut_found_on = state.found == "true" && state.now == "false";
+  }
+  EXPECT_TRUE(lut_found_on);
+  const std::string put_back = camera->RestoreFound();
+  EXPECT_EQ(put_back, " The camera was put back as it was found.");
+  camera.reset();
+  OtherClient check;
+  EXPECT_EQ(check.Get("", "LUTEnable"), "true");
+  EXPECT_EQ(check.Get("", "GammaEnabled"), "true");
+  EXPECT_EQ(check.Get("", "Gamma"), "0.45");
+  EXPECT_EQ(check.Get("", "DigitalShift"), "2");
+  EXPECT_EQ(check.Get("", "AcquisitionFrameRateEnabled"), "true");
+}
+
 }  // namespace
 }  // namespace irdist
