@@ -135,13 +135,14 @@ struct VirtualChecks {
   std::string lut_after;  // LUTEnable as another client reads it after camera-test
 };
 
-VirtualChecks CheckVirtualCamera(const std::string& rig_path, const char* serial) {
+VirtualChecks CheckVirtualCamera(const std::string& rig_path, const char* serial,
+                                 double current_ma = 500.0) {
   irdist::testing::LoopbackGvcpLock lock;
   sim::VirtualRigOverrides overrides;
   overrides.serial = serial;
   auto rig = sim::VirtualRig::Start(rig_path, overrides);
   rig->world().SetPose(1500.0, 0.0, 0.0, false);
-  rig->world().SetCurrent(500.0);
+  rig->world().SetCurrent(current_ma);
   VirtualChecks out;
   {
     auto camera = AravisCamera::Open(rig->Info().camera_address, rig->Info().serial);
@@ -200,6 +201,17 @@ TEST(CameraTest, VirtualCameraFixedGammaFailsLinearity) {
             std::string::npos);
   const std::string table = CameraCheckTable(v.checks);
   EXPECT_NE(table.find("FAIL  linearity"), std::string::npos) << table;
+}
+
+// The IRED off: the linearity row says the scene has no light (and fails: nothing measured).
+TEST(CameraTest, VirtualCameraWithoutLightSaysSo) {
+  const VirtualChecks v =
+      CheckVirtualCamera(testing::VirtualRigWithCameraKeys("dark", ""), "IRDCTV4", 0.0);
+  const CameraCheck& linearity = Find(v.checks, "linearity");
+  EXPECT_FALSE(linearity.passed);
+  EXPECT_EQ(linearity.found.rfind("not measured: no light", 0), 0u) << linearity.found;
+  EXPECT_NE(linearity.fix.find("lit scene"), std::string::npos);
+  EXPECT_TRUE(Find(v.checks, "setup").passed);
 }
 
 }  // namespace
