@@ -30,6 +30,13 @@ std::string LinearityYaml(const LinearityResult& r) {
   return out.str();
 }
 
+bool NeedsFirstPoseLinearity(const std::string& recording_dir, bool resume) {
+  if (!resume) return true;
+  std::string text, why;
+  if (!ReadRegularFile(recording_dir + "/linearity.yaml", 1 << 20, &text, &why)) return true;
+  return text.find("\npassed: true\n") == std::string::npos;
+}
+
 LinearityResult CheckFirstPoseLinearity(AravisCamera& camera, const std::function<void()>& fire,
                                         const FirstPoseLinearityOptions& options,
                                         std::ostream& out) {

@@ -22,6 +22,10 @@ struct FirstPoseLinearityOptions {
   int bit_depth = 12;            // the pixel format's
 };
 
+// Whether a calibration's recording still needs the series: a new one does; a resumed one does
+// unless its linearity.yaml says the series passed (a run refused, then resumed, measures again).
+bool NeedsFirstPoseLinearity(const std::string& recording_dir, bool resume);
+
 // The file's text: every figure of the series and each point.
 std::string LinearityYaml(const LinearityResult& result);
 

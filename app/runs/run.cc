@@ -29,6 +29,7 @@
 #include "app/processing/run_results.h"
 #include "app/runs/bracket_committer.h"
 #include "app/runs/capture.h"
+#include "app/runs/linearity_check.h"
 #include "app/runs/resume.h"
 #include "app/runs/suggest.h"
 #include "base/safe_file.h"
@@ -419,7 +420,8 @@ LiveCaptureSetup RecorderSetup(const RunRequest& request, const Recipe& recipe,
   LiveCaptureSetup setup = CaptureSetup(recipe, rig, RigTriggerSource(recipe.rig));
   setup.recording_dir = run_dir + "/recording";
   setup.resume = !request.resume_dir.empty();
-  setup.check_linearity = request.kind == RunKind::kCalibrate && !setup.resume;
+  setup.check_linearity = request.kind == RunKind::kCalibrate &&
+                          NeedsFirstPoseLinearity(setup.recording_dir, setup.resume);
   setup.allow_nonlinear = request.allow_nonlinear;
   setup.station_identity = station.IdentityBrief();
   setup.recipe_text = recipe_text;

@@ -90,5 +90,23 @@ TEST(FirstPoseLinearity, TheFileHoldsEveryPoint) {
   EXPECT_NE(yaml.find("measured: true"), std::string::npos);
 }
 
+TEST(FirstPoseLinearity, AResumeMeasuresAgainUnlessTheSeriesPassed) {
+  const std::string dir = ::testing::TempDir() + "/linearity_resume";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  EXPECT_TRUE(NeedsFirstPoseLinearity(dir, false));
+  EXPECT_TRUE(NeedsFirstPoseLinearity(dir, true));  // cut before the series was kept
+  LinearityResult failed;
+  failed.measured = true;
+  failed.error_percent = 8.0;
+  std::ofstream(dir + "/linearity.yaml") << LinearityYaml(failed);
+  EXPECT_TRUE(NeedsFirstPoseLinearity(dir, true));  // refused: a resume measures again
+  LinearityResult passed = failed;
+  passed.error_percent = 0.1;
+  std::ofstream(dir + "/linearity.yaml") << LinearityYaml(passed);
+  EXPECT_FALSE(NeedsFirstPoseLinearity(dir, true));
+  EXPECT_TRUE(NeedsFirstPoseLinearity(dir, false));  // a new recording always measures
+}
+
 }  // namespace
 }  // namespace irdist
