@@ -498,5 +498,30 @@ TEST(VendorCameras, OlderSpellingsAndPixelProcessingAreSetNeutralRecordedAndPutB
   EXPECT_EQ(check.Get("", "AcquisitionFrameRateEnabled"), "true");
 }
 
+// A raw colour mosaic in a Mono format is refused with the reason; a camera offering Bayer formats
+// (Aravis's own fake camera) is named colour in recording.yaml's features.
+TEST(VendorCameras, ARawMosaicIsRefusedAndAColourCameraNamed) {
+  {
+    testing::FakeCameraProcess fake("IRDRAW01", {"-g", Genicam("raw_mosaic.xml")});
+    auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+    try {
+      camera->Configure(Triggered("Mono12"));
+      FAIL() << "expected CameraError";
+    } catch (const CameraError& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find("raw colour mosaic (PixelColorFilter BayerRG)"), std::string::npos)
+          << message;
+      EXPECT_NE(message.find("Use a monochrome camera"), std::string::npos) << message;
+    }
+  }
+  testing::FakeCameraProcess fake("IRDRAW02");
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  CameraSettings settings = Triggered("Mono16");
+  camera->Configure(settings);
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.at("irdist.Sensor").rfind("colour (Bayer pixel formats", 0), 0u)
+      << features.at("irdist.Sensor");
+}
+
 }  // namespace
 }  // namespace irdist

@@ -127,6 +127,15 @@ TEST(CameraTest, AnExceptionInOneCheckLeavesTheTableWhole) {
   EXPECT_NE(table.find("PASS  triggered frames"), std::string::npos) << table;
 }
 
+TEST(CameraTest, RawMosaicFailsTheMonochromeRowWithItsFix) {
+  const std::vector<CameraCheck> checks = ChecksOf("raw_mosaic.xml", "IRDCT07");
+  const CameraCheck& colour = Find(checks, "monochrome sensor");
+  EXPECT_FALSE(colour.passed);
+  EXPECT_EQ(colour.found, "raw colour mosaic: PixelColorFilter BayerRG");
+  EXPECT_NE(colour.fix.find("use a monochrome camera"), std::string::npos);
+  EXPECT_FALSE(Find(checks, "setup").passed);
+}
+
 // --- the virtual camera (sim/), its blob lit -----------------------------------------------------
 
 
