@@ -1,15 +1,18 @@
 #pragma once
 // The Aravis (GenICam / GigE Vision) implementation of Camera. The only client code in irdist that
-// includes <arv.h> is in aravis_camera.cc; this header carries no GLib or Aravis type.
+// includes <arv.h> is in its parts (aravis_internal.h lists them); this header carries no GLib or
+// Aravis type.
 
 #include <chrono>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "acquisition/camera.h"
+#include "acquisition/pixel_pipeline.h"
 
 namespace irdist {
 
@@ -74,9 +77,21 @@ class AravisCamera final : public Camera {
   // Whether the camera declares GVCP packet resend (GigE Vision capability register; false for
   // other transports).
   bool DeclaresPacketResend();
+  // The pixel-shaping features the camera has (acquisition/pixel_pipeline.h), as found and as left
+  // by the last Configure (empty before).
+  std::vector<PixelFeatureState> PixelPipeline() const;
+  // What makes the sensor a colour one (a PixelColorFilter, Bayer formats offered), or "" for a
+  // monochrome sensor. Configure refuses a raw mosaic (a Mono format whose PixelColorFilter is
+  // not None); a colour camera's own interpolated Mono output is accepted and named.
+  std::string ColourSensor();
+  // Puts back every feature the first Configure changed, as it was found (stopped first); returns
+  // " The camera was put back as it was found." or what could not be. Configure again to use it.
+  std::string RestoreFound();
+  // The exposure's bounds (us) as read by the last Configure ({0, 0} before).
+  std::pair<double, double> ExposureBoundsUs() const;
 
  private:
-  struct Impl;
+  struct Impl;  // acquisition/aravis_internal.h (acquisition-internal)
   explicit AravisCamera(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };

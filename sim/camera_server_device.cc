@@ -81,6 +81,7 @@ void CameraServer::Impl::InitRegisters() {
   WriteLocked(kRegBlackLevel, 0);
   WriteLocked(kRegChunkModeActive, 0);
   WriteLocked(kRegChunkEnableExposure, 0);
+  WriteLocked(kRegLutEnable, physics.camera.lut_enable ? 1 : 0);
   WriteLocked(kRegGvcpCapability,
               kCapabilityWriteMemory | (packet_resend ? kCapabilityPacketResend : 0u));
   WriteLocked(kRegDeviceTemperature,

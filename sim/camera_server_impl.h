@@ -48,6 +48,7 @@ inline constexpr guint32 kRegDeviceTemperature = 0x8008;  // milli-degrees Celsi
 inline constexpr guint32 kRegBlackLevel = 0x800c;
 inline constexpr guint32 kRegChunkModeActive = 0x8010;
 inline constexpr guint32 kRegChunkEnableExposure = 0x8018;
+inline constexpr guint32 kRegLutEnable = 0x801c;
 inline constexpr guint32 kRegGvcpCapability = 0x934;
 inline constexpr guint32 kRegHeartbeatMs = 0x938;
 inline constexpr guint32 kRegControlPrivilege = 0xa00;
@@ -86,6 +87,7 @@ struct FrameSetup {
   int offset_x = 0;
   int offset_y = 0;
   double black_offset_dn = 0.0;
+  double curve_gamma = 1.0;  // the LUT's and the fixed gamma's curve together (1 = linear)
   bool chunks = false;
   bool exposure_chunk = false;
   std::size_t packet_size = 1400;

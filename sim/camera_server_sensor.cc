@@ -61,6 +61,8 @@ FrameSetup CameraServer::Impl::LatchSetupLocked() const {
   s.offset_x = static_cast<int>(ReadLocked(kRegOffsetX));
   s.offset_y = static_cast<int>(ReadLocked(kRegOffsetY));
   s.black_offset_dn = static_cast<double>(ReadLocked(kRegBlackLevel));
+  s.curve_gamma = physics.camera.fixed_gamma *
+                  (ReadLocked(kRegLutEnable) != 0 ? physics.camera.lut_gamma : 1.0);
   s.chunks = ReadLocked(kRegChunkModeActive) != 0;
   s.exposure_chunk = s.chunks && ReadLocked(kRegChunkEnableExposure) != 0;
   s.packet_size = std::max<guint32>(ReadLocked(kRegPacketSize) & 0xffff, 576);
@@ -94,6 +96,7 @@ FrameRecord CameraServer::Impl::Expose(const FrameSetup& s, std::uint64_t index,
   if (s.pixel_format == kPixelMono12p) {
     cv::Mat out(s.height, s.width, FormatCvType(format));
     if (pixels > 0) renderer.Render(c, index, format, cv::Point(s.offset_x, s.offset_y), out);
+    ApplyResponseCurve(s.curve_gamma, format, out);
     payload.assign((pixels * 12 + 7) / 8, 0);
     if (pixels > 0) PackMono12p(out, payload.data());
   } else {
@@ -102,6 +105,7 @@ FrameRecord CameraServer::Impl::Expose(const FrameSetup& s, std::uint64_t index,
     if (pixels > 0) {
       cv::Mat out(s.height, s.width, FormatCvType(format), payload.data());
       renderer.Render(c, index, format, cv::Point(s.offset_x, s.offset_y), out);
+      ApplyResponseCurve(s.curve_gamma, format, out);
     }
   }
   FrameRecord record;

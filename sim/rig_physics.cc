@@ -149,6 +149,9 @@ bool CameraOptions::IsValid(std::string* why) const {
   if (!std::isfinite(exposure_write_delay_ms) || exposure_write_delay_ms < 0.0) {
     return Fail(why, "camera.exposure_write_delay_ms must be >= 0");
   }
+  if (!(lut_gamma >= 0.1 && lut_gamma <= 10.0) || !(fixed_gamma >= 0.1 && fixed_gamma <= 10.0)) {
+    return Fail(why, "camera.lut_gamma and camera.fixed_gamma must lie in [0.1, 10]");
+  }
   return true;
 }
 
@@ -343,12 +346,16 @@ void ReadSensor(const YAML::Node& node, const std::string& file, SensorOptions* 
 void ReadCamera(const YAML::Node& node, const std::string& file, CameraOptions* c) {
   const MapReader k(node, file, "virtual.camera",
                     {"readout_ms", "trigger_frequency_hz", "drop_frame_rate",
-                     "lost_packet_ratio", "exposure_write_delay_ms"});
+                     "lost_packet_ratio", "exposure_write_delay_ms", "lut_enable", "lut_gamma",
+                     "fixed_gamma"});
   c->readout_ms = k.Number("readout_ms", c->readout_ms);
   c->trigger_frequency_hz = k.Number("trigger_frequency_hz", c->trigger_frequency_hz);
   c->drop_frame_rate = k.Number("drop_frame_rate", c->drop_frame_rate);
   c->lost_packet_ratio = k.Number("lost_packet_ratio", c->lost_packet_ratio);
   c->exposure_write_delay_ms = k.Number("exposure_write_delay_ms", c->exposure_write_delay_ms);
+  c->lut_enable = k.Boolean("lut_enable", c->lut_enable);
+  c->lut_gamma = CheckedNumber(k, "virtual.camera", "lut_gamma", c->lut_gamma, 0.1, 10.0);
+  c->fixed_gamma = CheckedNumber(k, "virtual.camera", "fixed_gamma", c->fixed_gamma, 0.1, 10.0);
 }
 
 void ReadAmbient(const YAML::Node& node, const std::string& file, AmbientOptions* a) {

@@ -104,6 +104,12 @@ struct CameraOptions {
   double drop_frame_rate = 0.0;        // probability that a whole frame is never sent
   double lost_packet_ratio = 0.0;      // probability that each GVSP packet is lost
   double exposure_write_delay_ms = 0.0;  // ExposureTime writes applied after up to this (fault)
+  // Pixel-shaping faults (docs/virtual-rig.md): a LUT left on by a previous user (LUTEnable true at
+  // start, writable) holding the curve DN' = FS (DN / FS)^lut_gamma; and a gamma curve the camera
+  // applies always, with no feature to switch it (fixed_gamma; 1 = none).
+  bool lut_enable = false;
+  double lut_gamma = 0.45;
+  double fixed_gamma = 1.0;
   bool IsValid(std::string* why) const;
 };
 

@@ -329,4 +329,23 @@ cv::Mat Sensor::Expose(const SignalWindow& signal, double exposure_s, std::uint6
   return out;
 }
 
+void ApplyResponseCurve(double gamma, PixelFormat format, cv::Mat& image) {
+  if (gamma == 1.0 || image.empty()) return;
+  const int full_scale = (1 << FormatBits(format)) - 1;
+  std::vector<std::uint16_t> table(static_cast<std::size_t>(full_scale) + 1);
+  for (int v = 0; v <= full_scale; ++v) {
+    table[static_cast<std::size_t>(v)] = static_cast<std::uint16_t>(
+        std::lround(full_scale * std::pow(static_cast<double>(v) / full_scale, gamma)));
+  }
+  if (image.depth() == CV_8U) {
+    image.forEach<std::uint8_t>([&table](std::uint8_t& v, const int*) {
+      v = static_cast<std::uint8_t>(table[v]);
+    });
+  } else {
+    image.forEach<std::uint16_t>([&table, full_scale](std::uint16_t& v, const int*) {
+      v = table[std::min<int>(v, full_scale)];
+    });
+  }
+}
+
 }  // namespace irdist::sim

@@ -55,6 +55,11 @@ std::vector<double> CrosstalkKernel(double sigma_px);
 // off the sensor is lost); the total is conserved otherwise. sigma_px = 0 returns `electrons`.
 SignalWindow DiffuseCharge(const SignalWindow& electrons, double sigma_px, const cv::Rect& sensor);
 
+// The camera's pixel processing after the ADC (a LUT or gamma, sim/rig_physics.h's camera
+// faults): each value v of `image` (in `format`'s range, full scale FS) becomes
+// round(FS (v / FS)^gamma). gamma = 1 leaves it untouched.
+void ApplyResponseCurve(double gamma, PixelFormat format, cv::Mat& image);
+
 class Sensor {
  public:
   explicit Sensor(const SensorOptions& options);

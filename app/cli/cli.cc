@@ -295,6 +295,8 @@ void AddCalibrate(CommandTable& table) {
   sub->add_option("--resume", a.resume_dir, "Continue the cut run in this folder");
   AddTimeScale(sub, a.time_scale);
   sub->add_flag("--quiet", a.quiet, "No progress output");
+  sub->add_flag("--allow-nonlinear", a.allow_nonlinear,
+                "Go on when the first pose's linearity error is above 1% (docs/devices/README.md)");
 }
 
 void AddValidate(CommandTable& table) {

@@ -22,6 +22,7 @@ struct CalibrateArgs {
   std::string resume_dir;   // --resume: continue a cut run from its recording ("" = new run)
   double time_scale = 0.0;  // --time-scale: virtual rig's simulated s per host s (0 = rig file's)
   bool quiet = false;       // --quiet: no progress output
+  bool allow_nonlinear = false;  // --allow-nonlinear: go on past a failed first-pose linearity
 };
 
 struct ValidateArgs {

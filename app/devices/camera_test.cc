@@ -3,12 +3,17 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <exception>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <tuple>
 
 #include "acquisition/aravis_camera.h"
+#include "acquisition/linearity.h"
 #include "acquisition/pixel_format.h"
+#include "acquisition/pixel_pipeline.h"
 #include "app/devices/tools.h"
 
 namespace irdist {
@@ -72,16 +77,41 @@ CameraCheck ExposureModeCheck(AravisCamera& camera) {
           "would follow the trigger pulse)"};
 }
 
-// The frame trigger: TriggerSelector FrameStart, or a single trigger (SFNC: no selector).
+// The frame trigger as irdist picks it (acquisition/aravis_trigger.cc, SFNC): FrameStart, else
+// ExposureStart; a read-only selector's own value when it is one of them; "" when none.
+std::string FrameTriggerOf(const FeatureInfo& selector) {
+  const std::vector<std::string> candidates =
+      selector.writable ? selector.entries : std::vector<std::string>{selector.value};
+  for (const char* trigger : {"FrameStart", "ExposureStart"}) {
+    const auto found = std::find(candidates.begin(), candidates.end(), trigger);
+    if (found != candidates.end()) return trigger;
+  }
+  return "";
+}
+
+// The selector entry the trigger's controls are read under ("" for a camera without selector).
+std::string FrameSelector(AravisCamera& camera) {
+  const FeatureInfo selector = camera.Describe("TriggerSelector");
+  return selector.present ? FrameTriggerOf(selector) : "";
+}
+
+// The frame trigger: TriggerSelector FrameStart or ExposureStart (a read-only selector taken as
+// it is), or a single trigger (SFNC: no selector), with writable mode and source.
 CameraCheck FrameTriggerCheck(AravisCamera& camera) {
   const FeatureInfo selector = camera.Describe("TriggerSelector");
   const char* fix =
-      "irdist triggers each frame: the camera needs TriggerSelector FrameStart with TriggerMode "
-      "and TriggerSource, or a single trigger (TriggerMode, TriggerSource)";
+      "irdist triggers each frame with one timed exposure: the camera needs TriggerSelector "
+      "FrameStart or ExposureStart with writable TriggerMode and TriggerSource, or a single "
+      "trigger (TriggerMode, TriggerSource)";
   if (selector.present) {
-    const FeatureInfo mode = camera.Describe("TriggerMode", "FrameStart");
-    return {"frame trigger", Offers(selector, "FrameStart") && mode.writable,
-            "TriggerSelector offers " + Join(selector.entries), fix};
+    const std::string trigger = FrameTriggerOf(selector);
+    const bool usable = !trigger.empty() && camera.Describe("TriggerMode", trigger).writable &&
+                        camera.Describe("TriggerSource", trigger).writable;
+    const std::string offered = selector.writable
+                                    ? "TriggerSelector offers " + Join(selector.entries)
+                                    : "TriggerSelector read-only at " + selector.value;
+    return {"frame trigger", usable,
+            offered + (trigger.empty() ? "" : "; frame trigger " + trigger), fix};
   }
   const bool single = camera.Describe("TriggerMode").writable &&
                       camera.Describe("TriggerSource").writable;
@@ -92,8 +122,7 @@ CameraCheck FrameTriggerCheck(AravisCamera& camera) {
 }
 
 CameraCheck LineInputCheck(AravisCamera& camera) {
-  const bool selector = camera.Describe("TriggerSelector").present;
-  const FeatureInfo source = camera.Describe("TriggerSource", selector ? "FrameStart" : "");
+  const FeatureInfo source = camera.Describe("TriggerSource", FrameSelector(camera));
   std::vector<std::string> lines;
   for (const std::string& entry : source.entries) {
     if (entry.rfind("Line", 0) == 0) lines.push_back(entry);
@@ -120,9 +149,14 @@ CameraCheck AutoOffCheck(AravisCamera& camera) {
 
 CameraCheck OtherTriggersCheck(AravisCamera& camera) {
   const FeatureInfo selector = camera.Describe("TriggerSelector");
+  if (selector.present && !selector.writable) {
+    return {"other triggers off", true,
+            "TriggerSelector read-only: no other trigger can be selected", ""};
+  }
+  const std::string frame = FrameTriggerOf(selector);
   std::vector<std::string> others, stuck;
   for (const std::string& entry : selector.entries) {
-    if (entry == "FrameStart") continue;
+    if (entry == frame) continue;
     const FeatureInfo mode = camera.Describe("TriggerMode", entry);
     others.push_back(entry + " " + (mode.present ? mode.value : "-"));
     if (mode.present && (!mode.writable || !Offers(mode, "Off"))) stuck.push_back(entry);
@@ -134,11 +168,13 @@ CameraCheck OtherTriggersCheck(AravisCamera& camera) {
 }
 
 CameraCheck FrameRateLimitCheck(AravisCamera& camera) {
-  const FeatureInfo enable = camera.Describe("AcquisitionFrameRateEnable");
+  std::string name = "AcquisitionFrameRateEnable";
+  FeatureInfo enable = camera.Describe(name);
+  if (!enable.present) enable = camera.Describe(name = "AcquisitionFrameRateEnabled");
   if (!enable.present) return {"frame-rate limit off", true, "no AcquisitionFrameRateEnable", ""};
   return {"frame-rate limit off", enable.writable,
-          "AcquisitionFrameRateEnable " + enable.value + " (irdist sets it false when triggered)",
-          "a frame-rate limit delays triggered frames: AcquisitionFrameRateEnable must be writable"};
+          name + " " + enable.value + " (irdist sets it false when triggered)",
+          "a frame-rate limit delays triggered frames: " + name + " must be writable"};
 }
 
 CameraCheck PacketResendCheck(AravisCamera& camera) {
@@ -163,31 +199,51 @@ std::vector<CameraCheck> SpeedNotes(AravisCamera& camera) {
            ""}};
 }
 
-// Configures the camera as a run would (Software trigger when offered) and takes three frames.
-std::vector<CameraCheck> SetupAndFrames(AravisCamera& camera) {
+// What the setup left for the rows after it.
+struct SetupOutcome {
+  bool configured = false;
+  bool software = false;
+  int bit_depth = 12;
+};
+
+// The settings a run would use: the deepest format, a 512 x 512 region (the features, not the
+// link's capacity), the Software trigger when offered (else a line).
+CameraSettings TestSettings(AravisCamera& camera, bool* software) {
   const std::vector<std::string> formats = UsableFormats(camera.Describe("PixelFormat"));
-  const bool selector = camera.Describe("TriggerSelector").present;
-  const FeatureInfo source = camera.Describe("TriggerSource", selector ? "FrameStart" : "");
+  const FeatureInfo source = camera.Describe("TriggerSource", FrameSelector(camera));
   CameraSettings settings;
   settings.pixel_format = formats.empty() ? "Mono12" : formats.front();
-  // A 512 x 512 region (or the whole sensor when smaller): the features, not the link's capacity.
-  for (const auto& [feature, side] : {std::pair{"Width", &settings.width},
-                                      std::pair{"Height", &settings.height}}) {
+  // The sensor's central 512 x 512 (offsets on 16-pixel steps), where a lens points the scene.
+  const bool offsets = camera.Describe("OffsetX").writable && camera.Describe("OffsetY").writable;
+  for (const auto& [sensor, feature, side, offset] :
+       {std::tuple{"SensorWidth", "Width", &settings.width, &settings.offset_x},
+        std::tuple{"SensorHeight", "Height", &settings.height, &settings.offset_y}}) {
+    const FeatureInfo full = camera.Describe(sensor);
     const FeatureInfo f = camera.Describe(feature);
-    *side = f.max ? std::min(512, static_cast<int>(*f.max)) : 0;
+    const int max = full.present && !full.value.empty() ? std::stoi(full.value)
+                    : f.max                            ? static_cast<int>(*f.max)
+                                                       : 0;
+    *side = max > 0 ? std::min(512, max) : 0;
+    if (offsets && max > *side) *offset = ((max - *side) / 2) & ~15;
   }
-  const bool software = Offers(source, "Software") && camera.Describe("TriggerSoftware").present;
-  settings.trigger_source = software ? "Software" : "Line1";
+  *software = Offers(source, "Software") && camera.Describe("TriggerSoftware").present;
+  settings.trigger_source = *software ? "Software" : "Line1";
   for (const std::string& entry : source.entries) {
-    if (!software && entry.rfind("Line", 0) == 0) settings.trigger_source = entry;
+    if (!*software && entry.rfind("Line", 0) == 0) settings.trigger_source = entry;
   }
-  try {
-    camera.Configure(settings);
-  } catch (const CameraError& error) {
-    return {{"setup", false, error.what(), "fix the failures above, then run camera-test again"}};
-  }
-  CameraCheck setup{"setup", true, settings.pixel_format + ", " + settings.trigger_source + " trigger",
-                    ""};
+  return settings;
+}
+
+// Configures the camera as a run would and takes three software-triggered frames.
+std::vector<CameraCheck> SetupAndFrames(AravisCamera& camera, SetupOutcome* outcome) {
+  bool software = false;
+  const CameraSettings settings = TestSettings(camera, &software);
+  camera.Configure(settings);  // a CameraError becomes the setup row's FAIL (RunCameraChecks)
+  outcome->configured = true;
+  outcome->software = software;
+  outcome->bit_depth = FindPixelFormat(settings.pixel_format)->bit_depth;
+  CameraCheck setup{"setup", true,
+                    settings.pixel_format + ", " + settings.trigger_source + " trigger", ""};
   if (!software) return {setup, {"triggered frames", true, "not taken: no software trigger", ""}};
   camera.StartStream();
   int whole = 0;
@@ -202,16 +258,114 @@ std::vector<CameraCheck> SetupAndFrames(AravisCamera& camera) {
            "check the network path (cable, MTU, firewall for UDP from the camera)"}};
 }
 
+// A raw mosaic (PixelColorFilter other than None) fails; a colour camera whose Mono output it
+// interpolates itself is named and passes (docs/devices/README.md: what irdist does with each).
+CameraCheck ColourCheck(AravisCamera& camera) {
+  const std::string colour = camera.ColourSensor();
+  const bool raw_mosaic = colour.rfind("PixelColorFilter", 0) == 0;
+  return {"monochrome sensor", !raw_mosaic,
+          colour.empty() ? "no colour filter (no PixelColorFilter, no Bayer format)"
+          : raw_mosaic   ? "raw colour mosaic: " + colour
+                         : "colour sensor (" + colour + "): its Mono output is interpolated by the "
+                                                        "camera (accepted, linearity measured)",
+          "irdist refuses a raw colour mosaic (the filters modulate the blob's gray levels pixel "
+          "by pixel; docs/devices/README.md): use a monochrome camera"};
+}
+
+// The pixel-shaping features the camera has (acquisition/pixel_pipeline.h), as found -> as set.
+CameraCheck PixelPipelineCheck(AravisCamera& camera, const SetupOutcome& setup) {
+  if (!setup.configured) {
+    return {"neutral pixel pipeline", false, "not checked: the setup failed",
+            "fix the setup first"};
+  }
+  std::vector<std::string> rows;
+  for (const PixelFeatureState& state : camera.PixelPipeline()) {
+    rows.push_back(state.feature + " " + state.found +
+                   (state.found == state.now ? "" : " -> " + state.now));
+  }
+  const std::string not_neutral = NotNeutralSummary(camera.PixelPipeline());
+  return {"neutral pixel pipeline", not_neutral.empty(),
+          rows.empty() ? "none of the known pixel-shaping features" : Join(rows),
+          "irdist could not set these neutral: " + not_neutral +
+              "; switch them off with the vendor's tool (or load its default user set)"};
+}
+
+// The exposure series on the scene (acquisition/linearity.h): the shortest exposure as the dark
+// frame, software-triggered.
+CameraCheck LinearityCheck(AravisCamera& camera, const SetupOutcome& setup) {
+  const char* fix =
+      "the response is not a straight line: a LUT, a gamma curve, a contrast feature or "
+      "saturation bends it; switch it off (or dim the scene) and run again";
+  if (!setup.configured) return {"linearity", false, "not measured: the setup failed", fix};
+  if (!setup.software) {
+    return {"linearity", true, "not measured: no software trigger (a calibration's first pose "
+                               "measures it)", ""};
+  }
+  const auto [min_us, max_us] = camera.ExposureBoundsUs();
+  const LinearityResult result =
+      MeasureCameraLinearity(camera, [&camera] { camera.SoftwareTrigger(); }, 10000.0, min_us,
+                             std::min(max_us, 200000.0), setup.bit_depth, LinearityOptions{});
+  if (!result.measured && result.why.rfind("no light", 0) == 0) {
+    return {"linearity", false, "not measured: " + result.why,
+            "point the camera at a lit scene (the IRED on) and run again"};
+  }
+  return {"linearity", result.Passed(), result.BriefReport(), fix};
+}
+
+CameraCheck PutBackCheck(AravisCamera& camera) {
+  const std::string outcome = camera.RestoreFound();
+  const bool ok = outcome.empty() || outcome.find("could not") == std::string::npos;
+  return {"camera put back", ok, outcome.empty() ? "nothing changed" : outcome.substr(1),
+          "power-cycle the camera before another application uses it"};
+}
+
 }  // namespace
 
-std::vector<CameraCheck> CheckCamera(AravisCamera& camera) {
-  std::vector<CameraCheck> checks = {
-      PixelFormatCheck(camera),  ExposureCheck(camera),       ExposureModeCheck(camera),
-      FrameTriggerCheck(camera), LineInputCheck(camera),      AutoOffCheck(camera),
-      OtherTriggersCheck(camera), FrameRateLimitCheck(camera), PacketResendCheck(camera)};
-  for (CameraCheck& note : SpeedNotes(camera)) checks.push_back(std::move(note));
-  for (CameraCheck& check : SetupAndFrames(camera)) checks.push_back(std::move(check));
+std::vector<CameraCheck> RunCameraChecks(AravisCamera& camera,
+                                         const std::vector<CameraCheckStep>& steps) {
+  std::vector<CameraCheck> checks;
+  for (const CameraCheckStep& step : steps) {
+    try {
+      for (CameraCheck& check : step.run(camera)) checks.push_back(std::move(check));
+    } catch (const std::exception& error) {
+      checks.push_back({step.name, false, error.what(), step.fix});
+    }
+  }
   return checks;
+}
+
+std::vector<CameraCheckStep> CameraCheckSteps() {
+  using Rows = std::vector<CameraCheck>;
+  auto one = [](CameraCheck (*check)(AravisCamera&)) {
+    return [check](AravisCamera& camera) { return Rows{check(camera)}; };
+  };
+  auto setup = std::make_shared<SetupOutcome>();
+  const char* again = "fix what the message names, then run camera-test again";
+  return {
+      {"pixel format", again, one(PixelFormatCheck)},
+      {"monochrome sensor", again, one(ColourCheck)},
+      {"exposure time", again, one(ExposureCheck)},
+      {"timed exposure", again, one(ExposureModeCheck)},
+      {"frame trigger", again, one(FrameTriggerCheck)},
+      {"line trigger input", again, one(LineInputCheck)},
+      {"automatic controls off", again, one(AutoOffCheck)},
+      {"other triggers off", again, one(OtherTriggersCheck)},
+      {"frame-rate limit off", again, one(FrameRateLimitCheck)},
+      {"packet resend", again, one(PacketResendCheck)},
+      {"speed notes", again, SpeedNotes},
+      {"setup", "fix the failures above, then run camera-test again",
+       [setup](AravisCamera& camera) { return SetupAndFrames(camera, setup.get()); }},
+      {"neutral pixel pipeline", again,
+       [setup](AravisCamera& camera) { return Rows{PixelPipelineCheck(camera, *setup)}; }},
+      {"linearity", again,
+       [setup](AravisCamera& camera) { return Rows{LinearityCheck(camera, *setup)}; }},
+      {"camera put back", "power-cycle the camera before another application uses it",
+       one(PutBackCheck)},
+  };
+}
+
+std::vector<CameraCheck> CheckCamera(AravisCamera& camera) {
+  return RunCameraChecks(camera, CameraCheckSteps());
 }
 
 std::string CameraCheckTable(const std::vector<CameraCheck>& checks) {

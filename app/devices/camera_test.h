@@ -4,9 +4,11 @@
 // up a camera. Needed: a monochrome pixel format irdist reads, a writable exposure time with timed
 // exposure, a frame trigger (TriggerSelector FrameStart, or a single trigger) on a line input,
 // automatic controls that can be Off, the other triggers and the frame-rate limit that can be
-// turned off, GigE Vision packet resend, and a setup and triggered frames that work. Exposure
-// chunks and TriggerOverlap ReadOut are reported as what they make faster.
+// turned off, GigE Vision packet resend, a monochrome sensor, a setup and triggered frames that
+// work, the pixel-shaping features neutral and a linear response (EMVA 1288 linearity error
+// within 1%). Exposure chunks and TriggerOverlap ReadOut are reported as what they make faster.
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -25,8 +27,23 @@ struct CameraCheck {
   std::string fix;     // what to do (failures)
 };
 
-// Every check on an opened camera. The last checks configure it (Software trigger when it has
-// one) and take frames; a camera that cannot be configured is put back as it was found.
+// One step of the table: `run` gives its rows; a step that throws gives one FAIL row named `name`
+// with the error's message and `fix`, and every other step still runs.
+struct CameraCheckStep {
+  std::string name;
+  std::string fix;
+  std::function<std::vector<CameraCheck>(AravisCamera&)> run;
+};
+
+// The steps of camera-test, in order: the features, the setup and triggered frames, the neutral
+// pixel pipeline, the linearity series, and the camera put back as it was found.
+std::vector<CameraCheckStep> CameraCheckSteps();
+std::vector<CameraCheck> RunCameraChecks(AravisCamera& camera,
+                                         const std::vector<CameraCheckStep>& steps);
+
+// Every check on an opened camera (RunCameraChecks of CameraCheckSteps). The last checks
+// configure it (Software trigger when it has one), take frames and the linearity series, then put
+// it back as it was found.
 std::vector<CameraCheck> CheckCamera(AravisCamera& camera);
 // The table: one line per check, the fix under each failure, the count of checks passed.
 std::string CameraCheckTable(const std::vector<CameraCheck>& checks);

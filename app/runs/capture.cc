@@ -14,6 +14,7 @@
 #include "acquisition/bracket.h"
 #include "acquisition/recording_reader.h"
 #include "acquisition/recording_writer.h"
+#include "app/runs/linearity_check.h"
 
 namespace irdist {
 
@@ -170,6 +171,13 @@ LiveRecorder::~LiveRecorder() {
 void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int)>& trigger,
                                   const std::function<double()>& measure_current_ma) {
   Impl& m = *impl_;
+  if (m.setup.check_linearity) {  // the first pose, once
+    m.setup.check_linearity = false;
+    CheckFirstPoseLinearity(*m.camera, [&trigger] { trigger(-1); },
+                            {m.setup.recording_dir, m.setup.allow_nonlinear,
+                             m.setup.exposures_us.front(), m.bit_depth},
+                            std::cerr);
+  }
   m.DropStaged();  // frames of a bracket never committed
   const BracketCapture::FrameSink stage = [&m](const BracketFrame& frame) {
     m.StageAsync(frame.image);

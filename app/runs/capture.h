@@ -39,6 +39,10 @@ struct LiveCaptureSetup {
   // The model FrameFeatures refines them with (app/processing/frame_features.h BlobFitModelOf);
   // null = moments. Must outlive the recorder.
   const CalibrationModel* blob_fit_model = nullptr;
+  // A calibration's first pose measures the camera's linearity before its first bracket
+  // (app/runs/linearity_check.h); above the limit it stops unless allow_nonlinear.
+  bool check_linearity = false;
+  bool allow_nonlinear = false;
 };
 
 // What is already in a recording: its recipe text, whether it is complete, its complete brackets.

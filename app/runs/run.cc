@@ -29,6 +29,7 @@
 #include "app/processing/run_results.h"
 #include "app/runs/bracket_committer.h"
 #include "app/runs/capture.h"
+#include "app/runs/linearity_check.h"
 #include "app/runs/resume.h"
 #include "app/runs/suggest.h"
 #include "base/safe_file.h"
@@ -131,6 +132,7 @@ struct RunRequest {
   double time_scale = 0.0;
   bool quiet = false;
   bool allow_model_mismatch = false;  // validate
+  bool allow_nonlinear = false;       // calibrate: --allow-nonlinear
   // validate on hardware: the model's camera serial, which AravisCamera::Open then requires
   // ("" = none: another camera is allowed, or the model does not say).
   std::string expected_serial;
@@ -419,6 +421,9 @@ LiveCaptureSetup RecorderSetup(const RunRequest& request, const Recipe& recipe,
   setup.recording_dir = run_dir + "/recording";
   setup.resume = !request.resume_dir.empty();
   setup.command = CommandName(request.kind);
+  setup.check_linearity = request.kind == RunKind::kCalibrate &&
+                          NeedsFirstPoseLinearity(setup.recording_dir, setup.resume);
+  setup.allow_nonlinear = request.allow_nonlinear;
   setup.station_identity = station.IdentityBrief();
   setup.recipe_text = recipe_text;
   setup.feature_options = feature_options;
@@ -712,7 +717,9 @@ RunRequest RequestFrom(RunKind kind, const Args& args) {
 }  // namespace
 
 void RunCalibrate(const CalibrateArgs& args, CommandIo io) {
-  RunRecipe(RequestFrom(RunKind::kCalibrate, args), io);
+  RunRequest request = RequestFrom(RunKind::kCalibrate, args);
+  request.allow_nonlinear = args.allow_nonlinear;
+  RunRecipe(request, io);
 }
 
 void RunValidate(const ValidateArgs& args, CommandIo io) {

@@ -1,5 +1,6 @@
 // Tests of AravisCamera against Aravis's own fake GigE Vision camera on 127.0.0.1.
 #include "acquisition/aravis_camera.h"
+#include "acquisition/bracket.h"
 
 #include <arv.h>
 #include <gtest/gtest.h>
@@ -400,6 +401,126 @@ TEST(VendorCameras, MinimalCameraWithoutTriggerIsRefusedAndLeftAsFound) {
   camera.reset();
   OtherClient check;
   EXPECT_EQ(check.Get("", "Width"), "512");
+}
+
+// SFNC: ExposureStart starts one frame's exposure; with ExposureMode Timed (a previous user left
+// TriggerWidth) and one exposure per trigger it is the camera's frame trigger.
+TEST(VendorCameras, ExposureStartOnlyIsTheFrameTrigger) {
+  testing::FakeCameraProcess fake("IRDEXS01", {"-g", Genicam("exposure_start_only.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  camera->Configure(Triggered("Mono12"));
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.at("TriggerSelector"), "ExposureStart");
+  EXPECT_EQ(features.at("ExposureMode"), "Timed");
+  EXPECT_EQ(features.at("TriggerMode"), "On");
+  EXPECT_EQ(features.at("irdist.FrameTrigger"), "ExposureStart");
+  ExpectTriggeredFrames(*camera, 12);
+  // A bracket through it: every frame taken, each with the exposure asked for.
+  BracketOptions options;
+  options.exposures_us = {4000.0, 12000.0, 8000.0};
+  options.trigger_source = "Software";
+  BracketCapture capture(*camera, options);
+  const BracketResult result = capture.Capture([&](int) { camera->SoftwareTrigger(); });
+  camera->StopStream();
+  ASSERT_TRUE(result.complete) << result.BriefReport();
+  ASSERT_EQ(result.frames.size(), 3u);
+  for (std::size_t i = 0; i < result.frames.size(); ++i) {
+    EXPECT_NEAR(result.frames[i].actual_exposure_us, options.exposures_us[i], 1.0) << i;
+  }
+}
+
+// A read-only TriggerSelector (derived from the exposure mode) with writable trigger controls is
+// taken as it is: configured, triggered, never written.
+TEST(VendorCameras, ReadOnlySelectorWithWritableControlsCaptures) {
+  testing::FakeCameraProcess fake("IRDROS01", {"-g", Genicam("read_only_selector.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  CameraSettings settings = Triggered("Mono12");
+  settings.black_level = -1.0;  // its BlackLevel is locked (the next test)
+  camera->Configure(settings);
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.at("TriggerSelector"), "FrameStart");
+  EXPECT_EQ(features.at("irdist.FrameTrigger"), "FrameStart");
+  EXPECT_EQ(features.at("TriggerSource"), "Software");
+  ExpectTriggeredFrames(*camera, 12);
+}
+
+// Aravis 0.8 writes a locked feature without a word: irdist checks first, and the message names
+// the feature and the fix, never a source path; the camera is put back as found.
+TEST(VendorCameras, ALockedFeatureIsRefusedByNameWithItsFix) {
+  testing::FakeCameraProcess fake("IRDROS02", {"-g", Genicam("read_only_selector.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  try {
+    camera->Configure(Triggered("Mono12"));  // black_level 0 asks to write BlackLevel
+    FAIL() << "expected CameraError";
+  } catch (const CameraError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("BlackLevel is locked"), std::string::npos) << message;
+    EXPECT_NE(message.find("camera.black_level to -1"), std::string::npos) << message;
+    EXPECT_NE(message.find("put back as it was found"), std::string::npos) << message;
+    EXPECT_EQ(message.find(".cc:"), std::string::npos) << message;
+    EXPECT_EQ(message.find("powered, reachable"), std::string::npos) << message;
+  }
+  camera.reset();
+  OtherClient check;
+  EXPECT_EQ(check.Get("", "BlackLevel"), "4");
+}
+
+// An older camera's spellings and the pixel processing a previous user left on: each set neutral
+// and recorded, the switches put back by a failed setup.
+TEST(VendorCameras, OlderSpellingsAndPixelProcessingAreSetNeutralRecordedAndPutBack) {
+  testing::FakeCameraProcess fake("IRDOLD01", {"-g", Genicam("older_spellings.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  CameraSettings settings = Triggered("Mono12");
+  settings.black_level = -1.0;  // no BlackLevel on this camera
+  camera->Configure(settings);
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.at("GammaEnabled"), "false");
+  EXPECT_EQ(features.at("Gamma"), "1");
+  EXPECT_EQ(features.at("LUTEnable"), "false");
+  EXPECT_EQ(features.at("DigitalShift"), "0");
+  EXPECT_EQ(features.at("BlackLevelEnabled"), "true");
+  EXPECT_EQ(features.at("AcquisitionFrameRateEnabled"), "false");
+  EXPECT_EQ(features.at("BinningHorizontalMode"), "Sum");  // stated, not written
+  EXPECT_EQ(features.at("irdist.PixelPipeline"), "neutral");
+  bool lut_found_on = false;
+  for (const PixelFeatureState& state : camera->PixelPipeline()) {
+    if (state.feature == "LUTEnable") lut_found_on = state.found == "true" && state.now == "false";
+  }
+  EXPECT_TRUE(lut_found_on);
+  const std::string put_back = camera->RestoreFound();
+  EXPECT_EQ(put_back, " The camera was put back as it was found.");
+  camera.reset();
+  OtherClient check;
+  EXPECT_EQ(check.Get("", "LUTEnable"), "true");
+  EXPECT_EQ(check.Get("", "GammaEnabled"), "true");
+  EXPECT_EQ(check.Get("", "Gamma"), "0.45");
+  EXPECT_EQ(check.Get("", "DigitalShift"), "2");
+  EXPECT_EQ(check.Get("", "AcquisitionFrameRateEnabled"), "true");
+}
+
+// A raw colour mosaic in a Mono format is refused with the reason; a camera offering Bayer formats
+// (Aravis's own fake camera) is named colour in recording.yaml's features.
+TEST(VendorCameras, ARawMosaicIsRefusedAndAColourCameraNamed) {
+  {
+    testing::FakeCameraProcess fake("IRDRAW01", {"-g", Genicam("raw_mosaic.xml")});
+    auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+    try {
+      camera->Configure(Triggered("Mono12"));
+      FAIL() << "expected CameraError";
+    } catch (const CameraError& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find("raw colour mosaic (PixelColorFilter BayerRG)"), std::string::npos)
+          << message;
+      EXPECT_NE(message.find("Use a monochrome camera"), std::string::npos) << message;
+    }
+  }
+  testing::FakeCameraProcess fake("IRDRAW02");
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  CameraSettings settings = Triggered("Mono16");
+  camera->Configure(settings);
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_EQ(features.at("irdist.Sensor").rfind("colour (Bayer pixel formats", 0), 0u)
+      << features.at("irdist.Sensor");
 }
 
 }  // namespace

@@ -112,6 +112,21 @@ TEST(RigPhysics, BadValueNamesFileAndLine) {
   ExpectError("virtual:\n  sensor:\n    quantum_efficiency: 2\n", "range", "", "quantum_efficiency");
 }
 
+// The camera's pixel-shaping faults (a LUT left on, a gamma it cannot switch off): off by
+// default, read, range-checked at their line.
+TEST(RigPhysics, CameraCurveFaultKeys) {
+  EXPECT_FALSE(CameraOptions{}.lut_enable);
+  EXPECT_EQ(CameraOptions{}.fixed_gamma, 1.0);
+  const RigPhysics p = LoadRigPhysics(WriteRig(
+      "curves", "virtual:\n  camera:\n    lut_enable: true\n    lut_gamma: 0.5\n"
+                "    fixed_gamma: 0.8\n"));
+  EXPECT_TRUE(p.camera.lut_enable);
+  EXPECT_EQ(p.camera.lut_gamma, 0.5);
+  EXPECT_EQ(p.camera.fixed_gamma, 0.8);
+  ExpectError("virtual:\n  camera:\n    fixed_gamma: 0\n", "badgamma", "3", "fixed_gamma");
+  ExpectError("virtual:\n  camera:\n    lut_enable: maybe\n", "badlut", "3", "lut_enable");
+}
+
 // The sensor's fixed-pattern noise: off by default, on in virtual-fpn.yaml, range-checked.
 TEST(RigPhysics, FixedPatternNoiseKeys) {
   EXPECT_EQ(RigPhysics{}.sensor.prnu_percent, 0.0);

@@ -283,5 +283,23 @@ TEST(Sensor, CrosstalkActsOnTheCountedChargeBeforeTheNoise) {
   EXPECT_NEAR(var, expected, 0.2 * expected);
 }
 
+// The camera's LUT / gamma fault: FS (v / FS)^gamma on every pixel, nothing at gamma 1.
+TEST(Sensor, ResponseCurveBendsTheGrayLevels) {
+  cv::Mat image(1, 3, CV_16UC1);
+  image.at<std::uint16_t>(0, 0) = 0;
+  image.at<std::uint16_t>(0, 1) = 1024;
+  image.at<std::uint16_t>(0, 2) = 4095;
+  cv::Mat same = image.clone();
+  ApplyResponseCurve(1.0, PixelFormat::kMono12, same);
+  EXPECT_EQ(cv::countNonZero(same != image), 0);
+  ApplyResponseCurve(0.45, PixelFormat::kMono12, image);
+  EXPECT_EQ(image.at<std::uint16_t>(0, 0), 0);
+  EXPECT_EQ(image.at<std::uint16_t>(0, 1), std::lround(4095 * std::pow(1024.0 / 4095, 0.45)));
+  EXPECT_EQ(image.at<std::uint16_t>(0, 2), 4095);
+  cv::Mat mono8(1, 1, CV_8UC1, cv::Scalar(64));
+  ApplyResponseCurve(0.5, PixelFormat::kMono8, mono8);
+  EXPECT_EQ(mono8.at<std::uint8_t>(0, 0), std::lround(255 * std::sqrt(64.0 / 255)));
+}
+
 }  // namespace
 }  // namespace irdist::sim
