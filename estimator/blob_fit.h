@@ -36,6 +36,10 @@ struct Crosstalk {
   double lattice_share;
 };
 
+// The optics' variance keeps at least this (0.1 px of sd): the crosstalk cannot be the whole blur
+// (the edge model divides by the optics' sd).
+constexpr double kMinOpticsVarPx2 = 0.01;
+
 struct BlobFitResult {
   bool ok = false;
   cv::Point2d center_px;
@@ -65,6 +69,11 @@ struct BlobFitResult {
 // the pixel's area, is the optics' before them (BlurCalibration::crosstalk_*, FitBlurSplit).
 BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& features,
                       double blur_var_px2, const Crosstalk& crosstalk = {});
+
+// FitBlob with `passes` IRLS passes (2: FitBlob's; 1: the read noise's weights alone, whose
+// BlobFitResult::read_weighted_chi2 FitBlurSplit minimises).
+BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features& features,
+                            double blur_var_px2, const Crosstalk& crosstalk, int passes);
 
 // The fit's model at one pixel (x, y) before crosstalk: the disc blurred by the optics' sd,
 // integrated over the pixel's square, relative to its amplitude, and its derivatives along

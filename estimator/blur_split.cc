@@ -1,0 +1,136 @@
+// FitBlurSplit (blob_fit.h): the split of the calibrated blur between the optics and the
+// inter-pixel crosstalk, the crosstalk kernel's shape and the blob fit's own blur, from
+// calibration frames, by coordinate descent on the blob fit's first-pass cost.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <boost/math/tools/minima.hpp>
+
+#include "estimator/blob_fit.h"
+
+namespace irdist {
+
+namespace {
+
+// FitBlurSplit's rounds of coordinate descent (the split and the blur trade along a valley).
+constexpr int kSplitRounds = 8;
+
+}  // namespace
+
+namespace {
+
+// FitBlurSplit's reach for the total blur's correction (the cumulants err by a few 0.01 px^2).
+constexpr double kMaxBlurOffsetPx2 = 0.15;
+
+}  // namespace
+
+namespace {
+
+// The frames' summed first-pass cost with `crosstalk`; +inf when a frame's fit fails (no split
+// may win by losing frames).
+double SplitCost(const std::vector<const CrosstalkFrame*>& frames, const Crosstalk& crosstalk) {
+  double sum = 0.0;
+  for (const CrosstalkFrame* f : frames) {
+    const BlobFitResult fit =
+        FitBlobPasses(f->image, f->bit_depth, f->features, f->blur_var_px2, crosstalk, 1);
+    if (!fit.ok) return std::numeric_limits<double>::infinity();
+    sum += fit.read_weighted_chi2 * fit.pixels;
+  }
+  return sum;
+}
+
+// Brent's minimisation (Boost) of f over [low, high] to 2^-9 of the range.
+template <typename F>
+double Minimise(F f, double low, double high) {
+  if (!(high > low)) return low;
+  boost::uintmax_t iterations = 30;
+  return boost::math::tools::brent_find_minima(f, low, high, 9, iterations).first;
+}
+
+}  // namespace
+
+namespace {
+
+double InverseMetres(const CrosstalkFrame& f) { return f.d_mm > 0.0 ? 1000.0 / f.d_mm : 0.0; }
+
+// The offset's line o0 + o1 u (u = 1000 / d) through each frame's own best blur at `crosstalk`
+// (Brent on the frame's one-pass cost) less its given blur; a constant where the frames share
+// one distance or none is known.
+void FitBlurOffset(const std::vector<const CrosstalkFrame*>& given,
+                   const std::vector<CrosstalkFrame>& shifted, const Crosstalk& crosstalk,
+                   double* o0, double* o1) {
+  double su = 0.0, sr = 0.0, suu = 0.0, sur = 0.0;
+  for (size_t i = 0; i < shifted.size(); ++i) {
+    CrosstalkFrame trial = shifted[i];
+    const std::vector<const CrosstalkFrame*> one = {&trial};
+    const double room = shifted[i].blur_var_px2 - kPixelAreaVarPx2 - kMinOpticsVarPx2 -
+                        crosstalk.var_px2;
+    const double low = -std::min(kMaxBlurOffsetPx2, std::max(room, 0.0));
+    const double o = Minimise(
+        [&](double x) {
+          trial.blur_var_px2 = shifted[i].blur_var_px2 + x;
+          return SplitCost(one, crosstalk);
+        },
+        low, kMaxBlurOffsetPx2);
+    const double r = shifted[i].blur_var_px2 + o - given[i]->blur_var_px2;
+    const double u = InverseMetres(*given[i]);
+    su += u;
+    sr += r;
+    suu += u * u;
+    sur += u * r;
+  }
+  const double n = static_cast<double>(shifted.size());
+  const double det = n * suu - su * su;
+  *o1 = det > 1e-9 * std::max(n * suu, 1e-300) ? (n * sur - su * sr) / det : 0.0;
+  *o0 = (sr - *o1 * su) / n;
+}
+
+}  // namespace
+
+BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
+  BlurSplit split;
+  std::vector<const CrosstalkFrame*> usable;
+  for (const CrosstalkFrame& f : frames) {
+    if (f.features.Usable() && f.blur_var_px2 > kPixelAreaVarPx2 + 0.05) usable.push_back(&f);
+  }
+  split.frames = static_cast<int>(usable.size());
+  if (usable.empty()) return split;
+  // Coordinate descent: the crosstalk's variance at its kernel's shape (a sampled Gaussian first),
+  // then the shape at the variance (two rounds); from the second round on, each frame's own best
+  // blur at the split gives the offset's line, and the next round fits the variance at it (the
+  // split and the blur trade along a valley: kSplitRounds). The optics keep kMinOpticsVarPx2.
+  std::vector<CrosstalkFrame> shifted;
+  for (const CrosstalkFrame* f : usable) shifted.push_back(*f);
+  std::vector<const CrosstalkFrame*> now;
+  for (const CrosstalkFrame& f : shifted) now.push_back(&f);
+  Crosstalk best;
+  double o0 = 0.0, o1 = 0.0;
+  for (int round = 0; round < kSplitRounds; ++round) {
+    double min_blur = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < shifted.size(); ++i) {
+      shifted[i].blur_var_px2 = usable[i]->blur_var_px2 + o0 + o1 * InverseMetres(*usable[i]);
+      min_blur = std::min(min_blur, shifted[i].blur_var_px2);
+    }
+    const double max_var = std::max(min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2, 0.0);
+    const double share = best.lattice_share;
+    best.var_px2 =
+        Minimise([&](double c) { return SplitCost(now, {c, share}); }, 0.0, max_var);
+    const double var = best.var_px2;
+    if (round < 2) {
+      best.lattice_share =
+          Minimise([&](double l) { return SplitCost(now, {var, l}); }, 0.0, 1.0);
+    }
+    if (round >= 1 && round + 1 < kSplitRounds) FitBlurOffset(usable, shifted, best, &o0, &o1);
+  }
+  if (SplitCost(now, best) <= SplitCost(now, {})) {
+    split.crosstalk_var_px2 = best.var_px2;
+    split.crosstalk_lattice_share = best.lattice_share;
+  }
+  split.blur_offset_px2 = o0;
+  split.blur_offset_u_px2 = o1;
+  return split;
+}
+
+}  // namespace irdist
