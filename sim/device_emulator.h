@@ -58,6 +58,15 @@ struct EmulatorInfo {
 
 const EmulatorInfo* FindEmulator(const std::string& driver);
 
+// A client that made the emulator's pty exclusive (TIOCEXCL, as irdist's serial transport does)
+// and died without clearing it (kill -9) leaves the flag on the tty, which lives on because the
+// emulator holds its slave side open: every later open() but root's fails with EBUSY. Clears the
+// flag when it is set and no process holds an flock on the pty (irdist's transport takes the
+// flock before TIOCEXCL and clears the flag before it lets the flock go). Returns whether it
+// cleared it. The emulators call it every kAbandonedExclusiveCheckS while they serve.
+bool ReleaseAbandonedExclusive(int slave_fd);
+constexpr double kAbandonedExclusiveCheckS = 0.25;  // host seconds
+
 struct EmulatorRegistration {
   explicit EmulatorRegistration(EmulatorInfo info);
 };

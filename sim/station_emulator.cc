@@ -14,6 +14,7 @@
 #include <array>
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -28,6 +29,7 @@
 
 #include "base/check.h"
 #include "base/yaml_fields.h"
+#include "sim/device_emulator.h"
 
 namespace irdist::sim {
 
@@ -293,7 +295,14 @@ struct StationEmulator::Impl : StationEffects {
 
   void Loop() {
     char buf[512];
+    const auto check_period = std::chrono::duration<double>(kAbandonedExclusiveCheckS);
+    auto next_check = std::chrono::steady_clock::now();
     while (!stop) {
+      if (std::chrono::steady_clock::now() >= next_check) {
+        ReleaseAbandonedExclusive(slave_fd);  // a client killed while it held the pty
+        next_check = std::chrono::steady_clock::now() +
+                     std::chrono::duration_cast<std::chrono::steady_clock::duration>(check_period);
+      }
       // Wait for input, at most until the next scheduled event (in host time).
       double wait_host_s = 0.002;
       {

@@ -41,7 +41,8 @@ class PtuEmulatorTest : public ::testing::Test {
   void SetUp() override {
     emulator_ = testing::MakeEmulator(world_, "flir_ptu", "head", Rig());
     ASSERT_NE(emulator_, nullptr);
-    host_ = std::make_unique<PtyHost>(emulator_->Start());
+    host_path_ = emulator_->Start();
+    host_ = std::make_unique<PtyHost>(host_path_);
   }
   std::string Ask(const std::string& command, int timeout_ms = 5000) {
     return host_->Ask(command + "\r\n", timeout_ms);
@@ -50,6 +51,7 @@ class PtuEmulatorTest : public ::testing::Test {
   World world_{20.0};
   std::unique_ptr<DeviceEmulator> emulator_;
   std::unique_ptr<PtyHost> host_;
+  std::string host_path_;
 };
 
 TEST_F(PtuEmulatorTest, AnswersVersionResolutionAndLimits) {
@@ -219,6 +221,10 @@ TEST(PtuEmulatorReset, APowerCyclePrintsItsBannerAndEchoesWhileItResets) {
   EXPECT_EQ(host.ReadLine(3000), "* 0");
   EXPECT_GE(world.clock().Now() - start_s, 1.0);
   EXPECT_NE(host.ReadLine(1000).find("* Pan-Tilt Controller"), std::string::npos);
+}
+
+TEST_F(PtuEmulatorTest, AnExclusiveFlagLeftByADeadClientIsCleared) {
+  testing::ExpectAbandonedExclusiveReleased(host_path_);
 }
 
 TEST_F(PtuEmulatorTest, ASpeedAboveTheUpperBoundIsRefused) {
