@@ -467,6 +467,25 @@ TEST(FlirPtuEmulated, AResetThatEchoesAndPrintsItsBannerIsWaitedForAndHomedAgain
   EXPECT_NEAR(read.pan_deg, 10.0, 0.03);
 }
 
+// The same power cut in the middle of a move: the wait for the move sees the reset through and
+// reports the restart; homed again, the retaken move lands.
+TEST(FlirPtuEmulated, APowerCutMidMoveIsARestartOnceTheResetEnds) {
+  EmulatedHead head("      reset_s: 1.5\n      echo: true\n");
+  std::unique_ptr<DeviceDriver> driver = head.Open(EmulatedHead::Spec());
+  Motion& motion = testing::IdentifiedAndHomed(*driver);
+  StationPosition target;
+  target.pan_deg = 20.0;
+  target.tilt_deg = -5.0;
+  motion.StartMove(target);
+  head.emulator->PowerCycle();
+  EXPECT_THROW(motion.WaitSettled(std::chrono::milliseconds(20000)), DeviceRestarted);
+  motion.Home();
+  motion.StartMove(target);
+  motion.WaitSettled(std::chrono::milliseconds(20000));
+  EXPECT_NEAR(head.world.Pose().pan_deg, 20.0, 0.03);
+  EXPECT_NEAR(head.world.Pose().tilt_deg, -5.0, 0.03);
+}
+
 // Issue 33 item 6: no move ends (and so no frame is exposed) before the unit has confirmed the
 // end of its last command: positions read within the rig's tolerance of the target while the
 // axes still creep in (a slow deceleration) are not the end of the move, and with replies dropped
