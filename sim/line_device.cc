@@ -271,10 +271,12 @@ void LineDevice::Serve() {
     }
     std::string unsolicited;
     {
-      std::lock_guard<std::mutex> lock(state_mutex_);
+      std::unique_lock<std::mutex> lock(state_mutex_);
       if (stop_) return;
+      current_lock_ = &lock;  // Advance may run a protocol's queued command that waits
       Advance(Now());
       MaybePowerCycle();
+      current_lock_ = nullptr;
       unsolicited.swap(outbox_);
     }
     SendReply(unsolicited);
@@ -322,7 +324,9 @@ void LineDevice::SendReply(const std::string& reply) {
   if (uniform(rng_) < faults.delay_rate) {
     std::unique_lock<std::mutex> lock(state_mutex_);
     const double until_s = Now() + faults.delay_s;
+    current_lock_ = &lock;
     WaitInSimTime(lock, [this, until_s] { return Now() >= until_s; });
+    current_lock_ = nullptr;
   }
   std::string bytes = reply;
   for (char& c : bytes) {

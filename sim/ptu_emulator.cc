@@ -187,7 +187,11 @@ void PtuEmulator::HitLimit(PtuAxis& axis, double now_s) {
 }
 
 void PtuEmulator::Advance(double now_s) {
-  if (now_s >= busy_until_s_ && !deferred_.empty() && !draining_) SendUnsolicited(Drain());
+  // The commands received during the power-up reset, once it ends (only on the serving thread:
+  // A and R wait in simulated time).
+  if (now_s >= busy_until_s_ && !deferred_.empty() && !draining_ && HasCurrentLock()) {
+    SendUnsolicited(Drain());
+  }
   std::map<std::string, double> rig;
   bool any_moving = false;
   for (PtuAxis& axis : axes_) {

@@ -209,18 +209,25 @@ TEST(PtuEmulatorReset, APowerCyclePrintsItsBannerAndEchoesWhileItResets) {
   host.Send("ED\r\n");
   EXPECT_EQ(host.ReadLine(1000), "ED");  // echoed: echo is on at power-up
   EXPECT_EQ(host.ReadLine(1000), "*");
+  EXPECT_EQ(host.Ask("PP2000\r\n"), "*");
+  EXPECT_EQ(host.Ask("A\r\n", 5000), "*");  // at 2000: the power-up reset's return takes 2 s
   emulator->PowerCycle();
   const double start_s = world.clock().Now();
   EXPECT_EQ(host.ReadLine(1000), "Pan-Tilt Controller v3.4.2 (emulated, irdist)");
   EXPECT_EQ(host.ReadLine(1000), "Initializing...");
   host.Send("PP\r\n");
+  host.Send("A\r\n");  // await: run once the reset ends, it waits in simulated time itself
   host.Send("V\r\n");
   EXPECT_EQ(host.ReadLine(300), "PP");  // echoed at once, though the unit is resetting
+  EXPECT_EQ(host.ReadLine(300), "A");
   EXPECT_EQ(host.ReadLine(300), "V");
   EXPECT_EQ(host.ReadLine(200), "");    // no answer yet
-  EXPECT_EQ(host.ReadLine(3000), "* 0");
+  EXPECT_EQ(host.ReadLine(3000).substr(0, 2), "* ");  // on its way back to 0
   EXPECT_GE(world.clock().Now() - start_s, 1.0);
+  EXPECT_EQ(host.ReadLine(5000), "*");  // A: once the axes stand at 0
   EXPECT_NE(host.ReadLine(1000).find("* Pan-Tilt Controller"), std::string::npos);
+  EXPECT_EQ(host.Ask("PP\r\n"), "PP");  // echo on still (the power-up default)
+  EXPECT_EQ(host.ReadLine(1000), "* 0");
 }
 
 TEST_F(PtuEmulatorTest, AnExclusiveFlagLeftByADeadClientIsCleared) {
