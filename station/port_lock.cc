@@ -8,11 +8,13 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "station/transport.h"
@@ -35,13 +37,18 @@ const char kSerialNeeded[] =
     "a serial device (a character device that is a tty, e.g. /dev/ttyUSB0 or "
     "/dev/serial/by-id/...) is needed";
 
-// "1234 (irdist station move 10)": the command line of a live process, or its pid alone.
+// "process 1234 (irdist station move 10)": a live process's command line (control characters
+// shown as '?', never sent to a terminal), or its pid alone.
 std::string ProcessText(long pid) {
   std::ifstream in("/proc/" + std::to_string(pid) + "/cmdline", std::ios::binary);
   std::string command((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   while (!command.empty() && command.back() == '\0') command.pop_back();
   for (char& c : command) {
-    if (c == '\0' || c == '\n' || c == '\r') c = ' ';
+    if (c == '\0') {
+      c = ' ';
+    } else if (std::iscntrl(static_cast<unsigned char>(c))) {
+      c = '?';
+    }
   }
   if (command.size() > kMaxCommandChars) command = command.substr(0, kMaxCommandChars) + "...";
   return "process " + std::to_string(pid) + (command.empty() ? "" : " (" + command + ")");
@@ -50,7 +57,7 @@ std::string ProcessText(long pid) {
 [[noreturn]] void InUse(const std::string& path, const std::string& holder,
                         const std::string& origin) {
   throw LinkError("serial port in use by " + (holder.empty() ? "another program" : holder) +
-                      "; irdist opens a port only when no one else has it open",
+                      "; a port is one command's at a time",
                   path,
                   "end that command (or wait until it ends), or check " + origin +
                       " if this is not the port you meant");

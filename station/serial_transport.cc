@@ -125,9 +125,12 @@ SerialTransport::SerialTransport(const std::string& port, SerialOptions options,
 }
 
 SerialTransport::~SerialTransport() {
-  // Closing the descriptor drops the flock; the exclusive flag is cleared first.
+  // Closing the descriptor drops the flock; the exclusive flag is cleared first (best effort: a
+  // destructor cannot report it, and the emulators clear a flag left behind).
   const int fd = impl_->port.native_handle();
-  if (fd >= 0) ::ioctl(fd, TIOCNXCL);
+  if (fd >= 0 && ::ioctl(fd, TIOCNXCL) != 0) {
+    // Left set: a real port drops it with this last close; a pty's emulator clears it.
+  }
   boost::system::error_code ignored;
   impl_->port.close(ignored);
 }
