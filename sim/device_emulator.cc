@@ -68,4 +68,11 @@ bool ReleaseAbandonedExclusive(int slave_fd) {
   return ::ioctl(slave_fd, TIOCNXCL) == 0;
 }
 
+void AbandonedExclusiveWatch::Poll(int slave_fd) {
+  const auto now = std::chrono::steady_clock::now();
+  if (now < next_) return;
+  ReleaseAbandonedExclusive(slave_fd);  // a client killed while it held the pty
+  next_ = now + std::chrono::milliseconds(250);
+}
+
 }  // namespace irdist::sim

@@ -261,14 +261,9 @@ void LineDevice::WaitInSimTime(std::unique_lock<std::mutex>& lock,
 
 void LineDevice::Serve() {
   char buffer[512];
-  const auto check_period = std::chrono::duration<double>(kAbandonedExclusiveCheckS);
-  auto next_check = std::chrono::steady_clock::now();
+  AbandonedExclusiveWatch exclusive;
   while (true) {
-    if (std::chrono::steady_clock::now() >= next_check) {
-      ReleaseAbandonedExclusive(slave_fd_);  // a client killed while it held the pty
-      next_check = std::chrono::steady_clock::now() +
-                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(check_period);
-    }
+    exclusive.Poll(slave_fd_);
     std::string unsolicited;
     {
       std::unique_lock<std::mutex> lock(state_mutex_);

@@ -295,14 +295,9 @@ struct StationEmulator::Impl : StationEffects {
 
   void Loop() {
     char buf[512];
-    const auto check_period = std::chrono::duration<double>(kAbandonedExclusiveCheckS);
-    auto next_check = std::chrono::steady_clock::now();
+    AbandonedExclusiveWatch exclusive;
     while (!stop) {
-      if (std::chrono::steady_clock::now() >= next_check) {
-        ReleaseAbandonedExclusive(slave_fd);  // a client killed while it held the pty
-        next_check = std::chrono::steady_clock::now() +
-                     std::chrono::duration_cast<std::chrono::steady_clock::duration>(check_period);
-      }
+      exclusive.Poll(slave_fd);
       // Wait for input, at most until the next scheduled event (in host time).
       double wait_host_s = 0.002;
       {
