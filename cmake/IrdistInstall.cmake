@@ -4,8 +4,14 @@
 #   P/share/doc/irdist/             README.md and docs/
 #   P/<python dir>/irdist/          the Python module (IRDIST_PYTHON_INSTALL_DIR below)
 # The virtual camera's GenICam XML is compiled into the program (sim/virtual_camera_xml.cc.in).
+# Nothing is written through a symbolic link: the folders are checked first
+# (cmake/IrdistInstallCheck.cmake), before the first file is installed.
 include(GNUInstallDirs)
 
+set(_irdist_check_links "include(${PROJECT_SOURCE_DIR}/cmake/IrdistInstallCheck.cmake)
+  irdist_refuse_links(\"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}\"")
+install(CODE "${_irdist_check_links} ${CMAKE_INSTALL_BINDIR}/irdist
+  ${CMAKE_INSTALL_DATADIR}/irdist ${CMAKE_INSTALL_DOCDIR})")
 install(TARGETS irdist RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/recipes/ DESTINATION ${CMAKE_INSTALL_DATADIR}/irdist/recipes)
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
@@ -28,6 +34,7 @@ else:
   endif()
   set(IRDIST_PYTHON_INSTALL_DIR ${_irdist_python_dir} CACHE STRING
     "Where, under the install prefix, the Python module irdist goes")
+  install(CODE "${_irdist_check_links} ${IRDIST_PYTHON_INSTALL_DIR}/irdist)")
   install(TARGETS irdist_python LIBRARY DESTINATION ${IRDIST_PYTHON_INSTALL_DIR}/irdist)
   install(FILES ${PROJECT_SOURCE_DIR}/python/irdist/__init__.py
     DESTINATION ${IRDIST_PYTHON_INSTALL_DIR}/irdist)

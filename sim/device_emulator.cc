@@ -1,7 +1,14 @@
 #include "sim/device_emulator.h"
 
+#include <sys/ioctl.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <map>
+#include <sstream>
 
 namespace irdist::sim {
 namespace {
@@ -38,6 +45,34 @@ EmulatorRegistration::EmulatorRegistration(EmulatorInfo info) {
 const EmulatorInfo* FindEmulator(const std::string& driver) {
   const auto it = Registry().find(driver);
   return it == Registry().end() ? nullptr : &it->second;
+}
+
+bool ReleaseAbandonedExclusive(int slave_fd) {
+  int exclusive = 0;
+  struct stat st {};
+  if (::ioctl(slave_fd, TIOCGEXCL, &exclusive) != 0 || exclusive == 0) return false;
+  if (::fstat(slave_fd, &st) != 0) return false;
+  char file[64];
+  std::snprintf(file, sizeof(file), "%02x:%02x:%lu", major(st.st_dev), minor(st.st_dev),
+                static_cast<unsigned long>(st.st_ino));
+  std::ifstream locks("/proc/locks");
+  if (!locks) return false;  // who holds it cannot be known: leave the flag
+  for (std::string line; std::getline(locks, line);) {
+    std::istringstream fields(line);  // "1: FLOCK  ADVISORY  WRITE 1234 00:05:3 0 EOF"
+    std::string number, type, mode, access, pid, where;
+    if (fields >> number >> type >> mode >> access >> pid >> where && type == "FLOCK" &&
+        where == file) {
+      return false;  // a live client holds it
+    }
+  }
+  return ::ioctl(slave_fd, TIOCNXCL) == 0;
+}
+
+void AbandonedExclusiveWatch::Poll(int slave_fd) {
+  const auto now = std::chrono::steady_clock::now();
+  if (now < next_) return;
+  ReleaseAbandonedExclusive(slave_fd);  // a client killed while it held the pty
+  next_ = now + std::chrono::milliseconds(250);
 }
 
 }  // namespace irdist::sim

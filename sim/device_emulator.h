@@ -6,6 +6,7 @@
 // VirtualRig starts one for every `station.devices:` entry of the rig file whose port is `auto`,
 // with the fault knobs of `virtual.devices.<name>:`.
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -57,6 +58,23 @@ struct EmulatorInfo {
 };
 
 const EmulatorInfo* FindEmulator(const std::string& driver);
+
+// A client that made the emulator's pty exclusive (TIOCEXCL, as irdist's serial transport does)
+// and died without clearing it (kill -9) leaves the flag on the tty, which lives on because the
+// emulator holds its slave side open: every later open() but root's fails with EBUSY. Clears the
+// flag when it is set and no process holds an flock on the pty (irdist's transport takes the
+// flock before TIOCEXCL and clears the flag before it lets the flock go). Returns whether it
+// cleared it. The emulators call it through AbandonedExclusiveWatch while they serve.
+bool ReleaseAbandonedExclusive(int slave_fd);
+
+// ReleaseAbandonedExclusive at most every 0.25 host seconds, from a serving loop.
+class AbandonedExclusiveWatch {
+ public:
+  void Poll(int slave_fd);
+
+ private:
+  std::chrono::steady_clock::time_point next_{};
+};
 
 struct EmulatorRegistration {
   explicit EmulatorRegistration(EmulatorInfo info);

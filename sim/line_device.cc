@@ -261,13 +261,17 @@ void LineDevice::WaitInSimTime(std::unique_lock<std::mutex>& lock,
 
 void LineDevice::Serve() {
   char buffer[512];
+  AbandonedExclusiveWatch exclusive;
   while (true) {
+    exclusive.Poll(slave_fd_);
     std::string unsolicited;
     {
-      std::lock_guard<std::mutex> lock(state_mutex_);
+      std::unique_lock<std::mutex> lock(state_mutex_);
       if (stop_) return;
+      current_lock_ = &lock;  // Advance may run a protocol's queued command that waits
       Advance(Now());
       MaybePowerCycle();
+      current_lock_ = nullptr;
       unsolicited.swap(outbox_);
     }
     SendReply(unsolicited);
@@ -315,7 +319,9 @@ void LineDevice::SendReply(const std::string& reply) {
   if (uniform(rng_) < faults.delay_rate) {
     std::unique_lock<std::mutex> lock(state_mutex_);
     const double until_s = Now() + faults.delay_s;
+    current_lock_ = &lock;
     WaitInSimTime(lock, [this, until_s] { return Now() >= until_s; });
+    current_lock_ = nullptr;
   }
   std::string bytes = reply;
   for (char& c : bytes) {

@@ -104,6 +104,10 @@ class LineDevice : public DeviceEmulator {
   double Now() const { return world_.clock().Now(); }
   World& world() { return world_; }
   std::unique_lock<std::mutex>& CurrentLock() { return *current_lock_; }
+  // Whether the serving thread holds the state lock through a unique_lock CurrentLock() gives
+  // (in HandleMessage, and in Advance when the serving thread calls it): only then may a
+  // protocol run a command that waits in simulated time.
+  bool HasCurrentLock() const { return current_lock_ != nullptr; }
 
   mutable std::mutex state_mutex_;
 

@@ -9,6 +9,10 @@
 // A reset (R, and the reset at power-up) takes `reset_s` besides the axes' return to 0: the
 // unit reads nothing meanwhile, so commands sent during it wait in the line and are answered,
 // in order, once it ends (after a client gave up, its successor reads those stale replies).
+// A power cycle (not the first power-up, which no client sees) prints the controller's banner
+// (its version text) and "Initializing..." as it starts, as the PTU manuals' power-up shows;
+// with echo on (`echo: true`, the power-up echo), each command sent during the power-up reset
+// is echoed at once and answered when the reset ends.
 // A limit hit (fault `limit_hit_axis`: the axis stalls halfway through its next move) is
 // reported unsolicited as "!P" or "!T": the unit lost synchrony and needs a reset.
 //
@@ -135,6 +139,9 @@ class PtuEmulator : public LineDevice {
   void Halt(PtuAxis& axis);
   std::string AwaitStop();
   std::string Reset();
+  std::string Run(const std::string& message, bool echo);
+  std::string Drain();
+  std::string WithLineEnd(const std::string& replies) const;
 
   void HitLimit(PtuAxis& axis, double now_s);
 
@@ -143,6 +150,9 @@ class PtuEmulator : public LineDevice {
   bool verbose_ = true, echo_ = false;
   double busy_until_s_ = 0.0;       // a reset in progress: nothing is read until then
   bool limit_hit_pending_ = false;  // the limit_hit_axis fault has not struck yet
+  bool powered_ = false;            // past the first power-up (a later one prints its banner)
+  std::vector<std::string> deferred_;  // messages received during the power-up reset
+  bool draining_ = false;              // running deferred_ (Advance re-enters through A, R)
 };
 
 void PtuEmulator::ResetToPowerOn() {
@@ -159,6 +169,11 @@ void PtuEmulator::ResetToPowerOn() {
     if (config_.reset_on_power_up) MoveTo(axis, 0.0);
   }
   if (config_.reset_on_power_up) busy_until_s_ = Now() + config_.reset_s;
+  deferred_.clear();  // what the unit had not run yet is lost with the power
+  if (powered_ && config_.reset_on_power_up) {
+    SendUnsolicited(WithLineEnd(config_.version + "\r\nInitializing...\r\n"));
+  }
+  powered_ = true;
   Advance(Now());
 }
 
@@ -172,6 +187,11 @@ void PtuEmulator::HitLimit(PtuAxis& axis, double now_s) {
 }
 
 void PtuEmulator::Advance(double now_s) {
+  // The commands received during the power-up reset, once it ends (only on the serving thread:
+  // A and R wait in simulated time).
+  if (now_s >= busy_until_s_ && !deferred_.empty() && !draining_ && HasCurrentLock()) {
+    SendUnsolicited(Drain());
+  }
   std::map<std::string, double> rig;
   bool any_moving = false;
   for (PtuAxis& axis : axes_) {
@@ -187,10 +207,34 @@ void PtuEmulator::Advance(double now_s) {
 }
 
 std::string PtuEmulator::HandleMessage(const std::string& message) {
-  // A reset in progress reads nothing: this message waited in the line until it ends.
-  WaitInSimTime(CurrentLock(), [this] { return Now() >= busy_until_s_; });
-  std::string replies = echo_ ? message + "\r\n" : "";
+  // The power-up reset: the message is echoed at once and run when the reset ends.
+  if (Now() < busy_until_s_ && !draining_) {
+    deferred_.push_back(message);
+    return echo_ ? WithLineEnd(message + "\r\n") : "";
+  }
+  const std::string earlier = Drain();  // those received during a reset come first
+  return earlier + WithLineEnd(Run(message, echo_));
+}
+
+// The replies to the messages received during the power-up reset, in order.
+std::string PtuEmulator::Drain() {
+  std::vector<std::string> messages;
+  messages.swap(deferred_);
+  draining_ = true;
+  std::string replies;
+  for (const std::string& message : messages) replies += WithLineEnd(Run(message, false));
+  draining_ = false;
+  return replies;
+}
+
+std::string PtuEmulator::Run(const std::string& message, bool echo) {
+  std::string replies = echo ? message + "\r\n" : "";
   for (const std::string& command : SplitCommands(message)) replies += Execute(command);
+  return replies;
+}
+
+// CR LF as written by the handlers, or CR alone (`reply_line_end: cr`).
+std::string PtuEmulator::WithLineEnd(const std::string& replies) const {
   if (config_.line_end == "\r\n") return replies;
   std::string out;
   for (std::size_t i = 0; i < replies.size(); ++i) {

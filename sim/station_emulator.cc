@@ -14,6 +14,7 @@
 #include <array>
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -28,6 +29,7 @@
 
 #include "base/check.h"
 #include "base/yaml_fields.h"
+#include "sim/device_emulator.h"
 
 namespace irdist::sim {
 
@@ -293,7 +295,9 @@ struct StationEmulator::Impl : StationEffects {
 
   void Loop() {
     char buf[512];
+    AbandonedExclusiveWatch exclusive;
     while (!stop) {
+      exclusive.Poll(slave_fd);
       // Wait for input, at most until the next scheduled event (in host time).
       double wait_host_s = 0.002;
       {

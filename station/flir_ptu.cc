@@ -6,152 +6,18 @@
 //
 // The protocol has no request ids: replies are matched by order, one per command. Echo is
 // switched off (ED) and feedback set terse (FT) at connection; the parser still takes the text
-// after the first '*' or '!' so an echoed command or verbose feedback parses the same.
+// after the first '*' or '!' so an echoed command or verbose feedback parses the same. The class
+// is declared in station/flir_ptu_driver.h; the line kept in step and the unit's resets are in
+// station/flir_ptu_sync.cc.
 
-#include <algorithm>
-#include <cctype>
-#include <climits>
-#include <cmath>
 #include <sstream>
 #include <thread>
 
 #include "base/bounds.h"
-#include "station/axes_motion.h"
-#include "station/driver.h"
-#include "station/line_query.h"
+#include "station/flir_ptu_driver.h"
 #include "station/serial_driver.h"
 
-namespace irdist {
-namespace {
-
-using Clock = std::chrono::steady_clock;
-using std::chrono::milliseconds;
-
-constexpr char kName[] = "flir_ptu";
-constexpr double kArcsecPerDeg = 3600.0;
-constexpr milliseconds kPollPeriod{10};
-constexpr int kStillPolls = 15;  // polls standing still, away from the target: stopped short
-constexpr milliseconds kQuietAfterVersion{200};  // SyncOnVersion: the line is quiet after V
-
-struct PtuAxis {
-  Axis axis = Axis::kPan;
-  char letter = 'P';            // command prefix: P (pan) or T (tilt)
-  double deg_per_position = 0;  // PR/TR (arc seconds) / 3600
-  long long min_pos = 0, max_pos = 0;
-  AxisSpeed speed;
-  long long target = 0;
-  bool has_target = false;
-  long long speed_pos_s = 0;  // PS/TS as read at Identify (a power cycle restores defaults)
-  long long upper_pos_s = 0, lower_pos_s = 0;  // PU/PL (TU/TL) speed bounds; 0: not read
-};
-
-// The unit's own limit-hit report: "!P" or "!T" alone on a line (manual: the axis hit a limit
-// and lost synchrony; a reset is needed).
-bool IsLimitHit(const std::string& line) {
-  const std::size_t mark = line.find('!');
-  if (mark == std::string::npos) return false;
-  std::string text = line.substr(mark + 1);
-  text.erase(0, text.find_first_not_of(' '));
-  text.erase(text.find_last_not_of(' ') + 1);
-  return text == "P" || text == "T";
-}
-
-// Speed, acceleration and speed-bound commands (PS, TA, PU...): a refusal is about speed.
-bool IsRateCommand(const std::string& command) {
-  return command.size() >= 2 && (command[0] == 'P' || command[0] == 'T') &&
-         std::string("SAULB").find(command[1]) != std::string::npos;
-}
-
-// The first number among the words of `text` ("* 22", "* Current Pan position is 22").
-bool FirstNumber(const std::string& text, double* value) {
-  std::istringstream in(text);
-  for (std::string word; in >> word;) {
-    while (!word.empty() && (word.back() == ',' || word.back() == '.')) word.pop_back();
-    char* end = nullptr;
-    const double v = std::strtod(word.c_str(), &end);
-    if (!word.empty() && end == word.c_str() + word.size() && std::isfinite(v)) {
-      *value = v;
-      return true;
-    }
-  }
-  return false;
-}
-
-class FlirPtu : public AxesMotionDriver<PtuAxis> {
- public:
-  FlirPtu(const DeviceSpec& spec, std::unique_ptr<Transport> link)
-      : spec_(spec), link_(std::move(link)), query_(link_.get(), QueryOptions(spec)) {
-    identity_.kind = kName;
-    identity_.port = spec.port;
-    identity_.vendor = "FLIR";
-    timeout_ = query_.options().reply_timeout;
-    attempts_ = query_.options().attempts;
-    tolerance_ = static_cast<long long>(spec.Number("tolerance_positions", 0));
-    home_timeout_ = milliseconds(static_cast<long long>(spec.Number("home_timeout_s", 120) * 1000));
-    reset_wait_ = milliseconds(static_cast<long long>(spec.Number("reset_wait_s", 60) * 1000));
-    for (const auto& [axis, address] : spec.axes) {
-      PtuAxis a;
-      a.axis = axis;
-      a.letter = address == "pan" ? 'P' : 'T';
-      axes_.push_back(a);
-    }
-  }
-
-  DeviceIdentity Identify() override;
-  MotionState State() override;
-  void Home() override;
-  void StartMove(const StationPosition& target) override;
-  void WaitSettled(milliseconds timeout) override;
-  void ReadPosition(StationPosition* position) override;
-  void Stop() noexcept override;
-  void CheckAlive() override;
-
- private:
-  LineQueryOptions QueryOptions(const DeviceSpec& spec);
-  ReplyVerdict Judge(const std::string& command, const std::string& line, std::string* body) const;
-  LineRequest Request(const std::string& command, std::string* body) const;
-  std::string Query(const std::string& command);
-  double QueryNumber(const std::string& command);
-  bool Command(const std::string& command, milliseconds wait);
-  long long Position(const PtuAxis& a) {
-    return std::llround(QueryNumber(std::string(1, a.letter) + "P"));
-  }
-  long long StablePosition(const PtuAxis& a);
-  void ReadAxis(PtuAxis* a);
-  void ApplySpeed(PtuAxis* a);
-  void MoveAxis(PtuAxis* a, long long position);
-  void WaitAt(milliseconds timeout, const std::string& what);
-  void TakePending(bool report_limit_hit);
-  void SyncOnVersion();
-  bool IsVersion(const std::string& line) const;
-  [[noreturn]] void LimitHit(const std::string& line) const;
-  void ReadSpeedBounds(PtuAxis* a);
-  [[noreturn]] void StoppedShort(const std::string& what, const std::vector<long long>& positions);
-  std::string AxisText(const PtuAxis& a) const { return AxisName(a.axis); }
-  [[noreturn]] void Fail(const std::string& code, const std::string& message,
-                         const std::string& fix) const {
-    throw DeviceError(identity_, code, message, fix);
-  }
-  // A link failure naming the driver and the rig entry ("flir_ptu 'head': ...") and the port.
-  [[noreturn]] void LinkFail(const std::string& message, const std::string& fix) const {
-    throw LinkError(std::string(kName) + " '" + spec_.name + "': " + message, spec_.port, fix);
-  }
-
-  DeviceSpec spec_;
-  std::unique_ptr<Transport> link_;
-  LineQuery query_;  // after link_: it writes and reads through it
-  DeviceIdentity identity_;
-  milliseconds timeout_{1000};
-  milliseconds home_timeout_{120000};
-  milliseconds reset_wait_{60000};  // a unit silent this long after a lost reply is gone
-  int attempts_ = 3;
-  std::string version_;       // the unit's V answer: the resynchronisation marker
-  bool out_of_step_ = false;  // a reply was lost: resynchronise before the next command
-  long long tolerance_ = 0;
-  bool homed_ = false;
-  bool moving_ = false;
-  bool was_away_ = false;  // an axis stood or was seen away from 0 since the move began
-};
+namespace irdist::flir_ptu_internal {
 
 LineQueryOptions FlirPtu::QueryOptions(const DeviceSpec& spec) {
   LineQueryOptions options =
@@ -164,6 +30,7 @@ LineQueryOptions FlirPtu::QueryOptions(const DeviceSpec& spec) {
   options.before_send = [this](int attempt) {
     TakePending(true);
     if (attempt > 0 || out_of_step_) SyncOnVersion();
+    NotePowerUp();
   };
   options.after_miss = [this] { out_of_step_ = true; };
   return options;
@@ -174,7 +41,10 @@ LineQueryOptions FlirPtu::QueryOptions(const DeviceSpec& spec) {
 ReplyVerdict FlirPtu::Judge(const std::string& command, const std::string& line,
                             std::string* body) const {
   const std::size_t mark = line.find_first_of("*!");
-  if (mark == std::string::npos) return ReplyVerdict::kSkip;
+  if (mark == std::string::npos) {
+    NotePowerUpText(line);
+    return ReplyVerdict::kSkip;
+  }
   std::string text = line.substr(mark + 1);
   text.erase(0, text.find_first_not_of(' '));
   if (line[mark] == '*') {
@@ -187,77 +57,6 @@ ReplyVerdict FlirPtu::Judge(const std::string& command, const std::string& line,
            ? "check the speed against the unit's speed bounds (PU/PL, TU/TL; `irdist station "
              "status` shows them) and lower speed_deg_s or accel_deg_s2 in the rig file"
            : "check the command's value against the unit's position limits (PN/PX/TN/TX)");
-}
-
-// Manual: "!P" / "!T": the axis hit a limit and lost synchrony.
-void FlirPtu::LimitHit(const std::string& line) const {
-  const bool pan = line.find('P', line.find('!')) != std::string::npos;
-  Fail(line, std::string(pan ? "pan" : "tilt") + " axis hit its limit (the unit's own report)",
-       "the unit lost synchrony: check for an obstruction, then home (reset) it and resume");
-}
-
-// The lines that arrived unasked since the last reply (late replies, the unit's reports): a
-// limit hit among them is reported (once homed), the rest dropped.
-void FlirPtu::TakePending(bool report_limit_hit) {
-  for (const std::string& line : link_->ReadPending()) {
-    if (report_limit_hit && homed_ && IsLimitHit(line)) {
-      homed_ = false;
-      LimitHit(line);
-    }
-  }
-}
-
-bool FlirPtu::IsVersion(const std::string& line) const {
-  const std::size_t mark = line.find('*');
-  if (mark == std::string::npos) return false;
-  if (!version_.empty()) return line.find(version_, mark) != std::string::npos;
-  std::string upper = line.substr(mark);
-  for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return upper.find("PAN-TILT") != std::string::npos || upper.find("PTU") != std::string::npos;
-}
-
-// Sends V and reads until its answer, then on until the line is quiet: every other line answers
-// an earlier command (stale replies of a reset, of a previous session, whose own V may answer
-// first). A resetting unit answers nothing, for up to reset_wait_s; a device that answers but
-// never as a PTU is refused after `attempts` V's.
-void FlirPtu::SyncOnVersion() {
-  TakePending(true);
-  const auto deadline = Clock::now() + reset_wait_;
-  int answered = 0, unanswered = 0;
-  std::string heard;
-  link_->WriteLine("V");
-  while (true) {
-    if (Clock::now() >= deadline) {
-      if (answered > 0) break;
-      LinkFail("no answer to V within reset_wait_s (" + std::to_string(reset_wait_.count()) +
-                   " ms)" + (heard.empty() ? "" : "; last heard '" + heard + "'"),
-               "check the unit's power, cable and baud rate (PTU default 9600)");
-    }
-    std::string line;
-    try {
-      // Replies come in order: after a version only the answers to the other V's can follow,
-      // back to back (a 50-character line takes 52 ms at 9600 baud).
-      line = link_->ReadLine(answered > 0 ? std::min(timeout_, kQuietAfterVersion) : timeout_);
-    } catch (const LinkError&) {
-      if (answered > 0) break;  // quiet after the version: nothing stale is left
-      if (!heard.empty() && ++unanswered >= attempts_) {
-        Fail(heard, "the device on this port answers, but never with a pan-tilt unit's version",
-             "connect the PTU to this port or fix the rig file's port");
-      }
-      link_->WriteLine("V");
-      continue;
-    }
-    if (IsLimitHit(line) && homed_) {
-      homed_ = false;
-      LimitHit(line);
-    }
-    if (IsVersion(line)) {
-      ++answered;
-    } else if (answered == 0) {
-      heard = line;
-    }
-  }
-  out_of_step_ = false;
 }
 
 LineRequest FlirPtu::Request(const std::string& command, std::string* body) const {
@@ -376,9 +175,7 @@ DeviceIdentity FlirPtu::Identify() {
     Fail("", std::string("no PTU answers on this port: ") + e.what(),
          "check that the port is the PTU's (ls -l /dev/serial/by-id) and its baud rate");
   }
-  std::string upper = version;
-  for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  if (upper.find("PAN-TILT") == std::string::npos && upper.find("PTU") == std::string::npos) {
+  if (!ptu_text::NamesAPanTiltUnit(version)) {
     Fail(version, "the device on this port answered V with '" + version + "', not a pan-tilt "
                   "unit's version", "connect the PTU to this port or fix the rig file's port");
   }
@@ -436,41 +233,11 @@ void FlirPtu::WaitAt(milliseconds timeout, const std::string& what) {
   }
 }
 
-// Every axis stands still and one is away from its target. Back at 0/0 (where the power-up reset
-// leaves the unit) after being elsewhere, or with the rig's speed gone back to the default: the
-// unit restarted. An axis stuck at 0 since the move began is not told apart from it.
-void FlirPtu::StoppedShort(const std::string& what, const std::vector<long long>& positions) {
-  Stop();
-  bool at_power_up_pose = was_away_, speed_reset = false;
-  std::string short_axes;
-  for (std::size_t i = 0; i < axes_.size(); ++i) {
-    at_power_up_pose = at_power_up_pose && positions[i] == 0;
-    if (std::llabs(positions[i] - axes_[i].target) > tolerance_) {
-      short_axes += (short_axes.empty() ? "" : ", ") + AxisText(axes_[i]) + " at " +
-                    std::to_string(positions[i]) + " (target " +
-                    std::to_string(axes_[i].target) + ")";
-    }
-    if (spec_.settings.count("speed_deg_s")) {
-      const std::string p(1, axes_[i].letter);
-      speed_reset = speed_reset || std::llround(QueryNumber(p + "S")) != axes_[i].speed_pos_s;
-    }
-  }
-  if (homed_ && (at_power_up_pose || speed_reset)) {
-    homed_ = false;
-    moving_ = false;
-    throw DeviceRestarted(identity_.Brief() + ": " + what + " ended with " + short_axes +
-                              (speed_reset ? ", speeds reset" : ", at the power-up pose 0/0") +
-                              ": the unit was power-cycled or reset; home it and retake",
-                          false);
-  }
-  Fail("", what + " stopped short: " + short_axes,
-       "check for an obstruction, an overload or a stalled axis; then home");
-}
-
 // Manual: R resets (calibrates) both axes; the '*' may come when the reset ends. The rig's speeds
 // are set again, then the axes commanded to 0, where homing leaves them.
 void FlirPtu::Home() {
   homed_ = false;
+  if (restarted_) Reidentify();
   if (!Command("R", home_timeout_)) {
     LinkFail("no acknowledgement of the reset (R) within " +
                  std::to_string(home_timeout_.count()) + " ms",
@@ -528,6 +295,7 @@ void FlirPtu::StartMove(const StationPosition& target) {
 
 void FlirPtu::WaitSettled(milliseconds timeout) {
   WaitAt(timeout, "move");
+  ConfirmStopped(timeout);
   moving_ = false;
 }
 
@@ -547,25 +315,13 @@ void FlirPtu::Stop() noexcept {
   }
 }
 
-// At rest, an axis away from its target or speeds back to their defaults: the unit restarted
-// (its power-up reset moves the axes and resets the settings).
-void FlirPtu::CheckAlive() {
-  for (const PtuAxis& a : axes_) {
-    const long long pos = (!homed_ || moving_ || !a.has_target) ? Position(a) : StablePosition(a);
-    if (!homed_ || moving_ || !a.has_target) continue;
-    const bool moved = std::llabs(pos - a.target) > tolerance_;
-    const bool reset = spec_.settings.count("speed_deg_s") &&
-                       std::llround(QueryNumber(std::string(1, a.letter) + "S")) != a.speed_pos_s;
-    if (moved || reset) {
-      homed_ = false;
-      throw DeviceRestarted(identity_.Brief() + ": " + AxisText(a) + " at " +
-                                std::to_string(pos) + " instead of " + std::to_string(a.target) +
-                                (reset ? " and its speed reset" : "") +
-                                ": the unit was power-cycled or reset; home it and retake",
-                            false);
-    }
-  }
-}
+}  // namespace irdist::flir_ptu_internal
+
+namespace irdist {
+namespace {
+
+using flir_ptu_internal::FlirPtu;
+using flir_ptu_internal::kName;
 
 [[noreturn]] void Invalid(const DeviceSpec& spec, const std::string& message) {
   InvalidEntry(spec, kName, message);

@@ -5,7 +5,11 @@
 
 #include <boost/asio.hpp>
 
+#include <cerrno>
+#include <cstring>
 #include <istream>
+
+#include "station/port_lock.h"
 
 namespace irdist {
 
@@ -38,6 +42,21 @@ std::string CleanLine(const std::string& raw) {
     if (c != '\r' && c != '\n') clean.push_back(c);
   }
   return clean;
+}
+
+// Raw mode, as Asio's own open() sets it: no echo, no line editing, no character translation,
+// 8 data bits, receiver on, modem lines ignored. Closes the port and throws if it cannot be set.
+void MakeRaw(int fd, const std::string& port) {
+  termios tio{};
+  if (::tcgetattr(fd, &tio) == 0) {
+    ::cfmakeraw(&tio);
+    tio.c_cflag |= CREAD | CLOCAL;
+    if (::tcsetattr(fd, TCSANOW, &tio) == 0) return;
+  }
+  const int error = errno;
+  CloseExclusivePort(fd);
+  throw LinkError("cannot set the serial port to raw mode: " + std::string(std::strerror(error)),
+                  port, "check that the port is a serial device");
 }
 
 }  // namespace
@@ -85,14 +104,17 @@ SerialTransport::SerialTransport(const std::string& port, SerialOptions options,
   impl_->port_name = port;
   impl_->options = options;
   impl_->log = log;
+  // Opened for this command alone (flock and TIOCEXCL until the destructor): a second irdist on
+  // the same port is refused naming this process.
+  const int fd = OpenExclusivePort(port, options.origin);
+  MakeRaw(fd, port);
   boost::system::error_code ec;
-  impl_->port.open(port, ec);
+  impl_->port.assign(fd, ec);
   if (ec) {
-    throw LinkError("cannot open serial port: " + ec.message(), port,
-                    "check " + options.origin + ", that the device exists and that you may "
-                    "open it (group dialout)");
+    CloseExclusivePort(fd);
+    throw LinkError("cannot use serial port: " + ec.message(), port, "check " + options.origin);
   }
-  // A pty rejects some of these; what matters (raw mode) was set by open().
+  // A pty rejects some of these; what matters (raw mode) is set above.
   impl_->port.set_option(asio::serial_port_base::baud_rate(options.baud), ec);
   impl_->port.set_option(asio::serial_port_base::character_size(8), ec);
   impl_->port.set_option(asio::serial_port_base::parity(asio::serial_port_base::parity::none), ec);
@@ -103,6 +125,12 @@ SerialTransport::SerialTransport(const std::string& port, SerialOptions options,
 }
 
 SerialTransport::~SerialTransport() {
+  // Closing the descriptor drops the flock; the exclusive flag is cleared first (best effort: a
+  // destructor cannot report it, and the emulators clear a flag left behind).
+  const int fd = impl_->port.native_handle();
+  if (fd >= 0 && ::ioctl(fd, TIOCNXCL) != 0) {
+    // Left set: a real port drops it with this last close; a pty's emulator clears it.
+  }
   boost::system::error_code ignored;
   impl_->port.close(ignored);
 }

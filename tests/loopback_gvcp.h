@@ -3,20 +3,28 @@
 // rig, Aravis's arv-fake-gv-camera-0.8, or the irdist binary running one): only one camera can own
 // UDP 127.0.0.1:3956. Within one ctest run the tests hold the CTest lock IRDIST_GVCP_LOCK; across
 // build trees they take an exclusive flock on /tmp/irdist-gvcp-127.0.0.1.lock (the project's
-// convention for "I own the loopback GVCP port") and wait until the port is really free.
+// convention for "I own the loopback GVCP port") and wait until the port is really free. The lock
+// file is opened without following a link and must be a regular file: a link or FIFO planted
+// under that name in the shared /tmp is refused, never followed.
 
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <sys/file.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 namespace irdist::testing {
+
+inline constexpr char kLoopbackGvcpLockPath[] = "/tmp/irdist-gvcp-127.0.0.1.lock";
 
 inline bool LoopbackGvcpPortFree() {
   const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
@@ -43,11 +51,22 @@ inline bool WaitForLoopbackGvcpPort(std::chrono::seconds limit) {
 // Holds the loopback-GVCP flock and has waited until the port is free.
 class LoopbackGvcpLock {
  public:
-  LoopbackGvcpLock() {
-    fd_ = ::open("/tmp/irdist-gvcp-127.0.0.1.lock", O_CREAT | O_RDWR | O_CLOEXEC, 0666);
-    if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0) {
+  explicit LoopbackGvcpLock(const std::string& path = kLoopbackGvcpLockPath) {
+    fd_ = ::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0666);
+    std::string reason;
+    struct stat st {};
+    if (fd_ < 0) {
+      reason = std::strerror(errno);
+    } else if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
+      reason = "not a regular file";
+    } else if (::flock(fd_, LOCK_EX) != 0) {
+      reason = std::strerror(errno);
+    }
+    if (!reason.empty()) {
       Release();
-      throw std::runtime_error("cannot lock /tmp/irdist-gvcp-127.0.0.1.lock");
+      throw std::runtime_error("cannot lock " + path + " (" + reason +
+                               "; a symbolic link or other file planted there is never "
+                               "followed): remove it");
     }
     if (!WaitForLoopbackGvcpPort(std::chrono::seconds(60))) {
       Release();

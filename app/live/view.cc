@@ -1,10 +1,14 @@
 #include "app/live/view.h"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cctype>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -50,6 +54,17 @@ void CheckPngOutput(const std::string& path, bool force, const char* flag) {
   if (fs::exists(status) && !force) {
     throw RunFolderError(path + " exists: irdist does not replace a file unasked. Choose another " +
                          std::string(flag) + " name, or add --force to replace it.");
+  }
+  // The folder is checked now, before the camera starts or the station moves (issue 33).
+  const fs::path parent = fs::path(path).has_parent_path() ? fs::path(path).parent_path() : ".";
+  if (!fs::is_directory(parent, ec)) {
+    throw RunFolderError(std::string(flag) + " " + path + ": the folder " + parent.string() +
+                         " does not exist (or is not a folder); create it first or choose "
+                         "another " + flag + ".");
+  }
+  if (::access(parent.c_str(), W_OK) != 0) {
+    throw RunFolderError(std::string(flag) + " " + path + ": cannot write in " + parent.string() +
+                         " (" + std::strerror(errno) + "); choose another " + flag + ".");
   }
 }
 

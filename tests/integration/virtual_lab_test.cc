@@ -150,5 +150,26 @@ TEST(VirtualLab, AZaberPowerCycleMidSweepLosesNoFrame) {
   EXPECT_TRUE(RecordingReader(run.dir + "/run/recording").IsComplete());
 }
 
+// Issue 33 item 6: the PTU loses power mid-sweep and resets for 6 host seconds (60 simulated),
+// echoing commands and printing its banner and "Initializing..." meanwhile. The run stopped after
+// about 6 s saying the port answered "but never with a pan-tilt unit's version"; it waits the
+// reset out (reset_wait_s 60 s), homes the unit again, retakes the bracket and completes, every
+// frame once and labelled with its pose.
+TEST(VirtualLab, APtuPowerCutThatEchoesItsBannerIsWaitedOutAndTheRunCompletes) {
+  const std::string key = "      max_speed_pos_s: 12000";
+  const std::string rig =
+      LabRigWith({{key, "      power_cycle_after_s: 150.0\n      reset_s: 60.0\n" + key},
+                  {"      echo: false ", "      echo: true  "}});
+  ASSERT_FALSE(rig.empty()) << "recipes/rigs/virtual-lab.yaml changed; update this test";
+  const LabRun run = RunLab("lab-ptu-power-cut", rig);
+  ASSERT_EQ(run.code, 0) << run.output;
+  EXPECT_EQ(ExpectFramesMatchThePlan(run.dir + "/run"), 24) << run.output;
+  EXPECT_TRUE(RecordingReader(run.dir + "/run/recording").IsComplete());
+  const std::string log = testing::ReadAll(run.dir + "/run/station.log");
+  EXPECT_NE(log.find("head: Initializing..."), std::string::npos) << "no power cut happened";
+  // Mid-sweep (150 simulated s after the unit's own power-up reset began): one restart, one retake.
+  EXPECT_NE(run.output.find("1 retakes, 1 station reboots"), std::string::npos) << run.output;
+}
+
 }  // namespace
 }  // namespace irdist

@@ -1,7 +1,7 @@
 """Test of the install (cmake/IrdistInstall.cmake and `./irdist install`): into a fresh prefix,
 then, from a folder outside the source tree, P/bin/irdist plans a recipe whose rig is found in
 P/share/irdist (directly and through a symlink on PATH), the ./irdist launcher works through a
-symlink, and a python3 with only P's site-packages added reads the smoke calibration's recording
+symlink, an install through a linked folder is refused, and a python3 with only P's site-packages added reads the smoke calibration's recording
 into numpy and estimates a bracket within 1% of its truth."""
 import os
 import shutil
@@ -92,6 +92,26 @@ assert abs(m["d_mm"] - truth) < 0.01 * truth, m
         code, out = run([sys.executable, "-c", script], cwd=self.elsewhere,
                         env=self.env_without_the_build(PYTHONPATH=site[0]))
         self.assertEqual(code, 0, out)
+
+
+class InstallThroughALinkTest(unittest.TestCase):
+    """Issue 33: `./irdist install` wrote the recipes through a linked share/irdist/recipes. A link
+    anywhere the install writes stops it before the first write, naming the link."""
+
+    def test_a_linked_recipes_folder_is_refused_and_nothing_written_through_it(self):
+        with tempfile.TemporaryDirectory(prefix="irdist_install_link_") as tmp:
+            prefix = os.path.join(tmp, "p")
+            elsewhere = os.path.join(tmp, "elsewhere")
+            os.makedirs(os.path.join(prefix, "share", "irdist"))
+            os.makedirs(elsewhere)
+            link = os.path.join(prefix, "share", "irdist", "recipes")
+            os.symlink(elsewhere, link)
+            code, out = run([os.path.join(SOURCE, "irdist"), "install", "--prefix", prefix],
+                            cwd=tmp)
+            self.assertNotEqual(code, 0, out)
+            self.assertIn(f"{link} is a symbolic link", " ".join(out.split()))  # CMake wraps
+            self.assertEqual(os.listdir(elsewhere), [], "written through the link")
+            self.assertFalse(os.path.exists(os.path.join(prefix, "bin", "irdist")), out)
 
 
 if __name__ == "__main__":

@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <thread>
 
 #include "base/input_error.h"
 #include "tests/sim/pty_host.h"
@@ -39,7 +41,8 @@ class PtuEmulatorTest : public ::testing::Test {
   void SetUp() override {
     emulator_ = testing::MakeEmulator(world_, "flir_ptu", "head", Rig());
     ASSERT_NE(emulator_, nullptr);
-    host_ = std::make_unique<PtyHost>(emulator_->Start());
+    host_path_ = emulator_->Start();
+    host_ = std::make_unique<PtyHost>(host_path_);
   }
   std::string Ask(const std::string& command, int timeout_ms = 5000) {
     return host_->Ask(command + "\r\n", timeout_ms);
@@ -48,6 +51,7 @@ class PtuEmulatorTest : public ::testing::Test {
   World world_{20.0};
   std::unique_ptr<DeviceEmulator> emulator_;
   std::unique_ptr<PtyHost> host_;
+  std::string host_path_;
 };
 
 TEST_F(PtuEmulatorTest, AnswersVersionResolutionAndLimits) {
@@ -151,6 +155,9 @@ TEST_F(PtuEmulatorTest, FaultsDropGarbleDelayStickAndPowerCycle) {
   EXPECT_EQ(Ask("FV"), "*");
   EXPECT_EQ(Ask("PP2000"), "*");
   EXPECT_EQ(Ask("A", 5000), "*");  // the power-up reset brings it back to 0
+  // The power-up prints the controller's banner and "Initializing..." (the manuals' power-up).
+  EXPECT_NE(host_->ReadLine().find("Pan-Tilt Controller"), std::string::npos);
+  EXPECT_EQ(host_->ReadLine(), "Initializing...");
   EXPECT_EQ(Ask("PP"), "* 0");      // and the feedback mode is the power-on one (terse)
 }
 
@@ -186,6 +193,45 @@ TEST(PtuEmulatorReset, CommandsDuringAResetAreAnsweredWhenItEnds) {
   EXPECT_GE(world.clock().Now() - start_s, 0.5);
   EXPECT_EQ(host.ReadLine(1000), "* 0");
   EXPECT_EQ(host.ReadLine(1000), "* 0");
+}
+
+// Issue 33 item 6: a unit power-cycled mid-run prints its banner and "Initializing..." as the
+// manuals' power-up shows, and with its power-up echo on echoes each command sent during the
+// reset at once; the commands are answered, in order, only when the reset ends.
+TEST(PtuEmulatorReset, APowerCyclePrintsItsBannerAndEchoesWhileItResets) {
+  World world(1.0);
+  auto emulator = testing::MakeEmulator(world, "flir_ptu", "head",
+                                        Rig("      reset_s: 1.0\n"
+                                            "      echo: true\n"));
+  ASSERT_NE(emulator, nullptr);
+  PtyHost host(emulator->Start());
+  std::this_thread::sleep_for(std::chrono::milliseconds(1200));  // the first power-up: unseen
+  host.Send("ED\r\n");
+  EXPECT_EQ(host.ReadLine(1000), "ED");  // echoed: echo is on at power-up
+  EXPECT_EQ(host.ReadLine(1000), "*");
+  EXPECT_EQ(host.Ask("PP2000\r\n"), "*");
+  EXPECT_EQ(host.Ask("A\r\n", 5000), "*");  // at 2000: the power-up reset's return takes 2 s
+  emulator->PowerCycle();
+  const double start_s = world.clock().Now();
+  EXPECT_EQ(host.ReadLine(1000), "Pan-Tilt Controller v3.4.2 (emulated, irdist)");
+  EXPECT_EQ(host.ReadLine(1000), "Initializing...");
+  host.Send("PP\r\n");
+  host.Send("A\r\n");  // await: run once the reset ends, it waits in simulated time itself
+  host.Send("V\r\n");
+  EXPECT_EQ(host.ReadLine(300), "PP");  // echoed at once, though the unit is resetting
+  EXPECT_EQ(host.ReadLine(300), "A");
+  EXPECT_EQ(host.ReadLine(300), "V");
+  EXPECT_EQ(host.ReadLine(200), "");    // no answer yet
+  EXPECT_EQ(host.ReadLine(3000).substr(0, 2), "* ");  // on its way back to 0
+  EXPECT_GE(world.clock().Now() - start_s, 1.0);
+  EXPECT_EQ(host.ReadLine(5000), "*");  // A: once the axes stand at 0
+  EXPECT_NE(host.ReadLine(1000).find("* Pan-Tilt Controller"), std::string::npos);
+  EXPECT_EQ(host.Ask("PP\r\n"), "PP");  // echo on still (the power-up default)
+  EXPECT_EQ(host.ReadLine(1000), "* 0");
+}
+
+TEST_F(PtuEmulatorTest, AnExclusiveFlagLeftByADeadClientIsCleared) {
+  testing::ExpectAbandonedExclusiveReleased(host_path_);
 }
 
 TEST_F(PtuEmulatorTest, ASpeedAboveTheUpperBoundIsRefused) {

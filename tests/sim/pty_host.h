@@ -5,6 +5,8 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
+#include <sys/file.h>
+#include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -107,6 +109,34 @@ bool WaitFor(Done done, double timeout_s = 10.0) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   return done();
+}
+
+// The pty's exclusive flag (TIOCEXCL) as a new opener finds it.
+inline bool PtyExclusive(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);  // root passes EBUSY
+  int flag = -1;
+  EXPECT_GE(fd, 0) << path;
+  EXPECT_EQ(::ioctl(fd, TIOCGEXCL, &flag), 0);
+  ::close(fd);
+  return flag == 1;
+}
+
+// Issue 33: a client killed while it held the pty exclusive (TIOCEXCL, no flock left) must not
+// lock every later non-root client out: the emulator clears the flag within a second; while a
+// client holds its flock the flag stays.
+inline void ExpectAbandonedExclusiveReleased(const std::string& path) {
+  const int live = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
+  ASSERT_GE(live, 0) << path;
+  ASSERT_EQ(::flock(live, LOCK_EX | LOCK_NB), 0);
+  ASSERT_EQ(::ioctl(live, TIOCEXCL), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_TRUE(PtyExclusive(path)) << "cleared under a live client";
+  ::close(live);  // killed: the flock goes with the process, the flag stays on the tty
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  while (PtyExclusive(path) && std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_FALSE(PtyExclusive(path)) << "the flag of a dead client stays on " << path;
 }
 
 }  // namespace irdist::sim::testing

@@ -1,6 +1,7 @@
 #include "sim/station_emulator.h"
 
 #include "base/input_error.h"
+#include "tests/sim/pty_host.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -200,6 +201,12 @@ TEST(StationEmulator, PowersUpUnhomedIredOffWithABootId) {
   EXPECT_EQ(host.Ask("SYST:ERR?"), "OK 0,\"No error\"");
   EXPECT_EQ(host.Ask("MOVE 200000,0,0"), "ERR 201,\"Not homed\"");
   EXPECT_EQ(world.Pose().bias_ma, 0.0);
+}
+
+TEST(StationEmulator, AnExclusiveFlagLeftByADeadClientIsCleared) {
+  World world(50.0);
+  StationEmulator emulator(world, EmulatorOptions{});
+  testing::ExpectAbandonedExclusiveReleased(emulator.Start());
 }
 
 TEST(StationEmulator, HomesAndMovesInTheTimeTheProfileSays) {

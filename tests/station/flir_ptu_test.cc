@@ -12,6 +12,7 @@
 #include "station/driver.h"
 #include "station/serial_transport.h"
 #include "tests/station/fake_transport.h"
+#include "tests/station/rig_fixture.h"
 
 namespace irdist {
 namespace {
@@ -46,6 +47,12 @@ struct Ptu {
     if (c == "FT") { terse = true; return "*"; }
     if (c == "V") return "* " + version;
     if (c == "I" || c == "H") return "*";
+    if (c == "A") {  // await: answers once both axes stand still
+      for (PtuAxisModel* a : {&pan, &tilt}) {
+        while (!a->stuck && a->pos != a->target) a->Step();
+      }
+      return "*";
+    }
     if (c == "R") {
       pan.target = tilt.target = 0;
       pan.pos = 1500;  // the reset swept the axes to their limits; they come back on polls
@@ -425,6 +432,85 @@ TEST(FlirPtuEmulated, ANewSessionReadsStaleRepliesAwayBeforeIdentifying) {
   StationPosition p;
   next->motion()->ReadPosition(&p);
   EXPECT_NEAR(p.pan_deg, 0.0, 1e-9);
+}
+
+// Issue 33 item 6: a unit that loses power mid-run resets for longer than every retry while
+// echoing commands and printing its banner and "Initializing..." (the manuals' power-up). It is
+// waited for (reset_wait_s), found restarted (DeviceRestarted, not "answers, but never with a
+// pan-tilt unit's version"), identified and homed again, and moves on.
+TEST(FlirPtuEmulated, AResetThatEchoesAndPrintsItsBannerIsWaitedForAndHomedAgain) {
+  EmulatedHead head("      reset_s: 1.5\n      echo: true\n");
+  DeviceSpec spec = EmulatedHead::Spec();
+  spec.settings["speed_deg_s"] = {"40", 13};
+  std::unique_ptr<DeviceDriver> driver = head.Open(spec);
+  Motion& motion = *driver->motion();
+  motion.Identify();  // during the first power-up reset: its echo is waited out too
+  motion.Home();
+  StationPosition target;
+  target.pan_deg = 10.0;
+  motion.StartMove(target);
+  motion.WaitSettled(std::chrono::milliseconds(20000));
+  head.emulator->PowerCycle();
+  try {
+    motion.CheckAlive();
+    FAIL() << "a power cycle went unseen";
+  } catch (const DeviceRestarted& e) {
+    EXPECT_NE(std::string(e.what()).find("home it and retake"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(motion.State(), MotionState::kUnhomed);
+  motion.Home();  // what the sweep does on a restart
+  motion.StartMove(target);
+  motion.WaitSettled(std::chrono::milliseconds(20000));
+  EXPECT_NEAR(head.world.Pose().pan_deg, 10.0, 0.03);
+  StationPosition read;
+  motion.ReadPosition(&read);
+  EXPECT_NEAR(read.pan_deg, 10.0, 0.03);
+}
+
+// The same power cut in the middle of a move: the wait for the move sees the reset through and
+// reports the restart; homed again, the retaken move lands.
+TEST(FlirPtuEmulated, APowerCutMidMoveIsARestartOnceTheResetEnds) {
+  EmulatedHead head("      reset_s: 1.5\n      echo: true\n");
+  std::unique_ptr<DeviceDriver> driver = head.Open(EmulatedHead::Spec());
+  Motion& motion = testing::IdentifiedAndHomed(*driver);
+  StationPosition target;
+  target.pan_deg = 20.0;
+  target.tilt_deg = -5.0;
+  motion.StartMove(target);
+  head.emulator->PowerCycle();
+  EXPECT_THROW(motion.WaitSettled(std::chrono::milliseconds(20000)), DeviceRestarted);
+  motion.Home();
+  motion.StartMove(target);
+  motion.WaitSettled(std::chrono::milliseconds(20000));
+  EXPECT_NEAR(head.world.Pose().pan_deg, 20.0, 0.03);
+  EXPECT_NEAR(head.world.Pose().tilt_deg, -5.0, 0.03);
+}
+
+// Issue 33 item 6: no move ends (and so no frame is exposed) before the unit has confirmed the
+// end of its last command: positions read within the rig's tolerance of the target while the
+// axes still creep in (a slow deceleration) are not the end of the move, and with replies dropped
+// and delayed past the reply timeout no late or lost reply is taken for the confirmation: every
+// move returns with the unit at rest at its target.
+TEST(FlirPtuEmulated, NoMoveEndsBeforeTheUnitConfirmsIt) {
+  EmulatedHead head("      pan_accel_pos_s2: 200\n      tilt_accel_pos_s2: 200\n");
+  DeviceSpec spec = EmulatedHead::Spec();
+  spec.reply_timeout_ms = 250;
+  spec.settings["retries"] = {"6", 11};
+  spec.settings["tolerance_positions"] = {"3", 14};
+  std::unique_ptr<DeviceDriver> driver = head.Open(spec);
+  Motion& motion = testing::IdentifiedAndHomed(*driver);
+  head.emulator->SetFaults(testing::LossyReplies(0.5));
+  for (int i = 0; i < 6; ++i) {
+    StationPosition target;
+    target.pan_deg = (i % 2 == 0 ? 1.0 : -1.0) * (1.0 + 0.5 * i);
+    target.tilt_deg = i % 3 == 0 ? 0.0 : 0.25 * i;  // some moves leave the tilt where it is
+    motion.StartMove(target);
+    motion.WaitSettled(std::chrono::milliseconds(20000));
+    const sim::PoseState pose = head.world.Pose();
+    EXPECT_FALSE(pose.moving) << "move " << i << " ended while the unit was still moving";
+    EXPECT_NEAR(pose.pan_deg, target.pan_deg, 0.03) << "move " << i;
+    EXPECT_NEAR(pose.tilt_deg, target.tilt_deg, 0.03) << "move " << i;
+  }
 }
 
 // The unit's own "!P" (the pan axis hit a limit and lost synchrony) is reported as such.

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "sim/device_emulator.h"
 #include "sim/station_emulator.h"
 #include "sim/world.h"
 #include "station/line_log.h"
@@ -84,6 +85,24 @@ inline double TrapezoidS(double distance, double speed, double accel) {
   if (distance <= 0) return 0.0;
   if (distance >= speed * speed / accel) return distance / speed + speed / accel;
   return 2.0 * std::sqrt(distance / accel);
+}
+
+// A link as hostile as issue 33's: 10% of the replies dropped, 10% delayed by `delay_s`
+// (simulated seconds), for a driver's test against its emulator.
+inline sim::EmulatorFaults LossyReplies(double delay_s) {
+  sim::EmulatorFaults faults;
+  faults.drop_rate = 0.1;
+  faults.delay_rate = 0.1;
+  faults.delay_s = delay_s;
+  return faults;
+}
+
+// The driver's motion role, identified and homed.
+inline Motion& IdentifiedAndHomed(DeviceDriver& driver) {
+  Motion& motion = *driver.motion();
+  motion.Identify();
+  motion.Home();
+  return motion;
 }
 
 }  // namespace irdist::testing

@@ -12,6 +12,7 @@
 #include "station/driver.h"
 #include "station/serial_transport.h"
 #include "tests/station/fake_transport.h"
+#include "tests/station/rig_fixture.h"
 
 namespace irdist {
 namespace {
@@ -373,6 +374,33 @@ TEST(ScpiSourceEmulated, OneFlippedBitInTheOutputStateDoesNotStopTheRun) {
   source->SetCurrent(475.0);
   EXPECT_NEAR(source->Measure().current_ma, 475.0, 0.01);
   EXPECT_NEAR(world.Pose().bias_ma, 475.0, 0.01);
+}
+
+// Issue 33 item 6: with replies dropped and delayed past the reply timeout, SetCurrent returns
+// only once the instrument has taken the level (its error query answered after it, in order; a
+// late answer to an earlier query is never that answer), so no frame is exposed at the old one.
+TEST(ScpiSourceEmulated, NoLevelCountsAsSetBeforeTheInstrumentTookIt) {
+  sim::World world(20.0);
+  const std::string rig =
+      "station:\n  devices:\n    source:\n      driver: scpi_source\n      port: auto\n"
+      "      compliance_v: 3.0\n";
+  std::unique_ptr<sim::DeviceEmulator> emulator = sim::FindEmulator("scpi_source")->create(
+      world, {"source", "scpi_source", "inline.yaml", rig, 1});
+  DeviceSpec spec = SourceSpec();
+  spec.port = emulator->Start();
+  spec.reply_timeout_ms = 100;
+  spec.settings["retries"] = {"8", 26};
+  SerialOptions serial;
+  serial.line_end = FindDriver("scpi_source")->line_end;
+  std::unique_ptr<DeviceDriver> driver = FindDriver("scpi_source")->create(
+      spec, std::make_unique<SerialTransport>(spec.port, serial));
+  CurrentSource* source = driver->source();
+  source->Identify();
+  emulator->SetFaults(testing::LossyReplies(4.0));  // 0.2 s at this time scale: late replies
+  for (const double bias_ma : {100.0, 475.0, 250.0, 600.0, 50.0, 320.0}) {
+    source->SetCurrent(bias_ma);
+    EXPECT_NEAR(world.Pose().bias_ma, bias_ma, 0.01) << "returned before the level was taken";
+  }
 }
 
 }  // namespace

@@ -2,10 +2,13 @@
 
 #include <gtest/gtest.h>
 #include <pty.h>
+#include <sys/ioctl.h>
+#include <sys/stat.h>
 #include <termios.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -137,6 +140,72 @@ TEST(SerialTransport, InvalidBaudIsALinkErrorNamingWhereItWasGiven) {
     EXPECT_NE(e.fix().find("check the PORT and --baud of irdist station-test"), std::string::npos)
         << e.what();
   }
+}
+
+
+// Issue 33 item 5: two commands on one port both moved the station. The port is held for the
+// transport's lifetime (flock and TIOCEXCL); a second opener is refused naming the holder's pid
+// and command; once the holder closes, the port opens again and is no longer exclusive.
+TEST(SerialTransport, SecondOpenerIsRefusedNamingTheHolder) {
+  Pty pty;
+  auto exclusive = [&] {
+    int flag = -1;
+    EXPECT_EQ(ioctl(pty.slave, TIOCGEXCL, &flag), 0);
+    return flag;
+  };
+  {
+    SerialTransport first(pty.path);
+    EXPECT_EQ(exclusive(), 1);
+    try {
+      SerialTransport second(pty.path);
+      FAIL() << "a second opener of " << pty.path << " was let in";
+    } catch (const LinkError& e) {
+      const std::string holder = "in use by process " + std::to_string(getpid()) + " (";
+      EXPECT_NE(e.failure().find(holder), std::string::npos) << e.what();
+      EXPECT_NE(e.failure().find("test_station_serial_transport"), std::string::npos) << e.what();
+      EXPECT_EQ(e.where(), pty.path);
+      EXPECT_FALSE(e.fix().empty());
+    }
+    first.WriteLine("still mine");
+    EXPECT_EQ(pty.Receive(), "still mine\r\n");
+  }
+  EXPECT_EQ(exclusive(), 0);  // cleared at close: the emulator's side keeps the tty open
+  SerialTransport again(pty.path);
+  EXPECT_EQ(exclusive(), 1);
+}
+
+// Issue 33 item 7: a rig whose port is /dev/zero or a FIFO said "not found". It says what the
+// file is and that a serial device (a character device that is a tty) is needed.
+TEST(SerialTransport, NonSerialPortsAreNamedForWhatTheyAre) {
+  char dir_template[] = "/tmp/irdist_serial_XXXXXX";
+  ASSERT_NE(mkdtemp(dir_template), nullptr);
+  const std::string dir = dir_template;
+  const std::string fifo = dir + "/fifo", plain = dir + "/plain";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  std::ofstream(plain) << "x";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"/dev/zero", "a character device but not a tty"},
+      {"/dev/null", "a character device but not a tty"},
+      {fifo, "a FIFO (named pipe), not a serial port"},
+      {plain, "a regular file, not a serial port"},
+      {dir, "a folder, not a serial port"},
+      {dir + "/missing", "no such serial port"}};
+  for (const auto& [path, said] : cases) {
+    try {
+      SerialTransport transport(path);
+      ADD_FAILURE() << path << " opened as a serial port";
+    } catch (const LinkError& e) {
+      EXPECT_NE(e.failure().find(said), std::string::npos) << e.what();
+      EXPECT_EQ(e.where(), path);
+      if (path != dir + "/missing") {
+        EXPECT_NE(e.failure().find("a character device that is a tty"), std::string::npos)
+            << e.what();
+      }
+    }
+  }
+  unlink(fifo.c_str());
+  unlink(plain.c_str());
+  rmdir(dir.c_str());
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "station/driver.h"
 #include "station/serial_transport.h"
 #include "tests/station/fake_transport.h"
+#include "tests/station/rig_fixture.h"
 
 namespace irdist {
 namespace {
@@ -452,6 +453,29 @@ TEST(ZaberAsciiEmulated, RepliesAreChecksummedAndADamagedPositionIsNeverTaken) {
     EXPECT_DOUBLE_EQ(p.slide_mm, at.slide_mm);
   }
   EXPECT_EQ(dynamic_cast<sim::LineDevice&>(*slide.emulator).RepliesFlipped(), 2u);
+}
+
+// Issue 33 item 6: no move ends (and so no frame is exposed) before the stage itself says it is
+// idle: with replies dropped and delayed past the reply timeout, every move returns with the
+// stage at rest at its target; a late reply (its message id an earlier one's) is never taken.
+TEST(ZaberAsciiEmulated, NoMoveEndsBeforeTheStageConfirmsIt) {
+  EmulatedSlide slide("");
+  DeviceSpec spec = SlideSpec();
+  spec.settings["retries"] = {"8", 9};
+  std::unique_ptr<DeviceDriver> driver = slide.Open(spec);
+  Motion& motion = testing::IdentifiedAndHomed(*driver);
+  // 4 simulated seconds: 0.2 s at the bench's time scale, twice the reply timeout.
+  slide.emulator->SetFaults(testing::LossyReplies(4.0));
+  for (int i = 0; i < 8; ++i) {
+    StationPosition target;
+    target.slide_mm = 1200.0 + 37.5 * i;
+    motion.StartMove(target);
+    motion.WaitSettled(std::chrono::milliseconds(60000));
+    EXPECT_FALSE(slide.world.Pose().moving) << "move " << i << " ended while still moving";
+    StationPosition at;
+    motion.ReadPosition(&at);
+    EXPECT_NEAR(at.slide_mm, target.slide_mm, 0.01) << "move " << i;
+  }
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "app/devices/station_cmd.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <fstream>
 #include <map>
@@ -12,6 +13,7 @@
 #include "sim/device_emulator.h"
 #include "sim/station_emulator.h"
 #include "sim/world.h"
+#include "station/serial_transport.h"
 
 namespace irdist {
 namespace {
@@ -59,6 +61,24 @@ TEST_F(StationCommand, AMoveBeforeHomeSaysItHomesFirstAndNamesTheHomeCommand) {
   Run("move", {1600.0, 0.0, 0.0});
   EXPECT_EQ(err_.find("homing first"), std::string::npos) << err_;
   EXPECT_NEAR(world_.Pose().slide_mm, 1600.0, 1e-6);
+}
+
+// Issue 33 item 5: two commands on one port both moved the station, each printing its own
+// target. A port in use (here held by this process, as a calibrate would hold it) is refused
+// before anything is sent, naming the holder.
+TEST_F(StationCommand, APortInUseIsRefusedNamingItsHolder) {
+  SerialTransport holder(port_);
+  const double slide_mm = world_.Pose().slide_mm;
+  try {
+    Run("move", {1800.0, 5.0, 0.0});
+    FAIL() << "a second command drove a port in use";
+  } catch (const LinkError& e) {
+    EXPECT_NE(std::string(e.what()).find("in use by process " + std::to_string(getpid())),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(world_.Pose().slide_mm, slide_mm);
+  EXPECT_FALSE(world_.Pose().moving);
 }
 
 TEST_F(StationCommand, TheCurrentStaysOnUntilOff) {

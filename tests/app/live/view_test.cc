@@ -134,6 +134,17 @@ TEST(Snap, RefusesAnExistingFileALinkAndAnotherFormatBeforeTheCamera) {
   snap.out = dir + "/link.png";
   snap.force = true;
   EXPECT_THROW(RunSnap(snap, {out, err}), RunFolderError);
+  // Issue 33: a missing folder was found only after the station had moved to --at.
+  snap.out = dir + "/missing/dir/x.png";
+  snap.at = {2000.0, 0.0, 0.0, 490.0};
+  try {
+    RunSnap(snap, {out, err});
+    FAIL() << "snap accepted an --out in a missing folder";
+  } catch (const RunFolderError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir + "/missing/dir does not exist"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(err.str().find("--at:"), std::string::npos) << "the station moved: " << err.str();
   ViewArgs view;
   view.rig = VirtualRig();
   view.screenshot = dir + "/recorded.png";
