@@ -16,6 +16,7 @@
 #include "app/live/view.h"
 #include "app/runs/offline.h"
 #include "app/runs/run.h"
+#include "app/runs/run_suggest.h"
 #include "base/bounds.h"
 #include "sim/rig_physics.h"
 #include "station/plan.h"

@@ -34,8 +34,8 @@ struct Handlers {
   std::function<void(const CameraTestArgs&, CommandIo)> camera_test;
 };
 
-// The handlers of this build: every command (app/runs/run.h, app/runs/offline.h,
-// app/devices/tools.h).
+// The handlers of this build: every command (app/runs/run.h, app/runs/run_suggest.h,
+// app/runs/offline.h, app/devices/tools.h).
 Handlers DefaultHandlers();
 
 // Names of the subcommands, in help order.

@@ -1,5 +1,6 @@
 #include "app/processing/frame_features.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -42,10 +43,24 @@ int BitDepthOfPixelFormat(const std::string& pixel_format) {
   return format == nullptr ? 16 : format->bit_depth;
 }
 
+void CheckFrameHoldsWindow(const cv::Mat& image, const FeatureOptions& options) {
+  const int side_px = options.window_side_px;
+  if (image.cols >= side_px && image.rows >= side_px) return;
+  throw FeatureWindowError(
+      "a frame of " + std::to_string(image.cols) + " x " + std::to_string(image.rows) +
+      " px (width x height) is smaller than the features' window, features.window_side_px " +
+      std::to_string(side_px) + " (" + std::to_string(side_px) + " x " + std::to_string(side_px) +
+      " px): use the model on frames of the ROI it was calibrated on, or calibrate one on this "
+      "ROI with features.window_side_px at most " +
+      std::to_string(std::min(image.cols, image.rows)) + " (docs/recipes.md, Bounds)");
+}
+
 namespace {
 
+// The scene pass, on a frame that holds the window (refused before it otherwise).
 SceneFrame SceneOf(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
                    const SceneContext* scene) {
+  CheckFrameHoldsWindow(image, options);
   SceneContext context = scene != nullptr ? *scene : SceneContext();
   context.window_side_px = options.window_side_px;
   return CleanScene(image, bit_depth, options.scene, context);

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "base/check.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
 
@@ -25,10 +26,22 @@ struct RecordedBracket;
 // Significant bits of a GenICam pixel format ("Mono12" -> 12); 16 when unknown.
 int BitDepthOfPixelFormat(const std::string& pixel_format);
 
+// A frame smaller than the features' window (FeatureOptions::window_side_px, a model's
+// features.window_side_px): most often a model without provenance (its ROI never checked against
+// the window) used on a smaller ROI. Its message names the key, the frame's size and the fix.
+class FeatureWindowError : public Error {
+ public:
+  using Error::Error;
+};
+
+// Throws FeatureWindowError when `image` is narrower or lower than options.window_side_px.
+void CheckFrameHoldsWindow(const cv::Mat& image, const FeatureOptions& options);
+
 // Features of every row of a recording, by frame index.
 using FeatureMap = std::map<std::int64_t, Features>;
 
-// The features of one frame: the single function live and playback runs use. First the scene
+// The features of one frame: the single function live and playback runs use. A frame smaller
+// than the window is refused first (CheckFrameHoldsWindow). Then the scene
 // pass (options.scene, estimator/scene.h CleanScene: defect pixels replaced, other blobs masked,
 // occlusion and second sources named in Features::scene), then the features of the cleaned frame;
 // with a model (`blob_fit_model` non-null: the estimation default), the blob's moment variances

@@ -1,15 +1,8 @@
 #include "app/runs/run.h"
 
-#include <unistd.h>
-
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <ctime>
-#include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <memory>
 #include <optional>
@@ -18,7 +11,6 @@
 #include <sstream>
 #include <thread>
 
-#include "acquisition/recording_reader.h"
 #include "app/cli/stop_signal.h"
 #include "app/devices/station_setup.h"
 #include "app/inputs/camera_settings.h"
@@ -31,8 +23,8 @@
 #include "app/runs/capture.h"
 #include "app/runs/linearity_check.h"
 #include "app/runs/resume.h"
-#include "app/runs/suggest.h"
-#include "base/safe_file.h"
+#include "app/runs/run_folder.h"
+#include "app/runs/run_progress.h"
 #include "base/yaml_fields.h"
 #include "estimator/model_file.h"
 #include "sim/virtual_rig.h"
@@ -42,109 +34,12 @@
 
 namespace irdist {
 
-namespace fs = std::filesystem;
-
 namespace {
 
 constexpr const char* kSoftwareVersion = "irdist 0.1.0";
 
 // A recipe's or rig file's text, through the one reader that refuses FIFOs and devices.
 std::string ReadText(const std::string& path) { return yaml_fields::ReadFile(path); }
-
-std::string Timestamp() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  localtime_r(&now, &tm);
-  char buffer[32];
-  std::strftime(buffer, sizeof(buffer), "%Y%m%d-%H%M%S", &tm);
-  return buffer;
-}
-
-// Progress on stderr: a bar with ETA on a terminal, one log line per pose otherwise.
-class Progress {
- public:
-  Progress(std::ostream& err, bool quiet, int total, double estimate_host_s)
-      : err_(err),
-        quiet_(quiet),
-        tty_(isatty(STDERR_FILENO) == 1),
-        total_(total),
-        estimate_host_s_(estimate_host_s),
-        start_(std::chrono::steady_clock::now()) {}
-
-  void Update(int done, const std::string& what) {
-    if (quiet_) return;
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    // The plan's estimate per pose, corrected by the rate measured since the first pose was
-    // done (before it, homing and the move from home would make the rate look slow).
-    const double per_pose_plan = total_ > 0 ? estimate_host_s_ / total_ : 0.0;
-    double per_pose = per_pose_plan;
-    if (first_done_ < 0) {
-      first_done_ = done;
-      first_time_ = std::chrono::steady_clock::now();
-    } else if (done > first_done_) {
-      const int measured_poses = done - first_done_;
-      const double measured =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - first_time_).count() /
-          measured_poses;
-      const double weight = std::min(1.0, measured_poses / 5.0);
-      per_pose = weight * measured + (1.0 - weight) * per_pose_plan;
-    }
-    const double eta = per_pose * (total_ - done);
-    const double fraction = total_ > 0 ? static_cast<double>(done) / total_ : 1.0;
-    if (tty_) {
-      constexpr int kWidth = 30;
-      const int filled = static_cast<int>(fraction * kWidth);
-      err_ << "\r[" << std::string(static_cast<size_t>(filled), '#')
-           << std::string(static_cast<size_t>(kWidth - filled), '.') << "] " << done << "/"
-           << total_ << " poses, ETA " << FormatDuration(eta) << "   " << std::flush;
-      line_open_ = true;
-    } else {
-      err_ << "pose " << done << "/" << total_ << " (" << what << "), elapsed "
-           << FormatDuration(elapsed) << ", ETA " << FormatDuration(eta) << "\n";
-    }
-  }
-  void Finish() {
-    if (line_open_) err_ << "\n";
-    line_open_ = false;
-  }
-
- private:
-  std::ostream& err_;
-  bool quiet_;
-  bool tty_;
-  int total_;
-  double estimate_host_s_;
-  std::chrono::steady_clock::time_point start_;
-  int first_done_ = -1;  // poses done at the first update, and when
-  std::chrono::steady_clock::time_point first_time_;
-  bool line_open_ = false;
-};
-
-enum class RunKind { kCalibrate, kValidate };
-
-struct RunRequest {
-  RunKind kind = RunKind::kCalibrate;
-  std::string recipe_path;
-  std::string model_path;  // validate
-  std::string out_dir;
-  std::string resume_dir;
-  double time_scale = 0.0;
-  bool quiet = false;
-  bool allow_model_mismatch = false;  // validate
-  bool allow_nonlinear = false;       // calibrate: --allow-nonlinear
-  // validate on hardware: the model's camera serial, which AravisCamera::Open then requires
-  // ("" = none: another camera is allowed, or the model does not say).
-  std::string expected_serial;
-};
-
-// What the recording phase leaves for the processing phase.
-struct Recorded {
-  std::string dir;
-  FeatureMap cache;  // features of the frames captured in this session
-  bool cut = false;
-  std::unique_ptr<RunFolderLock> lock;  // held through the processing too
-};
 
 std::vector<Pose> SweepPoses(const Plan& plan, const std::set<std::int64_t>& done) {
   std::vector<Pose> poses;
@@ -156,73 +51,6 @@ std::vector<Pose> SweepPoses(const Plan& plan, const std::set<std::int64_t>& don
 
 void SleepHostMs(double ms) {
   if (ms > 0.0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(ms));
-}
-
-// A free station.N.log name for the log of an earlier session.
-std::string KeepEarlierLog(const std::string& dir) {
-  const std::string current = dir + "/station.log";
-  if (!fs::exists(current)) return "";
-  for (int n = 1;; ++n) {
-    std::string kept = dir + "/station." + std::to_string(n) + ".log";
-    if (!fs::exists(kept)) {
-      fs::rename(current, kept);
-      return kept;
-    }
-  }
-}
-
-const char* CommandName(RunKind kind) {
-  return kind == RunKind::kCalibrate ? "calibrate" : "validate";
-}
-
-// The files a finished run of `recipe` leaves in its folder, the last one written last.
-std::vector<std::string> ResultsOf(RunKind kind, const Recipe& recipe) {
-  if (recipe.after == AfterRecording::kNone) return {"features.csv"};
-  if (kind == RunKind::kCalibrate) return {"model.yaml", "report/index.html"};
-  return {"estimates.csv", "summary.yaml", "report/index.html"};
-}
-
-// A new run folder holds no recording or results of another run (nor a link in their place).
-void RefuseOtherResults(const std::string& dir, RunKind kind) {
-  for (const char* name : {"recording", "model.yaml", "features.csv", "estimates.csv",
-                           "summary.yaml", "report"}) {
-    const fs::path path = fs::path(dir) / name;
-    std::error_code ec;
-    if (fs::exists(fs::symlink_status(path, ec))) {
-      throw RunFolderError(path.string() + " exists already: irdist " + CommandName(kind) +
-                           " never replaces a run's recording or results. Continue that run "
-                           "with --resume " + ShellQuoted(dir) + ", or choose a new --out "
-                           "folder.");
-    }
-  }
-}
-
-// The run folder: a new one, or the cut run to resume (its complete brackets in `done_ids`).
-// Returns false when the recording to resume is complete already (only its processing is left).
-bool PrepareRunFolder(const RunRequest& request, const Recipe& recipe, const Plan& plan,
-                      const std::string& recipe_text, CommandIo io, Recorded* recorded,
-                      std::set<std::int64_t>* done_ids) {
-  if (request.resume_dir.empty()) {
-    recorded->dir =
-        request.out_dir.empty() ? recipe.output_dir + "-" + Timestamp() : request.out_dir;
-    RefuseOtherResults(recorded->dir, request.kind);
-    CreateRunFolder(recorded->dir);
-    return true;
-  }
-  recorded->dir = request.resume_dir;
-  ResumeExpectation expected = ResumeExpectationOf(recipe, recipe_text, ReadText(recipe.rig_path));
-  expected.results = ResultsOf(request.kind, recipe);
-  const ResumeState state = CheckResume(recorded->dir, CommandName(request.kind), expected);
-  if (state.complete) {
-    io.err << "Resuming " << recorded->dir << ": the recording is complete but "
-           << state.missing_result << " is missing (the run was stopped while processing); "
-           << "processing it now.\n";
-    return false;
-  }
-  *done_ids = state.complete_brackets;
-  io.err << "Resuming " << recorded->dir << ": " << done_ids->size() << " of "
-         << plan.poses.size() << " brackets already recorded.\n";
-  return true;
 }
 
 // Where the rig's devices and camera are: a virtual rig is started here (and stopped by the
@@ -431,17 +259,20 @@ LiveCaptureSetup RecorderSetup(const RunRequest& request, const Recipe& recipe,
   return setup;
 }
 
+}  // namespace
+
 Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& plan,
                 const FeatureOptions& feature_options, const CalibrationModel* blob_fit_model,
                 CommandIo io) {
   Recorded recorded;
   const std::string recipe_text = ReadText(recipe.path);
-  std::set<std::int64_t> done_ids;
-  const bool record = PrepareRunFolder(request, recipe, plan, recipe_text, io, &recorded, &done_ids);
+  RunFolder folder = OpenRunFolder(request.kind, request.out_dir, request.resume_dir, recipe, plan,
+                                   recipe_text, io.err);
+  recorded.dir = folder.dir;
+  recorded.lock = std::move(folder.lock);
+  const std::set<std::int64_t>& done_ids = folder.done_ids;
   const std::string command = CommandName(request.kind);
-  // One run per folder, for the whole run (recording and processing).
-  recorded.lock = std::make_unique<RunFolderLock>(recorded.dir, command);
-  if (!record) return recorded;
+  if (!folder.record) return recorded;
   const std::vector<Pose> poses = SweepPoses(plan, done_ids);
   // Declared first: the camera and the station links are closed before a virtual rig stops.
   RigEndpoints rig = StartRig(request, recipe, io);
@@ -489,6 +320,8 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   return recorded;
 }
 
+namespace {
+
 // Validate refuses a model of another camera setup before anything moves: pixel format and ROI
 // from the rig file, the serial from a virtual rig's physics (a hardware camera's serial is only
 // known once it is opened).
@@ -535,9 +368,9 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
   }
 
   // A result that cannot be written (a full disk): the resume completes them.
-  WriteResults("complete the results with: " +
-                   ResumeCommand(CommandName(request.kind), recipe.path, request.model_path,
-                                 recorded.dir), [&] {
+  const std::string advice =
+      CompleteResultsAdvice(request.kind, recipe.path, request.model_path, recorded.dir);
+  WriteResults(advice, [&] {
     if (recipe.after == AfterRecording::kNone) {
       ProcessRecordingOnly(recorded.dir, feature_options, recorded.cache, io.out);
     } else if (request.kind == RunKind::kCalibrate) {
@@ -552,154 +385,6 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
   });
   io.out << "Run folder: " << recorded.dir << "\n";
 }
-
-// The probe recipe of `plan --suggest`: the recipe's two ends (nearest distance at the smallest
-// angle and the highest current; farthest at the largest angle and the lowest current) crossed,
-// each taken at the recipe's t_r and its longest t_n. Written as YAML so that the probe run is
-// recorded like any other (its recipe text stands in its recording.yaml).
-struct RecipeEnds {
-  double d_min = 1e300, d_max = -1e300;    // mm
-  double th_min = 1e300, th_max = -1e300;  // |theta|, deg
-  double i_min = 1e300, i_max = -1e300;    // mA
-  // The bright end (nearest, smallest angle, highest current) or the faint end (farthest,
-  // largest angle, lowest current), compared at the station's resolution (0.01 unit).
-  bool Nearest(double d, double theta, double ma) const {
-    return Same(d, d_min) && Same(std::abs(theta), th_min) && Same(ma, i_max);
-  }
-  bool Farthest(double d, double theta, double ma) const {
-    return Same(d, d_max) && Same(std::abs(theta), th_max) && Same(ma, i_min);
-  }
-  static bool Same(double a, double b) {
-    return std::llround(a * 100.0) == std::llround(b * 100.0);
-  }
-};
-
-RecipeEnds EndsOf(const Plan& plan) {
-  RecipeEnds e;
-  for (const Pose& p : plan.poses) {
-    e.d_min = std::min(e.d_min, p.slide_mm);
-    e.d_max = std::max(e.d_max, p.slide_mm);
-    e.th_min = std::min(e.th_min, std::abs(p.theta_deg));
-    e.th_max = std::max(e.th_max, std::abs(p.theta_deg));
-    e.i_min = std::min(e.i_min, p.bias_ma);
-    e.i_max = std::max(e.i_max, p.bias_ma);
-  }
-  return e;
-}
-
-std::string ProbeRecipeText(const Recipe& recipe, const RecipeEnds& e) {
-  // [lo, hi], or [lo] when the recipe has one value on the axis.
-  const auto pair = [](YAML::Emitter& out, double lo, double hi) {
-    out << YAML::Flow << YAML::BeginSeq << lo;
-    if (hi != lo) out << hi;
-    out << YAML::EndSeq;
-  };
-  const BracketSpec& b = recipe.sweep.bracket;
-  const double t_long = *std::max_element(b.t_meas_ms.begin(), b.t_meas_ms.end());
-  YAML::Emitter y;  // every path and name quoted as it needs ('#', ':', quotes, spaces)
-  y.SetDoublePrecision(10);
-  y << YAML::Comment("Probe frames for 'irdist plan --suggest " + recipe.path + "'");
-  y << YAML::BeginMap;
-  y << YAML::Key << "name" << YAML::Value << YAML::DoubleQuoted << recipe.name + "-probe";
-  y << YAML::Key << "rig" << YAML::Value << YAML::DoubleQuoted
-    << fs::absolute(recipe.rig_path).string();
-  y << YAML::Key << "after" << YAML::Value << "none";
-  y << YAML::Key << "axes" << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "slide_mm" << YAML::Value;
-  pair(y, e.d_min, e.d_max);
-  y << YAML::Key << "theta_deg" << YAML::Value;
-  pair(y, e.th_min, e.th_max);
-  y << YAML::Key << "bias_ma" << YAML::Value;
-  pair(y, e.i_min, e.i_max);
-  y << YAML::EndMap;
-  y << YAML::Key << "bracket" << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "t_ref_ms" << YAML::Value << b.t_ref_ms;
-  y << YAML::Key << "t_meas_ms" << YAML::Value << YAML::Flow << YAML::BeginSeq << t_long
-    << YAML::EndSeq;
-  y << YAML::EndMap << YAML::EndMap;
-  return std::string(y.c_str()) + "\n";
-}
-
-}  // namespace
-
-std::string SuggestProbeRecipe(const Recipe& recipe, const Plan& plan) {
-  return ProbeRecipeText(recipe, EndsOf(plan));
-}
-
-namespace {
-
-// The suggestion's options, with --from's best dt; checked before the probe sweep (a bad value
-// must not cost a sweep).
-SuggestOptions SuggestOptionsOf(const PlanArgs& args, std::ostream& err) {
-  SuggestOptions options;
-  if (!args.from_summary.empty()) {
-    const std::optional<double> best = ReadBestDtMs(args.from_summary);
-    if (best) {
-      options.best_dt_ms = *best;
-    } else {
-      err << args.from_summary << " has no best_dt_ms (a validation with one t_n?); "
-          << "suggesting without it.\n";
-    }
-  }
-  std::string why;
-  if (!options.IsValid(&why)) throw SuggestError(args.from_summary + ": " + why);
-  return options;
-}
-
-}  // namespace
-
-void RunSuggest(const PlanArgs& args, CommandIo io) {
-  const Recipe recipe = LoadRecipe(args.recipe);
-  const Plan plan = PlanRecipe(recipe);
-  const RecipeEnds ends = EndsOf(plan);
-  const SuggestOptions options = SuggestOptionsOf(args, io.err);
-  const std::string dir =
-      args.out_dir.empty() ? recipe.output_dir + "-suggest-" + Timestamp() : args.out_dir;
-  fs::create_directories(dir);
-  const std::string probe_path = dir + "/probe-recipe.yaml";
-  std::string why;
-  if (!WriteFileAtomically(probe_path, SuggestProbeRecipe(recipe, plan), 0644, &why)) {
-    throw RunFolderError(probe_path + " " + why + "; check the folder.");
-  }
-  RunRequest request;
-  request.kind = RunKind::kCalibrate;
-  request.recipe_path = probe_path;
-  request.out_dir = dir;
-  request.time_scale = args.time_scale;
-  request.quiet = args.quiet;
-  const Recipe probe_recipe = LoadRecipe(probe_path);
-  const Plan probe_plan = PlanRecipe(probe_recipe);
-  io.out << "Probing " << recipe.path << " at its ends: " << probe_plan.summary.pose_count
-         << " poses, t " << recipe.sweep.bracket.t_ref_ms << " and "
-         << probe_recipe.sweep.bracket.t_meas_ms.front() << " ms\n";
-  Recorded recorded;
-  {
-    SignalGuard guard;
-    recorded = Record(request, probe_recipe, probe_plan, FeatureOptions{}, nullptr, io);
-  }
-  if (recorded.cut) throw InterruptedError("probe stopped; nothing suggested.");
-  const RecordingReader reader(dir + "/recording");
-  const FeatureMap features = RecordingFeatures(reader, FeatureOptions{}, recorded.cache);
-  std::vector<ProbeFrame> probes;
-  for (const FrameRecord& row : reader.rows()) {
-    const bool nearest = ends.Nearest(row.slide_mm, row.theta_deg, row.bias_ma_set);
-    const bool farthest = ends.Farthest(row.slide_mm, row.theta_deg, row.bias_ma_set);
-    if (!nearest && !farthest) continue;
-    const auto f = features.find(row.index);
-    if (f == features.end() || !f->second.blob_found) {
-      throw RunFolderError(reader.dir() + ": no IRED image in frame " + row.file +
-                           "; is the IRED in view and on? (see " + dir + "/features.csv)");
-    }
-    probes.push_back({nearest, row.requested_exposure_us / 1000.0, row.bias_ma_set, f->second.peak,
-                      f->second.background});
-  }
-  const Suggestion s = SuggestExposures(probes, options);
-  io.out << "Suggested bracket for " << recipe.path << " (probe run in " << dir << "):\n"
-         << s.BriefReport();
-  if (!s.feasible) throw SuggestError("no feasible exposures: " + s.reason);
-}
-
-namespace {
 
 // The options calibrate and validate share.
 template <typename Args>

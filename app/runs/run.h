@@ -1,7 +1,8 @@
 #pragma once
 // The live runs behind the irdist commands: calibrate and validate (sweep a recipe on a rig, record,
-// then fit or estimate) and plan --suggest (probe frames). The offline commands (fit, playback,
-// check) are declared in app/runs/offline.h.
+// then fit or estimate), and the recording they share with plan --suggest's probe
+// (app/runs/run_suggest.h). The offline commands (fit, playback, check) are declared in
+// app/runs/offline.h.
 //
 // Run folder layout (always the same):
 //   DIR/recording/      the recording (docs/recording-format.md)
@@ -12,10 +13,13 @@
 //   DIR/report/index.html
 // A resumed run keeps the earlier sessions' station logs as station.<n>.log.
 
+#include <memory>
 #include <string>
 
 #include "app/cli/command_args.h"
 #include "app/cli/errors.h"
+#include "app/processing/frame_features.h"
+#include "app/runs/run_folder.h"
 
 namespace irdist {
 
@@ -23,15 +27,41 @@ namespace irdist {
 // LinkError, StationError, RecordingError, ModelFileError.
 void RunCalibrate(const CalibrateArgs& args, CommandIo io);
 void RunValidate(const ValidateArgs& args, CommandIo io);
-// plan --suggest: records probe frames at the recipe's two ends on its rig and proposes t_r, the
-// t_n and the current (app/runs/suggest.h). Throws SuggestError when no exposures fit.
-void RunSuggest(const PlanArgs& args, CommandIo io);
+
+// The recording phase every live run shares (calibrate, validate, plan --suggest's probe in
+// app/runs/run_suggest.cc): what it is asked to do, and what it leaves.
+struct RunRequest {
+  RunKind kind = RunKind::kCalibrate;
+  std::string recipe_path;
+  std::string model_path;  // validate
+  std::string out_dir;
+  std::string resume_dir;
+  double time_scale = 0.0;
+  bool quiet = false;
+  bool allow_model_mismatch = false;  // validate
+  bool allow_nonlinear = false;       // calibrate: --allow-nonlinear
+  // validate on hardware: the model's camera serial, which AravisCamera::Open then requires
+  // ("" = none: another camera is allowed, or the model does not say).
+  std::string expected_serial;
+};
+
+// What the recording phase leaves for the processing phase.
+struct Recorded {
+  std::string dir;
+  FeatureMap cache;  // features of the frames captured in this session
+  bool cut = false;
+  std::unique_ptr<RunFolderLock> lock;  // held through the processing too
+};
 
 struct Recipe;
 struct Plan;
-// The probe recipe RunSuggest records (YAML written through yaml-cpp's emitter, so any rig path
-// or name reads back as it is): the recipe's two ends crossed (nearest distance, smallest angle,
-// highest current; farthest, largest angle, lowest current), at its t_r and its longest t_n.
-std::string SuggestProbeRecipe(const Recipe& recipe, const Plan& plan);
+// Records `plan` of `recipe` into a new run folder or the one resumed (OpenRunFolder, locked in
+// the result), with the features computed as the brackets are committed: starts the rig, the
+// station and the camera, sweeps, and reports the sweep, the capture and the time on io.out. A
+// stop leaves the recording cut (Recorded::cut); a failure closes it as cut, prints the --resume
+// command and rethrows.
+Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& plan,
+                const FeatureOptions& feature_options, const CalibrationModel* blob_fit_model,
+                CommandIo io);
 
 }  // namespace irdist

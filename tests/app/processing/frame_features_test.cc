@@ -61,6 +61,40 @@ TEST(FrameFeatures, MeasuresTheSceneCleanedFrame) {
   EXPECT_GT(std::abs(raw.e_rel / b.e_rel - 1.0), 0.01);
 }
 
+// The message FrameFeatures refuses `image` with (FeatureWindowError); "" when it measures it.
+std::string WindowRefusal(const cv::Mat& image, const FeatureOptions& options) {
+  try {
+    FrameFeatures(image, 12, options);
+  } catch (const FeatureWindowError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A model's features.window_side_px larger than the frame (a model without provenance, whose ROI
+// was never checked against the window, on a 256 px ROI) is refused before the scene pass and the
+// features, naming the key, the frame's size and the largest window that fits; it hit an internal
+// check in ComputeFeatures. A frame exactly the window's size is measured.
+TEST(FrameFeatures, RefusesAFrameSmallerThanTheWindow) {
+  FeatureOptions options;
+  options.window_side_px = 512;
+  const cv::Mat roi(256, 256, CV_16UC1, cv::Scalar(100));
+  const std::string what = WindowRefusal(roi, options);
+  EXPECT_NE(what.find("features.window_side_px 512"), std::string::npos) << what;
+  EXPECT_NE(what.find("256 x 256 px"), std::string::npos) << what;
+  EXPECT_NE(what.find("at most 256"), std::string::npos) << what;
+  // The scene pass alone (recording_fit's blob fit and blur split) refuses it too.
+  EXPECT_THROW(SceneCleanedFrame(roi, 12, options), FeatureWindowError);
+  // Either side too short: a wide, low ROI names its height as the largest window.
+  options.window_side_px = 128;
+  const std::string wide = WindowRefusal(cv::Mat(100, 300, CV_16UC1, cv::Scalar(100)), options);
+  EXPECT_NE(wide.find("300 x 100 px (width x height)"), std::string::npos) << wide;
+  EXPECT_NE(wide.find("at most 100"), std::string::npos) << wide;
+  options.window_side_px = 256;
+  EXPECT_EQ(WindowRefusal(roi, options), "");
+  EXPECT_FALSE(FrameFeatures(roi, 12, options).blob_found);  // flat: measured, no blob
+}
+
 TEST_F(SmallRecordingTest, FeaturesFromPngEqualFeaturesFromMemory) {
   const RecordingReader reader((dir_ / "recording").string());
   const FeatureOptions options;

@@ -1,6 +1,7 @@
 // The live runs: the probe recipe of plan --suggest, a run folder holding another run's results,
 // a bad --from refused before the probe.
 #include "app/runs/run.h"
+#include "app/runs/run_suggest.h"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
