@@ -174,19 +174,29 @@ void AravisCamera::Impl::RefuseRawMosaic() {
                     "None).");
 }
 
-// Exposure chunks, where the camera offers them.
+// Exposure chunks, where the camera offers them and camera.exposure_check wants them.
 void AravisCamera::Impl::ConfigureChunks() {
   exposure_chunks = false;
   chunk_parser.reset();
-  if (arv_camera_are_chunks_available(camera.get(), nullptr) == FALSE || !Has("ChunkSelector")) {
-    return;
+  const ExposureCheck check = settings.exposure_check;
+  const bool wanted = settings.exposure_chunks &&
+                      (check == ExposureCheck::kAuto || check == ExposureCheck::kChunk);
+  const bool available =
+      arv_camera_are_chunks_available(camera.get(), nullptr) != FALSE && Has("ChunkSelector");
+  const std::vector<std::string> chunks =
+      available ? EnumEntries("ChunkSelector") : std::vector<std::string>{};
+  const bool declared = std::find(chunks.begin(), chunks.end(), "ExposureTime") != chunks.end();
+  if (check == ExposureCheck::kChunk && !declared) {
+    throw CameraError("camera " + Name() + " does not declare an ExposureTime chunk (ChunkSelector" +
+                      " entries: " + (chunks.empty() ? "none" : JoinNames(chunks)) +
+                      "), but the rig file asks for camera.exposure_check: chunk. Set it to "
+                      "readback (or remove it).");
   }
+  if (!available) return;
   GError* error = nullptr;
-  const std::vector<std::string> chunks = EnumEntries("ChunkSelector");
-  const char* fix = "Set camera.exposure_chunks: false in the rig file.";
+  const char* fix = "Set camera.exposure_check: readback in the rig file.";
   RequireWritable("ChunkModeActive", fix);
-  if (!settings.exposure_chunks ||
-      std::find(chunks.begin(), chunks.end(), "ExposureTime") == chunks.end()) {
+  if (!wanted || !declared) {
     arv_camera_set_chunk_mode(camera.get(), FALSE, &error);  // none left on by a previous client
     ThrowOnError(error, "turning chunk mode off", Name());
     return;

@@ -373,6 +373,48 @@ TEST(VendorCameras, FlirStyleFailedSetupLeavesItAsFound) {
   EXPECT_EQ(check.Get("FrameStart", "TriggerMode"), "Off");
 }
 
+// A command done with the camera, however it ended (here while still streaming): with restore
+// (camera.restore_after's default) every feature is put back as found; without, left as set.
+TEST(VendorCameras, LeaveAsFoundStopsThenPutsBackOrLeavesAsSet) {
+  testing::FakeCameraProcess fake("IRDFLI03", {"-g", Genicam("flir_style.xml")});
+  for (const bool restore : {false, true}) {
+    SCOPED_TRACE(restore ? "restore" : "leave");
+    auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+    camera->Configure(Triggered("Mono12p"));
+    camera->StartStream();
+    const std::string outcome = camera->LeaveAsFound(restore);
+    EXPECT_FALSE(camera->streaming());
+    EXPECT_EQ(outcome, restore ? "The camera was put back as it was found."
+                               : "The camera is left as irdist set it (camera.restore_after: "
+                                 "false in the rig file).");
+    camera.reset();
+    OtherClient check;
+    EXPECT_EQ(check.Get("", "ExposureAuto"), restore ? "Continuous" : "Off");
+    EXPECT_EQ(check.Get("FrameStart", "TriggerMode"), restore ? "Off" : "On");
+    if (!restore) {  // the next round must find the camera as it was at the start
+      check.Set("", "ExposureAuto", "Continuous");
+      check.Set("FrameStart", "TriggerMode", "Off");
+    }
+  }
+}
+
+// GainAuto found holding no entry of its enumeration (enum_no_entry.xml): Configure sets it Off,
+// and putting the camera back skips it by name, never writes it as "" nor asks for a power-cycle.
+TEST(VendorCameras, AnEnumerationHoldingNoEntryIsSkippedAndNamedWhenPuttingBack) {
+  testing::FakeCameraProcess fake("IRDENU01", {"-g", Genicam("enum_no_entry.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  camera->Configure(Triggered("Mono12p"));
+  const std::string outcome = camera->RestoreFound();
+  EXPECT_NE(outcome.find("put back as it was found"), std::string::npos) << outcome;
+  EXPECT_NE(outcome.find("Not put back: GainAuto"), std::string::npos) << outcome;
+  EXPECT_EQ(outcome.find("power-cycle"), std::string::npos) << outcome;
+  camera.reset();
+  OtherClient check;
+  EXPECT_EQ(check.Get("", "GainAuto"), "Off");
+  EXPECT_EQ(check.Get("", "ExposureAuto"), "Continuous");  // the rest as found
+  EXPECT_EQ(check.Get("", "GammaEnable"), "true");
+}
+
 // One trigger, no TriggerSelector (the SFNC allows it): configured and triggered as FrameStart.
 TEST(VendorCameras, SingleTriggerWithoutSelectorIsTheFrameTrigger) {
   testing::FakeCameraProcess fake("IRDONE01", {"-g", Genicam("single_trigger.xml")});
