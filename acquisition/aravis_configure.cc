@@ -200,6 +200,9 @@ std::map<std::string, std::string> AravisCamera::ReadBackFeatures() {
   if (impl_->packet_size > 0) values["irdist.PacketSize"] = std::to_string(impl_->packet_size);
   values["irdist.ExposureChunks"] = impl_->exposure_chunks ? "true" : "false";
   values["irdist.ExposureCheck"] = ExposureCheckName(impl_->settings.exposure_check);
+  if (!impl_->exposure_bounds_note.empty()) {
+    values["irdist.ExposureBounds"] = impl_->exposure_bounds_note;
+  }
   return values;
 }
 

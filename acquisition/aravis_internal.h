@@ -55,6 +55,7 @@ struct AravisCamera::Impl {
   int warmup_discarded = 0;
   double exposure_min_us = 0.0;
   double exposure_max_us = 0.0;
+  std::string exposure_bounds_note;  // where the bounds came from (irdist.ExposureBounds)
   ArvGcFeatureNode* exposure_node = nullptr;  // ExposureTime (or ExposureTimeAbs), found by
                                               // ReadExposureBounds; checked before each write
   std::string pixel_format;
@@ -109,6 +110,7 @@ struct AravisCamera::Impl {
   void RefuseRawMosaic();
   void ConfigureChunks();
   void ReadExposureBounds();
+  void CrossCheckExposureBounds();
   void CheckExposureRange(double exposure_us) const;
   void WriteExposure(double exposure_us);
 

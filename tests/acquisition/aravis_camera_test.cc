@@ -320,6 +320,39 @@ TEST(VendorCameras, BaslerStyleIsSetToTimedExposureAndFrameStartAlone) {
   EXPECT_EQ(check.Get("AcquisitionStart", "TriggerMode"), "Off");
 }
 
+// Writes `text` (NUL-padded to 32 bytes) into the camera's memory at `address`, as another client.
+void WriteCameraString(guint64 address, const std::string& text) {
+  GError* error = nullptr;
+  ArvCamera* other = arv_camera_new("127.0.0.1", &error);
+  ASSERT_EQ(error, nullptr) << error->message;
+  std::string padded = text;
+  padded.resize(32, '\0');
+  arv_device_write_memory(arv_camera_get_device(other), address, 32, padded.data(), &error);
+  g_object_unref(other);
+  ASSERT_EQ(error, nullptr) << error->message;
+}
+
+// A Basler ace's raw exposure timebase (ExposureTimeRaw x ExposureTimeBaseAbs, 20 us a step):
+// the bounds irdist checks exposures against are in microseconds, those of ExposureTimeAbs,
+// whatever Aravis's Basler quirk reports (the raw steps); an exposure in us is written and kept.
+TEST(VendorCameras, BaslerRawTimebaseBoundsAreInMicroseconds) {
+  testing::FakeCameraProcess fake("IRDBAS02", {"-g", Genicam("basler_raw_timebase.xml")});
+  WriteCameraString(0x10c0, "Basler");
+  WriteCameraString(0x10e0, "acA1300-60gm");
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  EXPECT_EQ(camera->Identity().vendor, "Basler");
+  camera->Configure(Triggered("Mono12"));
+  const auto [min_us, max_us] = camera->ExposureBoundsUs();
+  EXPECT_NEAR(min_us, 40.0, 1e-6);
+  EXPECT_NEAR(max_us, 1000000.0, 1e-3);
+  EXPECT_NEAR(camera->SetExposureUs(300000.0), 300000.0, 1.0);  // above the raw maximum 50000
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_NEAR(std::stod(features.at("ExposureTimeAbs")), 300000.0, 1.0);
+  const std::string bounds = features.at("irdist.ExposureBounds");
+  EXPECT_NE(bounds.find("(ExposureTimeAbs); Aravis reported [2, 50000]"), std::string::npos)
+      << bounds;
+}
+
 // FLIR-style: ExposureAuto and GainAuto Continuous, GammaEnable and ExposureMode TriggerWidth at
 // power-up, Mono12p and no Mono12. Mono12 is refused naming Mono12p; Mono12p streams with
 // every automatic control off, gamma off, TriggerOverlap ReadOut and the other triggers Off.
