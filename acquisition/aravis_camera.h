@@ -62,6 +62,7 @@ class AravisCamera final : public Camera {
   int Flush() override;
   void SoftwareTrigger() override;
   bool HasExposureChunks() const override;
+  ExposureCheck exposure_check() const override;
 
   // Stream counters from Aravis (completed buffers, failures, underruns, missing packets, ...).
   std::map<std::string, std::uint64_t> StreamStatistics() const;
@@ -87,6 +88,10 @@ class AravisCamera final : public Camera {
   // Puts back every feature the first Configure changed, as it was found (stopped first); returns
   // " The camera was put back as it was found." or what could not be. Configure again to use it.
   std::string RestoreFound();
+  // When a command is done with the camera, however it ended: stops the stream, then puts back
+  // what Configure changed (RestoreFound) when `restore` is true. Never throws: returns what was
+  // done, as a sentence for the user ("" when never configured).
+  std::string LeaveAsFound(bool restore) noexcept;
   // The exposure's bounds (us) as read by the last Configure ({0, 0} before).
   std::pair<double, double> ExposureBoundsUs() const;
 

@@ -25,8 +25,45 @@ const char* const kRecordedFeatures[] = {
     "SensorWidth",       "SensorHeight",      "AcquisitionFrameRateEnabled", "PixelColorFilter",
 };
 
+// GigE Vision 2.0 bootstrap registers: the primary (controlling) application's port and address.
+constexpr guint64 kPrimaryAppPortRegister = 0x0a10;
+constexpr guint64 kPrimaryAppAddressRegister = 0x0a14;
+
+// Who holds `device`'s control channel, as its bootstrap registers say (read access needs none).
+std::string ControlHolder(ArvDevice* device) {
+  guint32 address = 0;
+  guint32 port = 0;
+  GError* error = nullptr;
+  arv_device_read_register(device, kPrimaryAppAddressRegister, &address, &error);
+  if (error == nullptr) arv_device_read_register(device, kPrimaryAppPortRegister, &port, &error);
+  const bool read = error == nullptr;
+  if (!read) g_error_free(error);  // a GigE Vision 1.x camera: the holder unknown
+  if (!read || address == 0) return "another application (the camera does not say which)";
+  std::ostringstream out;
+  out << "the application at " << (address >> 24) << "." << ((address >> 16) & 0xff) << "."
+      << ((address >> 8) & 0xff) << "." << (address & 0xff) << " port " << (port & 0xffff)
+      << " (the camera's primary application register)";
+  return out.str();
+}
 
 }  // namespace
+
+// Control first: a GigE Vision camera's control channel (CCP) is taken, or found held by this
+// client, before any feature is written; another holder is named when the camera says who.
+void TakeControl(ArvCamera* camera, const std::string& name) {
+  if (arv_camera_is_gv_device(camera) == FALSE) return;
+  ArvGvDevice* device = ARV_GV_DEVICE(arv_camera_get_device(camera));
+  if (arv_gv_device_is_controller(device) != FALSE) return;
+  GError* error = nullptr;
+  const gboolean taken = arv_gv_device_take_control(device, &error);
+  if (error != nullptr) g_error_free(error);  // refused: said below with the holder
+  if (taken != FALSE && arv_gv_device_is_controller(device) != FALSE) return;
+  throw CameraError("camera " + name + " is controlled by " +
+                    ControlHolder(ARV_DEVICE(device)) +
+                    "; irdist writes no feature without control. Close that application (a "
+                    "viewer, another irdist), or wait a few seconds for a crashed one's heartbeat "
+                    "to time out, then try again.");
+}
 
 std::string CameraIdentity::BriefReport() const {
   std::ostringstream out;
@@ -86,6 +123,7 @@ std::unique_ptr<AravisCamera> AravisCamera::Open(const std::string& id_serial_or
       break;
     }
   }
+  TakeControl(camera, impl->Name());
   // A previous client (maybe crashed) may have left the camera streaming.
   if (impl->Has("AcquisitionStop")) {
     arv_camera_stop_acquisition(camera, &error);
@@ -105,7 +143,11 @@ void AravisCamera::Configure(const CameraSettings& settings) {
   d.stream.reset();
   d.configured = false;
   const std::vector<Impl::SavedFeature> found = d.SaveState();
-  if (d.found_state.empty()) d.found_state = found;  // as before irdist's first setup
+  const std::vector<std::string> found_unsaved = d.unsaved;
+  if (d.found_state.empty()) {  // as before irdist's first setup
+    d.found_state = found;
+    d.found_unsaved = found_unsaved;
+  }
   try {
     d.SetEnum("PixelFormat", settings.pixel_format,
               "Set camera.pixel_format in the rig file to a Mono format the camera offers.");
@@ -124,7 +166,7 @@ void AravisCamera::Configure(const CameraSettings& settings) {
   } catch (const CameraError& error) {
     d.stream.reset();
     d.exposure_max_us = 0.0;
-    throw CameraError(error.what() + d.RestoreState(found));
+    throw CameraError(error.what() + d.RestoreState(found, found_unsaved));
   }
   d.configured = true;
 }
@@ -157,6 +199,10 @@ std::map<std::string, std::string> AravisCamera::ReadBackFeatures() {
   }
   if (impl_->packet_size > 0) values["irdist.PacketSize"] = std::to_string(impl_->packet_size);
   values["irdist.ExposureChunks"] = impl_->exposure_chunks ? "true" : "false";
+  values["irdist.ExposureCheck"] = ExposureCheckName(impl_->settings.exposure_check);
+  if (!impl_->exposure_bounds_note.empty()) {
+    values["irdist.ExposureBounds"] = impl_->exposure_bounds_note;
+  }
   return values;
 }
 
@@ -195,10 +241,25 @@ std::string AravisCamera::ColourSensor() { return impl_->ColourSensor(); }
 std::string AravisCamera::RestoreFound() {
   IRDIST_CHECK(!impl_->streaming, "RestoreFound() while streaming; call StopStream() first");
   if (impl_->found_state.empty()) return "";
-  const std::string outcome = impl_->RestoreState(impl_->found_state);
+  const std::string outcome = impl_->RestoreState(impl_->found_state, impl_->found_unsaved);
   impl_->configured = false;
   impl_->stream.reset();
   return outcome;
+}
+
+std::string AravisCamera::LeaveAsFound(bool restore) noexcept {
+  try {
+    if (impl_->streaming) StopStream();
+    if (impl_->found_state.empty()) return "";
+    if (!restore) {
+      return "The camera is left as irdist set it (camera.restore_after: false in the rig file).";
+    }
+    std::string outcome = RestoreFound();
+    if (!outcome.empty() && outcome.front() == ' ') outcome.erase(0, 1);
+    return outcome;
+  } catch (const std::exception& error) {
+    return std::string("The camera could not be put back as it was found: ") + error.what();
+  }
 }
 
 FeatureInfo AravisCamera::Describe(const std::string& feature, const std::string& selector) {

@@ -107,7 +107,8 @@ void AravisCamera::Impl::SetEnum(const char* feature, const std::string& value,
     throw CameraError("camera " + Name() + ": " + feature + " cannot be " + value +
                       "; it offers: " + JoinNames(entries) + ". " + fix);
   }
-  if (GetString(feature) == value) return;  // held already: nothing to write
+  // Held already: nothing to write (a register holding no entry reads as none, never throws).
+  if (ValueAsString(FeatureNode(feature)) == value) return;
   RequireWritable(feature, fix);
   GError* error = nullptr;
   arv_camera_set_string(camera.get(), feature, value.c_str(), &error);
@@ -183,11 +184,30 @@ std::optional<std::string> AravisCamera::Impl::ValueAsString(ArvGcFeatureNode* n
   return OrEmpty(value);
 }
 
+namespace {
+// Whether `value` names an entry of the enumeration `node` (available now or not).
+bool IsEnumEntry(ArvGcFeatureNode* node, const std::string& value) {
+  for (const GSList* item = arv_gc_enumeration_get_entries(ARV_GC_ENUMERATION(node));
+       item != nullptr; item = item->next) {
+    if (OrEmpty(arv_gc_feature_node_get_name(ARV_GC_FEATURE_NODE(item->data))) == value) {
+      return true;
+    }
+  }
+  return false;
+}
+}  // namespace
+
 void AravisCamera::Impl::SaveFeature(const std::string& selector, const char* feature,
-                                     std::vector<SavedFeature>* saved) const {
+                                     std::vector<SavedFeature>* saved) {
   ArvGcFeatureNode* node = WritableNode(feature);
   if (node == nullptr) return;
-  if (const auto value = ValueAsString(node)) saved->push_back({selector, feature, *value});
+  const auto value = ValueAsString(node);
+  if (ARV_IS_GC_ENUMERATION(node) && (!value || value->empty() || !IsEnumEntry(node, *value))) {
+    // A register holding no entry's value: nothing that could be written back.
+    unsaved.push_back((selector.empty() ? "" : selector + " ") + feature);
+    return;
+  }
+  if (value) saved->push_back({selector, feature, *value});
 }
 
 // The features Configure() may change, in the order they are put back: the pixel pipeline's
@@ -216,6 +236,7 @@ std::vector<AravisCamera::Impl::SavedFeature> AravisCamera::Impl::SaveState() {
   static const char* const kPerTrigger[] = {"TriggerSource", "TriggerActivation", "TriggerOverlap",
                                             "TriggerMode"};
   std::vector<SavedFeature> saved;
+  unsaved.clear();
   for (const char* feature : kGlobal) SaveFeature("", feature, &saved);
   for (const PixelFeatureSpec& spec : PixelPipelineTable()) {
     for (const char* feature : spec.spellings) SaveFeature("", feature, &saved);
@@ -257,7 +278,8 @@ std::string AravisCamera::Impl::WriteFeature(const std::string& selector, const 
 
 // Puts back every saved feature (offsets at 0 first, so the saved size fits); returns the text
 // that ends the setup's error message.
-std::string AravisCamera::Impl::RestoreState(const std::vector<SavedFeature>& saved) {
+std::string AravisCamera::Impl::RestoreState(const std::vector<SavedFeature>& saved,
+                                             const std::vector<std::string>& skipped_names) {
   for (const char* offset : {"OffsetX", "OffsetY"}) {
     if (WritableNode(offset) != nullptr) WriteFeature("", offset, "0");
   }
@@ -266,8 +288,13 @@ std::string AravisCamera::Impl::RestoreState(const std::vector<SavedFeature>& sa
     const std::string why = WriteFeature(f.selector, f.feature.c_str(), f.value);
     if (!why.empty()) failed.push_back((f.selector.empty() ? "" : f.selector + " ") + why);
   }
-  if (failed.empty()) return " The camera was put back as it was found.";
-  return " The camera could not be put back as it was found (" + JoinNames(failed) +
+  const std::string skipped =
+      skipped_names.empty() ? ""
+                            : " Not put back: " + JoinNames(skipped_names) +
+                            " (found holding no entry of its enumeration; set it with the vendor's "
+                            "tool if it matters).";
+  if (failed.empty()) return " The camera was put back as it was found." + skipped;
+  return skipped + " The camera could not be put back as it was found (" + JoinNames(failed) +
          "); it is left with acquisition stopped: power-cycle it before another application "
          "uses it.";
 }

@@ -36,6 +36,9 @@ std::string OrEmpty(const char* text);
 std::string JoinNames(const std::vector<std::string>& items);
 bool LooksLikeIpv4(const std::string& name);
 bool IsLoopback(const std::string& address);
+// Takes a GigE Vision camera's control channel, or finds it held by this client; throws
+// CameraError naming the holder when another has it (aravis_configure.cc). Other transports: none.
+void TakeControl(ArvCamera* camera, const std::string& name);
 
 struct AravisCamera::Impl {
   GPtr<ArvCamera> camera;
@@ -52,6 +55,7 @@ struct AravisCamera::Impl {
   int warmup_discarded = 0;
   double exposure_min_us = 0.0;
   double exposure_max_us = 0.0;
+  std::string exposure_bounds_note;  // where the bounds came from (irdist.ExposureBounds)
   ArvGcFeatureNode* exposure_node = nullptr;  // ExposureTime (or ExposureTimeAbs), found by
                                               // ReadExposureBounds; checked before each write
   std::string pixel_format;
@@ -65,6 +69,10 @@ struct AravisCamera::Impl {
     std::string value;
   };
   std::vector<SavedFeature> found_state;  // saved by the last Configure
+  // Enumerations found holding no entry's value, never saved (named when putting back): by the
+  // last SaveState, and by the one behind found_state.
+  std::vector<std::string> unsaved;
+  std::vector<std::string> found_unsaved;
 
   std::string Name() const { return identity.serial + "@" + identity.address; }
   ArvDevice* Device() const { return arv_camera_get_device(camera.get()); }
@@ -84,11 +92,12 @@ struct AravisCamera::Impl {
   ArvGcFeatureNode* WritableNode(const char* feature) const;
   std::optional<std::string> ValueAsString(ArvGcFeatureNode* node) const;
   void SaveFeature(const std::string& selector, const char* feature,
-                   std::vector<SavedFeature>* saved) const;
+                   std::vector<SavedFeature>* saved);
   std::vector<SavedFeature> SaveState();
   std::string WriteFeature(const std::string& selector, const char* feature,
                            const std::string& value);
-  std::string RestoreState(const std::vector<SavedFeature>& saved);
+  std::string RestoreState(const std::vector<SavedFeature>& saved,
+                           const std::vector<std::string>& skipped_names);
 
   // --- setup (aravis_setup.cc) ---
   void SetRegion(const CameraSettings& s);
@@ -101,6 +110,7 @@ struct AravisCamera::Impl {
   void RefuseRawMosaic();
   void ConfigureChunks();
   void ReadExposureBounds();
+  void CrossCheckExposureBounds();
   void CheckExposureRange(double exposure_us) const;
   void WriteExposure(double exposure_us);
 

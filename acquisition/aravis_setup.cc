@@ -174,19 +174,29 @@ void AravisCamera::Impl::RefuseRawMosaic() {
                     "None).");
 }
 
-// Exposure chunks, where the camera offers them.
+// Exposure chunks, where the camera offers them and camera.exposure_check wants them.
 void AravisCamera::Impl::ConfigureChunks() {
   exposure_chunks = false;
   chunk_parser.reset();
-  if (arv_camera_are_chunks_available(camera.get(), nullptr) == FALSE || !Has("ChunkSelector")) {
-    return;
+  const ExposureCheck check = settings.exposure_check;
+  const bool wanted = settings.exposure_chunks &&
+                      (check == ExposureCheck::kAuto || check == ExposureCheck::kChunk);
+  const bool available =
+      arv_camera_are_chunks_available(camera.get(), nullptr) != FALSE && Has("ChunkSelector");
+  const std::vector<std::string> chunks =
+      available ? EnumEntries("ChunkSelector") : std::vector<std::string>{};
+  const bool declared = std::find(chunks.begin(), chunks.end(), "ExposureTime") != chunks.end();
+  if (check == ExposureCheck::kChunk && !declared) {
+    throw CameraError("camera " + Name() + " does not declare an ExposureTime chunk (ChunkSelector" +
+                      " entries: " + (chunks.empty() ? "none" : JoinNames(chunks)) +
+                      "), but the rig file asks for camera.exposure_check: chunk. Set it to "
+                      "readback (or remove it).");
   }
+  if (!available) return;
   GError* error = nullptr;
-  const std::vector<std::string> chunks = EnumEntries("ChunkSelector");
-  const char* fix = "Set camera.exposure_chunks: false in the rig file.";
+  const char* fix = "Set camera.exposure_check: readback in the rig file.";
   RequireWritable("ChunkModeActive", fix);
-  if (!settings.exposure_chunks ||
-      std::find(chunks.begin(), chunks.end(), "ExposureTime") == chunks.end()) {
+  if (!wanted || !declared) {
     arv_camera_set_chunk_mode(camera.get(), FALSE, &error);  // none left on by a previous client
     ThrowOnError(error, "turning chunk mode off", Name());
     return;
@@ -207,6 +217,34 @@ void AravisCamera::Impl::ReadExposureBounds() {
   arv_camera_get_exposure_time_bounds(camera.get(), &exposure_min_us, &exposure_max_us, &error);
   ThrowOnError(error, "reading ExposureTime bounds", Name());
   exposure_node = FeatureNode(Has("ExposureTime") ? "ExposureTime" : "ExposureTimeAbs");
+  CrossCheckExposureBounds();
+}
+
+// The exposure feature's own bounds are in microseconds (SFNC); Aravis takes a Basler ace's from
+// ExposureTimeRaw, in raw steps of ExposureTimeBaseAbs. The feature's bounds win; a difference is
+// named in irdist.ExposureBounds (recording.yaml).
+void AravisCamera::Impl::CrossCheckExposureBounds() {
+  std::ostringstream note;
+  note << "[" << exposure_min_us << ", " << exposure_max_us << "] us";
+  exposure_bounds_note = note.str() + " (Aravis)";
+  if (exposure_node == nullptr || !ARV_IS_GC_FLOAT(exposure_node)) return;
+  GError* error = nullptr;
+  const double min_us = arv_gc_float_get_min(ARV_GC_FLOAT(exposure_node), &error);
+  const double max_us = error == nullptr ? arv_gc_float_get_max(ARV_GC_FLOAT(exposure_node), &error)
+                                         : 0.0;
+  if (error != nullptr) {
+    g_error_free(error);  // the feature states none: Aravis's kept
+    return;
+  }
+  const std::string name = OrEmpty(arv_gc_feature_node_get_name(exposure_node));
+  const bool same = std::fabs(min_us - exposure_min_us) <= 1e-6 * std::max(1.0, min_us) &&
+                    std::fabs(max_us - exposure_max_us) <= 1e-6 * std::max(1.0, max_us);
+  std::ostringstream out;
+  out << "[" << min_us << ", " << max_us << "] us (" << name << ")";
+  if (!same) out << "; Aravis reported " << note.str() << ", not microseconds (a raw timebase)";
+  exposure_bounds_note = out.str();
+  exposure_min_us = min_us;
+  exposure_max_us = max_us;
 }
 
 void AravisCamera::Impl::CheckExposureRange(double exposure_us) const {

@@ -220,6 +220,8 @@ void AravisCamera::SoftwareTrigger() {
 
 bool AravisCamera::HasExposureChunks() const { return impl_->exposure_chunks; }
 
+ExposureCheck AravisCamera::exposure_check() const { return impl_->settings.exposure_check; }
+
 std::map<std::string, std::uint64_t> AravisCamera::StreamStatistics() const {
   std::map<std::string, std::uint64_t> out;
   if (impl_->stream == nullptr) return out;

@@ -83,13 +83,15 @@ std::string CaptureStats::BriefReport() const {
       << " [timeouts " << timeouts << ", damaged " << damaged << ", wrong exposure "
       << wrong_exposure << ", duplicates " << duplicates << ", late " << late << ", stray "
       << stray << ", id gaps " << id_gaps << ", warm-up " << warmup << ", pipelined "
-      << pipelined_frames << ", fired in readout " << fired_in_readout << ", exposure re-reads " << exposure_rereads << "], packets resent "
+      << pipelined_frames << ", fired in readout " << fired_in_readout << ", exposure re-reads "
+      << exposure_rereads << ", without chunk " << without_chunk << "], packets resent "
       << transfer.resent_packets << " of " << transfer.resend_requests << " asked, missing "
       << transfer.missing_packets;
   if (!failed_buffers.empty()) {
     out << ", failed buffers:";
     for (const auto& [status, count] : failed_buffers) out << " " << status << " " << count;
   }
+  if (!exposure_notice.empty()) out << "; " << exposure_notice;
   return out.str();
 }
 
@@ -147,12 +149,33 @@ void BracketCapture::CountLeftover(const RawFrame& frame) {
   }
 }
 
-bool BracketCapture::Pipelining() const {
-  return options_.pipelined && camera_.HasExposureChunks();
+bool BracketCapture::ChunkEvidence() const {
+  const ExposureCheck check = camera_.exposure_check();
+  return (check == ExposureCheck::kAuto || check == ExposureCheck::kChunk) &&
+         camera_.HasExposureChunks() && !chunks_lost_;
+}
+
+bool BracketCapture::Pipelining() const { return options_.pipelined && ChunkEvidence(); }
+
+void BracketCapture::FallBackToReadback(const PlannedFrame& plan) {
+  chunks_lost_ = true;
+  std::ostringstream out;
+  out << "frame " << plan.frame_in_bracket << " of bracket " << stats_.brackets
+      << " came without its ChunkExposureTime chunk (chunk mode is on; "
+      << (frames_with_chunk_ == 0 ? "no frame carried one"
+                                  : "the chunks stopped after " +
+                                        std::to_string(frames_with_chunk_) + " frames")
+      << "): each exposure is read back before its trigger from now on (no pipelining). Chunk "
+         "data is lost on the way (a NIC or switch), laid out in a way Aravis cannot parse, or "
+         "ignored by the firmware for this pixel format; set camera.exposure_check: readback to "
+         "say so in the rig file";
+  stats_.exposure_notice = out.str();
+  if (options_.on_notice) options_.on_notice(stats_.exposure_notice);
 }
 
 double BracketCapture::ProgramExposure(double exposure_us) {
   camera_.WriteExposureUs(exposure_us);
+  if (camera_.exposure_check() == ExposureCheck::kNone) return exposure_us;  // taken as written
   const auto deadline = std::chrono::steady_clock::now() + options_.exposure_settle_timeout;
   const double tolerance = std::max(options_.exposure_tolerance * exposure_us, 1e-6);
   while (true) {
@@ -198,16 +221,33 @@ BracketCapture::Outcome BracketCapture::AwaitFrame(const PlannedFrame& plan, dou
     out->status = frame->status;
     out->image = std::move(frame->image);
     out->bit_depth = frame->bit_depth;
-    out->exposure_from_chunk = frame->chunk_exposure_us.has_value();
-    // Pipelined, the read-back says nothing about this frame: without its chunk it is not verified.
-    out->actual_exposure_us = frame->chunk_exposure_us.value_or(readback_us);
-    const double tolerance = options_.exposure_tolerance * plan.exposure_us;
-    if (!(std::fabs(out->actual_exposure_us - plan.exposure_us) <= std::max(tolerance, 1e-6))) {
-      out->status = FrameStatus::kWrongExposure;
-      return Outcome::kWrongExposure;
-    }
-    return Outcome::kOk;
+    return JudgeExposure(plan, readback_us, frame->chunk_exposure_us, out);
   }
+}
+
+BracketCapture::Outcome BracketCapture::JudgeExposure(const PlannedFrame& plan,
+                                                      double readback_us,
+                                                      const std::optional<double>& chunk_us,
+                                                      BracketFrame* out) {
+  if (ChunkEvidence() && !chunk_us.has_value()) {
+    ++stats_.without_chunk;
+    out->status = FrameStatus::kWrongExposure;
+    if (camera_.exposure_check() == ExposureCheck::kChunk) return Outcome::kNoChunk;
+    FallBackToReadback(plan);
+    // Pipelined, the read-back says nothing about this frame: it is retaken, read back.
+    if (std::isnan(readback_us)) return Outcome::kNoChunk;
+  }
+  const bool from_chunk = ChunkEvidence() && chunk_us.has_value();
+  if (from_chunk) ++frames_with_chunk_;
+  out->exposure_from_chunk = from_chunk;
+  out->actual_exposure_us = from_chunk ? *chunk_us : readback_us;
+  const double tolerance = options_.exposure_tolerance * plan.exposure_us;
+  if (!(std::fabs(out->actual_exposure_us - plan.exposure_us) <= std::max(tolerance, 1e-6))) {
+    out->status = FrameStatus::kWrongExposure;
+    return Outcome::kWrongExposure;
+  }
+  out->status = FrameStatus::kOk;
+  return Outcome::kOk;
 }
 
 std::chrono::steady_clock::time_point BracketCapture::StartFrame(const PlannedFrame& plan,
@@ -283,6 +323,11 @@ void BracketCapture::CountFailure(Outcome outcome, BracketFrame* frame, AttemptL
     case Outcome::kWrongExposure:
       ++stats_.wrong_exposure;
       ++log->wrong_exposure;
+      log->last_exposure_us = frame->actual_exposure_us;
+      log->last_from_chunk = frame->exposure_from_chunk;
+      break;
+    case Outcome::kNoChunk:
+      ++log->no_chunk;
       break;
     case Outcome::kOk:
       break;
@@ -294,7 +339,7 @@ bool BracketCapture::TakeFrame(const PlannedFrame& plan, const PlannedFrame* nex
                                bool* next_programmed, AttemptLog* log) {
   frame->plan = plan;
   frame->requested_exposure_us = plan.exposure_us;
-  const bool pipelined = Pipelining();
+  bool pipelined = Pipelining();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   // On entry the camera holds this frame's exposure (written during the previous readout, or
   // programmed serially); a retry after a pipelined write programs it again.
@@ -305,6 +350,14 @@ bool BracketCapture::TakeFrame(const PlannedFrame& plan, const PlannedFrame* nex
         Attempt(plan, readback_us, trigger, pipelined ? next : nullptr, frame);
     *next_programmed = pipelined && next != nullptr;
     if (outcome == Outcome::kOk) return true;
+    if (outcome == Outcome::kNoChunk && !ChunkEvidence()) {
+      // The chunks stopped: this frame is retaken with its exposure read back (no retry spent).
+      pipelined = false;
+      readback_us = ProgramExposure(plan.exposure_us);
+      ++stats_.retried;
+      --attempt;
+      continue;
+    }
     CountFailure(outcome, frame, log);
     if (attempt >= options_.max_retries) return false;
     ++stats_.retried;
@@ -326,20 +379,27 @@ std::string BracketCapture::FailureText(const PlannedFrame& plan, const AttemptL
   why << "frame " << plan.frame_in_bracket << " (" << FrameRoleName(plan.role) << ", "
       << plan.exposure_us << " us) failed " << (options_.max_retries + 1) << " times ("
       << log.timeouts << " nothing in time, " << log.damaged << " incomplete, "
-      << log.wrong_exposure << " wrong exposure)";
+      << log.wrong_exposure << " wrong exposure, " << log.no_chunk << " without chunk)";
   if (log.damaged > 0 || missing > 0 || asked > 0) {
     why << ": packets were lost on the network (" << missing << " missing, " << asked
         << " asked again, " << resent << " resent): check the cable and the network card, the "
         << "MTU (jumbo frames) against the packet size (camera.packet_size), the socket buffer "
         << "and the camera's packet delay (GevSCPD); then the trigger wiring ("
         << options_.trigger_source << ")";
-  } else if (log.timeouts > 0 && log.wrong_exposure == 0) {
+  } else if (log.timeouts > 0 && log.wrong_exposure == 0 && log.no_chunk == 0) {
     why << ": nothing arrived: check the trigger wiring (" << options_.trigger_source
         << "), the camera's trigger source and activation, that the trigger output fires, and "
         << "frame_timeout";
+  } else if (log.no_chunk > 0) {
+    why << ": the frames came without their ChunkExposureTime chunk although chunk mode is on "
+        << "(camera.exposure_check: chunk): chunk data lost on the way (a NIC or switch), laid "
+        << "out in a way Aravis cannot parse, or ignored by the firmware for this pixel format; "
+        << "set camera.exposure_check: readback (or remove it: the chunk while frames carry it)";
   } else {
-    why << ": the camera did not take the exposure written: check that no other application "
-        << "controls it and that the exposures are within its range and increments";
+    why << ": the camera reported " << log.last_exposure_us << " us ("
+        << (log.last_from_chunk ? "the frame's ChunkExposureTime chunk" : "read back")
+        << ") for the " << plan.exposure_us << " us written: use exposures within its range "
+        << "and increments (a camera that rounds them to its own steps needs exposures on them)";
   }
   return why.str();
 }

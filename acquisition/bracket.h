@@ -19,6 +19,11 @@
 //   still in frame N's readout, so it starts as the sensor frees: the trigger latency and the
 //   transfer leave the frame period too. A frame N that fails then waits for N+1's frame and
 //   discards it before the retry; each frame is still checked against its own chunk.
+// - the exposure evidence follows the camera's exposure_check (camera.h ExposureCheck): by default
+//   the chunk while frames carry it; the first frame without it (chunks never sent, or stopped
+//   mid-run) turns the capture serial with read-backs for good, said once (options.on_notice,
+//   stats().exposure_notice), and that frame is retaken (no retry spent): good frames are never
+//   rejected for a missing chunk. With exposure_check chunk, a frame without one is rejected.
 // - serial (no chunks): exposure N+1 is written after frame N has arrived and read back until the
 //   camera reports it (a camera may apply a write late), then the trigger fires; the read-back is
 //   the frame's exposure.
@@ -64,6 +69,9 @@ struct BracketOptions {
   bool trigger_in_readout = false;
   // Serial mode: how long a written exposure may take to read back before it is a CameraError.
   std::chrono::milliseconds exposure_settle_timeout{500};
+  // Called once when the exposure evidence falls back from the chunk to the read-back (with why),
+  // for the command to print; the text is also kept in CaptureStats::exposure_notice.
+  std::function<void(const std::string&)> on_notice;
   bool IsValid(std::string* why) const;
 };
 
@@ -121,6 +129,8 @@ struct CaptureStats {
   std::int64_t pipelined_frames = 0;   // frames whose successor's exposure was written in readout
   std::int64_t fired_in_readout = 0;   // triggers fired during the previous frame's readout
   std::int64_t exposure_rereads = 0;   // read-backs that still showed the old value
+  std::int64_t without_chunk = 0;      // frames that came without the chunk they were to carry
+  std::string exposure_notice;         // the chunk-to-read-back fallback, when it happened
   // Failed buffers the stream handed back, by FrameStatusName (missing_packets, timeout, ...).
   // A failed buffer's frame id and timestamp are not trusted (a lost leader packet leaves them 0
   // or stale): they never move the frame identity that tells duplicates apart.
@@ -154,13 +164,21 @@ class BracketCapture {
   const CaptureStats& stats() const { return stats_; }
 
  private:
-  enum class Outcome { kOk, kTimeout, kDamaged, kWrongExposure };
+  enum class Outcome { kOk, kTimeout, kDamaged, kWrongExposure, kNoChunk };
   // The outcomes of one planned frame's attempts, for the message when it is given up.
   struct AttemptLog {
     int timeouts = 0;
     int damaged = 0;
     int wrong_exposure = 0;
+    int no_chunk = 0;
+    double last_exposure_us = 0.0;  // the last wrong exposure's evidence, and whether a chunk's
+    bool last_from_chunk = false;
   };
+  // Whether frames are checked against their chunk now (exposure_check auto or chunk, the camera
+  // sends chunks, and they have not stopped).
+  bool ChunkEvidence() const;
+  // A frame came without its chunk: under exposure_check auto, the read-back from now on.
+  void FallBackToReadback(const PlannedFrame& plan);
   void PrepareStream(const Trigger& trigger);
   bool Pipelining() const;
   // Writes `exposure_us` and reads it back until the camera reports it; returns the read-back.
@@ -180,6 +198,10 @@ class BracketCapture {
   void DiscardFrameFiredAhead(const PlannedFrame& next);
   Outcome AwaitFrame(const PlannedFrame& plan, double readback_us,
                      std::chrono::steady_clock::time_point deadline, BracketFrame* out);
+  // The exposure evidence of an accepted frame (its chunk or `readback_us`, NaN when pipelined)
+  // against `plan`'s.
+  Outcome JudgeExposure(const PlannedFrame& plan, double readback_us,
+                        const std::optional<double>& chunk_us, BracketFrame* out);
   void CountFailure(Outcome outcome, BracketFrame* frame, AttemptLog* log);
   void CountFailedBuffer(FrameStatus status);
   // Why `plan` was given up: the network first when packets were lost (incomplete buffers, or
@@ -201,6 +223,8 @@ class BracketCapture {
   // earlier than the successor's start (the later of that trigger and the frame's arrival).
   std::optional<std::chrono::steady_clock::time_point> started_ahead_;
   std::function<void()> during_last_readout_;  // of the Capture() in progress
+  bool chunks_lost_ = false;                   // the chunks stopped: read-backs for good
+  std::int64_t frames_with_chunk_ = 0;
   int last_frame_ = -1;                        // frame_in_bracket of its last frame
 };
 

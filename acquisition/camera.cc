@@ -33,6 +33,28 @@ bool CameraSettings::IsValid(std::string* why) const {
   return true;
 }
 
+const char* ExposureCheckName(ExposureCheck check) {
+  switch (check) {
+    case ExposureCheck::kAuto:
+      return "auto";
+    case ExposureCheck::kChunk:
+      return "chunk";
+    case ExposureCheck::kReadback:
+      return "readback";
+    case ExposureCheck::kNone:
+      return "none";
+  }
+  return "auto";
+}
+
+std::optional<ExposureCheck> ParseExposureCheck(const std::string& name) {
+  for (ExposureCheck check : {ExposureCheck::kAuto, ExposureCheck::kChunk,
+                              ExposureCheck::kReadback, ExposureCheck::kNone}) {
+    if (name == ExposureCheckName(check)) return check;
+  }
+  return std::nullopt;
+}
+
 const char* FrameStatusName(FrameStatus status) {
   switch (status) {
     case FrameStatus::kOk:

@@ -43,6 +43,20 @@ struct DeviceInfo {
   std::string protocol;  // "GigEVision", "USB3Vision", ...
 };
 
+// What each frame's exposure is checked against (the rig file's camera.exposure_check;
+// docs/recipes.md "The camera's state").
+enum class ExposureCheck {
+  // The default: the frame's own ChunkExposureTime where the camera declares it and its frames
+  // carry it; once a frame comes without it (never sent, or stopped), the read-back, said once.
+  kAuto,
+  kChunk,     // the chunk only: a camera without it is refused, a frame without it is rejected
+  kReadback,  // chunks off: each exposure written and read back before its trigger
+  kNone,      // written, neither read back nor checked (a camera whose read-back cannot be trusted)
+};
+const char* ExposureCheckName(ExposureCheck check);  // "auto", "chunk", "readback", "none"
+// The rig file's spelling ("chunk", "readback", "none"; "auto" the default) or std::nullopt.
+std::optional<ExposureCheck> ParseExposureCheck(const std::string& name);
+
 // How to configure a camera for irdist (from the rig file's camera: section).
 struct CameraSettings {
   // GenICam PixelFormat: Mono8, Mono10, Mono10p, Mono12, Mono12p, Mono12Packed, Mono14 or Mono16
@@ -90,6 +104,12 @@ struct CameraSettings {
   // Ask for ChunkExposureTime when the camera offers it (each frame then says the exposure it was
   // taken with, which lets BracketCapture pipeline its exposure writes); false = chunks off.
   bool exposure_chunks = true;
+  // How a frame's exposure is verified (above). kReadback and kNone turn chunks off; kChunk
+  // refuses a camera that does not declare ChunkExposureTime.
+  ExposureCheck exposure_check = ExposureCheck::kAuto;
+  // For the command that owns the camera (the rig's camera.restore_after): put back what
+  // Configure changed when it is done with the camera, however it ends. Configure ignores it.
+  bool restore_after = true;
   // Relative tolerance when a value read back must equal the value set (floats only).
   double readback_tolerance = 0.005;
   bool IsValid(std::string* why) const;
@@ -167,6 +187,8 @@ class Camera {
   virtual void SoftwareTrigger() = 0;
   // Whether frames carry ChunkExposureTime.
   virtual bool HasExposureChunks() const = 0;
+  // The exposure check the camera was configured with (CameraSettings::exposure_check).
+  virtual ExposureCheck exposure_check() const { return ExposureCheck::kAuto; }
   // Packet resend and loss counters (zeros for cameras without a packet transport).
   virtual TransferStats Transfer() const { return {}; }
 };

@@ -45,10 +45,19 @@ void CameraServer::Impl::TrackController(const sockaddr_in& from) {
     have_controller = true;
     controller = from;
     controller_seen = SteadyClock::now();
+    WriteLocked(kRegPrimaryAppPort, ntohs(from.sin_port));
+    WriteLocked(kRegPrimaryAppAddress, ntohl(from.sin_addr.s_addr));
   } else if (have_controller && !privileged) {
-    have_controller = false;
-    WriteLocked(kRegAcquisition, 0);
+    ReleaseControllerLocked();
   }
+}
+
+void CameraServer::Impl::ReleaseControllerLocked() {
+  have_controller = false;
+  WriteLocked(kRegControlPrivilege, 0);
+  WriteLocked(kRegPrimaryAppPort, 0);
+  WriteLocked(kRegPrimaryAppAddress, 0);
+  WriteLocked(kRegAcquisition, 0);
 }
 
 void CameraServer::Impl::ExpireController() {
@@ -56,9 +65,7 @@ void CameraServer::Impl::ExpireController() {
   if (!have_controller) return;
   const auto timeout = std::chrono::milliseconds(ReadLocked(kRegHeartbeatMs));
   if (SteadyClock::now() - controller_seen <= timeout) return;
-  have_controller = false;
-  WriteLocked(kRegControlPrivilege, 0);
-  WriteLocked(kRegAcquisition, 0);
+  ReleaseControllerLocked();
   std::lock_guard<std::mutex> count_lock(mutex);
   ++stats.controllers_expired;
 }

@@ -52,6 +52,10 @@ inline constexpr guint32 kRegLutEnable = 0x801c;
 inline constexpr guint32 kRegGvcpCapability = 0x934;
 inline constexpr guint32 kRegHeartbeatMs = 0x938;
 inline constexpr guint32 kRegControlPrivilege = 0xa00;
+// GigE Vision 2.0 bootstrap: the primary application's UDP port and IPv4 address (0 = none), so a
+// client refused control can say who holds it.
+inline constexpr guint32 kRegPrimaryAppPort = 0xa10;
+inline constexpr guint32 kRegPrimaryAppAddress = 0xa14;
 inline constexpr guint32 kRegStreamPort = 0xd00;
 inline constexpr guint32 kRegPacketSize = 0xd04;
 inline constexpr guint32 kRegStreamAddress = 0xd18;
@@ -111,6 +115,7 @@ struct CameraServer::Impl {
     drop_rate = p.camera.drop_frame_rate;
     lost_ratio = p.camera.lost_packet_ratio;
     write_delay_ms = p.camera.exposure_write_delay_ms;
+    packet_resend = p.camera.packet_resend;
   }
 
   World& world;
@@ -177,6 +182,8 @@ struct CameraServer::Impl {
   bool MayWrite(const sockaddr_in& from) const;
   // After a command: a controller appears or leaves with the privilege register.
   void TrackController(const sockaddr_in& from);
+  // No controller any more: privilege, primary application and acquisition cleared (reg_mutex held).
+  void ReleaseControllerLocked();
   // A controller silent for longer than its heartbeat timeout has gone (crashed or killed): the
   // privilege is released and acquisition stopped, as a real camera does.
   void ExpireController();

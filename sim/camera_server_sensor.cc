@@ -132,7 +132,14 @@ void CameraServer::Impl::RunFrame(const std::optional<FrameSetup>& latched) {
   std::vector<std::uint8_t> payload;
   FrameRecord record = Expose(s, index, payload);
   record.block_id = block_id;
-  if (s.chunks) AppendChunks(s, payload);
+  if (s.chunks) {
+    // The exposure chunk fault: the camera still declares and enables it, the frame lacks it.
+    const std::uint64_t drop_from =
+        static_cast<std::uint64_t>(physics.camera.drop_exposure_chunks_from_frame);
+    FrameSetup with_chunks = s;
+    with_chunks.exposure_chunk = s.exposure_chunk && !(drop_from > 0 && index >= drop_from);
+    AppendChunks(with_chunks, payload);
+  }
   const bool drop = std::uniform_real_distribution<double>(0.0, 1.0)(sensor_rng) < drop_rate;
   record.dropped = drop;
   Write(kRegDeviceTemperature, static_cast<guint32>(static_cast<gint32>(

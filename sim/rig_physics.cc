@@ -152,6 +152,9 @@ bool CameraOptions::IsValid(std::string* why) const {
   if (!(lut_gamma >= 0.1 && lut_gamma <= 10.0) || !(fixed_gamma >= 0.1 && fixed_gamma <= 10.0)) {
     return Fail(why, "camera.lut_gamma and camera.fixed_gamma must lie in [0.1, 10]");
   }
+  if (drop_exposure_chunks_from_frame < 0) {
+    return Fail(why, "camera.drop_exposure_chunks_from_frame must be >= 0 (0 = never)");
+  }
   return true;
 }
 
@@ -347,7 +350,7 @@ void ReadCamera(const YAML::Node& node, const std::string& file, CameraOptions* 
   const MapReader k(node, file, "virtual.camera",
                     {"readout_ms", "trigger_frequency_hz", "drop_frame_rate",
                      "lost_packet_ratio", "exposure_write_delay_ms", "lut_enable", "lut_gamma",
-                     "fixed_gamma"});
+                     "fixed_gamma", "drop_exposure_chunks_from_frame", "packet_resend"});
   c->readout_ms = k.Number("readout_ms", c->readout_ms);
   c->trigger_frequency_hz = k.Number("trigger_frequency_hz", c->trigger_frequency_hz);
   c->drop_frame_rate = k.Number("drop_frame_rate", c->drop_frame_rate);
@@ -356,6 +359,10 @@ void ReadCamera(const YAML::Node& node, const std::string& file, CameraOptions* 
   c->lut_enable = k.Boolean("lut_enable", c->lut_enable);
   c->lut_gamma = CheckedNumber(k, "virtual.camera", "lut_gamma", c->lut_gamma, 0.1, 10.0);
   c->fixed_gamma = CheckedNumber(k, "virtual.camera", "fixed_gamma", c->fixed_gamma, 0.1, 10.0);
+  c->drop_exposure_chunks_from_frame =
+      CheckedInteger(k, "virtual.camera", "drop_exposure_chunks_from_frame",
+                     c->drop_exposure_chunks_from_frame, 0, 1000000000);
+  c->packet_resend = k.Boolean("packet_resend", c->packet_resend);
 }
 
 void ReadAmbient(const YAML::Node& node, const std::string& file, AmbientOptions* a) {

@@ -110,6 +110,12 @@ struct CameraOptions {
   bool lut_enable = false;
   double lut_gamma = 0.45;
   double fixed_gamma = 1.0;
+  // Exposure chunks sent while the host asks for them (ChunkModeActive, ChunkEnable), dropped
+  // from this frame on (frames counted from 1 as exposed, warm-up frames included; 1 = every
+  // frame, as a NIC or firmware that loses them; 0 = never dropped). The image chunk stays.
+  int drop_exposure_chunks_from_frame = 0;
+  // GVCP packet resend declared and served; false = a camera without it (resend requests unheard).
+  bool packet_resend = true;
   bool IsValid(std::string* why) const;
 };
 

@@ -14,6 +14,9 @@ CameraSettings CameraSettingsOf(const CameraConfig& c, const std::string& trigge
   s.width = c.roi_width;
   s.height = c.roi_height;
   s.trigger_overlap_readout = c.trigger_in_readout;
+  // rig.cc refused any other spelling at its line.
+  s.exposure_check = ParseExposureCheck(c.exposure_check).value_or(ExposureCheck::kAuto);
+  s.restore_after = c.restore_after;
   return s;
 }
 

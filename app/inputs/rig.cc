@@ -125,7 +125,7 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   const MapReader map(node, file, "camera",
                       {"id", "pixel_format", "trigger_source", "trigger_activation", "black_level",
                        "packet_size", "frame_timeout_ms", "readout_ms", "trigger_overlap", "roi_px",
-                       "intrinsics"});
+                       "intrinsics", "exposure_check", "restore_after"});
   CameraConfig camera;
   camera.id = map.String("id", camera.id);
   camera.pixel_format = map.String("pixel_format", camera.pixel_format);
@@ -141,6 +141,9 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   const std::string overlap = map.String("trigger_overlap", "off");
   OneOf(map, "trigger_overlap", overlap, {"off", "readout"});
   camera.trigger_in_readout = overlap == "readout";
+  camera.exposure_check = map.String("exposure_check", camera.exposure_check);
+  OneOf(map, "exposure_check", camera.exposure_check, {"auto", "chunk", "readback", "none"});
+  camera.restore_after = map.Boolean("restore_after", camera.restore_after);
   if (map.Has("roi_px")) {
     const YAML::Node node = map.Get("roi_px");
     const std::string shape =

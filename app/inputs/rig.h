@@ -38,6 +38,13 @@ struct CameraConfig {
   // (GenICam TriggerOverlap ReadOut, or a camera that queues it): brackets trigger each frame
   // during its predecessor's readout. `off` (the default) = trigger after the frame arrived.
   bool trigger_in_readout = false;
+  // `exposure_check: chunk | readback | none` (absent or `auto`: the chunk where the camera
+  // declares it and its frames carry it, else the read-back, said once; acquisition/camera.h).
+  std::string exposure_check = "auto";
+  // `restore_after: true` (the default): calibrate, validate, measure, snap and view put back
+  // every feature irdist changed when they end, whether done, failed or interrupted; false
+  // leaves the camera as irdist set it (for a next run on the same settings).
+  bool restore_after = true;
   // Region of interest `roi_px: [offset_x, offset_y, width, height]` (sensor pixels); width 0 =
   // the full sensor. A region around the IRED's image cuts each frame's transfer, the recording
   // and the host's work by the ratio of areas (docs/recipes.md).

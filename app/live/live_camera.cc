@@ -33,6 +33,7 @@ struct LiveCamera::Impl {
   int frame_timeout_ms = 1000;
   LiveCameraOptions options;  // as opened, for configuring the camera again
   bool whole_sensor = false;
+  std::ostream* err = nullptr;  // the command's, for the camera's state when it closes
 };
 
 namespace {
@@ -153,6 +154,7 @@ CameraRoute UseHardwareCamera(const Rig& rig, const std::string& rig_path,
 LiveCamera::LiveCamera(const LiveCameraOptions& options, std::ostream& err) : impl_(new Impl) {
   Impl& m = *impl_;
   m.options = options;
+  m.err = &err;
   m.rig_path = ResolveRig(options.rig_spec);
   m.rig = LoadRig(m.rig_path);
   CameraRoute route;
@@ -173,13 +175,10 @@ LiveCamera::LiveCamera(const LiveCameraOptions& options, std::ostream& err) : im
 }
 
 LiveCamera::~LiveCamera() {
-  if (impl_->camera && impl_->camera->streaming()) {
-    try {
-      impl_->camera->StopStream();
-    } catch (const Error&) {
-      // Closing anyway; the camera is released with the object.
-    }
-  }
+  if (!impl_->camera) return;
+  // Done, failed or interrupted alike: stopped, and put back unless the rig says otherwise.
+  const std::string outcome = impl_->camera->LeaveAsFound(impl_->rig.camera.restore_after);
+  if (!outcome.empty()) *impl_->err << outcome << "\n";
 }
 
 const Rig& LiveCamera::rig() const { return impl_->rig; }

@@ -129,7 +129,16 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   settings.buffer_count =
       std::max(settings.buffer_count, static_cast<int>(2 * setup.exposures_us.size() + 4));
   m.camera->Configure(settings);
+  try {
+    OpenRecording(setup);
+  } catch (...) {
+    std::cerr << m.camera->LeaveAsFound(setup.camera.restore_after) << "\n";
+    throw;
+  }
+}
 
+void LiveRecorder::OpenRecording(const LiveCaptureSetup& setup) {
+  Impl& m = *impl_;
   if (setup.resume) {
     m.writer = RecordingWriter::Resume(setup.recording_dir);
     if (!m.writer->set_aside().empty()) {
@@ -159,6 +168,7 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   options.trigger_source = setup.camera.trigger_source;
   options.frame_timeout = std::chrono::milliseconds(setup.frame_timeout_ms);
   options.trigger_in_readout = setup.camera.trigger_overlap_readout;
+  options.on_notice = [](const std::string& text) { std::cerr << "warning: " << text << "\n"; };
   m.capture = std::make_unique<BracketCapture>(*m.camera, options);
   m.software_trigger = std::make_unique<CameraSoftwareTrigger>(*m.camera);
 }
@@ -166,6 +176,9 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
 LiveRecorder::~LiveRecorder() {
   if (impl_->staging.valid()) impl_->staging.wait();
   if (impl_->committing.valid()) impl_->committing.wait();
+  // Done, failed or interrupted alike: stopped, and put back unless the rig says otherwise.
+  const std::string outcome = impl_->camera->LeaveAsFound(impl_->setup.camera.restore_after);
+  if (!outcome.empty()) std::cerr << outcome << "\n";
 }
 
 void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int)>& trigger,

@@ -93,6 +93,8 @@ class LiveRecorder : public PendingBrackets {
   const FeatureMap& FeatureCache() const;  // after WaitCommitted()
 
  private:
+  // The recording opened (or resumed) and the capture set up, after the camera's Configure.
+  void OpenRecording(const LiveCaptureSetup& setup);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

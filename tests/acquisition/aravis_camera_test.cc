@@ -320,6 +320,39 @@ TEST(VendorCameras, BaslerStyleIsSetToTimedExposureAndFrameStartAlone) {
   EXPECT_EQ(check.Get("AcquisitionStart", "TriggerMode"), "Off");
 }
 
+// Writes `text` (NUL-padded to 32 bytes) into the camera's memory at `address`, as another client.
+void WriteCameraString(guint64 address, const std::string& text) {
+  GError* error = nullptr;
+  ArvCamera* other = arv_camera_new("127.0.0.1", &error);
+  ASSERT_EQ(error, nullptr) << error->message;
+  std::string padded = text;
+  padded.resize(32, '\0');
+  arv_device_write_memory(arv_camera_get_device(other), address, 32, padded.data(), &error);
+  g_object_unref(other);
+  ASSERT_EQ(error, nullptr) << error->message;
+}
+
+// A Basler ace's raw exposure timebase (ExposureTimeRaw x ExposureTimeBaseAbs, 20 us a step):
+// the bounds irdist checks exposures against are in microseconds, those of ExposureTimeAbs,
+// whatever Aravis's Basler quirk reports (the raw steps); an exposure in us is written and kept.
+TEST(VendorCameras, BaslerRawTimebaseBoundsAreInMicroseconds) {
+  testing::FakeCameraProcess fake("IRDBAS02", {"-g", Genicam("basler_raw_timebase.xml")});
+  WriteCameraString(0x10c0, "Basler");
+  WriteCameraString(0x10e0, "acA1300-60gm");
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  EXPECT_EQ(camera->Identity().vendor, "Basler");
+  camera->Configure(Triggered("Mono12"));
+  const auto [min_us, max_us] = camera->ExposureBoundsUs();
+  EXPECT_NEAR(min_us, 40.0, 1e-6);
+  EXPECT_NEAR(max_us, 1000000.0, 1e-3);
+  EXPECT_NEAR(camera->SetExposureUs(300000.0), 300000.0, 1.0);  // above the raw maximum 50000
+  const auto features = camera->ReadBackFeatures();
+  EXPECT_NEAR(std::stod(features.at("ExposureTimeAbs")), 300000.0, 1.0);
+  const std::string bounds = features.at("irdist.ExposureBounds");
+  EXPECT_NE(bounds.find("(ExposureTimeAbs); Aravis reported [2, 50000]"), std::string::npos)
+      << bounds;
+}
+
 // FLIR-style: ExposureAuto and GainAuto Continuous, GammaEnable and ExposureMode TriggerWidth at
 // power-up, Mono12p and no Mono12. Mono12 is refused naming Mono12p; Mono12p streams with
 // every automatic control off, gamma off, TriggerOverlap ReadOut and the other triggers Off.
@@ -371,6 +404,48 @@ TEST(VendorCameras, FlirStyleFailedSetupLeavesItAsFound) {
   EXPECT_EQ(check.Get("", "ExposureMode"), "TriggerWidth");
   EXPECT_EQ(check.Get("", "PixelFormat"), "Mono8");
   EXPECT_EQ(check.Get("FrameStart", "TriggerMode"), "Off");
+}
+
+// A command done with the camera, however it ended (here while still streaming): with restore
+// (camera.restore_after's default) every feature is put back as found; without, left as set.
+TEST(VendorCameras, LeaveAsFoundStopsThenPutsBackOrLeavesAsSet) {
+  testing::FakeCameraProcess fake("IRDFLI03", {"-g", Genicam("flir_style.xml")});
+  for (const bool restore : {false, true}) {
+    SCOPED_TRACE(restore ? "restore" : "leave");
+    auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+    camera->Configure(Triggered("Mono12p"));
+    camera->StartStream();
+    const std::string outcome = camera->LeaveAsFound(restore);
+    EXPECT_FALSE(camera->streaming());
+    EXPECT_EQ(outcome, restore ? "The camera was put back as it was found."
+                               : "The camera is left as irdist set it (camera.restore_after: "
+                                 "false in the rig file).");
+    camera.reset();
+    OtherClient check;
+    EXPECT_EQ(check.Get("", "ExposureAuto"), restore ? "Continuous" : "Off");
+    EXPECT_EQ(check.Get("FrameStart", "TriggerMode"), restore ? "Off" : "On");
+    if (!restore) {  // the next round must find the camera as it was at the start
+      check.Set("", "ExposureAuto", "Continuous");
+      check.Set("FrameStart", "TriggerMode", "Off");
+    }
+  }
+}
+
+// GainAuto found holding no entry of its enumeration (enum_no_entry.xml): Configure sets it Off,
+// and putting the camera back skips it by name, never writes it as "" nor asks for a power-cycle.
+TEST(VendorCameras, AnEnumerationHoldingNoEntryIsSkippedAndNamedWhenPuttingBack) {
+  testing::FakeCameraProcess fake("IRDENU01", {"-g", Genicam("enum_no_entry.xml")});
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  camera->Configure(Triggered("Mono12p"));
+  const std::string outcome = camera->RestoreFound();
+  EXPECT_NE(outcome.find("put back as it was found"), std::string::npos) << outcome;
+  EXPECT_NE(outcome.find("Not put back: GainAuto"), std::string::npos) << outcome;
+  EXPECT_EQ(outcome.find("power-cycle"), std::string::npos) << outcome;
+  camera.reset();
+  OtherClient check;
+  EXPECT_EQ(check.Get("", "GainAuto"), "Off");
+  EXPECT_EQ(check.Get("", "ExposureAuto"), "Continuous");  // the rest as found
+  EXPECT_EQ(check.Get("", "GammaEnable"), "true");
 }
 
 // One trigger, no TriggerSelector (the SFNC allows it): configured and triggered as FrameStart.

@@ -58,6 +58,8 @@ class ScriptedCamera : public Camera {
   std::deque<Act> script;
   std::vector<double> exposures_at_trigger;
   bool chunks = false;
+  int chunk_triggers = -1;  // with chunks: triggers whose frame carries one (-1 = every one)
+  ExposureCheck check = ExposureCheck::kAuto;
   std::uint64_t next_id = 1;  // GigE Vision 1.x block ids: 1..65535, then 1 again
 
   CameraIdentity Identity() const override { return {"Test", "Scripted", "S1", "1", ""}; }
@@ -86,7 +88,9 @@ class ScriptedCamera : public Camera {
     RawFrame frame;
     frame.status = FrameStatus::kOk;
     frame.image = cv::Mat(4, 4, CV_16UC1, cv::Scalar(static_cast<double>(exposure_us_ / 100.0)));
-    if (chunks) frame.chunk_exposure_us = exposure_us_;
+    const bool chunk_sent =
+        chunk_triggers < 0 || static_cast<int>(exposures_at_trigger.size()) <= chunk_triggers;
+    if (chunks && chunk_sent) frame.chunk_exposure_us = exposure_us_;
     switch (act) {
       case Act::kDeliver:
         break;
@@ -120,6 +124,7 @@ class ScriptedCamera : public Camera {
     queue_.push_back(frame);
   }
   bool HasExposureChunks() const override { return chunks; }
+  ExposureCheck exposure_check() const override { return check; }
 
  private:
   double exposure_us_ = 1000.0;
@@ -277,6 +282,82 @@ TEST(BracketCapture, GivingUpNamesTheNetworkForLostPacketsAndTheTriggerForSilenc
       EXPECT_EQ(network, std::string::npos) << why;
       EXPECT_NE(why.find("nothing arrived"), std::string::npos) << why;
     }
+  }
+}
+
+// Chunks that stop mid-run (a NIC dropping them, firmware ignoring ChunkEnable): the capture falls
+// back to read-backs with one notice naming the chunk; no good frame is rejected or lost.
+TEST(BracketCapture, ChunksStoppingMidRunFallBackToReadbackWithOneNotice) {
+  ScriptedCamera camera;
+  camera.chunks = true;
+  camera.chunk_triggers = 3;
+  BracketOptions options = FastOptions();
+  std::vector<std::string> notices;
+  options.on_notice = [&](const std::string& text) { notices.push_back(text); };
+  BracketCapture capture(camera, options);
+  for (int bracket = 0; bracket < 2; ++bracket) {
+    const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+    ASSERT_TRUE(result.complete) << result.BriefReport();
+    for (size_t i = 0; i < result.frames.size(); ++i) {
+      EXPECT_DOUBLE_EQ(result.frames[i].actual_exposure_us, options.exposures_us[i]);
+      EXPECT_EQ(result.frames[i].exposure_from_chunk, bracket == 0 && i < 3) << i;
+    }
+  }
+  ASSERT_EQ(notices.size(), 1u);
+  EXPECT_NE(notices[0].find("ChunkExposureTime"), std::string::npos) << notices[0];
+  EXPECT_NE(notices[0].find("stopped after 3 frames"), std::string::npos) << notices[0];
+  EXPECT_EQ(capture.stats().exposure_notice, notices[0]);
+  EXPECT_EQ(capture.stats().without_chunk, 1);
+  EXPECT_EQ(capture.stats().wrong_exposure, 0);
+  EXPECT_EQ(capture.stats().lost, 0);
+  // The frame without its chunk was retaken once, read back, and every later one read back.
+  EXPECT_EQ(capture.stats().retried, 1);
+}
+
+TEST(BracketCapture, ChunksNeverSentFallBackAtTheFirstFrame) {
+  ScriptedCamera camera;
+  camera.chunks = true;
+  camera.chunk_triggers = 0;
+  BracketCapture capture(camera, FastOptions());
+  const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+  ASSERT_TRUE(result.complete) << result.BriefReport();
+  for (const BracketFrame& frame : result.frames) EXPECT_FALSE(frame.exposure_from_chunk);
+  EXPECT_NE(capture.stats().exposure_notice.find("no frame carried one"), std::string::npos)
+      << capture.stats().exposure_notice;
+}
+
+// exposure_check: chunk keeps the chunk as the only evidence: a frame without it is rejected, and
+// the message names the chunk (never another application).
+TEST(BracketCapture, ExposureCheckChunkRejectsFramesWithoutItAndNamesTheChunk) {
+  ScriptedCamera camera;
+  camera.chunks = true;
+  camera.chunk_triggers = 1;
+  camera.check = ExposureCheck::kChunk;
+  BracketCapture capture(camera, FastOptions());
+  const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+  ASSERT_FALSE(result.complete);
+  EXPECT_EQ(result.frames.size(), 1u);
+  EXPECT_NE(result.failure.find("without their ChunkExposureTime chunk"), std::string::npos)
+      << result.failure;
+  EXPECT_NE(result.failure.find("camera.exposure_check: readback"), std::string::npos);
+  EXPECT_EQ(result.failure.find("application"), std::string::npos) << result.failure;
+  EXPECT_TRUE(capture.stats().exposure_notice.empty());
+}
+
+// exposure_check: none takes each exposure as written: a camera reporting another value (here a
+// chunk twice the exposure) still delivers, nothing retried.
+TEST(BracketCapture, ExposureCheckNoneTakesTheExposureAsWritten) {
+  ScriptedCamera camera;
+  camera.chunks = true;
+  camera.check = ExposureCheck::kNone;
+  camera.script.assign(5, ScriptedCamera::Act::kWrongChunk);
+  BracketCapture capture(camera, FastOptions());
+  const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+  ASSERT_TRUE(result.complete) << result.BriefReport();
+  EXPECT_EQ(capture.stats().retried, 0);
+  for (const BracketFrame& frame : result.frames) {
+    EXPECT_FALSE(frame.exposure_from_chunk);
+    EXPECT_DOUBLE_EQ(frame.actual_exposure_us, frame.requested_exposure_us);
   }
 }
 

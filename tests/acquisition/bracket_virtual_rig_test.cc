@@ -1,6 +1,7 @@
 // A bracket against the virtual rig (sim/): the frames carry the exposures requested, in order.
 // The rig renders each frame from radiometry with the exposure latched for it, so the emitter's
 // integrated signal in each frame must scale like the noise-free ground truth for its exposure.
+#include <arv.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include "sim/camera_server.h"
 #include "sim/virtual_rig.h"
 #include "tests/loopback_gvcp.h"
+#include "tests/virtual_rig_with.h"
 
 namespace irdist {
 namespace {
@@ -95,12 +97,13 @@ TEST(BracketVirtualRig, FiveExposureBracketCarriesTheRequestedExposuresInOrder) 
 // A virtual rig with a Software-triggered camera opened on it, 256 x 256 Mono12 frames.
 struct SmallRig {
   explicit SmallRig(const std::string& serial, bool chunks = true, int width = 256,
-                    double time_scale = 10.0) {
+                    double time_scale = 10.0,
+                    const std::string& rig_path = IRDIST_SOURCE_DIR "/recipes/rigs/virtual.yaml") {
     sim::VirtualRigOverrides overrides;
     overrides.serial = serial;
     overrides.seed = 11;
     overrides.time_scale = time_scale;
-    rig = sim::VirtualRig::Start(IRDIST_SOURCE_DIR "/recipes/rigs/virtual.yaml", overrides);
+    rig = sim::VirtualRig::Start(rig_path, overrides);
     rig->world().SetPose(1500.0, 0.0, 0.0, false);
     rig->world().SetCurrent(500.0);
     camera = AravisCamera::Open(rig->Info().camera_address, rig->Info().serial);
@@ -196,6 +199,103 @@ TEST(BracketVirtualRig, DelayedOrReorderedExposureWritesNeverMislabelAFrame) {
     EXPECT_GT(stats.wrong_exposure + stats.exposure_rereads, 0) << stats.BriefReport();
     EXPECT_EQ(stats.lost, 0) << stats.BriefReport();
   }
+}
+
+// Exposure chunks on (every frame carries its own), dropped from the first frame (a camera
+// declaring them whose frames carry none) and stopping mid-run: every bracket complete, every
+// frame labelled with the exposure the camera's own record gives it; without chunks the capture
+// falls back to read-backs with one notice naming the chunk.
+TEST(BracketVirtualRig, ExposureChunksOnOffAndStoppingMidRunLoseNoFrame) {
+  struct Case {
+    const char* serial;
+    int drop_from_frame;  // virtual.camera.drop_exposure_chunks_from_frame (0 = never)
+    const char* notice;   // in the fallback's notice ("" = none)
+  };
+  // Frame 1 is Configure's warm-up; a bracket is 5 frames: 9 stops them in the second bracket.
+  for (const Case& c : {Case{"IRDVCHK0", 0, ""}, Case{"IRDVCHK1", 1, "no frame carried one"},
+                        Case{"IRDVCHK9", 9, "the chunks stopped after"}}) {
+    SCOPED_TRACE(c.serial);
+    const std::string rig_path = testing::VirtualRigWithCameraKeys(
+        c.serial, "    drop_exposure_chunks_from_frame: " + std::to_string(c.drop_from_frame) + "\n");
+    SmallRig small(c.serial, true, 256, 10.0, rig_path);
+    ASSERT_TRUE(small.camera->HasExposureChunks());  // declared and turned on
+    const CaptureStats stats = ExpectNoMislabelledFrame(small, FiveExposures(), 4);
+    EXPECT_EQ(stats.lost, 0) << stats.BriefReport();
+    EXPECT_EQ(stats.wrong_exposure, 0) << stats.BriefReport();
+    if (c.drop_from_frame == 0) {
+      EXPECT_TRUE(stats.exposure_notice.empty()) << stats.exposure_notice;
+      EXPECT_EQ(stats.pipelined_frames, 4 * 4);
+      continue;
+    }
+    EXPECT_EQ(stats.without_chunk, 1) << stats.BriefReport();
+    EXPECT_NE(stats.exposure_notice.find(c.notice), std::string::npos) << stats.exposure_notice;
+    EXPECT_NE(stats.exposure_notice.find("ChunkExposureTime"), std::string::npos);
+    EXPECT_LT(stats.pipelined_frames, 4 * 4);
+  }
+}
+
+// Control first: while another client holds the camera's control channel, Open refuses before it
+// writes any feature and names the holder from the camera's primary application register; once
+// that client has left, Open takes control.
+TEST(BracketVirtualRig, AnotherControllerHoldingTheCameraIsNamedBeforeAnyWrite) {
+  testing::LoopbackGvcpLock lock;
+  sim::VirtualRigOverrides overrides;
+  overrides.serial = "IRDVCTL1";
+  auto rig = sim::VirtualRig::Start(IRDIST_SOURCE_DIR "/recipes/rigs/virtual.yaml", overrides);
+  GError* error = nullptr;
+  ArvCamera* other = arv_camera_new("127.0.0.1", &error);
+  ASSERT_EQ(error, nullptr) << error->message;
+  ArvGvDevice* other_device = ARV_GV_DEVICE(arv_camera_get_device(other));
+  if (arv_gv_device_is_controller(other_device) == FALSE) {
+    ASSERT_TRUE(arv_gv_device_take_control(other_device, nullptr));
+  }
+  const auto writes_before = rig->camera().Stats().control_requests;
+  try {
+    AravisCamera::Open("127.0.0.1", "IRDVCTL1");
+    ADD_FAILURE() << "opened a camera another client controls";
+  } catch (const CameraError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("is controlled by the application at 127.0.0.1 port"),
+              std::string::npos) << message;
+    EXPECT_NE(message.find("writes no feature without control"), std::string::npos);
+  }
+  EXPECT_GT(rig->camera().Stats().control_requests, writes_before);  // it did ask
+  g_object_unref(other);  // leaves control
+  auto camera = AravisCamera::Open("127.0.0.1", "IRDVCTL1");
+  camera->Configure(CameraSettings{});
+  camera.reset();
+  rig->Stop();
+}
+
+// virtual.camera.packet_resend: false serves a camera without GVCP resend (capability bit clear).
+TEST(BracketVirtualRig, RigKeySwitchesPacketResendOff) {
+  {
+    SmallRig with("IRDVRSD1");  // one rig at a time: each holds the loopback GVCP lock
+    EXPECT_TRUE(with.camera->DeclaresPacketResend());
+  }
+  SmallRig without("IRDVRSD0", true, 256, 10.0,
+                   testing::VirtualRigWithCameraKeys("IRDVRSD0", "    packet_resend: false\n"));
+  EXPECT_FALSE(without.camera->DeclaresPacketResend());
+}
+
+// exposure_check: readback turns the camera's chunks off; chunk on a camera declaring them works.
+TEST(BracketVirtualRig, ExposureCheckReadbackTurnsChunksOff) {
+  SmallRig small("IRDVCHKR");
+  CameraSettings settings;
+  settings.pixel_format = "Mono12";
+  settings.trigger_source = "Software";
+  settings.width = 256;
+  settings.height = 256;
+  settings.exposure_check = ExposureCheck::kReadback;
+  small.camera->Configure(settings);
+  EXPECT_FALSE(small.camera->HasExposureChunks());
+  EXPECT_EQ(small.camera->ReadBackFeatures()["ChunkModeActive"], "false");
+  const CaptureStats stats = ExpectNoMislabelledFrame(small, FiveExposures(), 2);
+  EXPECT_EQ(stats.pipelined_frames, 0);
+  EXPECT_TRUE(stats.exposure_notice.empty());
+  settings.exposure_check = ExposureCheck::kChunk;
+  small.camera->Configure(settings);
+  EXPECT_TRUE(small.camera->HasExposureChunks());
 }
 
 // GigE packet loss: the grabber asks for the lost packets again and the camera resends them, so

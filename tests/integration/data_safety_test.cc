@@ -90,6 +90,8 @@ TEST_P(DataSafety, AFaultDuringAMoveKeepsTheBracketsBeforeIt) {
             4u);
   if (fault == "estop") EXPECT_NE(output.find("emergency stop"), std::string::npos) << output;
   if (fault == "refuse") EXPECT_NE(output.find("-222"), std::string::npos) << output;
+  // The failed run put the camera back as it found it (camera.restore_after's default).
+  EXPECT_NE(output.find("The camera was put back as it was found."), std::string::npos) << output;
 
   // The same rig file (a resume refuses another one): a new emulator counts its moves from zero,
   // and the one pose left is reached before the third move.

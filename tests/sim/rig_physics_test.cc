@@ -127,6 +127,22 @@ TEST(RigPhysics, CameraCurveFaultKeys) {
   ExpectError("virtual:\n  camera:\n    lut_enable: maybe\n", "badlut", "3", "lut_enable");
 }
 
+// The camera's transport faults: exposure chunks dropped from a frame on, packet resend off; both
+// off by default, read, checked at their line.
+TEST(RigPhysics, CameraChunkAndResendFaultKeys) {
+  EXPECT_EQ(CameraOptions{}.drop_exposure_chunks_from_frame, 0);
+  EXPECT_TRUE(CameraOptions{}.packet_resend);
+  const RigPhysics p = LoadRigPhysics(WriteRig(
+      "chunks", "virtual:\n  camera:\n    drop_exposure_chunks_from_frame: 7\n"
+                "    packet_resend: false\n"));
+  EXPECT_EQ(p.camera.drop_exposure_chunks_from_frame, 7);
+  EXPECT_FALSE(p.camera.packet_resend);
+  ExpectError("virtual:\n  camera:\n    drop_exposure_chunks_from_frame: -1\n", "baddrop", "3",
+              "drop_exposure_chunks_from_frame");
+  ExpectError("virtual:\n  camera:\n    packet_resend: sometimes\n", "badresend", "3",
+              "packet_resend");
+}
+
 // The sensor's fixed-pattern noise: off by default, on in virtual-fpn.yaml, range-checked.
 TEST(RigPhysics, FixedPatternNoiseKeys) {
   EXPECT_EQ(RigPhysics{}.sensor.prnu_percent, 0.0);

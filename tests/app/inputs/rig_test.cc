@@ -328,6 +328,34 @@ TEST(RigTest, BadRigFilesNameTheirLineAndColumn) {
   }
 }
 
+// camera.exposure_check: the chunk, the read-back or none; absent = auto; anything else refused at
+// its line with the choices.
+TEST(RigTest, ExposureCheckIsOneOfItsChoices) {
+  EXPECT_EQ(ParseRig("kind: virtual\ncamera: {id: auto}\n", "rig.yaml").camera.exposure_check, "auto");
+  for (const std::string choice : {"chunk", "readback", "none", "auto"}) {
+    EXPECT_EQ(ParseRig("kind: virtual\ncamera:\n  exposure_check: " + choice + "\n",
+                       "rig.yaml")
+                  .camera.exposure_check,
+              choice);
+  }
+  try {
+    ParseRig("kind: virtual\ncamera:\n  id: auto\n  exposure_check: chunks\n", "rig.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.Line(), 4) << e.what();
+    EXPECT_NE(e.Message().find("readback"), std::string::npos) << e.what();
+  }
+}
+
+// camera.restore_after: true by default (the camera put back when a command ends), false kept.
+TEST(RigTest, RestoreAfterIsTrueUnlessSaidOtherwise) {
+  EXPECT_TRUE(ParseRig("kind: virtual\ncamera: {id: auto}\n", "rig.yaml").camera.restore_after);
+  EXPECT_FALSE(ParseRig("kind: virtual\ncamera:\n  restore_after: false\n", "rig.yaml")
+                   .camera.restore_after);
+  EXPECT_THROW(ParseRig("kind: virtual\ncamera:\n  restore_after: later\n", "rig.yaml"),
+               RecipeError);
+}
+
 TEST(RigTest, MissingRigFileIsARecipeError) {
   EXPECT_THROW(LoadRig("/nonexistent/rig.yaml"), RecipeError);
 }

@@ -69,8 +69,10 @@ TEST(Snap, SavesTheFrameAndFindsTheBlobOnTheAxis) {
   EXPECT_LT(cv::mean(preview(cv::Rect(0, 0, 32, 32)))[0], 5.0);  // a corner of the background
   EXPECT_NE(out.str().find(".preview.png"), std::string::npos) << out.str();
   // --at says each step while the station homes, moves and the current settles.
+  // The camera is put back as it was found when snap is done (camera.restore_after's default).
   for (const char* step : {"--at: [", "homing the station", "IRED current to 490.0 mA",
-                           "moving to slide 2000.0 mm", "at the pose"}) {
+                           "moving to slide 2000.0 mm", "at the pose",
+                           "The camera was put back as it was found."}) {
     EXPECT_NE(err.str().find(step), std::string::npos) << step << "\n" << err.str();
   }
 }
