@@ -165,6 +165,8 @@ class Session {
     capture.trigger_source = live_->trigger_source();
     capture.frame_timeout = std::chrono::milliseconds(live_->frame_timeout_ms());
     capture.trigger_in_readout = live_->rig().camera.trigger_in_readout;
+    std::ostream* err = &io.err;  // the command's stream outlives the session
+    capture.on_notice = [err](const std::string& text) { *err << "warning: " << text << "\n"; };
     capture_ = std::make_unique<BracketCapture>(live_->camera(), capture);
     workers_ = std::make_unique<FeatureWorkers>(static_cast<int>(bracket.exposures_us.size()));
     if (!args.out_dir.empty()) {

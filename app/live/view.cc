@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <iostream>
 #include <memory>
 #include <optional>
 #include <opencv2/highgui.hpp>
@@ -106,6 +107,8 @@ class SingleExposure {
     bracket.exposures_us = {exposure_ms * 1000.0, exposure_ms * 1000.0};
     bracket.trigger_source = live.trigger_source();
     bracket.frame_timeout = std::chrono::milliseconds(live.frame_timeout_ms());
+    // A camera whose exposure chunks stop coming: read-backs from then on, said once.
+    bracket.on_notice = [](const std::string& text) { std::cerr << "warning: " << text << "\n"; };
     capture_ = std::make_unique<BracketCapture>(live.camera(), bracket);
   }
   cv::Mat Next() {
