@@ -9,6 +9,7 @@
 
 #include "acquisition/content_hash.h"
 #include "acquisition/pixel_format.h"
+#include "base/bounds.h"
 #include "base/safe_file.h"
 
 namespace irdist {
@@ -192,6 +193,38 @@ std::vector<RecordingIssue> ExposureOrderIssues(
     }
   }
   return issues;
+}
+
+std::string RowBoundsRefusal(const FrameRecord& row) {
+  const std::string fix = "frames.csv rows are written by irdist; restore the file from a copy";
+  const struct {
+    const char* column;
+    double value;
+    const Bound& bound;
+  } numbers[] = {
+      {"index", static_cast<double>(row.index), bounds::kFrameNumber},
+      {"bracket_id", static_cast<double>(row.bracket_id), bounds::kFrameNumber},
+      {"frame_in_bracket", static_cast<double>(row.frame_in_bracket), bounds::kFrameNumber},
+      {"bracket_size", static_cast<double>(row.bracket_size), bounds::kFrameNumber},
+      {"requested_exposure_us", row.requested_exposure_us, bounds::kExposureUs},
+      {"actual_exposure_us", row.actual_exposure_us, bounds::kExposureUs},
+      {"bias_ma_set", row.bias_ma_set, bounds::kCurrentMa},
+      {"slide_mm", row.slide_mm, bounds::kSlideMm},
+      {"pan_deg", row.pan_deg, bounds::kAngleDeg},
+      {"tilt_deg", row.tilt_deg, bounds::kAngleDeg},
+      {"theta_deg", row.theta_deg, bounds::kAngleDeg},
+      {"repeat", static_cast<double>(row.repeat), bounds::kFrameNumber},
+      {"host_time_ns", static_cast<double>(row.host_time_ns), bounds::kUtcTimeNs},
+      {"host_monotonic_ns", static_cast<double>(row.host_monotonic_ns), bounds::kMonotonicNs},
+  };
+  for (const auto& number : numbers) {
+    const std::string refusal = number.bound.Refusal(number.column, number.value, fix);
+    if (!refusal.empty()) return refusal;
+  }
+  if (!std::isnan(row.bias_ma_measured)) {
+    return bounds::kCurrentMa.Refusal("bias_ma_measured", row.bias_ma_measured, fix);
+  }
+  return "";
 }
 
 }  // namespace irdist

@@ -42,6 +42,14 @@ std::vector<RecordingIssue> HeaderFormatIssues(const RecordingHeader& header, bo
 // tilt_deg, theta_deg, bias_ma_set, repeat): one bracket is taken at one pose. One issue per row.
 std::vector<RecordingIssue> BracketPoseIssues(const std::vector<RecordedBracket>& brackets);
 
+// The first number of a parsed frames.csv row outside base/bounds.h's table, as "<column> = <value>
+// is outside <range> (<why>)"; "" when all are inside. Checked: index, bracket_id,
+// frame_in_bracket, bracket_size, both exposures, both currents (an empty bias_ma_measured is not
+// measured), slide_mm, pan_deg, tilt_deg, theta_deg, repeat, host_time_ns, host_monotonic_ns (0 =
+// not recorded). camera_frame_id and camera_timestamp_ns are the camera's own 64-bit counters: any
+// value is possible.
+std::string RowBoundsRefusal(const FrameRecord& row);
+
 // What check measured of one decoded frame.
 struct FrameSignal {
   double sum = 0.0;        // of every pixel value

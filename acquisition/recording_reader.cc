@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -19,6 +20,7 @@
 #include "acquisition/content_hash.h"
 #include "acquisition/recording_files.h"
 #include "acquisition/recording_integrity.h"
+#include "base/bounds.h"
 #include "base/regular_file.h"
 #include "base/utc_time.h"
 #include "base/yaml_fields.h"
@@ -49,6 +51,11 @@ bool ParseUint(const std::string& text, std::uint64_t* value) {
   if (errno != 0 || end == nullptr || *end != '\0') return false;
   *value = v;
   return true;
+}
+
+// A count as an int; one beyond an int's range saturates (RowBoundsRefusal refuses it then).
+int SaturatedInt(std::int64_t value) {
+  return static_cast<int>(std::min<std::int64_t>(value, std::numeric_limits<int>::max()));
 }
 
 // Empty = NaN when `optional`.
@@ -157,11 +164,9 @@ void ParseHeaderImage(const yf::MapReader& root, RecordingHeader* h) {
   }
   const YAML::Node depth = image.Require("bit_depth");
   h->bit_depth = yf::AsInteger(depth, root.File(), "image.bit_depth");
-  if (h->bit_depth < 1 || h->bit_depth > 16) {
-    yf::Fail(root.File(), depth.Mark(),
-             "image.bit_depth " + std::to_string(h->bit_depth) +
-                 " is impossible for a 16-bit PNG; it must be 1..16 (8 for Mono8, 12 for Mono12)");
-  }
+  const std::string refusal = bounds::kBitDepth.Refusal(
+      "image.bit_depth", h->bit_depth, "a 16-bit PNG carries 8 for Mono8, 12 for Mono12");
+  if (!refusal.empty()) yf::Fail(root.File(), depth.Mark(), refusal);
   h->pixel_format = image.String("pixel_format", "");
 }
 
@@ -208,15 +213,32 @@ Completion ParseCompletionField(const yf::MapReader& root) {
            "completion '" + text + "' is not running, complete or cut; fix the key by hand");
 }
 
+// A count of rows in recording.yaml, refused at file:line:column outside bounds::kFrameNumber.
+std::int64_t HeaderCount(const yf::MapReader& root, const YAML::Node& node, const char* key) {
+  const double value = yf::AsNumber(node, root.File(), key);
+  const std::string refusal = bounds::kFrameNumber.Refusal(
+      key, value, "a count of frames.csv's rows; fix it by hand or restore the file");
+  if (!refusal.empty()) yf::Fail(root.File(), node.Mark(), refusal);
+  if (value != std::floor(value)) {
+    yf::Fail(root.File(), node.Mark(), std::string(key) + " must be a whole number");
+  }
+  return static_cast<std::int64_t>(value);
+}
+
 // The command that made the recording and the rows a resume could not verify.
 void ParseHeaderRun(const yf::MapReader& root, RecordingHeader* h) {
   h->run_command = root.String("command", "");
   if (!root.Has("unverified_rows")) return;
   const YAML::Node rows = root.Get("unverified_rows");
-  h->unverified_rows = yf::AsInteger(rows, root.File(), "unverified_rows");
-  if (h->unverified_rows < 0) {
-    yf::Fail(root.File(), rows.Mark(), "unverified_rows must be 0 or more (a count of rows)");
-  }
+  h->unverified_rows = HeaderCount(root, rows, "unverified_rows");
+}
+
+// frame_count: -1 while running, else the rows at close (a count in bounds::kFrameNumber).
+void ParseHeaderFrameCount(const yf::MapReader& root, RecordingHeader* h) {
+  if (!root.Has("frame_count")) return;
+  const YAML::Node node = root.Get("frame_count");
+  if (yf::AsNumber(node, root.File(), "frame_count") == -1.0) return;
+  h->frame_count = HeaderCount(root, node, "frame_count");
 }
 
 struct TextFiles {
@@ -253,7 +275,7 @@ RecordingHeader ParseHeaderFields(const std::string& text, const std::string& pa
   h.software_version = root.String("software_version", "");
   h.start_time = root.String("start_time", "");
   h.end_time = root.String("end_time", "");
-  h.frame_count = static_cast<std::int64_t>(root.Number("frame_count", -1));
+  ParseHeaderFrameCount(root, &h);
   if (root.Has("resumed")) {
     const YAML::Node resumed = root.Get("resumed");
     if (!resumed.IsSequence()) yf::Fail(path, resumed.Mark(), "resumed must be a list of times");
@@ -355,9 +377,9 @@ bool ParseFramesCsvRow(const std::string& line, FrameRecord* r, std::string* why
   }
   if (!ParseCsvInt(f[2], &r->bracket_id)) return bad("bracket_id", f[2]);
   if (!ParseCsvInt(f[3], &v) || v < 0) return bad("frame_in_bracket", f[3]);
-  r->frame_in_bracket = static_cast<int>(v);
+  r->frame_in_bracket = SaturatedInt(v);
   if (!ParseCsvInt(f[4], &v) || v <= r->frame_in_bracket) return bad("bracket_size", f[4]);
-  r->bracket_size = static_cast<int>(v);
+  r->bracket_size = SaturatedInt(v);
   if (f[5] == "ref") {
     r->role = FrameRole::kReference;
   } else if (f[5] == "meas") {
@@ -378,7 +400,7 @@ bool ParseFramesCsvRow(const std::string& line, FrameRecord* r, std::string* why
   if (!ParseDouble(f[13], &r->tilt_deg)) return bad("tilt_deg", f[13]);
   if (!ParseDouble(f[14], &r->theta_deg)) return bad("theta_deg", f[14]);
   if (!ParseCsvInt(f[15], &v) || v < 0) return bad("repeat", f[15]);
-  r->repeat = static_cast<int>(v);
+  r->repeat = SaturatedInt(v);
   if (!ParseUint(f[16], &r->camera_frame_id)) return bad("camera_frame_id", f[16]);
   if (!f[17].empty() && !ParseUint(f[17], &r->camera_timestamp_ns)) {
     return bad("camera_timestamp_ns", f[17]);
@@ -511,6 +533,11 @@ FramesCsv ParseFramesCsv(const std::string& text) {
     std::string why;
     row.line = static_cast<int>(i + 1);
     if (!ParseFramesCsvRow(lines.lines[i], &row, &why, csv.hashed)) {
+      csv.errors.push_back({kFramesCsv, row.line, "bad row: " + why});
+      continue;
+    }
+    why = RowBoundsRefusal(row);
+    if (!why.empty()) {
       csv.errors.push_back({kFramesCsv, row.line, "bad row: " + why});
       continue;
     }

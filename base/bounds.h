@@ -38,11 +38,22 @@ inline constexpr Bound kDurationS{"duration or wait", "s", 0.0, 86400.0, true,
                                   "a run's duration or a device's wait lies within a day"};
 inline constexpr Bound kDelayMs{"delay", "ms", 0.0, 86400000.0, false,
                                 "a device's readout, settling or overhead lies within a day"};
+inline constexpr Bound kExposureUs{"exposure", "us", 0.0, 1.0e8, true,
+                                   "a camera's exposure (100 s is far beyond any GigE camera's)"};
+static_assert(kExposureUs.max == kExposureMs.max * 1000.0, "one exposure bound in ms and us");
+inline constexpr Bound kUtcTimeNs{"wall-clock time", "ns since 1970", 0.0, 7.2581184e18, false,
+                                  "a frame's arrival lies between 1970-01-01 (the clock's start) "
+                                  "and 2200-01-01 UTC"};
+inline constexpr Bound kMonotonicNs{"monotonic time", "ns", 0.0, 3.16e18, false,
+                                    "a host's monotonic clock counts from its boot: less than a "
+                                    "century"};
 // Sizes and counts.
 inline constexpr Bound kDiskGb{"disk budget", "GB", 0.0, 1.0e6, true,
                                "no disk holds more than a petabyte"};
 inline constexpr Bound kCount{"count", "", 1.0, 1.0e9, false,
                               "at least one, and a billion brackets is decades of measuring"};
+inline constexpr Bound kFrameNumber{"frame or bracket number", "", 0.0, 1.0e9, false,
+                                    "counted from 0; a billion frames is decades of measuring"};
 inline constexpr Bound kToleranceSteps{"position tolerance", "steps", 0.0, 1.0e6, false,
                                        "a motor's tolerance is a few steps; a million is more "
                                        "than an axis's travel"};
@@ -52,6 +63,14 @@ inline constexpr Bound kBitDepth{"bit depth", "bit", 1.0, 16.0, false,
                                  "a camera's pixels carry 1 to 16 bits (Mono8: 8, Mono12: 12)"};
 inline constexpr Bound kFrameBitDepth{"bit depth of a frame", "bit", 8.0, 16.0, false,
                                       "the features read Mono8 to Mono16 frames"};
+// The station's pose and the emitter's current, as recorded with each frame.
+inline constexpr Bound kSlideMm{"slide position", "mm", -1.0e5, 1.0e5, false,
+                                "a linear stage's position lies within 100 m of its home"};
+inline constexpr Bound kAngleDeg{"angle", "deg", -360.0, 360.0, false,
+                                 "a pan, tilt or off-axis angle lies within one turn either way"};
+inline constexpr Bound kCurrentMa{"IRED current", "mA", -10.0, 10000.0, false,
+                                  "an IRED's forward current is at most a few amperes; a source "
+                                  "reading back an emitter that is off may show a few mA below 0"};
 // Camera intrinsics (OpenCV's pinhole with distortion [k1, k2, p1, p2, k3]).
 inline constexpr Bound kFocalPx{"focal length", "px", 10.0, 1.0e6, false,
                                 "focal length / pixel pitch: 1 mm / 20 um = 50 px to "

@@ -21,6 +21,7 @@
 
 #include "acquisition/recording_check.h"
 #include "acquisition/recording_reader.h"
+#include "acquisition/recording_writer.h"
 #include "app/cli/errors.h"
 #include "app/inputs/recipe.h"
 #include "app/live/measure.h"
@@ -196,6 +197,16 @@ class PyRecording {
            std::to_string(position_.rbegin()->first);
   }
 
+  // check=False opens a recording a live run is writing, but says so (a Python warning).
+  static void WarnIfLive(const std::string& path) {
+    const std::string pid = LiveWriterOf(path);
+    if (pid.empty()) return;
+    const std::string text = path + " is being written by process " + pid +
+                             " (a live run holds its writer.lock): the rows are those written so "
+                             "far, and its last bracket may be incomplete";
+    if (PyErr_WarnEx(PyExc_UserWarning, text.c_str(), 1) != 0) throw py::error_already_set();
+  }
+
   static std::string Checked(const std::string& path, bool check) {
     if (path.find('\0') != std::string::npos) {
       throw py::value_error("the recording path contains a NUL character (\\0), which no file "
@@ -207,7 +218,10 @@ class PyRecording {
                            " (a live run holds its writer.lock); open it once that run has "
                            "ended, or with check=False to read the rows written so far.");
     }
-    if (!check) return path;
+    if (!check) {
+      WarnIfLive(path);
+      return path;
+    }
     if (!result.ok()) {
       throw RecordingError(path + " has errors (irdist check " + path + " lists them):\n" +
                            result.BriefReport() + "Open it with check=False to read it anyway.");

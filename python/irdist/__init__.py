@@ -27,7 +27,9 @@ class Recording(_irdist.Recording):
     """A recording (docs/recording-format.md) read with irdist's own reader.
 
     Recording(path, check=True): `check` runs the checks of `irdist check` first (every PNG
-    decoded) and raises RecordingError listing the errors by file and line.
+    decoded) and raises RecordingError listing the errors by file and line. A recording a live run
+    is writing raises with check=True; with check=False it opens with a UserWarning "being written
+    by process N".
     len(rec), rec[i] and iteration give (image, row) pairs: image a numpy uint16 array (rows x
     columns, values as the camera delivered them), row frames.csv's columns as a dict.
     rec.rows: every row (no images), e.g. pandas.DataFrame(rec.rows); rec.header: recording.yaml.

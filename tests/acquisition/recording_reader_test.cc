@@ -138,7 +138,7 @@ TEST(RecordingSafety, ImpossibleOrMissingBitDepthIsAnErrorNamingRecordingYaml) {
   const fs::path yaml = fs::path(dir) / "recording.yaml";
   const std::string text = Slurp(yaml);
   WriteText(yaml, std::regex_replace(text, std::regex("bit_depth: 12"), "bit_depth: 40"));
-  EXPECT_NE(CheckRecording(dir).BriefReport().find("bit_depth 40 is impossible"),
+  EXPECT_NE(CheckRecording(dir).BriefReport().find("bit_depth = 40 is outside [1, 16] bit"),
             std::string::npos)
       << CheckRecording(dir).BriefReport();
   WriteText(yaml, std::regex_replace(text, std::regex("\\s*bit_depth: 12"), ""));
@@ -191,6 +191,37 @@ TEST(RecordingSafety, EmptySlideIsAnErrorNamingFramesCsvLine) {
   });
   EXPECT_NE(ReaderError(dir).find("frames.csv:4: bad row: bad slide_mm ''"), std::string::npos)
       << ReaderError(dir);
+  fs::remove_all(dir);
+}
+
+TEST(RecordingBounds, RowNumberOutsideTheTableIsRefusedNamingLineColumnAndRange) {
+  const std::string dir = CompleteRecording("rowbounds", kBracketSize);
+  EditCsvLine(dir, 4, [](std::string line) {
+    return std::regex_replace(line, std::regex(",1500,10,"), ",1e9,10,");
+  });
+  const std::string expected =
+      "frames.csv:4: bad row: slide_mm = 1000000000 is outside [-100000, 100000] mm";
+  EXPECT_NE(ReaderError(dir).find(expected), std::string::npos) << ReaderError(dir);
+  // check lists it as one more error, the other rows still read.
+  const std::string report = CheckRecording(dir).BriefReport();
+  EXPECT_NE(report.find("frames.csv:4: bad row: slide_mm = 1000000000 is outside"),
+            std::string::npos)
+      << report;
+  fs::remove_all(dir);
+}
+
+TEST(RecordingBounds, HeaderCountOutsideTheTableIsRefusedNamingLineAndRange) {
+  const std::string dir = CompleteRecording("headerbounds", kBracketSize);
+  const fs::path yaml = fs::path(dir) / "recording.yaml";
+  WriteText(yaml, std::regex_replace(Slurp(yaml), std::regex("frame_count: [0-9]+"),
+                                     "frame_count: 1e300"));
+  const std::string error = ReaderError(dir);
+  EXPECT_NE(error.find("recording.yaml:"), std::string::npos) << error;
+  EXPECT_NE(error.find("frame_count = 1e+300 is outside [0, 1000000000]"), std::string::npos)
+      << error;
+  EXPECT_NE(CheckRecording(dir).BriefReport().find("frame_count = 1e+300 is outside"),
+            std::string::npos)
+      << CheckRecording(dir).BriefReport();
   fs::remove_all(dir);
 }
 

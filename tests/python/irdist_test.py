@@ -9,6 +9,7 @@ import re
 import subprocess
 import tempfile
 import unittest
+import warnings
 
 import numpy as np
 
@@ -95,6 +96,13 @@ class RecordingTest(unittest.TestCase):
                 with self.assertRaisesRegex(irdist.RecordingError,
                                             "being written by process %d" % os.getpid()):
                     irdist.Recording(copy)
+                with self.assertWarnsRegex(UserWarning,
+                                           "being written by process %d" % os.getpid()):
+                    live = irdist.Recording(copy, check=False)
+                self.assertEqual(len(live), len(self.rec))
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")  # no warning once the writer is gone
+                self.assertEqual(len(irdist.Recording(copy, check=False)), len(self.rec))
             self.assertEqual(len(irdist.Recording(copy)), len(self.rec))
 
 

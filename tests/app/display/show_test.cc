@@ -22,6 +22,7 @@ TEST(ShowTest, WithoutADisplaySaysSo) {
     auto writer = RecordingWriter::Open(dir, header);
     FrameRecord record;
     record.bracket_size = 1;
+    record.requested_exposure_us = record.actual_exposure_us = 8000.0;  // a real frame's
     writer->Append(cv::Mat(8, 8, CV_16UC1, cv::Scalar(100)), record);
     writer->Close(Completion::kComplete);
   }

@@ -30,6 +30,7 @@ TEST(CaptureTest, RecordingStateListsCompleteBracketsOnly) {
         r.frame_in_bracket = k;
         r.bracket_size = 2;
         r.role = k == 0 ? FrameRole::kReference : FrameRole::kMeasurement;
+        r.requested_exposure_us = r.actual_exposure_us = 8000.0 + 22000.0 * k;  // a real bracket's
         writer->Append(image, r);
       }
     }

@@ -42,6 +42,7 @@ class ResumeTest : public ::testing::Test {
       r.frame_in_bracket = k;
       r.bracket_size = 2;
       r.role = k == 0 ? FrameRole::kReference : FrameRole::kMeasurement;
+      r.requested_exposure_us = r.actual_exposure_us = 8000.0 + 22000.0 * k;  // a real bracket's
       writer->Append(cv::Mat(8, 8, CV_16UC1, cv::Scalar(7 + k)), r);
     }
     writer->Close(completion);
