@@ -66,6 +66,43 @@ TrackState TrackFilter::State(double time_s) const {
   return s;
 }
 
+TrackState TrackFilter::Gated(double time_s, const std::vector<double>& position_mm,
+                              const std::vector<double>& sd_mm, double chi2) {
+  // Frames that agree with the previous gated one count towards a restart.
+  double apart = 0.0;
+  for (size_t i = 0; rejected_in_row_ > 0 && i < axes_.size(); ++i) {
+    const double d = position_mm[i] - last_rejected_[i];
+    apart += d * d / (sd_mm[i] * sd_mm[i] + last_rejected_sd_[i] * last_rejected_sd_[i]);
+  }
+  rejected_in_row_ = apart > gate_chi2_ ? 1 : rejected_in_row_ + 1;
+  last_rejected_ = position_mm;
+  last_rejected_sd_ = sd_mm;
+  const bool restart = rejected_in_row_ >= options_.reset_after;
+  if (restart) Start(time_s, position_mm, sd_mm);
+  TrackState s = State(time_s);
+  s.chi2 = chi2;
+  s.used = s.started = restart;
+  return s;
+}
+
+void TrackFilter::Update(const std::vector<double>& position_mm,
+                         const std::vector<double>& sd_mm) {
+  for (size_t i = 0; i < axes_.size(); ++i) {
+    Axis& a = axes_[i];
+    const double r = sd_mm[i] * sd_mm[i];
+    const double s = a.ppp + r;
+    const double kp = a.ppp / s, kv = a.ppv / s;  // the gain K = P H^T / S
+    const double y = position_mm[i] - a.p;
+    a.p += kp * y;
+    a.v += kv * y;
+    // Joseph form (I - K H) P (I - K H)^T + K R K^T: symmetric and positive whatever the rounding.
+    const double pp = (1 - kp) * (1 - kp) * a.ppp + kp * kp * r;
+    const double pv = (1 - kp) * (a.ppv - kv * a.ppp) + kp * kv * r;
+    const double vv = a.pvv - 2.0 * kv * a.ppv + kv * kv * a.ppp + kv * kv * r;
+    a.ppp = pp, a.ppv = pv, a.pvv = vv;
+  }
+}
+
 TrackState TrackFilter::Add(double time_s, const std::vector<double>& position_mm,
                             const std::vector<double>& sd_mm) {
   IRDIST_CHECK(position_mm.size() == axes_.size() && sd_mm.size() == axes_.size(),
@@ -97,41 +134,8 @@ TrackState TrackFilter::Add(double time_s, const std::vector<double>& position_m
     const double y = position_mm[i] - axes_[i].p;
     chi2 += y * y / (axes_[i].ppp + sd_mm[i] * sd_mm[i]);
   }
-  if (chi2 > gate_chi2_) {
-    // Gated. Frames that agree with the previous gated one count towards a restart.
-    double apart = 0.0;
-    for (size_t i = 0; rejected_in_row_ > 0 && i < axes_.size(); ++i) {
-      const double d = position_mm[i] - last_rejected_[i];
-      apart += d * d / (sd_mm[i] * sd_mm[i] + last_rejected_sd_[i] * last_rejected_sd_[i]);
-    }
-    rejected_in_row_ = apart > gate_chi2_ ? 1 : rejected_in_row_ + 1;
-    last_rejected_ = position_mm;
-    last_rejected_sd_ = sd_mm;
-    if (rejected_in_row_ >= options_.reset_after) {
-      Start(time_s, position_mm, sd_mm);
-      TrackState s = State(time_s);
-      s.chi2 = chi2;
-      s.used = s.started = true;
-      return s;
-    }
-    TrackState s = State(time_s);
-    s.chi2 = chi2;
-    return s;
-  }
-  for (size_t i = 0; i < axes_.size(); ++i) {
-    Axis& a = axes_[i];
-    const double r = sd_mm[i] * sd_mm[i];
-    const double s = a.ppp + r;
-    const double kp = a.ppp / s, kv = a.ppv / s;  // the gain K = P H^T / S
-    const double y = position_mm[i] - a.p;
-    a.p += kp * y;
-    a.v += kv * y;
-    // Joseph form (I - K H) P (I - K H)^T + K R K^T: symmetric and positive whatever the rounding.
-    const double pp = (1 - kp) * (1 - kp) * a.ppp + kp * kp * r;
-    const double pv = (1 - kp) * (a.ppv - kv * a.ppp) + kp * kv * r;
-    const double vv = a.pvv - 2.0 * kv * a.ppv + kv * kv * a.ppp + kv * kv * r;
-    a.ppp = pp, a.ppv = pv, a.pvv = vv;
-  }
+  if (chi2 > gate_chi2_) return Gated(time_s, position_mm, sd_mm, chi2);
+  Update(position_mm, sd_mm);
   rejected_in_row_ = 0;
   ++frames_;
   TrackState s = State(time_s);

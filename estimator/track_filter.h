@@ -61,6 +61,11 @@ class TrackFilter {
   };
   void Start(double time_s, const std::vector<double>& z, const std::vector<double>& sd);
   void Predict(double dt_s);
+  // A frame beyond the gate: counted towards a restart (which it may make).
+  TrackState Gated(double time_s, const std::vector<double>& position_mm,
+                   const std::vector<double>& sd_mm, double chi2);
+  // The Kalman update of every axis with one frame (Joseph form).
+  void Update(const std::vector<double>& position_mm, const std::vector<double>& sd_mm);
   TrackState State(double time_s) const;
 
   TrackFilterOptions options_;
