@@ -43,9 +43,15 @@ double ThreadCpuMs() {
   return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
-TrackFilterOptions FilterOptionsOf(const MeasureArgs& args) {
+// The filter's process noise: --accel-psd, else the rig file's track.accel_psd_mm2_per_s3, else
+// the filter's default.
+TrackFilterOptions FilterOptionsOf(const MeasureArgs& args, const Rig& rig) {
   TrackFilterOptions options;
-  if (args.accel_psd_mm2_per_s3 > 0.0) options.accel_psd_mm2_per_s3 = args.accel_psd_mm2_per_s3;
+  if (args.accel_psd_mm2_per_s3 > 0.0) {
+    options.accel_psd_mm2_per_s3 = args.accel_psd_mm2_per_s3;
+  } else if (rig.track_accel_psd_mm2_per_s3 > 0.0) {
+    options.accel_psd_mm2_per_s3 = rig.track_accel_psd_mm2_per_s3;
+  }
   return options;
 }
 
@@ -64,11 +70,10 @@ double TrackExposureMs(const MeasureArgs& args, const CalibrationModel& model) {
     return t_ms;
   }
   throw UsageError("measure --track: exposure " + FixedText(t_ms, 3) +
-                   " ms lies outside the "
-                   "calibrated exposures of " +
-                   args.model + " (reference " + FixedText(r.t_ref_min_ms, 3) + "-" +
-                   FixedText(r.t_ref_max_ms, 3) + " ms, measurement " + FixedText(r.t_min_ms, 3) +
-                   "-" + FixedText(r.t_max_ms, 3) + " ms); give --exposure-ms inside them.");
+                   " ms lies outside the calibrated exposures of " + args.model + " (reference " +
+                   FixedText(r.t_ref_min_ms, 3) + "-" + FixedText(r.t_ref_max_ms, 3) +
+                   " ms, measurement " + FixedText(r.t_min_ms, 3) + "-" + FixedText(r.t_max_ms, 3) +
+                   " ms); give --exposure-ms inside them.");
 }
 
 struct TrackSession::Impl {
@@ -79,7 +84,7 @@ struct TrackSession::Impl {
         measure(a, m, io),
         geometry(GeometryOfRigText(yaml_fields::ReadFile(measure.live().rig_path()),
                                    measure.live().rig_path())),
-        filter(1, FilterOptionsOf(a)) {
+        filter(1, FilterOptionsOf(a, measure.live().rig())) {
     const Rig& rig = measure.live().rig();
     GrabberOptions options;
     options.exposure_us = exposure_ms * 1000.0;
@@ -122,8 +127,7 @@ TrackSample TrackSession::Impl::Frame(double time_s) {
     const TrackCounters c = grabber->counters();
     throw CameraError("measure --track: no frame in " + std::to_string(wait.count()) + " ms (" +
                       std::to_string(c.received) + " received, " + std::to_string(c.lost) +
-                      " lost so far). Check the camera link and its "
-                      "trigger.");
+                      " lost so far). Check the camera link and its trigger.");
   }
   const double cpu0_ms = ThreadCpuMs();
   const RawFrame& raw = grabbed->raw;
