@@ -51,7 +51,7 @@ void FrameGrabber::Stop() {
   stopping_ = true;
   if (thread_.joinable()) thread_.join();
   std::lock_guard<std::mutex> lock(mutex_);
-  if (newest_) ++counters_.skipped;
+  if (newest_) ++counters_.drained;
   newest_.reset();
   if (failure_) std::rethrow_exception(failure_);
 }
@@ -105,6 +105,10 @@ bool FrameGrabber::Receive(int* in_flight) {
     return false;
   }
   ++counters_.received;
+  if (stopping_) {  // in flight as the grabbing stopped: no estimator waits for it
+    ++counters_.drained;
+    return true;
+  }
   if (newest_) ++counters_.skipped;
   newest_ = GrabbedFrame{std::move(*frame), next_number_++, {}};
   arrived_.notify_one();

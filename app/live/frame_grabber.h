@@ -30,6 +30,9 @@ struct TrackCounters {
   std::int64_t skipped = 0;         // replaced by a newer frame before the estimator took them
   std::int64_t lost = 0;            // triggered and never delivered, or delivered damaged
   std::int64_t wrong_exposure = 0;  // delivered with another exposure than the track's
+  // Received as the grabbing stopped (the run's end, or before a bracket check): the frames then
+  // in flight, and the one waiting for the estimator.
+  std::int64_t drained = 0;
 };
 
 struct GrabberOptions {
@@ -61,8 +64,8 @@ class FrameGrabber {
   // discarded, as a bracket's) and the grabbing thread. Throws CameraError.
   void Start();
   // Fires no more triggers, waits for those in flight (each up to the frame timeout) and joins
-  // the thread; a frame still waiting for the estimator is counted skipped. Rethrows the
-  // thread's CameraError, if any.
+  // the thread; those frames and one still waiting for the estimator are counted drained.
+  // Rethrows the thread's CameraError, if any.
   void Stop();
   // The newest frame not yet taken, waiting up to `timeout`; std::nullopt when none came.
   std::optional<GrabbedFrame> Take(std::chrono::milliseconds timeout);

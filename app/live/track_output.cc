@@ -17,7 +17,8 @@ std::string CountersJson(const TrackCounters& c) {
          ",\"received\":" + std::to_string(c.received) +
          ",\"estimated\":" + std::to_string(c.estimated) +
          ",\"skipped\":" + std::to_string(c.skipped) + ",\"lost\":" + std::to_string(c.lost) +
-         ",\"wrong_exposure\":" + std::to_string(c.wrong_exposure) + "}";
+         ",\"wrong_exposure\":" + std::to_string(c.wrong_exposure) +
+         ",\"drained\":" + std::to_string(c.drained) + "}";
 }
 
 // "track": the filter's state after the frame (null when it did not see the frame).
@@ -143,7 +144,8 @@ std::string TrackStats::Report(double wall_s, const TrackCounters& c) const {
       << "), " << estimated_ << " with an estimate\n";
   out << "  frames: " << c.triggered << " triggered, " << c.received << " received, " << c.estimated
       << " estimated, " << c.skipped << " skipped (the estimator behind), " << c.lost << " lost, "
-      << c.wrong_exposure << " at another exposure\n";
+      << c.wrong_exposure << " at another exposure, " << c.drained
+      << " drained as the grabbing stopped\n";
   out << "  latency (frame arrival to estimate): median " << FixedText(LatencyQuantileMs(0.5), 2)
       << " ms, p95 " << FixedText(LatencyQuantileMs(0.95), 2) << " ms, max "
       << FixedText(latency_max_ms_, 2) << " ms\n";
