@@ -47,6 +47,10 @@ inline constexpr Bound kUtcTimeNs{"wall-clock time", "ns since 1970", 0.0, 7.258
 inline constexpr Bound kMonotonicNs{"monotonic time", "ns", 0.0, 3.16e18, false,
                                     "a host's monotonic clock counts from its boot: less than a "
                                     "century"};
+// A track's white-acceleration power spectral density (estimator/track_filter.h, measure --track).
+inline constexpr Bound kAccelPsd{"acceleration noise density", "mm^2/s^3", 0.0, 1.0e12, true,
+                                 "q = a^2 T: 1e12 is 1000 g sustained for a second, beyond any "
+                                 "carriage, robot or hand"};
 // Sizes and counts.
 inline constexpr Bound kDiskGb{"disk budget", "GB", 0.0, 1.0e6, true,
                                "no disk holds more than a petabyte"};

@@ -13,6 +13,7 @@
 #include "app/devices/tools.h"
 #include "app/inputs/recipe.h"
 #include "app/live/measure.h"
+#include "app/live/track_session.h"
 #include "app/live/view.h"
 #include "app/runs/offline.h"
 #include "app/runs/run.h"
@@ -213,7 +214,9 @@ Handlers DefaultHandlers() {
   handlers.check = RunCheck;
   handlers.sim = RunSim;
   handlers.devices = RunDevices;
-  handlers.measure = RunMeasure;
+  handlers.measure = [](const MeasureArgs& args, CommandIo io) {
+    args.track ? RunTrack(args, io) : RunMeasure(args, io);  // docs/measure.md "Tracking"
+  };
   handlers.snap = RunSnap;
   handlers.view = RunView;
   handlers.station = RunStation;
@@ -383,6 +386,22 @@ void AddAt(CLI::App* sub, std::vector<double>& at) {
                   .application_index(3));
 }
 
+// measure --track and its options (docs/measure.md "Tracking").
+void AddTrack(CLI::App* sub, MeasureArgs& a) {
+  sub->add_flag("--track", a.track,
+                "An estimate per frame at one exposure, with a constant-velocity track "
+                "(--count counts frames)");
+  sub->add_option("--exposure-ms", a.exposure_ms,
+                  "With --track: the exposure (default: the model's reference exposure)")
+      ->check(Bounded("--exposure-ms", bounds::kExposureMs, "--exposure-ms 8"));
+  sub->add_option("--accel-psd", a.accel_psd_mm2_per_s3,
+                  "With --track: the filter's acceleration noise density, mm^2/s^3 (default 1e5)")
+      ->check(Bounded("--accel-psd", bounds::kAccelPsd, "--accel-psd 1e5"));
+  sub->add_option("--check-every", a.check_every_s,
+                  "With --track: a full bracket every S seconds, checked against the track")
+      ->check(Bounded("--check-every", bounds::kDurationS, "--check-every 5"));
+}
+
 void AddMeasure(CommandTable& table) {
   MeasureArgs& a = table.args().measure;
   CLI::App* sub = table.Add("measure", table.handlers().measure, a);
@@ -409,6 +428,7 @@ void AddMeasure(CommandTable& table) {
   AddTimeScale(sub, a.time_scale);
   sub->add_flag("--allow-model-mismatch", a.allow_model_mismatch,
                 "Use a model calibrated with another camera serial, pixel format or ROI");
+  AddTrack(sub, a);
 }
 
 void AddSnapAndView(CommandTable& table) {

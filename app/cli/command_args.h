@@ -67,6 +67,12 @@ struct MeasureArgs {
   std::vector<double> at;       // --at SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA (virtual rig only)
   double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
   bool allow_model_mismatch = false;
+  // --track (docs/measure.md "Tracking"): an estimate per frame at one exposure, smoothed by a
+  // constant-velocity filter; --count then counts frames.
+  bool track = false;
+  double exposure_ms = 0.0;            // --exposure-ms: the track's (0 = the model's t_ref)
+  double accel_psd_mm2_per_s3 = 0.0;   // --accel-psd: the filter's process noise (0 = default)
+  double check_every_s = 0.0;          // --check-every: a bracket every S s (0 = none)
 };
 
 // `irdist snap`: one frame to a PNG, the blob's position and a suggested roi_px.

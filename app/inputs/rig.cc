@@ -507,7 +507,8 @@ bool Rig::IsValid(std::string* why) const { return camera.IsValid(why) && statio
 
 Rig ParseRig(const std::string& text, const std::string& file) {
   const YAML::Node root = yaml_fields::Parse(text, file);
-  const MapReader map(root, file, "the rig file", {"name", "kind", "camera", "station", "virtual"});
+  const MapReader map(root, file, "the rig file",
+                      {"name", "kind", "camera", "station", "track", "virtual"});
   Rig rig;
   rig.path = file;
   rig.name = map.String("name", std::filesystem::path(file).stem().string());
@@ -521,6 +522,11 @@ Rig ParseRig(const std::string& text, const std::string& file) {
     rig.station.composition = LegacyComposition(rig.station, file, 0);
   }
   rig.station.motion.readout_ms = rig.camera.readout_ms;
+  if (map.Has("track")) {
+    const MapReader track(map.Get("track"), file, "track", {"accel_psd_mm2_per_s3"});
+    rig.track_accel_psd_mm2_per_s3 =
+        track.Bounded("accel_psd_mm2_per_s3", 0.0, bounds::kAccelPsd, "accel_psd_mm2_per_s3: 1e5");
+  }
   rig.has_virtual_section = map.Has("virtual");
   if (rig.kind == RigKind::kHardware) {
     if (rig.has_virtual_section) {

@@ -110,6 +110,9 @@ struct Rig {
   RigKind kind = RigKind::kVirtual;
   CameraConfig camera;
   StationConfig station;
+  // `track: {accel_psd_mm2_per_s3: Q}`: `measure --track`'s filter process noise (mm^2/s^3,
+  // estimator/track_filter.h; --accel-psd overrides it); 0 = the filter's default.
+  double track_accel_psd_mm2_per_s3 = 0.0;
   bool has_virtual_section = false;
   bool IsValid(std::string* why) const;
 };

@@ -461,6 +461,10 @@ bool StopNow(const MeasureArgs& args, int count, double elapsed_s) {
 }
 
 void CheckMeasureArgs(const MeasureArgs& args) {
+  if (!args.track && (args.exposure_ms > 0.0 || args.accel_psd_mm2_per_s3 > 0.0 ||
+                      args.check_every_s > 0.0)) {
+    throw UsageError("measure: --exposure-ms, --accel-psd and --check-every go with --track.");
+  }
   if (args.record && args.out_dir.empty()) {
     throw UsageError("measure: --record needs --out DIR (the recording goes to DIR/recording).");
   }

@@ -20,16 +20,16 @@ std::string FixedText(double value, int decimals) {
   return text;
 }
 
-namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
 std::string JsonNumber(double value) {
   if (!std::isfinite(value)) return "null";
   char text[40];
   std::snprintf(text, sizeof(text), "%.10g", value);
   return text;
 }
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
 
 const char* JsonBool(bool value) { return value ? "true" : "false"; }
 
@@ -128,7 +128,8 @@ std::string MeasureJson(const MeasureSample& s) {
   const EstimateRow& e = s.estimate;
   const bool ok = s.have_estimate && e.ok;
   std::ostringstream out;
-  out << "{\"schema\":\"irdist.measure/" << kMeasureJsonVersion << "\",\"bracket\":" << s.bracket
+  out << "{\"schema\":\"irdist.measure/" << kMeasureJsonVersion << "\",\"mode\":\"" << s.mode
+      << "\",\"bracket\":" << s.bracket
       << ",\"time_s\":" << JsonNumber(s.time_s) << TimeJson(s)
       << ",\"latency_ms\":" << JsonNumber(s.latency_ms) << ",\"ok\":" << JsonBool(ok)
       << ",\"d_mm\":" << JsonNumber(ok ? e.d_mm : NAN)

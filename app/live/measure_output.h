@@ -30,6 +30,9 @@ constexpr int kMeasureJsonVersion = 2;
 
 // What one bracket gives: the default (I0-free, joint) estimate and where the blob was.
 struct MeasureSample {
+  // "bracket" (measure's) or "track" (one frame of `measure --track`, app/live/track_session.h):
+  // the JSON's `mode`.
+  const char* mode = "bracket";
   std::int64_t bracket = 0;
   double time_s = 0.0;  // host seconds since the first bracket started
   // The bracket's last frame: its arrival on the host's wall clock (ns since the Unix epoch, UTC)
@@ -66,6 +69,8 @@ MeasureSample MeasureSampleOf(const RecordedBracket& bracket, const FeatureMap& 
 // `value` with `decimals` decimals, "-" when not finite: the text of every figure measure prints.
 std::string FixedText(double value, int decimals);
 
+// A JSON number (%.10g), "null" when not finite.
+std::string JsonNumber(double value);
 // The JSON object of one bracket (one line, no trailing newline).
 std::string MeasureJson(const MeasureSample& s);
 // The one-line text form (piped output; the terminal's live line is the same text).

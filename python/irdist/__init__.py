@@ -75,12 +75,14 @@ def executable():
     return found
 
 
-def measure(model, rig=None, count=None, duration_s=None, args=(), stderr=None):
+def measure(model, rig=None, count=None, duration_s=None, args=(), stderr=None, track=False):
     """Yields the live JSON objects of `irdist measure --json` (docs/measure.md), one dict per
     bracket, as they come. model: a Model or a model.yaml path; rig: a rig name or file; count /
     duration_s: stop after so many brackets / seconds (default: until the iterator is closed);
     args: further measure flags, e.g. ["--at", "2000,10,0,500"]. stderr: where measure's messages
-    and summary go (default: this process's stderr).
+    and summary go (default: this process's stderr). track=True: `measure --track`, one dict per
+    frame (mode "track"; count counts frames) and per interleaved bracket (mode "bracket", with
+    args ["--check-every", "S"]), docs/measure.md "Tracking".
 
     Closing the iterator (a `break` out of a for loop, .close(), or its garbage collection) stops
     measure as Ctrl-C does: SIGTERM, then it finishes the bracket in flight, stops the camera and
@@ -92,7 +94,7 @@ def measure(model, rig=None, count=None, duration_s=None, args=(), stderr=None):
     if duration_s is not None:
         _irdist._check_argument("duration_s", duration_s)  # NaN would never end
     path = model.path if isinstance(model, _irdist.Model) else os.fspath(model)
-    argv = [executable(), "measure", "--model", path, "--json"]
+    argv = [executable(), "measure", "--model", path, "--json"] + (["--track"] if track else [])
     if rig is not None:
         argv += ["--rig", os.fspath(rig)]
     if count is not None:

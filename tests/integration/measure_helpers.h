@@ -2,11 +2,17 @@
 // What the measure integration tests share: the small calibration they make their model with, and
 // the JSON lines of `irdist measure --json`.
 
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cstdio>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "tests/integration/run_helpers.h"
 
 namespace irdist::testing {
 
@@ -39,6 +45,36 @@ inline std::vector<YAML::Node> JsonLines(const std::string& output) {
     if (!line.empty() && line[0] == '{') objects.push_back(YAML::Load(line));
   }
   return objects;
+}
+
+// Runs irdist with `args` (its stdout a pipe, its stderr to `log`), reads `count` lines of its
+// stdout into *lines and then goes away (closes the pipe, as `head -n` does); returns the child's
+// wait status (-1 when it could not be waited for).
+inline int ReadLinesThenGoAway(const std::vector<std::string>& args, std::size_t count,
+                               const std::string& log, std::vector<std::string>* lines) {
+  int pipe_fds[2];
+  if (pipe(pipe_fds) != 0) return -1;
+  const pid_t pid = fork();
+  if (pid == 0) {
+    dup2(pipe_fds[1], STDOUT_FILENO);
+    const int err = ::open(log.c_str(), O_CREAT | O_WRONLY | O_TRUNC, 0644);
+    dup2(err, STDERR_FILENO);
+    close(pipe_fds[0]);
+    std::vector<char*> argv = {const_cast<char*>("irdist")};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(IrdistBinary().c_str(), argv.data());
+    _exit(127);
+  }
+  close(pipe_fds[1]);
+  FILE* reader = fdopen(pipe_fds[0], "r");
+  char buffer[8192];
+  while (lines->size() < count && std::fgets(buffer, sizeof(buffer), reader) != nullptr) {
+    lines->emplace_back(buffer);
+  }
+  std::fclose(reader);  // the reader goes away, as head does
+  int status = 0;
+  return waitpid(pid, &status, 0) == pid ? status : -1;
 }
 
 }  // namespace irdist::testing

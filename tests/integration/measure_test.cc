@@ -292,30 +292,12 @@ TEST_F(Measure, KillNineKeepsEveryPrintedBracketInEstimatesCsv) {
 // at its next line (EPIPE), prints its summary on stderr and exits 0. Each line carries the
 // bracket's UTC time (ISO 8601, microseconds) beside the host's monotonic clock.
 TEST_F(Measure, JsonReaderThatGoesAwayStopsMeasureCleanly) {
-  int pipe_fds[2];
-  ASSERT_EQ(pipe(pipe_fds), 0);
   const std::string log = *dir_ + "/head.log";
   testing::LoopbackGvcpLock lock;
-  const pid_t pid = fork();
-  if (pid == 0) {
-    dup2(pipe_fds[1], STDOUT_FILENO);
-    const int err = ::open(log.c_str(), O_CREAT | O_WRONLY | O_TRUNC, 0644);
-    dup2(err, STDERR_FILENO);
-    close(pipe_fds[0]);
-    execl(testing::IrdistBinary().c_str(), "irdist", "measure", "--model", Model().c_str(),
-          "--time-scale", kTimeScale, "--at", "2000,0,0,490", "--json", nullptr);
-    _exit(127);
-  }
-  close(pipe_fds[1]);
-  FILE* reader = fdopen(pipe_fds[0], "r");
   std::vector<std::string> lines;
-  char buffer[4096];
-  while (lines.size() < 2 && std::fgets(buffer, sizeof(buffer), reader) != nullptr) {
-    lines.emplace_back(buffer);
-  }
-  std::fclose(reader);  // the reader goes away, as head does
-  int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  const int status = testing::ReadLinesThenGoAway(
+      {"measure", "--model", Model(), "--time-scale", kTimeScale, "--at", "2000,0,0,490", "--json"},
+      2, log, &lines);
   ASSERT_EQ(lines.size(), 2u) << ReadAll(log);
   ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status) << "\n" << ReadAll(log);
   EXPECT_EQ(WEXITSTATUS(status), 0) << ReadAll(log);

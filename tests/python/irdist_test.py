@@ -203,6 +203,25 @@ class MeasureTest(unittest.TestCase):
         live.close()
         self.assertEqual(child_pids() - before, set(), "measure ended and was reaped")
 
+    def test_track_yields_a_dict_per_frame_in_mode_track(self):
+        # Issue 34 item 1: irdist.measure(..., track=True), the IRED placed at 2000 mm.
+        lines = list(irdist.measure(MODEL, rig="virtual", count=6, track=True,
+                                    args=["--time-scale", "10", "--at", "2000,0,0,500"],
+                                    stderr=subprocess.DEVNULL))
+        self.assertEqual(len(lines), 6)
+        self.assertEqual({m["mode"] for m in lines}, {"track"})
+        self.assertEqual(lines[0]["schema"], irdist.MEASURE_JSON_SCHEMA)
+        frames = [m["frame"] for m in lines]
+        self.assertEqual(frames, sorted(set(frames)), "frames in order, none twice")
+        # Every frame between two lines is one the estimator skipped, and counted so.
+        last = lines[-1]["counters"]
+        self.assertEqual(frames[-1] - frames[0] - (len(frames) - 1),
+                         last["skipped"] - lines[0]["counters"]["skipped"])
+        for m in lines:
+            self.assertTrue(m["ok"], m)
+            self.assertAlmostEqual(m["d_mm"], 2000.0, delta=0.02 * 2000.0)
+            self.assertIsNotNone(m["track"])
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

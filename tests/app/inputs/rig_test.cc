@@ -160,6 +160,22 @@ TEST(RigTest, DelaysBeyondADayAreRefused) {
             std::string::npos);
 }
 
+// measure --track's process noise as a rig key (issue 34): read, bounded, unknown keys refused.
+TEST(RigTest, TrackAccelPsdIsReadAndBounded) {
+  const std::string head = "name: r\nkind: hardware\ncamera:\n  id: 10.0.0.2\n";
+  const std::string station = "station:\n  port: /dev/ttyUSB0\n";
+  EXPECT_EQ(ParseRig(head + station, "r.yaml").track_accel_psd_mm2_per_s3, 0.0);
+  EXPECT_EQ(ParseRig(head + station + "track:\n  accel_psd_mm2_per_s3: 2.5e4\n", "r.yaml")
+                .track_accel_psd_mm2_per_s3,
+            2.5e4);
+  EXPECT_NE(RefusalOf(head + station + "track:\n  accel_psd_mm2_per_s3: -1\n")
+                .find("r.yaml:8:25: track.accel_psd_mm2_per_s3 = -1 is outside"),
+            std::string::npos)
+      << RefusalOf(head + station + "track:\n  accel_psd_mm2_per_s3: -1\n");
+  EXPECT_NE(RefusalOf(head + station + "track:\n  accel_psd: 1e5\n").find("accel_psd"),
+            std::string::npos);
+}
+
 TEST(RigTest, EmitterOffsetIsThreeFiniteNumbersOnAHardwareRig) {
   const std::string head = "name: r\nkind: hardware\ncamera:\n  id: 10.0.0.2\nstation:\n  port: "
                            "/dev/ttyUSB0\n  emitter_offset_mm: ";
