@@ -332,10 +332,12 @@ CameraCheck LinearityCheck(AravisCamera& camera, const SetupOutcome& setup) {
   return {"linearity", result.Passed(), result.BriefReport(), fix};
 }
 
+// However the rows before it ended (a failed linearity series leaves the stream running), the
+// stream is stopped first, then the camera put back.
 CameraCheck PutBackCheck(AravisCamera& camera) {
-  const std::string outcome = camera.RestoreFound();
-  const bool ok = outcome.empty() || outcome.find("could not") == std::string::npos;
-  return {"camera put back", ok, outcome.empty() ? "nothing changed" : outcome.substr(1),
+  const std::string outcome = camera.LeaveAsFound(true);
+  const bool ok = outcome.find("could not") == std::string::npos;
+  return {"camera put back", ok, outcome.empty() ? "nothing changed" : outcome,
           "power-cycle the camera before another application uses it"};
 }
 
