@@ -87,6 +87,7 @@ struct Vendor {
   double min_us, max_us;           // the exposure's bounds in microseconds
   std::set<std::string> cannot;    // camera-test rows the fake camera cannot pass
   bool frames;                     // whether the fake camera frames its software triggers
+  const char* bounds_note = "";    // in irdist.ExposureBounds: where the bounds came from
 };
 
 // What the fake camera cannot do: GVCP packet resend (every file); an exposure that changes the
@@ -94,8 +95,11 @@ struct Vendor {
 // microsecond ExposureTime also refuses a fractional exposure of the series); frames on
 // AVT's trigger, bit 0 of a big-endian register (it reads 0x80000000 where the fake camera wants
 // TriggerMode 1).
+// Basler: Aravis takes an ace's bounds from ExposureTimeRaw (raw steps of the 20 us timebase);
+// irdist's are ExposureTimeAbs's, in microseconds.
 const Vendor kBasler{"basler_aca1300_60gm", "IRDVBA01", "Mono12", 20.0, 1e6,
-                     {"packet resend", "linearity"}, true};
+                     {"packet resend", "linearity"}, true,
+                     "(ExposureTimeAbs); Aravis reported [1, 50000]"};
 const Vendor kFlir{"flir_bfs_pge_19s4m", "IRDVFL01", "Mono12p", 5.0, 3e7,
                    {"packet resend", "linearity"}, true};
 const Vendor kAvt{"avt_mako_g125b", "IRDVAV01", "Mono12", 12.0, 6e7,
@@ -183,6 +187,11 @@ TEST_P(VendorFiles, ConfigureTakesIt) {
   const auto [min_us, max_us] = camera->ExposureBoundsUs();
   EXPECT_NEAR(min_us, vendor.min_us, 1e-6);
   EXPECT_NEAR(max_us, vendor.max_us, 1e-3);
+  EXPECT_NE(features.at("irdist.ExposureBounds").find(vendor.bounds_note), std::string::npos)
+      << features.at("irdist.ExposureBounds");
+  if (features.count("AcquisitionMode") != 0) {
+    EXPECT_EQ(features.at("AcquisitionMode"), "Continuous");
+  }
 }
 
 // Every feature irdist saved is as found once it is done: read by another client before a
