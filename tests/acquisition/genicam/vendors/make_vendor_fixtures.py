@@ -16,10 +16,12 @@ anywhere in 32 bits. This script moves only the register addresses:
 
 Every node, formula, selector, enumeration, tooltip and byte of the file is otherwise kept as the
 vendor wrote it. The fake camera's memory starts zeroed, while a real camera powers up with its
-limits in place; each fixture therefore comes with a `.powerup` list (address value node) that
-the test writes into the camera before anyone opens it (POWERUP), and 0x304 holds 1: the fake
-camera only frames software triggers when its trigger-source register reads 1, whatever value
-the vendor gave Software.
+limits in place; each fixture therefore comes with a `.powerup` list (address, 32-bit word) that
+the test writes into the camera before anyone opens it: the inquiry bits of what the file
+declares, the model's values (POWERUP), its names (IDENTITY), and 1 at 0x304: the fake camera
+only frames software triggers when its trigger-source register reads 1, whatever value the
+vendor gave Software. Each generated file is checked against its source: the same elements,
+attributes and texts but for the addresses moved (check_only_addresses_moved).
 
 Usage: make_vendor_fixtures.py ADGENICAM_XML_DIR OUT.tar.xz
   ADGENICAM_XML_DIR: the xml/ folder of https://github.com/areaDetector/ADGenICam (SOURCES
@@ -383,6 +385,27 @@ def powerup_words(vendor, values):
     return words
 
 
+def check_only_addresses_moved(original, generated, formula_nodes):
+    """Raises unless the two files differ only in <Address> texts and in the formulas and values
+    of the address nodes."""
+    def texts(text):
+        root = ET.fromstring(text.encode("utf-8"))
+        for node in root.iter():
+            name = node.get("Name", "")
+            for child in node:
+                kind = child.tag.split("}")[-1]
+                moved_text = kind == "Address" or (name in formula_nodes and
+                                                   kind in ("Formula", "Value"))
+                yield child.tag, sorted(child.attrib.items()), \
+                    None if moved_text else (child.text or "").strip()
+    before, after = list(texts(original)), list(texts(generated))
+    if len(before) != len(after):
+        raise SystemExit(f"{len(before)} elements became {len(after)}")
+    for old, new in zip(before, after):
+        if old != new:
+            raise SystemExit(f"changed beyond an address: {old} -> {new}")
+
+
 def make_fixture(xml_dir, fixture):
     file_name, blob_sha1 = SOURCES[fixture]
     with open(f"{xml_dir}/{file_name}", "rb") as f:
@@ -397,6 +420,7 @@ def make_fixture(xml_dir, fixture):
     relocate(vendor, mapping, formula_nodes, edits)
     wire(WIRING[fixture], mapping, edits)
     apply_edits(vendor, edits)
+    check_only_addresses_moved(data.decode("utf-8"), vendor.text, formula_nodes)
     lines = ["# address word: written big-endian before the camera is opened (%s)" % file_name]
     words = powerup_words(vendor, POWERUP[fixture])
     words[TRIGGER_SOURCE_SOFTWARE[0]] = TRIGGER_SOURCE_SOFTWARE[1]
@@ -405,7 +429,6 @@ def make_fixture(xml_dir, fixture):
         for i in range(0, 32, 4):
             words[address + i] = int.from_bytes(padded[i:i + 4], "big")
     lines += ["0x%X 0x%08X" % item for item in sorted(words.items())]
-    ET.fromstring(vendor.text.encode("utf-8"))  # still well-formed
     return vendor.text.encode("utf-8"), ("\n".join(lines) + "\n").encode("utf-8")
 
 
