@@ -516,8 +516,9 @@ void AddStationCommands(CommandTable& table) {
   sub = table.Add("camera-test", table.handlers().camera_test, camera);
   sub->add_option("camera", camera.camera,
                   "IP address, Aravis id or serial (default: the running `irdist sim` camera)");
-  sub->add_option("--rig", camera.rig, "Rig whose running sim to test, without CAMERA")
-      ->capture_default_str();
+  sub->add_option("--rig", camera.rig,
+                  "Rig file whose camera settings a run uses (and, without CAMERA, whose running "
+                  "sim to test; default virtual)");
 }
 
 int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& handlers) {

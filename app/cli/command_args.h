@@ -136,7 +136,8 @@ struct StationTestArgs {
 // (app/devices/camera_test.h).
 struct CameraTestArgs {
   std::string camera;           // IP address, Aravis id or serial; empty = the running sim's
-  std::string rig = "virtual";  // --rig: whose running `irdist sim` camera, without CAMERA
+  std::string rig;  // --rig: its camera settings configure the camera; without CAMERA, whose
+                    // running `irdist sim` camera to test (empty: virtual)
 };
 
 struct DevicesArgs {

@@ -15,7 +15,10 @@
 #include "acquisition/linearity.h"
 #include "acquisition/pixel_format.h"
 #include "acquisition/pixel_pipeline.h"
+#include "app/devices/station_setup.h"
 #include "app/devices/tools.h"
+#include "app/inputs/camera_settings.h"
+#include "app/inputs/rig.h"
 
 namespace irdist {
 namespace {
@@ -208,32 +211,44 @@ struct SetupOutcome {
   int bit_depth = 12;
 };
 
-// The settings a run would use: the deepest format, a 512 x 512 region (the features, not the
-// link's capacity), the Software trigger when offered (else a line).
-CameraSettings TestSettings(AravisCamera& camera, bool* software) {
-  const std::vector<std::string> formats = UsableFormats(camera.Describe("PixelFormat"));
-  const FeatureInfo source = camera.Describe("TriggerSource", FrameSelector(camera));
-  CameraSettings settings;
-  settings.pixel_format = formats.empty() ? "Mono12" : formats.front();
-  // The sensor's central 512 x 512 (offsets on 16-pixel steps), where a lens points the scene.
-  const bool offsets = camera.Describe("OffsetX").writable && camera.Describe("OffsetY").writable;
-  for (const auto& [sensor, feature, side, offset] :
-       {std::tuple{"SensorWidth", "Width", &settings.width, &settings.offset_x},
-        std::tuple{"SensorHeight", "Height", &settings.height, &settings.offset_y}}) {
-    const FeatureInfo full = camera.Describe(sensor);
-    const FeatureInfo f = camera.Describe(feature);
-    const int max = full.present && !full.value.empty() ? std::stoi(full.value)
-                    : f.max                            ? static_cast<int>(*f.max)
-                                                       : 0;
-    *side = max > 0 ? std::min(512, max) : 0;
-    if (offsets && max > *side) *offset = ((max - *side) / 2) & ~15;
+// A run's settings (`run`: the rig file's camera section, app/inputs/camera_settings.h), or a
+// run's defaults without a rig file (the whole sensor, exposure evidence auto) with the deepest
+// format the camera offers. The frames are software-triggered when the camera offers it, whatever
+// line a run fires (the setup row names it).
+CameraSettings TestSettings(AravisCamera& camera, const CameraSettings* run, bool* software) {
+  CameraSettings settings = run != nullptr ? *run : CameraSettingsOf(CameraConfig{}, "Line1");
+  if (run == nullptr) {
+    const std::vector<std::string> formats = UsableFormats(camera.Describe("PixelFormat"));
+    if (!formats.empty()) settings.pixel_format = formats.front();
   }
+  const FeatureInfo source = camera.Describe("TriggerSource", FrameSelector(camera));
   *software = Offers(source, "Software") && camera.Describe("TriggerSoftware").present;
-  settings.trigger_source = *software ? "Software" : "Line1";
-  for (const std::string& entry : source.entries) {
-    if (!*software && entry.rfind("Line", 0) == 0) settings.trigger_source = entry;
+  if (*software) {
+    settings.trigger_source = "Software";
+  } else if (run == nullptr) {
+    for (const std::string& entry : source.entries) {
+      if (entry.rfind("Line", 0) == 0) settings.trigger_source = entry;
+    }
   }
   return settings;
+}
+
+// The setup row's text: the format, the region and the trigger a run configures.
+std::string SetupFound(const CameraSettings& settings, const CameraSettings* run) {
+  std::ostringstream out;
+  out << settings.pixel_format << ", ";
+  if (settings.width == 0) {
+    out << "the whole sensor";
+  } else {
+    out << settings.width << " x " << settings.height << " at (" << settings.offset_x << ", "
+        << settings.offset_y << ")";
+  }
+  out << ", " << settings.trigger_source << " trigger";
+  if (run != nullptr && run->trigger_source != settings.trigger_source) {
+    out << " (a run fires " << run->trigger_source << ")";
+  }
+  out << (run != nullptr ? "; the rig file's camera settings" : "; a run's defaults (no rig file)");
+  return out.str();
 }
 
 // Three software-triggered frames at three exposures, taken as a run takes a bracket (the same
@@ -265,15 +280,15 @@ CameraCheck TriggeredFramesCheck(AravisCamera& camera, double exposure_us) {
 }
 
 // Configures the camera as a run would and takes three software-triggered frames.
-std::vector<CameraCheck> SetupAndFrames(AravisCamera& camera, SetupOutcome* outcome) {
+std::vector<CameraCheck> SetupAndFrames(AravisCamera& camera, const CameraSettings* run,
+                                        SetupOutcome* outcome) {
   bool software = false;
-  const CameraSettings settings = TestSettings(camera, &software);
+  const CameraSettings settings = TestSettings(camera, run, &software);
   camera.Configure(settings);  // a CameraError becomes the setup row's FAIL (RunCameraChecks)
   outcome->configured = true;
   outcome->software = software;
   outcome->bit_depth = FindPixelFormat(settings.pixel_format)->bit_depth;
-  CameraCheck setup{"setup", true,
-                    settings.pixel_format + ", " + settings.trigger_source + " trigger", ""};
+  CameraCheck setup{"setup", true, SetupFound(settings, run), ""};
   if (!software) return {setup, {"triggered frames", true, "not taken: no software trigger", ""}};
   return {setup, TriggeredFramesCheck(camera, settings.exposure_us)};
 }
@@ -332,10 +347,12 @@ CameraCheck LinearityCheck(AravisCamera& camera, const SetupOutcome& setup) {
   return {"linearity", result.Passed(), result.BriefReport(), fix};
 }
 
+// However the rows before it ended (a failed linearity series leaves the stream running), the
+// stream is stopped first, then the camera put back.
 CameraCheck PutBackCheck(AravisCamera& camera) {
-  const std::string outcome = camera.RestoreFound();
-  const bool ok = outcome.empty() || outcome.find("could not") == std::string::npos;
-  return {"camera put back", ok, outcome.empty() ? "nothing changed" : outcome.substr(1),
+  const std::string outcome = camera.LeaveAsFound(true);
+  const bool ok = outcome.find("could not") == std::string::npos;
+  return {"camera put back", ok, outcome.empty() ? "nothing changed" : outcome,
           "power-cycle the camera before another application uses it"};
 }
 
@@ -354,7 +371,7 @@ std::vector<CameraCheck> RunCameraChecks(AravisCamera& camera,
   return checks;
 }
 
-std::vector<CameraCheckStep> CameraCheckSteps() {
+std::vector<CameraCheckStep> CameraCheckSteps(const CameraSettings* run) {
   using Rows = std::vector<CameraCheck>;
   auto one = [](CameraCheck (*check)(AravisCamera&)) {
     return [check](AravisCamera& camera) { return Rows{check(camera)}; };
@@ -374,7 +391,9 @@ std::vector<CameraCheckStep> CameraCheckSteps() {
       {"packet resend", again, one(PacketResendCheck)},
       {"speed notes", again, SpeedNotes},
       {"setup", "fix the failures above, then run camera-test again",
-       [setup](AravisCamera& camera) { return SetupAndFrames(camera, setup.get()); }},
+       [setup, run = run != nullptr ? std::optional<CameraSettings>(*run) : std::nullopt](
+           AravisCamera& camera) { return SetupAndFrames(camera, run ? &*run : nullptr,
+                                                          setup.get()); }},
       {"neutral pixel pipeline", again,
        [setup](AravisCamera& camera) { return Rows{PixelPipelineCheck(camera, *setup)}; }},
       {"linearity", again,
@@ -384,8 +403,8 @@ std::vector<CameraCheckStep> CameraCheckSteps() {
   };
 }
 
-std::vector<CameraCheck> CheckCamera(AravisCamera& camera) {
-  return RunCameraChecks(camera, CameraCheckSteps());
+std::vector<CameraCheck> CheckCamera(AravisCamera& camera, const CameraSettings* run) {
+  return RunCameraChecks(camera, CameraCheckSteps(run));
 }
 
 std::string CameraCheckTable(const std::vector<CameraCheck>& checks) {
@@ -404,17 +423,24 @@ std::string CameraCheckTable(const std::vector<CameraCheck>& checks) {
 
 void RunCameraTest(const CameraTestArgs& args, CommandIo io) {
   std::string name = args.camera;
+  const std::string rig_spec = args.rig.empty() ? "virtual" : args.rig;
   if (name.empty()) {
-    const std::optional<RunningSim> sim = FindRunningSim(ResolveRig(args.rig), io.err);
+    const std::optional<RunningSim> sim = FindRunningSim(ResolveRig(rig_spec), io.err);
     if (!sim || sim->values.count("camera_address") == 0) {
       throw UsageError("camera-test: give CAMERA (IP address, Aravis id or serial), or start "
-                       "`irdist sim " + args.rig + "` to test the virtual camera");
+                       "`irdist sim " + rig_spec + "` to test the virtual camera");
     }
     name = sim->values.at("camera_address");
   }
+  // A run's settings: the rig file's when given (or the sim's), else a run's defaults.
+  std::optional<CameraSettings> run;
+  if (!args.rig.empty() || args.camera.empty()) {
+    const Rig rig = LoadRig(ResolveRig(rig_spec));
+    run = CameraSettingsOf(rig.camera, RigTriggerSource(rig));
+  }
   std::unique_ptr<AravisCamera> camera = AravisCamera::Open(name);
   io.out << "camera " << camera->Identity().BriefReport() << "\n";
-  const std::vector<CameraCheck> checks = CheckCamera(*camera);
+  const std::vector<CameraCheck> checks = CheckCamera(*camera, run ? &*run : nullptr);
   io.out << CameraCheckTable(checks);
   const auto failures = std::count_if(checks.begin(), checks.end(),
                                       [](const CameraCheck& c) { return !c.passed; });

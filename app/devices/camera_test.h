@@ -36,20 +36,25 @@ struct CameraCheckStep {
 };
 
 // The steps of camera-test, in order: the features, the setup and triggered frames, the neutral
-// pixel pipeline, the linearity series, and the camera put back as it was found.
-std::vector<CameraCheckStep> CameraCheckSteps();
+// pixel pipeline, the linearity series, and the camera put back as it was found. The setup is a
+// run's Configure: `run`, the rig file's camera settings (app/inputs/camera_settings.h: region,
+// pixel format, exposure evidence, black level, packet size), or without one (nullptr) a run's
+// defaults (the whole sensor) with the deepest pixel format offered; its frames are
+// software-triggered when the camera offers it.
+struct CameraSettings;
+std::vector<CameraCheckStep> CameraCheckSteps(const CameraSettings* run = nullptr);
 std::vector<CameraCheck> RunCameraChecks(AravisCamera& camera,
                                          const std::vector<CameraCheckStep>& steps);
 
 // Every check on an opened camera (RunCameraChecks of CameraCheckSteps). The last checks
 // configure it (Software trigger when it has one), take frames and the linearity series, then put
 // it back as it was found.
-std::vector<CameraCheck> CheckCamera(AravisCamera& camera);
+std::vector<CameraCheck> CheckCamera(AravisCamera& camera, const CameraSettings* run = nullptr);
 // The table: one line per check, the fix under each failure, the count of checks passed.
 std::string CameraCheckTable(const std::vector<CameraCheck>& checks);
 
 // The command: CAMERA (IP address, Aravis id or serial), or the camera of a running `irdist sim`
-// of --rig. Throws CheckFailedError (exit 1) when a check fails.
+// of --rig (default virtual); configured with --rig's camera settings when given (or the sim's). Throws CheckFailedError (exit 1) when a check fails.
 void RunCameraTest(const CameraTestArgs& args, CommandIo io);
 
 }  // namespace irdist

@@ -59,6 +59,34 @@ TEST(CameraTest, FlirStyleCameraPassesEveryCheck) {
   EXPECT_NE(table.find("PASS  setup"), std::string::npos) << table;
 }
 
+// camera-test configures as a run does: the rig file's camera settings when given (region,
+// format, exposure evidence), else a run's defaults (the whole sensor) with the deepest format.
+TEST(CameraTest, TheSetupIsARunsConfigure) {
+  testing::FakeCameraProcess fake("IRDCT09");
+  auto camera = AravisCamera::Open("127.0.0.1", fake.serial());
+  CameraSettings run;  // as app/inputs/camera_settings.h makes it from a rig file
+  run.pixel_format = "Mono16";
+  run.trigger_source = "Line0";
+  run.offset_x = 16;
+  run.offset_y = 8;
+  run.width = 256;
+  run.height = 128;
+  run.exposure_check = ExposureCheck::kReadback;
+  const std::vector<CameraCheck> checks = CheckCamera(*camera, &run);
+  const CameraCheck& setup = Find(checks, "setup");
+  EXPECT_TRUE(setup.passed) << setup.found;
+  EXPECT_EQ(setup.found,
+            "Mono16, 256 x 128 at (16, 8), Software trigger (a run fires Line0); the rig file's "
+            "camera settings");
+  const CameraCheck& frames = Find(checks, "triggered frames");
+  EXPECT_TRUE(frames.passed) << frames.found;
+  EXPECT_NE(frames.found.find("(readback)"), std::string::npos) << frames.found;
+  const std::vector<CameraCheck> defaults = CheckCamera(*camera);
+  EXPECT_EQ(Find(defaults, "setup").found,
+            "Mono16, the whole sensor, Software trigger; a run's defaults (no rig file)");
+  EXPECT_TRUE(Find(defaults, "triggered frames").passed) << Find(defaults, "triggered frames").found;
+}
+
 TEST(CameraTest, SingleTriggerCameraPassesTheTriggerChecks) {
   const std::vector<CameraCheck> checks = ChecksOf("single_trigger.xml", "IRDCT02");
   EXPECT_TRUE(Find(checks, "frame trigger").passed) << Find(checks, "frame trigger").found;
