@@ -95,6 +95,7 @@ FrameConditions CameraServer::Impl::ExposureConditions(double t0_s, double expos
     return c;
   }
   c.pose_start = world.PoseAt(t0_s);
+  c.pose_start.moving = sampled_start.moving;  // PoseAt's flag is now's: settling counts too
   c.pose_end = world.PoseAt(t0_s + exposure_s);
   const PoseState mid = world.PoseAt(t0_s + 0.5 * exposure_s);
   const auto travel = [&](double PoseState::*axis, double step) {
