@@ -35,10 +35,6 @@ struct TrajectoryPoint {
   bool known = false;         // every axis had a profile at time_s (else the values are 0)
 };
 
-// The truth of one frame: the pose at the middle of its exposure.
-TrajectoryPoint MidExposure(const class Trajectory& trajectory, std::uint64_t timestamp_ns,
-                            double exposure_us);
-
 class Trajectory {
  public:
   // Profiles kept per axis (the oldest are forgotten: a frame's truth is asked for at once).
@@ -58,6 +54,11 @@ class Trajectory {
  private:
   std::array<std::deque<MotionProfile>, kRigAxes> axes_;
 };
+
+// The truth of one frame from its camera timestamp (the exposure's start, sim ns) and exposure:
+// the pose and velocities at the middle of its exposure.
+TrajectoryPoint MidExposure(const Trajectory& trajectory, std::uint64_t timestamp_ns,
+                            double exposure_us);
 
 // theta from pan and tilt (deg), as PoseState::ThetaDeg.
 double ThetaDegOf(double pan_deg, double tilt_deg);
