@@ -46,14 +46,27 @@ class CameraServerError : public Error {
   using Error::Error;
 };
 
-// What the camera did for one frame it exposed.
+// What the camera did for one frame it exposed, and its truth: the IRED's pose at the middle of
+// the exposure (docs/virtual-rig.md, "Truth of a moving target").
 struct FrameRecord {
   std::uint64_t index = 0;        // camera-side frame counter since Start (1, 2, ...)
   std::uint16_t block_id = 0;     // GVSP block id the frame was sent with (1..65535)
   double sim_time_s = 0.0;        // simulated time at the start of the exposure
+  // The frame's GigE Vision timestamp (its leader's): the exposure's start on the world's clock
+  // in ns (SimTimeToNs(sim_time_s)); mid-exposure = timestamp_ns + exposure_us * 1000 / 2.
+  std::uint64_t timestamp_ns = 0;
   double exposure_us = 0.0;       // exposure the frame was taken with
-  double slide_mm = 0.0;          // pose at the start of the exposure
+  double slide_mm = 0.0;          // pose at the middle of the exposure (the frame's truth)
+  double pan_deg = 0.0;
+  double tilt_deg = 0.0;
   double theta_deg = 0.0;
+  double slide_mm_s = 0.0;        // signed velocities at the middle of the exposure
+  double pan_deg_s = 0.0;
+  double tilt_deg_s = 0.0;
+  // The truth came from the station's exact trajectory (sim/trajectory.h); false: no station
+  // profile is known (a station of devices, a test that sets the pose), and the pose is the
+  // World's as sampled at the exposure's start, velocities 0.
+  bool truth_from_trajectory = false;
   double bias_ma = 0.0;
   double junction_rise_k = 0.0;
   bool moving = false;            // an axis moved during the exposure

@@ -235,6 +235,9 @@ struct CameraServer::Impl {
   void SleepSim(double sim_s);
   // Renders the exposed image into `payload` (bytes as sent).
   FrameRecord Expose(const FrameSetup& s, std::uint64_t index, std::vector<std::uint8_t>& payload);
+  FrameConditions ExposureConditions(double t0_s, double exposure_s,
+                                     const PoseState& sampled_start) const;
+  void RecordTruth(const FrameConditions& c, double t0_s, FrameRecord* record) const;
   // One frame: latch, expose, read out, send; then keep it for resend requests.
   void RunFrame(const std::optional<FrameSetup>& latched);
   void Keep(FrameRecord record, std::shared_ptr<const SentFrame> frame);

@@ -16,6 +16,12 @@ namespace {
 
 constexpr std::size_t kRecordsKept = 1000;
 constexpr std::size_t kFramesKeptForResend = 8;
+// A moving exposure is rendered in one sub-step per this much travel (at least 2, at most 8):
+// each costs about 1.4 ms of a 256 x 256 frame's 5 ms, and the frame must be ready within its
+// readout (12 ms) to keep the camera's rate.
+constexpr double kSubStepMm = 2.0;
+constexpr double kSubStepDeg = 0.2;
+constexpr double kMaxSubSteps = 8.0;
 
 PixelFormat FormatOf(guint32 pixel_format) {
   switch (pixel_format) {
@@ -78,17 +84,66 @@ void CameraServer::Impl::SleepSim(double sim_s) {
   wake.wait_for(lock, world.clock().HostDuration(sim_s), [this] { return stopping; });
 }
 
+// The conditions of the exposure [t0_s, t0_s + exposure_s], known once it ended: from the
+// station's exact trajectory, a moving exposure in sub-steps; without one (no station profile),
+// the World's pose sampled at its start (`sampled_start`) and now, at its end.
+FrameConditions CameraServer::Impl::ExposureConditions(double t0_s, double exposure_s,
+                                                       const PoseState& sampled_start) const {
+  FrameConditions c;
+  c.exposure_s = exposure_s;
+  if (!world.TruthAt(t0_s).known) {
+    c.pose_start = sampled_start;
+    c.pose_end = world.Pose();
+    return c;
+  }
+  c.pose_start = world.PoseAt(t0_s);
+  c.pose_start.moving = sampled_start.moving;  // PoseAt's flag is now's: settling counts too
+  c.pose_end = world.PoseAt(t0_s + exposure_s);
+  const PoseState mid = world.PoseAt(t0_s + 0.5 * exposure_s);
+  const auto travel = [&](double PoseState::*axis, double step) {
+    return (std::fabs(mid.*axis - c.pose_start.*axis) + std::fabs(c.pose_end.*axis - mid.*axis)) /
+           step;
+  };
+  const double steps = travel(&PoseState::slide_mm, kSubStepMm) +
+                       travel(&PoseState::pan_deg, kSubStepDeg) +
+                       travel(&PoseState::tilt_deg, kSubStepDeg);
+  if (steps <= 0.0) return c;  // at rest: one pose
+  const int n = static_cast<int>(std::clamp(std::ceil(steps) + 1.0, 2.0, kMaxSubSteps));
+  for (int k = 0; k < n; ++k) {
+    c.sub_steps.push_back(world.PoseAt(t0_s + (k + 0.5) / n * exposure_s));
+  }
+  return c;
+}
+
+// The frame's truth: the pose at the middle of its exposure, from the trajectory when known.
+void CameraServer::Impl::RecordTruth(const FrameConditions& c, double t0_s,
+                                     FrameRecord* record) const {
+  record->sim_time_s = t0_s;
+  record->timestamp_ns = SimTimeToNs(t0_s);
+  const TrajectoryPoint mid = world.TruthAt(t0_s + 0.5 * c.exposure_s);
+  record->truth_from_trajectory = mid.known;
+  const PoseState& pose = c.pose_start;  // without a trajectory: the start, as sampled
+  record->slide_mm = mid.known ? mid.slide_mm : pose.slide_mm;
+  record->pan_deg = mid.known ? mid.pan_deg : pose.pan_deg;
+  record->tilt_deg = mid.known ? mid.tilt_deg : pose.tilt_deg;
+  record->theta_deg = mid.known ? mid.theta_deg : pose.ThetaDeg();
+  record->slide_mm_s = mid.slide_mm_s;
+  record->pan_deg_s = mid.pan_deg_s;
+  record->tilt_deg_s = mid.tilt_deg_s;
+  record->bias_ma = pose.bias_ma;
+  record->junction_rise_k = c.junction_rise_k;
+  record->moving = c.pose_start.moving || c.pose_end.moving || !c.sub_steps.empty();
+}
+
 FrameRecord CameraServer::Impl::Expose(const FrameSetup& s, std::uint64_t index,
                                        std::vector<std::uint8_t>& payload) {
   const PixelFormat format = FormatOf(s.pixel_format);
   const double exposure_s = s.exposure_us * 1e-6;
-  FrameConditions c;
   const double t0 = world.clock().Now();
-  c.pose_start = world.Pose();
-  c.exposure_s = exposure_s;
-  c.black_offset_dn = s.black_offset_dn;
+  const PoseState sampled_start = world.Pose();
   SleepSim(exposure_s);
-  c.pose_end = world.Pose();
+  FrameConditions c = ExposureConditions(t0, exposure_s, sampled_start);
+  c.black_offset_dn = s.black_offset_dn;
   c.junction_rise_k =
       renderer.scene().JunctionRiseK(world.CurrentHistory(), t0 + 0.5 * exposure_s);
   const std::size_t pixels = static_cast<std::size_t>(std::max(s.width, 0)) *
@@ -110,13 +165,8 @@ FrameRecord CameraServer::Impl::Expose(const FrameSetup& s, std::uint64_t index,
   }
   FrameRecord record;
   record.index = index;
-  record.sim_time_s = t0;
   record.exposure_us = s.exposure_us;
-  record.slide_mm = c.pose_start.slide_mm;
-  record.theta_deg = c.pose_start.ThetaDeg();
-  record.bias_ma = c.pose_start.bias_ma;
-  record.junction_rise_k = c.junction_rise_k;
-  record.moving = c.pose_start.moving || c.pose_end.moving;
+  RecordTruth(c, t0, &record);
   record.format = s.pixel_format == kPixelMono12p ? "Mono12p" : PixelFormatName(format);
   return record;
 }
@@ -127,11 +177,10 @@ void CameraServer::Impl::RunFrame(const std::optional<FrameSetup>& latched) {
   const std::uint64_t index = ++frame_counter;
   const std::uint16_t block_id = next_block_id;
   next_block_id = static_cast<std::uint16_t>(next_block_id == 0xffff ? 1 : next_block_id + 1);
-  const auto timestamp_ns = static_cast<std::uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(host_start.time_since_epoch()).count());
   std::vector<std::uint8_t> payload;
   FrameRecord record = Expose(s, index, payload);
   record.block_id = block_id;
+  const std::uint64_t timestamp_ns = record.timestamp_ns;  // the exposure's start, world's clock
   if (s.chunks) {
     // The exposure chunk fault: the camera still declares and enables it, the frame lacks it.
     const std::uint64_t drop_from =

@@ -76,9 +76,14 @@ SignalWindow Renderer::Signal(const FrameConditions& c) const {
   const double i_start = scene_.OnAxisIntensityMwSr(c.pose_start.bias_ma, c.junction_rise_k);
   const double i_end = scene_.OnAxisIntensityMwSr(c.pose_end.bias_ma, c.junction_rise_k);
   SignalWindow acc;
-  if (SameGeometry(c.pose_start, c.pose_end)) {
+  const double sub_steps = static_cast<double>(c.sub_steps.size());
+  for (const PoseState& pose : c.sub_steps) {  // a moving exposure, in equal parts
+    const double intensity = scene_.OnAxisIntensityMwSr(pose.bias_ma, c.junction_rise_k);
+    Accumulate(acc, EmitterSignal(pose, intensity, c.exposure_s / sub_steps), 1.0);
+  }
+  if (c.sub_steps.empty() && SameGeometry(c.pose_start, c.pose_end)) {
     acc = EmitterSignal(c.pose_start, 0.5 * (i_start + i_end), c.exposure_s);
-  } else {
+  } else if (c.sub_steps.empty()) {
     // Moving during the exposure: half of it at each end (a two-point smear).
     Accumulate(acc, EmitterSignal(c.pose_start, i_start, 0.5 * c.exposure_s), 1.0);
     Accumulate(acc, EmitterSignal(c.pose_end, i_end, 0.5 * c.exposure_s), 1.0);

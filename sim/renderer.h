@@ -22,6 +22,9 @@ namespace irdist::sim {
 struct FrameConditions {
   PoseState pose_start;        // state when the exposure starts
   PoseState pose_end;          // state when it ends (differs while an axis moves)
+  // A moving exposure's sub-steps: the states at the middles of equal parts of the exposure,
+  // each exposed for exposure_s / size (empty: the start and end states above).
+  std::vector<PoseState> sub_steps;
   double exposure_s = 0.008;
   double junction_rise_k = 0.0;  // IRED junction temperature above ambient, mid-exposure
   double black_offset_dn = 0.0;  // camera BlackLevel feature, ADC counts
@@ -54,8 +57,9 @@ class Renderer {
 
   const LabScene& lab() const { return lab_; }
 
-  // Mean signal electrons for the conditions (averaging the start and end poses of a moving
-  // exposure, and the intensity at the bias currents of both): the IRED, its reflection and the
+  // Mean signal electrons for the conditions (the sum over a moving exposure's sub-steps; else
+  // averaging the start and end poses, and the intensity at the bias currents of both): the
+  // IRED, its reflection and the
   // second source (ambient light, which covers the sensor, is added by Render for its region).
   SignalWindow Signal(const FrameConditions& conditions) const;
 

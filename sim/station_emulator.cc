@@ -203,6 +203,9 @@ struct StationEmulator::Impl : StationEffects {
   void SetPose(double slide_mm, double pan_deg, double tilt_deg, bool moving) override {
     world.SetPose(slide_mm, pan_deg, tilt_deg, moving);
   }
+  void SetAxisMotion(RigAxis axis, const MotionProfile& profile) override {
+    world.SetAxisMotion(axis, profile);
+  }
   void SetCurrent(double bias_ma) override { world.SetCurrent(bias_ma); }
   void FireTrigger() override {
     mutex.unlock();  // the sink may render a frame; never hold our lock across it

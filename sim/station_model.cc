@@ -13,19 +13,9 @@
 #include <vector>
 
 #include "base/check.h"
+#include "sim/station_model_text.h"
 
 namespace irdist::sim {
-
-bool ParseProtocolInt(const std::string& text, long long* value) {
-  if (text.empty()) return false;
-  std::size_t i = (text[0] == '-' || text[0] == '+') ? 1 : 0;
-  if (i == text.size() || text.size() > 12) return false;
-  for (std::size_t k = i; k < text.size(); ++k) {
-    if (text[k] < '0' || text[k] > '9') return false;
-  }
-  *value = std::strtoll(text.c_str(), nullptr, 10);
-  return true;
-}
 
 namespace {
 
@@ -35,84 +25,6 @@ constexpr int kTilt = 2;
 constexpr std::array<const char*, 3> kAxisNames = {"SLIDE", "PAN", "TILT"};
 constexpr std::size_t kErrorQueueDepth = 16;
 constexpr double kBootTimeS = 0.2;  // simulated time the station is deaf after a power-up
-
-bool AxisValid(const AxisOptions& a, const char* name, std::string* why) {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = std::string("virtual.station.") + name + ": " + m;
-    return false;
-  };
-  if (!(a.min < a.max)) return fail("min must be < max");
-  if (a.home < a.min || a.home > a.max) return fail("home must lie within [min, max]");
-  if (a.power_on < a.min || a.power_on > a.max) return fail("power_on must lie within [min, max]");
-  if (!(a.speed > 0)) return fail("speed must be > 0");
-  if (!(a.accel > 0)) return fail("accel must be > 0");
-  if (!(a.settle_s >= 0)) return fail("settle_s must be >= 0");
-  return true;
-}
-
-// One axis moving along a trapezoidal (or triangular) profile from rest or from an initial speed
-// v0 in the direction of travel, ending at rest at `to`.
-struct Profile {
-  double from = 0.0;
-  double to = 0.0;
-  double start_s = 0.0;
-  double v0 = 0.0, vp = 0.0, accel = 1.0;
-  double t_acc = 0.0, t_cruise = 0.0, t_dec = 0.0;
-
-  static Profile Make(double from, double to, double start_s, double v0, double vmax, double a) {
-    Profile p;
-    p.from = from;
-    p.to = to;
-    p.start_s = start_s;
-    p.accel = a;
-    const double d = std::fabs(to - from);
-    v0 = std::min(v0, std::sqrt(2.0 * a * d));  // cannot overshoot
-    p.v0 = v0;
-    if (d <= 0.0) return p;
-    if (d >= (2.0 * vmax * vmax - v0 * v0) / (2.0 * a)) {
-      p.vp = std::max(vmax, v0);
-      const double d_acc = (p.vp * p.vp - v0 * v0) / (2.0 * a);
-      const double d_dec = p.vp * p.vp / (2.0 * a);
-      p.t_acc = (p.vp - v0) / a;
-      p.t_dec = p.vp / a;
-      p.t_cruise = std::max(0.0, (d - d_acc - d_dec) / p.vp);
-    } else {
-      p.vp = std::sqrt((2.0 * a * d + v0 * v0) / 2.0);
-      p.t_acc = (p.vp - v0) / a;
-      p.t_dec = p.vp / a;
-    }
-    return p;
-  }
-  double Duration() const { return t_acc + t_cruise + t_dec; }
-  double EndS() const { return start_s + Duration(); }
-  // Distance travelled and speed, tau seconds after the start.
-  void At(double tau, double* pos, double* speed) const {
-    const double dir = to >= from ? 1.0 : -1.0;
-    double s = 0.0, v = 0.0;
-    if (tau <= 0.0) {
-      s = 0.0;
-      v = v0;
-    } else if (tau < t_acc) {
-      s = v0 * tau + 0.5 * accel * tau * tau;
-      v = v0 + accel * tau;
-    } else if (tau < t_acc + t_cruise) {
-      const double s_acc = v0 * t_acc + 0.5 * accel * t_acc * t_acc;
-      s = s_acc + vp * (tau - t_acc);
-      v = vp;
-    } else if (tau < Duration()) {
-      const double s_acc = v0 * t_acc + 0.5 * accel * t_acc * t_acc;
-      const double u = tau - t_acc - t_cruise;
-      s = s_acc + vp * t_cruise + vp * u - 0.5 * accel * u * u;
-      v = vp - accel * u;
-    } else {
-      *pos = to;
-      *speed = 0.0;
-      return;
-    }
-    *pos = from + dir * std::min(s, std::fabs(to - from));
-    *speed = v;
-  }
-};
 
 enum class State { kUnhomed, kHoming, kIdle, kMoving, kSettling, kEStop, kBooting };
 
@@ -129,93 +41,9 @@ const char* StateText(State s) {
   return "UNKNOWN";
 }
 
-struct CommandError {
-  int code;
-  std::string message;
-};
-
-CommandError ErrorFor(int code) {
-  switch (code) {
-    case -102: return {code, "Syntax error"};
-    case -104: return {code, "Data type error"};
-    case -108: return {code, "Parameter not allowed"};
-    case -109: return {code, "Missing parameter"};
-    case -113: return {code, "Undefined header"};
-    case -221: return {code, "Settings conflict"};
-    case -222: return {code, "Data out of range"};
-    case -350: return {code, "Queue overflow"};
-    case -500: return {code, "Power on"};
-    case 201: return {code, "Not homed"};
-    case 202: return {code, "Emergency stop active"};
-    case 203: return {code, "Checksum mismatch"};
-    case 204: return {code, "Homing failed"};
-    case 205: return {code, "Line too long"};
-    case 206: return {code, "Link lost"};
-    default: return {code, "Execution error"};
-  }
-}
-
-std::vector<std::string> SplitCommas(const std::string& text) {
-  std::vector<std::string> out;
-  if (text.empty()) return out;
-  std::string cur;
-  for (char c : text) {
-    if (c == ',') {
-      out.push_back(cur);
-      cur.clear();
-    } else if (c != ' ') {
-      cur.push_back(c);
-    }
-  }
-  out.push_back(cur);
-  return out;
-}
-
-std::string Upper(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return s;
-}
-
 long long Centi(double v) { return std::llround(v * 100.0); }
 
 }  // namespace
-
-bool EmulatorOptions::IsValid(std::string* why) const {
-  if (!AxisValid(slide, "slide", why) || !AxisValid(pan, "pan", why) ||
-      !AxisValid(tilt, "tilt", why)) {
-    return false;
-  }
-  auto fail = [&](const std::string& m) {
-    if (why) *why = "virtual.station: " + m;
-    return false;
-  };
-  auto rate_ok = [](double r) { return r >= 0.0 && r <= 1.0; };
-  if (!(homing_speed_factor > 0 && homing_speed_factor <= 1)) {
-    return fail("homing_speed_factor must be in (0, 1]");
-  }
-  if (!(max_current_ma > 0)) return fail("max_current_ma must be > 0");
-  if (!(current_noise_ma >= 0)) return fail("current_noise_ma must be >= 0");
-  if (!(min_trigger_width_us > 0)) return fail("min_trigger_width_us must be > 0");
-  if (!(min_trigger_period_us > min_trigger_width_us)) {
-    return fail("min_trigger_period_us must be > min_trigger_width_us");
-  }
-  if (max_trigger_count < 1) return fail("max_trigger_count must be >= 1");
-  if (!(reply_latency_s >= 0)) return fail("reply_latency_s must be >= 0");
-  if (!rate_ok(garble_rate) || !rate_ok(drop_rate) || !rate_ok(delay_rate) ||
-      !rate_ok(missed_pulse_rate)) {
-    return fail("garble_rate, drop_rate, delay_rate and missed_pulse_rate must be in [0, 1]");
-  }
-  if (!(delay_s >= 0)) return fail("delay_s must be >= 0");
-  if (fault_at_move < 0) return fail("fault_at_move must be >= 0 (0 = off)");
-  if (!fault.empty() && fault != "refuse" && fault != "estop" && fault != "silent") {
-    return fail("fault must be empty, refuse, estop or silent");
-  }
-  if (!stuck_axis.empty() && stuck_axis != "slide" && stuck_axis != "pan" &&
-      stuck_axis != "tilt") {
-    return fail("stuck_axis must be empty, slide, pan or tilt");
-  }
-  return true;
-}
 
 // ------------------------------------------------------------------------------------------------
 // The model proper: controller state and the command table, no I/O, no lock (the caller, e.g. the
@@ -225,7 +53,7 @@ struct StationModel::Impl {
   struct Axis {
     const AxisOptions* opt = nullptr;
     double pos = 0.0;          // physical position
-    Profile profile;           // current motion (from == to when at rest)
+    MotionProfile profile;     // current motion (from == to when at rest)
     bool moving = false;
   };
 
@@ -269,7 +97,24 @@ struct StationModel::Impl {
     axes[kTilt].opt = &options.tilt;
     for (Axis& a : axes) {
       a.pos = a.opt->power_on;
-      a.profile = Profile::Make(a.pos, a.pos, 0.0, 0.0, a.opt->speed, a.opt->accel);
+      a.profile = MotionProfile::Rest(a.pos, 0.0);
+    }
+  }
+
+  // Axis i follows `profile` from its start on; the world keeps it as its exact trajectory.
+  void Follow(int i, const MotionProfile& profile) {
+    axes[i].profile = profile;
+    effects.SetAxisMotion(static_cast<RigAxis>(i), profile);
+  }
+
+  // Every axis stops where it is at `now`, at once (no deceleration).
+  void HaltAxes(double now) {
+    for (int i = 0; i < 3; ++i) {
+      Axis& a = axes[i];
+      double v = 0.0;
+      a.profile.At(now - a.profile.start_s, &a.pos, &v);
+      Follow(i, MotionProfile::Rest(a.pos, now));
+      a.moving = false;
     }
   }
 
@@ -290,9 +135,9 @@ struct StationModel::Impl {
     char id[16];
     std::snprintf(id, sizeof(id), "%08X", dist(entropy) ^ static_cast<std::uint32_t>(reboots));
     boot_id = id;
-    for (Axis& a : axes) {
-      a.moving = false;
-      a.profile = Profile::Make(a.pos, a.pos, now, 0.0, a.opt->speed, a.opt->accel);
+    for (int i = 0; i < 3; ++i) {
+      axes[i].moving = false;
+      Follow(i, MotionProfile::Rest(axes[i].pos, now));
     }
     soft = {std::make_pair(options.slide.min, options.slide.max),
             std::make_pair(options.pan.min, options.pan.max),
@@ -313,12 +158,7 @@ struct StationModel::Impl {
 
   // Immediate halt, IRED off, trigger aborted: the ESTOP command or the station's stop button.
   void EStop(double now) {
-    for (Axis& a : axes) {
-      double v = 0.0;
-      a.profile.At(now - a.profile.start_s, &a.pos, &v);
-      a.profile = Profile::Make(a.pos, a.pos, now, 0.0, a.opt->speed, a.opt->accel);
-      a.moving = false;
-    }
+    HaltAxes(now);
     trig_remaining = 0;
     current_centi_ma = 0;
     effects.SetCurrent(0.0);
@@ -332,12 +172,7 @@ struct StationModel::Impl {
     effects.SetCurrent(0.0);
     trig_remaining = 0;
     if (state == State::kMoving || state == State::kHoming || state == State::kSettling) {
-      for (Axis& a : axes) {
-        double v = 0.0;
-        a.profile.At(now - a.profile.start_s, &a.pos, &v);
-        a.profile = Profile::Make(a.pos, a.pos, now, 0.0, a.opt->speed, a.opt->accel);
-        a.moving = false;
-      }
+      HaltAxes(now);
       state = homing_ok ? State::kIdle : State::kUnhomed;
     }
     PushError(206);
@@ -376,7 +211,8 @@ struct StationModel::Impl {
       double v = 0.0;
       a.profile.At(now - a.profile.start_s, &a.pos, &v);
       const double to = (i == stuck) ? a.pos : target[i];
-      a.profile = Profile::Make(a.pos, to, now, 0.0, a.opt->speed * speed_factor, a.opt->accel);
+      Follow(i, MotionProfile::Make(a.pos, to, now, 0.0, a.opt->speed * speed_factor,
+                                    a.opt->accel));
       a.moving = std::fabs(to - a.pos) > 0.0;
     }
   }
@@ -439,24 +275,7 @@ struct StationModel::Impl {
     return Centi(p);
   }
 
-  // One parsed command: its upper-case header, its comma-separated parameters and the time.
-  struct Request {
-    std::string header;
-    std::vector<std::string> args;
-    double now = 0.0;
-    // Exactly n integer parameters into *out; 0, or the error code (-109, -108, -104).
-    int Ints(std::size_t n, std::vector<long long>* out) const {
-      if (args.size() < n) return -109;
-      if (args.size() > n) return -108;
-      for (const std::string& a : args) {
-        long long v = 0;
-        if (!ParseProtocolInt(a, &v)) return -104;
-        out->push_back(v);
-      }
-      return 0;
-    }
-    int NoArgs() const { return args.empty() ? 0 : -108; }
-  };
+  using Request = StationRequest;
   using Handler = std::string (Impl::*)(const Request&);
 
   // Queues the error and returns its ERR reply.
@@ -613,12 +432,13 @@ struct StationModel::Impl {
     trig_remaining = 0;
     if (state == State::kMoving || state == State::kHoming) {
       const bool homing = state == State::kHoming;
-      for (Axis& a : axes) {
+      for (int i = 0; i < 3; ++i) {
+        Axis& a = axes[i];
         double speed = 0.0;
         a.profile.At(r.now - a.profile.start_s, &a.pos, &speed);
         const double dir = a.profile.to >= a.profile.from ? 1.0 : -1.0;
         const double stop_at = a.pos + dir * speed * speed / (2.0 * a.opt->accel);
-        a.profile = Profile::Make(a.pos, stop_at, r.now, speed, speed, a.opt->accel);
+        Follow(i, MotionProfile::Make(a.pos, stop_at, r.now, speed, speed, a.opt->accel));
       }
       state = State::kMoving;
       homing_ok = !homing;

@@ -15,6 +15,10 @@
 #include <random>
 #include <string>
 
+#include "sim/motion_profile.h"
+#include "sim/station_model_text.h"  // ParseProtocolInt
+#include "sim/trajectory.h"
+
 namespace irdist::sim {
 
 // One axis's motion parameters (trapezoidal profile), in the axis's own unit (mm or deg).
@@ -69,12 +73,12 @@ class StationEffects {
   virtual void SetPose(double slide_mm, double pan_deg, double tilt_deg, bool moving) = 0;
   virtual void SetCurrent(double bias_ma) = 0;
   virtual void FireTrigger() = 0;
+  // An axis starts following `profile` (a move, a stop, a halt, a power-up at rest): the exact
+  // trajectory the world keeps (sim/trajectory.h). Called before the SetPose that follows.
+  virtual void SetAxisMotion(RigAxis /*axis*/, const MotionProfile& /*profile*/) {}
   // After every power-up (first start and reboots): the link layer forgets its framing state.
   virtual void PoweredUp() {}
 };
-
-// The protocol's integer syntax: optional sign, 1-12 characters, decimal digits only.
-bool ParseProtocolInt(const std::string& text, long long* value);
 
 class StationModel {
  public:

@@ -62,6 +62,10 @@ bool VirtualRigOverrides::IsValid(std::string* why) const {
     if (why) *why = "serial override must have 1..15 characters";
     return false;
   }
+  if (trajectory_csv && trajectory_csv->empty()) {
+    if (why) *why = "trajectory_csv override must name a file";
+    return false;
+  }
   return true;
 }
 
@@ -71,6 +75,7 @@ std::string VirtualRigInfo::BriefReport() const {
       << "station: " << (station_port.empty() ? "(none)" : station_port) << "\n";
   for (const auto& [name, port] : device_ports) out << "device " << name << ": " << port << "\n";
   out << "time_scale: " << time_scale << "\n";
+  if (!trajectory_csv.empty()) out << "trajectory: " << trajectory_csv << "\n";
   return out.str();
 }
 
@@ -89,27 +94,31 @@ std::unique_ptr<VirtualRig> VirtualRig::Start(const std::string& rig_path,
   if (overrides.time_scale) physics.time_scale = *overrides.time_scale;
   if (overrides.seed) physics.sensor.seed = *overrides.seed;
   if (overrides.serial) physics.camera.serial = *overrides.serial;
-  return StartImpl(physics, rig_path, overrides.seed);
+  return StartImpl(physics, rig_path, overrides);
 }
 
 std::unique_ptr<VirtualRig> VirtualRig::Start(const RigPhysics& physics,
                                               const std::string& rig_path) {
-  return StartImpl(physics, rig_path, std::nullopt);
+  return StartImpl(physics, rig_path, VirtualRigOverrides{});
 }
 
 std::unique_ptr<VirtualRig> VirtualRig::StartImpl(const RigPhysics& physics,
                                                   const std::string& rig_path,
-                                                  std::optional<std::uint64_t> seed) {
+                                                  const VirtualRigOverrides& overrides) {
   std::string why;
   IRDIST_CHECK(physics.IsValid(&why), why);
   std::unique_ptr<VirtualRig> rig(new VirtualRig(physics));
+  if (overrides.trajectory_csv) {  // before the station powers up: its first rows are logged
+    rig->world_->LogTrajectory(*overrides.trajectory_csv);
+    rig->info_.trajectory_csv = *overrides.trajectory_csv;
+  }
   rig->camera_ = std::make_unique<CameraServer>(*rig->world_, physics);
   rig->camera_->Start();
   rig->info_.camera_id = rig->camera_->device_id();
   rig->info_.camera_address = rig->camera_->address();
   rig->info_.serial = rig->camera_->serial();
   rig->info_.time_scale = physics.time_scale;
-  rig->StartStation(rig_path, seed);
+  rig->StartStation(rig_path, overrides.seed);
   return rig;
 }
 

@@ -27,6 +27,9 @@ struct VirtualRigOverrides {
   std::optional<double> time_scale;    // simulated s per host s
   std::optional<std::uint64_t> seed;   // sensor noise (and emulator) seed
   std::optional<std::string> serial;   // camera serial number (< 16 characters)
+  // A new file the station's trajectory is logged to from the start (sim/trajectory_file.h;
+  // `irdist sim` puts it in its state folder). Unset: not logged (the World keeps it anyway).
+  std::optional<std::string> trajectory_csv;
   bool IsValid(std::string* why) const;
 };
 
@@ -40,14 +43,15 @@ struct VirtualRigInfo {
   // station.devices.<name> -> its emulator's pty slave path (devices whose port is `auto`).
   std::map<std::string, std::string> device_ports;
   double time_scale = 1.0;
+  std::string trajectory_csv;  // the trajectory file, when logged (else empty)
   std::string BriefReport() const;  // "camera: ...\nstation: ...\n[device <name>: ...\n]"
 };
 
 class VirtualRig {
  public:
   // Loads the rig file's `virtual:` section (physics and virtual.station:), applies the
-  // overrides and starts the camera and the station. Throws RigFileError, CameraServerError or
-  // irdist::Error (pty).
+  // overrides and starts the camera and the station. Throws RigFileError, CameraServerError,
+  // TrajectoryFileError or irdist::Error (pty).
   static std::unique_ptr<VirtualRig> Start(const std::string& rig_path,
                                            const VirtualRigOverrides& overrides = {});
   // The same from already loaded physics (station options from `rig_path` if not empty).
@@ -78,7 +82,7 @@ class VirtualRig {
   explicit VirtualRig(const RigPhysics& physics);
   static std::unique_ptr<VirtualRig> StartImpl(const RigPhysics& physics,
                                                const std::string& rig_path,
-                                               std::optional<std::uint64_t> seed);
+                                               const VirtualRigOverrides& overrides);
 
   RigPhysics physics_;
   std::unique_ptr<World> world_;

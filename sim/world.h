@@ -12,19 +12,27 @@
 // axis points at the camera. The orientation angle theta between the emission axis and the line
 // to the camera is cos(theta) = cos(pan) * cos(tilt).
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <vector>
+
+#include "base/utc_time.h"
+#include "sim/trajectory.h"
+#include "sim/trajectory_file.h"
 
 namespace irdist::sim {
 
 class SimClock {
  public:
   explicit SimClock(double time_scale = 1.0)
-      : time_scale_(time_scale), start_(std::chrono::steady_clock::now()) {}
+      : time_scale_(time_scale),
+        start_(std::chrono::steady_clock::now()),
+        utc_start_ns_(UtcNowNs()) {}
   double time_scale() const { return time_scale_; }
   // Simulated seconds since construction.
   double Now() const {
@@ -35,10 +43,16 @@ class SimClock {
   std::chrono::duration<double> HostDuration(double sim_s) const {
     return std::chrono::duration<double>(sim_s / time_scale_);
   }
+  // The host's UTC time (ns since the Unix epoch) of simulated time sim_s: the wall clock read
+  // when the clock started plus the host time that sim_s took.
+  std::int64_t UtcNs(double sim_s) const {
+    return utc_start_ns_ + static_cast<std::int64_t>(std::llround(sim_s / time_scale_ * 1e9));
+  }
 
  private:
   double time_scale_;
   std::chrono::steady_clock::time_point start_;
+  std::int64_t utc_start_ns_;
 };
 
 // The station's physical state at one instant, as the camera sees it.
@@ -48,11 +62,7 @@ struct PoseState {
   double tilt_deg = 0.0;
   bool moving = false;       // some axis is in motion (frames taken now are smeared/wrong)
   double bias_ma = 0.0;      // IRED current as set (0 = off)
-  double ThetaDeg() const {
-    constexpr double kDeg = 3.14159265358979323846 / 180.0;
-    const double c = std::cos(pan_deg * kDeg) * std::cos(tilt_deg * kDeg);
-    return std::acos(std::fmin(1.0, std::fmax(-1.0, c))) / kDeg;
-  }
+  double ThetaDeg() const { return ThetaDegOf(pan_deg, tilt_deg); }
 };
 
 // One change of the IRED current, for the thermal model (self-heating integrates this history).
@@ -77,6 +87,34 @@ class World {
     pose_.tilt_deg = tilt_deg;
     pose_.moving = moving;
   }
+  // An axis starts following `profile` (sim/motion_profile.h) at profile.start_s: the exact
+  // trajectory PoseAt() and TruthAt() read, appended to the trajectory file when one is logged.
+  void SetAxisMotion(RigAxis axis, const MotionProfile& profile) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    trajectory_.Add(axis, profile);
+    if (log_) log_->Append(axis, profile);
+  }
+  // Logs every profile from now on to a new CSV file at `path` (sim/trajectory_file.h), starting
+  // with the profiles each axis follows now. Throws TrajectoryFileError.
+  void LogTrajectory(const std::string& path) {
+    auto log = std::make_unique<TrajectoryLog>(
+        path, [this](double sim_s) { return clock_.UtcNs(sim_s); });
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (int i = 0; i < kRigAxes; ++i) {
+      const RigAxis axis = static_cast<RigAxis>(i);
+      if (trajectory_.Has(axis)) log->Append(axis, trajectory_.Profiles(axis).back());
+    }
+    log_ = std::move(log);
+  }
+  // The trajectory file's path and its first write error ("" when none, or when not logged).
+  std::string TrajectoryLogPath() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return log_ ? log_->path() : std::string();
+  }
+  std::string TrajectoryLogError() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return log_ ? log_->Error() : std::string();
+  }
   void SetCurrent(double bias_ma) {
     std::lock_guard<std::mutex> lock(mutex_);
     pose_.bias_ma = bias_ma;
@@ -98,6 +136,29 @@ class World {
     std::lock_guard<std::mutex> lock(mutex_);
     return pose_;
   }
+  // The pose at simulated time t_s: the axes from the trajectory where the station gave their
+  // profiles (exact at any instant), else as last set by SetPose; the current as set at t_s;
+  // `moving` as now.
+  PoseState PoseAt(double t_s) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    PoseState pose = pose_;
+    const TrajectoryPoint point = trajectory_.At(t_s);
+    if (trajectory_.Has(RigAxis::kSlide)) pose.slide_mm = point.slide_mm;
+    if (trajectory_.Has(RigAxis::kPan)) pose.pan_deg = point.pan_deg;
+    if (trajectory_.Has(RigAxis::kTilt)) pose.tilt_deg = point.tilt_deg;
+    // The current set last at or before t_s.
+    const auto after = std::upper_bound(
+        history_.begin(), history_.end(), t_s,
+        [](double t, const CurrentStep& step) { return t < step.sim_time_s; });
+    if (after != history_.begin()) pose.bias_ma = (after - 1)->bias_ma;
+    return pose;
+  }
+  // The trajectory's point at t_s (known = false when some axis has no profile: a station of
+  // devices, or a test that only calls SetPose).
+  TrajectoryPoint TruthAt(double t_s) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return trajectory_.At(t_s);
+  }
   std::vector<CurrentStep> CurrentHistory() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return history_;
@@ -116,6 +177,8 @@ class World {
   SimClock clock_;
   mutable std::mutex mutex_;
   PoseState pose_;
+  Trajectory trajectory_;
+  std::unique_ptr<TrajectoryLog> log_;
   std::vector<CurrentStep> history_;
   std::uint64_t trigger_pulses_ = 0;
   std::function<void()> trigger_sink_;

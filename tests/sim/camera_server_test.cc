@@ -9,7 +9,9 @@
 #include <unistd.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <thread>
@@ -18,7 +20,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "sim/renderer.h"
+#include "sim/trajectory_file.h"
 #include "tests/loopback_gvcp.h"
+#include "tests/sim/station_on_world.h"
 
 namespace irdist::sim {
 namespace {
@@ -519,6 +523,132 @@ TEST(CameraServerPort, SecondCameraOnLoopbackFailsClearly) {
   }
   EXPECT_TRUE(first.running());
   EXPECT_FALSE(second.running());
+}
+
+// The blob's intensity-weighted width (2 sigma along x, px) in a Mono12 frame and its standard
+// deviation from the frame's noise: the moments of a box around the brightest pixel reaching
+// `reach_px` from it, less the frame's median (black level and dark signal). Each pixel's
+// variance is the background's (from the median absolute deviation) plus its shot noise.
+struct Width {
+  double px = 0.0, sd_px = 0.0;
+};
+Width BlobWidth(ArvBuffer* buffer, int reach_px, double gain_dn_per_e) {
+  size_t size = 0;
+  const void* data = arv_buffer_get_data(buffer, &size);
+  const int w = arv_buffer_get_image_width(buffer), h = arv_buffer_get_image_height(buffer);
+  cv::Mat frame;
+  cv::Mat(h, w, CV_16UC1, const_cast<void*>(data)).convertTo(frame, CV_64F);
+  cv::Point peak;
+  cv::minMaxLoc(frame, nullptr, nullptr, nullptr, &peak);
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  const double background = median(std::vector<double>(frame.begin<double>(), frame.end<double>()));
+  std::vector<double> deviations;
+  for (auto it = frame.begin<double>(); it != frame.end<double>(); ++it) {
+    deviations.push_back(std::fabs(*it - background));
+  }
+  const double background_var = std::pow(1.4826 * median(deviations), 2);
+  const cv::Rect box = cv::Rect(peak.x - reach_px, peak.y - reach_px, 2 * reach_px + 1,
+                                2 * reach_px + 1) & cv::Rect(0, 0, w, h);
+  double sum = 0.0, sx = 0.0, sxx = 0.0;
+  for (int r = box.y; r < box.y + box.height; ++r) {
+    for (int c = box.x; c < box.x + box.width; ++c) {
+      const double e = frame.at<double>(r, c) - background;
+      sum += e;
+      sx += e * c;
+      sxx += e * c * c;
+    }
+  }
+  const double mean = sx / sum, m2 = sxx / sum - mean * mean;
+  double var_m2 = 0.0;  // of sum_i e_i ((x_i - mean)^2 - m2) / sum, to first order
+  for (int r = box.y; r < box.y + box.height; ++r) {
+    for (int c = box.x; c < box.x + box.width; ++c) {
+      const double e = std::max(frame.at<double>(r, c) - background, 0.0);
+      const double lever = ((c - mean) * (c - mean) - m2) / sum;
+      var_m2 += (background_var + gain_dn_per_e * e) * lever * lever;
+    }
+  }
+  return {2.0 * std::sqrt(m2), std::sqrt(var_m2 / m2)};  // d(2 sqrt(m2)) = d(m2) / sqrt(m2)
+}
+
+// docs/virtual-rig.md "Truth of a moving target": frames taken while the slide moves 1500 ->
+// 3000 mm at 0.5 m/s carry the IRED's pose at the middle of their exposure (the profile written
+// out by hand), their GigE timestamp is the exposure's start on the world's clock in ns, the
+// trajectory file gives the same truth from timestamp and exposure, and the image's blob has the
+// mid-exposure pose's size.
+TEST_F(CameraServerTest, FramesDuringASlideMoveCarryTheirMidExposureTruth) {
+  const std::string path = "/tmp/irdist-camera-trajectory-" + std::to_string(::getpid()) + ".csv";
+  ::unlink(path.c_str());
+  world_.LogTrajectory(path);
+  testing::StationOnWorld station(world_, testing::HalfMetrePerSecond());
+  ASSERT_EQ(station.Do("HOME"), "OK");
+  ASSERT_TRUE(station.WaitFor("IDLE", std::chrono::seconds(30)));
+  ASSERT_EQ(station.Do("MOVE 150000,0,0"), "OK");
+  ASSERT_EQ(station.Do("SOUR:CURR 50000"), "OK");  // 500 mA (the power-up turned it off)
+  ASSERT_TRUE(station.WaitFor("IDLE", std::chrono::seconds(30)));
+  GError* error = nullptr;
+  arv_camera_set_pixel_format_from_string(camera_.get(), "Mono12", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_region(camera_.get(), 512, 384, 256, 256, &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_exposure_time(camera_.get(), 8000.0, &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
+  ASSERT_NO_GERROR(error);
+  arv_camera_set_string(camera_.get(), "TriggerSource", "Software", &error);
+  ASSERT_NO_GERROR(error);
+  CreateStream();
+  arv_camera_start_acquisition(camera_.get(), &error);
+  ASSERT_NO_GERROR(error);
+  struct Shot {
+    guint64 frame_id, timestamp_ns;
+    Width width;
+  };
+  std::vector<Shot> shots;
+  double move_s = 0.0;
+  ASSERT_EQ(station.Do("MOVE 300000,0,0", &move_s), "OK");
+  while (world_.clock().Now() < move_s + 3.7) {
+    arv_camera_software_trigger(camera_.get(), &error);
+    ASSERT_NO_GERROR(error);
+    Pop(2000000, [&](ArvBuffer* b) {
+      // At 1.5 m the disc's image reaches 10 px from its centre; 7 px more hold its blur.
+      shots.push_back({arv_buffer_get_frame_id(b), arv_buffer_get_timestamp(b),
+                       BlobWidth(b, 17, physics_.sensor.system_gain_dn_per_e)});
+    });
+  }
+  const std::vector<FrameRecord> records = server_->RecentFrames();
+  const Trajectory logged = ReadTrajectoryFile(path);
+  const Renderer truth_renderer(physics_);
+  int cruising = 0;
+  for (const Shot& shot : shots) {
+    const auto record = std::find_if(records.begin(), records.end(), [&](const FrameRecord& r) {
+      return r.block_id == shot.frame_id;
+    });
+    ASSERT_NE(record, records.end()) << "block " << shot.frame_id;
+    EXPECT_EQ(shot.timestamp_ns, record->timestamp_ns);
+    EXPECT_EQ(record->timestamp_ns, SimTimeToNs(record->sim_time_s));
+    const double tau = record->sim_time_s + 0.5 * record->exposure_us * 1e-6 - move_s;
+    ASSERT_TRUE(record->truth_from_trajectory);
+    EXPECT_NEAR(record->slide_mm, testing::ExpectedSlideMm(tau), 1e-6) << "tau " << tau;
+    EXPECT_NEAR(record->slide_mm_s, testing::ExpectedSlideMmS(tau), 1e-6) << "tau " << tau;
+    const TrajectoryPoint looked_up = MidExposure(logged, shot.timestamp_ns, 8000.0);
+    EXPECT_NEAR(looked_up.slide_mm, record->slide_mm, 1e-5) << "tau " << tau;
+    EXPECT_NEAR(looked_up.slide_mm_s, record->slide_mm_s, 1e-5) << "tau " << tau;
+    PoseState mid;
+    mid.slide_mm = record->slide_mm;
+    mid.bias_ma = 500;
+    const double expected_px =
+        truth_renderer.Describe(mid, 0.008, PixelFormat::kMono12, record->junction_rise_k).width_px;
+    EXPECT_NEAR(shot.width.px, expected_px, 4.0 * shot.width.sd_px) << "tau " << tau;
+    if (tau > 0.5 && tau < 3.0) ++cruising;
+    std::printf("tau %.4f slide %.3f mm width %.4f +- %.4f px expected %.4f z %.2f\n", tau,
+                record->slide_mm, shot.width.px, shot.width.sd_px, expected_px,
+                (shot.width.px - expected_px) / shot.width.sd_px);
+  }
+  EXPECT_GE(cruising, 5) << "too few frames during the cruise to mean anything";
+  ::unlink(path.c_str());
 }
 
 }  // namespace

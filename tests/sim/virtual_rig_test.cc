@@ -9,6 +9,8 @@
 
 #include "base/input_error.h"
 #include "sim/camera_server.h"
+#include "sim/station_emulator.h"
+#include "sim/trajectory_file.h"
 #include "tests/loopback_gvcp.h"
 #include "tests/sim/pty_host.h"
 
@@ -23,6 +25,9 @@ TEST(VirtualRigOverrides, DefaultsAreValid) {
   VirtualRigOverrides bad;
   bad.time_scale = 0.0;
   EXPECT_FALSE(bad.IsValid(&why));
+  VirtualRigOverrides no_file;
+  no_file.trajectory_csv = "";
+  EXPECT_FALSE(no_file.IsValid(&why));
 }
 
 TEST(VirtualRig, StartsCameraAndStationFromTheRigFile) {
@@ -132,6 +137,35 @@ TEST(VirtualRig, ADeviceWithoutAnEmulatorIsAnInputError) {
     EXPECT_GT(e.Line(), 0);
     EXPECT_NE(std::string(e.what()).find("acme_ptu"), std::string::npos) << e.what();
   }
+}
+
+// docs/virtual-rig.md "Truth of a moving target": the station's trajectory logged from the
+// start to the file the override names; a reboot halts the axes where they stand (new rows).
+TEST(VirtualRig, LogsTheStationsTrajectoryFromItsPowerUp) {
+  ASSERT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(120)));
+  VirtualRigOverrides overrides;
+  overrides.time_scale = 20.0;
+  overrides.trajectory_csv = ::testing::TempDir() + "virtual-rig-trajectory.csv";
+  ::unlink(overrides.trajectory_csv->c_str());
+  std::unique_ptr<VirtualRig> rig = VirtualRig::Start(kRig, overrides);
+  EXPECT_EQ(rig->Info().trajectory_csv, *overrides.trajectory_csv);
+  EXPECT_NE(rig->Info().BriefReport().find("trajectory: " + *overrides.trajectory_csv),
+            std::string::npos);
+  ASSERT_NE(rig->station(), nullptr);
+  rig->station()->Reboot();
+  const Trajectory logged = ReadTrajectoryFile(*overrides.trajectory_csv);
+  for (RigAxis axis : {RigAxis::kSlide, RigAxis::kPan, RigAxis::kTilt}) {
+    EXPECT_EQ(logged.Profiles(axis).size(), 2u) << RigAxisName(axis);  // power-up, reboot
+  }
+  const TrajectoryPoint now = logged.At(rig->world().clock().Now());
+  ASSERT_TRUE(now.known);
+  EXPECT_EQ(now.slide_mm, rig->world().Pose().slide_mm);
+  EXPECT_EQ(rig->world().TrajectoryLogError(), "");
+  rig->Stop();
+  // The file is the rig's: a second rig refuses to overwrite it.
+  EXPECT_TRUE(irdist::testing::WaitForLoopbackGvcpPort(std::chrono::seconds(5)));
+  EXPECT_THROW(VirtualRig::Start(kRig, overrides), TrajectoryFileError);
+  ::unlink(overrides.trajectory_csv->c_str());
 }
 
 TEST(VirtualRig, MissingRigFileIsATypedError) {
