@@ -102,6 +102,15 @@ inline constexpr Bound kNoiseExponent{"noise exponent", "", -10.0, 10.0, false,
                                       "noise grows with a power of the distance: shot noise "
                                       "d^1, a dark floor d^2 or d^4"};
 inline constexpr Bound kShare{"share", "", 0.0, 1.0, false, "a share of a whole"};
+// The fit's fitness (estimator/fitness.h): chi-squares and ratios of variances in noise units.
+inline constexpr Bound kChiSquare{"chi-square", "", 0.0, 1.0e15, false,
+                                  "a sum of squared residuals in noise units is >= 0; 1e15 is "
+                                  "residuals 3e7 times their noise (the fit clips a worse one)"};
+inline constexpr Bound kTailProbability{"tail probability", "", 0.0, 1.0, true,
+                                        "a probability of a good fit failing, above 0, below 1"};
+inline constexpr Bound kResidualPercent{"relative residual", "%", -100.0, 1.0e6, false,
+                                        "a positive quantity's model misses it by at least "
+                                        "-100%; 1e6% is 10000 times it (the fit clips a worse one)"};
 
 }  // namespace bounds
 }  // namespace irdist

@@ -11,6 +11,7 @@
 
 #include "estimator/features.h"
 #include "estimator/blur_model.h"
+#include "estimator/fitness.h"
 #include "estimator/models.h"
 #include "estimator/provenance.h"
 
@@ -25,6 +26,7 @@ struct CalibrationSample {
   double bias_ma = 0.0;
   double d_mm = 0.0;
   double theta_deg = 0.0;
+  int pose = -1;  // index of its pose (bracket) for the fitness (fitness.h); -1 = none
 };
 
 struct FitOptions {
@@ -196,6 +198,7 @@ struct CalibrationModel {
   ThetaCorrection theta_correction;  // not fitted: theta from the blur-corrected ratio alone
   ModelProvenance provenance;        // filled by the app from the recording (estimator/provenance.h)
   BlurCalibration blur_calibration;  // blur_model.h; not fitted in model files before format 4
+  CalibrationFitness fitness;  // fitness.h: set by the app after the fit; optional in model.yaml
   const FittedModel* Find(ModelKind kind) const;  // nullptr if not fitted
   std::string BriefReport() const;
 };

@@ -13,6 +13,7 @@
 #include "base/safe_file.h"
 #include "estimator/defect_map_file.h"
 #include "estimator/model_file_bounds.h"
+#include "estimator/model_file_fitness.h"
 #include "estimator/model_file_reader.h"
 
 namespace irdist {
@@ -498,6 +499,7 @@ std::string ModelToYaml(const CalibrationModel& model) {
   EmitThetaCorrection(out, model.theta_correction);
   EmitBlurCalibration(out, model.blur_calibration);
   EmitProvenance(out, model.provenance);
+  model_file::EmitFitness(out, model.fitness);
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
@@ -507,7 +509,7 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   const YAML::Node root = ParseModelText(text, path);
   if (!root.IsMap()) rd.Fail(root, "", "the document is not a map");
   rd.Keys(root, "", {"format_version", "features", "scaling", "ranges", "models", "geometric",
-                     "theta_correction", "provenance", "blur_calibration"});
+                     "theta_correction", "provenance", "blur_calibration", "fitness"});
   const int version = rd.Scalar<int>(root, "", "format_version");
   if (version < kOldestModelFormatVersion || version > kModelFormatVersion) {
     rd.Fail(root["format_version"], "format_version",
@@ -524,6 +526,7 @@ CalibrationModel ModelFromYaml(const std::string& text, const std::string& path)
   model.theta_correction = ReadThetaCorrection(rd, root);
   model.provenance = ReadProvenance(rd, root);
   ReadBlurCalibration(rd, root, version, &model.blur_calibration);
+  model.fitness = model_file::ReadFitness(rd, root);
   for (const ModelBoundFailure& failure : CheckModelBounds(model)) {
     rd.Fail(Locate(root, failure.key), failure.key,
             failure.message + "; irdist fit never writes such a model: restore the file as fit "

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "base/bounds.h"
 
@@ -115,12 +116,41 @@ void CheckProvenance(Checker* c, const ModelProvenance& p, const FeatureOptions&
   }
 }
 
+void CheckFitness(Checker* c, const CalibrationFitness& f) {
+  if (!f.assessed) return;
+  const std::string k = "fitness.";
+  for (const auto& [name, value] : {std::pair{"reduced_chi2", f.reduced_chi2},
+                                    {"limit", f.limit}, {"pose_limit", f.pose_limit}}) {
+    c->Value(k + name, value, bounds::kChiSquare);
+  }
+  c->Value(k + "tail_probability", f.tail_probability, bounds::kTailProbability);
+  c->Value(k + "size_floor", f.size_floor, bounds::kShare);
+  c->Value(k + "difference_floor", f.difference_floor, bounds::kShare);
+  c->Value(k + "dof", f.dof, bounds::kCount);
+  c->Value(k + "poses", f.poses, bounds::kCount);
+  c->Value(k + "poses_over", f.poses_over, bounds::kFrameNumber);
+  if (f.poses_over > f.poses) c->Failure(k + "poses_over", "more poses over than poses");
+  for (size_t i = 0; i < f.worst.size(); ++i) {
+    const PoseFitness& p = f.worst[i];
+    const std::string w = k + "worst_poses[" + std::to_string(i) + "].";
+    c->Value(w + "slide_mm", p.pose.slide_mm, bounds::kSlideMm);
+    c->Value(w + "pan_deg", p.pose.pan_deg, bounds::kAngleDeg);
+    c->Value(w + "tilt_deg", p.pose.tilt_deg, bounds::kAngleDeg);
+    c->Value(w + "bias_ma", p.pose.bias_ma, bounds::kCurrentMa);
+    c->Value(w + "chi2", p.chi2, bounds::kChiSquare);
+    c->Value(w + "channels", p.channels, bounds::kCount);
+    c->Value(w + "scatter_ratio", p.scatter_ratio, bounds::kChiSquare);
+    c->Value(w + "residual_percent", p.worst_residual_percent, bounds::kResidualPercent);
+  }
+}
+
 }  // namespace
 
 std::vector<ModelBoundFailure> CheckModelBounds(const CalibrationModel& model) {
   Checker c;
   CheckBlur(&c, model.blur_calibration, model.ranges);
   CheckProvenance(&c, model.provenance, model.features);
+  CheckFitness(&c, model.fitness);
   return c.Take();
 }
 

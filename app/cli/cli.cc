@@ -291,6 +291,11 @@ void AddTimeScale(CLI::App* sub, double& time_scale) {
       ->check(TimeScaleRange());
 }
 
+// fit's and calibrate's --keep-model (app/processing/recording_fit.h FitnessError).
+constexpr const char* kKeepModelHelp =
+    "Write model.yaml even when the fit misses its own frames beyond their noise (its fitness, "
+    "docs/estimator.md); without it such a model goes to model.rejected.yaml and the exit is 1";
+
 void AddCalibrate(CommandTable& table) {
   CalibrateArgs& a = table.args().calibrate;
   CLI::App* sub = table.Add("calibrate", table.handlers().calibrate, a);
@@ -301,6 +306,7 @@ void AddCalibrate(CommandTable& table) {
   sub->add_flag("--quiet", a.quiet, "No progress output");
   sub->add_flag("--allow-nonlinear", a.allow_nonlinear,
                 "Go on when the first pose's linearity error is above 1% (docs/devices/README.md)");
+  sub->add_flag("--keep-model", a.keep_model, kKeepModelHelp);
 }
 
 void AddValidate(CommandTable& table) {
@@ -324,6 +330,7 @@ void AddFitAndPlayback(CommandTable& table) {
   sub->add_flag("--recover-response", f.recover_response,
                 "Recover the camera's response from the brackets and linearise every pixel");
   sub->add_flag("--force", f.force, "Replace an existing model.yaml, features.csv and report");
+  sub->add_flag("--keep-model", f.keep_model, kKeepModelHelp);
 
   PlaybackArgs& p = table.args().playback;
   sub = table.Add("playback", table.handlers().playback, p);

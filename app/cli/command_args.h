@@ -23,6 +23,7 @@ struct CalibrateArgs {
   double time_scale = 0.0;  // --time-scale: virtual rig's simulated s per host s (0 = rig file's)
   bool quiet = false;       // --quiet: no progress output
   bool allow_nonlinear = false;  // --allow-nonlinear: go on past a failed first-pose linearity
+  bool keep_model = false;  // --keep-model: model.yaml even when the fit fails its fitness
 };
 
 struct ValidateArgs {
@@ -40,6 +41,7 @@ struct FitArgs {
   std::string out;        // --out: model file to write ("" = RECORDING/../model.yaml)
   bool recover_response = false;  // --recover-response: the camera's inverse response first
   bool force = false;             // --force: replace an existing model.yaml, features.csv, report
+  bool keep_model = false;  // --keep-model: model.yaml even when the fit fails its fitness
 };
 
 struct PlaybackArgs {

@@ -30,13 +30,32 @@ void Normalise(double poly[4]) {
   }
 }
 
+// The sample's known range and theta: the slide and the pose's theta, or, where the emitter sits
+// off the pan and tilt axes' line (a virtual rig's emitter offset, a hardware rig's lever), the
+// true range from the camera and theta from the line of sight (position.h TrueGeometryOf), which
+// is what the frames turned onto the line of sight show.
+void SetKnownGeometry(const CameraGeometry& g, const FrameRecord& row, CalibrationSample* s) {
+  s->d_mm = row.slide_mm;
+  s->theta_deg = std::fabs(row.theta_deg);
+  const bool off_axis = g.emitter_offset_x_mm != 0.0 || g.emitter_offset_y_mm != 0.0 ||
+                        g.lever_mm[0] != 0.0 || g.lever_mm[1] != 0.0 || g.lever_mm[2] != 0.0;
+  if (!off_axis) return;
+  const TrueGeometry t = TrueGeometryOf(g, row.slide_mm, row.pan_deg, row.tilt_deg);
+  if (std::isfinite(t.d_mm) && std::isfinite(t.theta_deg)) {
+    s->d_mm = t.d_mm;
+    s->theta_deg = t.theta_deg;
+  }
+}
+
 }  // namespace
 
 std::vector<CalibrationSample> SamplesFromRecording(const RecordingReader& reader,
                                                     const FeatureMap& features) {
   std::vector<CalibrationSample> samples;
   const CameraGeometry geometry = GeometryOfRecording(reader);
-  for (const RecordedBracket& bracket : reader.Brackets()) {
+  const std::vector<RecordedBracket> brackets = reader.Brackets();
+  for (size_t pose = 0; pose < brackets.size(); ++pose) {
+    const RecordedBracket& bracket = brackets[pose];
     if (!bracket.complete) continue;
     // The models read the camera turned onto the line of sight, as the estimates do.
     const FeatureMap turned = BracketOnLineOfSight(bracket, features, geometry);
@@ -47,12 +66,33 @@ std::vector<CalibrationSample> SamplesFromRecording(const RecordingReader& reade
       s.t_ref_ms = pair.reference->requested_exposure_us / 1000.0;
       s.t_ms = pair.measurement->requested_exposure_us / 1000.0;
       s.bias_ma = pair.measurement->bias_ma_set;
-      s.d_mm = pair.measurement->slide_mm;
-      s.theta_deg = std::fabs(pair.measurement->theta_deg);
+      SetKnownGeometry(geometry, *pair.measurement, &s);
+      s.pose = static_cast<int>(pose);
       samples.push_back(s);
     }
   }
   return samples;
+}
+
+std::vector<FitnessPose> FitnessPosesOf(const RecordingReader& reader) {
+  std::vector<FitnessPose> poses;
+  for (const RecordedBracket& bracket : reader.Brackets()) {
+    FitnessPose pose;
+    if (!bracket.frames.empty()) {
+      const FrameRecord& row = bracket.frames.front();
+      pose = {row.slide_mm, row.pan_deg, row.tilt_deg, row.bias_ma_set};
+    }
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+std::string RejectedModelPath(const std::string& model_path) {
+  const std::string yaml = ".yaml";
+  const bool ends_yaml = model_path.size() >= yaml.size() &&
+                         model_path.compare(model_path.size() - yaml.size(), yaml.size(), yaml) == 0;
+  return (ends_yaml ? model_path.substr(0, model_path.size() - yaml.size()) : model_path) +
+         ".rejected.yaml";
 }
 
 std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
@@ -270,7 +310,9 @@ std::string WriteCalibrationReport(const RecordingReader& reader,
                                    const CalibrationModel& model, const std::string& model_path,
                                    const std::string& report_dir) {
   std::ostringstream text;
-  text << "Calibration from " << reader.dir() << "\n" << model.BriefReport() << "\n";
+  text << "Calibration from " << reader.dir() << "\n"
+       << model.BriefReport() << "\n"
+       << model.fitness.BriefReport() << "\n";
   return WriteReport(report_dir, "irdist calibration",
                      CalibrationReportFields(reader.dir(), model_path, model), text.str(),
                      CalibrationPlots(CalibrationPointsOf(model, samples), model));
@@ -322,10 +364,11 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
 // blob fit with the first pass's calibrated blur and split (what measurement computes), and the
 // models fitted again on those sizes, so the distance reads the size as measurement measures it
 // (any smooth difference between the moments and the fit calibrates out).
+// `*samples` become the refined ones (what the returned model was fitted on).
 CalibrationModel RefitOnBlobFitSizes(const RecordingReader& reader, const FeatureMap& features,
                                      const FeatureOptions& feature_options,
                                      const FitOptions& fit_options, const CalibrationModel& first,
-                                     std::ostream& out) {
+                                     std::vector<CalibrationSample>* samples, std::ostream& out) {
   FeatureMap refined = features;
   int replaced = 0;
   for (const FrameRecord& row : reader.rows()) {
@@ -336,7 +379,8 @@ CalibrationModel RefitOnBlobFitSizes(const RecordingReader& reader, const Featur
         SceneCleanedFrame(reader.LoadImage(row), bit_depth, feature_options), bit_depth, first,
         &f->second);
   }
-  CalibrationModel model = Fit(SamplesFromRecording(reader, refined), feature_options, fit_options);
+  *samples = SamplesFromRecording(reader, refined);
+  CalibrationModel model = Fit(*samples, feature_options, fit_options);
   model.blur_calibration = first.blur_calibration;  // measured on the frames, unchanged
   out << "  sizes from the blob fit on " << replaced << " frames; models fitted again on them\n";
   return model;
@@ -364,12 +408,31 @@ DefectMap RecordingDefectMap(const RecordingReader& reader, const SceneOptions& 
   return map;
 }
 
+// A failing fit's warning, and unless kept, FitnessError.
+void JudgeFitness(const RecordingReader& reader, const CalibrationFitness& fitness,
+                  const std::string& model_path, bool keep_model, std::ostream& out) {
+  if (fitness.passed) return;
+  const std::string warning =
+      "the model misses its own calibration frames beyond their noise (reduced chi-square " +
+      FeatureNumber(fitness.reduced_chi2) + " > " + FeatureNumber(fitness.limit) + ", or a pose " +
+      "beyond " + FeatureNumber(fitness.pose_limit) + "; worst: " +
+      (fitness.worst.empty() ? std::string("none") : PoseText(fitness.worst.front().pose)) +
+      "). Probable cause: " + fitness.cause;
+  if (keep_model) {
+    out << "warning: " << warning << ". Kept as asked (--keep-model): " << model_path << "\n";
+    return;
+  }
+  throw FitnessError(warning + ". The model is written to " + RejectedModelPath(model_path) +
+                     ", not to " + model_path + "; to keep it anyway: irdist fit " +
+                     reader.dir() + " --out " + model_path + " --keep-model --force");
+}
+
 }  // namespace
 
 CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
                               const FeatureOptions& feature_options, const std::string& model_path,
-                              const std::string& report_dir, std::ostream& out) {
-  const std::vector<CalibrationSample> samples = SamplesFromRecording(reader, features);
+                              const std::string& report_dir, std::ostream& out, bool keep_model) {
+  std::vector<CalibrationSample> samples = SamplesFromRecording(reader, features);
   const int usable = CountUsableSamples(reader, samples);
   out << "Fitting " << samples.size() << " differences (" << usable << " usable) from "
       << reader.dir() << "\n";
@@ -379,19 +442,26 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   CalibrationModel model = Fit(samples, feature_options, fit_options);
   if (feature_options.blob_fit && model.geometric.fitted() && model.blur_calibration.fitted()) {
     CalibrateCrosstalk(reader, features, &model, out);
-    model = RefitOnBlobFitSizes(reader, features, feature_options, fit_options, model, out);
+    const CalibrationModel first = model;
+    model = RefitOnBlobFitSizes(reader, features, feature_options, fit_options, first, &samples,
+                                out);
   }
   model.provenance = ProvenanceOfRecording(reader);
   if (feature_options.scene.enabled && feature_options.scene.detect_defects) {
     model.features.scene.defect_map =
         RecordingDefectMap(reader, model.features.scene, model.provenance, out);
   }
-  SaveModel(model, model_path);
-  PrintFitSummaries(model, model_path, out);
+  model.fitness = AssessFitness(model, samples, FitnessPosesOf(reader));
+  out << "  " << model.fitness.BriefReport() << "\n";
+  const bool rejected = !model.fitness.passed && !keep_model;
+  const std::string written_path = rejected ? RejectedModelPath(model_path) : model_path;
+  SaveModel(model, written_path);
+  PrintFitSummaries(model, written_path, out);
   if (!report_dir.empty()) {
-    out << "Report: " << WriteCalibrationReport(reader, samples, model, model_path, report_dir)
+    out << "Report: " << WriteCalibrationReport(reader, samples, model, written_path, report_dir)
         << "\n";
   }
+  JudgeFitness(reader, model.fitness, model_path, keep_model, out);
   return model;
 }
 

@@ -11,7 +11,9 @@
 #include "app/processing/frame_features.h"
 #include "app/reports/calibration_plots.h"
 #include "estimator/features.h"
+#include "base/check.h"
 #include "estimator/fit.h"
+#include "estimator/fitness.h"
 #include "estimator/response.h"
 
 namespace irdist {
@@ -25,11 +27,30 @@ class RecordingReader;
 std::vector<CalibrationSample> SamplesFromRecording(const RecordingReader& reader,
                                                     const FeatureMap& features);
 
-// Calibration: samples -> Fit (default options) -> SaveModel(model_path) -> report in report_dir
-// (measured vs modelled dE/dS, Eq. 25 curves). Prints each model's FitSummary to `out`.
+// A fit that failed its own fitness test (estimator/fitness.h) and was not kept: its model is
+// written beside (RejectedModelPath) and the message names the worst poses, the probable cause
+// and how to keep it. Exit code 1.
+class FitnessError : public Error {
+ public:
+  using Error::Error;
+};
+
+// Where a model that failed its fitness and was not kept is written: "model.yaml" ->
+// "model.rejected.yaml" (any other name: NAME.rejected.yaml).
+std::string RejectedModelPath(const std::string& model_path);
+
+// The pose of each bracket of the recording, in reader.Brackets() order (CalibrationSample::pose
+// indexes it).
+std::vector<FitnessPose> FitnessPosesOf(const RecordingReader& reader);
+
+// Calibration: samples -> Fit (default options) -> the fit's fitness -> SaveModel(model_path) ->
+// report in report_dir (measured vs modelled dE/dS, Eq. 25 curves). Prints each model's FitSummary
+// and the fitness to `out`. A fit that fails its fitness warns; unless keep_model, its model goes
+// to RejectedModelPath (report written too) and FitnessError is thrown.
 CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
                               const FeatureOptions& feature_options, const std::string& model_path,
-                              const std::string& report_dir, std::ostream& out);
+                              const std::string& report_dir, std::ostream& out,
+                              bool keep_model = false);
 
 // Whether a calibration of this recording recovers the camera response: its recipe's
 // `calibration: {camera_response: recover}` (read from the recording's copy of the recipe).

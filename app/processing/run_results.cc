@@ -79,7 +79,7 @@ void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& opti
 }
 
 void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
-                        const FeatureMap& cache, std::ostream& out) {
+                        const FeatureMap& cache, std::ostream& out, bool keep_model) {
   RequireCleanRecording(run_dir + "/recording");
   const RecordingReader reader(run_dir + "/recording");
   bool recovered = false;
@@ -88,7 +88,8 @@ void ProcessCalibration(const std::string& run_dir, const FeatureOptions& option
   const FeatureMap features =
       RecordingFeatures(reader, fit_options, recovered ? FeatureMap{} : cache);
   WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
-  FitRecording(reader, features, fit_options, run_dir + "/model.yaml", run_dir + "/report", out);
+  FitRecording(reader, features, fit_options, run_dir + "/model.yaml", run_dir + "/report", out,
+               keep_model);
 }
 
 void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,

@@ -37,8 +37,9 @@ void WriteResults(const std::string& then, const std::function<void()>& write);
 // cache, computed without it, is not used); the curve is stored in model.yaml.
 void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& options,
                           const FeatureMap& cache, std::ostream& out);  // features.csv only
+// keep_model: model.yaml even when the fit fails its fitness (recording_fit.h FitRecording).
 void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
-                        const FeatureMap& cache, std::ostream& out);
+                        const FeatureMap& cache, std::ostream& out, bool keep_model = false);
 void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,
                        const std::map<std::string, std::string>& context, const FeatureMap& cache,
                        std::ostream& out);

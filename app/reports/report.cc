@@ -202,6 +202,15 @@ ReportFields CalibrationReportFields(const std::string& recording_dir,
                                             FixedDigits(model.ranges.d_max_mm, 0) + " mm, " +
                                             FixedDigits(model.ranges.theta_min_deg, 0) + " - " +
                                             FixedDigits(model.ranges.theta_max_deg, 0) + " deg"});
+  const CalibrationFitness& f = model.fitness;
+  if (f.assessed) {
+    fields.push_back({"fitness", std::string(f.passed ? "passed" : "FAILED") +
+                                     ", reduced chi-square " + FixedDigits(f.reduced_chi2, 2) +
+                                     " (limit " + FixedDigits(f.limit, 2) + ", " +
+                                     std::to_string(f.dof) + " dof), " +
+                                     std::to_string(f.poses_over) + " of " +
+                                     std::to_string(f.poses) + " poses over"});
+  }
   return fields;
 }
 

@@ -80,13 +80,15 @@ void RunFit(const FitArgs& args, CommandIo io) {
   CreateRunFolder(out_dir);
   const std::string again = "irdist fit " + ShellQuoted(args.recording) +
                             (args.out.empty() ? "" : " --out " + ShellQuoted(args.out)) +
-                            (args.recover_response ? " --recover-response" : "") + " --force";
+                            (args.recover_response ? " --recover-response" : "") +
+                            (args.keep_model ? " --keep-model" : "") + " --force";
   WriteResults("complete the results with: " + again, [&] {
     const FeatureOptions options =
         FitFeatureOptions(reader, FeatureOptions{}, args.recover_response, io.out);
     const FeatureMap features = RecordingFeatures(reader, options);
     WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
-    FitRecording(reader, features, options, model_path, out_dir + "/report", io.out);
+    FitRecording(reader, features, options, model_path, out_dir + "/report", io.out,
+                 args.keep_model);
   });
 }
 

@@ -374,7 +374,8 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
     if (recipe.after == AfterRecording::kNone) {
       ProcessRecordingOnly(recorded.dir, feature_options, recorded.cache, io.out);
     } else if (request.kind == RunKind::kCalibrate) {
-      ProcessCalibration(recorded.dir, feature_options, recorded.cache, io.out);
+      ProcessCalibration(recorded.dir, feature_options, recorded.cache, io.out,
+                         request.keep_model);
     } else {
       ProcessValidation(recorded.dir, *model,
                         {{"recipe", recipe.path},
@@ -404,6 +405,7 @@ RunRequest RequestFrom(RunKind kind, const Args& args) {
 void RunCalibrate(const CalibrateArgs& args, CommandIo io) {
   RunRequest request = RequestFrom(RunKind::kCalibrate, args);
   request.allow_nonlinear = args.allow_nonlinear;
+  request.keep_model = args.keep_model;
   RunRecipe(request, io);
 }
 

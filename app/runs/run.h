@@ -40,6 +40,7 @@ struct RunRequest {
   bool quiet = false;
   bool allow_model_mismatch = false;  // validate
   bool allow_nonlinear = false;       // calibrate: --allow-nonlinear
+  bool keep_model = false;            // calibrate: --keep-model
   // validate on hardware: the model's camera serial, which AravisCamera::Open then requires
   // ("" = none: another camera is allowed, or the model does not say).
   std::string expected_serial;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <string>
 
 namespace irdist {
@@ -111,6 +112,32 @@ TEST(ModelFileBounds, AWindowLargerThanTheRoiIsRefused) {
   ASSERT_EQ(failures.size(), 1u) << Keys(failures);
   EXPECT_EQ(failures[0].key, "features.window_side_px");
   EXPECT_NE(failures[0].message.find("at most 256"), std::string::npos) << failures[0].message;
+}
+
+TEST(ModelFileBounds, FitnessOutsideIsRefused) {
+  CalibrationModel model = Fitted();
+  CalibrationFitness& f = model.fitness;
+  f.assessed = true;
+  f.poses = 10;
+  f.dof = 20;
+  f.reduced_chi2 = 1.0;
+  f.limit = 1.5;
+  f.pose_limit = 20.0;
+  f.tail_probability = 1e-3;
+  f.size_floor = 0.004;
+  f.difference_floor = 0.004;
+  f.worst.push_back({{2000.0, 10.0, 0.0, 500.0}, 3.0, 4, 1.0, "size", 0.2});
+  EXPECT_EQ(Keys(CheckModelBounds(model)), "");
+  f.tail_probability = 0.0;
+  f.size_floor = 2.0;
+  f.poses_over = 11;
+  f.worst[0].pose.pan_deg = 400.0;
+  f.worst[0].chi2 = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(Keys(CheckModelBounds(model)),
+            "fitness.tail_probability; fitness.size_floor; fitness.poses_over; "
+            "fitness.worst_poses[0].pan_deg; fitness.worst_poses[0].chi2; ");
+  f.assessed = false;  // not assessed: nothing of it is written or checked
+  EXPECT_EQ(Keys(CheckModelBounds(model)), "");
 }
 
 }  // namespace

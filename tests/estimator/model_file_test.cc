@@ -228,6 +228,79 @@ TEST(ModelFile, FitBlurOffsetRoundTripsAndIsChecked) {
   }
 }
 
+// A fitness figure (estimator/fitness.h) with two named poses, one failing.
+CalibrationFitness SomeFitness() {
+  CalibrationFitness f;
+  f.assessed = true;
+  f.passed = false;
+  f.poses = 64;
+  f.dof = 180;
+  f.reduced_chi2 = 7.0 / 3.0;
+  f.chi2 = f.reduced_chi2 * f.dof;
+  f.limit = 1.0 + 1.0 / 7.0;
+  f.pose_limit = 25.0 / 3.0;
+  f.tail_probability = 1e-3;
+  f.size_floor = 0.004;
+  f.difference_floor = 0.005;
+  f.poses_over = 17;
+  f.cause = "an optic outside the model's family: 17 of 64 poses miss";
+  f.worst.push_back({{3000.0, 35.0, -0.5, 475.0}, 90.0 / 7.0, 4, 1.0 / 3.0, "minor", -2.0 / 3.0});
+  f.worst.push_back({{1500.0, 0.0, 0.0, 500.0}, 11.0 / 3.0, 3, 2.5, "dE", 0.125});
+  return f;
+}
+
+// Issue 38 item 2: the fitness round-trips bit for bit; a model without it (every model before it)
+// still loads, not assessed.
+TEST(ModelFile, FitnessRoundTripsAndIsOptional) {
+  CalibrationModel model = WithBlur(0.9);
+  EXPECT_EQ(ModelToYaml(model).find("fitness"), std::string::npos);
+  EXPECT_FALSE(ModelFromYaml(ModelToYaml(model), "old.yaml").fitness.assessed);
+  model.fitness = SomeFitness();
+  const CalibrationModel back = ModelFromYaml(ModelToYaml(model), "fitness.yaml");
+  const CalibrationFitness& f = back.fitness;
+  ASSERT_TRUE(f.assessed);
+  EXPECT_FALSE(f.passed);
+  EXPECT_TRUE(BitEqual(f.reduced_chi2, 7.0 / 3.0));
+  EXPECT_TRUE(BitEqual(f.limit, 1.0 + 1.0 / 7.0));
+  EXPECT_TRUE(BitEqual(f.pose_limit, 25.0 / 3.0));
+  EXPECT_EQ(f.dof, 180);
+  EXPECT_EQ(f.poses, 64);
+  EXPECT_EQ(f.poses_over, 17);
+  EXPECT_EQ(f.difference_floor, 0.005);
+  EXPECT_EQ(f.cause, SomeFitness().cause);
+  ASSERT_EQ(f.worst.size(), 2u);
+  EXPECT_EQ(f.worst[0].pose.tilt_deg, -0.5);
+  EXPECT_TRUE(BitEqual(f.worst[0].chi2, 90.0 / 7.0));
+  EXPECT_TRUE(BitEqual(f.worst[0].worst_residual_percent, -2.0 / 3.0));
+  EXPECT_EQ(f.worst[1].worst_channel, "dE");
+  EXPECT_EQ(f.worst[1].channels, 3);
+  EXPECT_EQ(ModelToYaml(back), ModelToYaml(model));
+}
+
+// A fitness number outside its bound (base/bounds.h) is refused at its key and line.
+TEST(ModelFile, FitnessOutsideItsBoundsIsRefusedAtItsLine) {
+  CalibrationModel model = WithBlur(0.9);
+  model.fitness = SomeFitness();
+  std::string text = ModelToYaml(model);
+  const size_t at = text.find("reduced_chi2: ");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, text.find('\n', at) - at, "reduced_chi2: -1");
+  try {
+    ModelFromYaml(text, "bad.yaml");
+    FAIL() << "a negative chi-square was accepted";
+  } catch (const ModelFileError& e) {
+    EXPECT_EQ(e.key(), "fitness.reduced_chi2");
+    EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos) << e.what();
+  }
+  model.fitness.worst[1].pose.bias_ma = 1e6;
+  try {
+    SaveModel(model, TempPath("fitness_outside"));
+    ADD_FAILURE() << "written";
+  } catch (const ModelFileError& e) {
+    EXPECT_EQ(e.key(), "fitness.worst_poses[1].bias_ma");
+  }
+}
+
 // Issue 38 item 3: a defocused lens's fit (fit_offset_u_px2 -0.573 on a blur of about 1 px^2)
 // is written and read back (it was refused by every reader, outside [-0.5, 0.5]).
 TEST(ModelFile, ADefocusedLensModelIsWrittenAndRead) {

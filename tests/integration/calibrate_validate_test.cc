@@ -124,6 +124,24 @@ TEST_F(CalibrateValidate, CalibrationRecordsEveryBracketFitsAndReports) {
   EXPECT_EQ(testing::CountLines(run + "/features.csv"), 1 + 24 * 4);
 }
 
+// Issue 38 item 2: a good calibration on the virtual rig passes its own fitness, and the figure is
+// in model.yaml, the output and the report.
+TEST_F(CalibrateValidate, AGoodCalibrationPassesItsFitness) {
+  ASSERT_EQ(calibrate_code_, 0) << calibrate_output_[0];
+  const CalibrationModel model = LoadModel(*dir_ + "/cal/model.yaml");
+  const CalibrationFitness& f = model.fitness;
+  ASSERT_TRUE(f.assessed) << calibrate_output_[0];
+  EXPECT_TRUE(f.passed) << f.BriefReport();
+  EXPECT_EQ(f.poses, 24);
+  EXPECT_GT(f.dof, 24);
+  EXPECT_LE(f.reduced_chi2, f.limit);
+  EXPECT_FALSE(f.worst.empty());
+  EXPECT_NE(calibrate_output_[0].find("fitness: reduced chi-square"), std::string::npos)
+      << calibrate_output_[0];
+  EXPECT_NE(ReadAll(*dir_ + "/cal/report/index.html").find("fitness"), std::string::npos);
+  EXPECT_FALSE(fs::exists(*dir_ + "/cal/model.rejected.yaml"));
+}
+
 TEST_F(CalibrateValidate, ValidationWritesEstimatesSummaryAndReport) {
   ASSERT_EQ(calibrate_code_, 0) << calibrate_output_[0];
   ASSERT_EQ(validate_code_, 0) << validate_output_[0];
