@@ -26,8 +26,8 @@
 
 #include "acquisition/bracket.h"
 #include "acquisition/recording_writer.h"
-#include "app/cli/errors.h"
-#include "app/cli/stop_signal.h"
+#include "app/inputs/errors.h"
+#include "app/inputs/stop_signal.h"
 #include "app/inputs/provenance.h"
 #include "app/live/live_camera.h"
 #include "app/processing/bracket_estimates.h"

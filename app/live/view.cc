@@ -21,7 +21,7 @@
 #include <utility>
 
 #include "acquisition/bracket.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/display/show.h"
 #include "app/display/view_layout.h"
 #include "app/live/live_camera.h"

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <thread>
 
-#include "app/cli/stop_signal.h"
+#include "app/inputs/stop_signal.h"
 #include "app/devices/station_setup.h"
 #include "app/inputs/camera_settings.h"
 #include "app/inputs/provenance.h"

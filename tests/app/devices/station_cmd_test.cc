@@ -9,7 +9,7 @@
 #include <sstream>
 #include <thread>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "sim/device_emulator.h"
 #include "sim/station_emulator.h"
 #include "sim/world.h"

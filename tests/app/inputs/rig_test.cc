@@ -6,7 +6,7 @@
 #include <iterator>
 #include <string>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "sim/rig_physics.h"
 
 namespace irdist {

@@ -18,7 +18,7 @@
 #include <thread>
 
 #include "acquisition/camera.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/display/show.h"
 #include "app/display/view_layout.h"
 #include "tests/loopback_gvcp.h"
