@@ -19,6 +19,8 @@
 #include <mutex>
 #include <vector>
 
+#include "base/pi.h"
+
 namespace irdist::sim {
 
 class SimClock {
@@ -49,7 +51,7 @@ struct PoseState {
   bool moving = false;       // some axis is in motion (frames taken now are smeared/wrong)
   double bias_ma = 0.0;      // IRED current as set (0 = off)
   double ThetaDeg() const {
-    constexpr double kDeg = 3.14159265358979323846 / 180.0;
+    constexpr double kDeg = kPi / 180.0;
     const double c = std::cos(pan_deg * kDeg) * std::cos(tilt_deg * kDeg);
     return std::acos(std::fmin(1.0, std::fmax(-1.0, c))) / kDeg;
   }

@@ -9,6 +9,7 @@
 
 #include "acquisition/recording_reader.h"
 #include "app/processing/position.h"
+#include "base/pi.h"
 #include "base/utc_time.h"
 
 namespace irdist {
@@ -22,7 +23,6 @@ std::string FixedText(double value, int decimals) {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::string JsonNumber(double value) {
   if (!std::isfinite(value)) return "null";
