@@ -2,7 +2,7 @@
 // Reading an input file without ever blocking or following a link out of its place: a FIFO, a
 // device, a folder or a symbolic link is refused, and so is a file over a size limit. Every
 // reader of a recipe, rig file, model file or recording goes through here. Writing one whole or
-// not at all (temporary file, sync, rename): WriteRegularFile.
+// not at all: WriteFileAtomically (base/safe_file.h).
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -54,34 +54,5 @@ inline bool ReadRegularFile(const std::string& path, std::int64_t max_bytes, std
 
 // Text files irdist reads (recipes, rig files, model files, recording.yaml, frames.csv).
 constexpr std::int64_t kMaxInputTextBytes = std::int64_t{1} << 30;
-
-// Writes `bytes` to `path` whole or not at all: into path + ".tmp" (a stale one, even a symbolic
-// link, is removed, never followed), synced, then renamed over `path`. Returns false and says why
-// in `why` (the system's reason: "No space left on device") when any step fails; the temporary
-// file is then removed and `path` is as it was.
-inline bool WriteRegularFile(const std::string& path, const std::string& bytes, std::string* why) {
-  const std::string tmp = path + ".tmp";
-  ::unlink(tmp.c_str());  // absent is fine; whatever else fails shows in open() below
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    *why = std::string("cannot be created: ") + std::strerror(errno);
-    return false;
-  }
-  size_t done = 0;
-  int error = 0;  // the first failure's errno
-  while (error == 0 && done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) error = n < 0 ? errno : EIO;
-    if (n > 0) done += static_cast<size_t>(n);
-  }
-  if (error == 0 && ::fsync(fd) != 0) error = errno;
-  if (::close(fd) != 0 && error == 0) error = errno;
-  if (error == 0 && ::rename(tmp.c_str(), path.c_str()) != 0) error = errno;
-  if (error == 0) return true;
-  *why = std::string("cannot be written: ") + std::strerror(error);
-  ::unlink(tmp.c_str());
-  return false;
-}
 
 }  // namespace irdist

@@ -1,4 +1,6 @@
-# One small function per kind of target. Every target includes from the repository root.
+# One small function per kind of target. Every target includes from the repository root,
+# IRDIST_ROOT (this file's parent folder, also when fuzz/'s project builds the module libraries).
+get_filename_component(IRDIST_ROOT "${CMAKE_CURRENT_LIST_DIR}/.." ABSOLUTE)
 
 set(IRDIST_WARNINGS -Wall -Wextra -Wno-unused-parameter)
 
@@ -6,7 +8,7 @@ set(IRDIST_WARNINGS -Wall -Wextra -Wno-unused-parameter)
 function(irdist_library name)
   cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(${name} STATIC ${ARG_SOURCES})
-  target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR})
+  target_include_directories(${name} PUBLIC ${IRDIST_ROOT})
   target_compile_options(${name} PRIVATE ${IRDIST_WARNINGS})
   target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   # -fPIC: the Python module (python/) links these static libraries into a shared object.

@@ -10,12 +10,12 @@
 #include <boost/math/special_functions/bessel.hpp>
 #include <ceres/tiny_solver.h>
 
+#include "base/pi.h"
 #include "estimator/normal_table.h"
 
 namespace irdist {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // A pass stops when a step changes the chi^2 by less than this: a parameter then moves by about
 // 1% of its standard error (TinySolver's function tolerance is absolute, in |f|^2 units).
 constexpr double kChi2Tolerance = 1e-4;
@@ -26,7 +26,7 @@ constexpr double kChi2Tolerance = 1e-4;
 constexpr double kWeightsPassTolerance = 0.5;
 // The pixel's spread PixelMean folds into the blur: 5/64 px^2 per axis, the variance of a 4x4 grid
 // of sub-samples (offsets +-1/8, +-3/8), against the box's 1/12. The fit integrated each pixel on
-// that grid until the model went to one evaluation per pixel (for speed, issue 11); with this
+// that grid until the model went to one evaluation per pixel (for speed); with this
 // spread the two agree to 3e-4 of the size variance on a 5 px disc and 1e-4 from 15 px, and the
 // accuracy study's figures did not move. With 1/12, discs of 5-8 px came out 0.1% smaller: the
 // first-order edge model's own error, which grows with blur / radius, is partly offset by the
@@ -76,10 +76,10 @@ struct Pixel {
   double x, y, value;
 };
 
-// How a pixel responds to the blurred disc (issue 20): the optical blur's sd before the pixels
+// How a pixel responds to the blurred disc: the optical blur's sd before the pixels
 // sample the image, each pixel's square integrating it, then the inter-pixel crosstalk after the
 // sampling, a separable kernel on the pixel grid. A model that folds the pixel's square and the
-// crosstalk into one Gaussian before the sampling (the fit before issue 20) takes a sharp image's
+// crosstalk into one Gaussian before the sampling (the earlier fit) takes a sharp image's
 // sampled edge for a smooth one: the fitted size then swings with the edge's sub-pixel phase.
 // Integrated and spread in this order, the model's pixels are the camera's, whatever the mix.
 struct PixelResponse {

@@ -1,5 +1,5 @@
 #pragma once
-// A likelihood fit of the IRED's blob with the CALIBRATED blur (issue 12): the blob is a uniformly
+// A likelihood fit of the IRED's blob with the CALIBRATED blur: the blob is a uniformly
 // bright elliptical disc {p : (p - c)^T P (p - c) <= 1}, blurred by a Gaussian whose variance is
 // the calibration's blur b(u) at the frame's distance less the pixel area (1/12 px^2; the pixel's
 // own spread is folded into the edge's blur, one evaluation per pixel), on the frame's background.
@@ -106,7 +106,7 @@ struct CrosstalkFrame {
   double d_mm = 0.0;  // the frame's distance (the offset's slope in 1000 / d); 0: unknown
 };
 
-// The split of the calibrated blur (issue 20): the variance (px^2) of the part that comes after
+// The split of the calibrated blur: the variance (px^2) of the part that comes after
 // the pixels sample the image (inter-pixel crosstalk; the rest, less the pixel's area, is the
 // optics' before them), as the one that fits the frames best: the blob fit's first-pass
 // residuals summed over the frames, minimised by Brent's method (Boost). The edge's shape on the

@@ -6,11 +6,11 @@
 #include <limits>
 
 #include "base/check.h"
+#include "base/pi.h"
 
 namespace irdist {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 }  // namespace
 

@@ -5,11 +5,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "base/pi.h"
+
 namespace irdist {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 }  // namespace
 

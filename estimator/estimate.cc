@@ -14,13 +14,13 @@
 #include <utility>
 
 #include "base/check.h"
+#include "base/pi.h"
 #include "estimator/polynomial_roots.h"
 #include "estimator/theta_start.h"
 
 namespace irdist {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kRad = kPi / 180.0;
 
 // One measured difference of a bracket, in the models' scaled variables.

@@ -9,13 +9,13 @@
 #include <vector>
 
 #include "base/check.h"
+#include "base/pi.h"
 #include "estimator/disc_fit.h"
 #include "estimator/gray_histogram.h"
 
 namespace irdist {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // The moments' threshold is at least this many noise sd above the background: a noise pixel
 // passes 5 sd in 3e-7 of draws, once in about 800 windows of 64 x 64.
 constexpr double kMomentNoiseSigmas = 5.0;

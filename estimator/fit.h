@@ -55,7 +55,7 @@ struct FitOptions {
   // theta_correction_degree (1..3) in (squared axis ratio, geometric distance).
   bool fit_theta_correction = true;
   int theta_correction_degree = 2;
-  // The geometric model's blur: one variance for every distance (the model before issue 12), or
+  // The geometric model's blur: one variance for every distance (the older, simpler model), or
   // the thin lens's blur variance, a quadratic in 1/d (GeometricModel), fitted with the disc's
   // scale from both axes of every calibration frame (default).
   bool geometric_blur_varies_with_distance = true;

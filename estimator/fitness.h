@@ -1,5 +1,5 @@
 #pragma once
-// The fit judges itself (issue 38 item 2): the calibrated model's residuals on its own calibration
+// The fit judges itself: the calibrated model's residuals on its own calibration
 // frames against their noise. Per pose (one bracket: slide, pan, tilt, current), each feature the
 // model predicts is a channel: the blob's major and minor moment variances (GeometricModel: disc
 // plus calibrated blur), and the differences dE_rel and dSigma of the I0-free models. A channel's

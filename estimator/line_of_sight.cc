@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/pi.h"
 #include "estimator/blur_model.h"
 
 namespace irdist {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // The rotation that takes the unit vector `from` onto the optical axis (0, 0, 1) by the smallest
 // angle (Rodrigues about from x z).

@@ -1,6 +1,6 @@
 #pragma once
-// The blob as the camera would see it turned about its centre to look straight at the IRED
-// (issue 20). The calibration holds the IRED on the optical axis; off the axis, at field angle
+// The blob as the camera would see it turned about its centre to look straight at the IRED.
+// The calibration holds the IRED on the optical axis; off the axis, at field angle
 // alpha, a pinhole images the same small patch of directions stretched by 1/cos^2(alpha) along
 // the radial and 1/cos(alpha) across it (image area per solid angle f^2 / cos^3(alpha)), and its
 // aperture, seen obliquely, collects cos(alpha) of the flux (the image's irradiance falls as

@@ -9,13 +9,13 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "base/pi.h"
 #include "estimator/scene.h"
 #include "estimator/scene_internal.h"
 
 namespace irdist::scene {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kRayStepPx = 0.5;  // an edge spans 2 px and more: linear between samples
 
 double Bilinear(const cv::Mat& image, double x, double y) {

@@ -4,10 +4,12 @@
 #include <cmath>
 #include <limits>
 
+#include "base/pi.h"
+
 namespace irdist {
 namespace {
 
-constexpr double kRad = 3.14159265358979323846 / 180.0;
+constexpr double kRad = kPi / 180.0;
 
 // theta (deg) from moment variances with the calibrated blur removed, through the calibrated
 // correction when the model has one and the options ask for it; NaN when the blob is not larger

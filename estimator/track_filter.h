@@ -1,5 +1,5 @@
 #pragma once
-// A constant-velocity track of a moving IRED (issue 34): per-frame estimates (the distance, or the
+// A constant-velocity track of a moving IRED: per-frame estimates (the distance, or the
 // 3D position in mm) smoothed by a Kalman filter whose state is each axis's position and velocity,
 // driven by white acceleration noise of power spectral density q (mm^2/s^3, one per track: the
 // filter's process noise, a rig or command option). Between frames dt apart the state moves as

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/inputs/rig.h"
 #include "fuzz/in_bounds.h"
 

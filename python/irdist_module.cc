@@ -22,7 +22,7 @@
 #include "acquisition/recording_check.h"
 #include "acquisition/recording_reader.h"
 #include "acquisition/recording_writer.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/inputs/recipe.h"
 #include "app/live/measure.h"
 #include "app/processing/bracket_estimates.h"

@@ -111,7 +111,6 @@ std::vector<StripRange> VisibleRanges(const DiscConic& conic, const ImageCut& cu
 }
 
 void GaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weights) {
-  constexpr double kPi = 3.14159265358979323846;
   nodes->assign(n, 0.0);
   weights->assign(n, 0.0);
   for (int i = 0; i < (n + 1) / 2; ++i) {

@@ -11,6 +11,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "base/pi.h"
+
 namespace irdist::sim {
 
 // One horizontal strip of the disc's image: its y (px), weight (px), chord ends (px), radiance.
@@ -79,7 +81,6 @@ class PixelResponse {
   }
 
  private:
-  static constexpr double kPi = 3.14159265358979323846;
   double Psi(double z) const {  // integral of the PSF's step response: z Phi(z) + sigma phi(z)
     if (sigma_ <= 1e-9) return std::max(z, 0.0);
     const double t = z / sigma_;

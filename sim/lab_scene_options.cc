@@ -3,6 +3,8 @@
 #include <cmath>
 #include <string>
 
+#include "base/pi.h"
+
 namespace irdist::sim {
 namespace {
 
@@ -20,7 +22,6 @@ bool RangeIn(const std::array<double, 2>& range, double min, double max) {
   return In(range[0], min, max) && In(range[1], min, max) && range[0] <= range[1];
 }
 
-constexpr double kPi = 3.14159265358979323846;
 
 }  // namespace
 

@@ -6,12 +6,12 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "base/pi.h"
 #include "sim/disc_image.h"
 
 namespace irdist::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kPlanck = 6.62607015e-34;  // J s
 constexpr double kLightSpeed = 2.99792458e8;  // m/s

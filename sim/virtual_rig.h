@@ -36,7 +36,7 @@ struct VirtualRigOverrides {
 // What to connect to.
 struct VirtualRigInfo {
   std::string camera_id;       // Aravis device id, "Aravis-Fake-<serial>"
-  std::string camera_address;  // "127.0.0.1": open by address (loopback, see issue 4's facts)
+  std::string camera_address;  // "127.0.0.1": open by address (loopback, docs/virtual-rig.md)
   std::string serial;          // verify it after opening the camera
   std::string station_port;    // irdist station's pty slave path, e.g. /dev/pts/7 (rig files
                                // without station.devices:; else empty)

@@ -24,6 +24,7 @@
 #include "base/utc_time.h"
 #include "sim/trajectory.h"
 #include "sim/trajectory_file.h"
+#include "base/pi.h"
 
 namespace irdist::sim {
 

@@ -10,11 +10,11 @@
 #include <sstream>
 
 #include "base/check.h"
+#include "base/pi.h"
 
 namespace irdist {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kSameValue = 1e-9;  // two axis values closer than this are the same position
 
 double DegToRad(double deg) { return deg * kPi / 180.0; }

@@ -19,6 +19,7 @@
 #include "app/runs/run.h"
 #include "app/runs/run_suggest.h"
 #include "base/bounds.h"
+#include "base/version.h"
 #include "sim/rig_physics.h"
 #include "station/plan.h"
 #include "station/serial_transport.h"
@@ -535,7 +536,7 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
       "IRED's radiant intensity.",
       "irdist"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "irdist 0.1.0");
+  app.set_version_flag("--version", kSoftwareVersion);
   ParsedArgs args;
   CommandTable table(app, args, handlers, io);
   AddCalibrate(table);

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "app/cli/command_args.h"
-#include "app/cli/errors.h"
+#include "app/inputs/command_args.h"
+#include "app/inputs/errors.h"
 
 namespace irdist {
 

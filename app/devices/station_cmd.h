@@ -2,8 +2,8 @@
 // `irdist station` (put the station at a pose and current by hand, with the same Station code as
 // the sweep) and `irdist station-test` (the conformance suite of docs/station-protocol.md).
 
-#include "app/cli/command_args.h"
-#include "app/cli/errors.h"
+#include "app/inputs/command_args.h"
+#include "app/inputs/errors.h"
 
 namespace irdist {
 

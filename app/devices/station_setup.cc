@@ -1,6 +1,6 @@
 #include "app/devices/station_setup.h"
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 
 namespace irdist {
 namespace {

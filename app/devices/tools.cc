@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "acquisition/aravis_camera.h"
-#include "app/cli/stop_signal.h"
+#include "app/inputs/stop_signal.h"
 #include "app/inputs/recipe.h"
 #include "app/inputs/rig.h"
 #include "sim/virtual_rig.h"

@@ -6,8 +6,8 @@
 #include <optional>
 #include <string>
 
-#include "app/cli/command_args.h"
-#include "app/cli/errors.h"
+#include "app/inputs/command_args.h"
+#include "app/inputs/errors.h"
 #include "app/inputs/state_file.h"
 
 namespace irdist {

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "acquisition/recording_reader.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 
 namespace irdist {
 namespace {

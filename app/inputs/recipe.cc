@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "base/bounds.h"
+#include "base/pi.h"
 #include "base/yaml_fields.h"
 
 #ifndef IRDIST_SOURCE_DIR
@@ -26,7 +27,6 @@ using yaml_fields::MapReader;
 constexpr int kMaxAxisValues = 100000;
 // Brackets of one plan: 1e6 is 11 days at 1 s a bracket, and a plan of ~100 MB.
 constexpr double kMaxPlanBrackets = 1e6;
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kMaxPlanDurationS = 1e8;  // three years
 
 std::string Number(double value) {

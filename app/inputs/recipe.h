@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/inputs/rig.h"
 #include "station/plan.h"
 

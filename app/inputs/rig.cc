@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "base/bounds.h"
 #include "base/yaml_fields.h"
 #include "station/serial_transport.h"

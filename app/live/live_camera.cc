@@ -9,7 +9,7 @@
 #include <ostream>
 
 #include "acquisition/aravis_camera.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/inputs/camera_settings.h"
 #include "app/devices/tools.h"
 #include "app/inputs/recipe.h"

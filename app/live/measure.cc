@@ -26,8 +26,8 @@
 
 #include "acquisition/bracket.h"
 #include "acquisition/recording_writer.h"
-#include "app/cli/errors.h"
-#include "app/cli/stop_signal.h"
+#include "app/inputs/errors.h"
+#include "app/inputs/stop_signal.h"
 #include "app/inputs/provenance.h"
 #include "app/live/live_camera.h"
 #include "app/processing/bracket_estimates.h"
@@ -35,7 +35,9 @@
 #include "app/processing/position.h"
 #include "app/processing/run_results.h"
 #include "app/runs/resume.h"
+#include "base/pi.h"
 #include "base/utc_time.h"
+#include "base/version.h"
 #include "base/yaml_fields.h"
 #include "estimator/model_file.h"
 
@@ -45,7 +47,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr const char* kSoftwareVersion = "irdist 0.1.0";
 // Free space a recording leaves on its disk by default (or 5% of the disk when that is less).
 constexpr double kFreeMarginBytes = 1024.0 * 1024.0 * 1024.0;
 
@@ -79,7 +80,7 @@ struct Truth {
 Truth TruthOf(const std::vector<double>& at) {
   Truth t;
   if (at.size() != 4) return t;
-  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  constexpr double kDeg = kPi / 180.0;
   t.slide_mm = at[0];
   t.pan_deg = at[1];
   t.tilt_deg = at[2];

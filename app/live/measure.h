@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "app/cli/command_args.h"
+#include "app/inputs/command_args.h"
 #include "app/live/measure_output.h"
 #include "app/processing/bracket_estimates.h"
 #include "app/reports/summary.h"

@@ -9,6 +9,7 @@
 
 #include "acquisition/recording_reader.h"
 #include "app/processing/position.h"
+#include "base/pi.h"
 #include "base/utc_time.h"
 
 namespace irdist {
@@ -28,8 +29,6 @@ std::string JsonNumber(double value) {
 }
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 const char* JsonBool(bool value) { return value ? "true" : "false"; }
 

@@ -9,8 +9,8 @@
 #include <ostream>
 
 #include "acquisition/camera.h"
-#include "app/cli/errors.h"
-#include "app/cli/stop_signal.h"
+#include "app/inputs/errors.h"
+#include "app/inputs/stop_signal.h"
 #include "app/live/live_camera.h"
 #include "app/live/measure.h"
 #include "app/live/track_estimate.h"

@@ -11,7 +11,7 @@
 #include <memory>
 #include <string>
 
-#include "app/cli/command_args.h"
+#include "app/inputs/command_args.h"
 #include "app/live/track_output.h"
 #include "estimator/fit.h"
 

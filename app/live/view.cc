@@ -21,7 +21,7 @@
 #include <utility>
 
 #include "acquisition/bracket.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/display/show.h"
 #include "app/display/view_layout.h"
 #include "app/live/live_camera.h"
@@ -56,7 +56,7 @@ void CheckPngOutput(const std::string& path, bool force, const char* flag) {
     throw RunFolderError(path + " exists: irdist does not replace a file unasked. Choose another " +
                          std::string(flag) + " name, or add --force to replace it.");
   }
-  // The folder is checked now, before the camera starts or the station moves (issue 33).
+  // The folder is checked now, before the camera starts or the station moves.
   const fs::path parent = fs::path(path).has_parent_path() ? fs::path(path).parent_path() : ".";
   if (!fs::is_directory(parent, ec)) {
     throw RunFolderError(std::string(flag) + " " + path + ": the folder " + parent.string() +

@@ -3,7 +3,7 @@
 // roi_px) and `irdist view` (a live window: image, blob window, ellipse, signal and saturation,
 // the live estimate with --model; keys on screen). Both work on a virtual rig (started here).
 
-#include "app/cli/command_args.h"
+#include "app/inputs/command_args.h"
 
 namespace irdist {
 

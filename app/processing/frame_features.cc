@@ -7,7 +7,7 @@
 
 #include "acquisition/pixel_format.h"
 #include "acquisition/recording_reader.h"
-#include "base/regular_file.h"
+#include "base/safe_file.h"
 #include "estimator/blob_fit.h"
 
 namespace irdist {
@@ -129,7 +129,7 @@ void WriteFeaturesCsv(const std::string& path, const std::vector<FrameRecord>& r
   }
   // Whole or not at all: a features.csv cut by a full disk would read as a finished result.
   std::string why;
-  if (!WriteRegularFile(path, out.str(), &why)) {
+  if (!WriteFileAtomically(path, out.str(), 0644, &why)) {
     throw RecordingError(path + ": " + why + "; free space or check the folder is writable.");
   }
 }

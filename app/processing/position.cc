@@ -13,6 +13,7 @@
 
 #include "acquisition/recording_reader.h"
 #include "app/reports/summary.h"
+#include "base/pi.h"
 #include "estimator/line_of_sight.h"
 #include "base/check.h"
 #include "base/yaml_fields.h"
@@ -158,7 +159,7 @@ TrueGeometry TrueGeometryOf(const CameraGeometry& g, double slide_mm, double pan
                             double tilt_deg) {
   TrueGeometry t;
   if (!std::isfinite(slide_mm) || !std::isfinite(pan_deg) || !std::isfinite(tilt_deg)) return t;
-  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  constexpr double kDeg = kPi / 180.0;
   const cv::Matx33d tilt_about_x(1, 0, 0, 0, std::cos(tilt_deg * kDeg), -std::sin(tilt_deg * kDeg),
                                  0, std::sin(tilt_deg * kDeg), std::cos(tilt_deg * kDeg));
   const double p = -pan_deg * kDeg;

@@ -5,7 +5,7 @@
 
 #include "acquisition/recording_check.h"
 #include "acquisition/recording_reader.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/processing/bracket_estimates.h"
 #include "app/processing/recording_fit.h"
 #include "app/reports/crb.h"

@@ -10,13 +10,13 @@
 #include "acquisition/recording_reader.h"
 #include "app/inputs/rig.h"
 #include "base/check.h"
+#include "base/pi.h"
 #include "sim/scene.h"
 #include "sim/sensor.h"
 
 namespace irdist {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kCanvasMarginPx = 6;  // beyond the unperturbed blob's window: room for the steps
 
 // d_mm moves the emitter along its line of sight from where it is at d0_mm (the rig's lateral

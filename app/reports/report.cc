@@ -14,11 +14,8 @@
 #include "acquisition/recording_reader.h"
 #include "app/reports/calibration_plots.h"
 #include "base/process.h"
-#include "base/regular_file.h"
-
-#ifndef IRDIST_VERSION
-#define IRDIST_VERSION "unknown"
-#endif
+#include "base/safe_file.h"
+#include "base/version.h"
 
 namespace irdist {
 namespace {
@@ -57,7 +54,7 @@ std::string WriteFix(const fs::path& path) {
 // Whole or not at all (temporary file, sync, rename): a full disk never leaves a cut file.
 void WriteFile(const fs::path& path, const std::string& text) {
   std::string why;
-  if (!WriteRegularFile(path.string(), text, &why)) {
+  if (!WriteFileAtomically(path.string(), text, 0644, &why)) {
     throw ReportError(path.string() + ": " + why + WriteFix(path));
   }
 }
@@ -295,7 +292,7 @@ std::string WriteReport(const std::string& dir, const std::string& title,
   if (ec) throw ReportError(dir + ": cannot create the report folder: " + ec.message());
   const bool have_gnuplot = !FindProgram("gnuplot").empty();
   ReportFields header = fields;
-  header.push_back({"report written", NowUtc() + " by irdist " IRDIST_VERSION});
+  header.push_back({"report written", NowUtc() + " by " + std::string(kSoftwareVersion)});
   std::ostringstream html;
   html << "<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>" << HtmlEscape(title)
        << "</title>\n<style>body{font-family:sans-serif;max-width:980px;margin:2em auto;}"

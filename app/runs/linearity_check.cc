@@ -5,6 +5,7 @@
 
 #include "acquisition/aravis_camera.h"
 #include "base/regular_file.h"
+#include "base/safe_file.h"
 
 namespace irdist {
 
@@ -46,7 +47,7 @@ LinearityResult CheckFirstPoseLinearity(AravisCamera& camera, const std::functio
       std::min(max_us, 20.0 * options.probe_exposure_us), options.bit_depth, LinearityOptions{});
   const std::string path = options.recording_dir + "/linearity.yaml";
   std::string why;
-  if (!WriteRegularFile(path, LinearityYaml(result), &why)) {
+  if (!WriteFileAtomically(path, LinearityYaml(result), 0644, &why)) {
     throw CameraError("could not write " + path + ": " + why +
                       ". Free space or fix the folder's "
                       "permissions, then resume the run.");

@@ -4,8 +4,8 @@
 // `irdist check` (a recording's or an estimates.csv's integrity). The processing itself is the
 // live runs' own (app/processing/), so the same recording gives byte-identical files.
 
-#include "app/cli/command_args.h"
-#include "app/cli/errors.h"
+#include "app/inputs/command_args.h"
+#include "app/inputs/errors.h"
 
 namespace irdist {
 

@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "acquisition/recording_reader.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/inputs/recipe.h"
 #include "app/processing/run_results.h"
 

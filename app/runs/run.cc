@@ -11,7 +11,7 @@
 #include <sstream>
 #include <thread>
 
-#include "app/cli/stop_signal.h"
+#include "app/inputs/stop_signal.h"
 #include "app/devices/station_setup.h"
 #include "app/inputs/camera_settings.h"
 #include "app/inputs/provenance.h"
@@ -25,6 +25,7 @@
 #include "app/runs/resume.h"
 #include "app/runs/run_folder.h"
 #include "app/runs/run_progress.h"
+#include "base/version.h"
 #include "base/yaml_fields.h"
 #include "estimator/model_file.h"
 #include "sim/virtual_rig.h"
@@ -35,8 +36,6 @@
 namespace irdist {
 
 namespace {
-
-constexpr const char* kSoftwareVersion = "irdist 0.1.0";
 
 // A recipe's or rig file's text, through the one reader that refuses FIFOs and devices.
 std::string ReadText(const std::string& path) { return yaml_fields::ReadFile(path); }

@@ -16,8 +16,8 @@
 #include <memory>
 #include <string>
 
-#include "app/cli/command_args.h"
-#include "app/cli/errors.h"
+#include "app/inputs/command_args.h"
+#include "app/inputs/errors.h"
 #include "app/processing/frame_features.h"
 #include "app/runs/run_folder.h"
 

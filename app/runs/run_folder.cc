@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <system_error>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/inputs/recipe.h"
 #include "base/yaml_fields.h"
 #include "station/plan.h"

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "acquisition/recording_reader.h"
-#include "app/cli/stop_signal.h"
+#include "app/inputs/stop_signal.h"
 #include "app/inputs/recipe.h"
 #include "app/processing/frame_features.h"
 #include "app/reports/summary.h"

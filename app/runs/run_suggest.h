@@ -5,8 +5,8 @@
 
 #include <string>
 
-#include "app/cli/command_args.h"
-#include "app/cli/errors.h"
+#include "app/inputs/command_args.h"
+#include "app/inputs/errors.h"
 
 namespace irdist {
 

@@ -8,7 +8,7 @@
 // issue-6 figures. Usage:
 //   irdist_accuracy_study [--rig recipes/rigs/virtual.yaml] [--seed N] [--quick] [--crb-only]
 //                         [--nonlinearity A]
-// Rigs with a blur after the pixels (issue 20): --rig recipes/rigs/virtual-crosstalk.yaml (0.6 px
+// Rigs with a blur after the pixels: --rig recipes/rigs/virtual-crosstalk.yaml (0.6 px
 // of inter-pixel crosstalk) and virtual-sharp.yaml (0.3 px optics, 0.8 px crosstalk); the bound
 // below includes the crosstalk (app/reports/crb.cc diffuses the charge as the sensor does).
 // It also prints the Cramer-Rao bound on d and theta at 2.7 m (app/reports/crb.h, the code behind
@@ -554,7 +554,7 @@ int Main(int argc, char** argv) {
           "   (MomentMethod::kThreshold); --theta-probe prints theta0's bias per pose and method;\n"
           "   --blur-change X (repeatable) validates again with the blur changed by X (0.15 = 15%%)\n"
           "   after calibration and prints the health flags; --only-default keeps the default\n"
-          "   and fixed_blur (the geometric model with one blur, the model before issue 12))\n");
+          "   and fixed_blur (the geometric model with one blur for every distance))\n");
       return 0;
     } else if (!std::strcmp(argv[i], "--verbose"))
       verbose = true;
@@ -687,7 +687,7 @@ int Main(int argc, char** argv) {
     pipelines.push_back(pl);
   }
   {
-    // Today's default before issue 12: the geometric model with one blur for every distance.
+    // The earlier default: the geometric model with one blur for every distance.
     Pipeline pl;
     pl.name = "fixed_blur";
     pl.fit.geometric_blur_varies_with_distance = false;

@@ -82,7 +82,7 @@ BENCHMARK(BM_RoiComputeFeatures)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 // The estimation default's per-frame cost on a live ROI (256 x 256, the default 64 px window),
 // as app/processing/frame_features.cc runs it: the scene pass, the moments, then FitBlob with the
 // frame's blur (the rendering's 0.7 px optics, pixel area added); a clean frame (Arg 0) and a
-// cluttered one (Arg 1). The figure tracking needs (issue 34: <= 1.5 ms a frame).
+// cluttered one (Arg 1). The figure tracking needs (<= 1.5 ms a frame).
 void BM_RoiFrameWithBlobFit(benchmark::State& state) {
   const cv::Mat frame = RoiFrame(state.range(0) != 0);
   const FeatureOptions options;

@@ -3,9 +3,11 @@
 #include "base/safe_file.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -63,6 +65,36 @@ TEST_F(SafeFileTest, AtomicWriteRemovesAPlantedTemporaryLinkAndNeverFollowsIt) {
   EXPECT_EQ(Read(target), "new: 1\n");
   EXPECT_FALSE(fs::is_symlink(target));
   EXPECT_FALSE(fs::exists(fs::symlink_status(dir_ / "model.yaml.tmp")));
+}
+
+TEST_F(SafeFileTest, AtomicWriteReplacesAFileWhole) {
+  const std::string path = (dir_ / "features.csv").string();
+  std::string why;
+  ASSERT_TRUE(WriteFileAtomically(path, "first\n", 0644, &why)) << why;
+  ASSERT_TRUE(WriteFileAtomically(path, "second\n", 0644, &why)) << why;
+  EXPECT_EQ(Read(path), "second\n");
+  EXPECT_FALSE(fs::exists(path + ".tmp"));
+}
+
+// A write that fails half way (a full disk, simulated by a file size limit) leaves the old file
+// as it was, no temporary file, and says the system's reason.
+TEST_F(SafeFileTest, AtomicWriteCutByAFullDiskLeavesTheOldFileAndSaysWhy) {
+  const std::string path = (dir_ / "index.html").string();
+  std::string why;
+  ASSERT_TRUE(WriteFileAtomically(path, "old", 0644, &why)) << why;
+  rlimit saved{};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &saved), 0);
+  auto* old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  rlimit limit = saved;
+  limit.rlim_cur = 1000;
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &limit), 0);
+  const bool ok = WriteFileAtomically(path, std::string(5000, 'x'), 0644, &why);
+  ::setrlimit(RLIMIT_FSIZE, &saved);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_FALSE(ok);
+  EXPECT_NE(why.find("cannot be written: File too large"), std::string::npos) << why;
+  EXPECT_EQ(Read(path), "old");
+  EXPECT_FALSE(fs::exists(path + ".tmp"));
 }
 
 TEST_F(SafeFileTest, AtomicWriteRefusesATargetThatIsALink) {

@@ -285,7 +285,7 @@ TEST_F(AccuracyTest, DefaultPipelineMeetsTheGoalsAtOffGridPoses) {
   const FeatureOptions fo;
   const CalibrationModel model = Calibrate(fo, FitOptions());
   const EstimateOptions eo;
-  // The goals of issue 6, with no margin: measured 0.12%, 0.23 deg, 0.11% on this grid.
+  // The accuracy goals, with no margin: measured 0.12%, 0.23 deg, 0.11% on this grid.
   const double kMaxRelError = 0.010;
   const double kMaxThetaErrorDeg = 1.0;
   const double kMaxCurrentShift = 0.003;

@@ -194,14 +194,14 @@ TEST(BlobFit, TheModelsDerivativesAreItsFiniteDifferences) {
 }
 
 
-// The blob fit's size over the edge's sub-pixel phase (issue 20), noise free, on the independent
+// The blob fit's size over the edge's sub-pixel phase, noise free, on the independent
 // renderer of tests/estimator/disc_spectrum.h (exact in the Fourier domain: the disc, the optical
 // Gaussian before the pixels, their squares, the crosstalk after them): the disc's radius swept
 // over 5..6 px in 0.05 px steps (the virtual rig's far end) and over 10..11 px, the fit given the
 // blur and its split (the crosstalk's variance on the grid and its kernel: a sampled Gaussian, or a
 // lattice random walk). For every mix of optics (0.3-1.0 px) and crosstalk (0-1.0 px) the
 // relative distance error stays within 0.05% peak to peak (the fit
-// before issue 20, one Gaussian before the sampling, missed by 0.06-0.33%).
+// the earlier fit, one Gaussian before the sampling, missed by 0.06-0.33%).
 struct BlurMix {
   double optics_px, crosstalk_px;
   bool lattice = false;  // the crosstalk a lattice random walk, not a sampled Gaussian

@@ -1,5 +1,5 @@
 #pragma once
-// An independent, noise-free renderer of a blob for the edge-phase tests (issue 20): a uniformly
+// An independent, noise-free renderer of a blob for the edge-phase tests: a uniformly
 // bright elliptical disc, blurred by an optical Gaussian BEFORE the pixels sample it, integrated
 // over each pixel's square, then spread by inter-pixel crosstalk (a discrete Gaussian) AFTER the
 // sampling. Computed in the Fourier domain, exactly: the disc's transform is closed form

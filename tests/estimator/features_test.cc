@@ -447,7 +447,7 @@ TEST(Features, AllPixelsScopeLinearisesEveryFeature) {
 
 // The size the geometric distance reads (the aperture moments' variance less the blur) must not
 // depend on where the disc's edge falls inside a pixel, whatever the mix of blur before the pixels
-// sample the image (optics) and after (crosstalk) (issue 20). Noise free, on an independent
+// sample the image (optics) and after (crosstalk). Noise free, on an independent
 // renderer (tests/estimator/disc_spectrum.h: the disc's exact spectrum, the optics' Gaussian, the
 // pixel's square, the sampling's aliases, then a sampled Gaussian's crosstalk); the disc's radius
 // swept over 5..6 px (the virtual rig's far end) in 0.05 px steps, centred on a pixel corner and

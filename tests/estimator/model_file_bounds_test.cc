@@ -38,7 +38,7 @@ std::string Keys(const std::vector<ModelBoundFailure>& failures) {
 
 TEST(ModelFileBounds, AFittedModelIsInside) { EXPECT_EQ(Keys(CheckModelBounds(Fitted())), ""); }
 
-// Issue 38: a defocused lens fits fit_offset_u_px2 -0.573 over a blur of about 1 px^2: the blob
+// Regression: a defocused lens fits fit_offset_u_px2 -0.573 over a blur of about 1 px^2: the blob
 // fit's blur stays a positive variance, so it is inside (it was refused outside [-0.5, 0.5]).
 TEST(ModelFileBounds, ADefocusedLensOffsetIsInside) {
   CalibrationModel model = Fitted();
@@ -60,7 +60,7 @@ TEST(ModelFileBounds, AnOffsetThatMakesTheBlurNegativeIsRefused) {
   EXPECT_NE(failures[0].message.find("(0, 16] px^2"), std::string::npos) << failures[0].message;
 }
 
-// Issue 33 item 2: blur_var_px2 [-5, 0, 0] or [1e300, 0, 0] were loaded and used.
+// Regression: blur_var_px2 [-5, 0, 0] or [1e300, 0, 0] were loaded and used.
 TEST(ModelFileBounds, ABlurThatIsNoVarianceIsRefused) {
   for (double c0 : {-5.0, 1e300, 16.5}) {
     SCOPED_TRACE(c0);
@@ -80,7 +80,7 @@ TEST(ModelFileBounds, NoiseAndShareOutsideAreRefused) {
             "blur_calibration.noise_exponent; blur_calibration.crosstalk_lattice_share; ");
 }
 
-// Issue 33 item 2: t_ref_ms 1e300 and t_meas_ms [-30, 0] passed in a provenance.
+// Regression: t_ref_ms 1e300 and t_meas_ms [-30, 0] passed in a provenance.
 TEST(ModelFileBounds, ProvenanceExposuresOutsideAreRefused) {
   CalibrationModel model = Fitted();
   model.provenance.t_ref_ms = 1e300;
@@ -104,7 +104,7 @@ TEST(ModelFileBounds, APixelFormatThatContradictsTheBitDepthIsRefused) {
   EXPECT_EQ(Keys(CheckModelBounds(model)), "");
 }
 
-// Issue 33 item 7: features.window_side_px 512 on a 256 px ROI was an internal check failure.
+// Regression: features.window_side_px 512 on a 256 px ROI was an internal check failure.
 TEST(ModelFileBounds, AWindowLargerThanTheRoiIsRefused) {
   CalibrationModel model = Fitted();
   model.features.window_side_px = 512;

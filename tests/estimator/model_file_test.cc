@@ -175,7 +175,7 @@ TEST(ModelFile, BlurTermsRoundTripAndNeedFormatFour) {
   }
 }
 
-// Issue 20: the blur's split (the crosstalk's variance and kernel shape) round trips; absent, the
+// The blur's split (the crosstalk's variance and kernel shape) round trips; absent, the
 // whole blur is the optics'; out of range, refused at its line.
 TEST(ModelFile, CrosstalkSplitRoundTripsAndIsChecked) {
   CalibrationModel model = WithBlur(0.9);
@@ -201,7 +201,7 @@ TEST(ModelFile, CrosstalkSplitRoundTripsAndIsChecked) {
   }
 }
 
-// The blob fit's blur offset (issue 20) round trips; absent, zero; out of range, refused at its
+// The blob fit's blur offset round trips; absent, zero; out of range, refused at its
 // line with the range.
 TEST(ModelFile, FitBlurOffsetRoundTripsAndIsChecked) {
   CalibrationModel model = WithBlur(0.9);
@@ -249,7 +249,7 @@ CalibrationFitness SomeFitness() {
   return f;
 }
 
-// Issue 38 item 2: the fitness round-trips bit for bit; a model without it (every model before it)
+// The fitness round-trips bit for bit; a model without it (every model before it)
 // still loads, not assessed.
 TEST(ModelFile, FitnessRoundTripsAndIsOptional) {
   CalibrationModel model = WithBlur(0.9);
@@ -301,7 +301,7 @@ TEST(ModelFile, FitnessOutsideItsBoundsIsRefusedAtItsLine) {
   }
 }
 
-// Issue 38 item 3: a defocused lens's fit (fit_offset_u_px2 -0.573 on a blur of about 1 px^2)
+// Regression: a defocused lens's fit (fit_offset_u_px2 -0.573 on a blur of about 1 px^2)
 // is written and read back (it was refused by every reader, outside [-0.5, 0.5]).
 TEST(ModelFile, ADefocusedLensModelIsWrittenAndRead) {
   CalibrationModel model = WithBlur(1.2);
@@ -313,7 +313,7 @@ TEST(ModelFile, ADefocusedLensModelIsWrittenAndRead) {
   EXPECT_EQ(back.blur_calibration.fit_offset_u_px2, -0.573);
 }
 
-// Issue 38 item 3: a fit that lands outside the bounds is refused by the writer naming the
+// Regression: a fit that lands outside the bounds is refused by the writer naming the
 // parameter and why; no file is left for the next command to reject.
 TEST(ModelFile, AFitOutsideTheBoundsIsNotWritten) {
   CalibrationModel model = WithBlur(0.2);
@@ -332,7 +332,7 @@ TEST(ModelFile, AFitOutsideTheBoundsIsNotWritten) {
   EXPECT_NE(stat(path.c_str(), &st), 0) << "a file was left at " << path;
 }
 
-// Issue 38 item 3, as a property: whatever a fit lands on (blurs, offsets, noise, exposures and
+// As a property: whatever a fit lands on (blurs, offsets, noise, exposures and
 // windows drawn over and beyond their bounds), SaveModel either writes a file that LoadModel (the
 // reader of playback, measure and Python) accepts, identical when written again, or refuses with
 // the parameter named and leaves no file.
@@ -383,7 +383,7 @@ TEST(ModelFile, EveryModelTheWriterWritesTheReaderAccepts) {
   EXPECT_GT(refused, 20);
 }
 
-// Issue 33 item 2: blur_var_px2 [-5, 0, 0] and [1e300, 0, 0] were loaded and used; refused at the
+// Regression: blur_var_px2 [-5, 0, 0] and [1e300, 0, 0] were loaded and used; refused at the
 // key's line now.
 TEST(ModelFile, ABlurThatIsNoVarianceIsRefusedAtItsLine) {
   CalibrationModel model = WithBlur(0.9);
@@ -636,7 +636,7 @@ TEST(ModelFileSafety, MisspeltKeyIsAnErrorNotADefault) {
   }
 }
 
-// Issue 33 item 2: t_ref_ms 1e300 and t_meas_ms [-30, 0] in a provenance passed; refused naming
+// Regression: t_ref_ms 1e300 and t_meas_ms [-30, 0] in a provenance passed; refused naming
 // the key (an element of a list by its index) at its line.
 TEST(ModelFileSafety, ProvenanceExposuresOutsideTheBoundsAreRefused) {
   CalibrationModel model = SmallModel();

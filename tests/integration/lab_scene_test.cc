@@ -1,4 +1,4 @@
-// A lab's scene on the virtual rig, end to end (issue 30): a clean calibration, then one
+// A lab's scene on the virtual rig, end to end: a clean calibration, then one
 // validation per fault the rig file adds (docs/virtual-rig.md, "A lab's scene"): defect pixels,
 // ambient light, a reflection off the table 25 px and 8 px away, a cable over 15% of the disc, a
 // second LED. Each is measured through within the clean run's accuracy, or named by its own flag on

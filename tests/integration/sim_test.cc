@@ -91,7 +91,7 @@ pid_t StartStreamingClient() {
   ::_exit(3);
 }
 
-// Issue 14's item: a client killed (SIGKILL) while connected, then Ctrl-C on the sim, at several
+// Regression: a client killed (SIGKILL) while connected, then Ctrl-C on the sim, at several
 // moments: right after the kill, later, and with another client still streaming.
 TEST(Sim, SurvivesAKilledClientAndCtrlCAtAnyMoment) {
   const std::string dir = testing::ScratchDir("sim-killed-client");

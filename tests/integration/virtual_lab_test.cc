@@ -150,7 +150,7 @@ TEST(VirtualLab, AZaberPowerCycleMidSweepLosesNoFrame) {
   EXPECT_TRUE(RecordingReader(run.dir + "/run/recording").IsComplete());
 }
 
-// Issue 33 item 6: the PTU loses power mid-sweep and resets for 6 host seconds (60 simulated),
+// Regression: the PTU loses power mid-sweep and resets for 6 host seconds (60 simulated),
 // echoing commands and printing its banner and "Initializing..." meanwhile. The run stopped after
 // about 6 s saying the port answered "but never with a pan-tilt unit's version"; it waits the
 // reset out (reset_wait_s 60 s), homes the unit again, retakes the bracket and completes, every

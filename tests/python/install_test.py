@@ -95,7 +95,7 @@ assert abs(m["d_mm"] - truth) < 0.01 * truth, m
 
 
 class InstallThroughALinkTest(unittest.TestCase):
-    """Issue 33: `./irdist install` wrote the recipes through a linked share/irdist/recipes. A link
+    """Regression: `./irdist install` wrote the recipes through a linked share/irdist/recipes. A link
     anywhere the install writes stops it before the first write, naming the link."""
 
     def test_a_linked_recipes_folder_is_refused_and_nothing_written_through_it(self):

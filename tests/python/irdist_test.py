@@ -155,7 +155,7 @@ class ModelTest(unittest.TestCase):
             model.features(np.zeros(5, dtype=np.uint16))
 
     def test_bad_bit_depths_and_tiny_images_are_refused_with_a_message(self):
-        # Issue 33 item 7: bit_depth=99 and a 1x1 image were internal check failures.
+        # Regression: bit_depth=99 and a 1x1 image were internal check failures.
         model = irdist.Model(MODEL)
         image, _ = irdist.Recording(RECORDING)[1]
         for bits in (99, 7, -12):
@@ -185,7 +185,7 @@ class MeasureTest(unittest.TestCase):
         self.assertEqual(lines[0]["schema"], irdist.MEASURE_JSON_SCHEMA)
 
     def test_arguments_outside_their_bounds_are_refused_before_measure_starts(self):
-        # Issue 33 item 7: duration_s NaN passed (a measure that never ends).
+        # Regression: duration_s NaN passed (a measure that never ends).
         before = child_pids()
         for kwargs in ({"duration_s": float("nan")}, {"duration_s": 0}, {"duration_s": 1e9},
                        {"count": 0}):

@@ -85,7 +85,7 @@ class CameraServerTest : public ::testing::Test {
     server_.reset();
   }
 
-  // Stream on loopback as issue 4's facts say: no packet socket, fixed 4 MB socket buffer.
+  // Stream on loopback as on the virtual rig: no packet socket, fixed 4 MB socket buffer.
   void CreateStream() {
     arv_camera_gv_set_stream_options(camera_.get(), ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
     GError* error = nullptr;

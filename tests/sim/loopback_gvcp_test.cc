@@ -1,5 +1,5 @@
 // tests/loopback_gvcp.h, the lock every GigE test takes in the shared /tmp: a symbolic link or a
-// FIFO planted under its name is refused, never followed (issue 33 item 7).
+// FIFO planted under its name is refused, never followed.
 #include "tests/loopback_gvcp.h"
 
 #include <gtest/gtest.h>

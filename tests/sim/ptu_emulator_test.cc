@@ -195,7 +195,7 @@ TEST(PtuEmulatorReset, CommandsDuringAResetAreAnsweredWhenItEnds) {
   EXPECT_EQ(host.ReadLine(1000), "* 0");
 }
 
-// Issue 33 item 6: a unit power-cycled mid-run prints its banner and "Initializing..." as the
+// Regression: a unit power-cycled mid-run prints its banner and "Initializing..." as the
 // manuals' power-up shows, and with its power-up echo on echoes each command sent during the
 // reset at once; the commands are answered, in order, only when the reset ends.
 TEST(PtuEmulatorReset, APowerCyclePrintsItsBannerAndEchoesWhileItResets) {

@@ -121,7 +121,7 @@ inline bool PtyExclusive(const std::string& path) {
   return flag == 1;
 }
 
-// Issue 33: a client killed while it held the pty exclusive (TIOCEXCL, no flock left) must not
+// Regression: a client killed while it held the pty exclusive (TIOCEXCL, no flock left) must not
 // lock every later non-root client out: the emulator clears the flag within a second; while a
 // client holds its flock the flag stays.
 inline void ExpectAbandonedExclusiveReleased(const std::string& path) {

@@ -434,7 +434,7 @@ TEST(FlirPtuEmulated, ANewSessionReadsStaleRepliesAwayBeforeIdentifying) {
   EXPECT_NEAR(p.pan_deg, 0.0, 1e-9);
 }
 
-// Issue 33 item 6: a unit that loses power mid-run resets for longer than every retry while
+// Regression: a unit that loses power mid-run resets for longer than every retry while
 // echoing commands and printing its banner and "Initializing..." (the manuals' power-up). It is
 // waited for (reset_wait_s), found restarted (DeviceRestarted, not "answers, but never with a
 // pan-tilt unit's version"), identified and homed again, and moves on.
@@ -486,7 +486,7 @@ TEST(FlirPtuEmulated, APowerCutMidMoveIsARestartOnceTheResetEnds) {
   EXPECT_NEAR(head.world.Pose().tilt_deg, -5.0, 0.03);
 }
 
-// Issue 33 item 6: no move ends (and so no frame is exposed) before the unit has confirmed the
+// Regression: no move ends (and so no frame is exposed) before the unit has confirmed the
 // end of its last command: positions read within the rig's tolerance of the target while the
 // axes still creep in (a slow deceleration) are not the end of the move, and with replies dropped
 // and delayed past the reply timeout no late or lost reply is taken for the confirmation: every
@@ -580,7 +580,7 @@ TEST(FlirPtu, ValidateRejectsBadAxesAndUnknownKeys) {
   EXPECT_THROW(info->validate(unknown), InputError);
 }
 
-// Issue 33 item 2: reset_wait_s 1e308 overflowed to a negative count of milliseconds (undefined
+// Regression: reset_wait_s 1e308 overflowed to a negative count of milliseconds (undefined
 // behaviour) and the PTU was declared absent at once; waits lie in (0, a day].
 TEST(FlirPtu, ValidateRefusesWaitsBeyondADay) {
   const DriverInfo* info = FindDriver("flir_ptu");

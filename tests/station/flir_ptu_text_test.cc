@@ -1,5 +1,5 @@
 // The FLIR PTU's reply text (station/flir_ptu_text.h): what a resetting unit prints is told apart
-// from another device's answers (issue 33 item 6).
+// from another device's answers.
 #include "station/flir_ptu_text.h"
 
 #include <gtest/gtest.h>

@@ -87,7 +87,7 @@ inline double TrapezoidS(double distance, double speed, double accel) {
   return 2.0 * std::sqrt(distance / accel);
 }
 
-// A link as hostile as issue 33's: 10% of the replies dropped, 10% delayed by `delay_s`
+// A link as hostile as a bad lab's: 10% of the replies dropped, 10% delayed by `delay_s`
 // (simulated seconds), for a driver's test against its emulator.
 inline sim::EmulatorFaults LossyReplies(double delay_s) {
   sim::EmulatorFaults faults;

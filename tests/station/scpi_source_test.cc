@@ -376,7 +376,7 @@ TEST(ScpiSourceEmulated, OneFlippedBitInTheOutputStateDoesNotStopTheRun) {
   EXPECT_NEAR(world.Pose().bias_ma, 475.0, 0.01);
 }
 
-// Issue 33 item 6: with replies dropped and delayed past the reply timeout, SetCurrent returns
+// Regression: with replies dropped and delayed past the reply timeout, SetCurrent returns
 // only once the instrument has taken the level (its error query answered after it, in order; a
 // late answer to an earlier query is never that answer), so no frame is exposed at the old one.
 TEST(ScpiSourceEmulated, NoLevelCountsAsSetBeforeTheInstrumentTookIt) {

@@ -143,7 +143,7 @@ TEST(SerialTransport, InvalidBaudIsALinkErrorNamingWhereItWasGiven) {
 }
 
 
-// Issue 33 item 5: two commands on one port both moved the station. The port is held for the
+// Regression: two commands on one port both moved the station. The port is held for the
 // transport's lifetime (flock and TIOCEXCL); a second opener is refused naming the holder's pid
 // and command; once the holder closes, the port opens again and is no longer exclusive.
 TEST(SerialTransport, SecondOpenerIsRefusedNamingTheHolder) {
@@ -174,7 +174,7 @@ TEST(SerialTransport, SecondOpenerIsRefusedNamingTheHolder) {
   EXPECT_EQ(exclusive(), 1);
 }
 
-// Issue 33 item 7: a rig whose port is /dev/zero or a FIFO said "not found". It says what the
+// Regression: a rig whose port is /dev/zero or a FIFO said "not found". It says what the
 // file is and that a serial device (a character device that is a tty) is needed.
 TEST(SerialTransport, NonSerialPortsAreNamedForWhatTheyAre) {
   char dir_template[] = "/tmp/irdist_serial_XXXXXX";

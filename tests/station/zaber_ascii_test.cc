@@ -455,7 +455,7 @@ TEST(ZaberAsciiEmulated, RepliesAreChecksummedAndADamagedPositionIsNeverTaken) {
   EXPECT_EQ(dynamic_cast<sim::LineDevice&>(*slide.emulator).RepliesFlipped(), 2u);
 }
 
-// Issue 33 item 6: no move ends (and so no frame is exposed) before the stage itself says it is
+// Regression: no move ends (and so no frame is exposed) before the stage itself says it is
 // idle: with replies dropped and delayed past the reply timeout, every move returns with the
 // stage at rest at its target; a late reply (its message id an earlier one's) is never taken.
 TEST(ZaberAsciiEmulated, NoMoveEndsBeforeTheStageConfirmsIt) {

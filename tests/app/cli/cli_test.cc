@@ -46,6 +46,20 @@ TEST(CliTest, DefaultArgsAreUsable) {
   EXPECT_TRUE(static_cast<bool>(DefaultHandlers().plan));
 }
 
+// The version is written once, in the top CMakeLists.txt's project(); --version says that one.
+TEST(CliTest, VersionIsTheProjectVersionFromCMake) {
+  std::ifstream cmake(std::string(IRDIST_SOURCE_DIR) + "/CMakeLists.txt");
+  const std::string text{std::istreambuf_iterator<char>(cmake), std::istreambuf_iterator<char>()};
+  const std::string key = "project(irdist VERSION ";
+  const size_t at = text.find(key);
+  ASSERT_NE(at, std::string::npos);
+  const std::string version = text.substr(at + key.size(), text.find(' ', at + key.size()) -
+                                                               at - key.size());
+  std::string out;
+  EXPECT_EQ(RunWords({"--version"}, Handlers{}, &out), 0);
+  EXPECT_EQ(out, "irdist " + version + "\n");
+}
+
 TEST(CliTest, EverySubcommandIsInTheTable) {
   EXPECT_EQ(SubcommandNames(),
             (std::vector<std::string>{"calibrate", "validate", "fit", "playback", "check", "plan",
@@ -366,7 +380,7 @@ std::string ReadText(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-// Issue 33 item 7: plan accepted rig values sim refuses (crosstalk NaN or 5.0001); plan loads
+// Regression: plan accepted rig values sim refuses (crosstalk NaN or 5.0001); plan loads
 // the rig exactly as sim and calibrate do, refusing at the rig file's line.
 TEST(CliSafety, PlanRefusesAVirtualRigThatSimRefuses) {
   const std::string dir = ::testing::TempDir() + "cli_plan_rig_" + std::to_string(::getpid());
@@ -473,7 +487,7 @@ TEST(CliTest, OutOfRangeFlagsNameTheFlagAndTheRangeAndRunNothing) {
       {{"view", "--at", "2000,inf,0,500"}, "--at inf is outside"},
       {{"station-test", "/dev/null", "--baud", "0"}, "--baud 0 is outside [1, 4000000] bit/s"},
       {{"station-test", "/dev/null", "--baud", "-9600"}, "--baud -9600 is outside"},
-      // Issue 33 item 7: NaN passed --duration and --max-disk-gb (a measure that never ends);
+      // Regression: NaN passed --duration and --max-disk-gb (a measure that never ends);
       // --count 0 printed a 309-digit range; snap --exposure-ms nan moved the station first.
       {{"measure", "--model", "m.yaml", "--duration", "nan"},
        "--duration nan is outside (0, 86400] s"},

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <thread>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "sim/device_emulator.h"
 #include "sim/station_emulator.h"
 #include "sim/world.h"
@@ -63,7 +63,7 @@ TEST_F(StationCommand, AMoveBeforeHomeSaysItHomesFirstAndNamesTheHomeCommand) {
   EXPECT_NEAR(world_.Pose().slide_mm, 1600.0, 1e-6);
 }
 
-// Issue 33 item 5: two commands on one port both moved the station, each printing its own
+// Regression: two commands on one port both moved the station, each printing its own
 // target. A port in use (here held by this process, as a calibrate would hold it) is refused
 // before anything is sent, naming the holder.
 TEST_F(StationCommand, APortInUseIsRefusedNamingItsHolder) {
@@ -94,7 +94,7 @@ TEST_F(StationCommand, RefusesAPoseOutsideTheRigsLimitsBeforeMoving) {
   EXPECT_FALSE(world_.Pose().moving);
 }
 
-// Issue 33 item 7: `station move 1e308` printed a 190-digit number.
+// Regression: `station move 1e308` printed a 190-digit number.
 TEST_F(StationCommand, AHugeTargetIsRefusedInPlainNumbers) {
   try {
     Run("move", {1e308, 0.0, 0.0});

@@ -62,7 +62,7 @@ TEST(CheckModelProvenance, OverrideWarnsInstead) {
   EXPECT_NE(warning.find("IRDV0002"), std::string::npos);
 }
 
-// Issue 33 item 7: a model from another rig name passed silently. The same camera setup under
+// Regression: a model from another rig name passed silently. The same camera setup under
 // another rig name (virtual-offset shares virtual's camera) is used, with a warning naming both.
 TEST(CheckModelProvenance, AnotherRigNameWarns) {
   ModelProvenance other = Calibrated();

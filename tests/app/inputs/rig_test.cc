@@ -6,7 +6,7 @@
 #include <iterator>
 #include <string>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "sim/rig_physics.h"
 
 namespace irdist {
@@ -97,7 +97,7 @@ std::string RefusalOf(const std::string& text) {
   return "";
 }
 
-// Issue 33 item 2: out-of-range intrinsics gave wrong distances marked ok (distortion 1e10 gave
+// Regression: out-of-range intrinsics gave wrong distances marked ok (distortion 1e10 gave
 // 2015.7 mm for 2000; cx 1e300 and fx 1e-300 dropped the position). Each is refused at its
 // line and column with the range; the rest of the intrinsics as before.
 TEST(RigTest, IntrinsicsOutsideTheirPhysicalBoundsAreRefused) {
@@ -128,7 +128,7 @@ TEST(RigTest, IntrinsicsOutsideTheirPhysicalBoundsAreRefused) {
   }
 }
 
-// Issue 33 item 2: intrinsics in sensor pixels stated as `pixels: roi` gave theta 14 deg for 10;
+// Regression: intrinsics in sensor pixels stated as `pixels: roi` gave theta 14 deg for 10;
 // the principal point must lie inside the pixels it is stated in.
 TEST(RigTest, APrincipalPointOutsideTheRoiItIsStatedInIsRefused) {
   const std::string head =

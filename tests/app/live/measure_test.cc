@@ -13,7 +13,7 @@
 #include <filesystem>
 #include <sstream>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/runs/resume.h"
 
 namespace irdist {

@@ -15,7 +15,7 @@
 #include <set>
 #include <thread>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/live/frame_grabber.h"
 #include "app/live/track_output.h"
 

@@ -18,7 +18,7 @@
 #include <thread>
 
 #include "acquisition/camera.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/display/show.h"
 #include "app/display/view_layout.h"
 #include "tests/loopback_gvcp.h"
@@ -136,7 +136,7 @@ TEST(Snap, RefusesAnExistingFileALinkAndAnotherFormatBeforeTheCamera) {
   snap.out = dir + "/link.png";
   snap.force = true;
   EXPECT_THROW(RunSnap(snap, {out, err}), RunFolderError);
-  // Issue 33: a missing folder was found only after the station had moved to --at.
+  // Regression: a missing folder was found only after the station had moved to --at.
   snap.out = dir + "/missing/dir/x.png";
   snap.at = {2000.0, 0.0, 0.0, 490.0};
   try {

@@ -9,7 +9,7 @@
 #include <fstream>
 
 #include "acquisition/recording_writer.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/runs/resume.h"
 #include "tests/full_disk.h"
 #include "tests/app/small_recording.h"

@@ -8,7 +8,7 @@
 #include <fstream>
 
 #include "acquisition/recording_writer.h"
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 
 namespace irdist {
 namespace {

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <string>
 
-#include "app/cli/errors.h"
+#include "app/inputs/errors.h"
 #include "app/inputs/recipe.h"
 #include "station/plan.h"
 

@@ -13,8 +13,8 @@
 
 #include <string>
 
-#include "app/cli/command_args.h"
-#include "app/cli/errors.h"
+#include "app/inputs/command_args.h"
+#include "app/inputs/errors.h"
 #include "app/inputs/recipe.h"
 #include "station/plan.h"
 

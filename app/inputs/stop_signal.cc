@@ -1,4 +1,4 @@
-#include "app/cli/stop_signal.h"
+#include "app/inputs/stop_signal.h"
 
 #include <signal.h>
 

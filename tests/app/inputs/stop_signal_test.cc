@@ -1,6 +1,6 @@
 // Ctrl-C: SIGINT/SIGTERM set the stop flag while a SignalGuard lives, and the previous handlers
 // come back after it.
-#include "app/cli/stop_signal.h"
+#include "app/inputs/stop_signal.h"
 
 #include <gtest/gtest.h>
 #include <signal.h>

@@ -2,7 +2,7 @@
 // Ctrl-C for the commands that run until stopped (calibrate, validate, measure, view, sim): while a
 // SignalGuard lives, SIGINT and SIGTERM only set a flag that the command polls between poses,
 // brackets or frames; it then finishes what is in flight and ends with exit code 130
-// (InterruptedError, app/cli/errors.h).
+// (InterruptedError, app/inputs/errors.h).
 
 #include <atomic>
 
