@@ -171,5 +171,23 @@ TEST(VirtualLab, APtuPowerCutThatEchoesItsBannerIsWaitedOutAndTheRunCompletes) {
   EXPECT_NE(run.output.find("1 retakes, 1 station reboots"), std::string::npos) << run.output;
 }
 
+// Issue 33 item 6, the Zaber's turn: the controller loses power mid-sweep and boots for 6 host
+// seconds (60 simulated), deaf and mute, then alerts "!01 0 IDLE WR". Its driver gave up on a
+// silent query after 5 x 500 ms (a LinkError stopped the run); it waits the boot out
+// (reset_wait_s 60 s), identifies and homes the stage again, retakes the bracket and completes,
+// every frame once and labelled with its pose.
+TEST(VirtualLab, AZaberPowerCutThatBootsSilentlyIsWaitedOutAndTheRunCompletes) {
+  const std::string key = "      power_on_mm: 2000.0";
+  const std::string rig = LabRigWith(
+      {{key, "      power_cycle_after_s: 12.0\n      reset_s: 60.0\n"
+             "      power_up_alert: true\n" + key}});
+  ASSERT_FALSE(rig.empty()) << "recipes/rigs/virtual-lab.yaml changed; update this test";
+  const LabRun run = RunLab("lab-zaber-power-cut", rig);
+  ASSERT_EQ(run.code, 0) << run.output;
+  EXPECT_EQ(ExpectFramesMatchThePlan(run.dir + "/run"), 24) << run.output;
+  EXPECT_TRUE(RecordingReader(run.dir + "/run/recording").IsComplete());
+  EXPECT_NE(run.output.find("1 retakes, 1 station reboots"), std::string::npos) << run.output;
+}
+
 }  // namespace
 }  // namespace irdist
