@@ -405,6 +405,7 @@ std::optional<std::string> ScpiEmulator::SetOutput(const std::string& argument) 
   if (value == "ON" || value == "1") {
     if (!state_.output_on) state_.output_on_since_s = Now();
     state_.output_on = true;
+    NoteMoveStarted();  // a source's "move": power_cycle_after_s counts from its first output on
   } else if (value == "OFF" || value == "0") {
     state_.output_on = false;
   } else {
