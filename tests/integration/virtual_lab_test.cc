@@ -196,13 +196,15 @@ TEST(VirtualLab, AZaberPowerCutThatBootsSilentlyIsWaitedOutAndTheRunCompletes) {
 }
 
 // The SourceMeter's turn: it loses power mid-sweep while sourcing and boots silently for 6 host
-// seconds (as the 2400's power-on self-test; the driver gave up after 4 x 1 s): waited out, its
+// seconds (as the 2400's power-on self-test; the driver gave up after 4 x 200 ms): waited out, its
 // own *IDN? again, a restart; the current is set again, the bracket retaken and the run completes
 // with every frame once.
 TEST(VirtualLab, ASourceMeterPowerCutIsWaitedOutAndTheRunCompletes) {
   const std::string key = "      open_circuit: false";
+  const std::string compliance = "      compliance_v: 3.0 ";
   const std::string rig =
-      LabRigWith({{key, "      power_cycle_after_s: 12.0\n      reset_s: 60.0\n" + key}});
+      LabRigWith({{key, "      power_cycle_after_s: 12.0\n      reset_s: 60.0\n" + key},
+                  {compliance, "      reply_timeout_ms: 200\n" + compliance}});
   ASSERT_FALSE(rig.empty()) << "recipes/rigs/virtual-lab.yaml changed; update this test";
   const LabRun run = RunLab("lab-source-power-cut", rig);
   ExpectOneRestartAndEveryFrame(run);
