@@ -81,6 +81,11 @@ std::string ClosestMatch(const std::string& word, const std::vector<std::string>
   std::string best;
   size_t best_distance = 0;
   for (const std::string& candidate : candidates) {
+    // The distance is at least the lengths' difference: a candidate that cannot come closer is
+    // skipped (a fuzzed key of kilobytes against each allowed name took 5-10% of a loader's time).
+    const size_t length_gap = word.size() > candidate.size() ? word.size() - candidate.size()
+                                                            : candidate.size() - word.size();
+    if (!best.empty() && length_gap >= best_distance) continue;
     const size_t distance = EditDistance(word, candidate);
     if (best.empty() || distance < best_distance) {
       best = candidate;

@@ -170,6 +170,20 @@ void LineDevice::PowerCycle() {
   ResetToPowerOn();
   pending_.clear();
   ++power_cycles_;
+  StartBoot();
+}
+
+void LineDevice::StartBoot() {
+  const double boot_s = BootSeconds();
+  if (boot_s > 0.0) booting_until_s_ = Now() + boot_s;
+}
+
+bool LineDevice::Booting() const { return booting_until_s_ >= 0.0 && Now() < booting_until_s_; }
+
+void LineDevice::MaybeEndBoot() {
+  if (booting_until_s_ < 0.0 || Booting()) return;
+  booting_until_s_ = -1.0;
+  outbox_ += BootMessage();
 }
 
 void LineDevice::SetFaults(const EmulatorFaults& faults) {
@@ -245,6 +259,7 @@ void LineDevice::MaybePowerCycle() {
   ResetToPowerOn();
   pending_.clear();
   ++power_cycles_;
+  StartBoot();
 }
 
 void LineDevice::WaitInSimTime(std::unique_lock<std::mutex>& lock,
@@ -271,6 +286,7 @@ void LineDevice::Serve() {
       current_lock_ = &lock;  // Advance may run a protocol's queued command that waits
       Advance(Now());
       MaybePowerCycle();
+      MaybeEndBoot();
       current_lock_ = nullptr;
       unsolicited.swap(outbox_);
     }
@@ -285,6 +301,13 @@ void LineDevice::Serve() {
 }
 
 void LineDevice::ServeBytes(const char* data, std::size_t size) {
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    if (Booting()) {  // a booting device's serial port is not listening yet
+      pending_.clear();
+      return;
+    }
+  }
   const std::string terminators = Terminators();
   for (std::size_t i = 0; i < size; ++i) {
     const char c = data[i];

@@ -91,6 +91,12 @@ class LineDevice : public DeviceEmulator {
   virtual void Advance(double now_s) = 0;
   // Returns the device to its power-on state (lock held).
   virtual void ResetToPowerOn() = 0;
+  // How long the device boots after a power cycle (simulated seconds): it hears and answers
+  // nothing meanwhile (bytes sent to it are lost). 0: at once (lock held).
+  virtual double BootSeconds() const { return 0.0; }
+  // What the device prints on its own when its boot ends (an alert), terminators included
+  // ("" = nothing; lock held).
+  virtual std::string BootMessage() { return ""; }
 
   // Called by the protocol when a move starts: arms the power cycle of the faults.
   void NoteMoveStarted();
@@ -117,6 +123,9 @@ class LineDevice : public DeviceEmulator {
   void SendReply(const std::string& reply);
   void FlipChosenBit(const std::string& message, std::string* reply);
   void MaybePowerCycle();
+  void StartBoot();
+  bool Booting() const;  // lock held
+  void MaybeEndBoot();   // lock held
   void CloseFds();
 
   World& world_;
@@ -136,6 +145,7 @@ class LineDevice : public DeviceEmulator {
   double move_started_s_ = -1.0;
   bool power_cycle_done_ = false;
   std::uint64_t power_cycles_ = 0;
+  double booting_until_s_ = -1.0;  // < 0: not booting
   std::uint64_t replies_dropped_ = 0;
   std::unique_lock<std::mutex>* current_lock_ = nullptr;
 };

@@ -52,6 +52,7 @@ struct ScpiConfig {
   double series_resistance_ohm = 1.5;  // IRED + leads
   double max_current_a = 1.05;         // source range
   double max_voltage_v = 21.0;
+  double reset_s = 0.0;  // a power cycle's boot (self-test): deaf and silent, as the 2400 is
 };
 
 struct SourceState {
@@ -180,6 +181,7 @@ class ScpiEmulator : public LineDevice {
   std::string HandleMessage(const std::string& message) override;
   void Advance(double now_s) override;
   void ResetToPowerOn() override;
+  double BootSeconds() const override { return config_.reset_s; }
 
  private:
   // A unit's outcome: a reply for a query, or nothing; errors are queued.
@@ -403,6 +405,7 @@ std::optional<std::string> ScpiEmulator::SetOutput(const std::string& argument) 
   if (value == "ON" || value == "1") {
     if (!state_.output_on) state_.output_on_since_s = Now();
     state_.output_on = true;
+    NoteMoveStarted();  // a source's "move": power_cycle_after_s counts from its first output on
   } else if (value == "OFF" || value == "0") {
     state_.output_on = false;
   } else {
@@ -484,7 +487,7 @@ std::optional<std::string> ScpiEmulator::Measure(bool reading_only) {
 const std::vector<std::string> kScpiKeys = {
     "model",         "serial",          "firmware",     "forward_voltage_v",
     "series_resistance_ohm", "max_current_a", "max_voltage_v", "open_circuit",
-    "extra_resistance_ohm",  "trip_after_s"};
+    "extra_resistance_ohm",  "trip_after_s",  "reset_s"};
 
 std::unique_ptr<DeviceEmulator> CreateScpi(World& world, const EmulatorSpec& spec) {
   const DeviceKeys keys = ReadDeviceKeys(spec, kScpiKeys);
@@ -500,6 +503,8 @@ std::unique_ptr<DeviceEmulator> CreateScpi(World& world, const EmulatorSpec& spe
   if (!(c.series_resistance_ohm > 0)) keys.Fail("series_resistance_ohm", "must be > 0");
   if (!(c.max_current_a > 0)) keys.Fail("max_current_a", "must be > 0");
   if (!(c.max_voltage_v > 0.2)) keys.Fail("max_voltage_v", "must be > 0.2");
+  c.reset_s = keys.Number("reset_s", c.reset_s);
+  if (!(c.reset_s >= 0.0 && c.reset_s <= 86400.0)) keys.Fail("reset_s", "must be in [0, 86400] s");
   SourceFaults f;
   f.open_circuit = keys.Boolean("open_circuit", f.open_circuit);
   f.extra_resistance_ohm = keys.Number("extra_resistance_ohm", f.extra_resistance_ohm);

@@ -42,6 +42,8 @@ struct ZaberConfig {
   double maxspeed_deg_s = 60.0, accel_deg_s2 = 240.0;
   double power_on_mm = 1000.0, power_on_deg = 0.0;  // where the stage rests at power-up
   bool comm_checksum = false;  // `comm.checksum` as found at start (non-volatile)
+  double reset_s = 0.0;        // a power cycle's boot: deaf and silent this long (simulated s)
+  bool power_up_alert = false;  // at the boot's end each device sends "!dd 0 IDLE WR" (an alert)
 };
 
 struct ZaberAxis {
@@ -137,6 +139,8 @@ class ZaberEmulator : public LineDevice {
   std::string HandleMessage(const std::string& message) override;
   void Advance(double now_s) override;
   void ResetToPowerOn() override;
+  double BootSeconds() const override { return config_.reset_s; }
+  std::string BootMessage() override;
 
  private:
   struct Outcome {
@@ -168,6 +172,21 @@ void ZaberEmulator::ResetToPowerOn() {
     axis.moving = axis.homing = axis.homed = axis.stalled = axis.stuck_move = false;
   }
   Advance(Now());
+}
+
+// Manual, "Alerts": an unsolicited message "!dd a status warning" (a checksum while comm.checksum
+// is 1). A controller booting after a power cut may send one, the reference lost (WR).
+std::string ZaberEmulator::BootMessage() {
+  if (!config_.power_up_alert) return "";
+  std::set<int> devices;
+  for (const ZaberAxis& axis : axes_) devices.insert(axis.device);
+  std::string alerts;
+  for (int device : devices) {
+    const std::string body = std::string(device < 10 ? "0" : "") + std::to_string(device) +
+                             " 0 IDLE WR";
+    alerts += "!" + body + (comm_checksum_ ? ":" + Hex2(Checksum(body)) : "") + "\r\n";
+  }
+  return alerts;
 }
 
 void ZaberEmulator::Advance(double now_s) {
@@ -413,7 +432,8 @@ ZaberEmulator::Outcome ZaberEmulator::Warnings(const std::vector<std::string>& w
 const std::vector<std::string> kZaberKeys = {
     "device_id",     "serial",        "version",        "resolution",  "microstep_um",
     "microstep_deg", "travel_mm",     "travel_deg",     "maxspeed_mm_s", "accel_mm_s2",
-    "maxspeed_deg_s", "accel_deg_s2", "power_on_mm",    "power_on_deg", "comm_checksum"};
+    "maxspeed_deg_s", "accel_deg_s2", "power_on_mm",    "power_on_deg", "comm_checksum",
+    "reset_s",       "power_up_alert"};
 
 ZaberConfig ReadZaberConfig(const DeviceKeys& keys) {
   ZaberConfig c;
@@ -432,6 +452,9 @@ ZaberConfig ReadZaberConfig(const DeviceKeys& keys) {
   c.power_on_mm = keys.Number("power_on_mm", c.power_on_mm);
   c.power_on_deg = keys.Number("power_on_deg", c.power_on_deg);
   c.comm_checksum = keys.Boolean("comm_checksum", c.comm_checksum);
+  c.reset_s = keys.Number("reset_s", c.reset_s);
+  if (!(c.reset_s >= 0.0 && c.reset_s <= 86400.0)) keys.Fail("reset_s", "must be in [0, 86400] s");
+  c.power_up_alert = keys.Boolean("power_up_alert", c.power_up_alert);
   for (const char* key : {"microstep_um", "microstep_deg", "travel_mm", "travel_deg",
                           "maxspeed_mm_s", "accel_mm_s2", "maxspeed_deg_s", "accel_deg_s2",
                           "resolution"}) {

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "base/bounds.h"
 #include "station/driver.h"
 #include "station/serial_driver.h"
 #include "station/line_query.h"
@@ -61,6 +62,7 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
     identity_.port = spec.port;
     timeout_ = query_.options().reply_timeout;
     compliance_v_ = spec.Number("compliance_v", 0.0);
+    reset_wait_ = milliseconds(static_cast<long long>(spec.Number("reset_wait_s", 60) * 1000));
   }
   ~ScpiSource() override {
     // Never write to a device that was not identified; `irdist station` leaves the output on.
@@ -88,6 +90,7 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
   void Set(const std::string& command);
   void DrainErrors(const std::string& after);
   void Resync();
+  [[noreturn]] void WaitOutSilence(const NoReplyError& silent);
   void CheckIdentity(const std::string& idn);
   void ApplySourceSettings();
   bool OutputOn() { return QueryBool(":OUTP?"); }
@@ -104,6 +107,8 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
   DeviceIdentity identity_;
   std::string idn_;  // the full *IDN? answer, the resynchronisation marker
   milliseconds timeout_{1000};
+  milliseconds reset_wait_{60000};  // an identified instrument silent this long is gone
+  bool waiting_out_silence_ = false;
   double compliance_v_ = 0.0;
   double setpoint_ma_ = 0.0;
   bool output_on_ = false;
@@ -132,7 +137,58 @@ std::string ScpiSource::Query(const std::string& query,
   request.judge = [&valid](const std::string& line) {
     return valid(Trim(line)) ? ReplyVerdict::kMatch : ReplyVerdict::kRetry;
   };
-  return Trim(query_.Ask(request));
+  try {
+    return Trim(query_.Ask(request));
+  } catch (const NoReplyError& silent) {
+    if (idn_.empty() || waiting_out_silence_) throw;  // before Identify: no instrument there
+    WaitOutSilence(silent);
+  }
+}
+
+// Silent through every attempt once identified: the instrument may be starting after a power cut
+// (the 2400 prints nothing while it does). *IDN? is asked until its known answer comes back, up to
+// reset_wait_s (another instrument's answer never counts). What was sent meanwhile is lost, so the
+// instrument's state is unknown: a DeviceRestarted, after which the settings and the level are
+// set again (its output state read again first).
+void ScpiSource::WaitOutSilence(const NoReplyError& silent) {
+  const auto start = Clock::now();
+  std::string heard;
+  while (Clock::now() - start < reset_wait_) {
+    link_->Flush();
+    link_->WriteLine("*IDN?");
+    std::string line;
+    try {
+      line = Trim(link_->ReadLine(timeout_));
+    } catch (const LinkError&) {
+      continue;  // still silent
+    }
+    if (line != idn_) {
+      if (!line.empty()) heard = line;
+      continue;
+    }
+    out_of_step_ = true;  // more answers to *IDN? may follow
+    const auto silent_ms = std::chrono::duration_cast<milliseconds>(Clock::now() - start);
+    waiting_out_silence_ = true;  // silent again now: a LinkError, no second wait
+    try {
+      output_on_ = OutputOnConfirmed(false);
+    } catch (...) {
+      waiting_out_silence_ = false;
+      throw;
+    }
+    waiting_out_silence_ = false;
+    if (!output_on_) setpoint_ma_ = 0.0;
+    throw DeviceRestarted(identity_.Brief() + ": silent for " + std::to_string(silent_ms.count()) +
+                              " ms after '" + silent.query() + "', then it answered again: it "
+                              "was power-cycled or reset and what was sent meanwhile is lost; "
+                              "the IRED current must be set again",
+                          false);
+  }
+  throw LinkError("the SourceMeter silent for reset_wait_s (" +
+                      std::to_string(reset_wait_.count()) + " ms) after '" + silent.query() +
+                      "'" + (heard.empty() ? "" : " (heard '" + heard + "', not its *IDN?)"),
+                  spec_.port,
+                  "check the instrument's power and RS-232 cable; an instrument that takes "
+                  "longer to start needs a larger reset_wait_s");
 }
 
 // Reads away whatever is pending until the known *IDN? answer comes back.
@@ -374,7 +430,8 @@ void ScpiSource::CheckAlive() {
 }
 
 void Validate(const DeviceSpec& spec) {
-  spec.CheckKnown({"compliance_v", "idn_vendor", "idn_model", "serial", "retries"});
+  spec.CheckKnown({"compliance_v", "idn_vendor", "idn_model", "serial", "retries",
+                   "reset_wait_s"});
   if (!spec.axes.empty()) Invalid(spec, "a current source drives no axes: remove `axes:`");
   if (!spec.settings.count("compliance_v")) {
     Invalid(spec, "compliance_v (the voltage limit while sourcing current) is required: the "
@@ -384,6 +441,9 @@ void Validate(const DeviceSpec& spec) {
   if (!(v > 0.0 && v <= 210.0)) Invalid(spec, "compliance_v must be in (0, 210] V");
   const double retries = spec.Number("retries", 3);
   if (retries < 0 || retries > 10) Invalid(spec, "retries must be 0-10");
+  const std::string reset_wait = bounds::kDurationS.Refusal("reset_wait_s",  // in ms later
+                                                            spec.Number("reset_wait_s", 60));
+  if (!reset_wait.empty()) Invalid(spec, reset_wait);
 }
 
 // Lines end with "\n" (the instrument's RS-232 terminator must be set to LF); 9600 baud,

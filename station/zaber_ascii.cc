@@ -62,6 +62,7 @@ class ZaberAscii : public AxesMotionDriver<AxisState> {
     direction_ = spec.Number("direction", 1.0);
     tolerance_ = static_cast<long long>(spec.Number("tolerance_microsteps", 2));
     home_timeout_ = milliseconds(static_cast<long long>(spec.Number("home_timeout_s", 120) * 1000));
+    reset_wait_ = milliseconds(static_cast<long long>(spec.Number("reset_wait_s", 60) * 1000));
     for (const auto& [axis, text] : spec.axes) {
       AxisState s;
       s.axis = axis;
@@ -87,6 +88,7 @@ class ZaberAscii : public AxesMotionDriver<AxisState> {
   LineRequest Request(const Address& a, int axis, const std::string& command, Reply* reply,
                       bool numeric = false);
   Reply Query(const Address& a, int axis, const std::string& command, bool numeric = false);
+  void AskThroughReset(const LineRequest& request, const NoReplyError& silent);
   long long QueryNumber(const Address& a, int axis, const std::string& command) {
     return Number(Query(a, axis, command, true), command);
   }
@@ -117,13 +119,16 @@ class ZaberAscii : public AxesMotionDriver<AxisState> {
   DeviceIdentity identity_;
   milliseconds timeout_{500};
   milliseconds home_timeout_{120000};
+  milliseconds reset_wait_{60000};  // an identified device silent this long after a miss is gone
   bool checksum_ = true;
   bool reply_checksums_ = false;  // comm.checksum is on: a reply without a checksum is damaged
   int unchecked_replies_ = 0;     // replies of the query in flight that came without checksum
   double direction_ = 1.0;
   long long tolerance_ = 2;
   int next_id_ = 0;
+  bool identified_ = false;       // Identify() completed: a silence may be a reset, waited out
   bool homed_ = false;
+  mutable bool restarted_ = false;  // a lost reference was reported: the next Home identifies
 };
 
 // "/device axis id command[:CC]" with the next message id (manual: ids 0-99), kept in *id.
@@ -182,14 +187,34 @@ Reply ZaberAscii::Query(const Address& a, int axis, const std::string& command, 
   unchecked_replies_ = 0;
   try {
     query_.Ask(Request(a, axis, command, &r, numeric));
-  } catch (const NoReplyError&) {
-    if (unchecked_replies_ < query_.options().attempts) throw;
-    reply_checksums_ = false;
-    EnableReplyChecksums(a);
-    query_.Ask(Request(a, axis, command, &r, numeric));
+  } catch (const NoReplyError& silent) {
+    if (unchecked_replies_ < query_.options().attempts) {
+      AskThroughReset(Request(a, axis, command, &r, numeric), silent);
+    } else {
+      reply_checksums_ = false;
+      EnableReplyChecksums(a);
+      query_.Ask(Request(a, axis, command, &r, numeric));
+    }
   }
   ThrowIfRejected(r, command);
   return r;
+}
+
+// An identified device silent through every attempt may be booting after a power cut (deaf and
+// mute meanwhile, perhaps an alert when it is up): the query is asked again, each time with a new
+// message id, until it answers or reset_wait_s ran out. Its reply then says whether the
+// reference was lost (WR: a restart, CheckFlag). Before Identify a silent port is no device.
+void ZaberAscii::AskThroughReset(const LineRequest& request, const NoReplyError& silent) {
+  if (!identified_) throw silent;
+  const auto deadline = Clock::now() + reset_wait_;
+  while (Clock::now() < deadline) {
+    if (query_.AskOnce(request, timeout_)) return;
+  }
+  throw LinkError(silent.device() + " silent for reset_wait_s (" +
+                      std::to_string(reset_wait_.count()) + " ms) after '" + silent.query() + "'",
+                  spec_.port,
+                  "check the device's power and cable; a controller that takes longer to start "
+                  "needs a larger reset_wait_s");
 }
 
 // Manual, setting comm.checksum (device scope): 1 makes the device checksum its replies (it
@@ -291,12 +316,20 @@ void ZaberAscii::ReadAxis(AxisState* s) {
 
 DeviceIdentity ZaberAscii::Identify() {
   link_->Flush();
+  identified_ = false;
+  const std::string serial_before = identity_.serial;
   std::set<int> seen;
   for (AxisState& s : axes_) {
     if (seen.insert(s.address.device).second) IdentifyDevice(s.address);
     ReadAxis(&s);
   }
+  if (!serial_before.empty() && identity_.serial != serial_before) {
+    Fail(identity_.serial, "serial " + identity_.serial + " answers where " + serial_before +
+                               " did before the restart",
+         "another stage is on this port: check /dev/serial/by-id and the cabling");
+  }
   homed_ = false;
+  identified_ = true;
   return identity_;
 }
 
@@ -310,6 +343,7 @@ void ZaberAscii::CheckFlag(const AxisState& s, const Reply& r) const {
          "clear the cause, then `warnings clear` and home again");
   }
   if (homed_ && Unreferenced(r.warning)) {
+    restarted_ = true;
     throw DeviceRestarted(identity_.Brief() + ": " + where + " lost its home reference (" +
                               r.warning + ": " + FlagMeaning(r.warning) +
                               "): the device was power-cycled or reset; home it and retake",
@@ -345,6 +379,10 @@ void ZaberAscii::WaitIdle(AxisState* s, milliseconds timeout, const std::string&
 }
 
 void ZaberAscii::Home() {
+  if (restarted_) {  // after a power cut: the same device, its settings and travel read again
+    Identify();
+    restarted_ = false;
+  }
   homed_ = false;
   for (AxisState& s : axes_) {
     Query(s.address, s.address.axis, "warnings clear");
@@ -444,6 +482,8 @@ void ZaberAscii::ReadPosition(StationPosition* position) {
 }
 
 void ZaberAscii::Stop() noexcept {
+  const bool identified = identified_;
+  identified_ = false;  // an exit path never waits out a silent device
   for (AxisState& s : axes_) {
     try {
       Reply r;
@@ -457,6 +497,7 @@ void ZaberAscii::Stop() noexcept {
       // Best effort: the caller is already handling a failure.
     }
   }
+  identified_ = identified;
 }
 
 void ZaberAscii::CheckAlive() {
@@ -481,7 +522,7 @@ void CheckStepKeys(const DeviceSpec& spec, const std::string& unit) {
 void Validate(const DeviceSpec& spec) {
   spec.CheckKnown({"microstep_um", "fullstep_um", "microstep_deg", "fullstep_deg", "origin_mm",
                    "origin_deg", "direction", "deviceid", "serial", "tolerance_microsteps",
-                   "retries", "home_timeout_s", "settle_ms", "checksum"});
+                   "retries", "home_timeout_s", "reset_wait_s", "settle_ms", "checksum"});
   if (spec.axes.empty()) Invalid(spec, "map at least one axis in `axes:` (e.g. {slide: \"1\"})");
   bool linear = false, angular = false;
   std::set<std::pair<int, int>> used;
@@ -505,6 +546,9 @@ void Validate(const DeviceSpec& spec) {
   const std::string home_wait = bounds::kDurationS.Refusal("home_timeout_s",
                                                            spec.Number("home_timeout_s", 120));
   if (!home_wait.empty()) Invalid(spec, home_wait);  // in ms later: 1e308 would overflow
+  const std::string reset_wait = bounds::kDurationS.Refusal("reset_wait_s",
+                                                            spec.Number("reset_wait_s", 60));
+  if (!reset_wait.empty()) Invalid(spec, reset_wait);
   const std::string checksum = spec.Text("checksum", "true");
   if (checksum != "true" && checksum != "false") Invalid(spec, "checksum must be true or false");
 }

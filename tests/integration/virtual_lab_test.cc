@@ -171,5 +171,44 @@ TEST(VirtualLab, APtuPowerCutThatEchoesItsBannerIsWaitedOutAndTheRunCompletes) {
   EXPECT_NE(run.output.find("1 retakes, 1 station reboots"), std::string::npos) << run.output;
 }
 
+// A run that recovered from one device restart: it completed with one retake, every frame of
+// the plan once and labelled with its pose.
+void ExpectOneRestartAndEveryFrame(const LabRun& run) {
+  ASSERT_EQ(run.code, 0) << run.output;
+  EXPECT_EQ(ExpectFramesMatchThePlan(run.dir + "/run"), 24) << run.output;
+  EXPECT_TRUE(RecordingReader(run.dir + "/run/recording").IsComplete());
+  EXPECT_NE(run.output.find("1 retakes, 1 station reboots"), std::string::npos) << run.output;
+}
+
+// Issue 33 item 6, the Zaber's turn: the controller loses power mid-sweep and boots for 6 host
+// seconds (60 simulated), deaf and mute, then alerts "!01 0 IDLE WR". Its driver gave up on a
+// silent query after 5 x 500 ms (a LinkError stopped the run); it waits the boot out
+// (reset_wait_s 60 s), identifies and homes the stage again, retakes the bracket and completes,
+// every frame once and labelled with its pose.
+TEST(VirtualLab, AZaberPowerCutThatBootsSilentlyIsWaitedOutAndTheRunCompletes) {
+  const std::string key = "      power_on_mm: 2000.0";
+  const std::string rig = LabRigWith(
+      {{key, "      power_cycle_after_s: 12.0\n      reset_s: 60.0\n"
+             "      power_up_alert: true\n" + key}});
+  ASSERT_FALSE(rig.empty()) << "recipes/rigs/virtual-lab.yaml changed; update this test";
+  const LabRun run = RunLab("lab-zaber-power-cut", rig);
+  ExpectOneRestartAndEveryFrame(run);
+}
+
+// The SourceMeter's turn: it loses power mid-sweep while sourcing and boots silently for 6 host
+// seconds (as the 2400's power-on self-test; the driver gave up after 4 x 200 ms): waited out, its
+// own *IDN? again, a restart; the current is set again, the bracket retaken and the run completes
+// with every frame once.
+TEST(VirtualLab, ASourceMeterPowerCutIsWaitedOutAndTheRunCompletes) {
+  const std::string key = "      open_circuit: false";
+  const std::string compliance = "      compliance_v: 3.0 ";
+  const std::string rig =
+      LabRigWith({{key, "      power_cycle_after_s: 12.0\n      reset_s: 60.0\n" + key},
+                  {compliance, "      reply_timeout_ms: 200\n" + compliance}});
+  ASSERT_FALSE(rig.empty()) << "recipes/rigs/virtual-lab.yaml changed; update this test";
+  const LabRun run = RunLab("lab-source-power-cut", rig);
+  ExpectOneRestartAndEveryFrame(run);
+}
+
 }  // namespace
 }  // namespace irdist

@@ -217,6 +217,21 @@ TEST_F(ScpiEmulatorTest, ReplyFaultsAndPowerCycle) {
   EXPECT_EQ(Ask(":SOUR:FUNC?"), "VOLT");
 }
 
+// reset_s: a power cycle's boot (the 2400's power-on self-test) hears and answers nothing, and
+// prints nothing when it ends; then the instrument answers with its power-on state.
+TEST(ScpiEmulatorBoot, APowerCycleBootsSilently) {
+  World world(20.0);
+  std::unique_ptr<DeviceEmulator> emulator =
+      testing::MakeEmulator(world, "scpi_source", "source", Rig("      reset_s: 20\n"));
+  ASSERT_NE(emulator, nullptr);
+  PtyHost host(emulator->Start());
+  EXPECT_EQ(host.Ask("*OPC?\n"), "1");
+  emulator->PowerCycle();
+  EXPECT_EQ(host.Ask("*OPC?\n", 300), "");
+  EXPECT_EQ(host.ReadLine(1500), "");  // nothing at the boot's end, the lost query unanswered
+  EXPECT_EQ(host.Ask(":SOUR:FUNC?\n"), "VOLT");
+}
+
 TEST(ScpiEmulatorRig, SourceFaultsComeFromTheRigFile) {
   World world(20.0);
   auto emulator = testing::MakeEmulator(world, "scpi_source", "source",

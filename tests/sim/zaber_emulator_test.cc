@@ -209,6 +209,19 @@ TEST_F(ZaberEmulatorTest, PowerCycleMidMoveLosesTheReference) {
   EXPECT_EQ(Ask("/1 1 get pos"), "@01 1 OK IDLE WR 0");
 }
 
+// reset_s: after a power cycle the controller boots, deaf and mute (a command sent meanwhile is
+// lost, never answered later); power_up_alert: when it is up it sends the manual's alert with the
+// reference lost, then answers as usual.
+TEST_F(ZaberEmulatorTest, APowerCycleBootsDeafAndMuteThenAlerts) {
+  Open(Rig("      reset_s: 20\n      power_up_alert: true\n"));  // 1 s at this time scale
+  Home();
+  emulator_->PowerCycle();
+  EXPECT_EQ(host_->Ask("/1 1 get pos\n", 300), "");
+  EXPECT_EQ(host_->ReadLine(3000), "!01 0 IDLE WR");
+  EXPECT_EQ(host_->ReadLine(300), "");  // the command sent during the boot stays unanswered
+  EXPECT_EQ(Ask("/1 1 get pos"), "@01 1 OK IDLE WR 0");
+}
+
 TEST(ZaberEmulatorRig, FaultsComeFromTheRigFile) {
   World world(20.0);
   auto emulator = testing::MakeEmulator(world, "zaber_ascii", "slide",

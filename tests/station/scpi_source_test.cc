@@ -376,6 +376,16 @@ TEST(ScpiSourceEmulated, OneFlippedBitInTheOutputStateDoesNotStopTheRun) {
   EXPECT_NEAR(world.Pose().bias_ma, 475.0, 0.01);
 }
 
+// The driver of `spec` on the emulator's pty (started here), replies awaited 100 ms.
+std::unique_ptr<DeviceDriver> OpenOnEmulator(sim::DeviceEmulator& emulator, DeviceSpec spec) {
+  spec.port = emulator.Start();
+  spec.reply_timeout_ms = 100;
+  SerialOptions serial;
+  serial.line_end = FindDriver("scpi_source")->line_end;
+  return FindDriver("scpi_source")->create(
+      spec, std::make_unique<SerialTransport>(spec.port, serial));
+}
+
 // Regression: with replies dropped and delayed past the reply timeout, SetCurrent returns
 // only once the instrument has taken the level (its error query answered after it, in order; a
 // late answer to an earlier query is never that answer), so no frame is exposed at the old one.
@@ -387,13 +397,8 @@ TEST(ScpiSourceEmulated, NoLevelCountsAsSetBeforeTheInstrumentTookIt) {
   std::unique_ptr<sim::DeviceEmulator> emulator = sim::FindEmulator("scpi_source")->create(
       world, {"source", "scpi_source", "inline.yaml", rig, 1});
   DeviceSpec spec = SourceSpec();
-  spec.port = emulator->Start();
-  spec.reply_timeout_ms = 100;
   spec.settings["retries"] = {"8", 26};
-  SerialOptions serial;
-  serial.line_end = FindDriver("scpi_source")->line_end;
-  std::unique_ptr<DeviceDriver> driver = FindDriver("scpi_source")->create(
-      spec, std::make_unique<SerialTransport>(spec.port, serial));
+  std::unique_ptr<DeviceDriver> driver = OpenOnEmulator(*emulator, spec);
   CurrentSource* source = driver->source();
   source->Identify();
   emulator->SetFaults(testing::LossyReplies(4.0));  // 0.2 s at this time scale: late replies
@@ -401,6 +406,59 @@ TEST(ScpiSourceEmulated, NoLevelCountsAsSetBeforeTheInstrumentTookIt) {
     source->SetCurrent(bias_ma);
     EXPECT_NEAR(world.Pose().bias_ma, bias_ma, 0.01) << "returned before the level was taken";
   }
+}
+
+// A SourceMeter emulator whose power cycle boots for 6 simulated s (3 s at this time scale),
+// its driver giving up on a silent query after 4 x 100 ms and waiting up to 20 s for a boot.
+struct BootingMeter {
+  BootingMeter()
+      : emulator(sim::FindEmulator("scpi_source")->create(
+            world, {"source", "scpi_source", "inline.yaml",
+                    "station:\n  devices:\n    source:\n      driver: scpi_source\n"
+                    "      port: auto\n      compliance_v: 3.0\n"
+                    "virtual:\n  devices:\n    source:\n      reset_s: 6\n",
+                    1})) {
+    DeviceSpec spec = SourceSpec();
+    spec.settings["reset_wait_s"] = {"20", 27};
+    driver = OpenOnEmulator(*emulator, spec);
+  }
+  // Identified, sourcing `bias_ma`, then its power cut (the boot begins).
+  CurrentSource& CutPowerWhileAt(double bias_ma) {
+    CurrentSource& source = *driver->source();
+    source.Identify();
+    source.SetCurrent(bias_ma);
+    emulator->PowerCycle();
+    return source;
+  }
+  double WorldBiasMa() const { return world.Pose().bias_ma; }
+  sim::World world{2.0};
+  std::unique_ptr<sim::DeviceEmulator> emulator;
+  std::unique_ptr<DeviceDriver> driver;
+};
+
+// Regression: a SourceMeter that loses power while sourcing boots silently (6 simulated s,
+// 3 s here; the driver gives up on a query after 4 x 100 ms): the next check waits it out up to
+// reset_wait_s, sees the same *IDN? again and reports a restart, never a dead link; the level set
+// again lands, with the source settings the power cut erased.
+TEST(ScpiSourceEmulated, ASilentPowerCutIsWaitedOutAndTheLevelSetAgain) {
+  BootingMeter meter;
+  CurrentSource& source = meter.CutPowerWhileAt(475.0);
+  EXPECT_NEAR(meter.WorldBiasMa(), 0.0, 0.01);  // the IRED dark while the instrument boots
+  EXPECT_THROW(source.Measure(), DeviceRestarted);
+  source.SetCurrent(475.0);
+  EXPECT_NEAR(source.Measure().current_ma, 475.0, 0.01);
+  EXPECT_NEAR(meter.WorldBiasMa(), 475.0, 0.01);
+}
+
+// A level set while the instrument boots is lost with it: the error query after it, answered
+// only once the boot is over, is no confirmation of the level (a restart instead).
+TEST(ScpiSourceEmulated, ALevelSentDuringTheBootIsNeverTakenAsSet) {
+  BootingMeter meter;
+  CurrentSource& source = meter.CutPowerWhileAt(100.0);
+  EXPECT_THROW(source.SetCurrent(475.0), DeviceRestarted);
+  EXPECT_NEAR(meter.WorldBiasMa(), 0.0, 0.01);
+  source.SetCurrent(475.0);
+  EXPECT_NEAR(meter.WorldBiasMa(), 475.0, 0.01);
 }
 
 }  // namespace

@@ -267,13 +267,23 @@ TEST(ZaberAscii, ReplyWhoseChecksumWasDamagedAwayIsNotTaken) {
   EXPECT_EQ(rig.Count("get pos"), 2);
 }
 
-TEST(ZaberAscii, SilentDeviceIsALinkErrorAfterTheRetries) {
-  Rig rig;
+// Identified, a device silent through every retry may be booting after a power cut: asked again
+// up to reset_wait_s, then a LinkError naming the wait.
+TEST(ZaberAscii, SilentDeviceIsALinkErrorAfterResetWait) {
+  DeviceSpec spec = SlideSpec();
+  spec.settings["reset_wait_s"] = {"0.05", 8};
+  Rig rig(spec);
   rig.motion->Identify();
-  rig.stage.drop_next = 100;
+  rig.stage.drop_next = 1 << 30;
   StationPosition now;
-  EXPECT_THROW(rig.motion->ReadPosition(&now), LinkError);
-  EXPECT_EQ(rig.Count("get pos"), 3);  // 1 + retries
+  try {
+    rig.motion->ReadPosition(&now);
+    ADD_FAILURE() << "a silent device answered";
+  } catch (const LinkError& e) {
+    EXPECT_NE(std::string(e.what()).find("silent for reset_wait_s (50 ms)"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_GT(rig.Count("get pos"), 3);  // 1 + retries, then asked again through the wait
 }
 
 TEST(ZaberAscii, LostMoveReplyIsNotResentWhenTheStageStarted) {
@@ -475,6 +485,70 @@ TEST(ZaberAsciiEmulated, NoMoveEndsBeforeTheStageConfirmsIt) {
     StationPosition at;
     motion.ReadPosition(&at);
     EXPECT_NEAR(at.slide_mm, target.slide_mm, 0.01) << "move " << i;
+  }
+}
+
+// The slide's driver, waiting up to `reset_wait_s` for a silent device (a boot after a power cut).
+std::unique_ptr<DeviceDriver> OpenWaiting(EmulatedSlide& slide, const std::string& reset_wait_s) {
+  DeviceSpec spec = SlideSpec();
+  spec.settings["reset_wait_s"] = {reset_wait_s, 9};
+  return slide.Open(spec);
+}
+
+// After a restart: homed (and so identified) again, the retaken move lands at rest.
+void HomeAgainAndLand(EmulatedSlide& slide, Motion& motion, double slide_mm) {
+  motion.Home();
+  StationPosition target;
+  target.slide_mm = slide_mm;
+  motion.StartMove(target);
+  motion.WaitSettled(std::chrono::milliseconds(20000));
+  EXPECT_FALSE(slide.world.Pose().moving);
+  StationPosition at;
+  motion.ReadPosition(&at);
+  EXPECT_NEAR(at.slide_mm, slide_mm, 0.01);
+}
+
+// Regression: a power cut whose boot outlasts every retry (30 simulated s, 1.5 s here; the
+// driver gives up on a silent query after 5 x 100 ms) is waited out up to reset_wait_s: at rest,
+// the device answers again with its reference lost (WR), a restart; the next Home identifies the
+// device again and the retaken move lands.
+TEST(ZaberAsciiEmulated, ASilentPowerCutAtRestIsWaitedOutIdentifiedAndHomedAgain) {
+  EmulatedSlide slide("      reset_s: 30\n");
+  std::unique_ptr<DeviceDriver> driver = OpenWaiting(slide, "20");
+  Motion& motion = testing::IdentifiedAndHomed(*driver);
+  slide.emulator->PowerCycle();
+  EXPECT_THROW(motion.CheckAlive(), DeviceRestarted);
+  HomeAgainAndLand(slide, motion, 1750.0);
+}
+
+// The same power cut in the middle of a move, the controller sending an alert ("!01 0 IDLE WR")
+// when it is up: the wait for the move sees the boot through, passes the alert over and reports
+// the restart (never a settled move); homed again, the retaken move lands.
+TEST(ZaberAsciiEmulated, APowerCutMidMoveThatAlertsIsARestartOnceTheBootEnds) {
+  EmulatedSlide slide("      reset_s: 30\n      power_up_alert: true\n");
+  std::unique_ptr<DeviceDriver> driver = OpenWaiting(slide, "20");
+  Motion& motion = testing::IdentifiedAndHomed(*driver);
+  StationPosition target;
+  target.slide_mm = 2100.0;
+  motion.StartMove(target);
+  slide.emulator->PowerCycle();
+  EXPECT_THROW(motion.WaitSettled(std::chrono::milliseconds(20000)), DeviceRestarted);
+  HomeAgainAndLand(slide, motion, 2100.0);
+}
+
+// A device silent for longer than reset_wait_s is gone: a LinkError naming the wait.
+TEST(ZaberAsciiEmulated, ABootLongerThanResetWaitIsALinkErrorNamingIt) {
+  EmulatedSlide slide("      reset_s: 200\n");
+  std::unique_ptr<DeviceDriver> driver = OpenWaiting(slide, "1");
+  Motion& motion = testing::IdentifiedAndHomed(*driver);
+  slide.emulator->PowerCycle();
+  try {
+    motion.CheckAlive();
+    FAIL() << "expected a LinkError";
+  } catch (const DeviceRestarted& e) {
+    FAIL() << "a restart before the device answered: " << e.what();
+  } catch (const LinkError& e) {
+    EXPECT_NE(std::string(e.what()).find("reset_wait_s"), std::string::npos) << e.what();
   }
 }
 
