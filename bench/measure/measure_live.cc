@@ -6,7 +6,7 @@
 //     the camera's own readout_ms): brackets per second / bound >= 0.9 is the goal;
 //   - the latency from a bracket's last frame to its estimate (each JSON line's latency_ms):
 //     median, p95 and max against 2 ms;
-// then tracks (`measure --track`, issue 34) FRAMES frames at the model's reference exposure, again
+// then tracks (`measure --track`) FRAMES frames at the model's reference exposure, again
 // with the blob fit and with the moments, and sets side by side:
 //   - estimates per second against the frames per second the camera delivered in the same run
 //     (the counters of the last line: received + lost frames over the lines' time span);

@@ -124,7 +124,7 @@ TEST_F(CalibrateValidate, CalibrationRecordsEveryBracketFitsAndReports) {
   EXPECT_EQ(testing::CountLines(run + "/features.csv"), 1 + 24 * 4);
 }
 
-// Issue 38 item 2: a good calibration on the virtual rig passes its own fitness, and the figure is
+// A good calibration on the virtual rig passes its own fitness, and the figure is
 // in model.yaml, the output and the report.
 TEST_F(CalibrateValidate, AGoodCalibrationPassesItsFitness) {
   ASSERT_EQ(calibrate_code_, 0) << calibrate_output_[0];

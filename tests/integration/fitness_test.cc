@@ -1,4 +1,4 @@
-// Issue 38 item 2, end to end on the virtual rig: a calibration whose frames the model's family
+// The fit judges itself, end to end on the virtual rig: a calibration whose frames the model's family
 // cannot describe (a cable over 5% of the IRED's disc, moving with it: every pose's blob is a cut
 // disc) fails its own fitness. calibrate warns with the worst poses and the probable cause, writes
 // the model beside as model.rejected.yaml (never model.yaml) and exits non-zero; `irdist fit

@@ -1,4 +1,4 @@
-// `irdist measure --track` end to end on the virtual rig (issue 34 items 1 and 4), through the
+// `irdist measure --track` end to end on the virtual rig , through the
 // built binary: a small calibration first (at time scale 50), then tracking a static IRED at time
 // scale 1 (every line mode "track", no frame lost, every frame between two lines counted as
 // skipped, the estimates within their standard errors of the pose, the per-frame scatter against

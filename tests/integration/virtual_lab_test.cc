@@ -180,7 +180,7 @@ void ExpectOneRestartAndEveryFrame(const LabRun& run) {
   EXPECT_NE(run.output.find("1 retakes, 1 station reboots"), std::string::npos) << run.output;
 }
 
-// Issue 33 item 6, the Zaber's turn: the controller loses power mid-sweep and boots for 6 host
+// Regression, the Zaber's turn: the controller loses power mid-sweep and boots for 6 host
 // seconds (60 simulated), deaf and mute, then alerts "!01 0 IDLE WR". Its driver gave up on a
 // silent query after 5 x 500 ms (a LinkError stopped the run); it waits the boot out
 // (reset_wait_s 60 s), identifies and homes the stage again, retakes the bracket and completes,

@@ -204,7 +204,7 @@ class MeasureTest(unittest.TestCase):
         self.assertEqual(child_pids() - before, set(), "measure ended and was reaped")
 
     def test_track_yields_a_dict_per_frame_in_mode_track(self):
-        # Issue 34 item 1: irdist.measure(..., track=True), the IRED placed at 2000 mm.
+        # irdist.measure(..., track=True), the IRED placed at 2000 mm.
         lines = list(irdist.measure(MODEL, rig="virtual", count=6, track=True,
                                     args=["--time-scale", "10", "--at", "2000,0,0,500"],
                                     stderr=subprocess.DEVNULL))
