@@ -160,7 +160,7 @@ TEST(RigTest, DelaysBeyondADayAreRefused) {
             std::string::npos);
 }
 
-// measure --track's process noise as a rig key : read, bounded, unknown keys refused.
+// measure --track's process noise as a rig key: read, bounded, unknown keys refused.
 TEST(RigTest, TrackAccelPsdIsReadAndBounded) {
   const std::string head = "name: r\nkind: hardware\ncamera:\n  id: 10.0.0.2\n";
   const std::string station = "station:\n  port: /dev/ttyUSB0\n";
