@@ -14,7 +14,9 @@ namespace irdist {
 
 // Starts the virtual rig, prints `camera: <id> <address> serial <serial>` and `station: <pty>`,
 // writes a state file (app/inputs/state_file.h: irdist-sim-<pid>.yaml in the user's private runtime
-// folder) and runs until SIGINT/SIGTERM; then stops the rig and removes the state file.
+// folder), logs the station's trajectory to irdist-sim-<pid>-trajectory.csv beside it (printed as
+// `trajectory:`, and the state file's `trajectory_csv`) and runs until SIGINT/SIGTERM; then stops
+// the rig and removes the state file and the trajectory file.
 void RunSim(const SimArgs& args, CommandIo io);
 
 // Lists running virtual rigs (their state files), serial ports (/dev/ttyUSB*, /dev/ttyACM*) and,

@@ -146,6 +146,10 @@ std::string SimStateYaml(const SimState& state) {
   for (const auto& [name, port] : state.ports) {
     out << YAML::Key << "port." + name << YAML::Value << YAML::DoubleQuoted << port;
   }
+  if (!state.trajectory_csv.empty()) {
+    out << YAML::Key << "trajectory_csv" << YAML::Value << YAML::DoubleQuoted
+        << state.trajectory_csv;
+  }
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }

@@ -33,10 +33,11 @@ struct SimState {
   std::string camera_id, camera_address, serial, station_port;
   double time_scale = 1.0;
   std::map<std::string, std::string> ports;  // station.devices name -> pty
+  std::string trajectory_csv;  // the station's trajectory file (sim/trajectory_file.h), or ""
 };
 
 // The state file's YAML (yaml-cpp's emitter): pid, rig, camera_id, camera_address, serial,
-// station_port, time_scale, and `port.<device>` for each device.
+// station_port, time_scale, `port.<device>` for each device and `trajectory_csv` when logged.
 std::string SimStateYaml(const SimState& state);
 
 // Writes the state file irdist-sim-<pid>.yaml into RuntimeStateDir(), created new through a

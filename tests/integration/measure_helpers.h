@@ -1,15 +1,19 @@
 #pragma once
-// What the measure integration tests share: the small calibration they make their model with, and
-// the JSON lines of `irdist measure --json`.
+// What the measure integration tests share: the small calibration they make their model with, the
+// JSON lines of `irdist measure --json`, and waiting for an `irdist sim` to run.
 
 #include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <regex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "tests/integration/run_helpers.h"
@@ -75,6 +79,22 @@ inline int ReadLinesThenGoAway(const std::vector<std::string>& args, std::size_t
   std::fclose(reader);  // the reader goes away, as head does
   int status = 0;
   return waitpid(pid, &status, 0) == pid ? status : -1;
+}
+
+// Waits until `irdist sim` announced its state file and runs; returns the file ("" on failure).
+inline std::string WaitForSim(Child& sim, const std::string& log_path) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  std::smatch state;
+  while (sim.Running() && std::chrono::steady_clock::now() < deadline) {
+    const std::string log = ReadAll(log_path);
+    if (log.find("Running until") != std::string::npos &&
+        std::regex_search(log, state, std::regex(R"(state: (\S+\.yaml))")) &&
+        std::filesystem::exists(state[1].str())) {
+      return state[1].str();
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return "";
 }
 
 }  // namespace irdist::testing

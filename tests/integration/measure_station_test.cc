@@ -12,7 +12,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -30,22 +29,6 @@ using testing::ReadAll;
 using testing::RunIrdist;
 using testing::JsonLines;
 using testing::WriteAll;
-
-// Waits until `irdist sim` announced its state file and runs; returns the file ("" on failure).
-std::string WaitForSim(testing::Child& sim, const std::string& log_path) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  std::smatch state;
-  while (sim.Running() && std::chrono::steady_clock::now() < deadline) {
-    const std::string log = ReadAll(log_path);
-    if (log.find("Running until") != std::string::npos &&
-        std::regex_search(log, state, std::regex(R"(state: (\S+\.yaml))")) &&
-        fs::exists(state[1].str())) {
-      return state[1].str();
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  return "";
-}
 
 struct Pose {
   const char* slide_mm;
@@ -166,7 +149,7 @@ TEST_F(MeasureStation, EstimatesAgreeWithThePosesSetByIrdistStation) {
 
   const std::string sim_log = dir_ + "/sim.log";
   testing::Child sim({"sim", "virtual", "--time-scale", "10"}, sim_log);
-  const std::string state = WaitForSim(sim, sim_log);
+  const std::string state = testing::WaitForSim(sim, sim_log);
   ASSERT_FALSE(state.empty()) << ReadAll(sim_log);
   EXPECT_EQ(fs::path(state).parent_path(), fs::path(dir_ + "/runtime/irdist"));  // private
   ASSERT_EQ(Run("home", {"station", "--rig", "virtual", "home"}, &output), 0) << output;

@@ -89,6 +89,16 @@ TEST_F(StateFileTest, StateYamlReadsBackWhateverThePathsHold) {
   EXPECT_EQ(node["rig"].as<std::string>(), state.rig);
   EXPECT_EQ(node["pid"].as<long>(), 42);
   EXPECT_EQ(node["port.slide"].as<std::string>(), "/dev/pts/4");
+  EXPECT_FALSE(node["trajectory_csv"]);  // not logged: no key
+}
+
+// A sim that logs the station's trajectory names its file, so a test or a user can find it.
+TEST_F(StateFileTest, StateYamlNamesTheTrajectoryFileWhenLogged) {
+  SimState state;
+  state.pid = 7;
+  state.trajectory_csv = "/run/user/1000/irdist/irdist-sim-7-trajectory.csv";
+  const YAML::Node node = YAML::Load(SimStateYaml(state));
+  EXPECT_EQ(node["trajectory_csv"].as<std::string>(), state.trajectory_csv);
 }
 
 // The attack: a link planted at the state file's name (or its temporary name) to a file
