@@ -1,4 +1,4 @@
-// `irdist measure --track` on a moving IRED (issue 34 item 2), through the built binary: `irdist
+// `irdist measure --track` on a moving IRED, through the built binary: `irdist
 // sim` runs a virtual rig whose slide cruises at 0.5 m/s (a copy of recipes/rigs/virtual.yaml with
 // the station emulator's slide speed 500 mm/s and acceleration 2000 mm/s^2: the station protocol
 // sets speeds in the station, not per MOVE), logging the station's trajectory to the file its
