@@ -215,9 +215,7 @@ Handlers DefaultHandlers() {
   handlers.check = RunCheck;
   handlers.sim = RunSim;
   handlers.devices = RunDevices;
-  handlers.measure = [](const MeasureArgs& args, CommandIo io) {
-    args.track ? RunTrack(args, io) : RunMeasure(args, io);  // docs/measure.md "Tracking"
-  };
+  handlers.measure = RunMeasureOrTrack;  // docs/measure.md "Tracking"
   handlers.snap = RunSnap;
   handlers.view = RunView;
   handlers.station = RunStation;

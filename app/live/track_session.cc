@@ -271,4 +271,8 @@ void RunTrack(const MeasureArgs& args, CommandIo io) {
   if (!stopped.empty()) summary << "Stopped: " << stopped << "\n";
 }
 
+void RunMeasureOrTrack(const MeasureArgs& args, CommandIo io) {
+  args.track ? RunTrack(args, io) : RunMeasure(args, io);
+}
+
 }  // namespace irdist

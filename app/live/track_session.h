@@ -50,4 +50,7 @@ class TrackSession {
 // --out and --record (UsageError): a track writes only its lines.
 void RunTrack(const MeasureArgs& args, CommandIo io);
 
+// The `measure` command: RunTrack with --track, else RunMeasure's brackets (app/live/measure.h).
+void RunMeasureOrTrack(const MeasureArgs& args, CommandIo io);
+
 }  // namespace irdist

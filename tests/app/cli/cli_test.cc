@@ -14,6 +14,7 @@
 #include "app/devices/station_cmd.h"
 #include "app/devices/tools.h"
 #include "app/live/measure.h"
+#include "app/live/track_session.h"
 #include "app/live/view.h"
 #include "app/runs/offline.h"
 #include "app/runs/run.h"
@@ -141,7 +142,7 @@ TEST(CliTest, EveryCommandRunsTheFunctionOfItsFamily) {
   EXPECT_TRUE(Calls(h.plan, &RunPlan));
   EXPECT_TRUE(Calls(h.sim, &RunSim));
   EXPECT_TRUE(Calls(h.devices, &RunDevices));
-  EXPECT_TRUE(Calls(h.measure, &RunMeasure));
+  EXPECT_TRUE(Calls(h.measure, &RunMeasureOrTrack));
   EXPECT_TRUE(Calls(h.snap, &RunSnap));
   EXPECT_TRUE(Calls(h.view, &RunView));
   EXPECT_TRUE(Calls(h.station, &RunStation));
