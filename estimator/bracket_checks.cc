@@ -74,4 +74,12 @@ std::vector<std::string> OutsideRanges(const CalibratedRanges& ranges,
   return outside;
 }
 
+RangeOptions RangeOptionsOf(const CalibrationModel& model) {
+  RangeOptions options;
+  if (model.geometric.fitted()) {
+    options.calibration_rel_error = std::max(model.geometric.summary.mean_relative_error, 0.0);
+  }
+  return options;
+}
+
 }  // namespace irdist

@@ -52,6 +52,10 @@ struct RangeOptions {
   double exposure_tolerance = 1e-3;  // relative
   double signal_tolerance = 0.02;    // relative
 };
+// The range check's options for `model`: its geometric fit's mean relative error (what the
+// distance leans on) as the calibration's error, beside each estimate's own.
+RangeOptions RangeOptionsOf(const CalibrationModel& model);
+
 std::vector<std::string> OutsideRanges(const CalibratedRanges& ranges,
                                        const DistanceEstimate& estimate, double t_ref_ms,
                                        const std::vector<double>& t_ms,

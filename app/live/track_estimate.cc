@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "app/processing/estimate_flags.h"
+#include "base/pi.h"
 #include "estimator/bracket_checks.h"
 #include "estimator/estimate.h"
 #include "estimator/estimate_baselines.h"
@@ -13,8 +14,6 @@
 namespace irdist {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The exposure's place in the range checks: a frame at a calibrated reference exposure is checked
 // as a reference (t_ref_ms, no t_ms), any other as a measurement exposure (t_ms) beside a
@@ -74,9 +73,7 @@ EstimateRow FrameRow(const Features& f, double exposure_ms, const CalibrationMod
   ExposureRoles(model.ranges, exposure_ms, &t_ref_ms, &t_ms);
   const std::vector<const Features*> frames = {&f};
   if (row.ok) {
-    RangeOptions options;
-    options.calibration_rel_error = std::max(model.geometric.summary.mean_relative_error, 0.0);
-    row.outside = OutsideRanges(model.ranges, e, t_ref_ms, t_ms, frames, options);
+    row.outside = OutsideRanges(model.ranges, e, t_ref_ms, t_ms, frames, RangeOptionsOf(model));
     row.outside_range = !row.outside.empty();
     *health = CheckHealth(model, g.d_mm, frames);
   }

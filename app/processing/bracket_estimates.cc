@@ -25,16 +25,6 @@ HealthCheck HealthOfFrames(const CalibrationModel& model, double d_mm,
   return CheckHealth(model, d_mm, frames);
 }
 
-// The range check's options for `model`: the calibration's error, its geometric fit's mean
-// relative error (what the distance leans on), beside each estimate's own.
-RangeOptions RangeOptionsOf(const CalibrationModel& model) {
-  RangeOptions options;
-  if (model.geometric.fitted()) {
-    options.calibration_rel_error = std::max(model.geometric.summary.mean_relative_error, 0.0);
-  }
-  return options;
-}
-
 // A row from estimate `e` of the exposures (t_ref_ms, t_ms) taken in `frames`: its values, the
 // calibrated ranges it lies outside, and whether it is an estimate at all.
 void FillRow(const CalibrationModel& model, const DistanceEstimate& e, double t_ref_ms,
