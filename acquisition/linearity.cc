@@ -133,13 +133,14 @@ Probe FindWindow(const GrabAt& grab, double exposure_us, double min_us, double m
   p.exposure_us = std::clamp(exposure_us, min_us, max_us);
   const double range = full_scale_dn - dark_dn;
   for (int attempt = 0; attempt < 8; ++attempt) {
-    const std::optional<cv::Mat> frame = grab(p.exposure_us);
-    if (!frame || frame->empty()) {
+    const std::optional<ExposedFrame> frame = grab(p.exposure_us);
+    if (!frame || frame->image.empty() || !(frame->exposure_us > 0.0)) {
       p.why = "no frame arrived at " + std::to_string(p.exposure_us) + " us";
       return p;
     }
-    p.window = BrightestWindow(*frame, options.window_px);
-    p.peak_dn = WindowMax(*frame, p.window);
+    p.exposure_us = frame->exposure_us;  // as the camera took it
+    p.window = BrightestWindow(frame->image, options.window_px);
+    p.peak_dn = WindowMax(frame->image, p.window);
     if (p.peak_dn >= dark_dn + options.saturation_fraction * range) {
       if (p.exposure_us <= min_us) break;
       p.exposure_us = std::max(min_us, p.exposure_us / 4.0);
@@ -195,12 +196,12 @@ LinearityResult MeasureLinearity(const GrabAt& grab,
                                                        i / (options.points - 1);
     const double exposure_us =
         std::clamp(fraction * range / rise_per_us, min_exposure_us, max_exposure_us);
-    const std::optional<cv::Mat> frame = grab(exposure_us);
-    if (!frame || frame->empty()) {
+    const std::optional<ExposedFrame> frame = grab(exposure_us);
+    if (!frame || frame->image.empty() || !(frame->exposure_us > 0.0)) {
       failed.why = "no frame arrived at " + std::to_string(exposure_us) + " us";
       return failed;
     }
-    points.push_back({exposure_us, cv::mean((*frame)(probe.window))[0]});
+    points.push_back({frame->exposure_us, cv::mean(frame->image(probe.window))[0]});
   }
   return FitLinearity(dark_dn, full_scale_dn, points, options);
 }
@@ -209,19 +210,26 @@ LinearityResult MeasureCameraLinearity(Camera& camera, const std::function<void(
                                        double probe_exposure_us, double min_exposure_us,
                                        double max_exposure_us, int bit_depth,
                                        const LinearityOptions& options) {
-  const GrabAt grab = [&camera, &fire](double exposure_us) -> std::optional<cv::Mat> {
-    camera.SetExposureUs(exposure_us);
+  const GrabAt grab = [&camera, &fire](double exposure_us) -> std::optional<ExposedFrame> {
+    camera.WriteExposureUs(exposure_us);  // no read-back check: the camera's step is measured
+    const double used_us = camera.ExposureUs();
     camera.Flush();
     fire();
-    const auto timeout = std::chrono::milliseconds(3000 + static_cast<int>(exposure_us / 1000));
+    const auto timeout = std::chrono::milliseconds(3000 + static_cast<int>(used_us / 1000));
     const std::optional<RawFrame> frame = camera.WaitFrame(timeout);
     if (!frame || frame->status != FrameStatus::kOk) return std::nullopt;
-    return frame->image;
+    return ExposedFrame{frame->image, used_us};
   };
   const bool was_streaming = camera.streaming();
   if (!was_streaming) camera.StartStream();
   const LinearityResult result = MeasureLinearity(
-      grab, [&grab, min_exposure_us] { return grab(min_exposure_us); }, probe_exposure_us,
+      grab,
+      [&grab, min_exposure_us]() -> std::optional<cv::Mat> {
+        std::optional<ExposedFrame> dark = grab(min_exposure_us);
+        if (!dark) return std::nullopt;
+        return dark->image;
+      },
+      probe_exposure_us,
       min_exposure_us, max_exposure_us, static_cast<double>((1 << bit_depth) - 1), options);
   camera.Flush();
   if (!was_streaming) camera.StopStream();

@@ -57,13 +57,20 @@ LinearityResult FitLinearity(double dark_dn, double full_scale_dn,
                              const std::vector<LinearityPoint>& points,
                              const LinearityOptions& options);
 
-// A frame at an exposure (us), or nothing when none arrived. Frames are CV_16UC1.
-using GrabAt = std::function<std::optional<cv::Mat>(double exposure_us)>;
+// A frame and the exposure the camera took it at (us): what it reads back, which may be the asked
+// one rounded to the camera's step (a FLIR's ExposureTime is whole microseconds).
+struct ExposedFrame {
+  cv::Mat image;  // CV_16UC1
+  double exposure_us = 0.0;
+};
+// A frame at an exposure (us), or nothing when none arrived.
+using GrabAt = std::function<std::optional<ExposedFrame>(double exposure_us)>;
 
 // The series on a camera: a dark frame (`grab_dark`, e.g. the shortest exposure or the source
 // off), a probe at `probe_exposure_us` (shortened until the brightest window is unsaturated,
 // lengthened until it is lit) that places the window, then options.points exposures from the low
-// to the high fraction of the range by the probe's slope, each window's mean; then the fit.
+// to the high fraction of the range by the probe's slope, each window's mean at the exposure the
+// camera used (ExposedFrame); then the fit.
 // Exposures stay inside [min_exposure_us, max_exposure_us]. A scene with no light says so.
 LinearityResult MeasureLinearity(const GrabAt& grab,
                                  const std::function<std::optional<cv::Mat>()>& grab_dark,
@@ -72,7 +79,9 @@ LinearityResult MeasureLinearity(const GrabAt& grab,
                                  const LinearityOptions& options);
 
 // The series on a configured camera, each frame started by `fire` (a software or line trigger):
-// the dark frame at `min_exposure_us`, the probe at `probe_exposure_us`; the stream started for it
+// the dark frame at `min_exposure_us`, the probe at `probe_exposure_us`; each exposure written,
+// then read back as the one the frame was taken at (a camera may round it to its step, never a
+// failure here); the stream started for it
 // (and stopped after when it was not running), queued frames dropped before each, the exposure
 // put back to the probe's after. Frames that do not arrive within the exposure plus 3 s end it as
 // not measured.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <ostream>
 #include <set>
 #include <sstream>
@@ -408,6 +409,21 @@ DefectMap RecordingDefectMap(const RecordingReader& reader, const SceneOptions& 
   return map;
 }
 
+// A model written to model_path supersedes an earlier fit's rejected model beside it: removed, and
+// said, so that the folder never shows a rejected model next to the one in use.
+void RemoveSupersededRejectedModel(const std::string& model_path, std::ostream& out) {
+  const std::string rejected = RejectedModelPath(model_path);
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(std::filesystem::symlink_status(rejected, error))) return;
+  if (std::filesystem::remove(rejected, error)) {
+    out << "  removed " << rejected << " (an earlier fit's rejected model, superseded by "
+        << model_path << ")\n";
+  } else {
+    out << "warning: could not remove " << rejected << " (an earlier fit's rejected model): "
+        << error.message() << "\n";
+  }
+}
+
 // A failing fit's warning, and unless kept, FitnessError.
 void JudgeFitness(const RecordingReader& reader, const CalibrationFitness& fitness,
                   const std::string& model_path, bool keep_model, std::ostream& out) {
@@ -456,6 +472,7 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   const bool rejected = !model.fitness.passed && !keep_model;
   const std::string written_path = rejected ? RejectedModelPath(model_path) : model_path;
   SaveModel(model, written_path);
+  if (!rejected) RemoveSupersededRejectedModel(model_path, out);
   PrintFitSummaries(model, written_path, out);
   if (!report_dir.empty()) {
     out << "Report: " << WriteCalibrationReport(reader, samples, model, written_path, report_dir)

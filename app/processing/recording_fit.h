@@ -46,7 +46,8 @@ std::vector<FitnessPose> FitnessPosesOf(const RecordingReader& reader);
 // Calibration: samples -> Fit (default options) -> the fit's fitness -> SaveModel(model_path) ->
 // report in report_dir (measured vs modelled dE/dS, Eq. 25 curves). Prints each model's FitSummary
 // and the fitness to `out`. A fit that fails its fitness warns; unless keep_model, its model goes
-// to RejectedModelPath (report written too) and FitnessError is thrown.
+// to RejectedModelPath (report written too) and FitnessError is thrown; a model written to
+// model_path removes an earlier RejectedModelPath file (said in `out`).
 CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
                               const FeatureOptions& feature_options, const std::string& model_path,
                               const std::string& report_dir, std::ostream& out,

@@ -70,9 +70,14 @@ TEST(FitLinearity, NoLightIsSaidNotMeasured) {
   EXPECT_EQ(r.why.rfind("no light", 0), 0u) << r.why;
 }
 
-// A synthetic camera: a Gaussian blob whose gray levels grow with the exposure through `curve`.
-GrabAt BlobCamera(double rate_dn_per_us, const std::function<double(double)>& curve) {
-  return [rate_dn_per_us, curve](double exposure_us) -> std::optional<cv::Mat> {
+// A synthetic camera: a Gaussian blob whose gray levels grow with the exposure through `curve`;
+// step_us > 0: it takes the exposure rounded to whole steps (and says so), as a FLIR's whole
+// microseconds.
+GrabAt BlobCamera(double rate_dn_per_us, const std::function<double(double)>& curve,
+                  double step_us = 0.0) {
+  return [rate_dn_per_us, curve, step_us](double asked_us) -> std::optional<ExposedFrame> {
+    const double exposure_us =
+        step_us > 0.0 ? std::max(step_us, step_us * std::round(asked_us / step_us)) : asked_us;
     cv::Mat image(64, 64, CV_16UC1);
     for (int y = 0; y < 64; ++y) {
       for (int x = 0; x < 64; ++x) {
@@ -82,14 +87,19 @@ GrabAt BlobCamera(double rate_dn_per_us, const std::function<double(double)>& cu
             static_cast<std::uint16_t>(std::lround(std::min(kFullScale, curve(linear))));
       }
     }
-    return image;
+    return ExposedFrame{image, exposure_us};
   };
+}
+
+// The dark frame of a synthetic camera: its shortest exposure's image.
+std::function<std::optional<cv::Mat>()> DarkOf(const GrabAt& grab) {
+  return [grab]() -> std::optional<cv::Mat> { return grab(0.0)->image; };
 }
 
 TEST(MeasureLinearity, ALinearCameraPassesWithTheDarkOffset) {
   const GrabAt grab = BlobCamera(0.5, [](double v) { return v; });
   const LinearityResult r =
-      MeasureLinearity(grab, [&grab] { return grab(0.0); }, 50000.0, 10.0, 1e6, kFullScale, {});
+      MeasureLinearity(grab, DarkOf(grab), 50000.0, 10.0, 1e6, kFullScale, {});
   ASSERT_TRUE(r.measured) << r.why;
   EXPECT_LT(r.error_percent, 0.3);  // integer rounding only
   EXPECT_NEAR(r.dark_dn, kDark, 0.5);
@@ -97,11 +107,24 @@ TEST(MeasureLinearity, ALinearCameraPassesWithTheDarkOffset) {
   EXPECT_EQ(r.points_saturated, 0);
 }
 
+// A bright source on a camera whose exposure is whole microseconds: the series' exposures are
+// 1.6 to 14 us asked, up to 25% off once rounded; each window is measured at the exposure the
+// camera took, so the line stays straight (the asked exposures would read a few % nonlinear).
+TEST(MeasureLinearity, ACameraThatRoundsTheExposureIsMeasuredAtWhatItTook) {
+  const GrabAt grab = BlobCamera(200.0, [](double v) { return v; }, 1.0);
+  const LinearityResult r = MeasureLinearity(grab, DarkOf(grab), 5.0, 1.0, 1e6, kFullScale, {});
+  ASSERT_TRUE(r.measured) << r.why;
+  EXPECT_LT(r.error_percent, 0.3) << "points measured at the asked exposures, not the taken ones";
+  for (const LinearityPoint& p : r.points) {
+    EXPECT_EQ(p.exposure_us, std::round(p.exposure_us)) << "an exposure the camera never took";
+  }
+}
+
 TEST(MeasureLinearity, ALutCurveFails) {
   const auto lut = [](double v) { return kFullScale * std::pow(v / kFullScale, 0.45); };
   const GrabAt grab = BlobCamera(0.5, lut);
   const LinearityResult r =
-      MeasureLinearity(grab, [&grab] { return grab(0.0); }, 1000.0, 10.0, 1e6, kFullScale, {});
+      MeasureLinearity(grab, DarkOf(grab), 1000.0, 10.0, 1e6, kFullScale, {});
   ASSERT_TRUE(r.measured) << r.why;
   EXPECT_GT(r.error_percent, 1.0);
   EXPECT_FALSE(r.Passed());
@@ -110,7 +133,7 @@ TEST(MeasureLinearity, ALutCurveFails) {
 TEST(MeasureLinearity, ADarkSceneSaysSo) {
   const GrabAt grab = BlobCamera(0.0, [](double v) { return v; });
   const LinearityResult r =
-      MeasureLinearity(grab, [&grab] { return grab(0.0); }, 1000.0, 10.0, 20000.0, kFullScale, {});
+      MeasureLinearity(grab, DarkOf(grab), 1000.0, 10.0, 20000.0, kFullScale, {});
   EXPECT_FALSE(r.measured);
   EXPECT_EQ(r.why.rfind("no light", 0), 0u) << r.why;
 }

@@ -96,6 +96,10 @@ TEST_F(Fitness, FitKeepsTheModelWhenToldTo) {
   EXPECT_NE(output.find("warning: the model misses its own calibration frames"), std::string::npos)
       << output;
   EXPECT_NE(output.find("Kept as asked (--keep-model)"), std::string::npos) << output;
+  // The kept model supersedes the rejected one the first fit left beside it: removed, and said.
+  EXPECT_FALSE(fs::exists(*dir_ + "/kept/model.rejected.yaml"));
+  EXPECT_NE(output.find("removed " + *dir_ + "/kept/model.rejected.yaml"), std::string::npos)
+      << output;
   const CalibrationModel model = LoadModel(kept);
   ASSERT_TRUE(model.fitness.assessed);
   EXPECT_FALSE(model.fitness.passed);
