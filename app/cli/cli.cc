@@ -11,16 +11,14 @@
 #include "app/devices/camera_test.h"
 #include "app/devices/station_cmd.h"
 #include "app/devices/tools.h"
-#include "app/inputs/recipe.h"
 #include "app/live/measure.h"
 #include "app/live/track_session.h"
 #include "app/live/view.h"
 #include "app/runs/offline.h"
+#include "app/runs/plan_command.h"
 #include "app/runs/run.h"
-#include "app/runs/run_suggest.h"
 #include "base/bounds.h"
 #include "base/version.h"
-#include "sim/rig_physics.h"
 #include "station/plan.h"
 #include "station/serial_transport.h"
 
@@ -30,95 +28,39 @@ namespace {
 struct SubcommandInfo {
   const char* name;
   const char* summary;
-  const char* lands_with;  // what must be integrated before the command runs
 };
 
 // The dispatch table, in help order.
 constexpr SubcommandInfo kSubcommands[] = {
-    {"calibrate", "Sweep a calibration recipe on a rig, record it and fit model.yaml",
-     "the station sweep (station/), the recording (acquisition/) and the calibration fit "
-     "(estimator/)"},
-    {"validate", "Sweep a validation recipe, estimate every bracket against the ground truth",
-     "the station sweep (station/), the recording (acquisition/) and Algorithm 1 (estimator/)"},
-    {"fit", "Fit model.yaml offline from a recording",
-     "the recording reader (acquisition/) and the calibration fit (estimator/)"},
-    {"playback", "Estimate distances offline from a recording with a model",
-     "the recording reader (acquisition/) and Algorithm 1 (estimator/)"},
-    {"check", "Check a recording for gaps, damaged frames and consistency",
-     "the recording checker (acquisition/)"},
-    {"plan", "Check a recipe and print its grid, order, frame count and duration estimate", ""},
-    {"sim", "Run the virtual rig (camera on 127.0.0.1, station on a pty) until Ctrl-C",
-     "the virtual rig (sim/)"},
-    {"devices", "List the cameras and stations irdist can see",
-     "camera discovery (acquisition/) and the station client (station/)"},
-    {"measure", "Measure distance, orientation (and 3D position) live from a calibrated camera",
-     "the camera (acquisition/) and Algorithm 1 (estimator/)"},
-    {"snap", "Save one frame to a PNG; print the blob's position and a suggested roi_px",
-     "the camera (acquisition/)"},
-    {"view", "Live window on the camera: image, blob, ellipse, levels, estimate with --model",
-     "the camera (acquisition/) and OpenCV highgui"},
-    {"station", "Put the station at a pose and current by hand (move, current, off, home, status)",
-     "the station composition (station/)"},
-    {"station-test", "Check a station board against docs/station-protocol.md (pass/fail table)",
-     "the station conformance suite (station/)"},
-    {"camera-test", "Check a camera's features against what irdist needs (pass/fail table)",
-     "the camera (acquisition/)"},
+    {"calibrate", "Sweep a calibration recipe on a rig, record it and fit model.yaml"},
+    {"validate", "Sweep a validation recipe, estimate every bracket against the ground truth"},
+    {"fit", "Fit model.yaml offline from a recording"},
+    {"playback", "Estimate distances offline from a recording with a model"},
+    {"check", "Check a recording for gaps, damaged frames and consistency"},
+    {"plan", "Check a recipe and print its grid, order, frame count and duration estimate"},
+    {"sim", "Run the virtual rig (camera on 127.0.0.1, station on a pty) until Ctrl-C"},
+    {"devices", "List the cameras and stations irdist can see"},
+    {"measure", "Measure distance, orientation (and 3D position) live from a calibrated camera"},
+    {"snap", "Save one frame to a PNG; print the blob's position and a suggested roi_px"},
+    {"view", "Live window on the camera: image, blob, ellipse, levels, estimate with --model"},
+    {"station", "Put the station at a pose and current by hand (move, current, off, home, status)"},
+    {"station-test", "Check a station board against docs/station-protocol.md (pass/fail table)"},
+    {"camera-test", "Check a camera's features against what irdist needs (pass/fail table)"},
 };
 
-const SubcommandInfo& Info(const std::string& name) {
+// A subcommand's summary for the help; a name outside the table is the program's fault.
+const char* SummaryOf(const std::string& name) {
   for (const SubcommandInfo& info : kSubcommands) {
-    if (name == info.name) return info;
+    if (name == info.name) return info.summary;
   }
   IRDIST_CHECK(false, "no subcommand ", name);
-}
-
-[[noreturn]] void ThrowNotAvailable(const std::string& name) {
-  throw NotAvailableError("'irdist " + name + "' is not available in this build yet: it lands " +
-                          "when " + Info(name).lands_with + " are integrated. Available today: " +
-                          "'irdist plan RECIPE' checks a recipe and estimates its duration.");
 }
 
 template <typename Args>
 void Invoke(const std::function<void(const Args&, CommandIo)>& handler, const std::string& name,
             const Args& args, CommandIo io) {
-  if (!handler) ThrowNotAvailable(name);
+  IRDIST_CHECK(static_cast<bool>(handler), "the command '", name, "' has no handler");
   handler(args, io);
-}
-
-std::string JoinMs(const std::vector<double>& values) {
-  std::ostringstream out;
-  for (size_t i = 0; i < values.size(); ++i) out << (i > 0 ? ", " : "") << values[i];
-  return out.str();
-}
-
-void PrintPlan(const Recipe& recipe, const Plan& plan, int show_poses, std::ostream& out) {
-  out << "Recipe: " << recipe.path << " (" << recipe.name << ")";
-  if (!recipe.description.empty()) out << ": " << recipe.description;
-  out << "\nRig: " << recipe.rig.name << " (" << recipe.rig_path << ")\n";
-  out << "Output: " << recipe.output_dir
-      << "; after recording: " << AfterRecordingName(recipe.after) << "\n";
-  const BracketSpec& bracket = recipe.sweep.bracket;
-  out << "Bracket: t_ref " << bracket.t_ref_ms << " ms; t_meas " << JoinMs(bracket.t_meas_ms)
-      << " ms; " << bracket.repeats << (bracket.repeats == 1 ? " repeat" : " repeats")
-      << "; reference " << (bracket.retake_reference ? "retaken before each t_meas" : "taken once")
-      << "\n";
-  out << plan.summary.BriefReport() << "\n";
-  const int total = static_cast<int>(plan.poses.size());
-  const int shown = show_poses < 0 ? total : std::min(show_poses, total);
-  if (shown == 0) return;
-  out << "Order ("
-      << (shown == total ? "all " + std::to_string(total)
-                         : "first " + std::to_string(shown) + " of " + std::to_string(total))
-      << " poses):\n";
-  out << "      #  slide_mm   pan_deg  tilt_deg theta_deg   bias_ma  repeat\n";
-  for (int i = 0; i < shown; ++i) {
-    const Pose& p = plan.poses[static_cast<size_t>(i)];
-    char line[160];
-    std::snprintf(line, sizeof(line), "  %5lld %9.2f %9.2f %9.2f %9.2f %9.2f %7d\n",
-                  static_cast<long long>(p.index), p.slide_mm, p.pan_deg, p.tilt_deg, p.theta_deg,
-                  p.bias_ma, p.repeat);
-    out << line;
-  }
 }
 
 // --time-scale: the virtual rig's range, said in plain numbers (not CLI11's double limits).
@@ -193,18 +135,6 @@ std::vector<std::string> SubcommandNames() {
   return names;
 }
 
-void RunPlan(const PlanArgs& args, CommandIo io) {
-  if (args.suggest) {
-    RunSuggest(args, io);
-    return;
-  }
-  const Recipe recipe = LoadRecipe(args.recipe);
-  // The rig exactly as sim and calibrate load it: a virtual rig's physics too (its refusals,
-  // e.g. a crosstalk of NaN or 5.0001, at file:line:column before any plan is printed).
-  if (recipe.rig.kind == RigKind::kVirtual) sim::LoadRigPhysics(recipe.rig_path);
-  PrintPlan(recipe, PlanRecipe(recipe), args.show_poses, io.out);
-}
-
 Handlers DefaultHandlers() {
   Handlers handlers;
   handlers.plan = RunPlan;
@@ -257,7 +187,7 @@ class CommandTable {
   template <typename Args>
   CLI::App* Add(const char* name, const std::function<void(const Args&, CommandIo)>& handler,
                 const Args& args) {
-    CLI::App* sub = app_.add_subcommand(name, Info(name).summary);
+    CLI::App* sub = app_.add_subcommand(name, SummaryOf(name));
     const std::string command = name;
     entries_.emplace_back(sub, [&handler, &args, command, io = io_] {
       Invoke(handler, command, args, io);

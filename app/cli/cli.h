@@ -1,9 +1,9 @@
 #pragma once
-// The irdist command line: a dispatch table of subcommands (calibrate, validate, fit, playback,
-// check, plan, sim, devices). Each subcommand parses into an Args struct and calls its handler in
-// Handlers; an empty handler means the modules behind it are not integrated in this build, and
-// the command says so (NotAvailableError, exit code 2). Integrating a command = filling its
-// handler in DefaultHandlers() (app/cli/cli.cc).
+// The irdist command line, the top of the house: one table of subcommands (calibrate, validate,
+// fit, playback, check, plan, sim, devices, measure, snap, view, station, station-test,
+// camera-test). Each subcommand parses its flags into an Args struct and calls its handler in
+// Handlers, the engine's entry point in the folder below (DefaultHandlers); a test may give
+// other handlers to see what a command line parses into.
 
 #include <functional>
 #include <iosfwd>
@@ -34,20 +34,16 @@ struct Handlers {
   std::function<void(const CameraTestArgs&, CommandIo)> camera_test;
 };
 
-// The handlers of this build: every command (app/runs/run.h, app/runs/run_suggest.h,
-// app/runs/offline.h, app/devices/tools.h).
+// The handlers of this build: every command (app/runs/run.h, app/runs/plan_command.h,
+// app/runs/offline.h, app/devices/tools.h, app/live/measure.h, ...).
 Handlers DefaultHandlers();
 
 // Names of the subcommands, in help order.
 std::vector<std::string> SubcommandNames();
 
-// `irdist plan`: loads the recipe and prints grid, order, counts and the duration estimate.
-void RunPlan(const PlanArgs& args, CommandIo io);
-
 // Parses argv (argv[0] is the program name) and runs the chosen subcommand. Returns the exit
-// code of a successful run (0; also for --help). Throws UsageError for a bad command line,
-// NotAvailableError for a command whose modules are not integrated, and whatever the handler
-// throws (RecipeError, ...).
+// code of a successful run (0; also for --help). Throws UsageError for a bad command line and
+// whatever the handler throws (RecipeError, ...); CheckError for a command without a handler.
 int RunIrdist(int argc, const char* const* argv, CommandIo io,
               const Handlers& handlers = DefaultHandlers());
 

@@ -26,9 +26,6 @@ int main(int argc, char** argv) {
   } catch (const irdist::InterruptedError& e) {
     std::cerr << "irdist: " << e.what() << "\n";
     return 130;
-  } catch (const irdist::NotAvailableError& e) {
-    std::cerr << "irdist: " << e.what() << "\n";
-    return 2;
   } catch (const irdist::Error& e) {
     std::cerr << "irdist: " << e.what() << "\n";
     return 1;

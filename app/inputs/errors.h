@@ -1,6 +1,6 @@
 #pragma once
 // The app's typed errors. main.cc maps them to exit codes: RecipeError and every other
-// irdist::Error -> 1 (a failed run), UsageError and NotAvailableError -> 2, InterruptedError ->
+// irdist::Error -> 1 (a failed run), UsageError -> 2, InterruptedError ->
 // 130.
 
 #include <string>
@@ -17,12 +17,6 @@ using RecipeError = InputError;
 
 // The command line is wrong (unknown command, missing or bad argument). Exit code 2.
 class UsageError : public Error {
- public:
-  using Error::Error;
-};
-
-// The command exists but its modules are not integrated into this build yet. Exit code 2.
-class NotAvailableError : public Error {
  public:
   using Error::Error;
 };
