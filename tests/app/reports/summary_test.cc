@@ -1,6 +1,7 @@
 #include "app/reports/summary.h"
 
-#include "app/reports/crb.h"
+#include "app/processing/crb.h"
+#include "tests/app/processing/hand_made_estimates.h"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -22,81 +23,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A hand-made estimates.csv. Pose 0: 2000 mm, 20 deg, two currents, two repeats each; pose 1:
-// 1500 mm, 0 deg, one current, with per-dt rows (22 and 24 ms) beside its joint row.
-constexpr const char* kCsv =
-    "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,bias_ma,d_mm,theta_deg,"
-    "outside_range,ok\n"
-    "0,0,0,i0_free,0,2000,20,475,2010,21,0,1\n"
-    "1,0,1,i0_free,0,2000,20,475,1990,19.5,0,1\n"
-    "2,1,0,i0_free,0,2000,20,525,2020,20,0,1\n"
-    "3,1,1,i0_free,0,2000,20,525,2000,22,0,1\n"
-    "4,2,0,i0_free,0,1500,0,500,1530,5,1,1\n"
-    "4,2,0,i0_free,22,1500,0,500,1515,4,0,1\n"
-    "4,2,0,i0_free,24,1500,0,500,1503,3,0,1\n"
-    "4,2,0,geometric,0,1500,0,500,1485,0,0,1\n"
-    "5,2,1,geometric,0,1500,0,500,0,0,0,0\n";
-
 // One line of a text file, for istream_iterator.
 struct Line : std::string {
   friend std::istream& operator>>(std::istream& in, Line& line) { return std::getline(in, line); }
 };
 
-class SummaryTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("irdist_summary_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-    std::ofstream(dir_ / "estimates.csv") << kCsv;
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
-};
 
-TEST_F(SummaryTest, FiguresMatchHandComputedValues) {
-  const auto rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
-  ASSERT_EQ(rows.size(), 9u);
-  const ValidationSummary s = Summarize(rows);
-  ASSERT_EQ(s.methods.size(), 2u);
-  const MethodSummary& m = s.methods[0];
-  EXPECT_EQ(m.method, "i0_free");
-  // Joint rows only: relative errors 0.5, 0.5, 1.0, 0.0, 2.0 %.
-  EXPECT_EQ(m.all.count, 5);
-  EXPECT_NEAR(m.all.distance_rel_error_pct_median, 0.5, 1e-12);
-  EXPECT_NEAR(m.all.distance_rel_error_pct_p95, 1.8, 1e-12);  // 1 + 0.8 * (2 - 1)
-  EXPECT_NEAR(m.all.distance_rel_error_pct_max, 2.0, 1e-12);
-  EXPECT_NEAR(m.all.distance_abs_error_mm_median, 10.0, 1e-9);
-  EXPECT_NEAR(m.all.distance_abs_error_mm_max, 30.0, 1e-9);
-  EXPECT_NEAR(m.all.theta_abs_error_deg_median, 1.0, 1e-12);
-  EXPECT_NEAR(m.all.theta_abs_error_deg_max, 5.0, 1e-12);
-  EXPECT_EQ(m.all.theta_ge15_count, 4);
-  EXPECT_NEAR(m.all.theta_ge15_abs_error_deg_median, 0.75, 1e-12);
-  EXPECT_NEAR(m.all.theta_ge15_abs_error_deg_max, 2.0, 1e-12);
-  EXPECT_EQ(m.all.theta_lt15_count, 1);
-  EXPECT_NEAR(m.all.theta_lt15_abs_error_deg_max, 5.0, 1e-12);
-  // Means 2000 (475 mA) and 2010 (525 mA) at 2000 mm: 0.5 %.
-  ASSERT_TRUE(m.current_shift_pct.has_value());
-  EXPECT_NEAR(*m.current_shift_pct, 0.5, 1e-12);
-  // Repeats 2010/1990 and 2020/2000: sample sd sqrt(200) mm.
-  ASSERT_TRUE(m.dispersion_mm.has_value());
-  EXPECT_NEAR(*m.dispersion_mm, std::sqrt(200.0), 1e-9);
-  ASSERT_EQ(m.by_dt.size(), 2u);
-  EXPECT_NEAR(m.by_dt.at(22.0).distance_rel_error_pct_max, 1.0, 1e-12);
-  EXPECT_NEAR(m.by_dt.at(24.0).distance_rel_error_pct_max, 0.2, 1e-12);
-  ASSERT_TRUE(m.best_dt_ms.has_value());
-  EXPECT_EQ(*m.best_dt_ms, 24.0);
-  EXPECT_EQ(m.outside_calibrated_range, 1);
-
-  const MethodSummary* g = s.Find("geometric");
-  ASSERT_NE(g, nullptr);
-  EXPECT_EQ(g->all.count, 1);
-  EXPECT_EQ(g->all.failed, 1);
-  EXPECT_NEAR(g->all.distance_rel_error_pct_max, 1.0, 1e-12);
-  EXPECT_FALSE(g->current_shift_pct.has_value());
-  EXPECT_FALSE(g->dispersion_mm.has_value());
-}
-
-TEST_F(SummaryTest, SummaryYamlHasTheDocumentedKeys) {
+TEST_F(HandMadeEstimatesTest, SummaryYamlHasTheDocumentedKeys) {
   const auto s = Summarize(ReadEstimatesCsv((dir_ / "estimates.csv").string()));
   const std::string path = (dir_ / "summary.yaml").string();
   WriteSummaryYaml(path, s, {{"recipe", "hand-made"}});
@@ -115,23 +48,9 @@ TEST_F(SummaryTest, SummaryYamlHasTheDocumentedKeys) {
   EXPECT_TRUE(y["geometric"]["dispersion_mm"].IsNull());
 }
 
-// The rows by pose and current keep every repetition's error (the Cramer-Rao comparison's input).
-TEST_F(SummaryTest, ConditionsGroupTheRepetitionsOfEachPoseAndCurrent) {
-  const auto s = Summarize(ReadEstimatesCsv((dir_ / "estimates.csv").string()));
-  const MethodSummary& m = s.methods[0];
-  ASSERT_EQ(m.conditions.size(), 3u);
-  EXPECT_EQ(m.conditions[0].bias_ma, 475.0);
-  EXPECT_EQ(m.conditions[0].d_error_mm, (std::vector<double>{10.0, -10.0}));
-  EXPECT_EQ(m.conditions[0].theta_error_deg, (std::vector<double>{1.0, -0.5}));
-  EXPECT_EQ(m.conditions[1].d_error_mm, (std::vector<double>{20.0, 0.0}));
-  EXPECT_EQ(m.conditions[2].d_mm, 1500.0);
-  EXPECT_EQ(m.conditions[2].d_error_mm, (std::vector<double>{30.0}));  // the joint row only
-  EXPECT_TRUE(s.methods[1].conditions.size() == 1u);  // the failed geometric row is left out
-}
-
 // A validation whose recording has no virtual rig: each method's `crb:` says why there is no
 // bound; without a recording in the context there is no block at all.
-TEST_F(SummaryTest, CrbBlockSaysWhyWithoutAVirtualRig) {
+TEST_F(HandMadeEstimatesTest, CrbBlockSaysWhyWithoutAVirtualRig) {
   const auto s = Summarize(ReadEstimatesCsv((dir_ / "estimates.csv").string()));
   const std::string path = (dir_ / "summary.yaml").string();
   const std::map<std::string, std::string> context = {
@@ -147,7 +66,7 @@ TEST_F(SummaryTest, CrbBlockSaysWhyWithoutAVirtualRig) {
   EXPECT_FALSE(y["crb"].IsDefined());
 }
 
-TEST_F(SummaryTest, RoundTripKeepsEveryRow) {
+TEST_F(HandMadeEstimatesTest, RoundTripKeepsEveryRow) {
   const auto rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
   const std::string path = (dir_ / "copy.csv").string();
   WriteEstimatesCsv(path, rows);
@@ -160,7 +79,7 @@ TEST_F(SummaryTest, RoundTripKeepsEveryRow) {
   }
 }
 
-TEST_F(SummaryTest, PositionColumnsRoundTripAndUnknownTruthIsEmpty) {
+TEST_F(HandMadeEstimatesTest, PositionColumnsRoundTripAndUnknownTruthIsEmpty) {
   std::vector<EstimateRow> rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
   ASSERT_GE(rows.size(), 2u);
   rows[0].x_mm = 12.5;
@@ -188,7 +107,7 @@ TEST_F(SummaryTest, PositionColumnsRoundTripAndUnknownTruthIsEmpty) {
 
 // The health column (calibration health, estimator/health.h) round-trips, files without it read
 // as "-", and the default method's summary counts the flagged estimates.
-TEST_F(SummaryTest, HealthColumnRoundTripsAndIsCounted) {
+TEST_F(HandMadeEstimatesTest, HealthColumnRoundTripsAndIsCounted) {
   auto rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
   for (const EstimateRow& r : rows) EXPECT_EQ(r.health, "-");
   rows[0].health = "ok";
@@ -214,7 +133,7 @@ TEST_F(SummaryTest, HealthColumnRoundTripsAndIsCounted) {
 
 // estimates.csv as irdist measure writes it, bracket by bracket: every appended row reads back;
 // a last line torn by a crash (no end of line) is dropped, and the note names its line.
-TEST_F(SummaryTest, StreamedRowsReadBackAndATornLastLineIsDroppedWithANote) {
+TEST_F(HandMadeEstimatesTest, StreamedRowsReadBackAndATornLastLineIsDroppedWithANote) {
   const std::vector<EstimateRow> rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
   ASSERT_EQ(rows.size(), 9u);
   const std::string path = (dir_ / "streamed.csv").string();
@@ -239,7 +158,7 @@ TEST_F(SummaryTest, StreamedRowsReadBackAndATornLastLineIsDroppedWithANote) {
 // The bracket's time: UTC as ISO 8601 with microseconds, the monotonic clock and the camera's
 // timestamp (all 64 bits), empty when unknown; unknown ground truth (measure without --at) reads
 // as NaN.
-TEST_F(SummaryTest, TimeColumnsRoundTripAndUnknownValuesAreEmpty) {
+TEST_F(HandMadeEstimatesTest, TimeColumnsRoundTripAndUnknownValuesAreEmpty) {
   std::vector<EstimateRow> rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
   const std::optional<std::int64_t> utc_ns = ParseUtcIso8601("2026-12-02T06:12:03.123456Z");
   ASSERT_TRUE(utc_ns.has_value());
@@ -270,7 +189,7 @@ TEST_F(SummaryTest, TimeColumnsRoundTripAndUnknownValuesAreEmpty) {
   EXPECT_TRUE(std::isnan(again[1].bias_ma));
 }
 
-TEST_F(SummaryTest, MotionAndOutsideColumnsRoundTripAndAreCounted) {
+TEST_F(HandMadeEstimatesTest, MotionAndOutsideColumnsRoundTripAndAreCounted) {
   auto rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
   for (const EstimateRow& r : rows) {
     EXPECT_EQ(r.motion, "-");
@@ -303,7 +222,7 @@ TEST_F(SummaryTest, MotionAndOutsideColumnsRoundTripAndAreCounted) {
 }
 
 // estimates.csv is never written through a link planted at its name: the link's target is kept.
-TEST_F(SummaryTest, EstimatesCsvIsNeverWrittenThroughALink) {
+TEST_F(HandMadeEstimatesTest, EstimatesCsvIsNeverWrittenThroughALink) {
   const fs::path victim = dir_ / "victim.txt";
   std::ofstream(victim) << "precious\n";
   fs::create_symlink(victim, dir_ / "linked.csv");
@@ -313,7 +232,7 @@ TEST_F(SummaryTest, EstimatesCsvIsNeverWrittenThroughALink) {
   EXPECT_EQ(text, "precious\n");
 }
 
-TEST_F(SummaryTest, BadRowIsRefusedWithItsLine) {
+TEST_F(HandMadeEstimatesTest, BadRowIsRefusedWithItsLine) {
   std::ofstream(dir_ / "bad.csv") << "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,"
                                      "bias_ma,d_mm,theta_deg,outside_range,ok\n"
                                      "0,0,0,i0_free,0,2000,20,475,2010,21,0,1\n"
@@ -329,7 +248,7 @@ TEST_F(SummaryTest, BadRowIsRefusedWithItsLine) {
 
 // plan --suggest --from reads best_dt_ms before any probe: a bad value names the file, its line
 // and the valid range; a FIFO is refused at once (YAML::LoadFile blocked on it).
-TEST_F(SummaryTest, BestDtIsReadStrictlyAndNeverFromAFifo) {
+TEST_F(HandMadeEstimatesTest, BestDtIsReadStrictlyAndNeverFromAFifo) {
   const fs::path path = dir_ / "summary.yaml";
   std::ofstream(path) << "methods: 2\nbest_dt_ms: 12.5\n";
   EXPECT_EQ(ReadBestDtMs(path.string()), 12.5);
@@ -355,13 +274,6 @@ TEST_F(SummaryTest, BestDtIsReadStrictlyAndNeverFromAFifo) {
   } catch (const EstimatesFileError& e) {
     EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
   }
-}
-
-TEST(Percentile, InterpolatesBetweenOrderStatistics) {
-  EXPECT_EQ(Percentile({}, 50.0), 0.0);
-  EXPECT_EQ(Percentile({3.0, 1.0, 2.0}, 50.0), 2.0);
-  EXPECT_NEAR(Percentile({0.0, 10.0}, 95.0), 9.5, 1e-12);
-  EXPECT_THROW(Percentile({1.0}, 101.0), CheckError);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // estimates.csv's standard errors and flags: written, read back, older files still read, an
 // unknown flag refused with its line, and what makes a row trusted.
-#include "app/reports/estimates_csv.h"
+#include "app/processing/estimates_csv.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
