@@ -3,12 +3,19 @@
 #include "app/processing/estimates_csv.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
+#include <vector>
 
+#include "base/utc_time.h"
+#include "tests/app/processing/hand_made_estimates.h"
 #include "tests/full_disk.h"
 
 namespace irdist {
@@ -127,6 +134,135 @@ TEST_F(EstimatesCsvTest, AHeaderThatCannotBeWrittenLeavesNoFile) {
   }
   EXPECT_NE(error.find("write failed"), std::string::npos) << error;
   EXPECT_FALSE(fs::exists(Path("estimates.csv")));
+}
+
+// The hand-made estimates.csv (tests/app/processing/hand_made_estimates.h): every column
+// read back as written, and the rows the summary counts.
+// One line of a text file, for istream_iterator.
+struct Line : std::string {
+  friend std::istream& operator>>(std::istream& in, Line& line) { return std::getline(in, line); }
+};
+
+TEST_F(HandMadeEstimatesTest, RoundTripKeepsEveryRow) {
+  const auto rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  const std::string path = (dir_ / "copy.csv").string();
+  WriteEstimatesCsv(path, rows);
+  const auto again = ReadEstimatesCsv(path);
+  ASSERT_EQ(again.size(), rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(again[i].method, rows[i].method);
+    EXPECT_EQ(again[i].d_mm, rows[i].d_mm);
+    EXPECT_EQ(again[i].outside_range, rows[i].outside_range);
+  }
+}
+
+TEST_F(HandMadeEstimatesTest, PositionColumnsRoundTripAndUnknownTruthIsEmpty) {
+  std::vector<EstimateRow> rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  ASSERT_GE(rows.size(), 2u);
+  rows[0].x_mm = 12.5;
+  rows[0].z_se_mm = 3.25;
+  rows[0].true_x_mm = 12.0;
+  rows[1].true_d_mm = NAN;  // irdist measure without a pose
+  const std::string path = (dir_ / "xyz.csv").string();
+  WriteEstimatesCsv(path, rows);
+  std::ifstream in(path);
+  std::string header, first, second;
+  std::getline(in, header);
+  std::getline(in, first);
+  std::getline(in, second);
+  EXPECT_NE(header.find(",x_mm,y_mm,z_mm,x_se_mm,y_se_mm,z_se_mm,true_x_mm,true_y_mm,true_z_mm"),
+            std::string::npos);
+  EXPECT_NE(first.find(",12.5,,,,,3.25,12,,"), std::string::npos) << first;
+  EXPECT_NE(second.find(",i0_free,0,,"), std::string::npos) << second;
+  rows.erase(rows.begin() + 1);
+  WriteEstimatesCsv(path, rows);
+  const std::vector<EstimateRow> again = ReadEstimatesCsv(path);
+  EXPECT_EQ(again[0].x_mm, 12.5);
+  EXPECT_EQ(again[0].true_x_mm, 12.0);
+  EXPECT_TRUE(std::isnan(again[0].y_mm));
+}
+
+// estimates.csv as irdist measure writes it, bracket by bracket: every appended row reads back;
+// a last line torn by a crash (no end of line) is dropped, and the note names its line.
+TEST_F(HandMadeEstimatesTest, StreamedRowsReadBackAndATornLastLineIsDroppedWithANote) {
+  const std::vector<EstimateRow> rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  ASSERT_EQ(rows.size(), 9u);
+  const std::string path = (dir_ / "streamed.csv").string();
+  {
+    EstimatesCsvWriter writer(path);
+    writer.Append({rows.begin(), rows.begin() + 4});
+    EXPECT_EQ(ReadEstimatesCsv(path).size(), 4u);  // on disk before the next append
+    writer.Append({rows.begin() + 4, rows.end()});
+  }
+  std::string note = "stale";
+  EXPECT_EQ(ReadEstimatesCsv(path, &note).size(), 9u);
+  EXPECT_EQ(note, "");
+  std::ofstream(path, std::ios::app) << "6,3,0,i0_free,0,1500,0,5";  // killed while writing
+  const std::vector<EstimateRow> again = ReadEstimatesCsv(path, &note);
+  ASSERT_EQ(again.size(), 9u);
+  EXPECT_EQ(again.back().bracket, 5);
+  EXPECT_NE(note.find("streamed.csv:11"), std::string::npos) << note;
+  EXPECT_NE(note.find("torn"), std::string::npos) << note;
+  EXPECT_EQ(ReadEstimatesCsv(path).size(), 9u);  // also without asking for the note
+}
+
+// The bracket's time: UTC as ISO 8601 with microseconds, the monotonic clock and the camera's
+// timestamp (all 64 bits), empty when unknown; unknown ground truth (measure without --at) reads
+// as NaN.
+TEST_F(HandMadeEstimatesTest, TimeColumnsRoundTripAndUnknownValuesAreEmpty) {
+  std::vector<EstimateRow> rows = ReadEstimatesCsv((dir_ / "estimates.csv").string());
+  const std::optional<std::int64_t> utc_ns = ParseUtcIso8601("2026-12-02T06:12:03.123456Z");
+  ASSERT_TRUE(utc_ns.has_value());
+  rows[0].utc_ns = *utc_ns;
+  rows[0].host_monotonic_ns = 987654321012345;
+  rows[0].camera_timestamp_ns = 18446744073709551000ull;
+  rows[1].true_d_mm = rows[1].true_theta_deg = rows[1].bias_ma = NAN;
+  const std::string path = (dir_ / "times.csv").string();
+  WriteEstimatesCsv(path, rows);
+  std::ifstream in(path);
+  const std::vector<std::string> lines{std::istream_iterator<Line>(in),
+                                       std::istream_iterator<Line>()};
+  ASSERT_EQ(lines.size(), rows.size() + 1);
+  EXPECT_NE(lines[0].find(",outside,utc_time,host_monotonic_ns,camera_timestamp_ns"),
+            std::string::npos)
+      << lines[0];
+  EXPECT_NE(lines[1].find(",2026-12-02T06:12:03.123456Z,987654321012345,18446744073709551000"),
+            std::string::npos)
+      << lines[1];
+  EXPECT_EQ(lines[2].substr(lines[2].size() - 3), ",,,") << lines[2];
+  const std::vector<EstimateRow> again = ReadEstimatesCsv(path);
+  EXPECT_EQ(again[0].utc_ns, *utc_ns);
+  EXPECT_EQ(again[0].host_monotonic_ns, 987654321012345);
+  EXPECT_EQ(again[0].camera_timestamp_ns, 18446744073709551000ull);
+  EXPECT_EQ(again[1].utc_ns, 0);
+  EXPECT_EQ(again[1].camera_timestamp_ns, 0u);
+  EXPECT_TRUE(std::isnan(again[1].true_d_mm));
+  EXPECT_TRUE(std::isnan(again[1].bias_ma));
+}
+
+// estimates.csv is never written through a link planted at its name: the link's target is kept.
+TEST_F(HandMadeEstimatesTest, EstimatesCsvIsNeverWrittenThroughALink) {
+  const fs::path victim = dir_ / "victim.txt";
+  std::ofstream(victim) << "precious\n";
+  fs::create_symlink(victim, dir_ / "linked.csv");
+  EXPECT_THROW(EstimatesCsvWriter((dir_ / "linked.csv").string()), EstimatesFileError);
+  std::ifstream in(victim);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "precious\n");
+}
+
+TEST_F(HandMadeEstimatesTest, BadRowIsRefusedWithItsLine) {
+  std::ofstream(dir_ / "bad.csv") << "bracket,pose,repeat,method,dt_ms,true_d_mm,true_theta_deg,"
+                                     "bias_ma,d_mm,theta_deg,outside_range,ok\n"
+                                     "0,0,0,i0_free,0,2000,20,475,2010,21,0,1\n"
+                                     "1,0,1,i0_free,0,2000,20,475,abc,19.5,0,1\n";
+  try {
+    ReadEstimatesCsv((dir_ / "bad.csv").string());
+    FAIL() << "a non-numeric d_mm was accepted";
+  } catch (const EstimatesFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.csv:3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("d_mm"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
