@@ -199,7 +199,7 @@ std::vector<CameraCheck> SpeedNotes(AravisCamera& camera) {
                          : "no ChunkExposureTime: each exposure read back before its trigger",
            ""},
           {"trigger in readout", true,
-           Offers(overlap, "ReadOut") ? "TriggerOverlap ReadOut (rig: trigger_overlap: readout)"
+           Offers(overlap, "ReadOut") ? "TriggerOverlap ReadOut (rig: trigger_in_readout: true)"
                                       : "no TriggerOverlap ReadOut: trigger after each frame",
            ""}};
 }
@@ -436,6 +436,7 @@ void RunCameraTest(const CameraTestArgs& args, CommandIo io) {
   std::optional<CameraSettings> run;
   if (!args.rig.empty() || args.camera.empty()) {
     const Rig rig = LoadRig(ResolveRig(rig_spec));
+    PrintRigNotes(rig, io.err);
     run = CameraSettingsOf(rig.camera, RigTriggerSource(rig));
   }
   std::unique_ptr<AravisCamera> camera = AravisCamera::Open(name);

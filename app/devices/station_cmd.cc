@@ -21,8 +21,10 @@ std::map<std::string, std::string> RunningSimPorts(const Rig& rig, std::ostream&
   for (const auto& [key, value] : sim->values) {
     if (key.rfind("port.", 0) == 0) ports[key.substr(5)] = value;
   }
-  const auto legacy = sim->values.find("station_port");
-  if (ports.empty() && legacy != sim->values.end()) ports[kLegacyStationDevice] = legacy->second;
+  const auto single_box = sim->values.find("station_port");
+  if (ports.empty() && single_box != sim->values.end()) {
+    ports[kSingleBoxStationDevice] = single_box->second;
+  }
   return ports;
 }
 
@@ -107,6 +109,7 @@ void SetCurrent(const Rig& rig, const StationArgs& args, Station& station) {
 
 void RunStation(const StationArgs& args, CommandIo io) {
   const Rig rig = LoadRig(ResolveRig(args.rig));
+  PrintRigNotes(rig, io.err);
   StationOptions options = StationRunOptions(PortsFor(rig, args, io.err), nullptr);
   options.off_at_exit = false;  // `current` leaves the IRED on; `off` switches it off
   Station station(rig.station.composition, options);

@@ -17,8 +17,8 @@ namespace irdist {
 // The ptys of a virtual rig's device emulators, by `station.devices` name.
 std::map<std::string, std::string> VirtualDevicePorts(const Rig& rig,
                                                       const sim::VirtualRigInfo& info);
-// `--port NAME=PATH` arguments (NAME a station.devices key; a legacy rig's device is "station").
-// Throws UsageError on a malformed one or an unknown device.
+// `--port NAME=PATH` arguments (NAME a station.devices key; a single-box rig's device is
+// "station"). Throws UsageError on a malformed one or an unknown device.
 std::map<std::string, std::string> ParsePortOverrides(const Rig& rig,
                                                       const std::vector<std::string>& args);
 StationOptions StationRunOptions(const std::map<std::string, std::string>& ports, LineLog* log);

@@ -82,6 +82,7 @@ std::optional<RunningSim> FindRunningSim(const std::string& rig_path, std::ostre
 void RunSim(const SimArgs& args, CommandIo io) {
   const std::string rig_path = ResolveRig(args.rig);
   const Rig rig = LoadRig(rig_path);
+  PrintRigNotes(rig, io.err);
   if (rig.kind != RigKind::kVirtual) {
     throw RecipeError(rig_path, 0, 0,
                       "is a hardware rig (kind: hardware); 'irdist sim' runs "

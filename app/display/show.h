@@ -9,7 +9,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "app/reports/summary.h"
+#include "app/processing/estimates_csv.h"
 #include "base/check.h"
 #include "estimator/features.h"
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <ostream>
 #include <vector>
 
 #include "app/inputs/errors.h"
@@ -121,11 +122,32 @@ void CheckIntrinsicsAgainstPixels(const CameraConfig& camera, const YAML::Node& 
   }
 }
 
-CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
+// camera.trigger_in_readout, or its old spelling `trigger_overlap: readout | off` with a note.
+bool ReadTriggerInReadout(const MapReader& map, std::vector<std::string>* notes) {
+  if (!map.Has("trigger_overlap")) return map.Boolean("trigger_in_readout", false);
+  const YAML::Node old = map.Get("trigger_overlap");
+  if (map.Has("trigger_in_readout")) {
+    Fail(map.File(), old.Mark(),
+         "camera.trigger_overlap is the old name of camera.trigger_in_readout; keep only "
+         "trigger_in_readout");
+  }
+  const std::string overlap = map.String("trigger_overlap", "off");
+  OneOf(map, "trigger_overlap", overlap, {"off", "readout"});
+  const bool in_readout = overlap == "readout";
+  notes->push_back(map.File() + ":" + std::to_string(old.Mark().line + 1) +
+                   ": camera.trigger_overlap is the old name of camera.trigger_in_readout (read "
+                   "as before); write `trigger_in_readout: " + (in_readout ? "true" : "false") +
+                   "` instead");
+  return in_readout;
+}
+
+CameraConfig ReadCamera(const YAML::Node& node, const std::string& file,
+                        std::vector<std::string>* notes) {
   const MapReader map(node, file, "camera",
                       {"id", "pixel_format", "trigger_source", "trigger_activation", "black_level",
-                       "packet_size", "frame_timeout_ms", "readout_ms", "trigger_overlap", "roi_px",
-                       "intrinsics", "exposure_check", "restore_after"});
+                       "packet_size", "frame_timeout_ms", "readout_ms", "trigger_in_readout",
+                       "trigger_overlap", "roi_px", "intrinsics", "exposure_check",
+                       "restore_after"});
   CameraConfig camera;
   camera.id = map.String("id", camera.id);
   camera.pixel_format = map.String("pixel_format", camera.pixel_format);
@@ -138,9 +160,7 @@ CameraConfig ReadCamera(const YAML::Node& node, const std::string& file) {
   camera.packet_size = AtLeast(map, "packet_size", camera.packet_size, 0);
   camera.frame_timeout_ms = AtLeast(map, "frame_timeout_ms", camera.frame_timeout_ms, 1);
   camera.readout_ms = DelayMs(map, "readout_ms", camera.readout_ms);
-  const std::string overlap = map.String("trigger_overlap", "off");
-  OneOf(map, "trigger_overlap", overlap, {"off", "readout"});
-  camera.trigger_in_readout = overlap == "readout";
+  camera.trigger_in_readout = ReadTriggerInReadout(map, notes);
   camera.exposure_check = map.String("exposure_check", camera.exposure_check);
   OneOf(map, "exposure_check", camera.exposure_check, {"auto", "chunk", "readback", "none"});
   camera.restore_after = map.Boolean("restore_after", camera.restore_after);
@@ -235,11 +255,11 @@ MotionModel ReadMotionModel(const MapReader& map, MotionModel model) {
   return model;
 }
 
-// A legacy `station: {port, baud, reply_timeout_ms}` is one irdist station filling every role.
-StationSpec LegacyComposition(const StationConfig& station, const std::string& file, int line) {
+// A single-box `station: {port, baud, reply_timeout_ms}` is one irdist station filling every role.
+StationSpec SingleBoxComposition(const StationConfig& station, const std::string& file, int line) {
   StationSpec spec;
   DeviceSpec device;
-  device.name = kLegacyStationDevice;
+  device.name = kSingleBoxStationDevice;
   device.driver = "irdist_station";
   device.port = station.port;
   device.baud = station.baud;
@@ -410,7 +430,7 @@ StationConfig ReadStation(const YAML::Node& node, const std::string& file) {
     Fail(file, map.Get("baud").Mark(), "station.baud must lie in 1..4000000 bit/s (e.g. 115200)");
   }
   station.reply_timeout_ms = AtLeast(map, "reply_timeout_ms", station.reply_timeout_ms, 1);
-  station.composition = LegacyComposition(station, file, map.Mark().line + 1);
+  station.composition = SingleBoxComposition(station, file, map.Mark().line + 1);
   station.composition.current_tolerance_ma =
       Positive(map, "current_tolerance_ma", station.composition.current_tolerance_ma);
   return station;
@@ -515,11 +535,11 @@ Rig ParseRig(const std::string& text, const std::string& file) {
   const std::string kind = map.String("kind", "hardware");
   OneOf(map, "kind", kind, {"virtual", "hardware"});
   rig.kind = kind == "virtual" ? RigKind::kVirtual : RigKind::kHardware;
-  if (map.Has("camera")) rig.camera = ReadCamera(map.Get("camera"), file);
+  if (map.Has("camera")) rig.camera = ReadCamera(map.Get("camera"), file, &rig.notes);
   if (map.Has("station")) {
     rig.station = ReadStation(map.Get("station"), file);
   } else {
-    rig.station.composition = LegacyComposition(rig.station, file, 0);
+    rig.station.composition = SingleBoxComposition(rig.station, file, 0);
   }
   rig.station.motion.readout_ms = rig.camera.readout_ms;
   if (map.Has("track")) {
@@ -546,5 +566,9 @@ Rig ParseRig(const std::string& text, const std::string& file) {
 }
 
 Rig LoadRig(const std::string& path) { return ParseRig(yaml_fields::ReadFile(path), path); }
+
+void PrintRigNotes(const Rig& rig, std::ostream& err) {
+  for (const std::string& note : rig.notes) err << "note: " << note << "\n";
+}
 
 }  // namespace irdist

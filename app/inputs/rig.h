@@ -3,6 +3,7 @@
 // `camera:` and `station:` sections into plain structs; the `virtual:` section (physics of the
 // virtual rig) is accepted here and parsed by sim/ itself. docs/recipes.md lists every key.
 
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -34,9 +35,10 @@ struct CameraConfig {
   int packet_size = 0;                            // GigE Vision packet size, bytes; 0 = negotiate
   int frame_timeout_ms = 1000;  // a frame later than this after its trigger is lost
   double readout_ms = 25.0;     // sensor readout + transfer of one frame (plan estimate)
-  // `trigger_overlap: readout` = the camera takes a trigger while it reads the previous frame out
+  // `trigger_in_readout: true` = the camera takes a trigger while it reads the previous frame out
   // (GenICam TriggerOverlap ReadOut, or a camera that queues it): brackets trigger each frame
-  // during its predecessor's readout. `off` (the default) = trigger after the frame arrived.
+  // during its predecessor's readout. false (the default) = trigger after the frame arrived. The
+  // old spelling `trigger_overlap: readout | off` is still read, with a note (Rig::notes).
   bool trigger_in_readout = false;
   // `exposure_check: chunk | readback | none` (absent or `auto`: the chunk where the camera
   // declares it and its frames carry it, else the read-back, said once; acquisition/camera.h).
@@ -75,14 +77,14 @@ struct StationLimits {
 };
 
 // The `station:` section. Two spellings:
-// - legacy (one irdist station box): `port`, `baud`, `reply_timeout_ms`, `limits`, `motion`; it
-//   means one irdist_station device named "station" filling every role;
+// - single-box (one irdist station box): `port`, `baud`, `reply_timeout_ms`, `limits`, `motion`;
+//   it means one irdist_station device named "station" filling every role;
 // - composed: `roles: {motion: [names], source: name, trigger: camera_software | name}`,
 //   `devices: {<name>: {driver, port, baud, reply_timeout_ms, axes: {slide|pan|tilt: address},
 //   ...driver keys}}`, `current_tolerance_ma`, `limits`, `motion`.
 // Either way `composition` holds the devices and roles the run opens (station/station.h).
 struct StationConfig {
-  // Legacy spelling only (kept for the irdist box's rig files).
+  // The single-box spelling only (one irdist station box).
   std::string port = "auto";   // serial device (/dev/ttyUSB0); "auto": the virtual rig's pty
   int baud = 115200;           // serial speed, bit/s
   int reply_timeout_ms = 500;  // deadline of every reply
@@ -98,8 +100,8 @@ struct StationConfig {
   bool IsValid(std::string* why) const;
 };
 
-// The name of the single device a legacy `station:` section stands for.
-constexpr const char* kLegacyStationDevice = "station";
+// The name of the single device a single-box `station:` section stands for.
+constexpr const char* kSingleBoxStationDevice = "station";
 
 
 enum class RigKind { kVirtual, kHardware };
@@ -114,8 +116,14 @@ struct Rig {
   // estimator/track_filter.h; --accel-psd overrides it); 0 = the filter's default.
   double track_accel_psd_mm2_per_s3 = 0.0;
   bool has_virtual_section = false;
+  // What the file still says in an old spelling, each "file:line: what, and the new spelling";
+  // read as before. The commands print them (PrintRigNotes).
+  std::vector<std::string> notes;
   bool IsValid(std::string* why) const;
 };
+
+// Prints each of rig.notes as "note: ..." to `err`.
+void PrintRigNotes(const Rig& rig, std::ostream& err);
 
 // Reads and checks a rig file. Throws RecipeError (file:line:column and what would be valid) on an
 // unreadable file, unknown key, wrong type or inconsistent value.

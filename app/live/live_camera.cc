@@ -157,6 +157,7 @@ LiveCamera::LiveCamera(const LiveCameraOptions& options, std::ostream& err) : im
   m.err = &err;
   m.rig_path = ResolveRig(options.rig_spec);
   m.rig = LoadRig(m.rig_path);
+  PrintRigNotes(m.rig, err);
   CameraRoute route;
   if (m.rig.kind != RigKind::kVirtual) {
     route = UseHardwareCamera(m.rig, m.rig_path, options);

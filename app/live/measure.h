@@ -19,7 +19,7 @@
 #include "app/inputs/command_args.h"
 #include "app/live/measure_output.h"
 #include "app/processing/bracket_estimates.h"
-#include "app/reports/summary.h"
+#include "app/processing/estimates_csv.h"
 #include "estimator/estimate.h"
 #include "estimator/features.h"
 #include "estimator/health.h"

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "app/processing/bracket_estimates.h"
-#include "app/reports/summary.h"
-#include "estimator/estimate.h"
+#include "app/processing/estimates_csv.h"
 #include "estimator/bracket_checks.h"
+#include "estimator/estimate.h"
 #include "estimator/health.h"
 
 namespace irdist {

@@ -89,7 +89,7 @@ struct TrackSession::Impl {
     GrabberOptions options;
     options.exposure_us = exposure_ms * 1000.0;
     // A trigger in flight during the previous frame is kept by a camera that queues triggers (the
-    // virtual one) or overlaps them with readout (the rig's trigger_overlap: readout).
+    // virtual one) or overlaps them with readout (the rig's trigger_in_readout: true).
     options.ahead = rig.kind == RigKind::kVirtual || rig.camera.trigger_in_readout ? 2 : 1;
     options.frame_timeout = std::chrono::milliseconds(measure.live().frame_timeout_ms());
     LiveCamera& live = measure.live();

@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
+#include "app/processing/estimates_csv.h"
 #include "app/processing/frame_features.h"
-#include "app/reports/summary.h"
-#include "estimator/estimate.h"
 #include "estimator/bracket_checks.h"
+#include "estimator/estimate.h"
 #include "estimator/fit.h"
 #include "estimator/health.h"
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "app/reports/estimates_csv.h"
+#include "app/processing/estimates_csv.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
 #include "estimator/health.h"

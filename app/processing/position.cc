@@ -12,7 +12,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "acquisition/recording_reader.h"
-#include "app/reports/summary.h"
+#include "app/processing/estimates_csv.h"
 #include "base/pi.h"
 #include "estimator/line_of_sight.h"
 #include "base/check.h"

@@ -12,8 +12,6 @@
 #include "app/inputs/provenance.h"
 #include "app/inputs/recipe.h"
 #include "app/processing/position.h"
-#include "app/reports/calibration_plots.h"
-#include "app/reports/report.h"
 #include "estimator/blob_fit.h"
 #include "estimator/defect_map.h"
 #include "estimator/model_file.h"
@@ -21,15 +19,6 @@
 
 namespace irdist {
 namespace {
-
-void Normalise(double poly[4]) {
-  double norm = 0.0;
-  for (int k = 0; k < 4; ++k) norm += poly[k] * poly[k];
-  norm = std::sqrt(norm);
-  if (norm > 0.0) {
-    for (int k = 0; k < 4; ++k) poly[k] /= norm;
-  }
-}
 
 // The sample's known range and theta: the slide and the pose's theta, or, where the emitter sits
 // off the pan and tilt axes' line (a virtual rig's emitter offset, a hardware rig's lever), the
@@ -94,60 +83,6 @@ std::string RejectedModelPath(const std::string& model_path) {
                          model_path.compare(model_path.size() - yaml.size(), yaml.size(), yaml) == 0;
   return (ends_yaml ? model_path.substr(0, model_path.size() - yaml.size()) : model_path) +
          ".rejected.yaml";
-}
-
-std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
-                                                  const std::vector<CalibrationSample>& samples,
-                                                  int eq25_curves) {
-  std::vector<CalibrationPoint> points;
-  const FittedModel* free_e = model.Find(ModelKind::kFreeE);
-  const FittedModel* free_s = model.Find(ModelKind::kFreeSigma);
-  if (free_e == nullptr || free_s == nullptr) return points;
-  const size_t stride =
-      eq25_curves > 0 ? std::max<size_t>(1, samples.size() / static_cast<size_t>(eq25_curves)) : 0;
-  for (size_t i = 0; i < samples.size(); ++i) {
-    const CalibrationSample& s = samples[i];
-    if (!s.reference.Usable() || !s.measurement.Usable()) continue;
-    CalibrationPoint p;
-    p.d_mm = s.d_mm;
-    p.theta_deg = s.theta_deg;
-    p.bias_ma = s.bias_ma;
-    p.dt_ms = s.t_ms - s.t_ref_ms;
-    ModelInputs in;
-    in.d_mm = s.d_mm;
-    in.theta_deg = s.theta_deg;
-    in.bias_ma = s.bias_ma;
-    in.dt_ms = p.dt_ms;
-    in.df = s.measurement.f00 - s.reference.f00;
-    p.de_measured = s.measurement.e_rel - s.reference.e_rel;
-    p.ds_measured = s.measurement.sigma - s.reference.sigma;
-    p.de_model = free_e->Predict(model.scaling, in);
-    p.ds_model = free_s->Predict(model.scaling, in);
-    if (stride > 0 && i % stride == 0 && static_cast<int>(i / stride) < eq25_curves) {
-      // Eq. 25 (c - a) as a function of d at the true theta, each polynomial normalised.
-      std::array<double, kNumModelVars> vars = ScaleInputs(in, model.scaling);
-      double a[4], c[4];
-      vars[kVarRho] = Rho(s.theta_deg, free_s->sigma_deg);
-      AlgebraicPolynomialInD(GetModelSpec(ModelKind::kFreeSigma), free_s->coefficients.data(),
-                             vars.data(), p.ds_measured, c);
-      vars[kVarRho] = Rho(s.theta_deg, free_e->sigma_deg);
-      AlgebraicPolynomialInD(GetModelSpec(ModelKind::kFreeE), free_e->coefficients.data(),
-                             vars.data(), p.de_measured, a);
-      Normalise(a);
-      Normalise(c);
-      const double d_lo = 0.8 * model.ranges.d_min_mm, d_hi = 1.2 * model.ranges.d_max_mm;
-      for (int k = 0; k <= 60; ++k) {
-        const double d_mm = d_lo + (d_hi - d_lo) * k / 60.0;
-        const double x = model.scaling.ScaledD(d_mm);
-        double value = 0.0;
-        for (int j = 3; j >= 0; --j) value = value * x + (c[j] - a[j]);
-        p.eq25_d_mm.push_back(d_mm);
-        p.eq25_value.push_back(value);
-      }
-    }
-    points.push_back(std::move(p));
-  }
-  return points;
 }
 
 bool RecipeAsksForResponse(const RecordingReader& reader) {
@@ -305,20 +240,6 @@ void PrintFitSummaries(const CalibrationModel& model, const std::string& model_p
   out << "Model: " << model_path << "\n";
 }
 
-// The calibration report; returns its index page.
-std::string WriteCalibrationReport(const RecordingReader& reader,
-                                   const std::vector<CalibrationSample>& samples,
-                                   const CalibrationModel& model, const std::string& model_path,
-                                   const std::string& report_dir) {
-  std::ostringstream text;
-  text << "Calibration from " << reader.dir() << "\n"
-       << model.BriefReport() << "\n"
-       << model.fitness.BriefReport() << "\n";
-  return WriteReport(report_dir, "irdist calibration",
-                     CalibrationReportFields(reader.dir(), model_path, model), text.str(),
-                     CalibrationPlots(CalibrationPointsOf(model, samples), model));
-}
-
 // The most calibration frames the crosstalk's split is fitted on (spread over the recording).
 constexpr std::size_t kCrosstalkFrames = 32;
 
@@ -447,7 +368,8 @@ void JudgeFitness(const RecordingReader& reader, const CalibrationFitness& fitne
 
 CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
                               const FeatureOptions& feature_options, const std::string& model_path,
-                              const std::string& report_dir, std::ostream& out, bool keep_model) {
+                              const CalibrationReportDrawer& draw_report, std::ostream& out,
+                              bool keep_model) {
   std::vector<CalibrationSample> samples = SamplesFromRecording(reader, features);
   const int usable = CountUsableSamples(reader, samples);
   out << "Fitting " << samples.size() << " differences (" << usable << " usable) from "
@@ -474,10 +396,7 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   SaveModel(model, written_path);
   if (!rejected) RemoveSupersededRejectedModel(model_path, out);
   PrintFitSummaries(model, written_path, out);
-  if (!report_dir.empty()) {
-    out << "Report: " << WriteCalibrationReport(reader, samples, model, written_path, report_dir)
-        << "\n";
-  }
+  if (draw_report) out << "Report: " << draw_report(model, samples, written_path) << "\n";
   JudgeFitness(reader, model.fitness, model_path, keep_model, out);
   return model;
 }

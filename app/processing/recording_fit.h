@@ -1,15 +1,15 @@
 #pragma once
 // Calibration from a recording (calibrate after its sweep, and `irdist fit`): the complete
 // brackets' differences as calibration samples, the camera response recovered when the recipe
-// asks for it, the fit of every model the samples determine, model.yaml and the calibration
-// report.
+// asks for it, the fit of every model the samples determine and model.yaml. The calibration
+// report is drawn above this floor: the caller passes its drawer.
 
+#include <functional>
 #include <iosfwd>
 #include <string>
 #include <vector>
 
 #include "app/processing/frame_features.h"
-#include "app/reports/calibration_plots.h"
 #include "estimator/features.h"
 #include "base/check.h"
 #include "estimator/fit.h"
@@ -43,14 +43,22 @@ std::string RejectedModelPath(const std::string& model_path);
 // indexes it).
 std::vector<FitnessPose> FitnessPosesOf(const RecordingReader& reader);
 
+// Draws a calibration's report from the fitted model, the samples it was fitted on and the path
+// its model file went to; returns the report's index page. Empty: no report (runs/ passes
+// CalibrationReportDrawerInto, reports/calibration_report.h).
+using CalibrationReportDrawer =
+    std::function<std::string(const CalibrationModel& model,
+                              const std::vector<CalibrationSample>& samples,
+                              const std::string& model_path)>;
+
 // Calibration: samples -> Fit (default options) -> the fit's fitness -> SaveModel(model_path) ->
-// report in report_dir (measured vs modelled dE/dS, Eq. 25 curves). Prints each model's FitSummary
-// and the fitness to `out`. A fit that fails its fitness warns; unless keep_model, its model goes
-// to RejectedModelPath (report written too) and FitnessError is thrown; a model written to
+// `draw_report` (measured vs modelled dE/dS, Eq. 25 curves). Prints each model's FitSummary and
+// the fitness to `out`. A fit that fails its fitness warns; unless keep_model, its model goes to
+// RejectedModelPath (the report drawn too) and FitnessError is thrown; a model written to
 // model_path removes an earlier RejectedModelPath file (said in `out`).
 CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& features,
                               const FeatureOptions& feature_options, const std::string& model_path,
-                              const std::string& report_dir, std::ostream& out,
+                              const CalibrationReportDrawer& draw_report, std::ostream& out,
                               bool keep_model = false);
 
 // Whether a calibration of this recording recovers the camera response: its recipe's
@@ -71,10 +79,5 @@ FeatureOptions WithResponse(const FeatureOptions& options, const ResponseRecover
 // the brackets when `force` or the recording's recipe asks for it (`*recovered` says which).
 FeatureOptions FitFeatureOptions(const RecordingReader& reader, const FeatureOptions& options,
                                  bool force, std::ostream& out, bool* recovered = nullptr);
-
-// The report's calibration points (Fig. 7 and Fig. 8) for a fitted model.
-std::vector<CalibrationPoint> CalibrationPointsOf(const CalibrationModel& model,
-                                                  const std::vector<CalibrationSample>& samples,
-                                                  int eq25_curves = 4);
 
 }  // namespace irdist

@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "app/processing/validation_summary.h"
 #include "app/reports/plot.h"
-#include "app/reports/summary.h"
 #include "base/check.h"
 #include "estimator/fit.h"
 
@@ -32,7 +32,7 @@ ReportFields RecordingReportFields(const std::string& recording_dir);
 ReportFields CalibrationReportFields(const std::string& recording_dir,
                                      const std::string& model_path, const CalibrationModel& model);
 // The validation page's header: `context` (recipe, model, recording), the recording's fields
-// and each method's error figures, and each method's bound in `crb` (app/reports/crb.h
+// and each method's error figures, and each method's bound in `crb` (app/processing/crb.h
 // ValidationCrb).
 ReportFields ValidationReportFields(const std::map<std::string, std::string>& context,
                                     const ValidationSummary& summary,

@@ -6,8 +6,8 @@
 
 #include <vector>
 
+#include "app/processing/validation_summary.h"
 #include "app/reports/plot.h"
-#include "app/reports/summary.h"
 
 namespace irdist {
 

@@ -14,9 +14,10 @@
 #include "app/processing/bracket_estimates.h"
 #include "app/processing/frame_features.h"
 #include "app/processing/recording_fit.h"
-#include "app/processing/run_results.h"
 #include "app/processing/scene_check.h"
+#include "app/reports/calibration_report.h"
 #include "app/runs/resume.h"
+#include "app/runs/run_results.h"
 #include "estimator/model_file.h"
 
 namespace irdist {
@@ -87,7 +88,8 @@ void RunFit(const FitArgs& args, CommandIo io) {
         FitFeatureOptions(reader, FeatureOptions{}, args.recover_response, io.out);
     const FeatureMap features = RecordingFeatures(reader, options);
     WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
-    FitRecording(reader, features, options, model_path, out_dir + "/report", io.out,
+    FitRecording(reader, features, options, model_path,
+                 CalibrationReportDrawerInto(out_dir + "/report", reader.dir()), io.out,
                  args.keep_model);
   });
 }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "app/inputs/recipe.h"
+#include "app/inputs/rig.h"
 #include "app/runs/run_suggest.h"
 #include "sim/rig_physics.h"
 #include "station/plan.h"
@@ -59,6 +60,7 @@ void RunPlan(const PlanArgs& args, CommandIo io) {
     return;
   }
   const Recipe recipe = LoadRecipe(args.recipe);
+  PrintRigNotes(recipe.rig, io.err);
   // The rig exactly as sim and calibrate load it: a virtual rig's physics too (its refusals,
   // e.g. a crosstalk of NaN or 5.0001, at file:line:column before any plan is printed).
   if (recipe.rig.kind == RigKind::kVirtual) sim::LoadRigPhysics(recipe.rig_path);

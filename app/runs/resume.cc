@@ -13,7 +13,7 @@
 #include "acquisition/recording_reader.h"
 #include "app/inputs/errors.h"
 #include "app/inputs/recipe.h"
-#include "app/processing/run_results.h"
+#include "app/runs/run_results.h"
 
 namespace irdist {
 namespace {

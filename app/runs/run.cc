@@ -18,13 +18,13 @@
 #include "app/inputs/recipe.h"
 #include "app/processing/bracket_estimates.h"
 #include "app/processing/frame_features.h"
-#include "app/processing/run_results.h"
 #include "app/runs/bracket_committer.h"
 #include "app/runs/capture.h"
 #include "app/runs/linearity_check.h"
 #include "app/runs/resume.h"
 #include "app/runs/run_folder.h"
 #include "app/runs/run_progress.h"
+#include "app/runs/run_results.h"
 #include "base/version.h"
 #include "base/yaml_fields.h"
 #include "estimator/model_file.h"
@@ -213,7 +213,7 @@ void ReportTiming(const SweepResult& result, const PoseTiming& timing, double co
 
 // The run's report: the sweep, the capture, the commit waits, where the time went, and the wall
 // time beside the plan and the physical bound. A composed rig's devices report their own speeds
-// (read at connection and homing): its plan and bound are on those; a legacy station's are the
+// (read at connection and homing): its plan and bound are on those; a single-box station's are the
 // rig file's (its protocol has no speed query).
 void ReportRun(LiveSession& s, const SweepResult& result, double wall_s, std::size_t pose_count,
                std::ostream& out) {
@@ -339,6 +339,7 @@ void CheckModelAgainstRig(const CalibrationModel& model, const RunRequest& reque
 
 void RunRecipe(const RunRequest& request, CommandIo io) {
   const Recipe recipe = LoadRecipe(request.recipe_path);
+  PrintRigNotes(recipe.rig, io.err);
   const Plan plan = PlanRecipe(recipe);
   std::optional<CalibrationModel> model;
   if (request.kind == RunKind::kValidate) {

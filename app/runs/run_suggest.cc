@@ -123,6 +123,7 @@ SuggestOptions SuggestOptionsOf(const PlanArgs& args, std::ostream& err) {
 
 void RunSuggest(const PlanArgs& args, CommandIo io) {
   const Recipe recipe = LoadRecipe(args.recipe);
+  PrintRigNotes(recipe.rig, io.err);
   const Plan plan = PlanRecipe(recipe);
   const RecipeEnds ends = EndsOf(plan);
   const SuggestOptions options = SuggestOptionsOf(args, io.err);

@@ -10,8 +10,8 @@
 //                         [--nonlinearity A]
 // Rigs with a blur after the pixels: --rig recipes/rigs/virtual-crosstalk.yaml (0.6 px
 // of inter-pixel crosstalk) and virtual-sharp.yaml (0.3 px optics, 0.8 px crosstalk); the bound
-// below includes the crosstalk (app/reports/crb.cc diffuses the charge as the sensor does).
-// It also prints the Cramer-Rao bound on d and theta at 2.7 m (app/reports/crb.h, the code behind
+// below includes the crosstalk (app/processing/crb.cc diffuses the charge as the sensor does).
+// It also prints the Cramer-Rao bound on d and theta at 2.7 m (app/processing/crb.h, the code behind
 // summary.yaml's `crb:`) for the Fig. 14 conditions, for one (t_r, t_n) pair and for a whole
 // bracket, beside the measured dispersion of Fig. 14.
 #include <algorithm>
@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "app/reports/crb.h"
+#include "app/processing/crb.h"
 #include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
 #include "estimator/estimate_baselines.h"

@@ -12,7 +12,7 @@
 
 #include "acquisition/recording_check.h"
 #include "acquisition/recording_reader.h"
-#include "app/reports/summary.h"
+#include "app/processing/validation_summary.h"
 #include "estimator/model_file.h"
 #include "tests/integration/measure_helpers.h"
 #include "tests/integration/run_helpers.h"
@@ -180,7 +180,7 @@ TEST_F(CalibrateValidate, ValidationWritesEstimatesSummaryAndReport) {
   EXPECT_NE(validate_output_[0].find("i0_free"), std::string::npos);
 }
 
-// The virtual rig's Cramer-Rao bound sits beside each method's figures (app/reports/crb.h): the
+// The virtual rig's Cramer-Rao bound sits beside each method's figures (app/processing/crb.h): the
 // bound of every pose of the recipe, the errors in units of it, and the report's header says the
 // same.
 TEST_F(CalibrateValidate, ValidationSummaryCarriesTheCramerRaoBound) {

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "app/reports/estimates_csv.h"
+#include "app/processing/estimates_csv.h"
 #include "tests/integration/measure_helpers.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"

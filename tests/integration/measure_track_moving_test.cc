@@ -7,7 +7,7 @@
 // slide from 1500 to 3000 mm, at pan 0 and at pan 20 deg. Each frame's truth is the trajectory's
 // pose at the middle of its exposure (sim/trajectory.h MidExposure from the frame's camera
 // timestamp and exposure): the per-frame distance error's rms during the move is at most 1.5 x the
-// one-frame Cramer-Rao bound (app/reports/crb.h on the rig's physics, one 8 ms frame, every
+// one-frame Cramer-Rao bound (app/processing/crb.h on the rig's physics, one 8 ms frame, every
 // unknown free, at each frame's true distance), and the filter's velocity on the cruise is within
 // 3 standard errors of the truth's. The per-frame standard error measure reports (d_se_mm, the
 // calibration's noise model) is printed beside the bound: at pan 20 it is 0.6-0.8 x the bound
@@ -26,7 +26,7 @@
 #include <thread>
 #include <vector>
 
-#include "app/reports/crb.h"
+#include "app/processing/crb.h"
 #include "sim/rig_physics.h"
 #include "sim/trajectory.h"
 #include "sim/trajectory_file.h"
@@ -57,7 +57,7 @@ std::string FastSlideRig() {
   return rig.replace(at, slide.size(), "speed: 500.0, accel: 2000.0");
 }
 
-// The one-frame Cramer-Rao bound on d (app/reports/crb.h: the virtual rig's physics, one frame at
+// The one-frame Cramer-Rao bound on d (app/processing/crb.h: the virtual rig's physics, one frame at
 // the track's exposure, every unknown free) at the pose's pan, every 250 mm from 1500 to 3000 mm;
 // between them interpolated linearly.
 class OneFrameBound {

@@ -4,6 +4,7 @@
 
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
 
 #include "app/inputs/errors.h"
@@ -344,6 +345,41 @@ TEST(RigTest, BadRigFilesNameTheirLineAndColumn) {
   }
 }
 
+// One name for triggering during readout: camera.trigger_in_readout. The old spelling
+// `trigger_overlap: readout | off` still reads the same, with a note naming the file and line and
+// the new spelling; both at once are refused; the shipped rigs use the new name.
+TEST(RigTest, TriggerInReadoutAndItsOldSpellingWithANote) {
+  const Rig now = ParseRig("kind: virtual\ncamera:\n  trigger_in_readout: true\n", "r.yaml");
+  EXPECT_TRUE(now.camera.trigger_in_readout);
+  EXPECT_TRUE(now.notes.empty());
+  EXPECT_FALSE(ParseRig("kind: virtual\ncamera: {}\n", "r.yaml").camera.trigger_in_readout);
+  for (const bool readout : {true, false}) {
+    const Rig old = ParseRig(std::string("kind: virtual\ncamera:\n  id: x\n  trigger_overlap: ") +
+                                 (readout ? "readout" : "off") + "\n",
+                             "old.yaml");
+    EXPECT_EQ(old.camera.trigger_in_readout, readout);
+    ASSERT_EQ(old.notes.size(), 1u);
+    EXPECT_EQ(old.notes[0].rfind("old.yaml:4: camera.trigger_overlap is the old name", 0), 0u)
+        << old.notes[0];
+    EXPECT_NE(old.notes[0].find(std::string("trigger_in_readout: ") + (readout ? "true" : "false")),
+              std::string::npos)
+        << old.notes[0];
+    std::ostringstream err;
+    PrintRigNotes(old, err);
+    EXPECT_EQ(err.str(), "note: " + old.notes[0] + "\n");
+  }
+  EXPECT_NE(RefusalOf("kind: virtual\ncamera:\n  trigger_overlap: readout\n"
+                      "  trigger_in_readout: true\n")
+                .find("r.yaml:3:20: camera.trigger_overlap is the old name"),
+            std::string::npos);
+  EXPECT_NE(RefusalOf("kind: virtual\ncamera:\n  trigger_overlap: sometimes\n").find("sometimes"),
+            std::string::npos);
+  for (const char* name : {"virtual", "virtual-lab", "virtual-offset", "example-hardware"}) {
+    EXPECT_TRUE(LoadRig(kRigs + "/" + name + ".yaml").notes.empty()) << name;
+  }
+  EXPECT_TRUE(LoadRig(kRigs + "/virtual.yaml").camera.trigger_in_readout);
+}
+
 // camera.exposure_check: the chunk, the read-back or none; absent = auto; anything else refused at
 // its line with the choices.
 TEST(RigTest, ExposureCheckIsOneOfItsChoices) {
@@ -376,8 +412,8 @@ TEST(RigTest, MissingRigFileIsARecipeError) {
   EXPECT_THROW(LoadRig("/nonexistent/rig.yaml"), RecipeError);
 }
 
-// A legacy `station: {port, baud, ...}` is one irdist_station device filling every role.
-TEST(RigTest, ALegacyStationIsOneIrdistStationInEveryRole) {
+// A single-box `station: {port, baud, ...}` is one irdist_station device filling every role.
+TEST(RigTest, ASingleBoxStationIsOneIrdistStationInEveryRole) {
   const Rig rig = LoadRig(kRigs + "/example-hardware.yaml");
   const StationSpec& spec = rig.station.composition;
   ASSERT_EQ(spec.devices.size(), 1u);

@@ -89,7 +89,7 @@ TEST_F(SmallRecordingTest, FitRefusesARecordingTooSmallForTheModels) {
   const FeatureMap features = RecordingFeatures(reader, FeatureOptions{});
   std::ostringstream out;
   EXPECT_THROW(
-      FitRecording(reader, features, FeatureOptions{}, (dir_ / "model.yaml").string(), "", out),
+      FitRecording(reader, features, FeatureOptions{}, (dir_ / "model.yaml").string(), {}, out),
       RecordingError);
   EXPECT_FALSE(fs::exists(dir_ / "model.yaml"));
 }

@@ -1,7 +1,7 @@
-// The virtual rig's Cramer-Rao bound (app/reports/crb.h): its scaling with the photo-electrons
+// The virtual rig's Cramer-Rao bound (app/processing/crb.h): its scaling with the photo-electrons
 // under pure Poisson noise, the Fig. 14 figures the accuracy study printed before the bound moved
 // here, the bound beside a method's repetitions, and a recording without a virtual rig.
-#include "app/reports/crb.h"
+#include "app/processing/crb.h"
 
 #include <gtest/gtest.h>
 

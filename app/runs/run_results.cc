@@ -1,4 +1,4 @@
-#include "app/processing/run_results.h"
+#include "app/runs/run_results.h"
 
 #include <ostream>
 #include <sstream>
@@ -7,10 +7,12 @@
 #include "acquisition/recording_reader.h"
 #include "app/inputs/errors.h"
 #include "app/processing/bracket_estimates.h"
+#include "app/processing/crb.h"
+#include "app/processing/estimates_csv.h"
 #include "app/processing/recording_fit.h"
-#include "app/reports/crb.h"
-#include "app/reports/estimates_csv.h"
+#include "app/reports/calibration_report.h"
 #include "app/reports/report.h"
+#include "app/reports/summary.h"
 #include "app/reports/validation_plots.h"
 #include "estimator/model_file.h"
 
@@ -88,8 +90,8 @@ void ProcessCalibration(const std::string& run_dir, const FeatureOptions& option
   const FeatureMap features =
       RecordingFeatures(reader, fit_options, recovered ? FeatureMap{} : cache);
   WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
-  FitRecording(reader, features, fit_options, run_dir + "/model.yaml", run_dir + "/report", out,
-               keep_model);
+  FitRecording(reader, features, fit_options, run_dir + "/model.yaml",
+               CalibrationReportDrawerInto(run_dir + "/report", reader.dir()), out, keep_model);
 }
 
 void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "app/processing/frame_features.h"
-#include "app/reports/summary.h"
+#include "app/processing/validation_summary.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
 

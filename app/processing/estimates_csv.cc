@@ -1,4 +1,4 @@
-#include "app/reports/estimates_csv.h"
+#include "app/processing/estimates_csv.h"
 
 #include <fcntl.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "app/reports/crb.h"
+#include "app/processing/crb.h"
 
 #include <algorithm>
 #include <cmath>

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "app/reports/summary.h"
+#include "app/processing/validation_summary.h"
 #include "estimator/crb.h"
 #include "sim/rig_physics.h"
 
