@@ -135,23 +135,41 @@ std::vector<double> LatticeWalk(double t) {
   return kernel;
 }
 
+// The crosstalk's kernel: a sampled Gaussian convolved with a lattice random walk that carries
+// `lattice_share` of the variance (sensors and renderers spread charge either way; the split's
+// fit tells them apart on a sharp edge), its outer taps below kKernelTailTap dropped (a small
+// crosstalk's sampled Gaussian reaches 3 px for taps of 1e-11 and less: the grown grid and the
+// six planes' convolutions paid for them). The last kernel is kept per thread: a model's
+// crosstalk is one kernel for every frame (the bisection and the Bessel terms cost 20 us a fit).
+constexpr double kKernelTailTap = 1e-10;
+const std::vector<double>& CrosstalkKernel(double crosstalk_var_px2, double lattice_share) {
+  thread_local double last_var = -1.0, last_share = -1.0;
+  thread_local std::vector<double> kernel;
+  if (crosstalk_var_px2 == last_var && lattice_share == last_share) return kernel;
+  const double share = std::clamp(lattice_share, 0.0, 1.0);
+  const std::vector<double> g = SampledGaussianOfVariance((1.0 - share) * crosstalk_var_px2);
+  const std::vector<double> l = LatticeWalk(share * crosstalk_var_px2);
+  kernel.assign(g.size() + l.size() - 1, 0.0);
+  for (size_t i = 0; i < g.size(); ++i) {
+    for (size_t j = 0; j < l.size(); ++j) kernel[i + j] += g[i] * l[j];
+  }
+  while (kernel.size() > 1 && kernel.front() < kKernelTailTap && kernel.back() < kKernelTailTap) {
+    kernel.erase(kernel.begin());
+    kernel.pop_back();
+  }
+  last_var = crosstalk_var_px2, last_share = lattice_share;
+  return kernel;
+}
+
 // The response for a blur of `blur_var_px2` per axis (pixel area included) of which
-// `crosstalk_var_px2` comes after the sampling: a kernel on the grid, a sampled Gaussian
-// convolved with a lattice random walk that carries `lattice_share` of the variance (sensors
-// and renderers spread charge either way; the split's fit tells them apart on a sharp edge).
+// `crosstalk_var_px2` comes after the sampling: the optics' sd and the crosstalk's kernel.
 PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double lattice_share) {
   PixelResponse r;
   r.optics_sd =
       std::sqrt(std::max(blur_var_px2 - kPixelAreaVarPx2 - crosstalk_var_px2, kMinOpticsVarPx2));
   r.kernel = {1.0};
   if (!(crosstalk_var_px2 > 1e-6)) return r;
-  const double share = std::clamp(lattice_share, 0.0, 1.0);
-  const std::vector<double> g = SampledGaussianOfVariance((1.0 - share) * crosstalk_var_px2);
-  const std::vector<double> l = LatticeWalk(share * crosstalk_var_px2);
-  r.kernel.assign(g.size() + l.size() - 1, 0.0);
-  for (size_t i = 0; i < g.size(); ++i) {
-    for (size_t j = 0; j < l.size(); ++j) r.kernel[i + j] += g[i] * l[j];
-  }
+  r.kernel = CrosstalkKernel(crosstalk_var_px2, lattice_share);
   r.reach = static_cast<int>(r.kernel.size() / 2);
   return r;
 }
