@@ -199,11 +199,12 @@ struct BlobLocation {
 }  // namespace
 
 // The mean of each k x k block of a CV_16UC1 image, rounded as cv::resize's INTER_AREA rounds
-// (k = 2: half up; else to nearest even in float): its result, 4-5x faster (its generic integer
-// path was a quarter of the full frame's features; tests/estimator/features_test.cc compares the
+// (k = 2: half up; else to nearest even in float): its result, about 4x faster (its generic path
+// was a quarter of the full frame's features; tests/estimator/features_test.cc compares the
 // two). Rows summed first into 32-bit columns, then each block's k columns. An image whose sides
 // are not multiples of k goes to cv::resize.
 cv::Mat DownsampleArea(const cv::Mat& image, int k) {
+  IRDIST_CHECK(k >= 1, "downsampling factor " + std::to_string(k) + " below 1");
   const int rows = image.rows / k, cols = image.cols / k;
   cv::Mat out;
   if (image.type() != CV_16UC1 || rows * k != image.rows || cols * k != image.cols) {
