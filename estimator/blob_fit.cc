@@ -8,16 +8,18 @@
 
 #include <Eigen/Dense>
 #include <boost/math/special_functions/bessel.hpp>
-#include <ceres/tiny_solver.h>
 
 #include "base/pi.h"
+#include "estimator/normal_lm.h"
 #include "estimator/normal_table.h"
 
 namespace irdist {
 namespace {
 
-// A pass stops when a step changes the chi^2 by less than this: a parameter then moves by about
-// 1% of its standard error (TinySolver's function tolerance is absolute, in |f|^2 units).
+// A pass stops when a step changes the chi^2 by less than this, or when the next Gauss-Newton
+// step would (its Newton decrement, estimator/normal_lm.h: one model evaluation fewer a pass, 4
+// instead of 6 a fit on bench_estimator's blob): a parameter is then within about 1% of its
+// standard error of the minimum (both tolerances absolute, in |f|^2 units).
 constexpr double kChi2Tolerance = 1e-4;
 // A pass whose solution only sets the next pass's weights stops sooner (6.2 model evaluations a
 // fit instead of 7.1 on bench_estimator's blob): the weights are the model's signal, which a
@@ -133,23 +135,41 @@ std::vector<double> LatticeWalk(double t) {
   return kernel;
 }
 
+// The crosstalk's kernel: a sampled Gaussian convolved with a lattice random walk that carries
+// `lattice_share` of the variance (sensors and renderers spread charge either way; the split's
+// fit tells them apart on a sharp edge), its outer taps below kKernelTailTap dropped (a small
+// crosstalk's sampled Gaussian reaches 3 px for taps of 1e-11 and less: the grown grid and the
+// six planes' convolutions paid for them). The last kernel is kept per thread: a model's
+// crosstalk is one kernel for every frame (the bisection and the Bessel terms cost 20 us a fit).
+constexpr double kKernelTailTap = 1e-10;
+const std::vector<double>& CrosstalkKernel(double crosstalk_var_px2, double lattice_share) {
+  thread_local double last_var = -1.0, last_share = -1.0;
+  thread_local std::vector<double> kernel;
+  if (crosstalk_var_px2 == last_var && lattice_share == last_share) return kernel;
+  const double share = std::clamp(lattice_share, 0.0, 1.0);
+  const std::vector<double> g = SampledGaussianOfVariance((1.0 - share) * crosstalk_var_px2);
+  const std::vector<double> l = LatticeWalk(share * crosstalk_var_px2);
+  kernel.assign(g.size() + l.size() - 1, 0.0);
+  for (size_t i = 0; i < g.size(); ++i) {
+    for (size_t j = 0; j < l.size(); ++j) kernel[i + j] += g[i] * l[j];
+  }
+  while (kernel.size() > 1 && kernel.front() < kKernelTailTap && kernel.back() < kKernelTailTap) {
+    kernel.erase(kernel.begin());
+    kernel.pop_back();
+  }
+  last_var = crosstalk_var_px2, last_share = lattice_share;
+  return kernel;
+}
+
 // The response for a blur of `blur_var_px2` per axis (pixel area included) of which
-// `crosstalk_var_px2` comes after the sampling: a kernel on the grid, a sampled Gaussian
-// convolved with a lattice random walk that carries `lattice_share` of the variance (sensors
-// and renderers spread charge either way; the split's fit tells them apart on a sharp edge).
+// `crosstalk_var_px2` comes after the sampling: the optics' sd and the crosstalk's kernel.
 PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double lattice_share) {
   PixelResponse r;
   r.optics_sd =
       std::sqrt(std::max(blur_var_px2 - kPixelAreaVarPx2 - crosstalk_var_px2, kMinOpticsVarPx2));
   r.kernel = {1.0};
   if (!(crosstalk_var_px2 > 1e-6)) return r;
-  const double share = std::clamp(lattice_share, 0.0, 1.0);
-  const std::vector<double> g = SampledGaussianOfVariance((1.0 - share) * crosstalk_var_px2);
-  const std::vector<double> l = LatticeWalk(share * crosstalk_var_px2);
-  r.kernel.assign(g.size() + l.size() - 1, 0.0);
-  for (size_t i = 0; i < g.size(); ++i) {
-    for (size_t j = 0; j < l.size(); ++j) r.kernel[i + j] += g[i] * l[j];
-  }
+  r.kernel = CrosstalkKernel(crosstalk_var_px2, lattice_share);
   r.reach = static_cast<int>(r.kernel.size() / 2);
   return r;
 }
@@ -228,14 +248,13 @@ double SquareMean(const double* v, double x, double y, const PixelResponse& r, d
 }
 
 // `in` (rows x cols, row-major) convolved with `kernel` along x (dx = 1) or y, keeping the valid
-// part: (rows x (cols - 2 reach)) or ((rows - 2 reach) x cols).
-std::vector<double> Convolve(const double* in, int rows, int cols,
-                             const std::vector<double>& kernel, bool along_x) {
+// part, into `out`: (rows x (cols - 2 reach)) or ((rows - 2 reach) x cols).
+void Convolve(const double* in, int rows, int cols, const std::vector<double>& kernel,
+              bool along_x, double* out) {
   const int reach = static_cast<int>(kernel.size() / 2);
   const int out_rows = along_x ? rows : rows - 2 * reach;
   const int out_cols = along_x ? cols - 2 * reach : cols;
   const int stride = along_x ? 1 : cols;
-  std::vector<double> out(static_cast<size_t>(out_rows) * out_cols, 0.0);
   for (int row = 0; row < out_rows; ++row) {
     for (int col = 0; col < out_cols; ++col) {
       const double* first = &in[static_cast<size_t>(row) * cols + col];
@@ -244,20 +263,18 @@ std::vector<double> Convolve(const double* in, int rows, int cols,
       out[static_cast<size_t>(row) * out_cols + col] = acc;
     }
   }
-  return out;
 }
 
-// Every pixel's residual, divided by its noise sd, and the analytic Jacobian, for
-// ceres::TinySolver (a dense Levenberg-Marquardt for a few parameters: the general ceres::Problem
-// cost more per iteration than the model itself). The model (each pixel's mean and its
-// derivatives) is computed once per point and kept; the weights are applied as it is read. So
-// TinySolver's Jacobian at an accepted trial step, the next pass's start (new weights, same
-// point), the noise regression and the covariance at a pass's solution cost no evaluation.
-class WindowResiduals {
+// Every pixel's residual, divided by its noise sd, and the analytic Jacobian, summed into the
+// normal equations J^T J and J^T r for the solver (estimator/normal_lm.h, TinySolver's steps): no
+// n x 7 Jacobian is written. The model (each pixel's mean and its derivatives) is computed once
+// per point and kept; the weights are applied as it is read. So the normal equations at an
+// accepted trial step, the next pass's start (new weights, same point), the noise regression and
+// the covariance at a pass's solution cost no evaluation of the model. A pixel whose derivatives
+// are all zero (flat: wholly inside or outside the disc's edge band) adds to the amplitude's and
+// background's terms only.
+class WindowResiduals : public NormalProblem<kParams> {
  public:
-  using Scalar = double;
-  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = kParams };
-
   // `pixels`: the window's, row by row (cols x rows, BlobPixels).
   WindowResiduals(const std::vector<Pixel>& pixels, int cols, int rows, PixelResponse response)
       : pixels_(pixels), cols_(cols), rows_(rows), response_(std::move(response)),
@@ -267,18 +284,52 @@ class WindowResiduals {
     for (size_t i = 0; i < var.size(); ++i) inv_sd_[i] = 1.0 / std::sqrt(var[i]);
   }
   int NumResiduals() const { return static_cast<int>(pixels_.size()); }
-  // The Jacobian is column-major, NumResiduals() x kParams, as TinySolver lays it out.
-  bool operator()(const double* v, double* residuals, double* jacobian) const {
+  bool Evaluate(const double* v, bool want_normal,
+                NormalEquations<kParams>* normal) const override {
     const std::vector<double>& mean = MeansAt(v);
     const size_t n = pixels_.size();
-    for (size_t i = 0; i < n; ++i) {
-      residuals[i] = (v[6] + v[5] * mean[i] - pixels_[i].value) * inv_sd_[i];
-      if (jacobian == nullptr) continue;
-      for (int k = 0; k < 5; ++k) jacobian[k * n + i] = v[5] * d_mean_[k * n + i] * inv_sd_[i];
-      jacobian[5 * n + i] = mean[i] * inv_sd_[i];
-      jacobian[6 * n + i] = inv_sd_[i];
+    double cost2 = 0.0;
+    if (!want_normal) {
+      for (size_t i = 0; i < n; ++i) {
+        const double r = (v[6] + v[5] * mean[i] - pixels_[i].value) * inv_sd_[i];
+        cost2 += r * r;
+      }
+      normal->cost2 = cost2;
+      return std::isfinite(cost2);
     }
-    return true;
+    // The upper triangle of J^T J by rows (k <= l) and J^T r; the flat pixels' sums apart.
+    double jtj[kParams * kParams] = {}, jtr[kParams] = {};
+    double flat_mm = 0.0, flat_m = 0.0, flat_1 = 0.0, flat_mr = 0.0, flat_r = 0.0;
+    double j[kParams];
+    for (size_t i = 0; i < n; ++i) {
+      const double s = inv_sd_[i];
+      const double r = (v[6] + v[5] * mean[i] - pixels_[i].value) * s;
+      cost2 += r * r;
+      const double* d = &d_mean_[i];
+      if (d[0] == 0.0 && d[n] == 0.0 && d[2 * n] == 0.0 && d[3 * n] == 0.0 && d[4 * n] == 0.0) {
+        const double ms = mean[i] * s;
+        flat_mm += ms * ms, flat_m += ms * s, flat_1 += s * s, flat_mr += ms * r, flat_r += s * r;
+        continue;
+      }
+      const double amplitude_s = v[5] * s;
+      for (int k = 0; k < 5; ++k) j[k] = amplitude_s * d[k * n];
+      j[5] = mean[i] * s;
+      j[6] = s;
+      for (int k = 0; k < kParams; ++k) {
+        jtr[k] += j[k] * r;
+        for (int l = k; l < kParams; ++l) jtj[k * kParams + l] += j[k] * j[l];
+      }
+    }
+    jtj[5 * kParams + 5] += flat_mm, jtj[5 * kParams + 6] += flat_m, jtj[6 * kParams + 6] += flat_1;
+    jtr[5] += flat_mr, jtr[6] += flat_r;
+    for (int k = 0; k < kParams; ++k) {
+      normal->jtr(k) = jtr[k];
+      for (int l = k; l < kParams; ++l) {
+        normal->jtj(k, l) = normal->jtj(l, k) = jtj[k * kParams + l];
+      }
+    }
+    normal->cost2 = cost2;
+    return std::isfinite(cost2);
   }
   // Each pixel's model mean (relative to the amplitude) at v; nothing is computed when v is the
   // last point.
@@ -295,7 +346,7 @@ class WindowResiduals {
     const int reach = response_.reach;
     const int cols = cols_ + 2 * reach, rows = rows_ + 2 * reach;
     const size_t grid = static_cast<size_t>(cols) * rows;
-    if (reach > 0) grown_.resize(6 * grid);
+    if (reach > 0) grown_.resize(6 * grid), across_.resize(static_cast<size_t>(rows) * cols_);
     double* mean = reach > 0 ? grown_.data() : mean_.data();
     double* d_mean = reach > 0 ? grown_.data() + grid : d_mean_.data();
     double d[5];
@@ -308,11 +359,9 @@ class WindowResiduals {
     }
     const size_t n = pixels_.size();
     for (int p = 0; reach > 0 && p < 6; ++p) {
-      const std::vector<double> across =
-          Convolve(grown_.data() + p * grid, rows, cols, response_.kernel, true);
-      const std::vector<double> spread =
-          Convolve(across.data(), rows, cols_, response_.kernel, false);
-      std::copy(spread.begin(), spread.end(), p == 0 ? mean_.data() : d_mean_.data() + (p - 1) * n);
+      Convolve(grown_.data() + p * grid, rows, cols, response_.kernel, true, across_.data());
+      Convolve(across_.data(), rows, cols_, response_.kernel, false,
+               p == 0 ? mean_.data() : d_mean_.data() + (p - 1) * n);
     }
     std::copy(v, v + kParams, at_);
     computed_ = true;
@@ -322,9 +371,10 @@ class WindowResiduals {
   int cols_, rows_;
   PixelResponse response_;
   std::vector<double> inv_sd_;
-  // The last point computed and its model (TinySolver holds the functor const).
+  // The last point computed and its model (the solver holds the problem const).
   mutable std::vector<double> mean_, d_mean_;
-  mutable std::vector<double> grown_;  // with crosstalk: the planes on the window grown by reach
+  mutable std::vector<double> grown_;   // with crosstalk: the planes on the window grown by reach
+  mutable std::vector<double> across_;  // with crosstalk: a plane spread along x
   mutable double at_[kParams] = {};
   mutable bool computed_ = false;
 };
@@ -393,10 +443,9 @@ std::vector<double> NoiseVariances(const std::vector<Pixel>& pixels, const Windo
 // parameters; J^T J's eigen-decomposition). NaN when J^T J is singular to Ceres's own threshold
 // (reciprocal condition 1e-14).
 double AnisotropyNoiseVar(const WindowResiduals& residuals, const double* v) {
-  Eigen::VectorXd r(residuals.NumResiduals());
-  Eigen::Matrix<double, Eigen::Dynamic, kParams> jacobian(residuals.NumResiduals(), kParams);
-  residuals(v, r.data(), jacobian.data());
-  const Eigen::Matrix<double, kParams, kParams> information = jacobian.transpose() * jacobian;
+  NormalEquations<kParams> normal;
+  residuals.Evaluate(v, true, &normal);
+  const Eigen::Matrix<double, kParams, kParams>& information = normal.jtj;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kParams, kParams>> eigen(information);
   if (eigen.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
   const Eigen::Matrix<double, kParams, 1> lambda = eigen.eigenvalues();  // ascending
@@ -410,10 +459,11 @@ double AnisotropyNoiseVar(const WindowResiduals& residuals, const double* v) {
 // anisotropy_noise_var: when set, receives AnisotropyNoiseVar at the pass's solution.
 double SolvePass(const WindowResiduals& residuals, double* v, bool* ok,
                  double* anisotropy_noise_var = nullptr, double tolerance = kChi2Tolerance) {
-  ceres::TinySolver<WindowResiduals> solver;
-  solver.options.function_tolerance = tolerance;
+  NormalLmOptions options;
+  options.function_tolerance = tolerance;
+  options.decrement_tolerance = tolerance;
   Eigen::Matrix<double, kParams, 1> x(v);
-  const auto& summary = solver.Solve(residuals, &x);
+  const NormalLmSummary summary = SolveNormalLm(residuals, options, &x);
   std::copy(x.data(), x.data() + kParams, v);
   *ok = std::isfinite(summary.final_cost) && v[2] > 0.0 && v[4] > 0.0 && v[2] * v[4] > v[3] * v[3];
   if (*ok && anisotropy_noise_var != nullptr) {

@@ -3,8 +3,9 @@
 // bright elliptical disc {p : (p - c)^T P (p - c) <= 1}, blurred by a Gaussian whose variance is
 // the calibration's blur b(u) at the frame's distance less the pixel area (1/12 px^2; the pixel's
 // own spread is folded into the edge's blur, one evaluation per pixel), on the frame's background.
-// Unknowns: centre, P (3), amplitude, background; the Jacobian is analytic, one Ceres residual
-// block for the window (about 1 ms for a 7 px disc, bench_estimator). Residuals are weighted by the sensor's noise model, var = read + k x signal (EMVA
+// Unknowns: centre, P (3), amplitude, background; the Jacobian is analytic, summed into the
+// normal equations of a Levenberg-Marquardt (estimator/normal_lm.h; about 0.4 ms for a 7 px disc,
+// bench_estimator). Residuals are weighted by the sensor's noise model, var = read + k x signal (EMVA
 // 1288: read noise plus shot noise through the system gain), with read measured on the frame's
 // background and k regressed from the residuals of a first pass (iteratively reweighted least
 // squares = maximum likelihood for Gaussian noise). Second moments weight the noise in the blob's

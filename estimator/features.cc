@@ -196,6 +196,44 @@ struct BlobLocation {
   double cx = 0.0, cy = 0.0;
 };
 
+}  // namespace
+
+// The mean of each k x k block of a CV_16UC1 image, rounded as cv::resize's INTER_AREA rounds
+// (k = 2: half up; else to nearest even in float): its result, about 4x faster (its generic path
+// was a quarter of the full frame's features; tests/estimator/features_test.cc compares the
+// two). Rows summed first into 32-bit columns, then each block's k columns. An image whose sides
+// are not multiples of k goes to cv::resize.
+cv::Mat DownsampleArea(const cv::Mat& image, int k) {
+  IRDIST_CHECK(k >= 1, "downsampling factor " + std::to_string(k) + " below 1");
+  const int rows = image.rows / k, cols = image.cols / k;
+  cv::Mat out;
+  if (image.type() != CV_16UC1 || rows * k != image.rows || cols * k != image.cols) {
+    cv::resize(image, out, cv::Size(cols, rows), 0, 0, cv::INTER_AREA);
+    return out;
+  }
+  out.create(rows, cols, CV_16UC1);
+  std::vector<std::uint32_t> columns(image.cols);
+  const float scale = 1.0f / static_cast<float>(k * k);
+  for (int r = 0; r < rows; ++r) {
+    const std::uint16_t* first = image.ptr<std::uint16_t>(r * k);
+    for (int x = 0; x < image.cols; ++x) columns[x] = first[x];
+    for (int i = 1; i < k; ++i) {
+      const std::uint16_t* in = image.ptr<std::uint16_t>(r * k + i);
+      for (int x = 0; x < image.cols; ++x) columns[x] += in[x];
+    }
+    std::uint16_t* o = out.ptr<std::uint16_t>(r);
+    for (int c = 0; c < cols; ++c) {
+      std::uint32_t sum = 0;
+      for (int j = 0; j < k; ++j) sum += columns[c * k + j];
+      o[c] = k == 2 ? static_cast<std::uint16_t>((sum + 2) >> 2)
+                    : cv::saturate_cast<std::uint16_t>(static_cast<float>(sum) * scale);
+    }
+  }
+  return out;
+}
+
+namespace {
+
 // Coarse pass: area-average downsampling, robust background, brightest coarse cell. Returns false
 // when its contrast is below the options' minimum (no blob); sets the background and the coarse
 // peak's position (full-resolution pixels) either way.
@@ -204,7 +242,7 @@ bool DetectCoarse(const cv::Mat& image, double max_gray, const FeatureOptions& o
   const int k = options.detection_downsample;
   cv::Mat coarse;
   if (k > 1) {
-    cv::resize(image, coarse, cv::Size(image.cols / k, image.rows / k), 0, 0, cv::INTER_AREA);
+    coarse = DownsampleArea(image, k);
   } else {
     coarse = image;
   }

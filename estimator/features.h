@@ -182,6 +182,11 @@ FeatureOptions PaperFeatureOptions();
 // a blob gives blob_found = false (a value, not an error).
 Features ComputeFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options);
 
+// The coarse pass's image: the mean of each k x k block of `image`, as cv::resize(INTER_AREA)
+// gives it (the same values, rounding included), computed by block sums (4-5x faster on CV_16UC1
+// with sides that are multiples of k; other images go to cv::resize itself).
+cv::Mat DownsampleArea(const cv::Mat& image, int k);
+
 // A Gaussian noise's sd from samples of it around a level: 1.4826 x the median absolute deviation
 // from their median (robust to the few that are not noise). Reorders `values`; 0 when empty.
 double RobustNoiseSd(std::vector<double>* values);

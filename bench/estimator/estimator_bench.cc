@@ -49,6 +49,16 @@ void BM_FeaturesWithBlobFit(benchmark::State& state) {
 }
 BENCHMARK(BM_FeaturesWithBlobFit)->Unit(benchmark::kMicrosecond);
 
+// The blob fit alone on the same frame (its features computed once): BM_FeaturesWithBlobFit less
+// BM_ComputeFeatures/0, measured directly.
+void BM_BlobFitOnly(benchmark::State& state) {
+  const cv::Mat frame = Frame();
+  const Features features = ComputeFeatures(frame, 12, FeatureOptions());
+  const double blur_var_px2 = 1.0 + 1.0 / 12.0;
+  for (auto _ : state) benchmark::DoNotOptimize(FitBlob(frame, 12, features, blur_var_px2));
+}
+BENCHMARK(BM_BlobFitOnly)->Unit(benchmark::kMicrosecond);
+
 // The scene pass (estimator/scene.h) per frame at a 256 x 256 ROI, beside ComputeFeatures on the
 // same frame (goal: the pass at most 20 % of it): a clean frame (Arg 0), and one with 30 hot
 // pixels and a reflection 15 px from the disc (Arg 1).

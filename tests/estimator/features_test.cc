@@ -520,3 +520,32 @@ TEST(Features, TheWindowsBackgroundTakesAmbientLightOffERelAndF00) {
 
 }  // namespace
 }  // namespace irdist
+
+namespace irdist {
+namespace {
+
+// The coarse pass's block means are cv::resize(INTER_AREA)'s values, rounding included: random
+// 12- and 16-bit frames (every rounding tie occurs) at the downsampling factors the options allow
+// that divide the frame, and a frame whose sides k does not divide (handed to cv::resize).
+TEST(Features, DownsampleAreaIsOpenCvsAreaResize) {
+  cv::RNG rng(7);
+  for (const int max_level : {4095, 65535}) {
+    for (int k = 2; k <= 8; ++k) {
+      cv::Mat frame(k * 37, k * 45, CV_16UC1);
+      rng.fill(frame, cv::RNG::UNIFORM, 0, max_level + 1);
+      cv::Mat expected;
+      cv::resize(frame, expected, cv::Size(45, 37), 0, 0, cv::INTER_AREA);
+      const cv::Mat got = DownsampleArea(frame, k);
+      ASSERT_EQ(got.size(), expected.size());
+      EXPECT_EQ(cv::countNonZero(got != expected), 0) << "k " << k << ", max " << max_level;
+    }
+  }
+  cv::Mat odd(130, 203, CV_16UC1);
+  rng.fill(odd, cv::RNG::UNIFORM, 0, 4096);
+  cv::Mat expected;
+  cv::resize(odd, expected, cv::Size(203 / 4, 130 / 4), 0, 0, cv::INTER_AREA);
+  EXPECT_EQ(cv::countNonZero(DownsampleArea(odd, 4) != expected), 0);
+}
+
+}  // namespace
+}  // namespace irdist
