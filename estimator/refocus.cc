@@ -38,11 +38,13 @@ class OwnBlurCost {
     reference_var_ = RingVariance(StartAt(calibrated), calibrated);
   }
   double operator()(double blur_var_px2) const { return Evaluate(blur_var_px2, nullptr); }
-  // The cost and its value per pixel (*per_pixel); +inf when the fit fails.
-  double Evaluate(double blur_var_px2, double* per_pixel) const {
+  // The cost, its value per pixel (*per_pixel) and the fit (*fit, when given); +inf when the fit
+  // fails.
+  double Evaluate(double blur_var_px2, double* per_pixel, BlobFitResult* fit_out = nullptr) const {
     const Features start = StartAt(blur_var_px2);
     const BlobFitResult fit =
         FitBlobPasses(image_, bit_depth_, start, blur_var_px2, crosstalk_, 1);
+    if (fit_out != nullptr) *fit_out = fit;
     if (!fit.ok || !(reference_var_ > 0.0)) return std::numeric_limits<double>::infinity();
     const double scale = RingVariance(start, blur_var_px2) / reference_var_;
     if (per_pixel != nullptr) *per_pixel = fit.read_weighted_chi2 * scale;
@@ -90,26 +92,60 @@ class OwnBlurCost {
   double reference_var_ = 0.0;
 };
 
-// The cost's minimum near `*at` refined by a least-squares parabola through five points 2h
-// apart at most (h = 5% of the blur, the lowest kept above `low`), and its standard error from
-// the parabola's curvature, scaled by the cost per pixel. NaN when the cost is not convex there.
-double RefineMinimum(const OwnBlurCost& cost, double low, double* at) {
-  const double h = std::max(0.05 * *at, 0.005);
-  const double centre = std::max(*at, low + 2.0 * h);
+// A parabola through the cost at five blurs: its vertex, the minimum's standard error (from its
+// curvature, scaled by the cost per pixel; NaN when the cost is not convex there), whether the
+// vertex lies inside the central three points, and the slopes of the disc's variances in the
+// blur between the second and fourth (the first pass's raw sizes).
+struct Parabola {
+  double vertex = 0.0, se = std::numeric_limits<double>::quiet_NaN();
+  bool inside = false;
+  double major_slope = 0.0, minor_slope = 0.0;
+};
+
+// The parabola through five points 5% of the blur apart centred at `at` (moved up where the
+// lowest would leave the search above `low`), fitted by least squares.
+Parabola FitParabola(const OwnBlurCost& cost, double low, double at) {
+  Parabola out;
+  const double h = std::max(0.05 * at, 0.005);
+  const double centre = std::max(at, low + 2.0 * h);
   double c[5], per_pixel = 0.0;
+  BlobFitResult below, above;
   for (int j = -2; j <= 2; ++j) {
-    c[j + 2] = j == 0 ? cost.Evaluate(centre, &per_pixel) : cost(centre + j * h);
+    const double b = centre + j * h;
+    c[j + 2] = j == 0 ? cost.Evaluate(b, &per_pixel)
+                      : cost.Evaluate(b, nullptr, j == -1 ? &below : j == 1 ? &above : nullptr);
   }
   double linear = 0.0, quadratic = 0.0;  // per step: sum j c_j / 10, sum (j^2 - 2) c_j / 14
   for (int j = -2; j <= 2; ++j) {
     linear += j * c[j + 2] / 10.0;
     quadratic += (j * j - 2) * c[j + 2] / 14.0;
   }
-  if (!(quadratic > 0.0) || !std::isfinite(quadratic) || !(per_pixel > 0.0)) return std::nan("");
-  const double step = std::clamp(-linear / (2.0 * quadratic), -2.0, 2.0);
-  *at = centre + step * h;
-  const double curvature = 2.0 * quadratic / (h * h);
-  return std::sqrt(2.0 * per_pixel / curvature);
+  out.vertex = centre;
+  if (!(quadratic > 0.0) || !std::isfinite(quadratic) || !(per_pixel > 0.0)) return out;
+  const double step = -linear / (2.0 * quadratic);
+  out.inside = std::abs(step) < 1.0;
+  out.vertex = centre + std::clamp(step, -2.0, 2.0) * h;
+  out.se = std::sqrt(2.0 * per_pixel / (2.0 * quadratic / (h * h)));
+  out.major_slope = (above.raw_major_var_px2 - below.raw_major_var_px2) / (2.0 * h);
+  out.minor_slope = (above.raw_minor_var_px2 - below.raw_minor_var_px2) / (2.0 * h);
+  return out;
+}
+
+// Near the calibrated blur (the parabola around it holds its own vertex: the usual case, five
+// one-pass fits): the disc at the calibrated blur (the refined features) moved along the
+// parabola's slopes. False when the vertex lies beyond (a focus change: the far search).
+bool OwnBlurNearCalibrated(const OwnBlurCost& cost, double low, Features* out) {
+  const double calibrated = out->size_blur_var_px2;
+  const Parabola p = FitParabola(cost, low, calibrated);
+  if (!p.inside || !std::isfinite(p.se)) return false;
+  const double step = p.vertex - calibrated;
+  out->own_blur_var_px2 = p.vertex;
+  out->own_blur_se_px2 = p.se;
+  out->own_major_slope = p.major_slope;
+  out->own_minor_slope = p.minor_slope;
+  out->own_major_var_px2 = out->moment_major_var_px2 - calibrated + p.major_slope * step;
+  out->own_minor_var_px2 = out->moment_minor_var_px2 - calibrated + p.minor_slope * step;
+  return true;
 }
 
 }  // namespace
@@ -125,17 +161,19 @@ bool MeasureOwnBlur(const cv::Mat& image, int bit_depth, const CalibrationModel&
   const double low = std::max(kOwnBlurLowFactor * calibrated, floor + 1e-3);
   const double high = kOwnBlurHighFactor * calibrated;
   if (!(high > low)) return false;
+  if (OwnBlurNearCalibrated(cost, low, out)) return true;
+  // Far from it: Brent over the search, the parabola at its minimum, the disc fitted there.
   boost::uintmax_t iterations = 40;
-  double own = boost::math::tools::brent_find_minima(cost, low, high, 10, iterations).first;
+  const double found = boost::math::tools::brent_find_minima(cost, low, high, 10, iterations).first;
   const double edge = 0.01 * (high - low);
-  if (own < low + edge || own > high - edge) return false;
-  const double se = RefineMinimum(cost, low, &own);
-  const Crosstalk& xt = crosstalk;
-  const BlobFitResult at = FitBlob(image, bit_depth, start, own, xt);
-  const BlobFitResult above = FitBlob(image, bit_depth, start, own + kSlopeStepPx2, xt);
-  if (!std::isfinite(se) || !at.ok || !above.ok) return false;
+  if (found < low + edge || found > high - edge) return false;
+  const Parabola p = FitParabola(cost, low, found);
+  const double own = p.vertex;
+  const BlobFitResult at = FitBlob(image, bit_depth, start, own, crosstalk);
+  const BlobFitResult above = FitBlob(image, bit_depth, start, own + kSlopeStepPx2, crosstalk);
+  if (!std::isfinite(p.se) || !at.ok || !above.ok) return false;
   out->own_blur_var_px2 = own;
-  out->own_blur_se_px2 = se;
+  out->own_blur_se_px2 = p.se;
   out->own_major_var_px2 = at.major_var_px2;
   out->own_minor_var_px2 = at.minor_var_px2;
   out->own_major_slope = (above.raw_major_var_px2 - at.raw_major_var_px2) / kSlopeStepPx2;
