@@ -9,7 +9,7 @@
 // electrons). The bound on d is the (d, d) element of F's inverse: every other unknown free.
 //
 // This file knows nothing of where mu and its derivatives come from: the caller renders them
-// (app/reports/crb.h does it with the virtual rig's physics) and passes one FrameSensitivity per frame.
+// (app/processing/crb.h does it with the virtual rig's physics) and passes one FrameSensitivity per frame.
 
 #include <opencv2/core.hpp>
 #include <string>

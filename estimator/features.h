@@ -158,6 +158,16 @@ struct Features {
   // The blur variance (px^2, pixel area included) inside moment_*_var_px2 where the blob fit set
   // them (its calibrated blur, estimator/blob_fit.h); NaN for the moments' own.
   double size_blur_var_px2 = std::numeric_limits<double>::quiet_NaN();
+  // The blob fit's own blur (estimator/refocus.h MeasureOwnBlur): the blur variance (px^2, pixel
+  // area and crosstalk included) that fits this frame best, its standard error, the disc's
+  // variances along its axes at that blur (no blur added) and their slopes d(disc var)/d(blur
+  // var). NaN when not measured (no model, the moments path, no blob).
+  double own_blur_var_px2 = std::numeric_limits<double>::quiet_NaN();
+  double own_blur_se_px2 = std::numeric_limits<double>::quiet_NaN();
+  double own_major_var_px2 = std::numeric_limits<double>::quiet_NaN();
+  double own_minor_var_px2 = std::numeric_limits<double>::quiet_NaN();
+  double own_major_slope = std::numeric_limits<double>::quiet_NaN();
+  double own_minor_slope = std::numeric_limits<double>::quiet_NaN();
   EllipseFit ellipse_moments;
   EllipseFit ellipse_contour;
   EllipseFit ellipse_model;     // kModelFit only (valid = false under the other methods)

@@ -5,6 +5,7 @@
 
 #include "estimator/features.h"
 #include "estimator/fit.h"
+#include "estimator/refocus.h"
 
 namespace irdist {
 
@@ -17,10 +18,16 @@ const char* HealthCheck::Label() const {
 std::string HealthCheck::Advice() const {
   if (!flagged) return "";
   const int percent = static_cast<int>(std::lround(100.0 * sigma_change));
-  return std::string("the blob's blur is ") + (percent > 0 ? "+" : "") + std::to_string(percent) +
-         "% from the calibration's at this distance: the optics changed (focus ring, lens, "
-         "temperature). Restore the calibration's focus, or recalibrate; distances from this "
-         "model are biased until then";
+  const std::string head = std::string("the blob's blur is ") + (percent > 0 ? "+" : "") +
+                           std::to_string(percent) +
+                           "% from the calibration's at this distance: the optics changed (focus "
+                           "ring, lens, temperature). Restore the calibration's focus, or "
+                           "recalibrate; ";
+  if (refocused) {
+    return head + "until then each bracket is measured with its own blur (flag refocused), its "
+                  "standard error grown by the blur's";
+  }
+  return head + "distances from this model are biased until then";
 }
 
 double BlurSigmaChange(double measured_var_px2, double calibrated_var_px2) {
@@ -29,22 +36,53 @@ double BlurSigmaChange(double measured_var_px2, double calibrated_var_px2) {
   return std::sqrt(measured / calibrated) - 1.0;
 }
 
-HealthCheck CheckHealth(const CalibrationModel& model, double d_mm,
-                        const std::vector<const Features*>& frames, const HealthOptions& options) {
-  HealthCheck h;
-  const BlurCalibration& cal = model.blur_calibration;
-  if (!cal.fitted() || !(d_mm > 0.0)) return h;
+namespace {
+
+// The blob-fit figure (refocus.h FitBracketBlur) when every usable frame has an own blur.
+bool BlobFitHealth(const std::vector<const Features*>& frames, HealthCheck* h) {
+  std::vector<const Features*> usable;
+  for (const Features* f : frames) {
+    if (f != nullptr && f->Usable()) usable.push_back(f);
+  }
+  const BracketBlur blur = FitBracketBlur(usable);
+  if (blur.frames == 0 || blur.frames != static_cast<int>(usable.size())) return false;
+  h->assessed = h->blob_fit = true;
+  h->frames = blur.frames;
+  h->blur_var_px2 = blur.blur_var_px2;
+  h->blur_se_px2 = blur.se_px2;
+  h->calibrated_px2 = blur.calibrated_px2;
+  h->z = (blur.blur_var_px2 - blur.calibrated_px2) / blur.se_px2;
+  return true;
+}
+
+// The cumulants' figure at d_mm.
+void CumulantHealth(const BlurCalibration& cal, double d_mm,
+                    const std::vector<const Features*>& frames, HealthCheck* h) {
   double sum = 0.0;
   for (const Features* f : frames) {
     if (f == nullptr || !f->Usable() || !std::isfinite(f->blur_var_px2)) continue;
     sum += f->blur_var_px2;
-    ++h.frames;
+    ++h->frames;
   }
-  if (h.frames == 0) return h;
-  h.assessed = true;
-  h.blur_var_px2 = sum / h.frames;
-  h.calibrated_px2 = cal.BlurVarPx2(d_mm);
-  h.z = (h.blur_var_px2 - h.calibrated_px2) / (cal.NoisePx2(d_mm) / std::sqrt(h.frames));
+  if (h->frames == 0) return;
+  h->assessed = true;
+  h->blur_var_px2 = sum / h->frames;
+  h->calibrated_px2 = cal.BlurVarPx2(d_mm);
+  h->z = (h->blur_var_px2 - h->calibrated_px2) / (cal.NoisePx2(d_mm) / std::sqrt(h->frames));
+}
+
+}  // namespace
+
+HealthCheck CheckHealth(const CalibrationModel& model, double d_mm,
+                        const std::vector<const Features*>& frames, const HealthOptions& options) {
+  HealthCheck h;
+  const BlurCalibration& cal = model.blur_calibration;
+  if (!cal.fitted()) return h;
+  if (!BlobFitHealth(frames, &h)) {
+    if (!(d_mm > 0.0)) return h;
+    CumulantHealth(cal, d_mm, frames, &h);
+    if (!h.assessed) return h;
+  }
   h.sigma_change = BlurSigmaChange(h.blur_var_px2, h.calibrated_px2);
   h.flagged = std::fabs(h.z) > options.z_limit && std::fabs(h.sigma_change) > options.min_sigma_change;
   return h;

@@ -1,9 +1,15 @@
 #pragma once
-// Calibration health: does a measurement still see the optics the calibration saw? The blob's
-// blur is measured on every frame (Features::blur_var_px2: 2nd and 4th cumulants along its axes,
-// independent of d and theta) and compared with the blur the calibration frames showed at the
-// estimated distance. A touched focus ring, a lens swap or a temperature change moves the blur;
-// the geometric (size) model then reads the wrong distance, silently. docs/estimator.md.
+// Calibration health: does a measurement still see the optics the calibration saw? Where the
+// frames carry the blob fit's own blur (features.h own_blur_var_px2, estimator/refocus.h: the
+// blur that fits each frame best within the blob family the calibration fitted its blur with), the
+// bracket's joint blob-fit blur is compared with the calibrated blob-fit blur (BlurCalibration::
+// FitBlurVarPx2, the blur the blob fit was given): a lens outside the Gaussian family (a halo, an
+// astigmatic PSF) under its own calibration reads as calibrated, and a real focus change is seen
+// (and measured through: bracket_estimates.cc `refocused`). Without it (the moments path), the
+// blob's cumulant blur (Features::blur_var_px2: 2nd and 4th cumulants along its axes) against the
+// calibrated cumulant blur at the estimated distance. A touched focus ring, a lens swap or a
+// temperature change moves the blur; the geometric (size) model then reads the wrong distance
+// unless the bracket's own blur is used. docs/estimator.md.
 
 #include <string>
 #include <vector>
@@ -33,6 +39,13 @@ struct HealthCheck {
   double sigma_change = 0.0;     // relative change of the blur's sigma (pixel area removed)
   double z = 0.0;                // departure in standard errors
   bool flagged = false;
+  // The figure: true = the blob fit's own blur against the calibrated blob-fit blur (its standard
+  // error blur_se_px2 from the frames' fits), false = the cumulants' blur.
+  bool blob_fit = false;
+  double blur_se_px2 = 0.0;
+  // Set by the estimate (app/processing/bracket_estimates.cc): the bracket was estimated with its
+  // own blur (flagged on the blob-fit figure), the `refocused` flag.
+  bool refocused = false;
   // "ok", "-" (not assessed), "blur_larger" or "blur_smaller" (the estimates.csv health column).
   const char* Label() const;
   // What to do when flagged ("" when not): refocus to the calibration's focus, or recalibrate.
@@ -43,7 +56,9 @@ struct HealthCheck {
 // variance to the measured one (both pixel area included): HealthCheck::sigma_change.
 double BlurSigmaChange(double measured_var_px2, double calibrated_var_px2);
 
-// The health of one estimate at distance d_mm from its measurement frames.
+// The health of one estimate at distance d_mm from its measurement frames: the blob-fit figure
+// where every usable frame has an own blur (d_mm then unused: each frame's calibrated blur is
+// the one its blob fit was given), else the cumulants' at d_mm.
 HealthCheck CheckHealth(const CalibrationModel& model, double d_mm,
                         const std::vector<const Features*>& frames,
                         const HealthOptions& options = HealthOptions());

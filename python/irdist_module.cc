@@ -260,6 +260,9 @@ py::dict FeaturesDict(const Features& f) {
   d["moment_major_var_px2"] = f.moment_major_var_px2;
   d["moment_minor_var_px2"] = f.moment_minor_var_px2;
   d["blur_var_px2"] = f.blur_var_px2;
+  d["size_blur_var_px2"] = f.size_blur_var_px2;  // the calibrated blur the blob fit was given
+  d["own_blur_var_px2"] = f.own_blur_var_px2;    // the blob fit's own blur (estimator/refocus.h)
+  d["own_blur_se_px2"] = f.own_blur_se_px2;
   d["ellipse_moments"] = EllipseDict(f.ellipse_moments);
   d["ellipse_contour"] = EllipseDict(f.ellipse_contour);
   d["ellipse_model"] = EllipseDict(f.ellipse_model);

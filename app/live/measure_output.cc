@@ -88,7 +88,7 @@ std::string QualityFlags(const MeasureSample& s) {
   }
   add(s.have_estimate && s.estimate.outside_range,
       "outside_range(" + JoinNames(s.estimate.outside, " ") + ")");
-  add(s.health.flagged, std::string(s.health.Label()) + "(" +
+  add(s.health.flagged, std::string(s.health.refocused ? "refocused" : s.health.Label()) + "(" +
                             (s.health.sigma_change > 0.0 ? "+" : "") +
                             FixedText(100.0 * s.health.sigma_change, 0) + "%)");
   add(s.motion.moving, "moving(" + FixedText(s.motion.spread_mm, 1) + " mm)");
@@ -104,7 +104,9 @@ std::string HealthJson(const HealthCheck& h) {
   return std::string("{\"status\":\"") + h.Label() +
          "\",\"blur_var_px2\":" + JsonNumber(h.blur_var_px2) +
          ",\"calibrated_blur_var_px2\":" + JsonNumber(h.calibrated_px2) +
-         ",\"sigma_change\":" + JsonNumber(h.sigma_change) + ",\"z\":" + JsonNumber(h.z) + "}";
+         ",\"sigma_change\":" + JsonNumber(h.sigma_change) + ",\"z\":" + JsonNumber(h.z) +
+         ",\"figure\":\"" + (h.blob_fit ? "blob_fit" : "cumulants") +
+         "\",\"refocused\":" + JsonBool(h.refocused) + "}";
 }
 
 // "motion": the figure behind the flag (null when not assessed).
@@ -142,6 +144,7 @@ std::string MeasureJson(const MeasureSample& s) {
       << ",\"clipped\":" << JsonBool(s.clipped)
       << ",\"outside_range\":" << JsonBool(s.have_estimate && e.outside_range)
       << ",\"unhealthy\":" << JsonBool(s.health.flagged)
+      << ",\"refocused\":" << JsonBool(s.health.refocused)
       << ",\"moving\":" << JsonBool(s.motion.moving)
       << ",\"second_source\":" << JsonBool(HasFlag(e.flags, "second_source"))
       << ",\"occluded\":" << JsonBool(HasFlag(e.flags, "occluded")) << "}"

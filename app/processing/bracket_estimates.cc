@@ -12,6 +12,7 @@
 #include "estimator/estimate_baselines.h"
 #include "estimator/health.h"
 #include "estimator/models.h"
+#include "estimator/refocus.h"
 
 namespace irdist {
 
@@ -86,13 +87,44 @@ void FramesOfPairs(const std::vector<DifferencePair>& pairs, const FeatureMap& f
   }
 }
 
+// A row's standard errors grown by the bracket blur's: its change when the blur moves by its
+// standard error (`shifted`, the estimate then), added in quadrature.
+void GrowStandardErrors(const DistanceEstimate& shifted, EstimateRow* row) {
+  if (!row->ok || !std::isfinite(shifted.d_mm) || !shifted.converged) return;
+  if (row->d_std_mm >= 0.0) row->d_std_mm = std::hypot(row->d_std_mm, shifted.d_mm - row->d_mm);
+  if (row->theta_std_deg >= 0.0) {
+    row->theta_std_deg = std::hypot(row->theta_std_deg, shifted.theta_deg - row->theta_deg);
+  }
+}
+
+// A refocused bracket's rows with the blur's uncertainty propagated (refocus.h): the estimate
+// again from `shifted`, the features at the bracket's blur plus its standard error.
+void AddBlurUncertainty(const CalibrationModel& model, const EstimateOptions& options,
+                        const std::vector<DifferencePair>& pairs, const FeatureMap& shifted,
+                        const std::vector<double>& t_ms, std::vector<EstimateRow>* rows) {
+  const FrameRecord& reference = *pairs.front().reference;
+  std::vector<Features> measurements;
+  for (const DifferencePair& pair : pairs) {
+    measurements.push_back(FeaturesOf(shifted, *pair.measurement));
+  }
+  const BracketEstimate e =
+      EstimateBracket(model, FeaturesOf(shifted, reference),
+                      reference.requested_exposure_us / 1000.0, measurements, t_ms, options);
+  GrowStandardErrors(e.joint, &(*rows)[0]);
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    if (pairs[k].reference == &reference) GrowStandardErrors(e.per_exposure[k], &(*rows)[k + 1]);
+  }
+}
+
 // One method's rows for a bracket: the joint estimate (dt_ms = 0), then one row per t_n. With
 // `checks`, the bracket's calibration health and motion (from this method's rows) go there.
+// `shifted` (a refocused bracket): its features at its blur plus the blur's standard error.
 void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& options,
                         const std::string& method, const EstimateRow& base,
                         const std::vector<DifferencePair>& pairs, const FeatureMap& features,
                         bool all_usable, std::vector<EstimateRow>* out,
-                        BracketEstimateRows* checks = nullptr) {
+                        BracketEstimateRows* checks = nullptr,
+                        const FeatureMap* shifted = nullptr) {
   const FrameRecord& reference = *pairs.front().reference;
   std::vector<const Features*> frames;  // every frame of the bracket, for the signal's range
   std::vector<double> t_ms;
@@ -126,6 +158,7 @@ void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& op
     }
     const MotionCheck motion =
         MotionOfRows(std::vector<EstimateRow>(rows.begin() + 1, rows.end()), &rows[0]);
+    if (shifted != nullptr) AddBlurUncertainty(model, options, pairs, *shifted, t_ms, &rows);
     if (checks != nullptr) {
       checks->health = health;
       checks->motion = motion;
@@ -277,6 +310,31 @@ void FlagRows(const CalibrationModel& model, const std::vector<DifferencePair>& 
 
 }  // namespace
 
+namespace {
+
+// The blob-fit health of a bracket's measurement frames before its estimate (estimator/health.h):
+// flagged, the bracket is estimated with its own blur (refocused).
+HealthCheck BlurBeforeEstimate(const CalibrationModel& model,
+                               const std::vector<DifferencePair>& pairs,
+                               const FeatureMap& features) {
+  std::vector<const Features*> frames;
+  for (const DifferencePair& pair : pairs) frames.push_back(&FeaturesOf(features, *pair.measurement));
+  return CheckHealth(model, NAN, frames);
+}
+
+// Every frame of the bracket with its blob's size at `blur_var_px2` (refocus.h AtBlur).
+FeatureMap BracketAtBlur(const RecordedBracket& bracket, const FeatureMap& features,
+                         double blur_var_px2) {
+  FeatureMap out;
+  for (const FrameRecord& row : bracket.frames) {
+    const auto f = features.find(row.index);
+    if (f != features.end()) out[row.index] = AtBlur(f->second, blur_var_px2);
+  }
+  return out;
+}
+
+}  // namespace
+
 BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
                                             const FeatureMap& frame_features,
                                             const CalibrationModel& model,
@@ -285,7 +343,20 @@ BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
   if (!bracket.complete) return rows;
   const std::vector<DifferencePair> pairs = DifferencePairsOf(bracket);
   if (pairs.empty()) return rows;
-  const FeatureMap features = BracketOnLineOfSight(bracket, frame_features, geometry);
+  // A focus change since calibration, measured through: the bracket's own blur where its
+  // blob-fit blur departs from the calibrated one (estimator/refocus.h).
+  const HealthCheck blur = BlurBeforeEstimate(model, pairs, frame_features);
+  const bool refocus = blur.blob_fit && blur.flagged;
+  const FeatureMap features = BracketOnLineOfSight(
+      bracket, refocus ? BracketAtBlur(bracket, frame_features, blur.blur_var_px2) : frame_features,
+      geometry);
+  const FeatureMap shifted =
+      refocus ? BracketOnLineOfSight(
+                    bracket,
+                    BracketAtBlur(bracket, frame_features, blur.blur_var_px2 + blur.blur_se_px2),
+                    geometry)
+              : FeatureMap{};
+  const FeatureMap* blur_shifted = refocus ? &shifted : nullptr;
   const EstimateRow base = BaseRowOf(bracket, *pairs.front().measurement, geometry);
   bool all_usable = true;
   for (const DifferencePair& pair : pairs) {
@@ -293,9 +364,10 @@ BracketEstimateRows EstimateRecordedBracket(const RecordedBracket& bracket,
                  FeaturesOf(features, *pair.measurement).Usable();
   }
   EstimateMethodRows(model, EstimateOptions{}, "i0_free", base, pairs, features, all_usable,
-                     &rows.i0_free, &rows);
+                     &rows.i0_free, &rows, blur_shifted);
+  rows.health.refocused = refocus && rows.health.blob_fit && rows.health.flagged;
   EstimateMethodRows(model, PaperEstimateOptions(), "paper", base, pairs, features, all_usable,
-                     &rows.paper);
+                     &rows.paper, nullptr, blur_shifted);
   if (model.Find(ModelKind::kDiffF) != nullptr) {
     rows.i0_dependent.push_back(I0DependentRow(model, base, pairs, features, all_usable));
   }
@@ -346,7 +418,9 @@ std::string OpticsFingerprintWarning(const CalibrationModel& model, const Health
       << " px^2 at " << std::lround(d_mm) << " mm, the model's " << first.calibrated_px2
       << " px^2 there (its fingerprint:";
   for (double d : {r.d_min_mm, 0.5 * (r.d_min_mm + r.d_max_mm), r.d_max_mm}) {
-    out << " " << std::lround(d) << " mm " << model.blur_calibration.BlurVarPx2(d) << " px^2";
+    const BlurCalibration& b = model.blur_calibration;
+    out << " " << std::lround(d) << " mm " << (first.blob_fit ? b.FitBlurVarPx2(d) : b.BlurVarPx2(d))
+        << " px^2";
   }
   out << "). The model was calibrated with other optics (another rig with this camera, another "
          "lens or focus): use that rig's model, restore the focus, or recalibrate.";

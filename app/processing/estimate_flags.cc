@@ -153,7 +153,9 @@ void FlagRow(const BracketFrameFlags& frames, const CalibratedRanges& ranges,
     row->flags.push_back({"moving", Fixed(row->spread_mm, 1, "mm")});
   }
   if (!scene_cause && health != nullptr && health->assessed && health->flagged) {
-    row->flags.push_back({health->Label(), PercentFigure(health->sigma_change)});
+    // Measured through with the bracket's own blur: a note; else the blur makes it suspect.
+    row->flags.push_back({health->refocused ? "refocused" : health->Label(),
+                          PercentFigure(health->sigma_change)});
   }
   FlagRanges(ranges, frames, t_ms, row);
   if (!row->ok) row->flags.push_back({"no_estimate", ""});

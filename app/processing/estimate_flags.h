@@ -61,7 +61,8 @@ BracketFrameFlags FrameFlags(const std::vector<const Features*>& frames);
 // measurement exposures) and a `signal` within kSignalExtrapolation of the calibrated peaks, which
 // become the notes `t_meas_extrapolated` and `signal_extrapolated` and leave the row's outside
 // list and outside_range; `moving` with the spread; `blur_larger`/`blur_smaller` with the blur's
-// change when `health` is given and flagged; `no_estimate` on a row without an estimate.
+// change when `health` is given and flagged, or the note `refocused` with it when the bracket was
+// measured with its own blur (HealthCheck::refocused); `no_estimate` on a row without an estimate.
 void FlagRow(const BracketFrameFlags& frames, const CalibratedRanges& ranges,
              const std::vector<double>& t_ms, const HealthCheck* health, EstimateRow* row);
 

@@ -223,6 +223,8 @@ const std::vector<FlagSpec>& FlagSpecs() {
        "a measurement exposure beyond the calibrated ones, within the graded tolerance (ms)"},
       {"signal_extrapolated", false,
        "the blob's peak beyond the calibration frames', within the graded tolerance (%)"},
+      {"refocused", false,
+       "the blur changed since calibration: measured with the bracket's own blur (%)"},
       // Suspect: the estimate is not trusted.
       {"no_blob", true, "a frame of the bracket has no blob"},
       {"saturated", true, "pixels at the format's maximum in the window (count)"},

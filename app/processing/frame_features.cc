@@ -9,6 +9,7 @@
 #include "acquisition/recording_reader.h"
 #include "base/safe_file.h"
 #include "estimator/blob_fit.h"
+#include "estimator/refocus.h"
 
 namespace irdist {
 
@@ -73,7 +74,10 @@ Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions
   const SceneFrame cleaned = SceneOf(image, bit_depth, options, scene);
   Features features = ComputeFeatures(cleaned.image, bit_depth, options);
   if (blob_fit_model != nullptr) {
-    RefineWithBlobFit(cleaned.image, bit_depth, *blob_fit_model, &features);
+    const Features moments = features;
+    if (RefineWithBlobFit(cleaned.image, bit_depth, *blob_fit_model, &features)) {
+      MeasureOwnBlur(cleaned.image, bit_depth, *blob_fit_model, moments, &features);
+    }
   }
   features.scene = cleaned.report;
   return features;

@@ -209,6 +209,8 @@ std::string ValidationSummary::BriefReport() const {
     if (m.best_dt_ms) out << ", best dt " << *m.best_dt_ms << " ms";
     if (m.outside_calibrated_range) out << ", " << m.outside_calibrated_range << " outside range";
     if (m.health_flagged) out << ", " << m.health_flagged << " unhealthy (optics)";
+    const auto refocused = m.flags.find("refocused");  // measured through with their own blur
+    if (refocused != m.flags.end()) out << ", " << refocused->second << " of them refocused";
     if (m.motion_flagged) out << ", " << m.motion_flagged << " moving";
     if (m.suspect) out << ", " << m.suspect << " suspect";
     if (m.silently_wrong) out << ", " << m.silently_wrong << " silently wrong";

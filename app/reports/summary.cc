@@ -165,8 +165,6 @@ std::optional<double> ReadBestDtMs(const std::string& summary_yaml_path) {
   }
 }
 
-
-
 void WriteSummaryYaml(const std::string& path, const ValidationSummary& summary,
                       const std::map<std::string, std::string>& context,
                       const std::map<std::string, CrbFigures>& crb) {

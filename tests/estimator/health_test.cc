@@ -110,5 +110,55 @@ TEST(HealthTest, FlaggedOnlyWhenSignificantAndLargeEnough) {
   EXPECT_TRUE(CheckHealth(noisy, 2000.0, {&frame}, strict).flagged);
 }
 
+// A frame with the blob fit's own blur `own_px2` (standard error `se_px2`), fitted with the
+// calibrated blob-fit blur `given_px2`, and a cumulant blur far off both (a lens outside the
+// Gaussian family: a halo reads +14% by the cumulants).
+Features FrameWithOwnBlur(double own_px2, double se_px2, double given_px2) {
+  Features f = FrameWithBlur(BlurWithSigmaChange(given_px2, 0.14));
+  f.size_blur_var_px2 = given_px2;
+  f.own_blur_var_px2 = own_px2;
+  f.own_blur_se_px2 = se_px2;
+  return f;
+}
+
+// Issue 38 item 4: the blob fit's own blur against the blur the fit was given, not the cumulants:
+// a lens whose own blur is its calibration's is ok whatever its cumulants say; a focus change of
+// the blob-fit blur is flagged with the figure's name.
+TEST(HealthTest, JudgesTheBlobFitsOwnBlurAgainstTheCalibratedBlobFitBlur) {
+  const std::vector<Features> same(4, FrameWithOwnBlur(0.80, 0.01, 0.80));
+  const HealthCheck ok = Check(same);
+  ASSERT_TRUE(ok.assessed);
+  EXPECT_TRUE(ok.blob_fit);
+  EXPECT_FALSE(ok.flagged);
+  EXPECT_STREQ(ok.Label(), "ok");
+  EXPECT_NEAR(ok.blur_var_px2, 0.80, 1e-12);
+  EXPECT_NEAR(ok.blur_se_px2, 0.005, 1e-12);  // 0.01 / sqrt(4)
+  // The blob-fit figure needs no distance: each frame's calibrated blur is the one it was given.
+  EXPECT_TRUE(Check(same, NAN).assessed);
+  const double wider = BlurWithSigmaChange(0.80, 0.30);
+  const HealthCheck changed = Check(std::vector<Features>(4, FrameWithOwnBlur(wider, 0.01, 0.80)));
+  EXPECT_TRUE(changed.flagged);
+  EXPECT_STREQ(changed.Label(), "blur_larger");
+  EXPECT_NEAR(changed.sigma_change, 0.30, 1e-9);
+  // A change within the bracket's noise is not flagged (z = 0.025 / 0.05 < 5).
+  const HealthCheck noisy =
+      Check(std::vector<Features>(4, FrameWithOwnBlur(0.825, 0.10, 0.80)));
+  EXPECT_TRUE(noisy.blob_fit);
+  EXPECT_FALSE(noisy.flagged);
+  // A refocused bracket's advice says it was measured through.
+  HealthCheck refocused = changed;
+  refocused.refocused = true;
+  EXPECT_NE(refocused.Advice().find("measured with its own blur"), std::string::npos);
+  EXPECT_EQ(changed.Advice().find("measured with its own blur"), std::string::npos);
+}
+
+// A frame without the blob fit's own blur (the moments path) keeps the cumulants' figure.
+TEST(HealthTest, WithoutTheBlobFitsOwnBlurTheCumulantsJudge) {
+  std::vector<Features> frames = Frames(4, 0.0);
+  const HealthCheck h = Check(frames);
+  EXPECT_TRUE(h.assessed);
+  EXPECT_FALSE(h.blob_fit);
+}
+
 }  // namespace
 }  // namespace irdist

@@ -487,7 +487,7 @@ int Occurrences(const std::string& text, const std::string& what) {
 
 // The lens blurring 30% more than at calibration (psf_sigma_px 0.7 -> 0.91): every bracket is
 // flagged, in the JSON (with the figure behind it), the live line and the summary, and one
-// warning says what to do.
+// warning says what to do; each is measured through with its own blur (the note refocused).
 TEST_F(Measure, BlurLargerThanTheModelsIsFlaggedEverywhereWithOneWarning) {
   const std::string rig_path = *dir_ + "/blur-rig.yaml";
   WriteAll(rig_path, RigWith("psf_sigma_px: 0.7", "psf_sigma_px: 0.91"));
@@ -502,6 +502,15 @@ TEST_F(Measure, BlurLargerThanTheModelsIsFlaggedEverywhereWithOneWarning) {
   for (const YAML::Node& j : objects) {
     EXPECT_TRUE(j["flags"]["unhealthy"].as<bool>()) << output;
     EXPECT_EQ(j["health"]["status"].as<std::string>(), "blur_larger") << output;
+    EXPECT_TRUE(j["flags"]["refocused"].as<bool>()) << output;
+    // A note among the causes, not a suspect one (the blur is measured through).
+    bool refocused_note = false;
+    for (const YAML::Node& c : j["causes"]) {
+      if (c["name"].as<std::string>() != "refocused") continue;
+      refocused_note = !c["suspect"].as<bool>();
+      EXPECT_EQ(c["figure"].as<std::string>().front(), '+') << output;
+    }
+    EXPECT_TRUE(refocused_note) << output;
     EXPECT_GT(j["health"]["blur_var_px2"].as<double>(),
               j["health"]["calibrated_blur_var_px2"].as<double>());
     EXPECT_GT(j["health"]["sigma_change"].as<double>(), 0.15) << output;
@@ -516,7 +525,8 @@ TEST_F(Measure, BlurLargerThanTheModelsIsFlaggedEverywhereWithOneWarning) {
                        &output),
             0)
       << output;
-  EXPECT_EQ(Occurrences(output, "[blur_larger(+"), 2) << output;
+  // Measured through with the bracket's own blur (issue 31 item 3): the line says refocused.
+  EXPECT_EQ(Occurrences(output, "[refocused(+"), 2) << output;
 }
 
 // Outside the calibration (0-30 deg, 30-36 ms here), with the reason; its edge (1500 mm) inside.

@@ -138,6 +138,9 @@ class ModelTest(unittest.TestCase):
             self.assertEqual(causes, expected["flags"], m)
             self.assertEqual(m["trusted"], not any(c["suspect"] for c in m["causes"]), m)
             self.assertAlmostEqual(m["d_se_mm"], float(expected["d_se_mm"]), delta=1e-3)
+            # The focus as calibrated: measured with the calibrated blur, not refocused.
+            self.assertFalse(m["flags"]["refocused"], m)
+            self.assertEqual(m["health"]["figure"], "blob_fit", m)
             checked += 1
         self.assertGreaterEqual(checked, 4)
 
@@ -149,6 +152,10 @@ class ModelTest(unittest.TestCase):
         x, y, w, h = f["roi"]
         cx, cy = f["centroid_px"]
         self.assertTrue(x <= cx <= x + w and y <= cy <= y + h, f)
+        # The blob fit's own blur, fitted with the size: the calibrated one it was given, within
+        # its noise and the calibration's (the rig as calibrated).
+        self.assertGreater(f["own_blur_se_px2"], 0.0, f)
+        self.assertLess(abs(f["own_blur_var_px2"] / f["size_blur_var_px2"] - 1.0), 0.15, f)
         # Another dtype is converted (the same gray levels as uint16).
         self.assertEqual(model.features(image.astype(np.int32))["centroid_px"], f["centroid_px"])
         with self.assertRaises(ValueError):

@@ -134,6 +134,20 @@ TEST(FlagRow, MotionAndFocusCarryTheirFigures) {
   EXPECT_EQ(Cell(row), "moving=23.4mm blur_larger=+30%");
 }
 
+// A bracket measured through with its own blur (issue 31 item 3): the note `refocused` with the
+// blur's change, not the suspect blur_larger; the estimate stays trusted.
+TEST(FlagRow, ARefocusedBracketIsANoteWithTheBlursChange) {
+  EstimateRow row = Estimated();
+  HealthCheck health = BlurLarger();
+  health.blob_fit = true;
+  health.refocused = true;
+  FlagRow({}, Table3(), {32.0}, &health, &row);
+  EXPECT_EQ(Cell(row), "refocused=+30%");
+  EXPECT_TRUE(row.Trusted());
+  ASSERT_NE(FindFlagSpec("refocused"), nullptr);
+  EXPECT_FALSE(FindFlagSpec("refocused")->suspect);
+}
+
 TEST(FlagRow, AReflectionOrAnOccluderIsNeverCalledMotionOrFocus) {
   const HealthCheck health = BlurLarger();
   for (const char* cause : {"second_source", "occluded"}) {
