@@ -1,0 +1,256 @@
+// Issue 31 items 1 and 2: the blob fit's size over the edge's sub-pixel phase on pixel responses
+// outside its family (tests/estimator/pixel_responses.h), with the blur and its split calibrated
+// from NOISY frames of that response, as `irdist fit` does (the cumulants' blur fitted over
+// distance, FitBlurCalibration; then FitBlurSplit on the frames at that blur), never given.
+//
+// The sweep: noise-free 12-bit frames (rounded to whole DN) of a flat disc on the optical axis,
+// R = 9.1 px x 1500 mm / d for d = 1.5..3 m every 20 mm (R 9.1..4.55 px: the phase R mod 1 turns
+// four and a half times), the centre on a pixel corner and on a pixel centre. The distance error
+// of each frame is sqrt(true size / fitted size) - 1 (the distance goes as 1 / the radius), the
+// size the mean of the fitted disc's two variances. The table it prints: docs/estimator.md
+// "Pixel responses outside the model (issue 31)"; the command:
+//   unshare -n bash -c 'ip link set lo up && cd build && ctest -R estimator/phase_sweep -V'
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "estimator/blob_fit.h"
+#include "estimator/blur_model.h"
+#include "estimator/edge_phase.h"
+#include "estimator/features.h"
+#include "tests/estimator/disc_spectrum.h"
+#include "tests/estimator/pixel_responses.h"
+
+namespace irdist {
+namespace {
+
+using testing::PixelResponseKind;
+
+constexpr int kSide = 44;
+constexpr double kNearMm = 1500.0, kFarMm = 3000.0;
+constexpr double kRadiusAtNearPx = 9.1;
+
+double RadiusAt(double d_mm) { return kRadiusAtNearPx * kNearMm / d_mm; }
+
+Features FeaturesOf(const cv::Mat& frame) {
+  FeatureOptions options;
+  options.window_side_px = 36;
+  return ComputeFeatures(frame, 12, options);
+}
+
+// The calibration of one response from noisy frames: 8 distances over 1.5..3 m, 4 frames each at
+// random sub-pixel centres (seeded): the cumulants' blur fitted over distance, then the split and
+// the blob fit's own blur on those 32 frames.
+struct Calibration {
+  BlurCalibration blur;
+  std::vector<CrosstalkFrame> frames;  // the split's frames, with their given blur
+  std::vector<double> true_radius_px;
+};
+
+Calibration CalibrateFromNoisyFrames(PixelResponseKind kind, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> phase(-0.5, 0.5);
+  Calibration out;
+  std::vector<BlurPoint> points;
+  for (int i = 0; i < 8; ++i) {
+    const double d_mm = kNearMm + i * (kFarMm - kNearMm) / 7.0;
+    for (int j = 0; j < 4; ++j) {
+      testing::FlatDisc disc;
+      disc.cx = 0.5 * kSide + phase(rng);
+      disc.cy = 0.5 * kSide + phase(rng);
+      disc.radius_px = RadiusAt(d_mm);
+      CrosstalkFrame frame;
+      frame.image = testing::NoisyFrame12(testing::RenderResponse(disc, kind, kSide), &rng);
+      frame.bit_depth = 12;
+      frame.features = FeaturesOf(frame.image);
+      frame.d_mm = d_mm;
+      if (!frame.features.Usable() || !std::isfinite(frame.features.blur_var_px2)) continue;
+      points.push_back({d_mm, frame.features.blur_var_px2});
+      out.frames.push_back(frame);
+      out.true_radius_px.push_back(disc.radius_px);
+    }
+  }
+  out.blur = FitBlurCalibration(points);
+  for (CrosstalkFrame& f : out.frames) f.blur_var_px2 = out.blur.BlurVarPx2(f.d_mm);
+  const BlurSplit split = FitBlurSplit(out.frames);
+  out.blur.crosstalk_var_px2 = split.crosstalk_var_px2;
+  out.blur.crosstalk_lattice_share = split.crosstalk_lattice_share;
+  out.blur.fit_offset_px2 = split.blur_offset_px2;
+  out.blur.fit_offset_u_px2 = split.blur_offset_u_px2;
+  return out;
+}
+
+// The fitted disc's distance error, sqrt(R^2 / 4 / size) - 1; NaN when the fit fails.
+double DistanceError(const cv::Mat& frame, const BlurCalibration& blur, double d_mm,
+                     double radius_px) {
+  const Features f = FeaturesOf(frame);
+  if (!f.Usable()) return std::nan("");
+  const BlobFitResult fit =
+      FitBlob(frame, 12, f, blur.FitBlurVarPx2(d_mm),
+              {blur.crosstalk_var_px2, blur.crosstalk_lattice_share});
+  if (!fit.ok) return std::nan("");
+  const double size = 0.5 * (fit.major_var_px2 + fit.minor_var_px2);
+  return std::sqrt(radius_px * radius_px / 4.0 / size) - 1.0;
+}
+
+struct SweepFigures {
+  double p2p = 0.0, mean = 0.0;
+  int failed = 0;
+};
+
+// The noise-free sweep with the disc's centre at (centre, centre).
+SweepFigures Sweep(PixelResponseKind kind, const BlurCalibration& blur, double centre) {
+  std::vector<double> errors;
+  SweepFigures out;
+  for (double d_mm = kNearMm; d_mm <= kFarMm + 1e-9; d_mm += 20.0) {
+    testing::FlatDisc disc;
+    disc.cx = disc.cy = centre;
+    disc.radius_px = RadiusAt(d_mm);
+    const cv::Mat frame = testing::CleanFrame12(testing::RenderResponse(disc, kind, kSide));
+    const double e = DistanceError(frame, blur, d_mm, disc.radius_px);
+    if (std::isfinite(e)) {
+      errors.push_back(e);
+    } else {
+      ++out.failed;
+    }
+  }
+  if (errors.empty()) return out;
+  out.p2p = testing::PeakToPeak(errors);
+  for (double e : errors) out.mean += e / errors.size();
+  return out;
+}
+
+// The renderers' own checks. The disc's area inside a square, exact, against a 2000 x 2000
+// point count, on squares cut by the circle every way (a corner, one side, two sides, inside).
+TEST(PixelResponses, CircleRectAreaIsTheCountedArea) {
+  const double r = 3.3;
+  for (const double x0 : {-4.0, -3.1, -0.4, 2.9, 3.2}) {
+    for (const double y0 : {-4.0, -2.2, 0.3, 3.0}) {
+      const double x1 = x0 + 0.9, y1 = y0 + 1.3;
+      long inside = 0;
+      const int n = 2000;
+      for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+          const double x = x0 + (i + 0.5) * (x1 - x0) / n, y = y0 + (j + 0.5) * (y1 - y0) / n;
+          inside += x * x + y * y <= r * r;
+        }
+      }
+      const double counted = inside * (x1 - x0) * (y1 - y0) / (static_cast<double>(n) * n);
+      EXPECT_NEAR(testing::CircleRectArea(r, x0, x1, y0, y1), counted, 2e-5)
+          << x0 << ", " << y0;
+    }
+  }
+}
+
+// Every response keeps the disc's light (the sum is pi R^2; with a 70% aperture the sampled sum
+// itself aliases, by 1e-5) and its symmetry: a disc centred on a pixel is mirrored by x -> -x
+// and y -> -y about that pixel (and by x <-> y but for the astigmatic optics), to rounding.
+TEST(PixelResponses, KeepTheDiscsLightAndSymmetry) {
+  for (const PixelResponseKind kind : testing::AllPixelResponses()) {
+    testing::FlatDisc disc;
+    disc.cx = disc.cy = 0.5 * kSide;
+    disc.radius_px = 6.2;
+    const cv::Mat1d image = testing::RenderResponse(disc, kind, kSide);
+    const std::string what = testing::ResponseName(kind);
+    EXPECT_NEAR(cv::sum(image)[0] / (M_PI * disc.radius_px * disc.radius_px), 1.0,
+                kind == PixelResponseKind::kFillFactor70 ? 1e-4 : 1e-9) << what;
+    double mirror = 0.0, transpose = 0.0;
+    for (int y = 0; y < kSide; ++y) {
+      for (int x = 0; x < kSide; ++x) {
+        const int mx = (kSide - x) % kSide, my = (kSide - y) % kSide;
+        mirror = std::max({mirror, std::fabs(image(y, x) - image(y, mx)),
+                           std::fabs(image(y, x) - image(my, x))});
+        transpose = std::max(transpose, std::fabs(image(y, x) - image(x, y)));
+      }
+    }
+    EXPECT_LT(mirror, 1e-12) << what;
+    if (kind == PixelResponseKind::kAstigmatic) {
+      EXPECT_GT(transpose, 1e-3) << what;
+    } else {
+      EXPECT_LT(transpose, 1e-12) << what;
+    }
+  }
+}
+
+// The fold has converged: twice the aliases move no pixel by more than 2e-5 of the disc's
+// brightness (the Airy transform is zero beyond its cut-off: its fold is exact). And the
+// Fourier route agrees with the exact pixel areas of the sharp disc (the all-after response's
+// first stage, whose spectrum decays slowly as 1 / |f|^2.5: 24 aliases, to 3e-4).
+TEST(PixelResponses, TheFoldHasConverged) {
+  testing::FlatDisc disc;
+  disc.cx = 21.5;
+  disc.cy = 21.8;
+  disc.radius_px = 5.3;
+  for (const PixelResponseKind kind : {PixelResponseKind::kDefocusDisc,
+                                       PixelResponseKind::kAiry, PixelResponseKind::kFillFactor70,
+                                       PixelResponseKind::kAstigmatic}) {
+    const int aliases = testing::AliasesOf(kind);
+    const cv::Mat1d once = testing::RenderFolded(disc, kind, kSide, aliases);
+    const cv::Mat1d twice = testing::RenderFolded(disc, kind, kSide, 2 * aliases);
+    EXPECT_LT(cv::norm(once, twice, cv::NORM_INF), 2e-5) << testing::ResponseName(kind);
+  }
+  disc.cx = disc.cy = 15.7;  // on a 32 px grid: 24 aliases are 2401 terms per bin
+  const cv::Mat1d folded = testing::RenderFolded(
+      disc, PixelResponseKind::kAllBlurAfter, 32, testing::AliasesOf(PixelResponseKind::kAllBlurAfter));
+  EXPECT_LT(cv::norm(folded, testing::RenderPixelAreas(disc, 32, 1.0), cv::NORM_INF), 3e-4);
+}
+
+// The calibration frames' own sizes against their edges' phase (EdgePhaseOf): each frame's blob
+// fit with the calibrated blur and split, as measurement runs it.
+EdgePhase CalibrationEdgePhase(const Calibration& cal) {
+  std::vector<EdgePhaseSample> samples;
+  for (const CrosstalkFrame& f : cal.frames) {
+    const BlobFitResult fit =
+        FitBlob(f.image, 12, f.features, cal.blur.FitBlurVarPx2(f.d_mm),
+                {cal.blur.crosstalk_var_px2, cal.blur.crosstalk_lattice_share});
+    if (!fit.ok) continue;
+    samples.push_back({0.5 * (fit.major_var_px2 + fit.minor_var_px2), fit.center_px.x,
+                       fit.center_px.y, f.d_mm});
+  }
+  return EdgePhaseOf(samples);
+}
+
+// The split's truth: the all-after response's kernel variance; none for the optical ones (the
+// Airy PSF's has no finite variance: reported, not asserted).
+double TrueCrosstalkVarPx2(PixelResponseKind kind) {
+  return kind == PixelResponseKind::kAllBlurAfter
+             ? testing::KernelVariance(testing::AfterPixelsKernel())
+             : 0.0;
+}
+
+class PhaseSweep : public ::testing::TestWithParam<PixelResponseKind> {};
+
+TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
+  const PixelResponseKind kind = GetParam();
+  const Calibration cal = CalibrateFromNoisyFrames(kind, 31);
+  ASSERT_GE(cal.frames.size(), 28u);
+  ASSERT_TRUE(cal.blur.fitted());
+  const SweepFigures corner = Sweep(kind, cal.blur, 0.5 * kSide - 0.5);
+  const SweepFigures centre = Sweep(kind, cal.blur, 0.5 * kSide);
+  const EdgePhase phase = CalibrationEdgePhase(cal);
+  std::printf(
+      "| %s | %.3f / %.3f | %.3f / %+.3f | %.3f / %+.3f | %.3f / %+.3f | %.3f (%.3f) |\n",
+      testing::ResponseName(kind).c_str(), cal.blur.crosstalk_var_px2,
+      cal.blur.crosstalk_lattice_share, cal.blur.FitBlurVarPx2(kNearMm),
+      cal.blur.FitBlurVarPx2(kFarMm) - cal.blur.FitBlurVarPx2(kNearMm), 100.0 * corner.p2p,
+      100.0 * corner.mean, 100.0 * centre.p2p, 100.0 * centre.mean, 100.0 * phase.rms,
+      100.0 * phase.noise_rms);
+  EXPECT_EQ(corner.failed + centre.failed, 0);
+  ASSERT_TRUE(phase.ok);
+  // The split within 0.05 px^2 where the response has one (the Airy PSF's read 1.4: reported).
+  if (kind != PixelResponseKind::kAiry) {
+    EXPECT_NEAR(cal.blur.crosstalk_var_px2, TrueCrosstalkVarPx2(kind), 0.05);
+  }
+  // The goal rows (issue 31: <= 0.05% peak to peak, <= 0.03% bias) are not reached on any of
+  // these responses yet: the table above reports them (docs/estimator.md).
+}
+
+INSTANTIATE_TEST_SUITE_P(Responses, PhaseSweep,
+                         ::testing::ValuesIn(testing::AllPixelResponses()));
+
+}  // namespace
+}  // namespace irdist
