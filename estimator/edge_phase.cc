@@ -46,6 +46,7 @@ EdgePhase EdgePhaseOf(const std::vector<EdgePhaseSample>& samples) {
   out.peak_to_peak = harmonic.maxCoeff() - harmonic.minCoeff();
   const double dof = std::max(n - kColumns, 1.0);
   out.noise_rms = std::sqrt(residual.squaredNorm() / dof) * std::sqrt(4.0 / n);
+  for (int k = 0; k < kSmooth; ++k) out.smooth[k] = c(k);
   out.ok = true;
   return out;
 }

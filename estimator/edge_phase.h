@@ -31,6 +31,13 @@ struct EdgePhase {
   // harmonic coefficients' share of n samples).
   double noise_rms = 0.0;
   int samples = 0;
+  // The smooth part of ln(R d / 1000 mm), s0 + s1 u + s2 u^2 (u = 1000 / d): what a calibration
+  // of the size against the distance takes from these frames, the phase apart.
+  double smooth[3] = {0.0, 0.0, 0.0};
+  double SmoothAt(double d_mm) const {
+    const double u = 1000.0 / d_mm;
+    return smooth[0] + smooth[1] * u + smooth[2] * u * u;
+  }
 };
 
 constexpr int kMinEdgePhaseSamples = 12;

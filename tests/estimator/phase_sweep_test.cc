@@ -84,43 +84,64 @@ Calibration CalibrateFromNoisyFrames(PixelResponseKind kind, unsigned seed) {
   return out;
 }
 
-// The fitted disc's distance error, sqrt(R^2 / 4 / size) - 1; NaN when the fit fails.
-double DistanceError(const cv::Mat& frame, const BlurCalibration& blur, double d_mm,
-                     double radius_px) {
+// The fitted disc's size (the mean of its two variances, R^2 / 4); NaN when the fit fails.
+double FittedSize(const cv::Mat& frame, const BlurCalibration& blur, double d_mm,
+                  cv::Point2d* centre) {
   const Features f = FeaturesOf(frame);
   if (!f.Usable()) return std::nan("");
   const BlobFitResult fit =
       FitBlob(frame, 12, f, blur.FitBlurVarPx2(d_mm),
               {blur.crosstalk_var_px2, blur.crosstalk_lattice_share});
   if (!fit.ok) return std::nan("");
-  const double size = 0.5 * (fit.major_var_px2 + fit.minor_var_px2);
-  return std::sqrt(radius_px * radius_px / 4.0 / size) - 1.0;
+  *centre = fit.center_px;
+  return 0.5 * (fit.major_var_px2 + fit.minor_var_px2);
 }
 
+// A sweep's figures: the distance error against the truth, sqrt(R^2 / 4 / size) - 1, and against
+// the calibration (the smooth size-distance law fitted on the calibration frames' own sizes,
+// EdgePhase::SmoothAt: what the geometric model absorbs), each peak to peak and mean; and the
+// part of the errors that follows the edge's phase (EdgePhaseOf on the sweep itself).
 struct SweepFigures {
   double p2p = 0.0, mean = 0.0;
+  double calibrated_p2p = 0.0, calibrated_mean = 0.0;
+  double phase_p2p = 0.0;
   int failed = 0;
 };
 
+double Mean(const std::vector<double>& x) {
+  double m = 0.0;
+  for (double v : x) m += v / x.size();
+  return m;
+}
+
 // The noise-free sweep with the disc's centre at (centre, centre).
-SweepFigures Sweep(PixelResponseKind kind, const BlurCalibration& blur, double centre) {
-  std::vector<double> errors;
+SweepFigures Sweep(PixelResponseKind kind, const BlurCalibration& blur,
+                   const EdgePhase& calibration, double centre) {
+  std::vector<double> errors, calibrated;
+  std::vector<EdgePhaseSample> samples;
   SweepFigures out;
   for (double d_mm = kNearMm; d_mm <= kFarMm + 1e-9; d_mm += 20.0) {
     testing::FlatDisc disc;
     disc.cx = disc.cy = centre;
     disc.radius_px = RadiusAt(d_mm);
     const cv::Mat frame = testing::CleanFrame12(testing::RenderResponse(disc, kind, kSide));
-    const double e = DistanceError(frame, blur, d_mm, disc.radius_px);
-    if (std::isfinite(e)) {
-      errors.push_back(e);
-    } else {
+    cv::Point2d at;
+    const double size = FittedSize(frame, blur, d_mm, &at);
+    if (!std::isfinite(size)) {
       ++out.failed;
+      continue;
     }
+    errors.push_back(std::sqrt(disc.radius_px * disc.radius_px / 4.0 / size) - 1.0);
+    calibrated.push_back(
+        std::expm1(calibration.SmoothAt(d_mm) - std::log(2.0 * std::sqrt(size) * d_mm / 1000.0)));
+    samples.push_back({size, at.x, at.y, d_mm});
   }
   if (errors.empty()) return out;
   out.p2p = testing::PeakToPeak(errors);
-  for (double e : errors) out.mean += e / errors.size();
+  out.mean = Mean(errors);
+  out.calibrated_p2p = testing::PeakToPeak(calibrated);
+  out.calibrated_mean = Mean(calibrated);
+  out.phase_p2p = EdgePhaseOf(samples).peak_to_peak;
   return out;
 }
 
@@ -204,12 +225,9 @@ TEST(PixelResponses, TheFoldHasConverged) {
 EdgePhase CalibrationEdgePhase(const Calibration& cal) {
   std::vector<EdgePhaseSample> samples;
   for (const CrosstalkFrame& f : cal.frames) {
-    const BlobFitResult fit =
-        FitBlob(f.image, 12, f.features, cal.blur.FitBlurVarPx2(f.d_mm),
-                {cal.blur.crosstalk_var_px2, cal.blur.crosstalk_lattice_share});
-    if (!fit.ok) continue;
-    samples.push_back({0.5 * (fit.major_var_px2 + fit.minor_var_px2), fit.center_px.x,
-                       fit.center_px.y, f.d_mm});
+    cv::Point2d at;
+    const double size = FittedSize(f.image, cal.blur, f.d_mm, &at);
+    if (std::isfinite(size)) samples.push_back({size, at.x, at.y, f.d_mm});
   }
   return EdgePhaseOf(samples);
 }
@@ -229,24 +247,42 @@ TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
   const Calibration cal = CalibrateFromNoisyFrames(kind, 31);
   ASSERT_GE(cal.frames.size(), 28u);
   ASSERT_TRUE(cal.blur.fitted());
-  const SweepFigures corner = Sweep(kind, cal.blur, 0.5 * kSide - 0.5);
-  const SweepFigures centre = Sweep(kind, cal.blur, 0.5 * kSide);
   const EdgePhase phase = CalibrationEdgePhase(cal);
-  std::printf(
-      "| %s | %.3f / %.3f | %.3f / %+.3f | %.3f / %+.3f | %.3f / %+.3f | %.3f (%.3f) |\n",
-      testing::ResponseName(kind).c_str(), cal.blur.crosstalk_var_px2,
-      cal.blur.crosstalk_lattice_share, cal.blur.FitBlurVarPx2(kNearMm),
-      cal.blur.FitBlurVarPx2(kFarMm) - cal.blur.FitBlurVarPx2(kNearMm), 100.0 * corner.p2p,
-      100.0 * corner.mean, 100.0 * centre.p2p, 100.0 * centre.mean, 100.0 * phase.rms,
-      100.0 * phase.noise_rms);
-  EXPECT_EQ(corner.failed + centre.failed, 0);
   ASSERT_TRUE(phase.ok);
+  const SweepFigures corner = Sweep(kind, cal.blur, phase, 0.5 * kSide - 0.5);
+  const SweepFigures centre = Sweep(kind, cal.blur, phase, 0.5 * kSide);
+  std::printf("| %s | %.3f / %.3f | %.3f / %+.3f | %.3f (%.3f) |\n",
+              testing::ResponseName(kind).c_str(), cal.blur.crosstalk_var_px2,
+              cal.blur.crosstalk_lattice_share, cal.blur.FitBlurVarPx2(kNearMm),
+              cal.blur.FitBlurVarPx2(kFarMm) - cal.blur.FitBlurVarPx2(kNearMm),
+              100.0 * phase.rms, 100.0 * phase.noise_rms);
+  for (const SweepFigures* s : {&corner, &centre}) {
+    std::printf("|   %s | %.3f / %+.3f | %.3f / %+.3f | %.3f |\n",
+                s == &corner ? "corner" : "centre", 100.0 * s->p2p, 100.0 * s->mean,
+                100.0 * s->calibrated_p2p, 100.0 * s->calibrated_mean, 100.0 * s->phase_p2p);
+  }
+  EXPECT_EQ(corner.failed + centre.failed, 0);
   // The split within 0.05 px^2 where the response has one (the Airy PSF's read 1.4: reported).
   if (kind != PixelResponseKind::kAiry) {
     EXPECT_NEAR(cal.blur.crosstalk_var_px2, TrueCrosstalkVarPx2(kind), 0.05);
   }
-  // The goal rows (issue 31: <= 0.05% peak to peak, <= 0.03% bias) are not reached on any of
-  // these responses yet: the table above reports them (docs/estimator.md).
+  // The size's part that follows the edge's phase (EdgePhaseOf on the sweep), within the goal's
+  // 0.05% peak to peak where it is reached (defocus disc 0.03%, 70% aperture 0.02%,
+  // astigmatic 0.003%); all the blur after the pixels (0.15%) and the Airy PSF (0.29% on the
+  // corner) are reported, not asserted. The goal rows on the whole error after calibration
+  // (<= 0.05% peak to peak, <= 0.03% bias) are reached on none yet (docs/estimator.md "Pixel
+  // responses outside the model").
+  if (kind != PixelResponseKind::kAllBlurAfter && kind != PixelResponseKind::kAiry) {
+    EXPECT_LT(corner.phase_p2p, 5e-4);
+    EXPECT_LT(centre.phase_p2p, 5e-4);
+  }
+  // Over the calibration's own poses, the phase's rms within the goal's equivalent (0.05% peak
+  // to peak on the corner sweep, whose weight w is 2, is 0.009% rms over centres at random
+  // phases) where reached: the astigmatic optics (0.005%); the others are reported (0.015-0.06%,
+  // at a noise floor of 0.011-0.017% from 32 frames).
+  if (kind == PixelResponseKind::kAstigmatic) {
+    EXPECT_LT(phase.rms, 9e-5);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Responses, PhaseSweep,
