@@ -180,15 +180,20 @@ struct FoldTable {
   struct Term {
     int bin;  // ky x side + kx
     int ax, ay;
-    double rho, h;
+    int rho_index;  // into rhos: the disc's transform depends on |f| alone
+    double h;
   };
   std::vector<Term> terms;
+  // The distinct |f| of the terms (the grid's symmetries repeat each): the disc's Bessel
+  // transform is evaluated once per distinct |f| and frame, not per term.
+  std::vector<double> rhos;
 };
 
 inline const FoldTable& FoldTableOf(PixelResponseKind kind, int side, int aliases) {
   static std::map<std::tuple<int, int, int>, FoldTable> cache;
   FoldTable& table = cache[{static_cast<int>(kind), side, aliases}];
   if (!table.terms.empty()) return table;
+  std::map<double, int> index_of_rho;  // |f| -> index into rhos
   for (int ky = 0; ky < side; ++ky) {
     const double fy0 = (ky < side / 2 ? ky : ky - side) / static_cast<double>(side);
     for (int kx = 0; kx < side; ++kx) {
@@ -197,7 +202,11 @@ inline const FoldTable& FoldTableOf(PixelResponseKind kind, int side, int aliase
         for (int ax = -aliases; ax <= aliases; ++ax) {
           const double fx = fx0 + ax, fy = fy0 + ay;
           const double h = BeforeSamplingTransform(kind, fx, fy);
-          if (h != 0.0) table.terms.push_back({ky * side + kx, ax, ay, std::hypot(fx, fy), h});
+          if (h == 0.0) continue;
+          const double rho = std::hypot(fx, fy);
+          const auto at = index_of_rho.emplace(rho, static_cast<int>(table.rhos.size()));
+          if (at.second) table.rhos.push_back(rho);
+          table.terms.push_back({ky * side + kx, ax, ay, at.first->second, h});
         }
       }
     }
@@ -223,13 +232,17 @@ inline cv::Mat1d RenderFolded(const FlatDisc& disc, PixelResponseKind kind, int 
           std::polar(1.0, -2.0 * M_PI * (f0 + a) * disc.cy);
     }
   }
+  const FoldTable& table = FoldTableOf(kind, side, aliases);
+  std::vector<double> disc_transform(table.rhos.size());
+  for (size_t i = 0; i < table.rhos.size(); ++i) {
+    const double rho = table.rhos[i];
+    disc_transform[i] = rho < 1e-12 ? M_PI * r * r
+                                    : r * boost::math::cyl_bessel_j(1, 2.0 * M_PI * r * rho) / rho;
+  }
   std::vector<std::complex<double>> spectrum(static_cast<size_t>(side) * side);
-  for (const FoldTable::Term& t : FoldTableOf(kind, side, aliases).terms) {
-    const double d = t.rho < 1e-12 ? M_PI * r * r
-                                   : r * boost::math::cyl_bessel_j(1, 2.0 * M_PI * r * t.rho) /
-                                         t.rho;
+  for (const FoldTable::Term& t : table.terms) {
     const int kx = t.bin % side, ky = t.bin / side;
-    spectrum[t.bin] += d * t.h * phase_x[static_cast<size_t>(kx) * span + t.ax + aliases] *
+    spectrum[t.bin] += disc_transform[t.rho_index] * t.h * phase_x[static_cast<size_t>(kx) * span + t.ax + aliases] *
                        phase_y[static_cast<size_t>(ky) * span + t.ay + aliases];
   }
   return InverseDft(spectrum, side);
