@@ -1,0 +1,328 @@
+// Issue 31 items 1 and 2: the blob fit's size over the edge's sub-pixel phase on pixel responses
+// outside its family (tests/estimator/pixel_responses.h), with the blur and its split calibrated
+// from NOISY frames of that response, as `irdist fit` does (the cumulants' blur fitted over
+// distance, FitBlurCalibration; then FitBlurSplit on the frames at that blur), never given.
+//
+// The sweep: noise-free 12-bit frames (rounded to whole DN) of a flat disc on the optical axis,
+// R = 9.1 px x 1500 mm / d for d = 1.5..3 m every 20 mm (R 9.1..4.55 px: the phase R mod 1 turns
+// four and a half times), the centre on a pixel corner and on a pixel centre. The distance error
+// of each frame is sqrt(true size / fitted size) - 1 (the distance goes as 1 / the radius), the
+// size the mean of the fitted disc's two variances. The table it prints: docs/estimator.md
+// "Pixel responses outside the model (issue 31)"; the command:
+//   unshare -n bash -c 'ip link set lo up && cd build && ctest -R estimator/phase_sweep -V'
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "estimator/blob_fit.h"
+#include "estimator/blur_model.h"
+#include "estimator/edge_phase.h"
+#include "estimator/features.h"
+#include "tests/estimator/disc_spectrum.h"
+#include "tests/estimator/pixel_responses.h"
+
+namespace irdist {
+namespace {
+
+using testing::PixelResponseKind;
+
+// Under AddressSanitizer (CI's ASan+UBSan stage, where the blob fit runs 10-30x slower) a
+// reduced sweep: 12 calibration frames (3 at each of 4 distances; the fewest FitBlurCalibration
+// and EdgePhaseOf take) instead of 32 (4 at 8), and the sweep every 100 mm instead of 20. It runs every code path of the full one (each renderer, the calibration, the
+// split, EdgePhaseOf, both sweeps) and asserts that they work (no failed fit, a fitted
+// calibration, enough samples); the figures' goal rows are asserted by the Release run only
+// (12 noisy frames make a noisier split than the tolerances are stated for).
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kReducedSweep = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kReducedSweep = true;
+#else
+constexpr bool kReducedSweep = false;
+#endif
+#else
+constexpr bool kReducedSweep = false;
+#endif
+constexpr int kCalibrationDistances = kReducedSweep ? 4 : 8;
+constexpr int kFramesPerDistance = kReducedSweep ? 3 : 4;
+constexpr double kSweepStepMm = kReducedSweep ? 100.0 : 20.0;
+
+constexpr int kSide = 44;
+constexpr double kNearMm = 1500.0, kFarMm = 3000.0;
+constexpr double kRadiusAtNearPx = 9.1;
+
+double RadiusAt(double d_mm) { return kRadiusAtNearPx * kNearMm / d_mm; }
+
+Features FeaturesOf(const cv::Mat& frame) {
+  FeatureOptions options;
+  options.window_side_px = 36;
+  return ComputeFeatures(frame, 12, options);
+}
+
+// The calibration of one response from noisy frames: 8 distances over 1.5..3 m, 4 frames each
+// (3 at 4 under a sanitizer) at random sub-pixel centres (seeded): the cumulants' blur fitted over distance, then the split and
+// the blob fit's own blur on those 32 frames.
+struct Calibration {
+  BlurCalibration blur;
+  std::vector<CrosstalkFrame> frames;  // the split's frames, with their given blur
+  std::vector<double> true_radius_px;
+};
+
+Calibration CalibrateFromNoisyFrames(PixelResponseKind kind, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> phase(-0.5, 0.5);
+  Calibration out;
+  std::vector<BlurPoint> points;
+  for (int i = 0; i < kCalibrationDistances; ++i) {
+    const double d_mm = kNearMm + i * (kFarMm - kNearMm) / (kCalibrationDistances - 1);
+    for (int j = 0; j < kFramesPerDistance; ++j) {
+      testing::FlatDisc disc;
+      disc.cx = 0.5 * kSide + phase(rng);
+      disc.cy = 0.5 * kSide + phase(rng);
+      disc.radius_px = RadiusAt(d_mm);
+      CrosstalkFrame frame;
+      frame.image = testing::NoisyFrame12(testing::RenderResponse(disc, kind, kSide), &rng);
+      frame.bit_depth = 12;
+      frame.features = FeaturesOf(frame.image);
+      frame.d_mm = d_mm;
+      if (!frame.features.Usable() || !std::isfinite(frame.features.blur_var_px2)) continue;
+      points.push_back({d_mm, frame.features.blur_var_px2});
+      out.frames.push_back(frame);
+      out.true_radius_px.push_back(disc.radius_px);
+    }
+  }
+  out.blur = FitBlurCalibration(points);
+  for (CrosstalkFrame& f : out.frames) f.blur_var_px2 = out.blur.BlurVarPx2(f.d_mm);
+  const BlurSplit split = FitBlurSplit(out.frames);
+  out.blur.crosstalk_var_px2 = split.crosstalk_var_px2;
+  out.blur.crosstalk_lattice_share = split.crosstalk_lattice_share;
+  out.blur.fit_offset_px2 = split.blur_offset_px2;
+  out.blur.fit_offset_u_px2 = split.blur_offset_u_px2;
+  return out;
+}
+
+// The fitted disc's size (the mean of its two variances, R^2 / 4); NaN when the fit fails.
+double FittedSize(const cv::Mat& frame, const BlurCalibration& blur, double d_mm,
+                  cv::Point2d* centre) {
+  const Features f = FeaturesOf(frame);
+  if (!f.Usable()) return std::nan("");
+  const BlobFitResult fit =
+      FitBlob(frame, 12, f, blur.FitBlurVarPx2(d_mm),
+              {blur.crosstalk_var_px2, blur.crosstalk_lattice_share});
+  if (!fit.ok) return std::nan("");
+  *centre = fit.center_px;
+  return 0.5 * (fit.major_var_px2 + fit.minor_var_px2);
+}
+
+// A sweep's figures: the distance error against the truth, sqrt(R^2 / 4 / size) - 1, and against
+// the calibration (the smooth size-distance law fitted on the calibration frames' own sizes,
+// EdgePhase::SmoothAt: what the geometric model absorbs), each peak to peak and mean; and the
+// part of the errors that follows the edge's phase (EdgePhaseOf on the sweep itself).
+struct SweepFigures {
+  double p2p = 0.0, mean = 0.0;
+  double calibrated_p2p = 0.0, calibrated_mean = 0.0;
+  double phase_p2p = 0.0;
+  int failed = 0;
+};
+
+double Mean(const std::vector<double>& x) {
+  double m = 0.0;
+  for (double v : x) m += v / x.size();
+  return m;
+}
+
+// The noise-free sweep with the disc's centre at (centre, centre).
+SweepFigures Sweep(PixelResponseKind kind, const BlurCalibration& blur,
+                   const EdgePhase& calibration, double centre) {
+  std::vector<double> errors, calibrated;
+  std::vector<EdgePhaseSample> samples;
+  SweepFigures out;
+  for (double d_mm = kNearMm; d_mm <= kFarMm + 1e-9; d_mm += kSweepStepMm) {
+    testing::FlatDisc disc;
+    disc.cx = disc.cy = centre;
+    disc.radius_px = RadiusAt(d_mm);
+    const cv::Mat frame = testing::CleanFrame12(testing::RenderResponse(disc, kind, kSide));
+    cv::Point2d at;
+    const double size = FittedSize(frame, blur, d_mm, &at);
+    if (!std::isfinite(size)) {
+      ++out.failed;
+      continue;
+    }
+    errors.push_back(std::sqrt(disc.radius_px * disc.radius_px / 4.0 / size) - 1.0);
+    calibrated.push_back(
+        std::expm1(calibration.SmoothAt(d_mm) - std::log(2.0 * std::sqrt(size) * d_mm / 1000.0)));
+    samples.push_back({size, at.x, at.y, d_mm});
+  }
+  if (errors.empty()) return out;
+  out.p2p = testing::PeakToPeak(errors);
+  out.mean = Mean(errors);
+  out.calibrated_p2p = testing::PeakToPeak(calibrated);
+  out.calibrated_mean = Mean(calibrated);
+  out.phase_p2p = EdgePhaseOf(samples).peak_to_peak;
+  return out;
+}
+
+// The renderers' own checks. The disc's area inside a square, exact, against a 2000 x 2000
+// point count, on squares cut by the circle every way (a corner, one side, two sides, inside).
+TEST(PixelResponses, CircleRectAreaIsTheCountedArea) {
+  const double r = 3.3;
+  for (const double x0 : {-4.0, -3.1, -0.4, 2.9, 3.2}) {
+    for (const double y0 : {-4.0, -2.2, 0.3, 3.0}) {
+      const double x1 = x0 + 0.9, y1 = y0 + 1.3;
+      long inside = 0;
+      const int n = 2000;
+      for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+          const double x = x0 + (i + 0.5) * (x1 - x0) / n, y = y0 + (j + 0.5) * (y1 - y0) / n;
+          inside += x * x + y * y <= r * r;
+        }
+      }
+      const double counted = inside * (x1 - x0) * (y1 - y0) / (static_cast<double>(n) * n);
+      EXPECT_NEAR(testing::CircleRectArea(r, x0, x1, y0, y1), counted, 2e-5)
+          << x0 << ", " << y0;
+    }
+  }
+}
+
+// Every response keeps the disc's light (the sum is pi R^2; with a 70% aperture the sampled sum
+// itself aliases, by 1e-5) and its symmetry: a disc centred on a pixel is mirrored by x -> -x
+// and y -> -y about that pixel (and by x <-> y but for the astigmatic optics), to rounding.
+TEST(PixelResponses, KeepTheDiscsLightAndSymmetry) {
+  for (const PixelResponseKind kind : testing::AllPixelResponses()) {
+    testing::FlatDisc disc;
+    disc.cx = disc.cy = 0.5 * kSide;
+    disc.radius_px = 6.2;
+    const cv::Mat1d image = testing::RenderResponse(disc, kind, kSide);
+    const std::string what = testing::ResponseName(kind);
+    EXPECT_NEAR(cv::sum(image)[0] / (M_PI * disc.radius_px * disc.radius_px), 1.0,
+                kind == PixelResponseKind::kFillFactor70 ? 1e-4 : 1e-9) << what;
+    double mirror = 0.0, transpose = 0.0;
+    for (int y = 0; y < kSide; ++y) {
+      for (int x = 0; x < kSide; ++x) {
+        const int mx = (kSide - x) % kSide, my = (kSide - y) % kSide;
+        mirror = std::max({mirror, std::fabs(image(y, x) - image(y, mx)),
+                           std::fabs(image(y, x) - image(my, x))});
+        transpose = std::max(transpose, std::fabs(image(y, x) - image(x, y)));
+      }
+    }
+    EXPECT_LT(mirror, 1e-12) << what;
+    if (kind == PixelResponseKind::kAstigmatic) {
+      EXPECT_GT(transpose, 1e-3) << what;
+    } else {
+      EXPECT_LT(transpose, 1e-12) << what;
+    }
+  }
+}
+
+// The fold has converged: twice the aliases move no pixel by more than 2e-5 of the disc's
+// brightness (the Airy transform is zero beyond its cut-off: its fold is exact). And the
+// Fourier route agrees with the exact pixel areas of the sharp disc (the all-after response's
+// first stage, whose spectrum decays slowly as 1 / |f|^2.5: 24 aliases, to 3e-4).
+TEST(PixelResponses, TheFoldHasConverged) {
+  testing::FlatDisc disc;
+  disc.cx = 21.5;
+  disc.cy = 21.8;
+  disc.radius_px = 5.3;
+  for (const PixelResponseKind kind : {PixelResponseKind::kDefocusDisc,
+                                       PixelResponseKind::kAiry, PixelResponseKind::kFillFactor70,
+                                       PixelResponseKind::kAstigmatic}) {
+    const int aliases = testing::AliasesOf(kind);
+    const cv::Mat1d once = testing::RenderFolded(disc, kind, kSide, aliases);
+    const cv::Mat1d twice = testing::RenderFolded(disc, kind, kSide, 2 * aliases);
+    EXPECT_LT(cv::norm(once, twice, cv::NORM_INF), 2e-5) << testing::ResponseName(kind);
+  }
+  disc.cx = disc.cy = 15.7;  // on a 32 px grid: 24 aliases are 2401 terms per bin
+  const cv::Mat1d folded = testing::RenderFolded(
+      disc, PixelResponseKind::kAllBlurAfter, 32, testing::AliasesOf(PixelResponseKind::kAllBlurAfter));
+  EXPECT_LT(cv::norm(folded, testing::RenderPixelAreas(disc, 32, 1.0), cv::NORM_INF), 3e-4);
+}
+
+// The calibration frames' own sizes against their edges' phase (EdgePhaseOf): each frame's blob
+// fit with the calibrated blur and split, as measurement runs it.
+EdgePhase CalibrationEdgePhase(const Calibration& cal) {
+  std::vector<EdgePhaseSample> samples;
+  for (const CrosstalkFrame& f : cal.frames) {
+    cv::Point2d at;
+    const double size = FittedSize(f.image, cal.blur, f.d_mm, &at);
+    if (std::isfinite(size)) samples.push_back({size, at.x, at.y, f.d_mm});
+  }
+  return EdgePhaseOf(samples);
+}
+
+// The split's truth: the all-after response's kernel variance; none for the optical ones (the
+// Airy PSF's has no finite variance: reported, not asserted).
+double TrueCrosstalkVarPx2(PixelResponseKind kind) {
+  return kind == PixelResponseKind::kAllBlurAfter
+             ? testing::KernelVariance(testing::AfterPixelsKernel())
+             : 0.0;
+}
+
+class PhaseSweep : public ::testing::TestWithParam<PixelResponseKind> {};
+
+TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
+  const PixelResponseKind kind = GetParam();
+  const Calibration cal = CalibrateFromNoisyFrames(kind, 31);
+  ASSERT_GE(cal.frames.size(), kReducedSweep ? 12u : 28u);
+  ASSERT_TRUE(cal.blur.fitted());
+  const EdgePhase phase = CalibrationEdgePhase(cal);
+  ASSERT_TRUE(phase.ok);
+  const SweepFigures corner = Sweep(kind, cal.blur, phase, 0.5 * kSide - 0.5);
+  const SweepFigures centre = Sweep(kind, cal.blur, phase, 0.5 * kSide);
+  std::printf("| %s | %.3f / %.3f | %.3f / %+.3f | %.3f (%.3f) |\n",
+              testing::ResponseName(kind).c_str(), cal.blur.crosstalk_var_px2,
+              cal.blur.crosstalk_lattice_share, cal.blur.FitBlurVarPx2(kNearMm),
+              cal.blur.FitBlurVarPx2(kFarMm) - cal.blur.FitBlurVarPx2(kNearMm),
+              100.0 * phase.rms, 100.0 * phase.noise_rms);
+  for (const SweepFigures* s : {&corner, &centre}) {
+    std::printf("|   %s | %.3f / %+.3f | %.3f / %+.3f | %.3f |\n",
+                s == &corner ? "corner" : "centre", 100.0 * s->p2p, 100.0 * s->mean,
+                100.0 * s->calibrated_p2p, 100.0 * s->calibrated_mean, 100.0 * s->phase_p2p);
+  }
+  EXPECT_EQ(corner.failed + centre.failed, 0);
+  if (kReducedSweep) return;  // the figures: the full sweep's (above)
+  // The split within 0.05 px^2 where the response has one (the Airy PSF's read 1.4: reported).
+  if (kind != PixelResponseKind::kAiry) {
+    EXPECT_NEAR(cal.blur.crosstalk_var_px2, TrueCrosstalkVarPx2(kind), 0.05);
+  }
+  // The size's part that follows the edge's phase (EdgePhaseOf on the sweep), within the goal's
+  // 0.05% peak to peak where it is reached (defocus disc 0.03%, 70% aperture 0.02%,
+  // astigmatic 0.003%); all the blur after the pixels (0.15%) and the Airy PSF (0.29% on the
+  // corner) are reported, not asserted. The goal rows on the whole error after calibration
+  // (<= 0.05% peak to peak, <= 0.03% bias) are reached on none yet (docs/estimator.md "Pixel
+  // responses outside the model").
+  if (kind != PixelResponseKind::kAllBlurAfter && kind != PixelResponseKind::kAiry) {
+    EXPECT_LT(corner.phase_p2p, 5e-4);
+    EXPECT_LT(centre.phase_p2p, 5e-4);
+  }
+  // Over the calibration's own poses, the phase's rms within the goal's equivalent (0.05% peak
+  // to peak on the corner sweep, whose weight w is 2, is 0.009% rms over centres at random
+  // phases) where reached: the astigmatic optics (0.005%); the others are reported (0.015-0.06%,
+  // at a noise floor of 0.011-0.017% from 32 frames).
+  if (kind == PixelResponseKind::kAstigmatic) {
+    EXPECT_LT(phase.rms, 9e-5);
+  }
+}
+
+// One CTest test per response (tests/estimator/CMakeLists.txt filters on these names), so that
+// ctest --parallel spreads them.
+std::string ResponseTestName(const ::testing::TestParamInfo<PixelResponseKind>& info) {
+  switch (info.param) {
+    case PixelResponseKind::kAllBlurAfter: return "AllBlurAfter";
+    case PixelResponseKind::kDefocusDisc: return "DefocusDisc";
+    case PixelResponseKind::kAiry: return "Airy";
+    case PixelResponseKind::kFillFactor70: return "FillFactor70";
+    case PixelResponseKind::kAstigmatic: return "Astigmatic";
+  }
+  return "Unknown";
+}
+
+INSTANTIATE_TEST_SUITE_P(Responses, PhaseSweep, ::testing::ValuesIn(testing::AllPixelResponses()),
+                         ResponseTestName);
+
+}  // namespace
+}  // namespace irdist
