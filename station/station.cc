@@ -339,6 +339,14 @@ void Station::Stop() noexcept {
   for (Motion* m : motion_) m->Stop();
 }
 
+void Station::SetSpeed(Axis axis, double unit_per_s) {
+  for (Motion* m : motion_) {
+    for (Axis a : m->Axes()) {
+      if (a == axis) m->SetSpeed(axis, unit_per_s);
+    }
+  }
+}
+
 std::map<Axis, AxisSpeed> Station::Speeds() const {
   std::map<Axis, AxisSpeed> speeds;
   for (Motion* m : motion_) {

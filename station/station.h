@@ -115,6 +115,9 @@ class Station {
 
   // Each axis's motion as its device reports it (for the plan's duration estimate).
   std::map<Axis, AxisSpeed> Speeds() const;
+  // The cruise speed of `axis` (mm/s or deg/s) for the moves that follow, through the motion
+  // device that drives it (Motion::SetSpeed). Throws DeviceError, StationError, LinkError.
+  void SetSpeed(Axis axis, double unit_per_s);
   const StationSpec& spec() const { return spec_; }
 
  private:
