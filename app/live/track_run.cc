@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -316,12 +317,18 @@ void ReportTrack(const TrackSummary& s, const std::string& dir, std::ostream& ou
 void Summarize(const ValidateArgs& args, const TrackRecipe& recipe, const TrackRig& rig,
                const TrackTaken& taken, const std::vector<CommandedMove>& moves,
                const std::string& dir, CommandIo io) {
-  const bool virtual_rig = !rig.trajectory_csv.empty();
-  const std::vector<TrackTruth> truths =
-      virtual_rig ? VirtualTrackTruths(taken.rows, rig.trajectory_csv, recipe.rig_path,
-                                       recipe.bias_ma)
-                  : CommandedTrackTruths(taken.rows, taken.monotonic_ns, moves,
-                                         recipe.rig.camera.readout_ms, recipe.truth_sd_mm);
+  std::vector<TrackTruth> truths;
+  if (!rig.trajectory_csv.empty()) {
+    truths = VirtualTrackTruths(taken.rows, rig.trajectory_csv, recipe.rig_path, recipe.bias_ma);
+  }
+  // A composed virtual rig's device emulators (Zaber, PTU) log no trajectory: the commanded
+  // profile is its truth, as on hardware.
+  const bool virtual_rig = std::any_of(truths.begin(), truths.end(),
+                                       [](const TrackTruth& t) { return t.known; });
+  if (!virtual_rig) {
+    truths = CommandedTrackTruths(taken.rows, taken.monotonic_ns, moves,
+                                  recipe.rig.camera.readout_ms, recipe.truth_sd_mm);
+  }
   TrackSummary summary = SummarizeTrack(taken.rows, truths, kCruiseSettleS);
   summary.truth_source = virtual_rig ? "virtual rig trajectory at mid-exposure (exact)"
                                      : "commanded profile (stated uncertainty truth_sd_mm)";
