@@ -78,6 +78,8 @@ inline constexpr Bound kSlideSpeedMmS{"slide speed", "mm/s", 0.0, 5000.0, true,
                                       "few m/s"};
 inline constexpr Bound kAngularSpeedDegS{"angular speed", "deg/s", 0.0, 1000.0, true,
                                          "a pan-tilt unit turns at most a few turns per second"};
+inline constexpr Bound kPositionSdMm{"position uncertainty", "mm", 0.0, 1000.0, true,
+                                     "a stage's commanded position is known within a metre"};
 inline constexpr Bound kCurrentMa{"IRED current", "mA", -10.0, 10000.0, false,
                                   "an IRED's forward current is at most a few amperes; a source "
                                   "reading back an emitter that is off may show a few mA below 0"};

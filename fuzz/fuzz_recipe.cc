@@ -20,11 +20,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const char* const rigs = IRDIST_SOURCE_DIR "/fuzz/recipe_rigs";
     if (irdist::RecipeKindOfText(text, "fuzz-recipe.yaml") == "track") {
-      irdist::ParseTrackRecipe(text, "fuzz-recipe.yaml", rigs);
+      const irdist::TrackRecipe track = irdist::ParseTrackRecipe(text, "fuzz-recipe.yaml", rigs);
+      if (!irdist::fuzz::TrackRecipeInBounds(track)) __builtin_trap();
       return 0;
     }
-    const irdist::Recipe recipe =
-        irdist::ParseRecipe(text, "fuzz-recipe.yaml", IRDIST_SOURCE_DIR "/fuzz/recipe_rigs");
+    const irdist::Recipe recipe = irdist::ParseRecipe(text, "fuzz-recipe.yaml", rigs);
     if (!irdist::fuzz::RecipeInBounds(recipe)) __builtin_trap();
     irdist::PlanRecipe(recipe);
   } catch (const irdist::InputError& error) {

@@ -16,13 +16,6 @@ using yaml_fields::MapReader;
 
 // A profile longer than this is a sweep's job, not a track's.
 constexpr int kMaxSegments = 1000;
-// Waits at rest before a segment and after the last: an hour at most.
-constexpr Bound kTrackWaitMs{"wait at rest", "ms", 0.0, 3.6e6, false,
-                             "a track's wait at rest lies within an hour"};
-// The commanded profile's stated uncertainty: within a metre.
-constexpr Bound kTruthSdMm{"truth uncertainty", "mm", 0.0, 1000.0, true,
-                           "a stage's commanded position is known within a metre"};
-
 std::string Number(double value) {
   char text[64];
   std::snprintf(text, sizeof(text), "%.10g", value);
@@ -120,9 +113,9 @@ void ReadTrackSection(const MapReader& top, TrackRecipe* recipe) {
   }
   recipe->exposure_ms = track.Bounded("exposure_ms", 0.0, bounds::kExposureMs);
   recipe->accel_psd_mm2_per_s3 = track.Bounded("accel_psd_mm2_per_s3", 0.0, bounds::kAccelPsd);
-  recipe->settle_ms = track.Bounded("settle_ms", recipe->settle_ms, kTrackWaitMs);
-  recipe->after_ms = track.Bounded("after_ms", recipe->after_ms, kTrackWaitMs);
-  recipe->truth_sd_mm = track.Bounded("truth_sd_mm", recipe->truth_sd_mm, kTruthSdMm);
+  recipe->settle_ms = track.Bounded("settle_ms", recipe->settle_ms, bounds::kDelayMs);
+  recipe->after_ms = track.Bounded("after_ms", recipe->after_ms, bounds::kDelayMs);
+  recipe->truth_sd_mm = track.Bounded("truth_sd_mm", recipe->truth_sd_mm, bounds::kPositionSdMm);
   const YAML::Node segments = track.Require("segments");
   if (!segments.IsSequence() || segments.size() == 0) {
     Fail(file, segments.Mark(),
