@@ -2,22 +2,26 @@
 // small calibration on a virtual rig whose slide accelerates at 2 m/s^2 (recipes/rigs/virtual.yaml
 // with the station emulator's slide accel 2000 mm/s^2; its cruise speed stays the rig's 200 mm/s
 // until the run sets it), then `irdist validate TRACK_RECIPE` against the running `irdist sim`
-// (time scale 1): the slide goes 1500 -> 3000 mm at the recipe's 0.5 m/s, sent to the station as
-// its SPEED command, while every frame is tracked. The run folder's summary.yaml must show the
-// emulator cruising at the recipe's speed (the truth's velocity on the cruise: 500 mm/s, not the
-// rig's 200), the per-frame error's rms during the move at most 1.5 x the one-frame Cramer-Rao
-// bound, the filter's velocity on the cruise within 3 standard errors of the truth, no frame
-// lost; track.csv holds a row for every frame. A bad track recipe is refused with its line.
+// (time scale 1): the slide goes 1500 -> 3000 mm at pan 0 and back at pan 20 deg, each at the
+// recipe's 0.5 m/s sent to the station as its SPEED command, while every frame is tracked. The
+// run folder's summary.yaml must show the emulator cruising at the recipe's speed (the truth's
+// velocity on each cruise: +-500 mm/s, not the rig's 200), the per-frame error's rms during the
+// moves at most 1.5 x the one-frame Cramer-Rao bound, the filter's velocity on each cruise within
+// 3 standard errors of the truth, no frame lost; track.csv holds a row for every frame. Ctrl-C
+// keeps what was taken (a summary marked cut, exit 130); --resume is refused; a bad track recipe
+// is refused with its line.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <string>
+#include <thread>
 
 #include "tests/integration/measure_helpers.h"
 #include "tests/integration/run_helpers.h"
@@ -31,7 +35,8 @@ using testing::ReadAll;
 using testing::RunIrdist;
 using testing::WriteAll;
 
-// The recipe: one segment, the slide 1500 -> 3000 mm at 0.5 m/s, pan 0, 490 mA.
+// The recipe: the slide 1500 -> 3000 mm at 0.5 m/s at pan 0, then back 3000 -> 1500 mm at
+// 0.5 m/s at pan 20 deg (the pan turned there first, at the station's own speed); 490 mA.
 constexpr char kTrackRecipe[] = R"(kind: track
 name: track-slide-test
 rig: virtual-fast
@@ -42,7 +47,11 @@ track:
   after_ms: 300
   segments:
     - {slide_mm: [1500, 3000], speed_mm_s: 500}
+    - {slide_mm: [3000, 1500], speed_mm_s: 500, pan_deg: 20}
 )";
+
+// The rows of a track.csv (its header left out).
+int CsvRows(const std::string& path) { return std::max(0, testing::CountLines(path) - 1); }
 
 class TrackRecipe : public ::testing::Test {
  protected:
@@ -95,19 +104,23 @@ TEST_F(TrackRecipe, MovesTheSlideAtTheRecipesSpeedAndScoresEveryFrameAgainstTheT
   EXPECT_FALSE(s["cut"].as<bool>());
   EXPECT_EQ(s["frames"]["lost"].as<int>(), 0) << ReadAll(run + "/summary.yaml");
   EXPECT_EQ(s["frames"]["wrong_exposure"].as<int>(), 0);
-  EXPECT_GE(s["frames"]["moving"].as<int>(), 50);  // about 3.2 s of move at ~50 frames/s
+  EXPECT_GE(s["frames"]["moving"].as<int>(), 100);  // two moves of about 3.2 s at ~50 frames/s
   const YAML::Node e = s["distance_error_moving"];
   EXPECT_LE(e["rms_mm"].as<double>(), 1.5 * e["one_frame_bound_rms_mm"].as<double>())
       << ReadAll(run + "/summary.yaml");
   EXPECT_TRUE(e["within_goal"].as<bool>());
   const YAML::Node cruises = s["velocity"]["velocity_on_cruise"];
-  ASSERT_EQ(cruises.size(), 1u) << ReadAll(run + "/summary.yaml");
-  // The station cruised at the recipe's speed (the rig's own is 200 mm/s).
-  EXPECT_NEAR(cruises[0]["truth_v_mm_per_s"].as<double>(), 500.0, 1e-6);
-  EXPECT_GE(cruises[0]["frames"].as<int>(), 30);
-  EXPECT_TRUE(cruises[0]["within_3se"].as<bool>()) << ReadAll(run + "/summary.yaml");
+  ASSERT_EQ(cruises.size(), 2u) << ReadAll(run + "/summary.yaml");
+  for (std::size_t i = 0; i < cruises.size(); ++i) {
+    SCOPED_TRACE("segment " + std::to_string(i));
+    EXPECT_EQ(cruises[i]["segment"].as<int>(), static_cast<int>(i));
+    // The station cruised at the recipe's speed (the rig's own is 200 mm/s).
+    EXPECT_NEAR(cruises[i]["truth_v_mm_per_s"].as<double>(), i == 0 ? 500.0 : -500.0, 1e-6);
+    EXPECT_GE(cruises[i]["frames"].as<int>(), 30);
+    EXPECT_TRUE(cruises[i]["within_3se"].as<bool>()) << ReadAll(run + "/summary.yaml");
+  }
   // track.csv: its header and one row per frame the summary counted.
-  EXPECT_EQ(testing::CountLines(run + "/track.csv"), s["frames"]["rows"].as<int>() + 1);
+  EXPECT_EQ(CsvRows(run + "/track.csv"), s["frames"]["rows"].as<int>());
   EXPECT_EQ(ReadAll(run + "/track.csv").rfind("frame,camera_frame_id,camera_timestamp_ns,utc_time", 0),
             0u);
   // The run folder cannot be resumed: refused, saying so.
@@ -116,6 +129,24 @@ TEST_F(TrackRecipe, MovesTheSlideAtTheRecipesSpeedAndScoresEveryFrameAgainstTheT
                 &output),
             0);
   EXPECT_NE(output.find("not resumable"), std::string::npos) << output;
+
+  // Ctrl-C during the first move: the move ends, what was taken is kept (its summary cut), 130.
+  const std::string cut = dir_ + "/cut";
+  testing::Child child({"validate", dir_ + "/track.yaml", "--model", dir_ + "/cal/model.yaml",
+                        "--out", cut},
+                       dir_ + "/cut.log");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (child.Running() && CsvRows(cut + "/track.csv") < 60 &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  child.Signal(SIGINT);
+  EXPECT_EQ(child.Wait(std::chrono::seconds(60)), 130) << ReadAll(dir_ + "/cut.log");
+  const YAML::Node c = YAML::LoadFile(cut + "/summary.yaml");
+  EXPECT_TRUE(c["cut"].as<bool>());
+  EXPECT_GE(c["frames"]["rows"].as<int>(), 60);
+  EXPECT_EQ(CsvRows(cut + "/track.csv"), c["frames"]["rows"].as<int>());
+  EXPECT_NE(ReadAll(dir_ + "/cut.log").find("not resumable"), std::string::npos);
 
   ASSERT_EQ(Run("off", {"station", "--rig", rig_, "off"}, &output), 0) << output;
   sim.Signal(SIGINT);
