@@ -56,7 +56,10 @@ int CsvRows(const std::string& path) { return std::max(0, testing::CountLines(pa
 class TrackRecipe : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = testing::ScratchDir("track-recipe");
+    // One folder per test: the logs of one survive the next.
+    dir_ = testing::ScratchDir(
+        std::string("track-recipe-") +
+        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     // The slide accelerating at 2 m/s^2, its speed left at the rig's 200 mm/s.
     rig_ = testing::FastSlideScratch(dir_, "speed: 200.0, accel: 2000.0");
     ASSERT_FALSE(rig_.empty()) << "recipes/rigs/virtual.yaml's slide changed; update this test";
