@@ -7,7 +7,6 @@
 #include <cmath>
 #include <vector>
 
-#include "app/processing/track_truth.h"
 
 namespace irdist {
 namespace {
@@ -94,31 +93,6 @@ TEST(TrackSummaryTest, TheCsvRowHoldsEveryColumnOfItsHeader) {
   EXPECT_EQ(columns(TrackCsvRow(r)), columns(TrackCsvHeader()));
   EXPECT_EQ(TrackCsvRow(r).rfind("12,0,,2023-11-14T22:13:20", 0), 0u) << TrackCsvRow(r);
   EXPECT_NE(TrackCsvRow(r).find("saturated clipped"), std::string::npos);
-}
-
-// A real rig's truth: the commanded trapezoid from when the move was sent, the frame's middle of
-// exposure its arrival less the readout and half the exposure.
-TEST(TrackSummaryTest, TheCommandedProfileIsTheTruthOnARealRig) {
-  std::vector<TrackFrameRow> rows(3);
-  for (TrackFrameRow& r : rows) {
-    r.exposure_ms = 8.0;
-    r.d_se_mm = 1.5;
-  }
-  const std::int64_t start_ns = 10'000'000'000;
-  // Mid-exposure 1 s, 2 s and 9 s after the start (readout 2 ms, half exposure 4 ms).
-  const std::vector<std::int64_t> arrival = {start_ns + 1'006'000'000, start_ns + 2'006'000'000,
-                                             start_ns + 9'006'000'000};
-  const std::vector<TrackTruth> truths = CommandedTrackTruths(
-      rows, arrival, {{1000.0, 3000.0, 500.0, 1000.0, start_ns}}, 2.0, 2.5);
-  // 0.5 s accelerating (125 mm), then cruising: at 1 s 125 + 250 mm, at 2 s 125 + 750 mm.
-  EXPECT_NEAR(truths[0].d_mm, 1375.0, 1e-6);
-  EXPECT_NEAR(truths[0].v_mm_per_s, 500.0, 1e-6);
-  EXPECT_NEAR(truths[0].cruise_s, 0.5, 1e-6);
-  EXPECT_NEAR(truths[1].d_mm, 1875.0, 1e-6);
-  EXPECT_DOUBLE_EQ(truths[0].sd_mm, 2.5);
-  EXPECT_DOUBLE_EQ(truths[0].bound_mm, 1.5);
-  EXPECT_NEAR(truths[2].d_mm, 3000.0, 1e-6);  // arrived and standing
-  EXPECT_DOUBLE_EQ(truths[2].v_mm_per_s, 0.0);
 }
 
 }  // namespace
