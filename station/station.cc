@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <future>
 #include <set>
+#include <thread>
 
 #include "base/input_error.h"
 #include "station/serial_transport.h"
@@ -245,6 +246,22 @@ void Station::Home() {
 void Station::MoveTo(const StationPosition& target) {
   for (Motion* m : motion_) m->StartMove(target);
   for (Motion* m : motion_) m->WaitSettled(options_.move_timeout);
+}
+
+bool Station::MoveToUnless(const StationPosition& target, const std::function<bool()>& stop) {
+  constexpr std::chrono::milliseconds kStopPoll{20};
+  for (Motion* m : motion_) m->StartMove(target);
+  for (Motion* m : motion_) {
+    while (m->State() == MotionState::kMoving) {
+      if (stop()) {
+        Stop();
+        return false;
+      }
+      std::this_thread::sleep_for(kStopPoll);
+    }
+  }
+  for (Motion* m : motion_) m->WaitSettled(options_.move_timeout);
+  return true;
 }
 
 StationPosition Station::Position() {

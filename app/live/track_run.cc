@@ -167,6 +167,10 @@ class ProfileRunner {
   void RestoreSpeeds() {
     for (const auto& [axis, speed] : own_speeds_) SetSpeed(axis, speed.speed);
   }
+  // A move that a Ctrl-C stops where it is (false).
+  bool MoveUnlessStopped(const StationPosition& target) {
+    return station_.MoveToUnless(target, [] { return StopRequested().load(); });
+  }
   static void SleepMs(double ms) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double, std::milli>(ms);
     while (!StopRequested().load() && std::chrono::steady_clock::now() < end) {
@@ -187,7 +191,7 @@ class ProfileRunner {
 void ProfileRunner::RunSegment(int k) {
   const TrackSegment& s = recipe_.segments[static_cast<std::size_t>(k)];
   RestoreSpeeds();
-  station_.MoveTo({s.slide_from_mm, s.pan_from_deg, recipe_.tilt_deg});
+  if (!MoveUnlessStopped({s.slide_from_mm, s.pan_from_deg, recipe_.tilt_deg})) return;
   SleepMs(recipe_.settle_ms);
   if (StopRequested().load()) return;
   SetSpeed(Axis::kSlide, s.speed_mm_s);
@@ -196,8 +200,8 @@ void ProfileRunner::RunSegment(int k) {
   CommandedMove move{s.slide_from_mm, s.slide_to_mm, speeds.at(Axis::kSlide).speed,
                      speeds.at(Axis::kSlide).acceleration, MonotonicNowNs()};
   segment_.store(k);
-  station_.MoveTo({s.slide_to_mm, s.pan_to_deg, recipe_.tilt_deg});
-  moves_.push_back(move);
+  moves_.push_back(move);  // the truth of a real rig, also of a move a Ctrl-C cut short
+  MoveUnlessStopped({s.slide_to_mm, s.pan_to_deg, recipe_.tilt_deg});
 }
 
 void ProfileRunner::Run() {
@@ -278,6 +282,7 @@ MeasureArgs TrackArgsOf(const ValidateArgs& args, const TrackRecipe& recipe) {
   m.accel_psd_mm2_per_s3 = recipe.accel_psd_mm2_per_s3;
   m.allow_model_mismatch = args.allow_model_mismatch;
   m.time_scale = args.time_scale;
+  m.json = args.quiet;  // the camera's notes (LiveCameraOptions::quiet) follow --quiet
   return m;
 }
 
@@ -361,7 +366,7 @@ void RunTrackRecipe(const ValidateArgs& args, CommandIo io) {
   const std::string dir = MakeTrackFolder(args, recipe);
   io.out << "Track recipe " << recipe.path << ": " << recipe.segments.size()
          << " segment(s) into " << dir << "\n";
-  SignalGuard guard;  // Ctrl-C ends the move in progress, keeps what was taken
+  SignalGuard guard;  // Ctrl-C stops the station where it is, keeps what was taken
   LineLog log(dir + "/station.log");
   Station station(recipe.rig.station.composition, StationRunOptions(rig.ports, &log));
   PrepareStation(station, recipe, io.err);
@@ -373,7 +378,7 @@ void RunTrackRecipe(const ValidateArgs& args, CommandIo io) {
   try {
     taken = TrackWhileMoving(session, profile, csv);
   } catch (...) {
-    StopRequested().store(true);  // the profile thread ends after its move
+    StopRequested().store(true);  // the profile thread stops the station and ends
     profile.Join();
     throw;
   }

@@ -7,8 +7,9 @@
 // the constant-velocity filter). Every frame's row goes to DIR/track.csv as it is estimated;
 // at the end DIR/summary.yaml holds the per-frame errors against the truth and the one-frame
 // bound, and the filter's velocity against the truth (app/processing/track_summary.h, the truth
-// from app/processing/track_truth.h). Ctrl-C ends the move in progress and keeps what was taken
-// (track.csv, a summary marked cut). A track run is not resumable: --resume is refused (the
+// from app/processing/track_truth.h). Ctrl-C stops the station where it is (each motion device's
+// controlled stop, Station::MoveToUnless) and keeps what was taken (track.csv, a summary marked
+// cut). A track run is not resumable: --resume is refused (the
 // motion is one continuous profile; run it again into a new folder).
 //
 // Lives in app/live/ (not app/runs/) because it reuses the track session, and runs/ is below

@@ -133,7 +133,8 @@ TEST_F(TrackRecipe, MovesTheSlideAtTheRecipesSpeedAndScoresEveryFrameAgainstTheT
             0);
   EXPECT_NE(output.find("not resumable"), std::string::npos) << output;
 
-  // Ctrl-C during the first move: the move ends, what was taken is kept (its summary cut), 130.
+  // Ctrl-C during the first move: the station stops, what was taken is kept (its summary cut),
+  // exit 130.
   const std::string cut = dir_ + "/cut";
   testing::Child child({"validate", dir_ + "/track.yaml", "--model", dir_ + "/cal/model.yaml",
                         "--out", cut},

@@ -74,6 +74,21 @@ TEST(Station, SetsAnAxisCruiseSpeedForTheNextMove) {
   EXPECT_NEAR(cruise.slide_mm_s, 500.0, 1e-6);
 }
 
+// A move given up (a track's Ctrl-C): the station stops where it is, short of the target.
+TEST(Station, AMoveGivenUpStopsTheStationShortOfItsTarget) {
+  VirtualStationRig rig(10.0);
+  rig.station->Identify();
+  rig.station->Home();
+  EXPECT_TRUE(rig.station->MoveToUnless({1200.0, 0.0, 0.0}, [] { return false; }));
+  EXPECT_NEAR(rig.station->Position().slide_mm, 1200.0, 0.011);
+  int polls = 0;  // gives up after a few polls of the moving axes (1200 -> 3000 mm takes 9.5 s)
+  EXPECT_FALSE(rig.station->MoveToUnless({3000.0, 0.0, 0.0}, [&polls] { return ++polls > 3; }));
+  const double stopped_mm = rig.station->Position().slide_mm;
+  EXPECT_GT(stopped_mm, 1200.0);
+  EXPECT_LT(stopped_mm, 2500.0);
+  EXPECT_EQ(rig.station->States().front().second, MotionState::kIdle);
+}
+
 TEST(Station, AnEStopAtStartGetsAClearMessageAtOnce) {
   VirtualStationRig rig(100.0);
   rig.station->Identify();
