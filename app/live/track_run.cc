@@ -13,6 +13,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <ostream>
 #include <thread>
 
@@ -150,7 +151,7 @@ class ProfileRunner {
   void Start() { thread_ = std::thread([this] { Run(); }); }
   bool done() const { return done_.load(); }
   int segment() const { return segment_.load(); }
-  // Waits for the move in progress to end (and the thread).
+  // Waits for the thread (a Ctrl-C has stopped the move in progress).
   void Join() {
     if (thread_.joinable()) thread_.join();
   }
@@ -162,10 +163,14 @@ class ProfileRunner {
   void Run();
   void RunSegment(int k);
   void SetSpeed(Axis axis, double unit_per_s) {
-    if (unit_per_s > 0.0) station_.SetSpeed(axis, unit_per_s);
+    if (!(unit_per_s > 0.0)) return;
+    station_.SetSpeed(axis, unit_per_s);
+    changed_.insert(axis);
   }
+  // The axes whose speed the run set back to what the station reported at the start.
   void RestoreSpeeds() {
-    for (const auto& [axis, speed] : own_speeds_) SetSpeed(axis, speed.speed);
+    for (Axis axis : changed_) station_.SetSpeed(axis, own_speeds_.at(axis).speed);
+    changed_.clear();
   }
   // A move that a Ctrl-C stops where it is (false).
   bool MoveUnlessStopped(const StationPosition& target) {
@@ -181,6 +186,7 @@ class ProfileRunner {
   Station& station_;
   const TrackRecipe& recipe_;
   std::map<Axis, AxisSpeed> own_speeds_;
+  std::set<Axis> changed_;
   std::vector<CommandedMove> moves_;
   std::atomic<bool> done_{false};
   std::atomic<int> segment_{-1};
