@@ -72,6 +72,14 @@ inline constexpr Bound kSlideMm{"slide position", "mm", -1.0e5, 1.0e5, false,
                                 "a linear stage's position lies within 100 m of its home"};
 inline constexpr Bound kAngleDeg{"angle", "deg", -360.0, 360.0, false,
                                  "a pan, tilt or off-axis angle lies within one turn either way"};
+// A station axis's cruise speed (a track recipe's profile).
+inline constexpr Bound kSlideSpeedMmS{"slide speed", "mm/s", 0.0, 5000.0, true,
+                                      "a linear stage carrying a pan-tilt head cruises at most a "
+                                      "few m/s"};
+inline constexpr Bound kAngularSpeedDegS{"angular speed", "deg/s", 0.0, 1000.0, true,
+                                         "a pan-tilt unit turns at most a few turns per second"};
+inline constexpr Bound kPositionSdMm{"position uncertainty", "mm", 0.0, 1000.0, true,
+                                     "a stage's commanded position is known within a metre"};
 inline constexpr Bound kCurrentMa{"IRED current", "mA", -10.0, 10000.0, false,
                                   "an IRED's forward current is at most a few amperes; a source "
                                   "reading back an emitter that is off may show a few mA below 0"};

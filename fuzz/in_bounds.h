@@ -4,6 +4,7 @@
 
 #include "app/inputs/recipe.h"
 #include "app/inputs/rig.h"
+#include "app/inputs/track_recipe.h"
 #include "base/bounds.h"
 
 namespace irdist::fuzz {
@@ -30,6 +31,30 @@ inline bool RecipeInBounds(const Recipe& recipe) {
   if (!bounds::kExposureMs.Contains(bracket.t_ref_ms)) return false;
   for (double t_ms : bracket.t_meas_ms) {
     if (!bounds::kExposureMs.Contains(t_ms) || !(t_ms > bracket.t_ref_ms)) return false;
+  }
+  return RigInBounds(recipe.rig);
+}
+
+// A track recipe: every position inside the rig's limits, every moving axis's speed in its bound.
+inline bool TrackRecipeInBounds(const TrackRecipe& recipe) {
+  const StationLimits& limits = recipe.rig.station.limits;
+  if (!bounds::kCurrentMa.Contains(recipe.bias_ma) || !limits.bias_ma.Contains(recipe.bias_ma)) {
+    return false;
+  }
+  if (recipe.segments.empty()) return false;
+  for (const TrackSegment& s : recipe.segments) {
+    for (double mm : {s.slide_from_mm, s.slide_to_mm}) {
+      if (!limits.slide_mm.Contains(mm)) return false;
+    }
+    for (double deg : {s.pan_from_deg, s.pan_to_deg}) {
+      if (!limits.pan_deg.Contains(deg)) return false;
+    }
+    if (s.slide_from_mm != s.slide_to_mm && !bounds::kSlideSpeedMmS.Contains(s.speed_mm_s)) {
+      return false;
+    }
+    if (s.pan_from_deg != s.pan_to_deg && !bounds::kAngularSpeedDegS.Contains(s.pan_speed_deg_s)) {
+      return false;
+    }
   }
   return RigInBounds(recipe.rig);
 }

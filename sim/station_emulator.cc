@@ -63,7 +63,7 @@ void ReadAxis(const YAML::Node& node, AxisOptions* axis, const std::string& wher
   // Strict: a misspelt key is an InputError with file:line, never silently ignored.
   const yaml_fields::MapReader keys(node, where, "virtual.station axis",
                                     {"min", "max", "home", "speed", "accel", "settle_s",
-                                     "power_on"});
+                                     "power_on", "max_speed"});
   ReadKey(node, "min", &axis->min, where);
   ReadKey(node, "max", &axis->max, where);
   ReadKey(node, "home", &axis->home, where);
@@ -71,6 +71,7 @@ void ReadAxis(const YAML::Node& node, AxisOptions* axis, const std::string& wher
   ReadKey(node, "accel", &axis->accel, where);
   ReadKey(node, "settle_s", &axis->settle_s, where);
   ReadKey(node, "power_on", &axis->power_on, where);
+  ReadKey(node, "max_speed", &axis->max_speed, where);
 }
 
 }  // namespace

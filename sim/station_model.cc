@@ -22,7 +22,6 @@ namespace {
 constexpr int kSlide = 0;
 constexpr int kPan = 1;
 constexpr int kTilt = 2;
-constexpr std::array<const char*, 3> kAxisNames = {"SLIDE", "PAN", "TILT"};
 constexpr std::size_t kErrorQueueDepth = 16;
 constexpr double kBootTimeS = 0.2;  // simulated time the station is deaf after a power-up
 
@@ -41,8 +40,6 @@ const char* StateText(State s) {
   return "UNKNOWN";
 }
 
-long long Centi(double v) { return std::llround(v * 100.0); }
-
 }  // namespace
 
 // ------------------------------------------------------------------------------------------------
@@ -54,6 +51,7 @@ struct StationModel::Impl {
     const AxisOptions* opt = nullptr;
     double pos = 0.0;          // physical position
     MotionProfile profile;     // current motion (from == to when at rest)
+    double speed = 1.0;        // cruise speed (SPEED; the options' speed at power-up)
     bool moving = false;
   };
 
@@ -137,6 +135,7 @@ struct StationModel::Impl {
     boot_id = id;
     for (int i = 0; i < 3; ++i) {
       axes[i].moving = false;
+      axes[i].speed = axes[i].opt->speed;
       Follow(i, MotionProfile::Rest(axes[i].pos, now));
     }
     soft = {std::make_pair(options.slide.min, options.slide.max),
@@ -211,7 +210,7 @@ struct StationModel::Impl {
       double v = 0.0;
       a.profile.At(now - a.profile.start_s, &a.pos, &v);
       const double to = (i == stuck) ? a.pos : target[i];
-      Follow(i, MotionProfile::Make(a.pos, to, now, 0.0, a.opt->speed * speed_factor,
+      Follow(i, MotionProfile::Make(a.pos, to, now, 0.0, a.speed * speed_factor,
                                     a.opt->accel));
       a.moving = std::fabs(to - a.pos) > 0.0;
     }
@@ -295,6 +294,8 @@ struct StationModel::Impl {
         {"POS?", &Impl::CmdPosQuery},
         {"LIM?", &Impl::CmdLimQuery},
         {"LIM", &Impl::CmdLim},
+        {"SPEED?", &Impl::CmdSpeedQuery},
+        {"SPEED", &Impl::CmdSpeed},
         {"HOME", &Impl::CmdHome},
         {"MOVE", &Impl::CmdMove},
         {"STOP", &Impl::CmdStop},
@@ -370,19 +371,30 @@ struct StationModel::Impl {
   }
 
   std::string CmdLim(const Request& r) {
-    if (r.args.size() != 3) return Fail(r.args.size() < 3 ? -109 : -108);
-    const std::string axis = Upper(r.args[0]);
     int i = -1;
-    for (int k = 0; k < 3; ++k) {
-      if (axis == kAxisNames[k]) i = k;
-    }
-    long long lo = 0, hi = 0;
-    if (i < 0 || !ParseProtocolInt(r.args[1], &lo) || !ParseProtocolInt(r.args[2], &hi)) return Fail(-104);
-    if (lo >= hi || lo < Centi(axes[i].opt->min) || hi > Centi(axes[i].opt->max)) {
+    std::vector<long long> v;
+    if (int e = r.AxisAndInts(2, &i, &v)) return Fail(e);
+    if (v[0] >= v[1] || v[0] < Centi(axes[i].opt->min) || v[1] > Centi(axes[i].opt->max)) {
       return Fail(-222);
     }
-    soft[i] = {lo / 100.0, hi / 100.0};
+    soft[i] = {v[0] / 100.0, v[1] / 100.0};
     return "OK";
+  }
+
+  // SPEED <axis>,<v>: the axis's cruise speed for the moves that follow, in 0.01 unit/s, within
+  // [1, the axis's max_speed]. Power-up restores `speed`.
+  std::string CmdSpeed(const Request& r) {
+    int i = -1;
+    std::vector<long long> v;
+    if (int e = r.AxisAndInts(1, &i, &v)) return Fail(e);
+    if (v[0] < 1 || v[0] > Centi(axes[i].opt->MaxSpeed())) return Fail(-222);
+    axes[i].speed = v[0] / 100.0;  // a move under way keeps its profile
+    return "OK";
+  }
+
+  std::string CmdSpeedQuery(const Request& r) {
+    if (int e = r.NoArgs()) return Fail(e);
+    return "OK " + CentiList({axes[kSlide].speed, axes[kPan].speed, axes[kTilt].speed});
   }
 
   std::string CmdHome(const Request& r) {

@@ -30,6 +30,10 @@ struct AxisOptions {
   double accel = 1.0;         // acceleration and deceleration, unit/s^2
   double settle_s = 0.05;     // settle time after the profile ends before the axis reports settled
   double power_on = 0.0;      // (uncalibrated) position the axis rests at after power-up
+  // The fastest cruise speed `SPEED` accepts (unit/s); 0: `speed` (the power-on speed) is also
+  // the fastest.
+  double max_speed = 0.0;
+  double MaxSpeed() const { return max_speed > 0.0 ? max_speed : speed; }
 };
 
 struct EmulatorOptions {

@@ -1,6 +1,7 @@
 #include "sim/station_model_text.h"
 
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 
 namespace irdist::sim {
@@ -25,6 +26,16 @@ int StationRequest::Ints(std::size_t n, std::vector<long long>* out) const {
     out->push_back(v);
   }
   return 0;
+}
+
+int StationRequest::AxisAndInts(std::size_t n, int* axis, std::vector<long long>* out) const {
+  if (args.size() != n + 1) return args.size() < n + 1 ? -109 : -108;
+  const std::string name = Upper(args[0]);
+  *axis = name == "SLIDE" ? 0 : name == "PAN" ? 1 : name == "TILT" ? 2 : -1;
+  if (*axis < 0) return -104;
+  StationRequest rest;
+  rest.args.assign(args.begin() + 1, args.end());
+  return rest.Ints(n, out);
 }
 
 CommandError ErrorFor(int code) {
@@ -67,6 +78,14 @@ std::vector<std::string> SplitCommas(const std::string& text) {
 std::string Upper(std::string s) {
   for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   return s;
+}
+
+long long Centi(double v) { return std::llround(v * 100.0); }
+
+std::string CentiList(const std::vector<double>& values) {
+  std::string text;
+  for (double v : values) text += (text.empty() ? "" : ",") + std::to_string(Centi(v));
+  return text;
 }
 
 }  // namespace irdist::sim

@@ -25,6 +25,9 @@ struct StationRequest {
   // Exactly n integer parameters into *out; 0, or the error code (-109, -108, -104).
   int Ints(std::size_t n, std::vector<long long>* out) const;
   int NoArgs() const { return args.empty() ? 0 : -108; }
+  // An axis name (SLIDE, PAN, TILT: *axis 0, 1, 2) then exactly n integer parameters into *out;
+  // 0, or the error code (-109, -108, -104).
+  int AxisAndInts(std::size_t n, int* axis, std::vector<long long>* out) const;
 };
 
 // The code with its message ("Execution error" for a code the table does not know).
@@ -32,5 +35,8 @@ CommandError ErrorFor(int code);
 // "a, b,c" -> {"a", "b", "c"} (spaces dropped); "" -> {}.
 std::vector<std::string> SplitCommas(const std::string& text);
 std::string Upper(std::string s);
+// A value in the protocol's 0.01 units; a list of them "a,b,c".
+long long Centi(double v);
+std::string CentiList(const std::vector<double>& values);
 
 }  // namespace irdist::sim

@@ -16,6 +16,9 @@ bool AxisValid(const AxisOptions& a, const char* name, std::string* why) {
   if (a.power_on < a.min || a.power_on > a.max) return fail("power_on must lie within [min, max]");
   if (!(a.speed > 0)) return fail("speed must be > 0");
   if (!(a.accel > 0)) return fail("accel must be > 0");
+  if (!(a.max_speed == 0.0 || a.max_speed >= a.speed)) {
+    return fail("max_speed must be 0 (= speed) or >= speed");
+  }
   if (!(a.settle_s >= 0)) return fail("settle_s must be >= 0");
   return true;
 }

@@ -138,27 +138,43 @@ void FlirPtu::ReadSpeedBounds(PtuAxis* a) {
 void FlirPtu::ApplySpeed(PtuAxis* a) {
   const std::string p(1, a->letter);
   if (spec_.settings.count("speed_deg_s")) {
-    const double deg_s = spec_.Number("speed_deg_s", 0);
-    const long long s = std::llround(deg_s / a->deg_per_position);
-    const bool above = a->upper_pos_s > 0 && s > a->upper_pos_s;
-    if (above || s < a->lower_pos_s) {
-      const long long bound = above ? a->upper_pos_s : a->lower_pos_s;
-      Fail(p + (above ? "U " : "L ") + std::to_string(bound),
-           "speed_deg_s " + std::to_string(deg_s) + " is " + (above ? "above" : "below") +
-               " the " + AxisText(*a) + " axis's " + (above ? "upper" : "lower") +
-               " speed bound " + p + (above ? "U " : "L ") + std::to_string(bound) +
-               " positions/s (" + std::to_string(bound * a->deg_per_position) + " deg/s)",
-           "set station.devices." + spec_.name + ".speed_deg_s within the unit's speed bounds");
-    }
-    if (!Command(p + "S" + std::to_string(s), timeout_)) {
-      LinkFail("no reply to " + p + "S", "check the cable");
-    }
+    SendSpeed(a, spec_.Number("speed_deg_s", 0),
+              "set station.devices." + spec_.name + ".speed_deg_s within the unit's speed bounds");
   }
   if (spec_.settings.count("accel_deg_s2")) {
     const long long s = std::llround(spec_.Number("accel_deg_s2", 0) / a->deg_per_position);
     if (!Command(p + "A" + std::to_string(s), timeout_)) {
       LinkFail("no reply to " + p + "A", "check the cable");
     }
+  }
+}
+
+// Manual, "Speed (absolute)": PS<positions/sec> (TS for tilt) sets the desired speed, changeable
+// on the fly; a speed outside the bounds PU/PL (TU/TL) is refused by the unit, and checked here
+// first where the bounds were read.
+void FlirPtu::SendSpeed(PtuAxis* a, double deg_s, const std::string& fix) {
+  const std::string p(1, a->letter);
+  const long long s = std::llround(deg_s / a->deg_per_position);
+  const bool above = a->upper_pos_s > 0 && s > a->upper_pos_s;
+  if (above || s < a->lower_pos_s || s < 1) {
+    const long long bound = above ? a->upper_pos_s : std::max(a->lower_pos_s, 1LL);
+    Fail(p + (above ? "U " : "L ") + std::to_string(bound),
+         "speed " + std::to_string(deg_s) + " deg/s is " + (above ? "above" : "below") + " the " +
+             AxisText(*a) + " axis's " + (above ? "upper" : "lower") + " speed bound " + p +
+             (above ? "U " : "L ") + std::to_string(bound) + " positions/s (" +
+             std::to_string(bound * a->deg_per_position) + " deg/s)",
+         fix);
+  }
+  if (!Command(p + "S" + std::to_string(s), timeout_)) {
+    LinkFail("no reply to " + p + "S", "check the cable");
+  }
+  a->speed_pos_s = s;
+  a->speed.speed = static_cast<double>(s) * a->deg_per_position;
+}
+
+void FlirPtu::SetSpeed(Axis axis, double unit_per_s) {
+  for (PtuAxis& a : axes_) {
+    if (a.axis == axis) SendSpeed(&a, unit_per_s, "ask for a speed within the unit's bounds");
   }
 }
 

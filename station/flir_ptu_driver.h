@@ -70,6 +70,7 @@ class FlirPtu : public AxesMotionDriver<PtuAxis> {
   void WaitSettled(milliseconds timeout) override;
   void ReadPosition(StationPosition* position) override;
   void Stop() noexcept override;
+  void SetSpeed(Axis axis, double unit_per_s) override;
   void CheckAlive() override;
 
  private:
@@ -85,6 +86,7 @@ class FlirPtu : public AxesMotionDriver<PtuAxis> {
   long long StablePosition(const PtuAxis& a);
   void ReadAxis(PtuAxis* a);
   void ApplySpeed(PtuAxis* a);
+  void SendSpeed(PtuAxis* a, double deg_s, const std::string& fix);
   void MoveAxis(PtuAxis* a, long long position);
   void WaitAt(milliseconds timeout, const std::string& what);
   void TakePending(bool report_limit_hit);

@@ -65,6 +65,7 @@ auto IrdistStationDriver::Guarded(F&& f) -> decltype(f()) {
 }
 
 DeviceIdentity IrdistStationDriver::Identify() {
+  for (double& speed : set_speed_) speed = 0.0;  // a new session: the station's own speeds
   const StationIdentity id = Guarded([&] { return client_.Identify(); });
   identity_.vendor = id.vendor;
   identity_.model = id.model;
@@ -124,8 +125,17 @@ void IrdistStationDriver::Stop() noexcept {
 AxisSpeed IrdistStationDriver::Speed(Axis axis) const {
   // The protocol has no speed query: the documented defaults of docs/station-protocol.md (the
   // emulator's); a rig file's `station.motion:` overrides them.
-  if (axis == Axis::kSlide) return {200.0, 400.0, 100.0, 1000.0};
-  return {30.0, 60.0, 50.0, 0.0};
+  AxisSpeed speed = axis == Axis::kSlide ? AxisSpeed{200.0, 400.0, 100.0, 1000.0}
+                                          : AxisSpeed{30.0, 60.0, 50.0, 0.0};
+  const double set = set_speed_[static_cast<int>(axis)];
+  if (set > 0.0) speed.speed = set;
+  return speed;
+}
+
+void IrdistStationDriver::SetSpeed(Axis axis, double unit_per_s) {
+  const char* name = axis == Axis::kSlide ? "SLIDE" : axis == Axis::kPan ? "PAN" : "TILT";
+  Guarded([&] { client_.SetSpeed(name, unit_per_s); });
+  set_speed_[static_cast<int>(axis)] = unit_per_s;
 }
 
 void IrdistStationDriver::SetCurrent(double bias_ma) {

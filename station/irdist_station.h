@@ -38,6 +38,7 @@ class IrdistStationDriver : public DeviceDriver,
   void ReadPosition(StationPosition* position) override;
   void Stop() noexcept override;
   AxisSpeed Speed(Axis axis) const override;
+  void SetSpeed(Axis axis, double unit_per_s) override;
 
   // CurrentSource
   void SetCurrent(double bias_ma) override;
@@ -65,6 +66,7 @@ class IrdistStationDriver : public DeviceDriver,
   double trigger_width_us_ = 100.0;
   double trigger_period_us_ = 1000.0;
   std::uint64_t fired_ = 0;
+  double set_speed_[3] = {0.0, 0.0, 0.0};  // SPEED sent since Identify (0: the station's own)
 };
 
 // The registry entry (also used by tests that build the driver directly).

@@ -56,6 +56,11 @@ class Motion {
   // Controlled stop; returns when the axes stand still. Best effort: never throws.
   virtual void Stop() noexcept = 0;
   virtual AxisSpeed Speed(Axis axis) const = 0;
+  // Sets `axis`'s cruise speed (unit/s: mm/s, deg/s) for the moves that follow, as the device's
+  // protocol sets it (Zaber ASCII `set maxspeed`, the FLIR PTU's PS/TS, the irdist station's
+  // SPEED); Speed() then reports it. Throws DeviceError (or StationError) when the device refuses
+  // it (outside its speed bounds), LinkError. A power cycle restores the device's own speed.
+  virtual void SetSpeed(Axis axis, double unit_per_s) = 0;
   // Throws DeviceRestarted when the device lost its state since Identify()/Home() (power cycle),
   // DeviceError when it is in e-stop or fault. Cheap: one exchange.
   virtual void CheckAlive() = 0;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <future>
 #include <set>
+#include <thread>
 
 #include "base/input_error.h"
 #include "station/serial_transport.h"
@@ -247,6 +248,22 @@ void Station::MoveTo(const StationPosition& target) {
   for (Motion* m : motion_) m->WaitSettled(options_.move_timeout);
 }
 
+bool Station::MoveToUnless(const StationPosition& target, const std::function<bool()>& stop) {
+  constexpr std::chrono::milliseconds kStopPoll{20};
+  for (Motion* m : motion_) m->StartMove(target);
+  for (Motion* m : motion_) {
+    while (m->State() == MotionState::kMoving) {
+      if (stop()) {
+        Stop();
+        return false;
+      }
+      std::this_thread::sleep_for(kStopPoll);
+    }
+  }
+  for (Motion* m : motion_) m->WaitSettled(options_.move_timeout);
+  return true;
+}
+
 StationPosition Station::Position() {
   StationPosition position;
   for (Motion* m : motion_) m->ReadPosition(&position);
@@ -337,6 +354,14 @@ void Station::Off() noexcept {
 
 void Station::Stop() noexcept {
   for (Motion* m : motion_) m->Stop();
+}
+
+void Station::SetSpeed(Axis axis, double unit_per_s) {
+  for (Motion* m : motion_) {
+    for (Axis a : m->Axes()) {
+      if (a == axis) m->SetSpeed(axis, unit_per_s);
+    }
+  }
 }
 
 std::map<Axis, AxisSpeed> Station::Speeds() const {

@@ -12,6 +12,7 @@
 // name ("slide: > /1 1 move abs 1000").
 
 #include <chrono>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -90,6 +91,10 @@ class Station {
   bool homed() const { return homed_; }
   // StartMove on every motion device, then WaitSettled on each: the devices move together.
   void MoveTo(const StationPosition& target);
+  // MoveTo that gives up when `stop()` turns true while an axis moves: every motion device is
+  // stopped (Stop()) and false returned, the axes wherever they came to rest. A long profile's
+  // move thus ends at a Ctrl-C at once. Throws as MoveTo.
+  bool MoveToUnless(const StationPosition& target, const std::function<bool()>& stop);
   StationPosition Position();
 
   void SetCurrent(double bias_ma);
@@ -115,6 +120,9 @@ class Station {
 
   // Each axis's motion as its device reports it (for the plan's duration estimate).
   std::map<Axis, AxisSpeed> Speeds() const;
+  // The cruise speed of `axis` (mm/s or deg/s) for the moves that follow, through the motion
+  // device that drives it (Motion::SetSpeed). Throws DeviceError, StationError, LinkError.
+  void SetSpeed(Axis axis, double unit_per_s);
   const StationSpec& spec() const { return spec_; }
 
  private:

@@ -356,6 +356,12 @@ void StationClient::SetSoftLimit(const std::string& axis, double min, double max
           std::to_string(ToCenti(max)));
 }
 
+void StationClient::SetSpeed(const std::string& axis, double unit_per_s) {
+  IRDIST_CHECK(axis == "SLIDE" || axis == "PAN" || axis == "TILT", "axis ", axis);
+  IRDIST_CHECK(std::isfinite(unit_per_s) && unit_per_s > 0.0, "speed ", unit_per_s);
+  Command("SPEED " + axis + "," + std::to_string(ToCenti(unit_per_s)));
+}
+
 void StationClient::SetCurrent(double bias_ma) {
   IRDIST_CHECK(std::isfinite(bias_ma) && bias_ma >= 0.0, "bias_ma ", bias_ma);
   Command("SOUR:CURR " + std::to_string(ToCenti(bias_ma)));

@@ -124,6 +124,9 @@ class StationClient {
   SoftLimits GetSoftLimits();
   // axis: "SLIDE", "PAN" or "TILT"; limits in mm or deg.
   void SetSoftLimit(const std::string& axis, double min, double max);
+  // SPEED: the axis's cruise speed (mm/s or deg/s) for the moves that follow; StationError
+  // (-222) beyond the station's fastest.
+  void SetSpeed(const std::string& axis, double unit_per_s);
 
   void SetCurrent(double bias_ma);  // 0 = IRED off
   double MeasureCurrent();          // mA, as measured by the source (noisy)

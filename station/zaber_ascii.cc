@@ -80,6 +80,7 @@ class ZaberAscii : public AxesMotionDriver<AxisState> {
   void WaitSettled(milliseconds timeout) override;
   void ReadPosition(StationPosition* position) override;
   void Stop() noexcept override;
+  void SetSpeed(Axis axis, double unit_per_s) override;
   void CheckAlive() override;
 
  private:
@@ -312,6 +313,29 @@ void ZaberAscii::ReadAxis(AxisState* s) {
       QueryNumber(a, a.axis, "get accel") / kAccelDataPerMicrostepS2 * step;
   s->speed.settle_ms = spec_.Number("settle_ms", 0.0);
   s->speed.home = ToUnits(*s, 0);
+}
+
+// Manual, setting `maxspeed`: the axis's speed limit for moves, in data units (microsteps/s x
+// 1.6384); writable, taking effect for the moves that follow (a value out of its range: RJ
+// BADDATA). A power cycle restores the stored value.
+void ZaberAscii::SetSpeed(Axis axis, double unit_per_s) {
+  for (AxisState& s : axes_) {
+    if (s.axis != axis) continue;
+    const long long data =
+        std::llround(unit_per_s / s.unit_per_microstep * kSpeedDataPerMicrostepS);
+    if (data < 1) {
+      Fail(std::to_string(data), std::string(AxisName(axis)) + " speed " +
+                                     std::to_string(unit_per_s) + " is below one data unit",
+           "ask for a faster speed");
+    }
+    const std::string command = "set maxspeed " + std::to_string(data);
+    Reply r;
+    if (!Command(s.address, command, &r)) {
+      throw LinkError(std::string(kName) + " '" + spec_.name + "': no reply to '" + command + "'",
+                      spec_.port, kNoReplyFix);
+    }
+    s.speed.speed = static_cast<double>(data) / kSpeedDataPerMicrostepS * s.unit_per_microstep;
+  }
 }
 
 DeviceIdentity ZaberAscii::Identify() {

@@ -12,6 +12,7 @@
 #include "app/devices/station_cmd.h"
 #include "app/devices/tools.h"
 #include "app/live/measure.h"
+#include "app/live/track_run.h"
 #include "app/live/track_session.h"
 #include "app/live/view.h"
 #include "app/runs/offline.h"
@@ -139,7 +140,7 @@ Handlers DefaultHandlers() {
   Handlers handlers;
   handlers.plan = RunPlan;
   handlers.calibrate = RunCalibrate;
-  handlers.validate = RunValidate;
+  handlers.validate = RunValidateOrTrack;  // a track recipe: app/live/track_run.h
   handlers.fit = RunFit;
   handlers.playback = RunPlayback;
   handlers.check = RunCheck;

@@ -16,16 +16,7 @@ namespace {
 // The ports a running `irdist sim` of this rig file wrote in its state file.
 std::map<std::string, std::string> RunningSimPorts(const Rig& rig, std::ostream& warn) {
   const std::optional<RunningSim> sim = FindRunningSim(rig.path, warn);
-  if (!sim) return {};
-  std::map<std::string, std::string> ports;
-  for (const auto& [key, value] : sim->values) {
-    if (key.rfind("port.", 0) == 0) ports[key.substr(5)] = value;
-  }
-  const auto single_box = sim->values.find("station_port");
-  if (ports.empty() && single_box != sim->values.end()) {
-    ports[kSingleBoxStationDevice] = single_box->second;
-  }
-  return ports;
+  return sim ? PortsOfRunningSim(*sim) : std::map<std::string, std::string>{};
 }
 
 std::map<std::string, std::string> PortsFor(const Rig& rig, const StationArgs& args,

@@ -29,6 +29,18 @@ std::map<std::string, std::string> VirtualDevicePorts(const Rig& rig,
   return ports;
 }
 
+std::map<std::string, std::string> PortsOfRunningSim(const RunningSim& sim) {
+  std::map<std::string, std::string> ports;
+  for (const auto& [key, value] : sim.values) {
+    if (key.rfind("port.", 0) == 0) ports[key.substr(5)] = value;
+  }
+  const auto single_box = sim.values.find("station_port");
+  if (ports.empty() && single_box != sim.values.end()) {
+    ports[kSingleBoxStationDevice] = single_box->second;
+  }
+  return ports;
+}
+
 std::map<std::string, std::string> ParsePortOverrides(const Rig& rig,
                                                       const std::vector<std::string>& args) {
   std::map<std::string, std::string> ports;

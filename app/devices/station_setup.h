@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "app/inputs/rig.h"
+#include "app/inputs/state_file.h"
 #include "sim/virtual_rig.h"
 #include "station/line_log.h"
 #include "station/station.h"
@@ -17,8 +18,11 @@ namespace irdist {
 // The ptys of a virtual rig's device emulators, by `station.devices` name.
 std::map<std::string, std::string> VirtualDevicePorts(const Rig& rig,
                                                       const sim::VirtualRigInfo& info);
-// `--port NAME=PATH` arguments (NAME a station.devices key; a single-box rig's device is
-// "station"). Throws UsageError on a malformed one or an unknown device.
+// The station devices' ports a running `irdist sim` wrote in its state file (`port.<device>`,
+// or a single-box rig's `station_port` as device "station").
+std::map<std::string, std::string> PortsOfRunningSim(const RunningSim& sim);
+// `--port NAME=PATH` arguments (NAME a station.devices key; a single-box rig's device is "station").
+// Throws UsageError on a malformed one or an unknown device.
 std::map<std::string, std::string> ParsePortOverrides(const Rig& rig,
                                                       const std::vector<std::string>& args);
 StationOptions StationRunOptions(const std::map<std::string, std::string>& ports, LineLog* log);

@@ -492,9 +492,16 @@ Recipe ParseRecipe(const std::string& text, const std::string& file, const std::
   if (!root || root.IsNull()) {
     throw RecipeError(file, 1, 1, "the recipe is empty; it needs at least axes: and bracket:");
   }
+  if (root.IsMap() && root["kind"] && root["kind"].IsScalar() &&
+      root["kind"].Scalar() != "sweep") {  // track_recipe.h reads the other kinds
+    Fail(file, root["kind"].Mark(),
+         "kind '" + root["kind"].Scalar() + "' is not a sweep: a track recipe (kind: track) is "
+         "run by 'irdist validate " + file + " --model MODEL' (docs/recipes.md \"Track "
+         "recipes\"); a sweep has no kind: or kind: sweep");
+  }
   const MapReader map(root, file, "the recipe",
                       {"name", "description", "rig", "output", "after", "calibration", "axes",
-                       "order", "serpentine", "bracket", "settle"});
+                       "order", "serpentine", "bracket", "settle", "kind"});
   Recipe recipe;
   ReadRunKeys(map, file, &recipe);
   ReadRigKey(map, file, base_dir, &recipe);

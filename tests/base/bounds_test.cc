@@ -45,7 +45,8 @@ TEST(Bounds, EveryBoundIsAFiniteRangeWithItsReason) {
         bounds::kSensorPx, bounds::kBitDepth, bounds::kFrameBitDepth, bounds::kFocalPx,
         bounds::kRadialDistortion, bounds::kTangentialDistortion, bounds::kBlurVarPx2,
         bounds::kBlurOffsetPx2, bounds::kBlurNoisePx2, bounds::kNoiseExponent, bounds::kShare,
-        bounds::kChiSquare, bounds::kTailProbability, bounds::kResidualPercent}) {
+        bounds::kChiSquare, bounds::kTailProbability, bounds::kResidualPercent,
+        bounds::kSlideSpeedMmS, bounds::kAngularSpeedDegS, bounds::kPositionSdMm}) {
     SCOPED_TRACE(b.name);
     EXPECT_TRUE(std::isfinite(b.min) && std::isfinite(b.max));
     EXPECT_LT(b.min, b.max);

@@ -3,6 +3,7 @@
 // JSON lines of `irdist measure --json`, and waiting for an `irdist sim` to run.
 
 #include <fcntl.h>
+#include <stdlib.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -38,6 +39,27 @@ settle:
   after_move_ms: 200
   after_current_ms: 500
 )";
+}
+
+// A test folder on a copy of recipes/rigs/virtual.yaml named virtual-fast (`dir`/rigs/) whose
+// station emulator's slide has `slide_motion` in place of "speed: 200.0, accel: 400.0", with
+// `dir`/runtime as XDG_RUNTIME_DIR (the sims' state files) and `dir`/calibration.yaml, the small
+// calibration on that rig. Returns the rig file's path; "" when virtual.yaml's slide changed (or
+// the environment cannot be set).
+inline std::string FastSlideScratch(const std::string& dir, const std::string& slide_motion) {
+  std::filesystem::create_directories(dir + "/runtime");
+  std::filesystem::create_directories(dir + "/rigs");
+  if (setenv("XDG_RUNTIME_DIR", (dir + "/runtime").c_str(), 1) != 0) return "";
+  std::string rig = ReadAll(std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml");
+  const std::string slide = "speed: 200.0, accel: 400.0";
+  const std::size_t at = rig.find(slide);
+  if (at == std::string::npos) return "";
+  const std::string path = dir + "/rigs/virtual-fast.yaml";
+  WriteAll(path, rig.replace(at, slide.size(), slide_motion));
+  std::string recipe = SmallCalibrationRecipe("fast-slide-calibration");
+  WriteAll(dir + "/calibration.yaml", recipe.replace(recipe.find("rig: virtual"), 12,
+                                                     "rig: virtual-fast"));
+  return path;
 }
 
 // The JSON objects of an output (lines starting with '{'), parsed.

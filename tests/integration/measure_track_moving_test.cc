@@ -48,15 +48,6 @@ constexpr double kCruiseMmPerS = 500.0;
 // cruise part checked starts this long after the cruise does.
 constexpr double kCruiseSettleS = 0.5;
 
-// recipes/rigs/virtual.yaml with the slide at 0.5 m/s, 2 m/s^2.
-std::string FastSlideRig() {
-  std::string rig = ReadAll(std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml");
-  const std::string slide = "speed: 200.0, accel: 400.0";
-  const std::size_t at = rig.find(slide);
-  if (at == std::string::npos) return "";
-  return rig.replace(at, slide.size(), "speed: 500.0, accel: 2000.0");
-}
-
 // The one-frame Cramer-Rao bound on d (app/processing/crb.h: the virtual rig's physics, one frame at
 // the track's exposure, every unknown free) at the pose's pan, every 250 mm from 1500 to 3000 mm;
 // between them interpolated linearly.
@@ -151,16 +142,8 @@ class MeasureTrackMoving : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = testing::ScratchDir("measure-track-moving");
-    fs::create_directories(dir_ + "/runtime");
-    fs::create_directories(dir_ + "/rigs");
-    ASSERT_EQ(setenv("XDG_RUNTIME_DIR", (dir_ + "/runtime").c_str(), 1), 0);
-    const std::string rig = FastSlideRig();
-    ASSERT_FALSE(rig.empty()) << "recipes/rigs/virtual.yaml's slide changed; update this test";
-    rig_ = dir_ + "/rigs/virtual-fast.yaml";
-    WriteAll(rig_, rig);
-    std::string recipe = testing::SmallCalibrationRecipe("track-moving-calibration");
-    recipe.replace(recipe.find("rig: virtual"), 12, "rig: virtual-fast");
-    WriteAll(dir_ + "/calibration.yaml", recipe);
+    rig_ = testing::FastSlideScratch(dir_, "speed: 500.0, accel: 2000.0");  // 0.5 m/s, 2 m/s^2
+    ASSERT_FALSE(rig_.empty()) << "recipes/rigs/virtual.yaml's slide changed; update this test";
   }
 
   int Run(const std::string& name, const std::vector<std::string>& args, std::string* output) {

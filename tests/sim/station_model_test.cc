@@ -199,6 +199,42 @@ TEST_F(StationModelStuckTest, AStuckSlideFailsHomingWithError204) {
   EXPECT_DOUBLE_EQ(effects_.slide_mm, 2000.0);  // never left its power-on position
 }
 
+EmulatorOptions WithSlideMaxSpeed(double max_speed_mm_s) {
+  EmulatorOptions o;
+  o.slide.max_speed = max_speed_mm_s;
+  return o;
+}
+
+class StationModelSpeedTest : public StationModelTest {
+ protected:
+  StationModelSpeedTest() : StationModelTest(WithSlideMaxSpeed(600.0)) {}
+};
+
+// SPEED (docs/station-protocol.md section 5): the cruise speed of the moves that follow, within
+// [0.01 unit/s, max_speed]; the power-up speed again after a reboot.
+TEST_F(StationModelSpeedTest, SetsTheCruiseSpeedOfTheNextMovesWithinTheAxissFastest) {
+  Home();
+  EXPECT_EQ(Do("SPEED?"), "OK 20000,3000,3000");  // the options' speeds at power-up
+  EXPECT_EQ(Do("SPEED SLIDE,60001"), "ERR -222,\"Data out of range\"");  // past max_speed
+  EXPECT_EQ(Do("SPEED PAN,3001"), "ERR -222,\"Data out of range\"");  // pan: max_speed 0 = speed
+  EXPECT_EQ(Do("SPEED SLIDE,0"), "ERR -222,\"Data out of range\"");
+  EXPECT_EQ(Do("SPEED ROLL,100"), "ERR -104,\"Data type error\"");
+  EXPECT_EQ(Do("SPEED SLIDE"), "ERR -109,\"Missing parameter\"");
+  ASSERT_EQ(Do("SPEED slide,50000"), "OK");
+  EXPECT_EQ(Do("SPEED?"), "OK 50000,3000,3000");
+  // 1000 mm at 500 mm/s and 400 mm/s^2: 1.25 s up, 0.75 s cruising, 1.25 s down (3.25 s; at
+  // the power-up's 200 mm/s it would take 5.5 s).
+  ASSERT_EQ(Do("MOVE 200000,0,0"), "OK");
+  RunFor(1.25 + 0.375);
+  EXPECT_NEAR(effects_.slide_mm, 1000.0 + 312.5 + 187.5, 1.0);  // mid-cruise: 1500 mm
+  RunFor(1.625 + 0.2);
+  EXPECT_EQ(State(), "OK IDLE");
+  EXPECT_EQ(Do("POS?"), "OK 200000,0,0");
+  model_.Reboot(now_s_);
+  RunFor(1.0);
+  EXPECT_EQ(Do("SPEED?"), "OK 20000,3000,3000");
+}
+
 TEST(StationModelOptions, RejectsInvalidOptionsAtConstruction) {
   RecordedEffects effects;
   EmulatorOptions o;

@@ -548,6 +548,28 @@ TEST(FlirPtuEmulated, ASpeedBeyondTheUnitsBoundIsAboutSpeed) {
   }
 }
 
+// A track's speed: PS in positions/s (the unit keeps it: a new session reads it back), and a
+// speed beyond the unit's upper bound refused naming it.
+TEST(FlirPtuEmulated, SetSpeedSendsPsAndRefusesASpeedBeyondTheBound) {
+  EmulatedHead head("");
+  {
+    std::unique_ptr<DeviceDriver> driver = head.Open(EmulatedHead::Spec());
+    driver->motion()->Identify();
+    driver->motion()->SetSpeed(Axis::kPan, 20.0);  // 778 positions/s of 92.5714 arcsec
+    EXPECT_NEAR(driver->motion()->Speed(Axis::kPan).speed, 778 * 92.5714 / 3600.0, 1e-6);
+    try {
+      driver->motion()->SetSpeed(Axis::kPan, 400.0);
+      FAIL() << "expected DeviceError";
+    } catch (const DeviceError& e) {
+      EXPECT_NE(std::string(e.what()).find("upper speed bound PU 12000"), std::string::npos)
+          << e.what();
+    }
+  }
+  std::unique_ptr<DeviceDriver> again = head.Open(EmulatedHead::Spec());
+  again->motion()->Identify();
+  EXPECT_NEAR(again->motion()->Speed(Axis::kPan).speed, 778 * 92.5714 / 3600.0, 1e-6);
+}
+
 TEST(FlirPtu, ARefusedSpeedCommandGetsSpeedAdvice) {
   DeviceSpec spec = HeadSpec();
   spec.settings["speed_deg_s"] = {"30", 12};

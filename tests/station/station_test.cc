@@ -55,6 +55,40 @@ TEST(Station, MovesAllMotionDevicesAndReadsThePosition) {
   EXPECT_NEAR(rig.world.Pose().slide_mm, 1800.0, 1e-6);
 }
 
+// A track's speed (Motion::SetSpeed through the protocol's SPEED): the next move cruises at it,
+// Speeds() reports it; beyond the station's fastest (max_speed) it is refused.
+TEST(Station, SetsAnAxisCruiseSpeedForTheNextMove) {
+  sim::EmulatorOptions options;
+  options.slide.max_speed = 600.0;
+  VirtualStationRig rig(10.0, options);
+  rig.station->Identify();
+  rig.station->Home();
+  EXPECT_DOUBLE_EQ(rig.station->Speeds().at(Axis::kSlide).speed, 200.0);
+  EXPECT_THROW(rig.station->SetSpeed(Axis::kSlide, 700.0), Error);
+  const double t0_s = rig.world.clock().Now();
+  rig.station->SetSpeed(Axis::kSlide, 500.0);
+  EXPECT_DOUBLE_EQ(rig.station->Speeds().at(Axis::kSlide).speed, 500.0);
+  rig.station->MoveTo({2500.0, 0.0, 0.0});  // 1000 -> 2500 mm: cruising 1.25-3.0 s in
+  const sim::TrajectoryPoint cruise = rig.world.TruthAt(t0_s + 2.0);
+  ASSERT_TRUE(cruise.known);
+  EXPECT_NEAR(cruise.slide_mm_s, 500.0, 1e-6);
+}
+
+// A move given up (a track's Ctrl-C): the station stops where it is, short of the target.
+TEST(Station, AMoveGivenUpStopsTheStationShortOfItsTarget) {
+  VirtualStationRig rig(10.0);
+  rig.station->Identify();
+  rig.station->Home();
+  EXPECT_TRUE(rig.station->MoveToUnless({1200.0, 0.0, 0.0}, [] { return false; }));
+  EXPECT_NEAR(rig.station->Position().slide_mm, 1200.0, 0.011);
+  int polls = 0;  // gives up after a few polls of the moving axes (1200 -> 3000 mm takes 9.5 s)
+  EXPECT_FALSE(rig.station->MoveToUnless({3000.0, 0.0, 0.0}, [&polls] { return ++polls > 3; }));
+  const double stopped_mm = rig.station->Position().slide_mm;
+  EXPECT_GT(stopped_mm, 1200.0);
+  EXPECT_LT(stopped_mm, 2500.0);
+  EXPECT_EQ(rig.station->States().front().second, MotionState::kIdle);
+}
+
 TEST(Station, AnEStopAtStartGetsAClearMessageAtOnce) {
   VirtualStationRig rig(100.0);
   rig.station->Identify();

@@ -423,6 +423,21 @@ TEST(ZaberAsciiEmulated, ADamagedReplyAtConnectionIsAskedAgain) {
               1651 / 1.6384e-4 * 3.048e-3 / 64, 1e-6);
 }
 
+// A track's speed: `set maxspeed` in the manual's data units (microsteps/s x 1.6384); the device
+// keeps it (a new session reads it back with `get maxspeed`).
+TEST(ZaberAsciiEmulated, SetSpeedSetsTheDevicesMaxspeed) {
+  EmulatedSlide slide("");
+  {
+    std::unique_ptr<DeviceDriver> driver = slide.Open(SlideSpec());
+    driver->motion()->Identify();
+    driver->motion()->SetSpeed(Axis::kSlide, 50.0);
+    EXPECT_NEAR(driver->motion()->Speed(Axis::kSlide).speed, 50.0, 1e-3);
+  }
+  std::unique_ptr<DeviceDriver> again = slide.Open(SlideSpec());
+  again->motion()->Identify();
+  EXPECT_NEAR(again->motion()->Speed(Axis::kSlide).speed, 50.0, 1e-3);
+}
+
 // A reply damaged in every attempt is a link problem, never "map one axis per address".
 TEST(ZaberAsciiEmulated, ARepliesDamagedEveryTimeGetLinkAdvice) {
   EmulatedSlide slide("      flip_reply: get accel\n      flip_byte: -2\n      flip_bit: 3\n"

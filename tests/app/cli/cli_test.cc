@@ -14,6 +14,7 @@
 #include "app/devices/station_cmd.h"
 #include "app/devices/tools.h"
 #include "app/live/measure.h"
+#include "app/live/track_run.h"
 #include "app/live/track_session.h"
 #include "app/live/view.h"
 #include "app/runs/offline.h"
@@ -136,7 +137,7 @@ bool Calls(const std::function<void(const Args&, CommandIo)>& handler,
 TEST(CliTest, EveryCommandRunsTheFunctionOfItsFamily) {
   const Handlers h = DefaultHandlers();
   EXPECT_TRUE(Calls(h.calibrate, &RunCalibrate));
-  EXPECT_TRUE(Calls(h.validate, &RunValidate));
+  EXPECT_TRUE(Calls(h.validate, &RunValidateOrTrack));  // a track recipe: app/live/track_run.h
   EXPECT_TRUE(Calls(h.fit, &RunFit));
   EXPECT_TRUE(Calls(h.playback, &RunPlayback));
   EXPECT_TRUE(Calls(h.check, &RunCheck));
