@@ -17,6 +17,7 @@
 #include "estimator/defect_map.h"
 #include "estimator/model_file.h"
 #include "estimator/models.h"
+#include "estimator/psf_anisotropy.h"
 
 namespace irdist {
 namespace {
@@ -318,6 +319,28 @@ std::string WriteCalibrationReport(const RecordingReader& reader,
                      CalibrationPlots(CalibrationPointsOf(model, samples), model));
 }
 
+// The face-on poses' |theta| (deg) whose frames show the PSF's anisotropy alone.
+constexpr double kFaceOnDeg = 0.5;
+
+// The optics' PSF anisotropy (estimator/psf_anisotropy.h) from the face-on frames' moments in the
+// camera's own axes (a round disc: what anisotropy they show is the lens's), into the model.
+void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& features,
+                            CalibrationModel* model, std::ostream& out) {
+  std::vector<Features> face_on;
+  for (const FrameRecord& row : reader.rows()) {
+    const auto f = features.find(row.index);
+    if (std::fabs(row.theta_deg) <= kFaceOnDeg && f != features.end() && f->second.Usable()) {
+      face_on.push_back(f->second);
+    }
+  }
+  const PsfAnisotropy psf = FitPsfAnisotropy(face_on);
+  model->blur_calibration.psf_aniso_c_px2 = psf.c_px2;
+  model->blur_calibration.psf_aniso_s_px2 = psf.s_px2;
+  out << "  PSF anisotropy: " << psf.c_px2 << " +- " << psf.c_se_px2 << ", " << psf.s_px2
+      << " +- " << psf.s_se_px2 << " px^2 ((Sxx - Syy) / 2, Sxy) from " << psf.frames
+      << " face-on frames\n";
+}
+
 // The most calibration frames the crosstalk's split is fitted on (spread over the recording).
 constexpr std::size_t kCrosstalkFrames = 32;
 
@@ -336,7 +359,9 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
   std::vector<CrosstalkFrame> frames;
   const std::size_t stride = std::max<std::size_t>(1, rows.size() / kCrosstalkFrames);
   for (std::size_t i = 0; i < rows.size() && frames.size() < kCrosstalkFrames; i += stride) {
-    const Features& f = features.at(rows[i]->index);
+    Features f = features.at(rows[i]->index);  // its moments less the PSF's anisotropy
+    RemovePsfAnisotropy(model->blur_calibration.psf_aniso_c_px2,
+                        model->blur_calibration.psf_aniso_s_px2, &f);
     const double blur_var_px2 = BlobFitBlurVarPx2(*model, f);
     if (!(blur_var_px2 > 0.0)) continue;
     const int bit_depth = reader.header().bit_depth;  // the frame FrameFeatures measured
@@ -441,6 +466,7 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   fit_options.models = DeterminedModels(reader, samples, usable, fit_options, out);
   CalibrationModel model = Fit(samples, feature_options, fit_options);
   if (feature_options.blob_fit && model.geometric.fitted() && model.blur_calibration.fitted()) {
+    CalibratePsfAnisotropy(reader, features, &model, out);
     CalibrateCrosstalk(reader, features, &model, out);
     const CalibrationModel first = model;
     model = RefitOnBlobFitSizes(reader, features, feature_options, fit_options, first, &samples,

@@ -1,0 +1,48 @@
+#pragma once
+// Anisotropy of a blob's image told apart from its causes (docs/estimator.md "Tilt or an
+// elliptical PSF"):
+// - the optics' PSF anisotropy (an astigmatic lens): the traceless part of the PSF's covariance,
+//   a = ((Sxx - Syy) / 2, Sxy) px^2, a constant in pixels, whatever the distance; the face-on
+//   calibration frames (theta 0, a round disc) show it alone in their moments;
+// - the disc's tilt: its image foreshortened by cos theta, an anisotropy proportional to the
+//   disc's image (R^2 / 4 (1 - cos^2 theta) / 2), growing as the disc comes closer;
+// - the noise of a round blob's fitted anisotropy (the round-blob rule, DenoisedAnisotropy2).
+
+#include <vector>
+
+#include "estimator/features.h"
+
+namespace irdist {
+
+// The PSF's anisotropy, px^2, in the sensor's axes.
+struct PsfAnisotropy {
+  double c_px2 = 0.0;  // (Sxx - Syy) / 2
+  double s_px2 = 0.0;  // Sxy
+  double c_se_px2 = 0.0, s_se_px2 = 0.0;  // their standard errors over the frames
+  int frames = 0;      // the face-on frames it was measured on (0: not measured, a round PSF)
+};
+
+// The PSF's anisotropy from face-on frames' moments (the camera's own axes, before any turn onto
+// the line of sight): each frame's covariance anisotropy ((Cxx - Cyy) / 2, Cxy) is the PSF's (a
+// round disc's image, a round pixel and crosstalk add none) plus noise of mean 0; their mean over
+// the frames, a frame farther than 5 robust sd from the median in either part left out. Fewer
+// than kMinPsfAnisotropyFrames usable frames: nothing measured (frames 0, anisotropy 0).
+constexpr int kMinPsfAnisotropyFrames = 6;
+PsfAnisotropy FitPsfAnisotropy(const std::vector<Features>& face_on);
+
+// The moments' covariance less the PSF's anisotropy: moment_major/minor_var_px2 and the moment
+// ellipse's angle become those of C - [[c, s], [s, -c]] (the PSF's round part stays, as the
+// calibrated blur b(u) that every size subtracts). Unchanged without usable moments.
+void RemovePsfAnisotropy(double c_px2, double s_px2, Features* features);
+
+// The round-blob rule: the squared anisotropy |a|^2 of a fitted disc (P's, px^-4) less its noise,
+// continuous in |a|^2. With t = |a|^2 / E|a_noise|^2, the blob is elliptical with the weight
+// w(t) = 1 / (1 + e^(t0 - t)) (the two hypotheses' likelihood ratio, round: |a|^2 exponential of
+// mean E|a_noise|^2; elliptical: |a| well above it), and the estimate is w(t) (|a|^2 -
+// E|a_noise|^2)_+: 0 for a round blob's usual noise, the unbiased |a|^2 for a clearly elliptical
+// one, and no step between (a rare noise excursion moves theta by a fraction of a degree, not to
+// 4 deg). A NaN or negative noise leaves |a|^2 as it is.
+constexpr double kRoundRuleMidpoint = 4.0;  // t0: the old hard step's threshold
+double DenoisedAnisotropy2(double a2, double noise_var);
+
+}  // namespace irdist
