@@ -25,6 +25,12 @@ void RobustCentre(const std::vector<double>& values, double* median, double* sd)
 
 }  // namespace
 
+bool PsfAnisotropy::Significant() const {
+  if (frames == 0 || !(c_se_px2 > 0.0) || !(s_se_px2 > 0.0)) return false;
+  const double zc = c_px2 / c_se_px2, zs = s_px2 / s_se_px2;
+  return zc * zc + zs * zs > kPsfAnisotropySignificance;
+}
+
 PsfAnisotropy FitPsfAnisotropy(const std::vector<Features>& face_on) {
   std::vector<double> c, s;
   for (const Features& f : face_on) {

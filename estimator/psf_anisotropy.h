@@ -20,7 +20,11 @@ struct PsfAnisotropy {
   double s_px2 = 0.0;  // Sxy
   double c_se_px2 = 0.0, s_se_px2 = 0.0;  // their standard errors over the frames
   int frames = 0;      // the face-on frames it was measured on (0: not measured, a round PSF)
+  // Whether it stands out of its noise: (c / se_c)^2 + (s / se_s)^2 > kPsfAnisotropySignificance
+  // (a chi-square of 2 degrees of freedom beyond its 0.1% tail); a calibration keeps it only then.
+  bool Significant() const;
 };
+constexpr double kPsfAnisotropySignificance = 13.8;
 
 // The PSF's anisotropy from face-on frames' moments (the camera's own axes, before any turn onto
 // the line of sight): each frame's covariance anisotropy ((Cxx - Cyy) / 2, Cxy) is the PSF's (a
@@ -38,11 +42,14 @@ void RemovePsfAnisotropy(double c_px2, double s_px2, Features* features);
 // The round-blob rule: the squared anisotropy |a|^2 of a fitted disc (P's, px^-4) less its noise,
 // continuous in |a|^2. With t = |a|^2 / E|a_noise|^2, the blob is elliptical with the weight
 // w(t) = 1 / (1 + e^(t0 - t)) (the two hypotheses' likelihood ratio, round: |a|^2 exponential of
-// mean E|a_noise|^2; elliptical: |a| well above it), and the estimate is w(t) (|a|^2 -
-// E|a_noise|^2)_+: 0 for a round blob's usual noise, the unbiased |a|^2 for a clearly elliptical
-// one, and no step between (a rare noise excursion moves theta by a fraction of a degree, not to
-// 4 deg). A NaN or negative noise leaves |a|^2 as it is.
-constexpr double kRoundRuleMidpoint = 4.0;  // t0: the old hard step's threshold
+// mean E|a_noise|^2, its log-likelihood falling as -t; elliptical: flat in t), and the estimate is
+// w(t) (|a|^2 - E|a_noise|^2)_+: ~0 for a round blob's noise, the unbiased |a|^2 for a clearly
+// elliptical one, and no step between. A NaN or negative noise leaves |a|^2 as it is.
+// t0 = 12: theta grows as |a|^(1/2) near 0 (|a|^2 of 3x the noise reads 4 deg), so a round blob
+// reads theta > 2 deg only beyond t = 8.4 (e^-8.4 = 2e-4 of frames), while a 10 deg blob lies at
+// t ~ 120 (w = 1 - 1e-47). With t0 = 4 (the old hard step's threshold) the sharp rig's Fig. 14 at
+// theta 0 had 2-6 brackets of 20 beyond 2 deg per seed (docs/estimator.md).
+constexpr double kRoundRuleMidpoint = 12.0;
 double DenoisedAnisotropy2(double a2, double noise_var);
 
 }  // namespace irdist

@@ -12,8 +12,8 @@
 // N(dx - c dy; Sxx - c^2 Syy), c = Sxy / Syy (a sheared Gaussian), so each strip's chord stays in
 // closed form across the row and only the pixel's height is integrated numerically (Gauss-Legendre,
 // the integrand analytic). The disc is a quadrature of shifted copies of the strips (rings of
-// equal width, points spaced well below the core's width: their sum is the disc convolved with
-// the core to far below the noise).
+// equal width, points 0.8 of the core's sd apart: their sum is the disc convolved with the core to
+// far below the noise).
 
 #include <vector>
 

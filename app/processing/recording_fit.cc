@@ -334,11 +334,13 @@ void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& fea
     }
   }
   const PsfAnisotropy psf = FitPsfAnisotropy(face_on);
-  model->blur_calibration.psf_aniso_c_px2 = psf.c_px2;
-  model->blur_calibration.psf_aniso_s_px2 = psf.s_px2;
+  const bool kept = psf.Significant();  // else a round PSF: noise is not written into the model
+  model->blur_calibration.psf_aniso_c_px2 = kept ? psf.c_px2 : 0.0;
+  model->blur_calibration.psf_aniso_s_px2 = kept ? psf.s_px2 : 0.0;
   out << "  PSF anisotropy: " << psf.c_px2 << " +- " << psf.c_se_px2 << ", " << psf.s_px2
       << " +- " << psf.s_se_px2 << " px^2 ((Sxx - Syy) / 2, Sxy) from " << psf.frames
-      << " face-on frames\n";
+      << " face-on frames: " << (kept ? "kept" : "within its noise, the PSF taken as round")
+      << "\n";
 }
 
 // The most calibration frames the crosstalk's split is fitted on (spread over the recording).

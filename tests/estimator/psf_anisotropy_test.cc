@@ -56,6 +56,24 @@ TEST(PsfAnisotropy, FaceOnFramesGiveThePsfsAnisotropy) {
   EXPECT_NEAR(psf.c_px2, c, std::max(3.0 * psf.c_se_px2, 0.02));
   EXPECT_NEAR(psf.s_px2, s, std::max(3.0 * psf.s_se_px2, 0.02));
   EXPECT_LT(psf.c_se_px2, 0.02);
+  EXPECT_TRUE(psf.Significant());
+  // A round PSF: the anisotropy stays within its noise, and is not kept.
+  std::vector<Features> round_frames;
+  for (int n = 0; n < 24; ++n) {
+    testing::DiscBlob blob;
+    blob.cx = 31.0 + phase(rng);
+    blob.cy = 31.0 + phase(rng);
+    blob.a = blob.b = 5.0 + 0.25 * n;
+    blob.optics_sigma_px = 0.9;
+    FeatureOptions options;
+    options.window_side_px = 56;
+    round_frames.push_back(
+        ComputeFeatures(NoisyFrame(testing::RenderDiscSpectrum(blob, 64), &rng), 16, options));
+  }
+  const PsfAnisotropy round = FitPsfAnisotropy(round_frames);
+  EXPECT_GE(round.frames, 20);
+  EXPECT_FALSE(round.Significant()) << round.c_px2 << " +- " << round.c_se_px2 << ", "
+                                    << round.s_px2 << " +- " << round.s_se_px2;
   // Too few frames: nothing measured.
   frames.resize(kMinPsfAnisotropyFrames - 1);
   EXPECT_EQ(FitPsfAnisotropy(frames).frames, 0);
@@ -98,8 +116,9 @@ TEST(PsfAnisotropy, TheRoundBlobRuleHasNoStep) {
   }
   EXPECT_LT(largest_step, 0.01 * noise);  // steps of 0.001 noise move it by < 0.01 noise
   EXPECT_LT(DenoisedAnisotropy2(1.0 * noise, noise), 1e-12);  // a round blob's mean noise
-  EXPECT_LT(DenoisedAnisotropy2(2.0 * noise, noise), 0.15 * noise);
-  EXPECT_NEAR(DenoisedAnisotropy2(15.0 * noise, noise), 14.0 * noise, 1e-3 * noise);
+  // theta > 2 deg (|a|^2 > 0.19 noise, as 3x reads 4 deg) only beyond t = 8.4: e^-8.4 of frames.
+  EXPECT_LT(DenoisedAnisotropy2(8.0 * noise, noise), 0.19 * noise);
+  EXPECT_NEAR(DenoisedAnisotropy2(30.0 * noise, noise), 29.0 * noise, 1e-6 * noise);
   // Without a noise figure the anisotropy is kept as it is.
   EXPECT_EQ(DenoisedAnisotropy2(3e-5, std::nan("")), 3e-5);
 }
