@@ -29,6 +29,27 @@ cv::Mat NoisyFrame(const cv::Mat1d& value, std::mt19937_64* rng) {
   return out;
 }
 
+// 24 noisy face-on discs of 5-11 px radius at scattered centres through a PSF of round sd
+// `sigma_px` and anisotropy (c, s) px^2: their features.
+std::vector<Features> FaceOnFrames(double sigma_px, double c, double s, std::mt19937_64* rng) {
+  std::uniform_real_distribution<double> phase(0.0, 1.0);
+  std::vector<Features> frames;
+  for (int n = 0; n < 24; ++n) {
+    testing::DiscBlob blob;
+    blob.cx = 31.0 + phase(*rng);
+    blob.cy = 31.0 + phase(*rng);
+    blob.a = blob.b = 5.0 + 0.25 * n;
+    blob.optics_sigma_px = sigma_px;
+    blob.psf_aniso_c_px2 = c;
+    blob.psf_aniso_s_px2 = s;
+    FeatureOptions options;
+    options.window_side_px = 56;
+    frames.push_back(
+        ComputeFeatures(NoisyFrame(testing::RenderDiscSpectrum(blob, 64), rng), 16, options));
+  }
+  return frames;
+}
+
 // Face-on discs of 5-11 px radius at scattered centres through an astigmatic lens (sd 1.05 px
 // along 30 deg, 0.7 across): the PSF's anisotropy ((Sxx - Syy) / 2, Sxy) = (0.153, 0.265) px^2
 // comes out of their moments within 3 standard errors and 0.02 px^2, the same at every size.
@@ -36,21 +57,7 @@ TEST(PsfAnisotropy, FaceOnFramesGiveThePsfsAnisotropy) {
   const double l1 = 1.05 * 1.05, l2 = 0.49, turn = 60.0 * kPi / 180.0;
   const double c = 0.5 * (l1 - l2) * std::cos(turn), s = 0.5 * (l1 - l2) * std::sin(turn);
   std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> phase(0.0, 1.0);
-  std::vector<Features> frames;
-  for (int n = 0; n < 24; ++n) {
-    testing::DiscBlob blob;
-    blob.cx = 31.0 + phase(rng);
-    blob.cy = 31.0 + phase(rng);
-    blob.a = blob.b = 5.0 + 0.25 * n;
-    blob.optics_sigma_px = std::sqrt(0.5 * (l1 + l2));
-    blob.psf_aniso_c_px2 = c;
-    blob.psf_aniso_s_px2 = s;
-    FeatureOptions options;
-    options.window_side_px = 56;
-    frames.push_back(
-        ComputeFeatures(NoisyFrame(testing::RenderDiscSpectrum(blob, 64), &rng), 16, options));
-  }
+  std::vector<Features> frames = FaceOnFrames(std::sqrt(0.5 * (l1 + l2)), c, s, &rng);
   const PsfAnisotropy psf = FitPsfAnisotropy(frames);
   ASSERT_GE(psf.frames, 20);
   EXPECT_NEAR(psf.c_px2, c, std::max(3.0 * psf.c_se_px2, 0.02));
@@ -58,18 +65,7 @@ TEST(PsfAnisotropy, FaceOnFramesGiveThePsfsAnisotropy) {
   EXPECT_LT(psf.c_se_px2, 0.02);
   EXPECT_TRUE(psf.Significant());
   // A round PSF: the anisotropy stays within its noise, and is not kept.
-  std::vector<Features> round_frames;
-  for (int n = 0; n < 24; ++n) {
-    testing::DiscBlob blob;
-    blob.cx = 31.0 + phase(rng);
-    blob.cy = 31.0 + phase(rng);
-    blob.a = blob.b = 5.0 + 0.25 * n;
-    blob.optics_sigma_px = 0.9;
-    FeatureOptions options;
-    options.window_side_px = 56;
-    round_frames.push_back(
-        ComputeFeatures(NoisyFrame(testing::RenderDiscSpectrum(blob, 64), &rng), 16, options));
-  }
+  const std::vector<Features> round_frames = FaceOnFrames(0.9, 0.0, 0.0, &rng);
   const PsfAnisotropy round = FitPsfAnisotropy(round_frames);
   EXPECT_GE(round.frames, 20);
   EXPECT_FALSE(round.Significant()) << round.c_px2 << " +- " << round.c_se_px2 << ", "

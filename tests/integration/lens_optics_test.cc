@@ -3,8 +3,7 @@
 // its own model on face-on and tilted poses. An astigmatic lens (an elliptical PSF, axes 1:1.5,
 // turned away from the rows, at two angles) must not be read as tilt: a face-on IRED reads
 // theta <= 1 deg on average (or the round lens's, whose noise alone reads about as much: theta
-// is >= 0) and its distances stay within 0.1% (median) and 2x the round lens's error over the
-// Cramer-Rao bound; a defocused lens (the geometric disc) and a lens with veiling glare (3% of the
+// is >= 0) and its distances stay within 0.1% (median) and 4x the Cramer-Rao bound (rms); a defocused lens (the geometric disc) and a lens with veiling glare (3% of the
 // light in a halo) calibrate to a model every reader loads and validate within bounds.
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
@@ -149,12 +148,12 @@ void ExpectAstigmatismIsNotTilt(const LensRun& control, double angle_deg) {
   // A face-on IRED's theta is >= 0: its noise alone reads about 1 deg on average (the round lens).
   EXPECT_LE(mean_theta, std::max(1.0, 1.3 * round_theta))
       << "angle " << angle_deg << ", the round lens: " << round_theta;
-  // The distances: read 1.4-4.2% short before the PSF was calibrated. Now the median error stays
-  // below 0.1% and the error over the Cramer-Rao bound within 2x the round lens's (issue 38's
-  // goal is 1.3x: measured 1.10x at 30 deg and 1.62x at -55 deg, the blur split fitted with a
-  // round PSF reading 0.14-0.19 px^2 of crosstalk that is not there; docs/estimator.md).
+  // The distances: read 1.4-4.2% short before the PSF was calibrated (tens of times the
+  // Cramer-Rao bound). Now the median error stays below 0.1% and the rms error over the bound
+  // below 4 (issue 38's goal, 1.3x the round lens's, is not asserted: measured 1.53 and 2.26 here
+  // against a round lens's 1.8-13 on this reduced calibration; docs/estimator.md).
   EXPECT_LE(median_pct, 0.1) << "angle " << angle_deg << ", the round lens: " << round_pct << "%";
-  EXPECT_LE(run.error_over_bound_rms, 2.0 * control.error_over_bound_rms)
+  EXPECT_LE(run.error_over_bound_rms, 4.0)
       << "angle " << angle_deg << ", the round lens: " << control.error_over_bound_rms;
   std::cout << "astigmatic lens at " << angle_deg << " deg: face-on mean theta " << mean_theta
             << " deg (round lens " << round_theta << "), median |d error| " << median_pct
