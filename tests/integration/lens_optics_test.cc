@@ -150,8 +150,8 @@ void ExpectAstigmatismIsNotTilt(const LensRun& control, double angle_deg) {
       << "angle " << angle_deg << ", the round lens: " << round_theta;
   // The distances: read 1.4-4.2% short before the PSF was calibrated (tens of times the
   // Cramer-Rao bound). Now the median error stays below 0.1% and the rms error over the bound
-  // below 4 (issue 38's goal, 1.3x the round lens's, is not asserted: measured 1.53 and 2.26 here
-  // against a round lens's 1.8-13 on this reduced calibration; docs/estimator.md).
+  // below 4 (issue 38's goal, 1.3x the round lens's, is not asserted: measured 1.36-2.26 here
+  // against a round lens's 0.9-13 on this reduced calibration; docs/estimator.md).
   EXPECT_LE(median_pct, 0.1) << "angle " << angle_deg << ", the round lens: " << round_pct << "%";
   EXPECT_LE(run.error_over_bound_rms, 4.0)
       << "angle " << angle_deg << ", the round lens: " << control.error_over_bound_rms;
