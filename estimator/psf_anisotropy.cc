@@ -84,7 +84,7 @@ void RemovePsfAnisotropy(double c_px2, double s_px2, Features* f) {
 double DenoisedAnisotropy2(double a2, double noise_var) {
   if (!std::isfinite(noise_var) || !(noise_var > 0.0)) return a2;
   const double t = a2 / noise_var;
-  const double weight = 1.0 / (1.0 + std::exp(kRoundRuleMidpoint - t));
+  const double weight = 1.0 / (1.0 + std::exp(kRoundRuleSlope * (kRoundRuleMidpoint - t)));
   return weight * std::max(0.0, a2 - noise_var);
 }
 

@@ -41,15 +41,16 @@ void RemovePsfAnisotropy(double c_px2, double s_px2, Features* features);
 
 // The round-blob rule: the squared anisotropy |a|^2 of a fitted disc (P's, px^-4) less its noise,
 // continuous in |a|^2. With t = |a|^2 / E|a_noise|^2, the blob is elliptical with the weight
-// w(t) = 1 / (1 + e^(t0 - t)) (the two hypotheses' likelihood ratio, round: |a|^2 exponential of
-// mean E|a_noise|^2, its log-likelihood falling as -t; elliptical: flat in t), and the estimate is
-// w(t) (|a|^2 - E|a_noise|^2)_+: ~0 for a round blob's noise, the unbiased |a|^2 for a clearly
-// elliptical one, and no step between. A NaN or negative noise leaves |a|^2 as it is.
-// t0 = 12: theta grows as |a|^(1/2) near 0 (|a|^2 of 3x the noise reads 4 deg), so a round blob
-// reads theta > 2 deg only beyond t = 8.4 (e^-8.4 = 2e-4 of frames), while a 10 deg blob lies at
-// t ~ 120 (w = 1 - 1e-47). With t0 = 4 (the old hard step's threshold) the sharp rig's Fig. 14 at
-// theta 0 had 2-6 brackets of 20 beyond 2 deg per seed (docs/estimator.md).
-constexpr double kRoundRuleMidpoint = 12.0;
+// w(t) = 1 / (1 + e^(k (t0 - t))) (a round blob's |a|^2 is exponential of mean E|a_noise|^2), and
+// the estimate is w(t) (|a|^2 - E|a_noise|^2)_+: ~0 for a round blob's noise, the unbiased |a|^2
+// for a clearly elliptical one, and no step between. A NaN or negative noise leaves |a|^2 as it is.
+// theta grows as |a|^(1/2) near 0 (|a|^2 of 3x the noise reads 4 deg), so a round blob reads
+// theta > 2 deg beyond t = 4.6 (1% of frames; the hard step at 4: 1.8%), while a 5 deg blob at
+// 2 m on the virtual rig (t ~ 7.5) keeps 95% of its |a|^2. A later midpoint (t0 = 12, k = 1)
+// removed every theta-0 outlier on the sharp rig but read that 5 deg blob as 3.7 deg; t0 = 4,
+// k = 1 kept too many false ellipses (docs/estimator.md).
+constexpr double kRoundRuleMidpoint = 6.0;  // t0
+constexpr double kRoundRuleSlope = 2.0;     // k
 double DenoisedAnisotropy2(double a2, double noise_var);
 
 }  // namespace irdist

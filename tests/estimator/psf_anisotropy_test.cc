@@ -112,8 +112,10 @@ TEST(PsfAnisotropy, TheRoundBlobRuleHasNoStep) {
   }
   EXPECT_LT(largest_step, 0.01 * noise);  // steps of 0.001 noise move it by < 0.01 noise
   EXPECT_LT(DenoisedAnisotropy2(1.0 * noise, noise), 1e-12);  // a round blob's mean noise
-  // theta > 2 deg (|a|^2 > 0.19 noise, as 3x reads 4 deg) only beyond t = 8.4: e^-8.4 of frames.
-  EXPECT_LT(DenoisedAnisotropy2(8.0 * noise, noise), 0.19 * noise);
+  // theta > 2 deg (|a|^2 > 0.19 noise, as 3x reads 4 deg) only beyond t = 4.5: 1% of frames.
+  EXPECT_LT(DenoisedAnisotropy2(4.5 * noise, noise), 0.19 * noise);
+  // A 5 deg blob at 2 m on the virtual rig (t ~ 7.5) keeps 95% of its noise-free |a|^2.
+  EXPECT_GT(DenoisedAnisotropy2(7.5 * noise, noise), 0.95 * 6.5 * noise);
   EXPECT_NEAR(DenoisedAnisotropy2(30.0 * noise, noise), 29.0 * noise, 1e-6 * noise);
   // Without a noise figure the anisotropy is kept as it is.
   EXPECT_EQ(DenoisedAnisotropy2(3e-5, std::nan("")), 3e-5);
