@@ -12,6 +12,7 @@
 #include "base/pi.h"
 #include "estimator/normal_lm.h"
 #include "estimator/normal_table.h"
+#include "estimator/psf_anisotropy.h"
 
 namespace irdist {
 namespace {
@@ -36,13 +37,6 @@ constexpr double kWeightsPassTolerance = 0.5;
 constexpr double kPixelSpreadVarPx2 = 5.0 / 64.0;
 // Parameters: centre x, y (relative to the fit's origin), P11, P12, P22, amplitude, background.
 constexpr int kParams = 7;
-// A round blob's fitted |a|^2 (anisotropy, below) is exponential with mean E |a_noise|^2: it
-// exceeds 4x that mean in e^-4 = 1.8% of frames. Below it the blob is taken as a circle; above,
-// only the noise's mean is removed, so a clearly elliptical blob keeps its axes (unbiased |a|^2).
-// A soft shrink (|a|^2 less 3x the noise) reached the same dispersion at theta 0 but shortened |a|
-// at 10-20 deg (theta max on Fig. 13 0.431 -> 0.444 deg); subtracting 1x alone removes the bias
-// but not the scatter (docs/estimator.md).
-constexpr double kCircleNoiseMultiple = 4.0;
 
 // The quantities of one pixel's edge geometry SquareMean and its derivatives share.
 struct EdgeGeometry {
@@ -86,6 +80,9 @@ struct Pixel {
 // Integrated and spread in this order, the model's pixels are the camera's, whatever the mix.
 struct PixelResponse {
   double optics_sd = 0.0;
+  // The optics' PSF anisotropy (px^2, psf_anisotropy.h): an edge of normal n is blurred by the
+  // variance n^T S n = optics_sd^2 + aniso_c (nx^2 - ny^2) + 2 aniso_s nx ny.
+  double aniso_c = 0.0, aniso_s = 0.0;
   std::vector<double> kernel;   // crosstalk, 1-D (applied along x, then y), odd, sums to 1
   int reach = 0;                // the kernel's half width
 };
@@ -208,17 +205,56 @@ double SquareEdge(double t, double nx, double ny, double sd, double* slope) {
   return c * sd * (e[0].lambda - e[1].lambda - e[2].lambda + e[3].lambda);
 }
 
+// One edge point's mean over the pixel's square for the PSF's anisotropy along its normal,
+// aniso_n = n^T a n (a the traceless part of the PSF's covariance): the edge spreads by the
+// variance along its normal, optics_var + aniso_n, and its 50% point moves inward by the curvature
+// times the variance along its tangent, optics_var - aniso_n, over 2 (a curved edge's blur reaches
+// in along the tangent; an elliptical PSF thus moves the edge by different amounts around the
+// disc), plus the square's tangential 1/12 over 2; the curvature widens it to second order.
+struct BlurredEdge {
+  double value = 0.0, slope = 0.0, shift = 0.0;
+};
+BlurredEdge BlurEdge(double dist, double kappa_edge, double nx, double ny, double optics_var,
+                     double aniso_n) {
+  const double normal2 = std::max(optics_var + aniso_n, kMinOpticsVarPx2);
+  const double tangent2 = std::max(optics_var - aniso_n, kMinOpticsVarPx2);
+  BlurredEdge e;
+  e.shift = 0.5 * tangent2 + 0.5 * kPixelAreaVarPx2;
+  // To second order the curvature also widens the edge: the tangential offset Y (blur and square)
+  // moves it by kappa Y^2 / 2, whose variance kappa^2 var(Y^2) / 4 adds to the edge's (var(Y^2) =
+  // 2 sd^4 + sd^2 / 3 + 1/80 - 1/144 for a Gaussian of sd plus a uniform of width 1).
+  const double var_y2 = 2.0 * tangent2 * tangent2 + tangent2 / 3.0 + 1.0 / 80.0 - 1.0 / 144.0;
+  const double sd =
+      std::sqrt(normal2) * (1.0 + kappa_edge * kappa_edge * var_y2 / (8.0 * normal2));
+  e.value = SquareEdge(dist - e.shift * kappa_edge, nx, ny, sd, &e.slope);
+  return e;
+}
+
+// Adds to d[5] the model's change through the edge normal's turn with v (x, y, P11, P12, P22):
+// aniso_n = c (nx^2 - ny^2) + 2 s nx ny moves with n = g / |g|; dvalue_daniso its effect.
+void AddNormalTurn(const double* v, double dx, double dy, double nx, double ny, double n,
+                   const PixelResponse& r, double dvalue_daniso, double* d) {
+  const double dgx[5] = {-v[2], -v[3], dx, dy, 0.0};
+  const double dgy[5] = {-v[3], -v[4], 0.0, dx, dy};
+  for (int k = 0; k < 5; ++k) {
+    const double along = nx * dgx[k] + ny * dgy[k];
+    const double dnx = (dgx[k] - nx * along) / n, dny = (dgy[k] - ny * along) / n;
+    const double daniso =
+        2.0 * r.aniso_c * (nx * dnx - ny * dny) + 2.0 * r.aniso_s * (dnx * ny + nx * dny);
+    d[k] += dvalue_daniso * daniso;
+  }
+}
+
 // The disc's mean over the pixel at (x, y) before crosstalk, and its derivatives into d[5]: the
 // optical edge integrated over the pixel's square as a straight edge (SquareEdge) at the signed
-// distance to the disc's edge, shifted inward by the curvature kappa times the blur's variance
-// over 2 (a disc of radius R blurred by sd s has its 50% edge s^2 / (2R) inside R) plus the
-// square's tangential variance (1/12) over 2, and widened to second order in the curvature.
-// The derivatives (analytic, the chain rule through q = (p - c)^T P (p - c), g = P (p - c), the
-// first-order distance and the curvature; DiscDerivatives) leave out the turn of the edge's
-// normal across the square and the widening's change: a few % of the slope, which moves the
-// fit's path, not its solution on an exact model. A pixel whose square lies far from the edge
-// (5 sd, Phi(-5) = 3e-7, plus the square's half diagonal and 0.5 px for the first-order distance)
-// is 1 or 0 at once.
+// distance to the disc's edge, blurred and shifted as BlurEdge says (the PSF's variance along the
+// edge's normal and tangent: an elliptical PSF's differ around the disc). The derivatives
+// (analytic, the chain rule through q = (p - c)^T P (p - c), g = P (p - c), the first-order
+// distance and the curvature; DiscDerivatives; an elliptical PSF's turn with the normal by a
+// central difference in n^T a n) leave out the turn of the edge's normal across the square and
+// the widening's change: a few % of the slope, which moves the fit's path, not its solution on an
+// exact model. A pixel whose square lies far from the edge (5 sd, Phi(-5) = 3e-7, plus the
+// square's half diagonal and 0.5 px for the first-order distance) is 1 or 0 at once.
 double SquareMean(const double* v, double x, double y, const PixelResponse& r, double* d) {
   const double dx = x - v[0], dy = y - v[1];
   const double gx = v[2] * dx + v[3] * dy, gy = v[3] * dx + v[4] * dy;  // g = P (p - c)
@@ -226,7 +262,9 @@ double SquareMean(const double* v, double x, double y, const PixelResponse& r, d
   const double n2 = gx * gx + gy * gy;
   const double rq = std::sqrt(q), n = std::sqrt(n2);
   const double dist = (rq - q) / n;
-  const double margin = 1.25 + 5.0 * r.optics_sd;
+  const double optics_var = r.optics_sd * r.optics_sd;
+  const double aniso = std::hypot(r.aniso_c, r.aniso_s);
+  const double margin = 1.25 + 5.0 * std::sqrt(optics_var + aniso);
   std::fill(d, d + 5, 0.0);
   if (q < 0.09 || dist > margin || dist < -margin) return dist < 0.0 ? 0.0 : 1.0;
   const double pgx = v[2] * gx + v[3] * gy, pgy = v[3] * gx + v[4] * gy;  // P g
@@ -234,17 +272,17 @@ double SquareMean(const double* v, double x, double y, const PixelResponse& r, d
   // of q are the edge scaled by sqrt q): the edge's own curvature bends the blur's reach.
   const double kappa = (n2 * (v[2] + v[4]) - (gx * pgx + gy * pgy)) / (n2 * n);
   const double kappa_edge = kappa * rq;
-  const double sd2 = r.optics_sd * r.optics_sd;
-  const double shift = 0.5 * sd2 + 0.5 * kPixelAreaVarPx2;
-  // To second order the curvature also widens the edge: the tangential offset Y (blur and square)
-  // moves it by kappa Y^2 / 2, whose variance kappa^2 var(Y^2) / 4 adds to the edge's (var(Y^2) =
-  // 2 sd^4 + sd^2 / 3 + 1/80 - 1/144 for a Gaussian of sd plus a uniform of width 1).
-  const double var_y2 = 2.0 * sd2 * sd2 + sd2 / 3.0 + 1.0 / 80.0 - 1.0 / 144.0;
-  const double sd = r.optics_sd * (1.0 + kappa_edge * kappa_edge * var_y2 / (8.0 * sd2));
-  double slope = 0.0;
-  const double value = SquareEdge(dist - shift * kappa_edge, gx / n, gy / n, sd, &slope);
-  DiscDerivatives(v, {dx, dy, gx, gy, pgx, pgy, rq, n, dist, kappa}, slope, shift, d);
-  return value;
+  const double nx = gx / n, ny = gy / n;
+  const double aniso_n = r.aniso_c * (nx * nx - ny * ny) + 2.0 * r.aniso_s * nx * ny;
+  const BlurredEdge e = BlurEdge(dist, kappa_edge, nx, ny, optics_var, aniso_n);
+  DiscDerivatives(v, {dx, dy, gx, gy, pgx, pgy, rq, n, dist, kappa}, e.slope, e.shift, d);
+  if (aniso > 0.0) {
+    const double h = 1e-4 * (optics_var + aniso);
+    const double up = BlurEdge(dist, kappa_edge, nx, ny, optics_var, aniso_n + h).value;
+    const double down = BlurEdge(dist, kappa_edge, nx, ny, optics_var, aniso_n - h).value;
+    AddNormalTurn(v, dx, dy, nx, ny, n, r, (up - down) / (2.0 * h), d);
+  }
+  return e.value;
 }
 
 // `in` (rows x cols, row-major) convolved with `kernel` along x (dx = 1) or y, keeping the valid
@@ -475,15 +513,14 @@ double SolvePass(const WindowResiduals& residuals, double* v, bool* ok,
 // P's eigenvalues tr/2 -+ |a|, a = ((P11 - P22) / 2, P12). The fitted |a|^2 is the true one plus
 // noise of mean noise_var = E |a_noise|^2: on a round blob the larger disc variance (1/4 over the
 // smaller eigenvalue) is biased up by ~0.9 noise sd and scatters more than the mean size. With
-// shrink, a blob whose |a|^2 is within kCircleNoiseMultiple x noise_var is a circle (|a| = 0: both
-// axes the mean size, theta 0); beyond it |a|^2 loses noise_var (its noise bias).
+// shrink, |a|^2 by the continuous round-blob rule (psf_anisotropy.h DenoisedAnisotropy2): ~0 for a
+// round blob's noise, |a|^2 less its noise bias for a clearly elliptical one, no step between
+// (the hard step at 4x the noise turned a rare false alarm into a 4 deg outlier at theta 0).
 void DiscEigenvalues(const double* v, double noise_var, bool shrink, double* p_small,
                      double* p_large) {
   const double tr = v[2] + v[4];
   const double a2 = 0.25 * (v[2] - v[4]) * (v[2] - v[4]) + v[3] * v[3];
-  const double noise = shrink && std::isfinite(noise_var) ? std::max(0.0, noise_var) : 0.0;
-  const bool round = a2 < kCircleNoiseMultiple * noise;
-  const double root = round ? 0.0 : std::sqrt(std::max(0.0, a2 - noise));
+  const double root = std::sqrt(std::max(0.0, shrink ? DenoisedAnisotropy2(a2, noise_var) : a2));
   *p_small = 0.5 * tr - root;
   *p_large = 0.5 * tr + root;
 }
@@ -502,15 +539,19 @@ double ReadVariance(const std::vector<Pixel>& pixels, const cv::Point2d& centre,
 
 }  // namespace
 
-double BlobEdgeValue(const double v[5], double x, double y, double optics_sd, double d[5]) {
+double BlobEdgeValue(const double v[5], double x, double y, double optics_sd, double d[5],
+                     const PsfAnisotropy& psf) {
   PixelResponse response;
   response.optics_sd = optics_sd;
+  response.aniso_c = psf.c_px2;
+  response.aniso_s = psf.s_px2;
   return SquareMean(v, x, y, response, d);
 }
 
 // FitBlob with `passes` IRLS passes (1: the read noise's weights alone, for FitBlurSplit).
 BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features& features,
-                            double blur_var_px2, const Crosstalk& crosstalk, int passes) {
+                            double blur_var_px2, const Crosstalk& crosstalk, int passes,
+                            const PsfAnisotropy& psf) {
   const double crosstalk_var_px2 = crosstalk.var_px2;
   BlobFitResult out;
   out.blur_var_px2 = blur_var_px2;
@@ -527,8 +568,11 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
   const double reach = 2.0 * std::sqrt(features.moment_major_var_px2) + 3.0 * std::sqrt(gauss_var);
   const double scale = 1.0 / ((1 << bit_depth) - 1);
   const double read_var = std::max(ReadVariance(pixels, {v[0], v[1]}, reach), scale * scale / 12.0);
-  WindowResiduals model(pixels, window.width, window.height,
-                        MakeResponse(blur_var_px2, out.crosstalk_var_px2, crosstalk.lattice_share));
+  PixelResponse response =
+      MakeResponse(blur_var_px2, out.crosstalk_var_px2, crosstalk.lattice_share);
+  response.aniso_c = psf.c_px2;
+  response.aniso_s = psf.s_px2;
+  WindowResiduals model(pixels, window.width, window.height, std::move(response));
   model.SetVariances(std::vector<double>(pixels.size(), read_var));
   bool ok = false;
   double chi2 = 0.0;
@@ -558,10 +602,17 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
 }
 
 BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& features,
-                      double blur_var_px2, const Crosstalk& crosstalk) {
+                      double blur_var_px2, const Crosstalk& crosstalk, const PsfAnisotropy& psf) {
   // IRLS, two passes: the read noise's weights, then the weights of the first pass's model (a
   // third pass, weights from the second's, moved no figure: docs/estimator.md "The blob fit").
-  return FitBlobPasses(image, bit_depth, features, blur_var_px2, crosstalk, 2);
+  return FitBlobPasses(image, bit_depth, features, blur_var_px2, crosstalk, 2, psf);
+}
+
+PsfAnisotropy PsfOf(const BlurCalibration& b) {
+  PsfAnisotropy psf;
+  psf.c_px2 = b.psf_aniso_c_px2;
+  psf.s_px2 = b.psf_aniso_s_px2;
+  return psf;
 }
 
 double BlobFitBlurVarPx2(const CalibrationModel& model, const Features& features) {
@@ -575,12 +626,14 @@ double BlobFitBlurVarPx2(const CalibrationModel& model, const Features& features
 bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
                        Features* features) {
   if (!features->Usable()) return false;
+  const BlurCalibration& b = model.blur_calibration;
+  // The moments less the PSF's anisotropy: the fit's start and the distance of its blur.
+  RemovePsfAnisotropy(b.psf_aniso_c_px2, b.psf_aniso_s_px2, features);
   const double blur = BlobFitBlurVarPx2(model, *features);
   if (!(blur > 0.0)) return false;
   const BlobFitResult fit =
-      FitBlob(image, bit_depth, *features, blur,
-              {model.blur_calibration.crosstalk_var_px2,
-               model.blur_calibration.crosstalk_lattice_share});
+      FitBlob(image, bit_depth, *features, blur, {b.crosstalk_var_px2, b.crosstalk_lattice_share},
+              PsfOf(b));
   if (!fit.ok) return false;
   features->moment_major_var_px2 = fit.major_var_px2 + blur;
   features->moment_minor_var_px2 = fit.minor_var_px2 + blur;

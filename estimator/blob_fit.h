@@ -24,6 +24,7 @@
 
 #include "estimator/features.h"
 #include "estimator/fit.h"
+#include "estimator/psf_anisotropy.h"
 
 namespace irdist {
 
@@ -45,7 +46,7 @@ struct BlobFitResult {
   bool ok = false;
   cv::Point2d center_px;
   // The disc's variance along its axes (no blur), A^2/4 and B^2/4, with the anisotropy's noise
-  // bias removed (a blob round within 4x its anisotropy noise is a circle: both the mean size).
+  // bias removed by the continuous round-blob rule (psf_anisotropy.h DenoisedAnisotropy2).
   double major_var_px2 = 0.0;
   double minor_var_px2 = 0.0;
   double raw_major_var_px2 = 0.0;  // the same from the fitted P's eigenvalues as they are
@@ -68,19 +69,28 @@ struct BlobFitResult {
 // crosstalk: the part of the blur that comes after the pixels sample the image (inter-pixel
 // crosstalk), its variance on the pixel grid and its kernel's shape; the rest of the blur, less
 // the pixel's area, is the optics' before them (BlurCalibration::crosstalk_*, FitBlurSplit).
+// psf: the optics' PSF anisotropy (an astigmatic lens; BlurCalibration::psf_aniso_*): each edge
+// point blurred by n^T S n for its normal n.
 BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& features,
-                      double blur_var_px2, const Crosstalk& crosstalk = {});
+                      double blur_var_px2, const Crosstalk& crosstalk = {},
+                      const PsfAnisotropy& psf = {});
 
 // FitBlob with `passes` IRLS passes (2: FitBlob's; 1: the read noise's weights alone, whose
 // BlobFitResult::read_weighted_chi2 FitBlurSplit minimises).
 BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features& features,
-                            double blur_var_px2, const Crosstalk& crosstalk, int passes);
+                            double blur_var_px2, const Crosstalk& crosstalk, int passes,
+                            const PsfAnisotropy& psf = {});
 
 // The fit's model at one pixel (x, y) before crosstalk: the disc blurred by the optics' sd,
 // integrated over the pixel's square, relative to its amplitude, and its derivatives along
 // v = (centre x, centre y, P11, P12, P22) into d[5] (zero where the pixel is flat, 1 or 0).
+// psf: the PSF's anisotropy (the edge's sd then sqrt(optics_sd^2 + n^T a n), a traceless).
 // Exposed for its test (the derivatives against finite differences).
-double BlobEdgeValue(const double v[5], double x, double y, double optics_sd, double d[5]);
+double BlobEdgeValue(const double v[5], double x, double y, double optics_sd, double d[5],
+                     const PsfAnisotropy& psf = {});
+
+// The PSF anisotropy a calibrated blur holds (BlurCalibration::psf_aniso_*).
+PsfAnisotropy PsfOf(const BlurCalibration& b);
 
 // The blur the blob fit is given for a frame: at the distance its moments give through the
 // geometric model, the calibrated blur (BlurCalibration, measured on every calibration frame from
@@ -88,12 +98,13 @@ double BlobEdgeValue(const double v[5], double x, double y, double optics_sd, do
 // b(u). 0 when the model has no geometric fit or the moments give no distance.
 double BlobFitBlurVarPx2(const CalibrationModel& model, const Features& features);
 
-// The default path's hook: the blur (BlobFitBlurVarPx2), FitBlob with the model's crosstalk
-// split, and the features' moment variances replaced by the fit's (disc + that blur). The
-// calibration fits its geometric model on these same sizes (a second pass,
-// app/processing/recording_fit.cc), so measurement and calibration see one size. Leaves the
-// features unchanged when the model has no geometric fit or the blob fit fails. Returns whether
-// it replaced.
+// The default path's hook: the features' moments less the model's PSF anisotropy
+// (RemovePsfAnisotropy, kept even when the fit fails), the blur (BlobFitBlurVarPx2), FitBlob with
+// the model's crosstalk split and PSF anisotropy, and the features' moment variances replaced by
+// the fit's (disc + that blur). The calibration fits its geometric model on these same sizes (a
+// second pass, app/processing/recording_fit.cc), so measurement and calibration see one size.
+// Leaves the sizes the moments' (less the PSF anisotropy) when the model has no geometric fit or
+// the blob fit fails. Returns whether it replaced.
 bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
                        Features* features);
 

@@ -33,6 +33,12 @@ struct BlurCalibration {
   // keep the cumulants' own blur.
   double fit_offset_px2 = 0.0;
   double fit_offset_u_px2 = 0.0;
+  // The optics' PSF anisotropy (an astigmatic lens: an elliptical PSF), the traceless part of its
+  // covariance, constant in pixels: ((Sxx - Syy) / 2, Sxy) px^2 in the sensor's axes, fitted from
+  // the face-on calibration frames (estimator/psf_anisotropy.h). The blob fit blurs each edge
+  // point by n^T S n for its normal n; the moments lose it. 0 in files before it (a round PSF).
+  double psf_aniso_c_px2 = 0.0;
+  double psf_aniso_s_px2 = 0.0;
   // The blur the blob fit is given at d_mm: BlurVarPx2 plus the fit's offset.
   double FitBlurVarPx2(double d_mm) const {
     return BlurVarPx2(d_mm) + fit_offset_px2 + fit_offset_u_px2 * 1000.0 / d_mm;

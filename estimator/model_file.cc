@@ -155,6 +155,10 @@ void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
     EmitDouble(out, "fit_offset_px2", b.fit_offset_px2);
     EmitDouble(out, "fit_offset_u_px2", b.fit_offset_u_px2);
   }
+  if (b.psf_aniso_c_px2 != 0.0 || b.psf_aniso_s_px2 != 0.0) {
+    EmitDouble(out, "psf_aniso_c_px2", b.psf_aniso_c_px2);
+    EmitDouble(out, "psf_aniso_s_px2", b.psf_aniso_s_px2);
+  }
   out << YAML::EndMap;
 }
 
@@ -195,6 +199,13 @@ void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
   }
   if (Present(node, "fit_offset_u_px2")) {
     b->fit_offset_u_px2 = rd.Scalar<double>(node, "blur_calibration", "fit_offset_u_px2");
+  }
+  // Optional (absent: a round PSF); bounded by model_file_bounds.h.
+  if (Present(node, "psf_aniso_c_px2")) {
+    b->psf_aniso_c_px2 = rd.Scalar<double>(node, "blur_calibration", "psf_aniso_c_px2");
+  }
+  if (Present(node, "psf_aniso_s_px2")) {
+    b->psf_aniso_s_px2 = rd.Scalar<double>(node, "blur_calibration", "psf_aniso_s_px2");
   }
   if (!(b->noise_at_1m_px2 > 0.0) || !std::isfinite(b->noise_exponent)) {
     rd.Fail(node["noise_at_1m_px2"], "blur_calibration.noise_at_1m_px2",

@@ -58,6 +58,26 @@ void BlurOverRange(Checker* c, const std::string& key, const CalibratedRanges& r
                       bounds::kBlurVarPx2.RangeText() + " (" + bounds::kBlurVarPx2.why + ")");
 }
 
+// The PSF's anisotropy |a| (blur_calibration.psf_aniso_*) is the half difference of the optics'
+// two variances: an elliptical PSF has both > 0, so |a| stays below the optics' mean variance (the
+// blob fit's blur less the pixel's area and the crosstalk) at every calibrated distance.
+void CheckPsfAnisotropy(Checker* c, const BlurCalibration& b, const CalibratedRanges& r) {
+  const std::string k = "blur_calibration.";
+  c->Value(k + "psf_aniso_c_px2", b.psf_aniso_c_px2, bounds::kBlurOffsetPx2);
+  c->Value(k + "psf_aniso_s_px2", b.psf_aniso_s_px2, bounds::kBlurOffsetPx2);
+  const double a = std::hypot(b.psf_aniso_c_px2, b.psf_aniso_s_px2);
+  if (a == 0.0 || !(r.d_min_mm > 0.0 && r.d_max_mm >= r.d_min_mm)) return;
+  for (const double d_mm : {r.d_min_mm, r.d_max_mm}) {
+    const double optics = b.FitBlurVarPx2(d_mm) - kPixelAreaVarPx2 - b.crosstalk_var_px2;
+    if (a < optics) continue;
+    c->Failure(k + "psf_aniso_c_px2",
+               "the PSF's anisotropy " + BoundNumber(a) + " px^2 is not below the optics' blur " +
+                   BoundNumber(optics) + " px^2 at d = " + BoundNumber(d_mm) +
+                   " mm (an elliptical PSF's two variances are both > 0)");
+    return;
+  }
+}
+
 void CheckBlur(Checker* c, const BlurCalibration& b, const CalibratedRanges& r) {
   if (!b.fitted()) return;
   const std::string k = "blur_calibration.";
@@ -70,6 +90,7 @@ void CheckBlur(Checker* c, const BlurCalibration& b, const CalibratedRanges& r) 
                 "the calibrated blur c0 + c1 u + c2 u^2");
   BlurOverRange(c, k + "fit_offset_u_px2", r, [&b](double d) { return b.FitBlurVarPx2(d); },
                 "the blob fit's blur (the calibrated blur + fit_offset_px2 + fit_offset_u_px2 u)");
+  CheckPsfAnisotropy(c, b, r);
 }
 
 // The bits of a monochrome GenICam format ("Mono12", "Mono12p", "Mono12Packed": 12), 0 for

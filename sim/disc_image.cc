@@ -134,8 +134,9 @@ void GaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weigh
   }
 }
 
-void IntegrateStrips(const std::vector<ImageStrip>& strips, const PixelResponse& response,
-                     double scale, const cv::Rect& rect, cv::Mat1f* out) {
+void IntegrateStrips(const std::vector<ImageStrip>& strips, const PixelResponse& row_response,
+                     const PixelResponse& chord_response, double scale, const cv::Rect& rect,
+                     cv::Mat1f* out) {
   const int rows = rect.height, cols = rect.width;
   const int count = static_cast<int>(strips.size());
   std::vector<double> row_weight(static_cast<size_t>(rows) * count);
@@ -145,14 +146,14 @@ void IntegrateStrips(const std::vector<ImageStrip>& strips, const PixelResponse&
     for (int k = 0; k < count; ++k) {
       const ImageStrip& st = strips[k];
       row_weight[static_cast<size_t>(r) * count + k] =
-          st.weight_px * st.radiance * response.h(st.y_px - y);
+          st.weight_px * st.radiance * row_response.h(st.y_px - y);
     }
   }
   for (int k = 0; k < count; ++k) {
     for (int col = 0; col < cols; ++col) {
       const double x = rect.x + col + 0.5;
       chord[static_cast<size_t>(k) * cols + col] =
-          response.H(strips[k].right_px - x) - response.H(strips[k].left_px - x);
+          chord_response.H(strips[k].right_px - x) - chord_response.H(strips[k].left_px - x);
     }
   }
   for (int r = 0; r < rows; ++r) {
@@ -161,7 +162,7 @@ void IntegrateStrips(const std::vector<ImageStrip>& strips, const PixelResponse&
     for (int col = 0; col < cols; ++col) {
       double sum = 0.0;
       for (int k = 0; k < count; ++k) sum += wr[k] * chord[static_cast<size_t>(k) * cols + col];
-      dst[col] = static_cast<float>(sum * scale);
+      dst[col] += static_cast<float>(sum * scale);
     }
   }
 }

@@ -96,9 +96,11 @@ class PixelResponse {
   double sigma_, reach_;
 };
 
-// Sums, per pixel of `out`, the strips weighted by h(row) and H across each chord, times `scale`.
-void IntegrateStrips(const std::vector<ImageStrip>& strips, const PixelResponse& response,
-                     double scale, const cv::Rect& rect, cv::Mat1f* out);
+// Sums, per pixel of `out`, the strips weighted by h(row) (row_response: the blur along y) and H
+// across each chord (chord_response: along x), times `scale`, added to `out`.
+void IntegrateStrips(const std::vector<ImageStrip>& strips, const PixelResponse& row_response,
+                     const PixelResponse& chord_response, double scale, const cv::Rect& rect,
+                     cv::Mat1f* out);
 
 }  // namespace disc_image
 }  // namespace irdist::sim

@@ -83,6 +83,22 @@ bool OpticsOptions::IsValid(std::string* why) const {
   if (!std::isfinite(psf_sigma_px) || psf_sigma_px < 0.0 || psf_sigma_px > 20.0) {
     return Fail(why, "optics.psf_sigma_px must lie in [0, 20]");
   }
+  if (psf_sigma_minor_px != 0.0 &&
+      !(std::isfinite(psf_sigma_minor_px) && psf_sigma_minor_px >= 0.1 && psf_sigma_minor_px <= 20.0)) {
+    return Fail(why, "optics.psf_sigma_minor_px must be 0 (a round PSF) or lie in [0.1, 20]");
+  }
+  if (psf_sigma_minor_px != 0.0 && !(psf_sigma_px >= 0.1)) {
+    return Fail(why, "optics.psf_sigma_px must be >= 0.1 with psf_sigma_minor_px");
+  }
+  if (!std::isfinite(psf_angle_deg) || std::fabs(psf_angle_deg) > 180.0) {
+    return Fail(why, "optics.psf_angle_deg must lie in [-180, 180]");
+  }
+  if (!std::isfinite(halo_share) || halo_share < 0.0 || halo_share > 0.5) {
+    return Fail(why, "optics.halo_share must lie in [0, 0.5]");
+  }
+  if (!std::isfinite(halo_sigma_px) || halo_sigma_px < 0.5 || halo_sigma_px > 50.0) {
+    return Fail(why, "optics.halo_sigma_px must lie in [0.5, 50]");
+  }
   if (!std::isfinite(focus_mm) || (focus_mm != 0.0 && focus_mm <= 2.0 * focal_length_mm)) {
     return Fail(why, "optics.focus_mm must be 0 (no defocus) or beyond twice the focal length");
   }
@@ -289,15 +305,25 @@ void ReadEmitter(const YAML::Node& node, const std::string& file, EmitterOptions
 void ReadOptics(const YAML::Node& node, const std::string& file, OpticsOptions* o) {
   const MapReader k(node, file, "virtual.optics",
                     {"focal_length_mm", "f_number", "lens_transmission", "filter_transmission",
-                     "psf_sigma_px", "focus_mm", "vignetting", "supersample"});
+                     "psf_sigma_px", "psf_sigma_minor_px", "psf_angle_deg", "focus_mm",
+                     "defocus_disc", "halo_share", "halo_sigma_px", "vignetting", "supersample"});
   o->focal_length_mm = k.Number("focal_length_mm", o->focal_length_mm);
   o->f_number = k.Number("f_number", o->f_number);
   o->lens_transmission = k.Number("lens_transmission", o->lens_transmission);
   o->filter_transmission = k.Number("filter_transmission", o->filter_transmission);
   o->psf_sigma_px = k.Number("psf_sigma_px", o->psf_sigma_px);
+  o->psf_sigma_minor_px = k.Number("psf_sigma_minor_px", o->psf_sigma_minor_px);
+  o->psf_angle_deg = k.Number("psf_angle_deg", o->psf_angle_deg);
   o->focus_mm = k.Number("focus_mm", o->focus_mm);
+  o->defocus_disc = k.Boolean("defocus_disc", o->defocus_disc);
+  o->halo_share = k.Number("halo_share", o->halo_share);
+  o->halo_sigma_px = k.Number("halo_sigma_px", o->halo_sigma_px);
   o->vignetting = k.Boolean("vignetting", o->vignetting);
   o->supersample = k.Integer("supersample", o->supersample);
+  std::string why;
+  CheckAt(k, o->IsValid(&why), why,
+          {"psf_sigma_px", "psf_sigma_minor_px", "psf_angle_deg", "halo_share", "halo_sigma_px",
+           "focal_length_mm", "f_number", "focus_mm", "supersample"});
 }
 
 // The defect pixels' keys, flat in `virtual.sensor:` (sim/defect_pixels.h).

@@ -55,12 +55,26 @@ struct OpticsOptions {
   double lens_transmission = 0.9;     // transmission of the lens at the emitter wavelength
   double filter_transmission = 1.6e-4;  // band-pass + neutral-density filter stack in front
   // In-focus lens PSF: Gaussian sigma (diffraction at N = 8 plus residual aberrations), pixels.
+  // With psf_sigma_minor_px set, the sd along psf_angle_deg's direction.
   double psf_sigma_px = 0.7;
+  // An astigmatic lens: the PSF an ellipse, sd psf_sigma_px along the direction psf_angle_deg
+  // (degrees from the sensor's rows, +x towards +y) and psf_sigma_minor_px across it, the same at
+  // every distance (in pixels). 0 = round (psf_sigma_px both ways).
+  double psf_sigma_minor_px = 0.0;
+  double psf_angle_deg = 0.0;
   // Thin-lens focus: the object distance (mm, along the optical axis) imaged sharply. An object at
   // d is blurred by a circle of confusion of diameter c = (f / N) f |d - s| / (d (s - f)) on the
   // sensor, added to the PSF as a Gaussian of the same per-axis variance c^2 / 16 (Scene::BlurSigmaPx).
   // 0 = no defocus: the blur is psf_sigma_px at every distance (recipes/rigs/virtual-fixed-blur.yaml).
   double focus_mm = 2000.0;
+  // The defocus as the geometric optics has it: false, the Gaussian of variance c^2 / 16 above;
+  // true, the uniform disc of diameter c itself (a defocused lens's PSF), convolved with the
+  // in-focus PSF (sim/lens_psf.h).
+  bool defocus_disc = false;
+  // Veiling glare: this share of the light (0..0.5) spread by a round Gaussian of halo_sigma_px
+  // (scatter in the lens and the filters), the rest through the PSF above. 0 = none.
+  double halo_share = 0.0;
+  double halo_sigma_px = 8.0;
   bool vignetting = true;             // cos^4 of the field angle
   int supersample = 8;  // integration strips per pixel of the disc image's height (>= 32 in all)
   bool IsValid(std::string* why) const;

@@ -128,14 +128,42 @@ double Scene::CircleOfConfusionPx(double distance_mm) const {
 }
 
 double Scene::BlurSigmaPx(double distance_mm) const {
-  const double psf = physics_.optics.psf_sigma_px;
+  const OpticsOptions& o = physics_.optics;
+  const double across = o.psf_sigma_minor_px > 0.0 ? o.psf_sigma_minor_px : o.psf_sigma_px;
+  const double psf_var = 0.5 * (o.psf_sigma_px * o.psf_sigma_px + across * across);
   const double coc = CircleOfConfusionPx(distance_mm);
-  return std::sqrt(psf * psf + coc * coc / 16.0);
+  return std::sqrt(psf_var + coc * coc / 16.0);
 }
 
-cv::Rect Scene::SignalRect(const EmitterImage& image, double blur_px) const {
+LensPsf Scene::PsfAt(double distance_mm) const {
+  const OpticsOptions& o = physics_.optics;
+  LensPsf psf;
+  const double along = o.psf_sigma_px;
+  const double across = o.psf_sigma_minor_px > 0.0 ? o.psf_sigma_minor_px : o.psf_sigma_px;
+  const double a = o.psf_angle_deg * kDeg;
+  const double c = std::cos(a), s = std::sin(a);
+  psf.sxx_px2 = along * along * c * c + across * across * s * s;
+  psf.syy_px2 = along * along * s * s + across * across * c * c;
+  psf.sxy_px2 = (along * along - across * across) * c * s;
+  const double coc = CircleOfConfusionPx(distance_mm);
+  if (o.defocus_disc) {
+    psf.disc_radius_px = 0.5 * coc;
+  } else {  // the disc's per-axis variance c^2 / 16 as a Gaussian
+    psf.sxx_px2 += coc * coc / 16.0;
+    psf.syy_px2 += coc * coc / 16.0;
+  }
+  // A point (an ideal lens in focus) still spreads over the pixel: keep the core's sd >= 1e-3 px.
+  psf.sxx_px2 = std::max(psf.sxx_px2, 1e-6);
+  psf.syy_px2 = std::max(psf.syy_px2, 1e-6);
+  psf.halo_share = o.halo_share;
+  psf.halo_sigma_px = o.halo_sigma_px;
+  return psf;
+}
+
+cv::Rect Scene::SignalRect(const EmitterImage& image, const LensPsf& psf) const {
   const SensorOptions& s = physics_.sensor;
-  const double half = 0.5 * image.major_px * 1.05 + 4.0 * blur_px + 2.0;
+  const double half =
+      0.5 * image.major_px * 1.05 + std::max(psf.CoreReachPx(), psf.HaloReachPx()) + 2.0;
   const cv::Rect wanted(static_cast<int>(std::floor(image.center_x_px - half)),
                         static_cast<int>(std::floor(image.center_y_px - half)),
                         static_cast<int>(std::ceil(2 * half)) + 1,
@@ -205,6 +233,17 @@ void AppendStrips(const Scene& scene, const StripGeometry& g, const disc_image::
     AppendStrip(scene, g, range.v_mid + range.v_half * std::sin(phi),
                 range.v_half * std::cos(phi) * 0.5 * kPi * w[k], strips);
   }
+}
+
+// The strips through the lens: (1 - halo share) of the light through the core (and the defocus
+// disc), the halo's share through its wide round Gaussian.
+void IntegrateThroughPsf(const std::vector<ImageStrip>& strips, const LensPsf& psf, double scale,
+                         const cv::Rect& rect, cv::Mat1f* out) {
+  if (strips.empty()) return;
+  disc_image::IntegrateStripsCore(strips, psf, scale * (1.0 - psf.halo_share), rect, out);
+  if (!(psf.halo_share > 0.0)) return;
+  const disc_image::PixelResponse halo(psf.halo_sigma_px);
+  disc_image::IntegrateStrips(strips, halo, halo, scale * psf.halo_share, rect, out);
 }
 
 }  // namespace
@@ -277,16 +316,14 @@ SignalWindow Scene::RenderDisc(const DiscSource& disc, double exposure_s) const 
   image.center_x_px = 0.5 * s.width_px + f * c.x / z / pitch_mm;
   image.center_y_px = 0.5 * s.height_px + f * c.y / z / pitch_mm;
   image.major_px = disc.diameter_mm * f / std::sqrt(Dot(c, c)) / pitch_mm;
-  const double blur_px = BlurSigmaPx(c.z);
+  const LensPsf psf = PsfAt(c.z);
   SignalWindow out;
-  out.rect = SignalRect(image, blur_px);
+  out.rect = SignalRect(image, psf);
   if (out.rect.empty()) return out;
   out.electrons = cv::Mat1f::zeros(out.rect.height, out.rect.width);
   if (disc.intensity_mw_sr <= 0.0 || exposure_s <= 0.0 || c.z <= 0.0) return out;
-  const std::vector<ImageStrip> strips = DiscStrips(disc);
-  if (strips.empty()) return out;
-  disc_image::IntegrateStrips(strips, disc_image::PixelResponse(blur_px),
-                              electrons_per_radiance_s_ * exposure_s, out.rect, &out.electrons);
+  IntegrateThroughPsf(DiscStrips(disc), psf, electrons_per_radiance_s_ * exposure_s, out.rect,
+                      &out.electrons);
   return out;
 }
 
@@ -303,16 +340,14 @@ SignalWindow Scene::RenderSignal(const PoseState& pose, double intensity_mw_sr,
   // sampling of the sharp disc happens anywhere, so nothing aliases: sampling a sharp edge on a
   // grid and blurring afterwards put a pose-dependent error of up to +-0.5 deg into the shape.
   const EmitterImage image = Project(pose);
-  const double blur_px = BlurSigmaPx(pose.slide_mm);
+  const LensPsf psf = PsfAt(pose.slide_mm);
   SignalWindow out;
-  out.rect = SignalRect(image, blur_px);
+  out.rect = SignalRect(image, psf);
   if (out.rect.empty()) return out;
   out.electrons = cv::Mat1f::zeros(out.rect.height, out.rect.width);
   if (intensity_mw_sr <= 0.0 || exposure_s <= 0.0) return out;
-  const std::vector<ImageStrip> strips = DiscStrips(EmitterDisc(pose, intensity_mw_sr));
-  if (strips.empty()) return out;
-  disc_image::IntegrateStrips(strips, disc_image::PixelResponse(blur_px),
-                              electrons_per_radiance_s_ * exposure_s, out.rect, &out.electrons);
+  IntegrateThroughPsf(DiscStrips(EmitterDisc(pose, intensity_mw_sr)), psf,
+                      electrons_per_radiance_s_ * exposure_s, out.rect, &out.electrons);
   return out;
 }
 

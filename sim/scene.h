@@ -18,6 +18,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "sim/lens_psf.h"
 #include "sim/rig_physics.h"
 #include "sim/world.h"
 
@@ -77,9 +78,14 @@ class Scene {
   // along the optical axis: (f / N) f |d - s| / (d (s - f)) / pitch, s = optics.focus_mm; 0 when
   // focus_mm is 0 (no defocus).
   double CircleOfConfusionPx(double distance_mm) const;
-  // Gaussian sigma (px) of the total blur at `distance_mm`: the lens PSF and the defocus disc
-  // (a uniform disc of diameter c has per-axis variance c^2 / 16), variances added.
+  // Gaussian sigma (px) of the total blur at `distance_mm`: the lens PSF (an elliptical one's
+  // mean variance per axis) and the defocus disc (a uniform disc of diameter c has per-axis
+  // variance c^2 / 16), variances added; the halo left out.
   double BlurSigmaPx(double distance_mm) const;
+
+  // The lens's PSF at `distance_mm` (sim/lens_psf.h): the in-focus PSF (round or elliptical), the
+  // defocus (a Gaussian or the geometric disc, optics.defocus_disc) and the halo.
+  LensPsf PsfAt(double distance_mm) const;
 
   // Mean signal electrons per pixel for an exposure of `exposure_s` seconds at on-axis intensity
   // `intensity_mw_sr`, over a window around the emitter's image (clipped to the sensor).
@@ -97,8 +103,8 @@ class Scene {
   double ElectronsPerRadianceSecond() const { return electrons_per_radiance_s_; }
 
  private:
-  // The window around the emitter's image holding its blur's reach, clipped to the sensor.
-  cv::Rect SignalRect(const EmitterImage& image, double blur_px) const;
+  // The window around the emitter's image holding its PSF's reach, clipped to the sensor.
+  cv::Rect SignalRect(const EmitterImage& image, const LensPsf& psf) const;
   // The disc's image as Chebyshev-spaced horizontal strips with their chords and radiance (W m^-2
   // sr^-1, vignetting included); empty when the disc is not an ellipse in view. A cut disc's
   // strips are spaced so over each range of rows where its visible chord is smooth.

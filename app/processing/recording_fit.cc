@@ -16,6 +16,7 @@
 #include "estimator/defect_map.h"
 #include "estimator/model_file.h"
 #include "estimator/models.h"
+#include "estimator/psf_anisotropy.h"
 
 namespace irdist {
 namespace {
@@ -240,6 +241,41 @@ void PrintFitSummaries(const CalibrationModel& model, const std::string& model_p
   out << "Model: " << model_path << "\n";
 }
 
+// The face-on poses' |theta| (deg) whose frames show the PSF's anisotropy alone.
+constexpr double kFaceOnDeg = 0.5;
+
+// The optics' PSF anisotropy (estimator/psf_anisotropy.h) from the face-on frames' moments in the
+// camera's own axes (a round disc: what anisotropy they show is the lens's), into the model.
+void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& features,
+                            CalibrationModel* model, std::ostream& out) {
+  std::vector<Features> face_on;
+  for (const FrameRecord& row : reader.rows()) {
+    const auto f = features.find(row.index);
+    if (std::fabs(row.theta_deg) <= kFaceOnDeg && f != features.end() && f->second.Usable()) {
+      face_on.push_back(f->second);
+    }
+  }
+  const PsfAnisotropy psf = FitPsfAnisotropy(face_on);
+  // A PSF's anisotropy is below its own blur (both variances > 0) at every distance; a larger one
+  // is the scene's (a cut or dirty disc), not the lens's: the PSF is then taken as round.
+  const BlurCalibration& b = model->blur_calibration;
+  const double optics_px2 = std::min(b.FitBlurVarPx2(model->ranges.d_min_mm),
+                                     b.FitBlurVarPx2(model->ranges.d_max_mm)) -
+                            kPixelAreaVarPx2;
+  const bool possible = std::hypot(psf.c_px2, psf.s_px2) < 0.9 * optics_px2;
+  const bool kept = psf.Significant() && possible;  // else round: noise is not written
+  model->blur_calibration.psf_aniso_c_px2 = kept ? psf.c_px2 : 0.0;
+  model->blur_calibration.psf_aniso_s_px2 = kept ? psf.s_px2 : 0.0;
+  out << "  PSF anisotropy: " << psf.c_px2 << " +- " << psf.c_se_px2 << ", " << psf.s_px2
+      << " +- " << psf.s_se_px2 << " px^2 ((Sxx - Syy) / 2, Sxy) from " << psf.frames
+      << " face-on frames: "
+      << (kept        ? "kept"
+          : !possible ? "larger than the blur itself, not a lens's (a cut or dirty disc?): the "
+                        "PSF taken as round"
+                      : "within its noise, the PSF taken as round")
+      << "\n";
+}
+
 // The most calibration frames the crosstalk's split is fitted on (spread over the recording).
 constexpr std::size_t kCrosstalkFrames = 32;
 
@@ -258,7 +294,9 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
   std::vector<CrosstalkFrame> frames;
   const std::size_t stride = std::max<std::size_t>(1, rows.size() / kCrosstalkFrames);
   for (std::size_t i = 0; i < rows.size() && frames.size() < kCrosstalkFrames; i += stride) {
-    const Features& f = features.at(rows[i]->index);
+    Features f = features.at(rows[i]->index);  // its moments less the PSF's anisotropy
+    RemovePsfAnisotropy(model->blur_calibration.psf_aniso_c_px2,
+                        model->blur_calibration.psf_aniso_s_px2, &f);
     const double blur_var_px2 = BlobFitBlurVarPx2(*model, f);
     if (!(blur_var_px2 > 0.0)) continue;
     const int bit_depth = reader.header().bit_depth;  // the frame FrameFeatures measured
@@ -379,6 +417,7 @@ CalibrationModel FitRecording(const RecordingReader& reader, const FeatureMap& f
   fit_options.models = DeterminedModels(reader, samples, usable, fit_options, out);
   CalibrationModel model = Fit(samples, feature_options, fit_options);
   if (feature_options.blob_fit && model.geometric.fitted() && model.blur_calibration.fitted()) {
+    CalibratePsfAnisotropy(reader, features, &model, out);
     CalibrateCrosstalk(reader, features, &model, out);
     const CalibrationModel first = model;
     model = RefitOnBlobFitSizes(reader, features, feature_options, fit_options, first, &samples,

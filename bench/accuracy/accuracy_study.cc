@@ -408,6 +408,18 @@ void PrintDispersion(const Methods& m) {
                   mt - th);
     }
     std::printf("\n");
+    // The outliers of issue 31's goal row: brackets with |theta error| > 2 deg or d off its true
+    // value by more than 4 of its own standard errors, per theta.
+    std::printf("  fig14    %-16s outliers (|theta err| > 2 deg or |d err| > 4 se):", name.c_str());
+    for (const auto& [th, v] : by_theta) {
+      int outliers = 0;
+      for (const Row* r : v) {
+        const bool far_d = r->d_std > 0.0 && std::fabs(r->d_mm - r->pose.d_mm) > 4.0 * r->d_std;
+        outliers += std::fabs(r->theta_deg - th) > 2.0 || far_d;
+      }
+      std::printf("  %g: %d of %zu", th, outliers, v.size());
+    }
+    std::printf("\n");
   }
 }
 

@@ -115,9 +115,11 @@ TEST(BlobFit, ScattersLessThanTheSecondMoments) {
 
 // On a round blob the larger eigenvalue of the fitted disc is the larger of two noisy axes: biased
 // up (+0.2% here) and scattered by the anisotropy's noise. The size used for distance
-// (major_var_px2: a blob round within its noise is a circle) scatters less than the raw larger
-// eigenvalue (measured 0.95x over 150 frames) and is unbiased; a clearly elliptical disc keeps its
-// axes.
+// (major_var_px2: the continuous round-blob rule takes a blob round within its noise for a
+// circle) scatters less than the raw larger eigenvalue (measured 0.95x over 150 frames) and is
+// unbiased to the fit's own mean size (-0.057% on this 5 px disc at 0.75 px of blur: the edge
+// model's third order, which the old rule's rare false ellipses offset by chance); a clearly
+// elliptical disc keeps its axes.
 TEST(BlobFit, ARoundBlobsSizeIsTheMeanOfItsAxesNotTheLargerOne) {
   const double a = 5.0;
   const int kFrames = 150;
@@ -138,8 +140,8 @@ TEST(BlobFit, ARoundBlobsSizeIsTheMeanOfItsAxesNotTheLargerOne) {
   const double bias_used = MeanSd(used, &sd_used), bias_raw = MeanSd(raw, &sd_raw);
   EXPECT_LT(sd_used, 0.97 * sd_raw) << "used " << sd_used << " raw " << sd_raw;
   EXPECT_GT(bias_raw, 5.0 * sd_raw / std::sqrt(kFrames)) << "the raw larger axis is biased up";
-  EXPECT_LT(std::abs(bias_used), 0.25 * bias_raw) << "used " << bias_used << " raw " << bias_raw;
-  EXPECT_LT(std::abs(bias_used), 5e-4);  // the fit's own: 0.05% of the size variance
+  EXPECT_LT(std::abs(bias_used), 0.35 * bias_raw) << "used " << bias_used << " raw " << bias_raw;
+  EXPECT_LT(std::abs(bias_used), 6e-4);  // the fit's own: 0.06% of the size variance
 
   const cv::Mat1d ellipse = RenderDisc(47.6, 48.3, 5.5, 4.2, 30.0, kBlurPx, 3000.0, 10.0);
   const cv::Mat elliptic = Frame(ellipse, &rng);
@@ -154,7 +156,8 @@ TEST(BlobFit, ARoundBlobsSizeIsTheMeanOfItsAxesNotTheLargerOne) {
 // across the blurred edge of an ellipse (where the model varies), within the terms they leave out
 // (the normal's turn across the pixel, the curvature's widening: 3% of the largest), and zero
 // where the pixel is flat.
-TEST(BlobFit, TheModelsDerivativesAreItsFiniteDifferences) {
+// The same with an elliptical PSF (psf_anisotropy.h): the edge's blur n^T S n for its normal.
+void ExpectDerivativesAreFiniteDifferences(const PsfAnisotropy& psf) {
   const double v[5] = {10.3, 9.7, 1.0 / 36.0, 0.004, 1.0 / 25.0};  // semi-axes about 6 and 5 px
   const double edge_sd = 0.6;
   std::mt19937_64 rng(11);
@@ -164,7 +167,7 @@ TEST(BlobFit, TheModelsDerivativesAreItsFiniteDifferences) {
     const double a = angle(rng), r = radius(rng);
     const double x = v[0] + r * std::cos(a), y = v[1] + r * std::sin(a);
     double d[5];
-    const double value = BlobEdgeValue(v, x, y, edge_sd, d);
+    const double value = BlobEdgeValue(v, x, y, edge_sd, d, psf);
     if (value <= 0.0 || value >= 1.0) continue;
     ++in_band;
     double numeric[5], largest = 0.0;
@@ -175,8 +178,8 @@ TEST(BlobFit, TheModelsDerivativesAreItsFiniteDifferences) {
       std::copy(v, v + 5, down);
       up[k] += h;
       down[k] -= h;
-      numeric[k] = (BlobEdgeValue(up, x, y, edge_sd, ignored) -
-                    BlobEdgeValue(down, x, y, edge_sd, ignored)) / (2.0 * h);
+      numeric[k] = (BlobEdgeValue(up, x, y, edge_sd, ignored, psf) -
+                    BlobEdgeValue(down, x, y, edge_sd, ignored, psf)) / (2.0 * h);
       largest = std::max(largest, std::abs(numeric[k]) * (k < 2 ? 1.0 : 36.0));  // per P's scale
     }
     for (int k = 0; k < 5; ++k) {
@@ -187,10 +190,63 @@ TEST(BlobFit, TheModelsDerivativesAreItsFiniteDifferences) {
   }
   EXPECT_GT(in_band, 100);
   double d[5] = {1, 1, 1, 1, 1};
-  EXPECT_EQ(BlobEdgeValue(v, v[0] + 0.5, v[1], edge_sd, d), 1.0);  // well inside
+  EXPECT_EQ(BlobEdgeValue(v, v[0] + 0.5, v[1], edge_sd, d, psf), 1.0);  // well inside
   EXPECT_EQ(d[0], 0.0);
-  EXPECT_EQ(BlobEdgeValue(v, v[0] + 20.0, v[1], edge_sd, d), 0.0);  // far outside
+  EXPECT_EQ(BlobEdgeValue(v, v[0] + 20.0, v[1], edge_sd, d, psf), 0.0);  // far outside
   EXPECT_EQ(d[2], 0.0);
+}
+
+TEST(BlobFit, TheModelsDerivativesAreItsFiniteDifferences) {
+  ExpectDerivativesAreFiniteDifferences({});
+  PsfAnisotropy psf;  // an astigmatic lens: sd 0.68 and 0.51 px along +-35 deg
+  psf.c_px2 = 0.03;
+  psf.s_px2 = -0.06;
+  ExpectDerivativesAreFiniteDifferences(psf);
+}
+
+// The optics' PSF (sd 1.05 px along 30 deg, 0.7 across: an astigmatic lens) on a face-on disc of
+// the independent renderer, noise free. Fitted with the round PSF of the same mean variance, the
+// disc reads elliptical: its semi-axes differ by 0.26-0.32 px (a tilt of 12-20 deg; the PSF's
+// anisotropy is constant in pixels, so the false tilt falls with the disc's size). With the PSF's
+// anisotropy in the edge model (each edge point spread by the PSF's variance along its normal and
+// moved in by that along its tangent) they agree within 0.01 px (measured 0.006 px at 5 px, 0.002
+// at 8: theta 2.9 and 1.3 deg read on a noise-free disc, where 1 deg is 0.0008 px), the size
+// within 0.25%.
+TEST(BlobFit, AnEllipticalPsfIsNotReadAsTilt) {
+  const double l1 = 1.05 * 1.05, l2 = 0.7 * 0.7, turn = 60.0 * kPi / 180.0;  // 2 x 30 deg
+  PsfAnisotropy psf;
+  psf.c_px2 = 0.5 * (l1 - l2) * std::cos(turn);
+  psf.s_px2 = 0.5 * (l1 - l2) * std::sin(turn);
+  const double round_var = 0.5 * (l1 + l2);
+  const double blur_var = round_var + 1.0 / 12.0;
+  for (const double radius : {5.0, 8.0, 11.0}) {
+    testing::DiscBlob blob;
+    blob.cx = 31.3;
+    blob.cy = 32.6;
+    blob.a = blob.b = radius;
+    blob.optics_sigma_px = std::sqrt(round_var);
+    blob.psf_aniso_c_px2 = psf.c_px2;
+    blob.psf_aniso_s_px2 = psf.s_px2;
+    const cv::Mat frame =
+        testing::DiscFrame16(testing::RenderDiscSpectrum(blob, 64), 50000.0, 1000.0);
+    FeatureOptions options;
+    options.window_side_px = 56;
+    const Features f = ComputeFeatures(frame, 16, options);
+    ASSERT_TRUE(f.Usable());
+    Features without_psf = f;
+    const BlobFitResult blind = FitBlob(frame, 16, without_psf, blur_var);
+    Features moments = f;
+    RemovePsfAnisotropy(psf.c_px2, psf.s_px2, &moments);
+    const BlobFitResult fit = FitBlob(frame, 16, moments, blur_var, {}, psf);
+    ASSERT_TRUE(blind.ok && fit.ok);
+    const double blind_axes_px =
+        2.0 * (std::sqrt(blind.raw_major_var_px2) - std::sqrt(blind.raw_minor_var_px2));
+    const double axes_px = 2.0 * (std::sqrt(fit.raw_major_var_px2) - std::sqrt(fit.raw_minor_var_px2));
+    EXPECT_GT(blind_axes_px, 0.2) << "radius " << radius;
+    EXPECT_LT(axes_px, 0.01) << "radius " << radius << " (blind " << blind_axes_px << ")";
+    const double size = 0.5 * (fit.raw_major_var_px2 + fit.raw_minor_var_px2);
+    EXPECT_NEAR(size / (radius * radius / 4.0), 1.0, 2.5e-3) << "radius " << radius;
+  }
 }
 
 

@@ -26,6 +26,11 @@ struct DiscBlob {
   double a = 5.0, b = 5.0;          // semi-axes, px
   double angle_deg = 0.0;           // major axis direction from +x
   double optics_sigma_px = 0.7;     // Gaussian blur before the pixels
+  // An elliptical (astigmatic) optical PSF: its anisotropic covariance added to the round one's
+  // sigma^2 I, S = sigma^2 I + [[psf_aniso_c_px2, psf_aniso_s_px2], [psf_aniso_s_px2,
+  // -psf_aniso_c_px2]] (px^2; c = (Sxx - Syy) / 2, s = Sxy): transform exp(-2 pi^2 f^T S f).
+  double psf_aniso_c_px2 = 0.0;
+  double psf_aniso_s_px2 = 0.0;
   double crosstalk_sigma_px = 0.0;  // discrete Gaussian after them (sampled, normalised)
   // true: the crosstalk is a lattice random walk of variance crosstalk_sigma_px^2 instead (charge
   // hopping between neighbours: transform exp(-t (1 - cos 2 pi f)) per axis).
@@ -87,8 +92,10 @@ inline cv::Mat1d RenderDiscSpectrum(const DiscBlob& blob, int side) {
                                           : blob.a * blob.b *
                                                 boost::math::cyl_bessel_j(1, 2.0 * M_PI * rho) /
                                                 rho;
-          const double optics = std::exp(-2.0 * M_PI * M_PI * blob.optics_sigma_px *
-                                         blob.optics_sigma_px * (fx * fx + fy * fy));
+          const double f_s_f = blob.optics_sigma_px * blob.optics_sigma_px * (fx * fx + fy * fy) +
+                               blob.psf_aniso_c_px2 * (fx * fx - fy * fy) +
+                               2.0 * blob.psf_aniso_s_px2 * fx * fy;
+          const double optics = std::exp(-2.0 * M_PI * M_PI * f_s_f);
           const double sx = fx == 0.0 ? 1.0 : std::sin(M_PI * fx) / (M_PI * fx);
           const double sy = fy == 0.0 ? 1.0 : std::sin(M_PI * fy) / (M_PI * fy);
           const double phase = -2.0 * M_PI * (fx * blob.cx + fy * blob.cy);

@@ -60,6 +60,24 @@ TEST(ModelFileBounds, AnOffsetThatMakesTheBlurNegativeIsRefused) {
   EXPECT_NE(failures[0].message.find("(0, 16] px^2"), std::string::npos) << failures[0].message;
 }
 
+// The PSF's anisotropy (an astigmatic lens): 0.3 px^2 on a blur of about 1 px^2 is inside; one
+// longer than the optics' blur at the far end (no elliptical PSF has a negative variance) is
+// refused naming the key, the distance and why.
+TEST(ModelFileBounds, APsfAnisotropyBeyondTheBlurIsRefused) {
+  CalibrationModel model = Fitted();
+  model.blur_calibration.psf_aniso_c_px2 = 0.15;
+  model.blur_calibration.psf_aniso_s_px2 = 0.26;
+  EXPECT_EQ(Keys(CheckModelBounds(model)), "");
+  model.blur_calibration.psf_aniso_s_px2 = 0.9;
+  const std::vector<ModelBoundFailure> failures = CheckModelBounds(model);
+  ASSERT_EQ(failures.size(), 1u) << Keys(failures);
+  EXPECT_EQ(failures[0].key, "blur_calibration.psf_aniso_c_px2");
+  EXPECT_NE(failures[0].message.find("d = 3500 mm"), std::string::npos) << failures[0].message;
+  EXPECT_NE(failures[0].message.find("both > 0"), std::string::npos) << failures[0].message;
+  model.blur_calibration.psf_aniso_s_px2 = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(Keys(CheckModelBounds(model)).find("psf_aniso_s_px2"), std::string::npos);
+}
+
 // Regression: blur_var_px2 [-5, 0, 0] or [1e300, 0, 0] were loaded and used.
 TEST(ModelFileBounds, ABlurThatIsNoVarianceIsRefused) {
   for (double c0 : {-5.0, 1e300, 16.5}) {

@@ -228,6 +228,20 @@ TEST(ModelFile, FitBlurOffsetRoundTripsAndIsChecked) {
   }
 }
 
+// The PSF's anisotropy round trips; absent (older files), a round PSF.
+TEST(ModelFile, PsfAnisotropyRoundTripsAndIsOptional) {
+  CalibrationModel model = WithBlur(0.9);
+  EXPECT_EQ(ModelToYaml(model).find("psf_aniso"), std::string::npos);
+  model.blur_calibration.psf_aniso_c_px2 = 0.153 / 3.0;
+  model.blur_calibration.psf_aniso_s_px2 = -0.265 / 7.0;
+  const CalibrationModel back = ModelFromYaml(ModelToYaml(model), "astigmatic.yaml");
+  EXPECT_TRUE(BitEqual(back.blur_calibration.psf_aniso_c_px2, 0.153 / 3.0));
+  EXPECT_TRUE(BitEqual(back.blur_calibration.psf_aniso_s_px2, -0.265 / 7.0));
+  const CalibrationModel round = ModelFromYaml(ModelToYaml(WithBlur(0.9)), "round.yaml");
+  EXPECT_EQ(round.blur_calibration.psf_aniso_c_px2, 0.0);
+  EXPECT_EQ(round.blur_calibration.psf_aniso_s_px2, 0.0);
+}
+
 // A fitness figure (estimator/fitness.h) with two named poses, one failing.
 CalibrationFitness SomeFitness() {
   CalibrationFitness f;

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/sim/signal_moments.h"
+
 namespace irdist::sim {
 namespace {
 
@@ -22,20 +24,8 @@ double Sum(const SignalWindow& w) { return cv::sum(w.electrons)[0]; }
 
 // Eigenvalues of the intensity-weighted second-moment matrix of the window.
 void Moments(const SignalWindow& w, double* major_var, double* minor_var) {
-  double s = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
-  for (int r = 0; r < w.electrons.rows; ++r) {
-    for (int c = 0; c < w.electrons.cols; ++c) {
-      const double v = w.electrons(r, c);
-      s += v;
-      sx += v * c;
-      sy += v * r;
-      sxx += v * c * c;
-      syy += v * r * r;
-      sxy += v * c * r;
-    }
-  }
-  const double mx = sx / s, my = sy / s;
-  const double a = sxx / s - mx * mx, b = syy / s - my * my, c = sxy / s - mx * my;
+  const testing::Covariance m = testing::CovarianceOf(w);
+  const double a = m.xx, b = m.yy, c = m.xy;
   const double mean = 0.5 * (a + b), diff = std::sqrt(0.25 * (a - b) * (a - b) + c * c);
   *major_var = mean + diff;
   *minor_var = mean - diff;
