@@ -1,5 +1,5 @@
 #pragma once
-// How much a set of frames' blob sizes follow the edge's sub-pixel phase (issue 31): the part of
+// How much a set of frames' blob sizes follow the edge's sub-pixel phase: the part of
 // the sizes' distance error that moves with where the disc's edge falls inside a pixel, over
 // frames at many distances and centres (a calibration's poses). A model whose pixel response is
 // not the camera's reads a sampled edge at one phase larger than at another; the error of a disc

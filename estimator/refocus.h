@@ -1,5 +1,5 @@
 #pragma once
-// A focus change measured through (issue 31 item 3): each frame's blob fit finds its OWN blur
+// A focus change measured through: each frame's blob fit finds its OWN blur
 // (the blur variance its one-pass cost is lowest at, the same cost and blob family the
 // calibration fitted its blob-fit blur with: blob_fit.h FitBlurSplit), and the disc's size at that
 // blur. A bracket's blur is the joint minimum of its measurement frames' costs; where it departs

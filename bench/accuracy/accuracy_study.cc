@@ -408,7 +408,7 @@ void PrintDispersion(const Methods& m) {
                   mt - th);
     }
     std::printf("\n");
-    // The outliers of issue 31's goal row: brackets with |theta error| > 2 deg or d off its true
+    // The outliers of the goal row: brackets with |theta error| > 2 deg or d off its true
     // value by more than 4 of its own standard errors, per theta.
     std::printf("  fig14    %-16s outliers (|theta err| > 2 deg or |d err| > 4 se):", name.c_str());
     for (const auto& [th, v] : by_theta) {

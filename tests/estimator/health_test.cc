@@ -121,7 +121,7 @@ Features FrameWithOwnBlur(double own_px2, double se_px2, double given_px2) {
   return f;
 }
 
-// Issue 38 item 4: the blob fit's own blur against the blur the fit was given, not the cumulants:
+// The blob fit's own blur against the blur the fit was given, not the cumulants:
 // a lens whose own blur is its calibration's is ok whatever its cumulants say; a focus change of
 // the blob-fit blur is flagged with the figure's name.
 TEST(HealthTest, JudgesTheBlobFitsOwnBlurAgainstTheCalibratedBlobFitBlur) {

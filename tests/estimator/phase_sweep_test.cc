@@ -1,4 +1,4 @@
-// Issue 31 items 1 and 2: the blob fit's size over the edge's sub-pixel phase on pixel responses
+// The blob fit's size over the edge's sub-pixel phase on pixel responses
 // outside its family (tests/estimator/pixel_responses.h), with the blur and its split calibrated
 // from NOISY frames of that response, as `irdist fit` does (the cumulants' blur fitted over
 // distance, FitBlurCalibration; then FitBlurSplit on the frames at that blur), never given.
@@ -8,7 +8,7 @@
 // four and a half times), the centre on a pixel corner and on a pixel centre. The distance error
 // of each frame is sqrt(true size / fitted size) - 1 (the distance goes as 1 / the radius), the
 // size the mean of the fitted disc's two variances. The table it prints: docs/estimator.md
-// "Pixel responses outside the model (issue 31)"; the command:
+// "Pixel responses outside the model"; the command:
 //   unshare -n bash -c 'ip link set lo up && cd build && ctest -R estimator/phase_sweep -V'
 #include <algorithm>
 #include <cmath>

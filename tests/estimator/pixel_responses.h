@@ -1,5 +1,5 @@
 #pragma once
-// Renderers whose pixel response is NOT the blob fit's (issue 31 item 2): a flat disc of radius R
+// Renderers whose pixel response is NOT the blob fit's: a flat disc of radius R
 // seen through one of five responses outside the fit's family (an optical Gaussian before the
 // pixels, each pixel's full square, a sampled Gaussian or lattice walk after them). Each is built
 // from the physics of its parts, never from the estimator's edge model or the virtual rig:

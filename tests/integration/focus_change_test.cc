@@ -1,4 +1,4 @@
-// A focus change after calibration measured through (issue 31 item 3, issue 38 item 4), end to
+// A focus change after calibration measured through, end to
 // end through the built binary: a small calibration on the shipped virtual rig, then validations
 // with the lens's PSF 30% and 10% wider (virtual.optics.psf_sigma_px 0.7 -> 0.91 and 0.77, an
 // edited copy of the rig file) and one with the rig as calibrated. Each bracket's blob-fit blur is

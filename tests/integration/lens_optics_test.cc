@@ -150,7 +150,7 @@ void ExpectAstigmatismIsNotTilt(const LensRun& control, double angle_deg) {
       << "angle " << angle_deg << ", the round lens: " << round_theta;
   // The distances: read 1.4-4.2% short before the PSF was calibrated (tens of times the
   // Cramer-Rao bound). Now the median error stays below 0.1% and the rms error over the bound
-  // below 4 (issue 38's goal, 1.3x the round lens's, is not asserted: measured 1.36-2.26 here
+  // below 4 (the goal, 1.3x the round lens's, is not asserted: measured 1.36-2.26 here
   // against a round lens's 0.9-13 on this reduced calibration; docs/estimator.md).
   EXPECT_LE(median_pct, 0.1) << "angle " << angle_deg << ", the round lens: " << round_pct << "%";
   EXPECT_LE(run.error_over_bound_rms, 4.0)
@@ -200,7 +200,7 @@ TEST_F(LensOptics, DefocusDiscAndHaloLensesCalibrateToLoadableModels) {
               << round_pct << "%), error / CRB rms " << run.error_over_bound_rms
               << " (round lens " << control_->error_over_bound_rms << ")\n";
     EXPECT_LE(mean_theta, std::max(1.0, 1.3 * round_theta)) << name;
-    EXPECT_LE(median_pct, 0.1) << name;  // issue 38's goal for the defocus disc's Fig. 10 median
+    EXPECT_LE(median_pct, 0.1) << name;  // the goal for the defocus disc's Fig. 10 median
   }
 }
 

@@ -525,7 +525,7 @@ TEST_F(Measure, BlurLargerThanTheModelsIsFlaggedEverywhereWithOneWarning) {
                        &output),
             0)
       << output;
-  // Measured through with the bracket's own blur (issue 31 item 3): the line says refocused.
+  // Measured through with the bracket's own blur: the line says refocused.
   EXPECT_EQ(Occurrences(output, "[refocused(+"), 2) << output;
 }
 

@@ -134,7 +134,7 @@ TEST(FlagRow, MotionAndFocusCarryTheirFigures) {
   EXPECT_EQ(Cell(row), "moving=23.4mm blur_larger=+30%");
 }
 
-// A bracket measured through with its own blur (issue 31 item 3): the note `refocused` with the
+// A bracket measured through with its own blur: the note `refocused` with the
 // blur's change, not the suspect blur_larger; the estimate stays trusted.
 TEST(FlagRow, ARefocusedBracketIsANoteWithTheBlursChange) {
   EstimateRow row = Estimated();
