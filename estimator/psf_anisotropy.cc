@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "base/pi.h"
+#include "estimator/features.h"
 
 namespace irdist {
 namespace {
@@ -15,12 +16,12 @@ double Median(std::vector<double> values) {
   return values[mid];
 }
 
-// The median and a robust sd (1.4826 x the median absolute deviation) of the values.
+// The median and a robust sd (features.h RobustNoiseSd: 1.4826 x the median absolute deviation)
+// of the values.
 void RobustCentre(const std::vector<double>& values, double* median, double* sd) {
   *median = Median(values);
-  std::vector<double> deviation(values.size());
-  for (size_t i = 0; i < values.size(); ++i) deviation[i] = std::fabs(values[i] - *median);
-  *sd = 1.4826 * Median(deviation);
+  std::vector<double> scratch = values;
+  *sd = RobustNoiseSd(&scratch);
 }
 
 }  // namespace
