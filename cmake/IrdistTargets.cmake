@@ -24,14 +24,16 @@ function(irdist_executable name)
   target_link_libraries(${name} PRIVATE ${ARG_DEPS})
 endfunction()
 
-# Tests that start a GigE Vision camera on 127.0.0.1 (the virtual rig or Aravis's fake camera) hold
-# this CTest resource lock: only one camera can own the GVCP port 127.0.0.1:3956 at a time.
-set(IRDIST_GVCP_LOCK gvcp_127.0.0.1_3956)
+# Tests that start a GigE Vision camera on 127.0.0.1:3956 (the virtual rig or Aravis's fake camera)
+# run through irdist_loopback_netns (tests/loopback_netns.cc): each in a network namespace of its
+# own with loopback up, so several run at once and no broadcast leaves the test; where the kernel
+# refuses a namespace, one at a time under a lock on this file.
+set(IRDIST_GVCP_LOCK_FILE ${CMAKE_BINARY_DIR}/gvcp-127.0.0.1-3956.lock)
 set(IRDIST_TEST_TIMEOUT_SCALE 1 CACHE STRING "Multiplier of every test's timeout (a sanitized build)")
 
 # irdist_test(module/file SOURCES ... [DEPS ...] [TIMEOUT seconds] [LABELS ...] [GIGE])
 # The CTest name is module/file, mirroring the source tree; the binary is test_module_file.
-# GIGE: the test starts a camera on 127.0.0.1 and takes IRDIST_GVCP_LOCK.
+# GIGE: the test starts a camera on 127.0.0.1, so it runs through irdist_loopback_netns.
 function(irdist_test test_name)
   cmake_parse_arguments(ARG "GIGE" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
   string(REPLACE "/" "_" target "test_${test_name}")
@@ -42,21 +44,28 @@ function(irdist_test test_name)
     IRDIST_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     IRDIST_BINARY_DIR="${PROJECT_BINARY_DIR}")
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
-  add_test(NAME ${test_name} COMMAND ${target})
+  if(ARG_GIGE)
+    add_test(NAME ${test_name}
+      COMMAND irdist_loopback_netns ${IRDIST_GVCP_LOCK_FILE} $<TARGET_FILE:${target}>)
+  else()
+    add_test(NAME ${test_name} COMMAND ${target})
+  endif()
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
   # A sanitized build runs some tests 20-30x slower (Ceres and Eigen under ASan+UBSan): its
   # configure sets IRDIST_TEST_TIMEOUT_SCALE (./irdist test --sanitize: 10).
+  set(_cost ${ARG_TIMEOUT})
   if(IRDIST_TEST_TIMEOUT_SCALE)
     math(EXPR ARG_TIMEOUT "${ARG_TIMEOUT} * ${IRDIST_TEST_TIMEOUT_SCALE}")
   endif()
-  set_tests_properties(${test_name} PROPERTIES TIMEOUT ${ARG_TIMEOUT}
+  # COST orders a run without CTest's own timings (a fresh clone): the slowest tests first, so that
+  # none is left running alone at the end; the unscaled timeout stands for the expected time.
+  set_tests_properties(${test_name} PROPERTIES TIMEOUT ${ARG_TIMEOUT} COST ${_cost}
     WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
   if(ARG_GIGE)
-    # Label gige: `ctest -LE gige` runs the tests without a camera (./irdist test --sanitize).
+    # Label gige: `ctest -LE gige` runs the tests without a camera.
     list(APPEND ARG_LABELS gige)
-    set_tests_properties(${test_name} PROPERTIES RESOURCE_LOCK ${IRDIST_GVCP_LOCK})
   endif()
   if(ARG_LABELS)
     set_tests_properties(${test_name} PROPERTIES LABELS "${ARG_LABELS}")

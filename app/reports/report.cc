@@ -263,8 +263,9 @@ ReportFields ValidationReportFields(const std::map<std::string, std::string>& co
   const auto recording = context.find("recording");
   if (recording != context.end()) fields = RecordingReportFields(recording->second);
   for (const auto& [key, value] : context) {  // the context wins over the recording's copy
+    const std::string& name = key;  // a structured binding is not captured before C++20
     auto same =
-        std::find_if(fields.begin(), fields.end(), [&](const auto& f) { return f.first == key; });
+        std::find_if(fields.begin(), fields.end(), [&](const auto& f) { return f.first == name; });
     if (same == fields.end()) {
       fields.push_back({key, value});
     } else if (!value.empty()) {

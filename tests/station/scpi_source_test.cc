@@ -255,10 +255,10 @@ TEST(ScpiSource, OffSwitchesTheOutputOffAndNeverThrows) {
 }
 
 TEST(ScpiSource, OffIsRepeatedWhenTheOutputStillReadsOn) {
+  int lost = 1;  // before the bench: the source's destructor still writes through the handler
   Bench b;
   b.source->Identify();
   b.source->SetCurrent(300.0);
-  int lost = 1;
   b.wire->respond = [&b, &lost](const std::string& line) {
     if (line == ":OUTP OFF" && lost-- > 0) return std::vector<std::string>{};  // damaged
     return b.meter.Respond(line);
