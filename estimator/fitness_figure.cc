@@ -58,8 +58,9 @@ std::string CalibrationFitness::BriefReport() const {
     << (passed ? "passed" : "FAILED");
   for (const PoseFitness& p : worst) {
     s << "\n    " << PoseText(p.pose) << ": chi2 " << Number(p.chi2, 4) << " (" << p.channels
-      << " channels), worst " << p.worst_channel << " " << std::showpos
-      << Number(p.worst_residual_percent, 3) << std::noshowpos << "%, scatter "
+      << " channels), worst " << p.worst_channel << " "
+      << (p.worst_residual_percent > 0.0 ? "+" : "") << Number(p.worst_residual_percent, 3)
+      << "%, scatter "
       << Number(p.scatter_ratio, 3) << "x its distance's";
   }
   return s.str();
