@@ -140,10 +140,10 @@ void AravisCamera::Impl::ConfigureTrigger(const CameraSettings& s) {
       SetEnum("TriggerActivation", s.trigger_activation,
               "Set camera.trigger_activation in the rig file to a value the camera offers.");
     }
-    if (s.trigger_overlap_readout && Has("TriggerOverlap")) {
+    if (s.trigger_in_readout && Has("TriggerOverlap")) {
       SetEnum("TriggerOverlap", "ReadOut",
-              "Set camera.trigger_overlap: off in the rig file: this camera has no ReadOut "
-              "overlap.");
+              "Set camera.trigger_in_readout: false in the rig file: this camera has no "
+              "ReadOut overlap.");
     }
   }
   ConfigureFrameRate(s);

@@ -65,7 +65,7 @@ struct BracketOptions {
   // Time after trigger + exposure before the next exposure is written (covers the trigger latency).
   std::chrono::microseconds pipeline_margin{500};
   // Pipelined only: the camera accepts a trigger while it reads the previous frame out (see above).
-  // The rig file's camera.trigger_overlap: readout. false = trigger after the frame arrived.
+  // The rig file's camera.trigger_in_readout. false = trigger after the frame arrived.
   bool trigger_in_readout = false;
   // Serial mode: how long a written exposure may take to read back before it is a CameraError.
   std::chrono::milliseconds exposure_settle_timeout{500};

@@ -95,9 +95,9 @@ struct CameraSettings {
   // sizes the stream's socket buffer on the first packet, so the first frame may come incomplete.
   // (With a hardware trigger, BracketOptions::warmup_trigger does the same through the trigger.)
   int warmup_frames = 1;
-  // The rig's camera.trigger_overlap is readout: where the camera has TriggerOverlap, it is set to
+  // The rig's camera.trigger_in_readout: where the camera has TriggerOverlap, it is set to
   // ReadOut (a camera without the feature is taken to accept such a trigger as documented).
-  bool trigger_overlap_readout = false;
+  bool trigger_in_readout = false;
   // GigE Vision packet resend: the most resend requests per frame, as a fraction of its packets
   // (Aravis's packet-request-ratio). 1.0 lets a frame with many lost packets be completed.
   double packet_request_ratio = 1.0;

@@ -10,11 +10,33 @@
 
 namespace irdist {
 
+bool MotionOptions::IsValid(std::string* why) const {
+  std::string reason;
+  if (!(false_alarm > 0.0 && false_alarm < 1.0)) reason = "false_alarm not in (0, 1)";
+  if (why != nullptr) *why = reason;
+  return reason.empty();
+}
+
+bool RangeOptions::IsValid(std::string* why) const {
+  std::string reason;
+  if (!(z_limit > 0.0 && z_limit <= 100.0)) {
+    reason = "z_limit not in (0, 100] standard errors";
+  } else if (!(calibration_rel_error >= 0.0 && calibration_rel_error < 1.0)) {
+    reason = "calibration_rel_error not in [0, 1)";
+  } else if (!(exposure_tolerance > 0.0 && exposure_tolerance < 1.0)) {
+    reason = "exposure_tolerance not in (0, 1)";
+  } else if (!(signal_tolerance > 0.0 && signal_tolerance < 1.0)) {
+    reason = "signal_tolerance not in (0, 1)";
+  }
+  if (why != nullptr) *why = reason;
+  return reason.empty();
+}
+
 MotionCheck CheckMotion(double joint_d_mm, const std::vector<double>& d_mm,
                         const std::vector<double>& d_se_mm, const MotionOptions& options) {
   IRDIST_CHECK(d_mm.size() == d_se_mm.size(), "d_mm and d_se_mm differ in length");
-  IRDIST_CHECK(options.false_alarm > 0.0 && options.false_alarm < 1.0,
-               "MotionOptions::false_alarm must be in (0, 1)");
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), "MotionOptions: " + why);
   MotionCheck m;
   if (!std::isfinite(joint_d_mm)) return m;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -40,6 +62,8 @@ std::vector<std::string> OutsideRanges(const CalibratedRanges& ranges,
                                        const std::vector<double>& t_ms,
                                        const std::vector<const Features*>& frames,
                                        const RangeOptions& options) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), "RangeOptions: " + why);
   std::vector<std::string> outside;
   DistanceEstimate widened = estimate;  // the distance's se with the calibration's error
   const double calibration_mm = options.calibration_rel_error * estimate.d_mm;

@@ -21,6 +21,8 @@ namespace irdist {
 // and leaves the test conservative on a static IRED (docs/estimator.md, "Motion").
 struct MotionOptions {
   double false_alarm = 1e-3;  // probability of flagging a static bracket, at the nominal noise
+  // The first problem, naming the field, in *why (empty when valid).
+  bool IsValid(std::string* why) const;
 };
 struct MotionCheck {
   bool assessed = false;  // >= 2 per-exposure estimates with a standard error, a joint one
@@ -51,6 +53,8 @@ struct RangeOptions {
   double calibration_rel_error = 0.0;
   double exposure_tolerance = 1e-3;  // relative
   double signal_tolerance = 0.02;    // relative
+  // The first problem, naming the field, in *why (empty when valid).
+  bool IsValid(std::string* why) const;
 };
 // The range check's options for `model`: its geometric fit's mean relative error (what the
 // distance leans on) as the calibration's error, beside each estimate's own.

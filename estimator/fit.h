@@ -11,7 +11,7 @@
 
 #include "estimator/features.h"
 #include "estimator/blur_model.h"
-#include "estimator/fitness.h"
+#include "estimator/fitness_figure.h"
 #include "estimator/models.h"
 #include "estimator/provenance.h"
 
@@ -198,7 +198,7 @@ struct CalibrationModel {
   ThetaCorrection theta_correction;  // not fitted: theta from the blur-corrected ratio alone
   ModelProvenance provenance;        // filled by the app from the recording (estimator/provenance.h)
   BlurCalibration blur_calibration;  // blur_model.h; not fitted in model files before format 4
-  CalibrationFitness fitness;  // fitness.h: set by the app after the fit; optional in model.yaml
+  CalibrationFitness fitness;  // fitness_figure.h (fitness.h computes it), set by the app; optional
   const FittedModel* Find(ModelKind kind) const;  // nullptr if not fitted
   std::string BriefReport() const;
 };

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/check.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
 #include "estimator/refocus.h"
@@ -73,8 +74,21 @@ void CumulantHealth(const BlurCalibration& cal, double d_mm,
 
 }  // namespace
 
+bool HealthOptions::IsValid(std::string* why) const {
+  std::string reason;
+  if (!(z_limit > 0.0 && z_limit <= 100.0)) {
+    reason = "z_limit not in (0, 100] standard errors";
+  } else if (!(min_sigma_change >= 0.0 && min_sigma_change < 1.0)) {
+    reason = "min_sigma_change not in [0, 1) (a relative change of the blur's sigma)";
+  }
+  if (why != nullptr) *why = reason;
+  return reason.empty();
+}
+
 HealthCheck CheckHealth(const CalibrationModel& model, double d_mm,
                         const std::vector<const Features*>& frames, const HealthOptions& options) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), "HealthOptions: " + why);
   HealthCheck h;
   const BlurCalibration& cal = model.blur_calibration;
   if (!cal.fitted()) return h;

@@ -29,6 +29,8 @@ struct HealthOptions {
   // three validation recipes, a 15% blur change flagged in >= 95% of estimates.
   double z_limit = 5.0;
   double min_sigma_change = 0.05;
+  // The first problem, naming the field, in *why (empty when valid).
+  bool IsValid(std::string* why) const;
 };
 
 struct HealthCheck {

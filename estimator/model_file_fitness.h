@@ -1,5 +1,5 @@
 #pragma once
-// model.yaml's optional `fitness:` block (CalibrationFitness, estimator/fitness.h): its read and
+// model.yaml's optional `fitness:` block (CalibrationFitness, estimator/fitness_figure.h): its read and
 // write, beside the model file's one parser (estimator/model_file.cc) that calls them.
 // Estimator-internal: yaml-cpp shows here, so only .cc files include it.
 //
@@ -22,7 +22,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "estimator/fitness.h"
+#include "estimator/fitness_figure.h"
 #include "estimator/model_file_reader.h"
 
 namespace irdist::model_file {

@@ -126,7 +126,7 @@ void VirtualRig::StartStation(const std::string& rig_path, std::optional<std::ui
   const std::string text = rig_path.empty() ? "" : yaml_fields::ReadFile(rig_path);
   const std::vector<DeviceEntry> devices =
       rig_path.empty() ? std::vector<DeviceEntry>{} : ReadStationDevices(rig_path, text);
-  if (devices.empty()) {  // a legacy rig file: the irdist station
+  if (devices.empty()) {  // a single-box rig file: the irdist station
     EmulatorOptions options =
         rig_path.empty() ? EmulatorOptions{} : LoadEmulatorOptions(rig_path);
     if (seed) options.seed = *seed;

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <thread>
 
+#include "base/check.h"
 #include "station/frame.h"
 #include "station/station_client.h"
 
@@ -226,7 +227,22 @@ std::string ConformanceReport::Table() const {
   return out.str();
 }
 
+bool ConformanceOptions::IsValid(std::string* why) const {
+  std::string reason;
+  if (reply_timeout.count() <= 0) {
+    reason = "reply_timeout must be > 0";
+  } else if (move_timeout.count() <= 0) {
+    reason = "move_timeout must be > 0";
+  } else if (poll_period.count() < 0) {
+    reason = "poll_period must be >= 0";
+  }
+  if (why != nullptr) *why = reason;
+  return reason.empty();
+}
+
 ConformanceReport RunConformance(Transport& transport, const ConformanceOptions& options) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), "ConformanceOptions: " + why);
   ClientOptions client_options;
   client_options.reply_timeout = options.reply_timeout;
   client_options.move_timeout = options.move_timeout;

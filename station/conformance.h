@@ -17,6 +17,8 @@ struct ConformanceOptions {
   std::chrono::milliseconds reply_timeout{500};
   std::chrono::milliseconds move_timeout{120000};
   std::chrono::milliseconds poll_period{10};
+  // The first problem, naming the field, in *why (empty when valid); those of ClientOptions.
+  bool IsValid(std::string* why) const;
 };
 
 struct ConformanceCheck {

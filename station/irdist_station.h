@@ -2,8 +2,8 @@
 // The irdist station (docs/station-protocol.md, docs/devices/irdist_station.md) as one device
 // driver filling every role: the three axes, the IRED's current source and the trigger output
 // wired to a camera line. It runs over StationClient (framing, retries, reboot recovery).
-// Registered as "irdist_station"; a legacy rig file's `station: {port, baud, ...}` means one such
-// device filling every role.
+// Registered as "irdist_station"; a single-box rig file's `station: {port, baud, ...}` means one
+// such device filling every role.
 
 #include <cstdint>
 #include <memory>

@@ -23,8 +23,8 @@
 
 namespace irdist {
 
-// The rig file's `station:` composition (app/inputs/rig.cc fills it; legacy single-box rigs become
-// one irdist_station device named "station" filling every role).
+// The rig file's `station:` composition (app/inputs/rig.cc fills it; a single-box rig, one irdist
+// station box, becomes one irdist_station device named "station" filling every role).
 struct StationSpec {
   std::vector<DeviceSpec> devices;
   std::vector<std::string> motion;  // device names, each driving the axes it maps

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <ostream>
 #include <sstream>
 
@@ -25,37 +26,6 @@
 
 namespace irdist {
 namespace {
-
-struct SubcommandInfo {
-  const char* name;
-  const char* summary;
-};
-
-// The dispatch table, in help order.
-constexpr SubcommandInfo kSubcommands[] = {
-    {"calibrate", "Sweep a calibration recipe on a rig, record it and fit model.yaml"},
-    {"validate", "Sweep a validation recipe, estimate every bracket against the ground truth"},
-    {"fit", "Fit model.yaml offline from a recording"},
-    {"playback", "Estimate distances offline from a recording with a model"},
-    {"check", "Check a recording for gaps, damaged frames and consistency"},
-    {"plan", "Check a recipe and print its grid, order, frame count and duration estimate"},
-    {"sim", "Run the virtual rig (camera on 127.0.0.1, station on a pty) until Ctrl-C"},
-    {"devices", "List the cameras and stations irdist can see"},
-    {"measure", "Measure distance, orientation (and 3D position) live from a calibrated camera"},
-    {"snap", "Save one frame to a PNG; print the blob's position and a suggested roi_px"},
-    {"view", "Live window on the camera: image, blob, ellipse, levels, estimate with --model"},
-    {"station", "Put the station at a pose and current by hand (move, current, off, home, status)"},
-    {"station-test", "Check a station board against docs/station-protocol.md (pass/fail table)"},
-    {"camera-test", "Check a camera's features against what irdist needs (pass/fail table)"},
-};
-
-// A subcommand's summary for the help; a name outside the table is the program's fault.
-const char* SummaryOf(const std::string& name) {
-  for (const SubcommandInfo& info : kSubcommands) {
-    if (name == info.name) return info.summary;
-  }
-  IRDIST_CHECK(false, "no subcommand ", name);
-}
 
 template <typename Args>
 void Invoke(const std::function<void(const Args&, CommandIo)>& handler, const std::string& name,
@@ -128,90 +98,6 @@ CLI::Validator FolderPath(const std::string& flag) {
       "FOLDER");
 }
 
-}  // namespace
-
-std::vector<std::string> SubcommandNames() {
-  std::vector<std::string> names;
-  for (const SubcommandInfo& info : kSubcommands) names.emplace_back(info.name);
-  return names;
-}
-
-Handlers DefaultHandlers() {
-  Handlers handlers;
-  handlers.plan = RunPlan;
-  handlers.calibrate = RunCalibrate;
-  handlers.validate = RunValidateOrTrack;  // a track recipe: app/live/track_run.h
-  handlers.fit = RunFit;
-  handlers.playback = RunPlayback;
-  handlers.check = RunCheck;
-  handlers.sim = RunSim;
-  handlers.devices = RunDevices;
-  handlers.measure = RunMeasureOrTrack;  // docs/measure.md "Tracking"
-  handlers.snap = RunSnap;
-  handlers.view = RunView;
-  handlers.station = RunStation;
-  handlers.station_test = RunStationTest;
-  handlers.camera_test = RunCameraTest;
-  return handlers;
-}
-
-namespace {
-
-// Every command's arguments, filled by the parser.
-struct ParsedArgs {
-  CalibrateArgs calibrate;
-  ValidateArgs validate;
-  FitArgs fit;
-  PlaybackArgs playback;
-  CheckArgs check;
-  PlanArgs plan;
-  SimArgs sim;
-  DevicesArgs devices;
-  MeasureArgs measure;
-  SnapArgs snap;
-  ViewArgs view;
-  StationArgs station;
-  StationTestArgs station_test;
-  CameraTestArgs camera_test;
-};
-
-// The subcommands as they are registered: each with the call that runs it.
-class CommandTable {
- public:
-  CommandTable(CLI::App& app, ParsedArgs& args, const Handlers& handlers, CommandIo io)
-      : app_(app), args_(args), handlers_(handlers), io_(io) {}
-
-  ParsedArgs& args() { return args_; }
-  const Handlers& handlers() const { return handlers_; }
-
-  // Adds subcommand `name` whose parsed `args` go to `handler`.
-  template <typename Args>
-  CLI::App* Add(const char* name, const std::function<void(const Args&, CommandIo)>& handler,
-                const Args& args) {
-    CLI::App* sub = app_.add_subcommand(name, SummaryOf(name));
-    const std::string command = name;
-    entries_.emplace_back(sub, [&handler, &args, command, io = io_] {
-      Invoke(handler, command, args, io);
-    });
-    return sub;
-  }
-
-  // The parsed subcommand's entry, or nullptr.
-  const std::pair<CLI::App*, std::function<void()>>* Parsed() const {
-    for (const auto& entry : entries_) {
-      if (entry.first->parsed()) return &entry;
-    }
-    return nullptr;
-  }
-
- private:
-  CLI::App& app_;
-  ParsedArgs& args_;
-  const Handlers& handlers_;
-  CommandIo io_;
-  std::vector<std::pair<CLI::App*, std::function<void()>>> entries_;
-};
-
 constexpr const char* kUsageHint =
     "Run 'irdist --help' for the commands, 'irdist COMMAND --help' for one.";
 
@@ -226,9 +112,7 @@ constexpr const char* kKeepModelHelp =
     "Write model.yaml even when the fit misses its own frames beyond their noise (its fitness, "
     "docs/estimator.md); without it such a model goes to model.rejected.yaml and the exit is 1";
 
-void AddCalibrate(CommandTable& table) {
-  CalibrateArgs& a = table.args().calibrate;
-  CLI::App* sub = table.Add("calibrate", table.handlers().calibrate, a);
+void CalibrateFlags(CLI::App* sub, CalibrateArgs& a) {
   sub->add_option("recipe", a.recipe, "Recipe file (recipes/*.yaml)")->required();
   sub->add_option("--out", a.out_dir, "Run folder (overrides the recipe's output)");
   sub->add_option("--resume", a.resume_dir, "Continue the cut run in this folder");
@@ -239,9 +123,7 @@ void AddCalibrate(CommandTable& table) {
   sub->add_flag("--keep-model", a.keep_model, kKeepModelHelp);
 }
 
-void AddValidate(CommandTable& table) {
-  ValidateArgs& a = table.args().validate;
-  CLI::App* sub = table.Add("validate", table.handlers().validate, a);
+void ValidateFlags(CLI::App* sub, ValidateArgs& a) {
   sub->add_option("recipe", a.recipe, "Recipe file (recipes/*.yaml)")->required();
   sub->add_option("--model", a.model, "model.yaml from a calibration")->required();
   sub->add_option("--out", a.out_dir, "Run folder (overrides the recipe's output)");
@@ -252,18 +134,16 @@ void AddValidate(CommandTable& table) {
                 "Use a model calibrated with another camera serial, pixel format or ROI");
 }
 
-void AddFitAndPlayback(CommandTable& table) {
-  FitArgs& f = table.args().fit;
-  CLI::App* sub = table.Add("fit", table.handlers().fit, f);
+void FitFlags(CLI::App* sub, FitArgs& f) {
   sub->add_option("recording", f.recording, "Recording folder")->required();
   sub->add_option("--out", f.out, "Model file to write");
   sub->add_flag("--recover-response", f.recover_response,
                 "Recover the camera's response from the brackets and linearise every pixel");
   sub->add_flag("--force", f.force, "Replace an existing model.yaml, features.csv and report");
   sub->add_flag("--keep-model", f.keep_model, kKeepModelHelp);
+}
 
-  PlaybackArgs& p = table.args().playback;
-  sub = table.Add("playback", table.handlers().playback, p);
+void PlaybackFlags(CLI::App* sub, PlaybackArgs& p) {
   sub->add_option("recording", p.recording, "Recording folder")->required();
   sub->add_option("--model", p.model, "model.yaml from a calibration");
   sub->add_option("--out", p.out_dir, "Folder for features.csv, estimates.csv, summary.yaml");
@@ -274,13 +154,11 @@ void AddFitAndPlayback(CommandTable& table) {
                 "Use a model calibrated with another camera serial, pixel format or ROI");
 }
 
-void AddCheckAndPlan(CommandTable& table) {
-  CheckArgs& c = table.args().check;
-  CLI::App* sub = table.Add("check", table.handlers().check, c);
+void CheckFlags(CLI::App* sub, CheckArgs& c) {
   sub->add_option("recording", c.recording, "Recording folder, or an estimates.csv")->required();
+}
 
-  PlanArgs& p = table.args().plan;
-  sub = table.Add("plan", table.handlers().plan, p);
+void PlanFlags(CLI::App* sub, PlanArgs& p) {
   sub->add_option("recipe", p.recipe, "Recipe file (recipes/*.yaml)")->required();
   sub->add_option("--poses", p.show_poses, "How many poses of the order to print (-1: all)")
       ->capture_default_str()
@@ -297,16 +175,14 @@ void AddCheckAndPlan(CommandTable& table) {
   sub->add_flag("--quiet", p.quiet, "No progress output");
 }
 
-void AddSimAndDevices(CommandTable& table) {
-  SimArgs& s = table.args().sim;
-  CLI::App* sub = table.Add("sim", table.handlers().sim, s);
+void SimFlags(CLI::App* sub, SimArgs& s) {
   sub->add_option("rig", s.rig, "Rig name or rig file of kind virtual")->capture_default_str();
   sub->add_option("--rig", s.rig, "Rig name or rig file of kind virtual");
   sub->add_option("--time-scale", s.time_scale, "Simulated seconds per host second")
       ->check(TimeScaleRange());
+}
 
-  DevicesArgs& d = table.args().devices;
-  sub = table.Add("devices", table.handlers().devices, d);
+void DevicesFlags(CLI::App* sub, DevicesArgs& d) {
   sub->add_flag("--discover", d.discover,
                 "Also discover GigE/USB cameras (broadcasts on every network interface)");
 }
@@ -339,9 +215,7 @@ void AddTrack(CLI::App* sub, MeasureArgs& a) {
       ->check(Bounded("--check-every", bounds::kDurationS, "--check-every 5"));
 }
 
-void AddMeasure(CommandTable& table) {
-  MeasureArgs& a = table.args().measure;
-  CLI::App* sub = table.Add("measure", table.handlers().measure, a);
+void MeasureFlags(CLI::App* sub, MeasureArgs& a) {
   sub->add_option("--model", a.model, "model.yaml from a calibration")->required();
   sub->add_option("--rig", a.rig, "Rig name or rig file")->capture_default_str();
   sub->add_option("--t-ref-ms", a.t_ref_ms, "Reference exposure (default: the model's)")
@@ -368,9 +242,7 @@ void AddMeasure(CommandTable& table) {
   AddTrack(sub, a);
 }
 
-void AddSnapAndView(CommandTable& table) {
-  SnapArgs& s = table.args().snap;
-  CLI::App* sub = table.Add("snap", table.handlers().snap, s);
+void SnapFlags(CLI::App* sub, SnapArgs& s) {
   sub->add_option("--rig", s.rig, "Rig name or rig file")->capture_default_str();
   sub->add_option("--out", s.out, "PNG file to write")->required();
   sub->add_flag("--force", s.force, "Replace an existing --out file");
@@ -378,9 +250,9 @@ void AddSnapAndView(CommandTable& table) {
       ->check(Bounded("--exposure-ms", bounds::kExposureMs, "--exposure-ms 8"));
   AddAt(sub, s.at);
   AddTimeScale(sub, s.time_scale);
+}
 
-  ViewArgs& v = table.args().view;
-  sub = table.Add("view", table.handlers().view, v);
+void ViewFlags(CLI::App* sub, ViewArgs& v) {
   sub->add_option("--rig", v.rig, "Rig name or rig file")->capture_default_str();
   sub->add_option("--model", v.model, "model.yaml: show the live estimate");
   sub->add_option("--exposure-ms", v.exposure_ms,
@@ -393,6 +265,120 @@ void AddSnapAndView(CommandTable& table) {
   sub->add_option("--screenshot", v.screenshot, "Save the last window image to this PNG");
   sub->add_flag("--force", v.force, "Replace an existing --screenshot file");
   AddTimeScale(sub, v.time_scale);
+}
+
+// `irdist station`, `irdist station-test` and `irdist camera-test`.
+void StationFlags(CLI::App* sub, StationArgs& station) {
+  sub->add_option("--rig", station.rig, "Rig name or rig file")->capture_default_str();
+  sub->add_option("action", station.action, "move | current | off | home | status")
+      ->required()
+      ->check(CLI::IsMember({"move", "current", "off", "home", "status"}));
+  sub->add_option("values", station.values, "move: SLIDE_MM PAN_DEG TILT_DEG; current: MA");
+  sub->add_option("--port", station.ports,
+                  "NAME=PATH: the port of station device NAME (default: the rig file's, or the "
+                  "running 'irdist sim' of a virtual rig)");
+}
+
+void StationTestFlags(CLI::App* sub, StationTestArgs& test) {
+  sub->add_option("port", test.port, "Serial port of the board (e.g. /dev/ttyUSB0)")->required();
+  sub->add_option("--baud", test.baud, "Serial speed, bit/s")
+      ->capture_default_str()
+      ->check(NumberIn("--baud", 1, kMaxBaud, false, "bit/s", "--baud 115200"));
+}
+
+void CameraTestFlags(CLI::App* sub, CameraTestArgs& camera) {
+  sub->add_option("camera", camera.camera,
+                  "IP address, Aravis id or serial (default: the running `irdist sim` camera)");
+  sub->add_option("--rig", camera.rig,
+                  "Rig file whose camera settings a run uses (and, without CAMERA, whose running "
+                  "sim to test; default virtual)");
+}
+
+// One command of the table: what `irdist --help` lists, and how it is wired.
+struct Command {
+  const char* name;
+  const char* help;
+  // Adds the command's flags to `sub` over Args of its own; returns the call that runs the
+  // command's handler in `handlers` with them.
+  std::function<void()> (*add)(CLI::App* sub, const Handlers& handlers, CommandIo io);
+  void (*set_default)(Handlers* handlers);  // this build's handler, the engine's entry point
+  bool (*has_handler)(const Handlers& handlers);
+};
+
+// A command's wiring from its Args, its slot in Handlers, its flags and its entry point.
+template <typename Args, CommandHandler<Args> Handlers::*kSlot, void (*kFlags)(CLI::App*, Args&),
+          void (*kRun)(const Args&, CommandIo)>
+struct Wiring {
+  static std::function<void()> Add(CLI::App* sub, const Handlers& handlers, CommandIo io) {
+    auto args = std::make_shared<Args>();
+    kFlags(sub, *args);
+    const CommandHandler<Args>& handler = handlers.*kSlot;
+    return [args, &handler, name = sub->get_name(), io] { Invoke(handler, name, *args, io); };
+  }
+  static void SetDefault(Handlers* handlers) { handlers->*kSlot = kRun; }
+  static bool HasHandler(const Handlers& handlers) { return static_cast<bool>(handlers.*kSlot); }
+};
+
+template <typename Args, CommandHandler<Args> Handlers::*kSlot, void (*kFlags)(CLI::App*, Args&),
+          void (*kRun)(const Args&, CommandIo)>
+constexpr Command Entry(const char* name, const char* help) {
+  using W = Wiring<Args, kSlot, kFlags, kRun>;
+  return Command{name, help, &W::Add, &W::SetDefault, &W::HasHandler};
+}
+
+// The commands, in help order: adding one is one entry (and its Args, flags and slot).
+const Command kCommands[] = {
+    Entry<CalibrateArgs, &Handlers::calibrate, CalibrateFlags, RunCalibrate>(
+        "calibrate", "Sweep a calibration recipe on a rig, record it and fit model.yaml"),
+    // A track recipe: app/live/track_run.h.
+    Entry<ValidateArgs, &Handlers::validate, ValidateFlags, RunValidateOrTrack>(
+        "validate", "Sweep a validation recipe, estimate every bracket against the ground truth"),
+    Entry<FitArgs, &Handlers::fit, FitFlags, RunFit>("fit",
+                                                     "Fit model.yaml offline from a recording"),
+    Entry<PlaybackArgs, &Handlers::playback, PlaybackFlags, RunPlayback>(
+        "playback", "Estimate distances offline from a recording with a model"),
+    Entry<CheckArgs, &Handlers::check, CheckFlags, RunCheck>(
+        "check", "Check a recording for gaps, damaged frames and consistency"),
+    Entry<PlanArgs, &Handlers::plan, PlanFlags, RunPlan>(
+        "plan", "Check a recipe and print its grid, order, frame count and duration estimate"),
+    Entry<SimArgs, &Handlers::sim, SimFlags, RunSim>(
+        "sim", "Run the virtual rig (camera on 127.0.0.1, station on a pty) until Ctrl-C"),
+    Entry<DevicesArgs, &Handlers::devices, DevicesFlags, RunDevices>(
+        "devices", "List the cameras and stations irdist can see"),
+    // --track: docs/measure.md "Tracking".
+    Entry<MeasureArgs, &Handlers::measure, MeasureFlags, RunMeasureOrTrack>(
+        "measure", "Measure distance, orientation (and 3D position) live from a calibrated camera"),
+    Entry<SnapArgs, &Handlers::snap, SnapFlags, RunSnap>(
+        "snap", "Save one frame to a PNG; print the blob's position and a suggested roi_px"),
+    Entry<ViewArgs, &Handlers::view, ViewFlags, RunView>(
+        "view", "Live window on the camera: image, blob, ellipse, levels, estimate with --model"),
+    Entry<StationArgs, &Handlers::station, StationFlags, RunStation>(
+        "station",
+        "Put the station at a pose and current by hand (move, current, off, home, status)"),
+    Entry<StationTestArgs, &Handlers::station_test, StationTestFlags, RunStationTest>(
+        "station-test", "Check a station board against docs/station-protocol.md (pass/fail table)"),
+    Entry<CameraTestArgs, &Handlers::camera_test, CameraTestFlags, RunCameraTest>(
+        "camera-test", "Check a camera's features against what irdist needs (pass/fail table)"),
+};
+
+// The registered subcommands, each with the call that runs it.
+using Registered = std::vector<std::pair<CLI::App*, std::function<void()>>>;
+
+Registered AddCommands(CLI::App& app, const Handlers& handlers, CommandIo io) {
+  Registered registered;
+  for (const Command& command : kCommands) {
+    CLI::App* sub = app.add_subcommand(command.name, command.help);
+    registered.emplace_back(sub, command.add(sub, handlers, io));
+  }
+  return registered;
+}
+
+// The parsed subcommand's entry, or nullptr.
+const Registered::value_type* ParsedOf(const Registered& registered) {
+  for (const auto& entry : registered) {
+    if (entry.first->parsed()) return &entry;
+  }
+  return nullptr;
 }
 
 // Unknown first words get the list of valid commands (CLI11 would only say "extra argument").
@@ -410,20 +396,20 @@ void CheckCommandName(int argc, const char* const* argv) {
 }
 
 // Parses; a parse error names the subcommand it happened in.
-int ParseAndRun(CLI::App& app, const CommandTable& table, int argc, const char* const* argv,
+int ParseAndRun(CLI::App& app, const Registered& registered, int argc, const char* const* argv,
                 CommandIo io) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help, --version
     return app.exit(e, io.out, io.err);
   } catch (const CLI::ParseError& e) {
-    if (const auto* entry = table.Parsed()) {
+    if (const auto* entry = ParsedOf(registered)) {
       const std::string name = entry->first->get_name();
       throw UsageError(name + ": " + e.what() + ". Run 'irdist " + name + " --help' for usage.");
     }
     throw UsageError(std::string(e.what()) + ". " + kUsageHint);
   }
-  const auto* entry = table.Parsed();
+  const auto* entry = ParsedOf(registered);
   if (entry == nullptr) throw UsageError(std::string("no command given. ") + kUsageHint);
   entry->second();
   return 0;
@@ -431,31 +417,32 @@ int ParseAndRun(CLI::App& app, const CommandTable& table, int argc, const char* 
 
 }  // namespace
 
-// `irdist station`, `irdist station-test` and `irdist camera-test`.
-void AddStationCommands(CommandTable& table) {
-  StationArgs& station = table.args().station;
-  CLI::App* sub = table.Add("station", table.handlers().station, station);
-  sub->add_option("--rig", station.rig, "Rig name or rig file")->capture_default_str();
-  sub->add_option("action", station.action, "move | current | off | home | status")
-      ->required()
-      ->check(CLI::IsMember({"move", "current", "off", "home", "status"}));
-  sub->add_option("values", station.values, "move: SLIDE_MM PAN_DEG TILT_DEG; current: MA");
-  sub->add_option("--port", station.ports,
-                  "NAME=PATH: the port of station device NAME (default: the rig file's, or the "
-                  "running 'irdist sim' of a virtual rig)");
-  StationTestArgs& test = table.args().station_test;
-  sub = table.Add("station-test", table.handlers().station_test, test);
-  sub->add_option("port", test.port, "Serial port of the board (e.g. /dev/ttyUSB0)")->required();
-  sub->add_option("--baud", test.baud, "Serial speed, bit/s")
-      ->capture_default_str()
-      ->check(NumberIn("--baud", 1, kMaxBaud, false, "bit/s", "--baud 115200"));
-  CameraTestArgs& camera = table.args().camera_test;
-  sub = table.Add("camera-test", table.handlers().camera_test, camera);
-  sub->add_option("camera", camera.camera,
-                  "IP address, Aravis id or serial (default: the running `irdist sim` camera)");
-  sub->add_option("--rig", camera.rig,
-                  "Rig file whose camera settings a run uses (and, without CAMERA, whose running "
-                  "sim to test; default virtual)");
+std::vector<std::string> SubcommandNames() {
+  std::vector<std::string> names;
+  for (const Command& command : kCommands) names.emplace_back(command.name);
+  return names;
+}
+
+Handlers DefaultHandlers() {
+  Handlers handlers;
+  for (const Command& command : kCommands) command.set_default(&handlers);
+  return handlers;
+}
+
+std::vector<std::string> CommandsWithoutHandler(const Handlers& handlers) {
+  std::vector<std::string> names;
+  for (const Command& command : kCommands) {
+    if (!command.has_handler(handlers)) names.emplace_back(command.name);
+  }
+  return names;
+}
+
+std::vector<std::string> CommandsWithoutHelp() {
+  std::vector<std::string> names;
+  for (const Command& command : kCommands) {
+    if (command.help == nullptr || command.help[0] == '\0') names.emplace_back(command.name);
+  }
+  return names;
 }
 
 int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& handlers) {
@@ -466,17 +453,8 @@ int RunIrdist(int argc, const char* const* argv, CommandIo io, const Handlers& h
       "irdist"};
   app.require_subcommand(1);
   app.set_version_flag("--version", kSoftwareVersion);
-  ParsedArgs args;
-  CommandTable table(app, args, handlers, io);
-  AddCalibrate(table);
-  AddValidate(table);
-  AddFitAndPlayback(table);
-  AddCheckAndPlan(table);
-  AddSimAndDevices(table);
-  AddMeasure(table);
-  AddSnapAndView(table);
-  AddStationCommands(table);
-  return ParseAndRun(app, table, argc, argv, io);
+  const Registered registered = AddCommands(app, handlers, io);
+  return ParseAndRun(app, registered, argc, argv, io);
 }
 
 }  // namespace irdist

@@ -1,9 +1,10 @@
 #pragma once
 // The irdist command line, the top of the house: one table of subcommands (calibrate, validate,
 // fit, playback, check, plan, sim, devices, measure, snap, view, station, station-test,
-// camera-test). Each subcommand parses its flags into an Args struct and calls its handler in
-// Handlers, the engine's entry point in the folder below (DefaultHandlers); a test may give
-// other handlers to see what a command line parses into.
+// camera-test), each entry its name, help, flags and handler (cli.cc, kCommands). Each
+// subcommand parses its flags into an Args struct and calls its handler in Handlers, the
+// engine's entry point in the folder below (DefaultHandlers); a test may give other handlers to
+// see what a command line parses into.
 
 #include <functional>
 #include <iosfwd>
@@ -17,26 +18,33 @@ namespace irdist {
 
 // One handler per subcommand. A handler reports results on io.out, throws irdist::Error
 // subclasses on failure (main.cc maps them to exit codes) and returns normally on success.
+template <typename Args>
+using CommandHandler = std::function<void(const Args&, CommandIo)>;
+// The slots the command table's entries name (a test fills its own).
 struct Handlers {
-  std::function<void(const CalibrateArgs&, CommandIo)> calibrate;
-  std::function<void(const ValidateArgs&, CommandIo)> validate;
-  std::function<void(const FitArgs&, CommandIo)> fit;
-  std::function<void(const PlaybackArgs&, CommandIo)> playback;
-  std::function<void(const CheckArgs&, CommandIo)> check;
-  std::function<void(const PlanArgs&, CommandIo)> plan;
-  std::function<void(const SimArgs&, CommandIo)> sim;
-  std::function<void(const DevicesArgs&, CommandIo)> devices;
-  std::function<void(const MeasureArgs&, CommandIo)> measure;
-  std::function<void(const SnapArgs&, CommandIo)> snap;
-  std::function<void(const ViewArgs&, CommandIo)> view;
-  std::function<void(const StationArgs&, CommandIo)> station;
-  std::function<void(const StationTestArgs&, CommandIo)> station_test;
-  std::function<void(const CameraTestArgs&, CommandIo)> camera_test;
+  CommandHandler<CalibrateArgs> calibrate;
+  CommandHandler<ValidateArgs> validate;
+  CommandHandler<FitArgs> fit;
+  CommandHandler<PlaybackArgs> playback;
+  CommandHandler<CheckArgs> check;
+  CommandHandler<PlanArgs> plan;
+  CommandHandler<SimArgs> sim;
+  CommandHandler<DevicesArgs> devices;
+  CommandHandler<MeasureArgs> measure;
+  CommandHandler<SnapArgs> snap;
+  CommandHandler<ViewArgs> view;
+  CommandHandler<StationArgs> station;
+  CommandHandler<StationTestArgs> station_test;
+  CommandHandler<CameraTestArgs> camera_test;
 };
 
-// The handlers of this build: every command (app/runs/run.h, app/runs/plan_command.h,
-// app/runs/offline.h, app/devices/tools.h, app/live/measure.h, ...).
+// The handlers of this build, from the table: every command's entry point (app/runs/run.h,
+// app/runs/plan_command.h, app/runs/offline.h, app/devices/tools.h, app/live/measure.h, ...).
 Handlers DefaultHandlers();
+
+// The table's commands whose slot in `handlers` is empty; those whose help is empty.
+std::vector<std::string> CommandsWithoutHandler(const Handlers& handlers);
+std::vector<std::string> CommandsWithoutHelp();
 
 // Names of the subcommands, in help order.
 std::vector<std::string> SubcommandNames();

@@ -13,7 +13,7 @@ CameraSettings CameraSettingsOf(const CameraConfig& c, const std::string& trigge
   s.offset_y = c.roi_offset_y;
   s.width = c.roi_width;
   s.height = c.roi_height;
-  s.trigger_overlap_readout = c.trigger_in_readout;
+  s.trigger_in_readout = c.trigger_in_readout;
   // rig.cc refused any other spelling at its line.
   s.exposure_check = ParseExposureCheck(c.exposure_check).value_or(ExposureCheck::kAuto);
   s.restore_after = c.restore_after;

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <string>
 #include <utility>
+
+#include "base/bounds.h"
 
 namespace irdist {
 
@@ -17,12 +20,31 @@ std::int64_t IdGap(std::uint64_t last, std::uint64_t id) {
   return last <= 0xffff ? static_cast<std::int64_t>(0xffff - last + id - 1) : 0;
 }
 
+// More triggers in flight than any camera queues (the virtual one and readout overlap need 2).
+constexpr int kMostAhead = 16;
+
 }  // namespace
+
+bool GrabberOptions::IsValid(std::string* why) const {
+  std::string reason = bounds::kExposureUs.Refusal("exposure_us", exposure_us);
+  if (!reason.empty()) {
+    // the exposure's refusal, said by its bound
+  } else if (ahead < 1 || ahead > kMostAhead) {
+    reason = "ahead = " + std::to_string(ahead) + " is outside [1, " + std::to_string(kMostAhead) +
+             "] triggers in flight";
+  } else if (frame_timeout.count() <= 0) {
+    reason = "frame_timeout must be positive";
+  } else if (!(exposure_tolerance > 0.0 && exposure_tolerance < 1.0)) {
+    reason = "exposure_tolerance not in (0, 1)";
+  }
+  if (why != nullptr) *why = reason;
+  return reason.empty();
+}
 
 FrameGrabber::FrameGrabber(Camera& camera, Trigger trigger, const GrabberOptions& options)
     : camera_(camera), trigger_(std::move(trigger)), options_(options) {
-  IRDIST_CHECK(options_.ahead >= 1 && options_.exposure_us > 0.0,
-               "FrameGrabber: ahead >= 1 and a positive exposure");
+  std::string why;
+  IRDIST_CHECK(options_.IsValid(&why), "GrabberOptions: " + why);
 }
 
 FrameGrabber::~FrameGrabber() {

@@ -41,6 +41,8 @@ struct GrabberOptions {
   std::chrono::milliseconds frame_timeout{1000};
   // Relative tolerance of a frame's ChunkExposureTime against exposure_us.
   double exposure_tolerance = 0.01;
+  // The first problem, naming the field, in *why (empty when valid).
+  bool IsValid(std::string* why) const;
 };
 
 // A frame handed to the estimator, with its number among the frames received (from 0) and the

@@ -151,7 +151,29 @@ CameraRoute UseHardwareCamera(const Rig& rig, const std::string& rig_path,
 
 }  // namespace
 
+bool LiveCameraOptions::IsValid(std::string* why) const {
+  std::string reason;
+  if (rig_spec.empty()) {
+    reason = "rig_spec is empty (give --rig a rig name or a rig file)";
+  } else if (!(time_scale == 0.0 || (time_scale >= 0.01 && time_scale <= 1000.0))) {
+    reason = "time_scale " + std::to_string(time_scale) +
+             " is outside 0.01..1000 (simulated seconds per host second; 0 = the rig file's)";
+  } else if (!at.empty() && (at.size() != 4 || !(at[3] >= 0.0))) {
+    reason = "at must be SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA with BIAS_MA >= 0";
+  } else if (!(first_exposure_us > 0.0)) {
+    reason = "first_exposure_us must be > 0";
+  } else if (!(longest_exposure_us >= first_exposure_us)) {
+    reason = "longest_exposure_us must be at least first_exposure_us";
+  } else if (buffer_count < 1 || buffer_count > 1000) {
+    reason = "buffer_count " + std::to_string(buffer_count) + " is outside 1..1000";
+  }
+  if (why != nullptr) *why = reason;
+  return reason.empty();
+}
+
 LiveCamera::LiveCamera(const LiveCameraOptions& options, std::ostream& err) : impl_(new Impl) {
+  std::string why;
+  if (!options.IsValid(&why)) throw UsageError("live camera: " + why);
   Impl& m = *impl_;
   m.options = options;
   m.err = &err;

@@ -28,11 +28,17 @@ struct LiveCameraOptions {
   double longest_exposure_us = 8000.0;  // sizes the frame timeout
   int buffer_count = 16;
   bool quiet = false;
+  // The first problem, naming the field, in *why (empty when valid): the virtual rig's time scale
+  // (0.01-1000, or 0), --at's four values (a current >= 0), positive exposures (the longest at
+  // least the first; the camera refuses one outside its own range, naming the flag), 1-1000
+  // stream buffers.
+  bool IsValid(std::string* why) const;
 };
 
 class LiveCamera {
  public:
-  // Throws RecipeError (rig file, --at on hardware), UsageError (--at with a running sim),
+  // Throws UsageError (options not IsValid), RecipeError (rig file, --at on hardware), UsageError
+  // (--at with a running sim),
   // CameraError, StationError, LinkError.
   LiveCamera(const LiveCameraOptions& options, std::ostream& err);
   ~LiveCamera();

@@ -167,7 +167,7 @@ void LiveRecorder::OpenRecording(const LiveCaptureSetup& setup) {
   options.interleave_reference = setup.interleave_reference;
   options.trigger_source = setup.camera.trigger_source;
   options.frame_timeout = std::chrono::milliseconds(setup.frame_timeout_ms);
-  options.trigger_in_readout = setup.camera.trigger_overlap_readout;
+  options.trigger_in_readout = setup.camera.trigger_in_readout;
   options.on_notice = [](const std::string& text) { std::cerr << "warning: " << text << "\n"; };
   m.capture = std::make_unique<BracketCapture>(*m.camera, options);
   m.software_trigger = std::make_unique<CameraSoftwareTrigger>(*m.camera);

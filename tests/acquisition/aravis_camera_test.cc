@@ -370,7 +370,7 @@ TEST(VendorCameras, FlirStyleStreamsMono12pWithEveryAutomaticControlOff) {
     EXPECT_NE(std::string(error.what()).find("Mono12p"), std::string::npos) << error.what();
   }
   CameraSettings settings = Triggered("Mono12p");
-  settings.trigger_overlap_readout = true;
+  settings.trigger_in_readout = true;
   camera->Configure(settings);
   const auto features = camera->ReadBackFeatures();
   EXPECT_EQ(features.at("PixelFormat"), "Mono12p");

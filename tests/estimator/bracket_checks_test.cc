@@ -95,5 +95,43 @@ TEST(OutsideRanges, NamesEachExposureAndTheSignal) {
   EXPECT_TRUE(OutsideRanges(old, e, 8.0, {30.0}, {&dim}).empty());
 }
 
+
+// The options refuse a bad field with its name; the checks refuse such options.
+TEST(MotionOptions, RefusesAFalseAlarmOutsideZeroToOne) {
+  std::string why;
+  EXPECT_TRUE(MotionOptions().IsValid(&why)) << why;
+  EXPECT_EQ(why, "");
+  for (const double bad : {0.0, 1.0, -0.1, double(NAN)}) {
+    MotionOptions options;
+    options.false_alarm = bad;
+    EXPECT_FALSE(options.IsValid(&why));
+    EXPECT_NE(why.find("false_alarm"), std::string::npos) << why;
+    EXPECT_THROW(CheckMotion(2000.0, {2000.0, 2001.0}, {1.0, 1.0}, options), CheckError);
+  }
+}
+
+TEST(RangeOptions, RefusesEachBadFieldByName) {
+  std::string why;
+  EXPECT_TRUE(RangeOptions().IsValid(&why)) << why;
+  RangeOptions z;
+  z.z_limit = 0.0;
+  RangeOptions calibration;
+  calibration.calibration_rel_error = -0.01;
+  RangeOptions exposure;
+  exposure.exposure_tolerance = 0.0;
+  RangeOptions signal;
+  signal.signal_tolerance = NAN;
+  const std::vector<std::pair<RangeOptions, std::string>> cases = {
+      {z, "z_limit"}, {calibration, "calibration_rel_error"},
+      {exposure, "exposure_tolerance"}, {signal, "signal_tolerance"}};
+  DistanceEstimate e;
+  e.d_mm = 2000.0;
+  e.d_std_mm = 1.0;
+  for (const auto& [options, field] : cases) {
+    EXPECT_FALSE(options.IsValid(&why)) << field;
+    EXPECT_EQ(why.rfind(field, 0), 0u) << why;
+    EXPECT_THROW(OutsideRanges(Table3Ranges(), e, 8.0, {30.0}, {}, options), CheckError);
+  }
+}
 }  // namespace
 }  // namespace irdist

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <vector>
 
+#include "base/check.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
 
@@ -160,5 +161,20 @@ TEST(HealthTest, WithoutTheBlobFitsOwnBlurTheCumulantsJudge) {
   EXPECT_FALSE(h.blob_fit);
 }
 
+
+// The options refuse a bad field with its name, and the check refuses such options.
+TEST(HealthOptions, RefusesEachBadFieldByName) {
+  std::string why;
+  EXPECT_TRUE(HealthOptions().IsValid(&why)) << why;
+  HealthOptions z;
+  z.z_limit = -1.0;
+  EXPECT_FALSE(z.IsValid(&why));
+  EXPECT_EQ(why.rfind("z_limit", 0), 0u) << why;
+  HealthOptions change;
+  change.min_sigma_change = 1.5;
+  EXPECT_FALSE(change.IsValid(&why));
+  EXPECT_EQ(why.rfind("min_sigma_change", 0), 0u) << why;
+  EXPECT_THROW(CheckHealth(ModelWithBlur(), 2000.0, {}, change), CheckError);
+}
 }  // namespace
 }  // namespace irdist

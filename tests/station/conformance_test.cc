@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <string>
+
 #include "sim/station_emulator.h"
 #include "sim/world.h"
 #include "station/serial_transport.h"
@@ -51,6 +54,24 @@ TEST(Conformance, AnOpenIredFailsTheCurrentCheck) {
   const ConformanceCheck* check = Find(report, "current");
   ASSERT_NE(check, nullptr);
   EXPECT_FALSE(check->passed) << report.Table();
+}
+
+// The options refuse a bad field with its name (RunConformance checks them first).
+TEST(ConformanceOptions, RefusesEachBadFieldByName) {
+  std::string why;
+  EXPECT_TRUE(ConformanceOptions().IsValid(&why)) << why;
+  ConformanceOptions reply;
+  reply.reply_timeout = std::chrono::milliseconds(0);
+  EXPECT_FALSE(reply.IsValid(&why));
+  EXPECT_EQ(why.rfind("reply_timeout", 0), 0u) << why;
+  ConformanceOptions move;
+  move.move_timeout = std::chrono::milliseconds(-1);
+  EXPECT_FALSE(move.IsValid(&why));
+  EXPECT_EQ(why.rfind("move_timeout", 0), 0u) << why;
+  ConformanceOptions poll;
+  poll.poll_period = std::chrono::milliseconds(-5);
+  EXPECT_FALSE(poll.IsValid(&why));
+  EXPECT_EQ(why.rfind("poll_period", 0), 0u) << why;
 }
 
 }  // namespace

@@ -45,7 +45,7 @@ struct VirtualStation {
 };
 
 // The emulator behind a composed Station of one irdist_station device filling every role (what a
-// legacy rig file means), logging to a file in the build tree.
+// single-box rig file means), logging to a file in the build tree.
 struct VirtualStationRig {
   explicit VirtualStationRig(double time_scale, sim::EmulatorOptions emulator_options = {},
                              double current_tolerance_ma = 5.0)

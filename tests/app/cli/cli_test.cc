@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -115,6 +116,19 @@ TEST(CliTest, UnknownOrMissingCommandIsAUsageError) {
   EXPECT_THROW(RunWords({"plan", "a", "b"}, DefaultHandlers()), UsageError);      // one too many
   EXPECT_THROW(RunWords({"validate", "r.yaml"}, DefaultHandlers()), UsageError);  // --model missing
   EXPECT_THROW(RunWords({"plan", "--bogus", "r.yaml"}, DefaultHandlers()), UsageError);
+}
+
+// One table: every command in it has its help and, in this build, its handler; an empty
+// Handlers leaves every command of the table without one (each entry names its own slot).
+TEST(CliTest, EveryCommandInTheTableHasAHandlerAndHelp) {
+  EXPECT_EQ(CommandsWithoutHandler(DefaultHandlers()), std::vector<std::string>{});
+  EXPECT_EQ(CommandsWithoutHelp(), std::vector<std::string>{});
+  EXPECT_EQ(CommandsWithoutHandler(Handlers{}), SubcommandNames());
+  Handlers one;
+  one.station_test = [](const StationTestArgs&, CommandIo) {};
+  std::vector<std::string> others = SubcommandNames();
+  others.erase(std::find(others.begin(), others.end(), "station-test"));
+  EXPECT_EQ(CommandsWithoutHandler(one), others);
 }
 
 TEST(CliTest, HelpListsTheCommands) {

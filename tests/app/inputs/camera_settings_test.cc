@@ -36,7 +36,7 @@ TEST(CameraSettingsTest, EveryRigKeyReachesTheCamera) {
   EXPECT_EQ(s.offset_y, 256);
   EXPECT_EQ(s.width, 256);
   EXPECT_EQ(s.height, 192);
-  EXPECT_TRUE(s.trigger_overlap_readout);
+  EXPECT_TRUE(s.trigger_in_readout);
   EXPECT_EQ(s.exposure_check, ExposureCheck::kReadback);
   EXPECT_FALSE(s.restore_after);
 }
