@@ -1,6 +1,6 @@
 // irdist_loopback_netns LOCKFILE PROGRAM [ARGS...]: runs a test that starts a GigE Vision camera on
 // 127.0.0.1:3956 in a network namespace of its own, whose only interface is loopback (brought up
-// here). Each such test then owns its own 127.0.0.1:3956, so CTest runs several at once, and no
+// here). Each such test then owns its own 127.0.0.1:3956, and no
 // discovery broadcast of a test ever leaves the namespace (the house rule: GigE traffic on loopback
 // only). Where the kernel refuses a namespace (no CAP_SYS_ADMIN), the test runs in the host's
 // network holding an exclusive flock on LOCKFILE for its whole life (the descriptor survives the
