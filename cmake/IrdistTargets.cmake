@@ -26,9 +26,9 @@ endfunction()
 
 # Tests that start a GigE Vision camera on 127.0.0.1:3956 (the virtual rig or Aravis's fake camera)
 # run through irdist_loopback_netns (tests/loopback_netns.cc): each in a network namespace of its
-# own with loopback up, so that no broadcast leaves the test; where the kernel refuses a namespace,
-# under a lock on this file.
-set(IRDIST_GVCP_LOCK_FILE ${CMAKE_BINARY_DIR}/gvcp-127.0.0.1-3956.lock)
+# own with loopback up, so that no broadcast leaves the test; and one at a time (this CTest
+# resource lock).
+set(IRDIST_CAMERA_TESTS_LOCK irdist_camera_tests)
 set(IRDIST_TEST_TIMEOUT_SCALE 1 CACHE STRING "Multiplier of every test's timeout (a sanitized build)")
 
 # irdist_test(module/file SOURCES ... [DEPS ...] [TIMEOUT seconds] [LABELS ...] [GIGE])
@@ -46,7 +46,7 @@ function(irdist_test test_name)
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
   if(ARG_GIGE)
     add_test(NAME ${test_name}
-      COMMAND irdist_loopback_netns ${IRDIST_GVCP_LOCK_FILE} $<TARGET_FILE:${target}>)
+      COMMAND irdist_loopback_netns $<TARGET_FILE:${target}>)
   else()
     add_test(NAME ${test_name} COMMAND ${target})
   endif()
@@ -68,7 +68,7 @@ function(irdist_test test_name)
     # side, the camera tests whose truth depends on time (a slide moving through an exposure, a
     # calibration at time scale 1) read 4-5 sd off or fail their fit under each other's load.
     list(APPEND ARG_LABELS gige)
-    set_tests_properties(${test_name} PROPERTIES RESOURCE_LOCK irdist_camera_tests)
+    set_tests_properties(${test_name} PROPERTIES RESOURCE_LOCK ${IRDIST_CAMERA_TESTS_LOCK})
   endif()
   if(ARG_LABELS)
     set_tests_properties(${test_name} PROPERTIES LABELS "${ARG_LABELS}")

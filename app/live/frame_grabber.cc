@@ -27,14 +27,12 @@ constexpr int kMostAhead = 16;
 
 bool GrabberOptions::IsValid(std::string* why) const {
   std::string reason = bounds::kExposureUs.Refusal("exposure_us", exposure_us);
-  if (!reason.empty()) {
-    // the exposure's refusal, said by its bound
-  } else if (ahead < 1 || ahead > kMostAhead) {
+  if (reason.empty() && (ahead < 1 || ahead > kMostAhead)) {
     reason = "ahead = " + std::to_string(ahead) + " is outside [1, " + std::to_string(kMostAhead) +
              "] triggers in flight";
-  } else if (frame_timeout.count() <= 0) {
-    reason = "frame_timeout must be positive";
-  } else if (!(exposure_tolerance > 0.0 && exposure_tolerance < 1.0)) {
+  }
+  if (reason.empty() && frame_timeout.count() <= 0) reason = "frame_timeout must be positive";
+  if (reason.empty() && !(exposure_tolerance > 0.0 && exposure_tolerance < 1.0)) {
     reason = "exposure_tolerance not in (0, 1)";
   }
   if (why != nullptr) *why = reason;
