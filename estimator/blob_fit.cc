@@ -404,28 +404,33 @@ std::vector<double> NoiseVariances(const std::vector<Pixel>& pixels, const Windo
   return var;
 }
 
-// The noise of P's anisotropy a = ((P11 - P22) / 2, P12) at the solution: E |a_noise|^2 =
-// var a1 + var a2 from the parameters' covariance, the inverse Fisher information (J^T J)^-1 of
-// the weighted residuals (what ceres::Covariance computes, without its sparse machinery: 7
-// parameters; J^T J's eigen-decomposition). NaN when J^T J is singular to Ceres's own threshold
-// (reciprocal condition 1e-14).
-double AnisotropyNoiseVar(const WindowResiduals& residuals, const double* v) {
+using Covariance = Eigen::Matrix<double, kParams, kParams>;
+
+// The parameters' covariance at the solution, (J^T J)^-1 of the weighted residuals (as
+// ceres::Covariance, without its sparse machinery: J^T J's eigen-decomposition); false when J^T J
+// is singular to Ceres's own threshold (reciprocal condition 1e-14).
+bool FitCovariance(const WindowResiduals& residuals, const double* v, Covariance* c) {
   NormalEquations<kParams> normal;
   residuals.Evaluate(v, true, &normal);
-  const Eigen::Matrix<double, kParams, kParams>& information = normal.jtj;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kParams, kParams>> eigen(information);
-  if (eigen.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::SelfAdjointEigenSolver<Covariance> eigen(normal.jtj);
+  if (eigen.info() != Eigen::Success) return false;
   const Eigen::Matrix<double, kParams, 1> lambda = eigen.eigenvalues();  // ascending
-  if (!(lambda(0) > 1e-14 * lambda(kParams - 1))) return std::numeric_limits<double>::quiet_NaN();
-  const Eigen::Matrix<double, kParams, kParams> c =
-      eigen.eigenvectors() * lambda.cwiseInverse().asDiagonal() * eigen.eigenvectors().transpose();
+  if (!(lambda(0) > 1e-14 * lambda(kParams - 1))) return false;
+  *c = eigen.eigenvectors() * lambda.cwiseInverse().asDiagonal() * eigen.eigenvectors().transpose();
+  return true;
+}
+
+// The noise of P's anisotropy a = ((P11 - P22) / 2, P12): E |a_noise|^2 = var a1 + var a2.
+double AnisotropyNoiseVar(const Covariance& c) {
   return 0.25 * (c(2, 2) + c(4, 4) - 2.0 * c(2, 4)) + c(3, 3);
 }
 
 // One weighted least-squares pass (ceres::TinySolver) from v; returns the weighted cost per pixel.
-// anisotropy_noise_var: when set, receives AnisotropyNoiseVar at the pass's solution.
+// covariance: when set, receives FitCovariance at the pass's solution (*covariance_ok whether
+// it could be computed).
 double SolvePass(const WindowResiduals& residuals, double* v, bool* ok,
-                 double* anisotropy_noise_var = nullptr, double tolerance = kChi2Tolerance) {
+                 Covariance* covariance = nullptr, bool* covariance_ok = nullptr,
+                 double tolerance = kChi2Tolerance) {
   NormalLmOptions options;
   options.function_tolerance = tolerance;
   options.decrement_tolerance = tolerance;
@@ -433,10 +438,22 @@ double SolvePass(const WindowResiduals& residuals, double* v, bool* ok,
   const NormalLmSummary summary = SolveNormalLm(residuals, options, &x);
   std::copy(x.data(), x.data() + kParams, v);
   *ok = std::isfinite(summary.final_cost) && v[2] > 0.0 && v[4] > 0.0 && v[2] * v[4] > v[3] * v[3];
-  if (*ok && anisotropy_noise_var != nullptr) {
-    *anisotropy_noise_var = AnisotropyNoiseVar(residuals, v);
-  }
+  if (*ok && covariance != nullptr) *covariance_ok = FitCovariance(residuals, v, covariance);
   return 2.0 * summary.final_cost / static_cast<double>(residuals.NumResiduals());
+}
+
+// The disc's trace size 1 / (4 p), p = tr(P) / 2 (a circle's A^2/4), and its standard error from
+// P's covariance, d(1 / 4p) = -dp / 4p^2: linear in P, without the round-blob rule's shrink, which
+// moves with the frame's signal. A fit missing its pixels beyond their noise (chi2 per pixel > 1)
+// widens it by sqrt(chi2).
+void TraceSize(const Covariance& c, const double* v, double chi2_per_pixel, double* var_px2,
+               double* se_px2) {
+  const double p_mean = 0.5 * (v[2] + v[4]);
+  const double var_p = 0.25 * (c(2, 2) + c(4, 4) + 2.0 * c(2, 4));
+  *var_px2 = 0.25 / p_mean;
+  *se_px2 = var_p >= 0.0 && p_mean > 0.0
+                ? std::sqrt(var_p * std::max(1.0, chi2_per_pixel)) / (4.0 * p_mean * p_mean)
+                : std::numeric_limits<double>::quiet_NaN();
 }
 
 // P's eigenvalues tr/2 -+ |a|, a = ((P11 - P22) / 2, P12). The fitted |a|^2 is the true one plus
@@ -503,16 +520,18 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
   response.aniso_s = psf.s_px2;
   WindowResiduals model(pixels, window.width, window.height, std::move(response));
   model.SetVariances(std::vector<double>(pixels.size(), read_var));
-  bool ok = false;
+  bool ok = false, covariance_ok = false;
   double chi2 = 0.0;
-  double noise_var = std::numeric_limits<double>::quiet_NaN();
+  Covariance covariance;
   for (int pass = 0; pass < passes; ++pass) {
-    chi2 = SolvePass(model, v, &ok, pass == 1 ? &noise_var : nullptr,
+    chi2 = SolvePass(model, v, &ok, pass == 1 ? &covariance : nullptr, &covariance_ok,
                      pass + 1 == passes ? kChi2Tolerance : kWeightsPassTolerance);
     if (!ok) return out;
     if (pass == 0) out.read_weighted_chi2 = chi2;
     if (pass == 0 && passes > 1) model.SetVariances(NoiseVariances(pixels, model, v, read_var));
   }
+  const double noise_var =
+      covariance_ok ? AnisotropyNoiseVar(covariance) : std::numeric_limits<double>::quiet_NaN();
   double p_small, p_large;  // 1/A^2, 1/B^2
   DiscEigenvalues(v, noise_var, false, &p_small, &p_large);
   out.raw_major_var_px2 = 0.25 / p_small;
@@ -520,6 +539,9 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
   out.anisotropy_noise_var = noise_var;
   DiscEigenvalues(v, noise_var, true, &p_small, &p_large);
   out.ok = p_small > 0.0 && out.raw_major_var_px2 > 0.0;
+  if (covariance_ok && out.ok) {
+    TraceSize(covariance, v, chi2, &out.trace_var_px2, &out.trace_var_se_px2);
+  }
   out.center_px = cv::Point2d(v[0] + window.x, v[1] + window.y);
   out.major_var_px2 = 0.25 / p_small;
   out.minor_var_px2 = 0.25 / p_large;
@@ -567,6 +589,8 @@ bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationMod
   features->moment_major_var_px2 = fit.major_var_px2 + blur;
   features->moment_minor_var_px2 = fit.minor_var_px2 + blur;
   features->size_blur_var_px2 = blur;
+  features->trace_var_px2 = fit.trace_var_px2 + blur;
+  features->trace_var_se_px2 = fit.trace_var_se_px2;
   // The fitted axes' direction with their variances: the moments' own is another (noisier, for a
   // near-round blob unrelated) measurement, and the line of sight turns the matrix of the two.
   if (features->ellipse_moments.valid) features->ellipse_moments.angle_deg = fit.angle_deg;

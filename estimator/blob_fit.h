@@ -18,6 +18,7 @@
 // so the calibrated geometric model, theta (kCalibratedBlur) and the fused solve use them as they
 // are. The distance for b(u) is the moments' geometric distance (b(u) changes slowly with d).
 
+#include <limits>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -54,6 +55,13 @@ struct BlobFitResult {
   // E |a_noise|^2 of P's anisotropy a = ((P11 - P22) / 2, P12), px^-4, from the fit's covariance
   // (NaN when it could not be computed: then nothing is removed).
   double anisotropy_noise_var = 0.0;
+  // The disc's trace size 1 / (2 tr P) (px^2, no blur: a circle's A^2/4, an ellipse's harmonic
+  // mean of its axes' variances) and its standard error from the fit's covariance (the frame's
+  // own noise, widened by sqrt(chi2_per_pixel) when the fit misses its pixels by more than their
+  // noise); NaN when not computed (a single pass, or a singular fit). Linear in P, free of the
+  // round-blob rule's shrink: the motion check's size (bracket_checks.h CheckMotionOfSizes).
+  double trace_var_px2 = std::numeric_limits<double>::quiet_NaN();
+  double trace_var_se_px2 = std::numeric_limits<double>::quiet_NaN();
   double angle_deg = 0.0;      // major axis direction, degrees from +x
   double blur_var_px2 = 0.0;   // the calibrated blur variance used (pixel area included)
   double crosstalk_var_px2 = 0.0;  // the part of it after the sampling, as used

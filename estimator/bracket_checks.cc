@@ -57,6 +57,47 @@ MotionCheck CheckMotion(double joint_d_mm, const std::vector<double>& d_mm,
   return m;
 }
 
+namespace {
+
+// A frame's trace size and its standard error, false when it has none.
+bool HasTraceSize(const Features& f) {
+  return f.blob_found && std::isfinite(f.trace_var_px2) && f.trace_var_se_px2 > 0.0 &&
+         std::isfinite(f.trace_var_se_px2) && f.trace_var_px2 > f.trace_var_se_px2 &&
+         f.moment_major_var_px2 > 0.0;
+}
+
+}  // namespace
+
+MotionCheck CheckMotionOfSizes(const GeometricModel& geometric,
+                               const std::vector<const Features*>& frames,
+                               const MotionOptions& options) {
+  if (!geometric.fitted() || frames.size() < 2) return MotionCheck{};
+  // The bracket's major-to-trace ratio (its ellipse's shape, common to its frames) puts each
+  // trace size on the major axis the geometric model reads.
+  double w_major = 0.0, w_trace = 0.0;
+  for (const Features* f : frames) {
+    if (!HasTraceSize(*f)) return MotionCheck{};
+    const double w = 1.0 / (f->trace_var_se_px2 * f->trace_var_se_px2);
+    w_major += w * f->moment_major_var_px2;
+    w_trace += w * f->trace_var_px2;
+  }
+  const double ratio = w_major / w_trace;
+  std::vector<double> d_mm, d_se_mm;
+  double sum_w = 0.0, sum_wd = 0.0;
+  for (const Features* f : frames) {
+    const double var = ratio * f->trace_var_px2, se = ratio * f->trace_var_se_px2;
+    const double d = geometric.DistanceMm(var);
+    const double se_mm =
+        0.5 * std::fabs(geometric.DistanceMm(var - se) - geometric.DistanceMm(var + se));
+    if (!std::isfinite(d) || !(se_mm > 0.0)) return MotionCheck{};
+    d_mm.push_back(d);
+    d_se_mm.push_back(se_mm);
+    sum_w += 1.0 / (se_mm * se_mm);
+    sum_wd += d / (se_mm * se_mm);
+  }
+  return CheckMotion(sum_wd / sum_w, d_mm, d_se_mm, options);
+}
+
 std::vector<std::string> OutsideRanges(const CalibratedRanges& ranges,
                                        const DistanceEstimate& estimate, double t_ref_ms,
                                        const std::vector<double>& t_ms,

@@ -1,8 +1,9 @@
 #pragma once
 // The checks of a bracket's estimate that say whether to trust it: motion inside the bracket
-// (its per-exposure distances against their noise) and the calibrated ranges it lies outside
-// (distance, theta, exposures, signal). Used by validate, playback, measure and the Python module
-// (app/processing/bracket_estimates.cc) beside the calibration's health (health.h).
+// (its frames' sizes, or its per-exposure distances, against their noise) and the calibrated
+// ranges it lies outside (distance, theta, exposures, signal). Used by validate, playback, measure
+// and the Python module (app/processing/bracket_estimates.cc) beside the calibration's health
+// (health.h).
 
 #include <string>
 #include <vector>
@@ -25,11 +26,11 @@ struct MotionOptions {
   bool IsValid(std::string* why) const;
 };
 struct MotionCheck {
-  bool assessed = false;  // >= 2 per-exposure estimates with a standard error, a joint one
-  int exposures = 0;
+  bool assessed = false;  // >= 2 estimates (exposures or frames) with a standard error
+  int exposures = 0;  // how many estimates entered (the frames for CheckMotionOfSizes)
   double chi2 = 0.0;
   double chi2_limit = 0.0;  // the quantile it is compared with
-  double spread_mm = 0.0;   // largest minus smallest per-exposure distance
+  double spread_mm = 0.0;   // largest minus smallest of the distances
   bool moving = false;
 };
 // `d_mm` and `d_se_mm` per exposure (a se <= 0 or NaN, or a non-finite d, leaves that exposure
@@ -37,6 +38,20 @@ struct MotionCheck {
 MotionCheck CheckMotion(double joint_d_mm, const std::vector<double>& d_mm,
                         const std::vector<double>& d_se_mm,
                         const MotionOptions& options = MotionOptions());
+
+// Motion from the frames' own sizes, the default where the blob fit gave every frame of the
+// bracket (the reference included) its trace size with a standard error from the frame's own
+// noise (Features::trace_var_px2, _se_px2; estimator/blob_fit.h): each size put on the major
+// axis by the bracket's common major-to-trace ratio, its geometric distance
+// (GeometricModel::DistanceMm) and standard error through the model's slope, then CheckMotion
+// about their inverse-variance weighted mean (n - 1 degrees of freedom, exactly). The noise is
+// each frame's own, so the law holds at every pose: the per-exposure estimates' standard errors
+// come from the calibration's noise law, a function of d alone (1.5x too small at theta 25 deg
+// with a small calibration grid, docs/measure.md "False alarms"). Not assessed when a frame
+// lacks a trace size.
+MotionCheck CheckMotionOfSizes(const GeometricModel& geometric,
+                               const std::vector<const Features*>& frames,
+                               const MotionOptions& options = MotionOptions());
 
 // Which calibrated ranges (model.yaml `ranges:`) a bracket's estimate lies outside, by name:
 // "distance", "theta" (each edge widened by z_limit x the estimate's own standard error, the

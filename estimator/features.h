@@ -158,6 +158,10 @@ struct Features {
   // The blur variance (px^2, pixel area included) inside moment_*_var_px2 where the blob fit set
   // them (its calibrated blur, estimator/blob_fit.h); NaN for the moments' own.
   double size_blur_var_px2 = std::numeric_limits<double>::quiet_NaN();
+  // Where the blob fit set the sizes: its trace size (px^2, the same blur added) and that size's
+  // standard error from the frame's own noise (estimator/blob_fit.h); NaN otherwise.
+  double trace_var_px2 = std::numeric_limits<double>::quiet_NaN();
+  double trace_var_se_px2 = std::numeric_limits<double>::quiet_NaN();
   // The blob fit's own blur (estimator/refocus.h MeasureOwnBlur): the blur variance (px^2, pixel
   // area and crosstalk included) that fits this frame best, its standard error, the disc's
   // variances along its axes at that blur (no blur added) and their slopes d(disc var)/d(blur

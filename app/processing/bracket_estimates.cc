@@ -42,16 +42,22 @@ void FillRow(const CalibrationModel& model, const DistanceEstimate& e, double t_
   row->ok = std::isfinite(e.d_mm) && e.d_mm > 0.0 && e.converged;
 }
 
-// Motion (estimator/bracket_checks.h CheckMotion) of the joint row from its per-exposure rows.
-MotionCheck MotionOfRows(const std::vector<EstimateRow>& per_dt, EstimateRow* joint) {
+// Motion inside the bracket of the joint row (estimator/bracket_checks.h): from the frames' own
+// sizes and errors where the blob fit gave them (CheckMotionOfSizes), otherwise from the
+// per-exposure rows against the joint one (CheckMotion).
+MotionCheck MotionOfRows(const CalibrationModel& model, const std::vector<const Features*>& frames,
+                         const std::vector<EstimateRow>& per_dt, EstimateRow* joint) {
   if (!joint->ok) return MotionCheck{};
-  std::vector<double> d_mm, d_se_mm;
-  for (const EstimateRow& row : per_dt) {
-    if (!row.ok) continue;
-    d_mm.push_back(row.d_mm);
-    d_se_mm.push_back(row.d_std_mm);
+  MotionCheck m = CheckMotionOfSizes(model.geometric, frames);
+  if (!m.assessed) {
+    std::vector<double> d_mm, d_se_mm;
+    for (const EstimateRow& row : per_dt) {
+      if (!row.ok) continue;
+      d_mm.push_back(row.d_mm);
+      d_se_mm.push_back(row.d_std_mm);
+    }
+    m = CheckMotion(joint->d_mm, d_mm, d_se_mm);
   }
-  const MotionCheck m = CheckMotion(joint->d_mm, d_mm, d_se_mm);
   if (m.assessed) {
     joint->motion = m.moving ? "moving" : "static";
     joint->spread_mm = m.spread_mm;
@@ -156,8 +162,8 @@ void EstimateMethodRows(const CalibrationModel& model, const EstimateOptions& op
               : EstimatePair(model, ref, ref_ms, measurements[k], t_ms[k], options);
       FillRow(model, e, ref_ms, {t_ms[k]}, {&ref, &measurements[k]}, &rows[k + 1]);
     }
-    const MotionCheck motion =
-        MotionOfRows(std::vector<EstimateRow>(rows.begin() + 1, rows.end()), &rows[0]);
+    const MotionCheck motion = MotionOfRows(
+        model, frames, std::vector<EstimateRow>(rows.begin() + 1, rows.end()), &rows[0]);
     if (shifted != nullptr) AddBlurUncertainty(model, options, pairs, *shifted, t_ms, &rows);
     if (checks != nullptr) {
       checks->health = health;

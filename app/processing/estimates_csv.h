@@ -66,9 +66,9 @@ struct EstimateRow {
   // Calibration health (estimator/health.h): "ok", "-" (not assessed), "blur_larger" or
   // "blur_smaller" (the optics no longer match the calibration).
   std::string health = "-";
-  // Motion inside the bracket (estimator/bracket_checks.h CheckMotion), on rows whose per-exposure
-  // estimates have standard errors (the default method's joint row): "moving", "static", or "-"
-  // (not assessed); spread_mm = largest minus smallest per-exposure distance (NaN: "-").
+  // Motion inside the bracket (estimator/bracket_checks.h CheckMotionOfSizes, or CheckMotion on
+  // the moments path), on the default method's joint row: "moving", "static", or "-" (not
+  // assessed); spread_mm = largest minus smallest of the frames' (or exposures') distances.
   std::string motion = "-";
   double spread_mm = NAN;
   // The calibrated ranges the estimate lies outside (estimator/bracket_checks.h OutsideRanges:

@@ -38,6 +38,66 @@ TEST(CheckMotion, NeedsTwoExposuresWithStandardErrors) {
   EXPECT_THROW(CheckMotion(2000.0, {1.0}, {}), CheckError);
 }
 
+// A geometric model with no blur: major var = alpha (1000 / d)^2, alpha 60 px^2 (15 px^2 at 2 m,
+// a disc of 7.7 px semi-axis).
+GeometricModel NoBlurGeometric() {
+  GeometricModel g;
+  g.alpha_px2 = 60.0;
+  return g;
+}
+
+// A frame as the blob fit leaves it: a disc whose major-axis variance is `major` and whose trace
+// size (harmonic mean of the axes' variances) is `trace`, with the trace's standard error `se`.
+Features SizedFrame(double major, double trace, double se) {
+  Features f;
+  f.blob_found = true;
+  f.moment_major_var_px2 = major;
+  f.trace_var_px2 = trace;
+  f.trace_var_se_px2 = se;
+  return f;
+}
+
+// Motion from the frames' own sizes: four frames of a static IRED at 2 m (major var 15 px^2, a
+// tilted disc's trace 12 px^2) scattered within their errors are static, with distances on the
+// major axis (the bracket's ratio 15/12 puts each trace there); the same frames with the size
+// shrinking as an IRED receding 10 mm a frame (0.5%) are moving, with the 30 mm spread the
+// sizes imply; a frame without a trace size (the moments' path) leaves it unassessed.
+TEST(CheckMotionOfSizes, JudgesTheFramesSizesAgainstTheirOwnErrors) {
+  const GeometricModel g = NoBlurGeometric();
+  const double se = 0.012;  // 0.1% of the size: 1 mm of distance at 2 m
+  const double noise[4] = {0.8, -1.1, 0.4, -0.2};
+  std::vector<Features> still, moving;
+  for (int k = 0; k < 4; ++k) {
+    still.push_back(SizedFrame(15.0, 12.0 + noise[k] * se, se));
+    const double shrink = 1.0 / ((1.0 + 0.005 * k) * (1.0 + 0.005 * k));  // d grows 0.5% a frame
+    moving.push_back(SizedFrame(15.0 * shrink, 12.0 * shrink, se));
+  }
+  const auto pointers = [](const std::vector<Features>& v) {
+    std::vector<const Features*> p;
+    for (const Features& f : v) p.push_back(&f);
+    return p;
+  };
+  const MotionCheck s = CheckMotionOfSizes(g, pointers(still));
+  ASSERT_TRUE(s.assessed);
+  EXPECT_EQ(s.exposures, 4);
+  EXPECT_FALSE(s.moving);
+  // Each frame's distance error is half its relative size error: 1 mm per se at 2000 mm.
+  EXPECT_NEAR(s.spread_mm, (1.1 + 0.8) * 1.0, 0.02);
+  double mean = 0.0;
+  for (double n : noise) mean += n / 4.0;
+  double chi2 = 0.0;
+  for (double n : noise) chi2 += (n - mean) * (n - mean);
+  EXPECT_NEAR(s.chi2, chi2, 0.01);
+  EXPECT_NEAR(s.chi2_limit, 16.266, 1e-3);  // 3 degrees of freedom
+  const MotionCheck m = CheckMotionOfSizes(g, pointers(moving));
+  ASSERT_TRUE(m.assessed);
+  EXPECT_TRUE(m.moving);
+  EXPECT_NEAR(m.spread_mm, 2000.0 * 0.015, 0.5);
+  still[2].trace_var_se_px2 = NAN;
+  EXPECT_FALSE(CheckMotionOfSizes(g, pointers(still)).assessed);
+  EXPECT_FALSE(CheckMotionOfSizes(GeometricModel(), pointers(moving)).assessed);  // no model
+}
+
 CalibratedRanges Table3Ranges() {
   CalibratedRanges r;
   r.d_min_mm = 1500.0;
