@@ -414,7 +414,11 @@ void SetUpFused(const CalibrationModel& model, const EstimateOptions& options, c
   if (options.method != EstimateMethod::kFused) return;
   p->fused = true;
   p->e_weight = FitWeight(p->e->summary) * options.radiometric_weight;
-  p->s_weight = FitWeight(p->s->summary) * options.radiometric_weight;
+  // A failed Sigma fit (e.g. one with a pole inside the calibrated range, model_poles.h) is no
+  // equation: the distance rests on the geometric ones.
+  p->s_weight = p->s->summary.termination == FitSummary::Termination::kFailed
+                    ? 0.0
+                    : FitWeight(p->s->summary) * options.radiometric_weight;
   p->huber = options.radiometric_huber;
   // Geometric summary residuals are relative distance errors: the weight is for ln d directly.
   if (model.geometric.fitted()) {

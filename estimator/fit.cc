@@ -18,6 +18,7 @@
 
 #include "base/check.h"
 #include "estimator/fit_status.h"
+#include "estimator/model_poles.h"
 
 namespace irdist {
 namespace {
@@ -319,12 +320,13 @@ struct FitInput {
   std::vector<Observation> obs;
   std::vector<int> active;
   bool sigma_free;
+  ModelScaling scaling;
 };
 
 FitInput MakeFitInput(ModelKind kind, ModelForm form, const std::vector<CalibrationSample>& samples,
                       const ModelScaling& scaling, const FitOptions& options) {
   FitInput in{&GetModelSpec(kind), form, MakeObservations(kind, samples, scaling, options), {},
-              false};
+              false, scaling};
   for (int j = 0; j < in.spec->num_coefficients(); ++j) {
     if (IsTermActive(*in.spec, form, j)) in.active.push_back(j);
   }
@@ -466,9 +468,23 @@ void SummariseRefinement(const FitInput& in, const FitOptions& options,
   fs.samples = static_cast<int>(in.obs.size());
 }
 
-// LM (Ceres) from one start; replaces *best when its cost is lower than *best_cost.
+// Where the ratio model c at sigma has a pole inside the calibrated domain (model_poles.h).
+PoleScan PolesOf(const FitInput& in, const std::vector<double>& c, double sigma) {
+  std::vector<std::array<double, kNumModelVars>> vars;
+  std::vector<double> thetas;
+  for (const Observation& o : in.obs) {
+    vars.push_back(o.vars);
+    thetas.push_back(o.theta_deg);
+  }
+  return ScanForPoles(*in.spec, c, sigma, vars, thetas, in.scaling.d_ref_mm, in.scaling.d_scale);
+}
+
+// LM (Ceres) from one start; replaces *best when its cost is lower than *best_cost. A solution
+// with a pole inside the calibrated domain never replaces one without (*best_has_pole says which
+// *best is); the count of such solutions goes to *poles.
 void RefineStart(const FitInput& in, const FitOptions& options, const Start& start, int index,
-                 int count, double* best_cost, FittedModel* best) {
+                 int count, double* best_cost, FittedModel* best, bool* best_has_pole,
+                 int* poles) {
   std::vector<double> c = start.c;
   double sigma = start.sigma;
   const int gauge = FixGauge(*in.spec, in.form, &c);
@@ -478,8 +494,13 @@ void RefineStart(const FitInput& in, const FitOptions& options, const Start& sta
   ceres::Solver::Summary summary;
   ceres::Solve(FitSolverOptions(options), &problem, &summary);
   const double cost = RelativeCost(*in.spec, c, sigma, in.obs, nullptr);
-  if (!(cost < *best_cost)) return;
+  const PoleScan pole = PolesOf(in, c, sigma);
+  *poles += pole.pole ? 1 : 0;
+  const bool better = best->coefficients.empty() || (*best_has_pole && !pole.pole) ||
+                      (*best_has_pole == pole.pole && cost < *best_cost);
+  if (!better) return;
   *best_cost = cost;
+  *best_has_pole = pole.pole;
   best->coefficients = c;
   best->sigma_deg = sigma;
   SummariseRefinement(in, options, summary, start, index, count, best);
@@ -490,6 +511,11 @@ void RefineStart(const FitInput& in, const FitOptions& options, const Start& sta
       ConditioningOf(&problem, free_blocks,
                      FreeParameterNames(*in.spec, in.form, gauge, in.sigma_free)),
       &best->summary);
+  if (pole.pole) {
+    best->summary.termination = FitSummary::Termination::kFailed;
+    best->summary.message += "; " + pole.Note() + ": every start has such a pole (a grid with "
+                             "more distances and angles pins the ratio between them)";
+  }
 }
 
 }  // namespace
@@ -507,11 +533,19 @@ FittedModel FitModel(ModelKind kind, ModelForm form, const std::vector<Calibrati
   if (in.sigma_free) starts.insert(starts.begin(), RefineScanSigma(in, options, starts[0].sigma));
   // 2. LM from the best starts.
   double best_cost = std::numeric_limits<double>::infinity();
+  bool best_has_pole = false;
+  int poles = 0;
   const int count = std::min<int>(options.multi_starts, starts.size());
-  for (int s = 0; s < count; ++s) RefineStart(in, options, starts[s], s, count, &best_cost, &model);
+  for (int s = 0; s < count; ++s) {
+    RefineStart(in, options, starts[s], s, count, &best_cost, &model, &best_has_pole, &poles);
+  }
   if (model.coefficients.empty()) {
     model.summary.message = "no start could be refined";
     return model;
+  }
+  if (poles > 0 && !best_has_pole) {
+    model.summary.message += "; " + std::to_string(poles) +
+                             " solution(s) with a pole inside the calibrated range set aside";
   }
   RelativeCost(*in.spec, model.coefficients, model.sigma_deg, in.obs, &model.summary.residuals);
   model.summary.SetErrorsFromResiduals();

@@ -127,15 +127,21 @@ TEST(Estimate, OutsideCalibratedRangeIsFlagged) {
   EXPECT_NE(x.BriefReport().find("OUTSIDE"), std::string::npos);
 }
 
+// The synthetic rig's exact model with its geometric baseline, every fit's mean error 1e-3.
+CalibrationModel FusedModel(const testing::SyntheticRig& rig) {
+  CalibrationModel model = rig.ExactModel();
+  model.geometric = FitGeometric(rig.Table3());
+  for (FittedModel& m : model.models) m.summary.mean_relative_error = 1e-3;
+  model.geometric.summary.mean_relative_error = 1e-3;
+  return model;
+}
+
 // A Sigma equation the calibration cannot meet (every measurement's Sigma 10% off, as between
 // the distances of a sparse calibration grid) must not outvote the geometric equations: the
 // Huber threshold bounds its pull.
 TEST(Estimate, FusedSolveBoundsTheInfluenceOfAMissedSigmaEquation) {
   const testing::SyntheticRig rig;
-  CalibrationModel model = rig.ExactModel();
-  model.geometric = FitGeometric(rig.Table3());
-  for (FittedModel& m : model.models) m.summary.mean_relative_error = 1e-3;
-  model.geometric.summary.mean_relative_error = 1e-3;
+  const CalibrationModel model = FusedModel(rig);
   Bracket b = MakeBracket(rig, 500.0, 2345.0, 20.0, 20.0);
   for (Features& f : b.measurements) f.sigma *= 1.10;
   EstimateOptions robust;
@@ -150,6 +156,37 @@ TEST(Estimate, FusedSolveBoundsTheInfluenceOfAMissedSigmaEquation) {
   EXPECT_GT(std::abs(d_plain / 2345.0 - 1.0), 0.004);  // the corruption matters
   EXPECT_LT(std::abs(d_robust - 2345.0), 0.25 * std::abs(d_plain - 2345.0));
   // (On the rendered Table 3 validations the threshold never engages: docs/estimator.md.)
+}
+
+// A failed Sigma fit (a pole inside the calibrated range, estimator/model_poles.h) is no equation:
+// a Sigma model 10% off moves the fused distance while the fit is converged, and not at all once
+// the fit says it failed (the same distance as with the exact model, failed too).
+TEST(Estimate, AFailedSigmaFitCastsNoVote) {
+  const testing::SyntheticRig rig;
+  CalibrationModel model = FusedModel(rig);
+  FittedModel* sigma = nullptr;
+  for (FittedModel& m : model.models) {
+    if (m.kind == ModelKind::kFreeSigma) sigma = &m;
+  }
+  ASSERT_NE(sigma, nullptr);
+  const Bracket b = MakeBracket(rig, 500.0, 2345.0, 20.0, 20.0);
+  EstimateOptions plain;
+  plain.radiometric_huber = 0.0;
+  const auto distance = [&] {
+    return EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, plain).joint.d_mm;
+  };
+  const double exact_used = distance();
+  sigma->summary.termination = FitSummary::Termination::kFailed;
+  const double exact_unused = distance();
+  const int numerator = GetModelSpec(ModelKind::kFreeSigma).num_numerator;
+  for (int j = 0; j < numerator; ++j) sigma->coefficients[j] *= 1.10;
+  const double off_unused = distance();
+  sigma->summary.termination = FitSummary::Termination::kConverged;
+  const double off_used = distance();
+  std::printf("Sigma model exact / 10%% off: d %.2f / %.2f mm used, %.2f / %.2f mm failed\n",
+              exact_used, off_used, exact_unused, off_unused);
+  EXPECT_GT(std::abs(off_used - exact_used), 2.0);  // a used equation pulls
+  EXPECT_EQ(off_unused, exact_unused);              // a failed one does not
 }
 
 // The reference frame's size is one more geometric equation, weighted by its share of the light:

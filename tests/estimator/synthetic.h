@@ -232,6 +232,7 @@ struct SyntheticRig {
       fm.form = ModelForm::kFull;
       fm.coefficients = Coefficients(k);
       fm.sigma_deg = sigma_deg;
+      fm.summary.termination = FitSummary::Termination::kConverged;  // exact: a failed fit is unused
       m.models.push_back(fm);
     }
     return m;

@@ -2,8 +2,10 @@
 // own, `irdist station` places the IRED, and `irdist measure` / `irdist snap` use the sim's camera
 // (they start no rig of their own). A small calibration first (3 distances x 4 angles x 2
 // currents), then three poses set by `irdist station`: every estimate within the validation goals
-// (distance 1%, theta 1 deg); `--at` is refused while the sim runs; at the end the IRED is switched
-// off and the sim stops on SIGINT, removing its state file.
+// (distance 1%, theta 1 deg), one of them between the grid's distances at a small theta (2100 mm,
+// tilt 5: the grid's Eq. 18 fit has a pole at 2000 mm, which once pinned such a pose's estimate
+// there, estimator/model_poles.h); `--at` is refused while the sim runs; at the end the IRED is
+// switched off and the sim stops on SIGINT, removing its state file.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <stdlib.h>
@@ -164,7 +166,7 @@ TEST_F(MeasureStation, EstimatesAgreeWithThePosesSetByIrdistStation) {
   EXPECT_NE(output.find("irdist station --rig virtual move"), std::string::npos) << output;
 
   for (const Pose& pose :
-       {Pose{"1500", "15", "0", 1500.0, 15.0}, Pose{"2000", "0", "5", 2000.0, 5.0},
+       {Pose{"1500", "15", "0", 1500.0, 15.0}, Pose{"2100", "0", "5", 2100.0, 5.0},
         Pose{"2500", "25", "0", 2500.0, 25.0}}) {
     SCOPED_TRACE(std::string("slide ") + pose.slide_mm + " mm");
     PlaceAndMeasure(pose, model);
