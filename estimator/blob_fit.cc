@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include "base/pi.h"
+#include "estimator/blob_fit_errors.h"
 #include "estimator/crosstalk_kernel.h"
 #include "estimator/normal_lm.h"
 #include "estimator/normal_table.h"
@@ -404,7 +405,8 @@ std::vector<double> NoiseVariances(const std::vector<Pixel>& pixels, const Windo
   return var;
 }
 
-using Covariance = Eigen::Matrix<double, kParams, kParams>;
+using Covariance = BlobCovariance;
+static_assert(kParams == BlobCovariance::RowsAtCompileTime, "the covariance's parameters");
 
 // The parameters' covariance at the solution, (J^T J)^-1 of the weighted residuals (as
 // ceres::Covariance, without its sparse machinery: J^T J's eigen-decomposition); false when J^T J
@@ -418,11 +420,6 @@ bool FitCovariance(const WindowResiduals& residuals, const double* v, Covariance
   if (!(lambda(0) > 1e-14 * lambda(kParams - 1))) return false;
   *c = eigen.eigenvectors() * lambda.cwiseInverse().asDiagonal() * eigen.eigenvectors().transpose();
   return true;
-}
-
-// The noise of P's anisotropy a = ((P11 - P22) / 2, P12): E |a_noise|^2 = var a1 + var a2.
-double AnisotropyNoiseVar(const Covariance& c) {
-  return 0.25 * (c(2, 2) + c(4, 4) - 2.0 * c(2, 4)) + c(3, 3);
 }
 
 // One weighted least-squares pass (ceres::TinySolver) from v; returns the weighted cost per pixel.
@@ -440,20 +437,6 @@ double SolvePass(const WindowResiduals& residuals, double* v, bool* ok,
   *ok = std::isfinite(summary.final_cost) && v[2] > 0.0 && v[4] > 0.0 && v[2] * v[4] > v[3] * v[3];
   if (*ok && covariance != nullptr) *covariance_ok = FitCovariance(residuals, v, covariance);
   return 2.0 * summary.final_cost / static_cast<double>(residuals.NumResiduals());
-}
-
-// The disc's trace size 1 / (4 p), p = tr(P) / 2 (a circle's A^2/4), and its standard error from
-// P's covariance, d(1 / 4p) = -dp / 4p^2: linear in P, without the round-blob rule's shrink, which
-// moves with the frame's signal. A fit missing its pixels beyond their noise (chi2 per pixel > 1)
-// widens it by sqrt(chi2).
-void TraceSize(const Covariance& c, const double* v, double chi2_per_pixel, double* var_px2,
-               double* se_px2) {
-  const double p_mean = 0.5 * (v[2] + v[4]);
-  const double var_p = 0.25 * (c(2, 2) + c(4, 4) + 2.0 * c(2, 4));
-  *var_px2 = 0.25 / p_mean;
-  *se_px2 = var_p >= 0.0 && p_mean > 0.0
-                ? std::sqrt(var_p * std::max(1.0, chi2_per_pixel)) / (4.0 * p_mean * p_mean)
-                : std::numeric_limits<double>::quiet_NaN();
 }
 
 // P's eigenvalues tr/2 -+ |a|, a = ((P11 - P22) / 2, P12). The fitted |a|^2 is the true one plus
@@ -541,6 +524,7 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
   out.ok = p_small > 0.0 && out.raw_major_var_px2 > 0.0;
   if (covariance_ok && out.ok) {
     TraceSize(covariance, v, chi2, &out.trace_var_px2, &out.trace_var_se_px2);
+    out.major_var_se_px2 = MajorVarSe(covariance, v, noise_var, p_small, chi2);
   }
   out.center_px = cv::Point2d(v[0] + window.x, v[1] + window.y);
   out.major_var_px2 = 0.25 / p_small;
@@ -591,6 +575,7 @@ bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationMod
   features->size_blur_var_px2 = blur;
   features->trace_var_px2 = fit.trace_var_px2 + blur;
   features->trace_var_se_px2 = fit.trace_var_se_px2;
+  features->major_var_se_px2 = fit.major_var_se_px2;
   // The fitted axes' direction with their variances: the moments' own is another (noisier, for a
   // near-round blob unrelated) measurement, and the line of sight turns the matrix of the two.
   if (features->ellipse_moments.valid) features->ellipse_moments.angle_deg = fit.angle_deg;

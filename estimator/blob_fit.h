@@ -62,6 +62,8 @@ struct BlobFitResult {
   // round-blob rule's shrink: the motion check's size (bracket_checks.h CheckMotionOfSizes).
   double trace_var_px2 = std::numeric_limits<double>::quiet_NaN();
   double trace_var_se_px2 = std::numeric_limits<double>::quiet_NaN();
+  // The standard error of major_var_px2 (the round-blob rule's slope included); NaN as above.
+  double major_var_se_px2 = std::numeric_limits<double>::quiet_NaN();
   double angle_deg = 0.0;      // major axis direction, degrees from +x
   double blur_var_px2 = 0.0;   // the calibrated blur variance used (pixel area included)
   double crosstalk_var_px2 = 0.0;  // the part of it after the sampling, as used

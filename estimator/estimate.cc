@@ -49,6 +49,9 @@ struct Problem {
   double theta_prior_rad = 0.0;
   double theta_prior_weight = 0.0;  // 1 / sd in rad; 0: no prior
   double huber = 0.0;               // kFused: Huber threshold of the radiometric residuals
+  // kFused: the measurement frames' own noise of ln d (rms, from their blob-fit sizes' standard
+  // errors: FrameNoiseRel); 0 = the calibration's noise law GeometricModel::NoiseRel(d).
+  double frame_noise_rel = 0.0;
 };
 
 // The residual whose square is the Huber loss (x2) of r with threshold k: r itself within k,
@@ -215,15 +218,16 @@ void NormalMatrices(const Problem& p, const double x[2], Eigen::Matrix2d* h_equa
   }
 }
 
-// kFused: residuals are in units of their calibration errors. Where the geometric fit has a noise
-// model, the equations' rows are rescaled from the mean fit error to the noise expected at this d
-// (one factor for all: their ratios stay as weighted); the theta prior's row keeps its own sd.
-// Then the covariance is (J^T J)^-1.
+// kFused: residuals are in units of their calibration errors. The equations' rows are rescaled
+// from the geometric fit's mean error to the frames' own noise of ln d (their blob-fit sizes'
+// standard errors) or, without it, to the calibration's noise law at this d (one factor for all:
+// their ratios stay as weighted); the theta prior's row keeps its own sd. Then the covariance is
+// (J^T J)^-1.
 void FusedUncertainty(const Problem& p, const Eigen::Matrix2d& h_equations,
                       const Eigen::Matrix2d& h_prior, bool solve_theta, DistanceEstimate* out) {
   Eigen::Matrix2d h = h_equations + h_prior;
   const GeometricModel& geo = p.model->geometric;
-  const double noise = geo.NoiseRel(out->d_mm);
+  const double noise = p.frame_noise_rel > 0.0 ? p.frame_noise_rel : geo.NoiseRel(out->d_mm);
   if (noise > 0.0 && geo.summary.mean_relative_error > 0.0) {
     const double scale = geo.summary.mean_relative_error / noise;
     h = scale * scale * h_equations + h_prior;
@@ -403,6 +407,24 @@ double GeometricLnD(const CalibrationModel& model, const Features& f) {
   return std::isfinite(d_mm) ? std::log(d_mm) : std::numeric_limits<double>::quiet_NaN();
 }
 
+// The rms over `frames` of each frame's noise of ln d: its blob-fit major-axis variance's
+// standard error through the geometric model's slope. 0 when a frame has none (the moments'
+// path, no model).
+double FrameNoiseRel(const CalibrationModel& model, const Features* const* frames, int n) {
+  const GeometricModel& g = model.geometric;
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const Features& f = *frames[i];
+    const double var = f.moment_major_var_px2;
+    const double se = f.major_var_se_px2;
+    if (!g.fitted() || !(se > 0.0) || !(var > se)) return 0.0;
+    const double noise = 0.5 * std::fabs(std::log(g.DistanceMm(var - se) / g.DistanceMm(var + se)));
+    if (!std::isfinite(noise) || !(noise > 0.0)) return 0.0;
+    sum += noise * noise;
+  }
+  return n > 0 ? std::sqrt(sum / n) : 0.0;
+}
+
 // Weight of an equation: 1 / its calibration fit's mean relative error (floored).
 double FitWeight(const FitSummary& s) {
   return 1.0 / std::max(s.mean_relative_error > 0.0 ? s.mean_relative_error : 1.0, 1e-6);
@@ -502,6 +524,7 @@ DistanceEstimate EstimatePair(const CalibrationModel& model, const Features& ref
   Problem p{&model, e, s, !e->degenerate, &diff, 1};
   SetUpFused(model, options, &geo, theta0, &p);
   SetUpReferenceSize(model, options, reference, t_ref_ms, &t_ms, 1, &p);
+  p.frame_noise_rel = FrameNoiseRel(model, &pair[1], 1);
   DistanceEstimate out = Solve(p, theta0, options);
   out.d_geometric_mm = MeanFinite(&geo, 1);
   return out;
@@ -540,6 +563,8 @@ BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& r
     Problem p{&model, e, s, !e->degenerate, &diffs[i], 1};
     SetUpFused(model, options, &geo[i], thetas[i], &p);
     SetUpReferenceSize(model, options, reference, t_ref_ms, &t_ms[i], 1, &p);
+    const Features* frame = &measurements[i];
+    p.frame_noise_rel = FrameNoiseRel(model, &frame, 1);
     out.per_exposure.push_back(Solve(p, thetas[i], options));
     out.per_exposure.back().d_geometric_mm = MeanFinite(&geo[i], 1);
   }
@@ -547,6 +572,9 @@ BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& r
   Problem joint{&model, e, s, !e->degenerate, diffs, n};
   SetUpFused(model, options, geo, theta0, &joint);
   SetUpReferenceSize(model, options, reference, t_ref_ms, t_ms.data(), n, &joint);
+  std::vector<const Features*> frames;
+  for (const Features& f : measurements) frames.push_back(&f);
+  joint.frame_noise_rel = FrameNoiseRel(model, frames.data(), n);
   const DistanceEstimate* best = &out.per_exposure[0];
   for (const DistanceEstimate& d : out.per_exposure) {
     if (d.residual_e + d.residual_sigma < best->residual_e + best->residual_sigma) best = &d;

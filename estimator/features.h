@@ -162,6 +162,8 @@ struct Features {
   // standard error from the frame's own noise (estimator/blob_fit.h); NaN otherwise.
   double trace_var_px2 = std::numeric_limits<double>::quiet_NaN();
   double trace_var_se_px2 = std::numeric_limits<double>::quiet_NaN();
+  // And the standard error of moment_major_var_px2 where the blob fit set it; NaN otherwise.
+  double major_var_se_px2 = std::numeric_limits<double>::quiet_NaN();
   // The blob fit's own blur (estimator/refocus.h MeasureOwnBlur): the blur variance (px^2, pixel
   // area and crosstalk included) that fits this frame best, its standard error, the disc's
   // variances along its axes at that blur (no blur added) and their slopes d(disc var)/d(blur

@@ -10,8 +10,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <Eigen/Dense>
+
+#include "base/check.h"
 
 namespace irdist {
 
@@ -44,6 +47,26 @@ struct NormalLmOptions {
   // for unit-variance residuals) of the minimum: the guarantee function_tolerance's last accepted
   // step gives, one model evaluation sooner.
   double decrement_tolerance = 0.0;
+  // The first problem, naming the field, in *why (empty when valid).
+  bool IsValid(std::string* why) const {
+    std::string reason;
+    if (max_iterations < 1) reason = "max_iterations below 1";
+    const double tolerances[] = {gradient_tolerance, parameter_tolerance, function_tolerance,
+                                 cost_threshold, decrement_tolerance};
+    const char* names[] = {"gradient_tolerance", "parameter_tolerance", "function_tolerance",
+                           "cost_threshold", "decrement_tolerance"};
+    for (int i = 0; i < 5 && reason.empty(); ++i) {
+      if (!(tolerances[i] >= 0.0) || !std::isfinite(tolerances[i])) {
+        reason = std::string(names[i]) + " not a finite number >= 0";
+      }
+    }
+    if (reason.empty() && !(initial_trust_region_radius > 0.0 &&
+                            std::isfinite(initial_trust_region_radius))) {
+      reason = "initial_trust_region_radius not a finite number > 0";
+    }
+    if (why != nullptr) *why = reason;
+    return reason.empty();
+  }
 };
 
 struct NormalLmSummary {
@@ -61,7 +84,10 @@ class NormalLm {
   using Vector = Eigen::Matrix<double, N, 1>;
   using Matrix = Eigen::Matrix<double, N, N>;
   NormalLm(const NormalProblem<N>& problem, const NormalLmOptions& options)
-      : problem_(problem), options_(options) {}
+      : problem_(problem), options_(options) {
+    std::string why;
+    IRDIST_CHECK(options.IsValid(&why), "NormalLmOptions: " + why);
+  }
 
   NormalLmSummary Solve(Vector* x_inout) {
     Vector& x = *x_inout;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "base/check.h"
 #include "base/pi.h"
 
 namespace irdist {
@@ -52,6 +53,8 @@ double Theta0(const CalibrationModel& model, const Features& f,
 // calibrated blur removed; falls back to Theta0 of `fallback` when no frame has moments.
 double Theta0Combined(const CalibrationModel& model, const Features* const* frames, int count,
                       const Features& fallback, const ThetaStartOptions& options) {
+  std::string why;
+  IRDIST_CHECK(options.IsValid(&why), "ThetaStartOptions: " + why);
   if (!options.bracket_moments || !model.geometric.fitted()) {
     return Theta0(model, fallback, options);
   }

@@ -3,6 +3,8 @@
 // signal-weighted moment matrices of a bracket's frames or one frame's, with the calibrated blur
 // removed (EstimateOptions::theta_source and theta_correction).
 
+#include <string>
+
 #include "estimator/features.h"
 #include "estimator/fit.h"
 
@@ -12,6 +14,13 @@ struct ThetaStartOptions {
   bool from_features = false;   // ThetaSource::kFeatures: the frame's own theta0
   bool bracket_moments = true;  // ThetaSource::kBracketMoments: the frames' moments together
   bool correction = true;       // through the model's calibrated theta correction when it has one
+  // The first problem in *why (empty when valid): one source, never both.
+  bool IsValid(std::string* why) const {
+    const std::string reason =
+        from_features && bracket_moments ? "from_features and bracket_moments both set" : "";
+    if (why != nullptr) *why = reason;
+    return reason.empty();
+  }
 };
 
 // theta0 (deg) from the signal-weighted mean of the frames' moment matrices (bracket_moments),

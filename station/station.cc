@@ -112,8 +112,25 @@ void CheckStationRoles(const StationSpec& spec) {
   CheckAxisDrivers(spec, drivers_of);
 }
 
+bool StationOptions::IsValid(std::string* why) const {
+  std::string reason;
+  for (const auto& [name, path] : ports) {
+    if (name.empty() || path.empty()) {
+      reason = "ports: an entry without a device name or a path ('" + name + "=" + path + "')";
+      break;
+    }
+  }
+  if (reason.empty() && move_timeout <= std::chrono::milliseconds::zero()) {
+    reason = "move_timeout not above 0 ms";
+  }
+  if (why != nullptr) *why = reason;
+  return reason.empty();
+}
+
 Station::Station(const StationSpec& spec, StationOptions options)
     : spec_(spec), options_(std::move(options)) {
+  std::string why;
+  IRDIST_CHECK(options_.IsValid(&why), "StationOptions: " + why);
   CheckStationRoles(spec_);
   for (const DeviceSpec& device : spec_.devices) OpenDevice(device);
   BindRoles();

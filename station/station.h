@@ -53,6 +53,8 @@ struct StationOptions {
   // The destructor switches the IRED off (every run). `irdist station current` leaves it on:
   // false also keeps the source's output as it is found (CurrentSource::KeepOutput()).
   bool off_at_exit = true;
+  // The first problem, naming the field, in *why (empty when valid).
+  bool IsValid(std::string* why) const;
 };
 
 // The measured IRED current differs from its set-point by more than the tolerance (an open

@@ -1,9 +1,11 @@
 #include "app/runs/linearity_check.h"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "acquisition/aravis_camera.h"
+#include "base/check.h"
 #include "base/regular_file.h"
 #include "base/safe_file.h"
 
@@ -38,9 +40,24 @@ bool NeedsFirstPoseLinearity(const std::string& recording_dir, bool resume) {
   return text.find("\npassed: true\n") == std::string::npos;
 }
 
+bool FirstPoseLinearityOptions::IsValid(std::string* why) const {
+  std::string reason;
+  if (recording_dir.empty()) {
+    reason = "recording_dir is empty";
+  } else if (!(probe_exposure_us > 0.0) || !std::isfinite(probe_exposure_us)) {
+    reason = "probe_exposure_us not a finite number > 0";
+  } else if (bit_depth < 8 || bit_depth > 16) {
+    reason = "bit_depth not in [8, 16]";
+  }
+  if (why != nullptr) *why = reason;
+  return reason.empty();
+}
+
 LinearityResult CheckFirstPoseLinearity(AravisCamera& camera, const std::function<void()>& fire,
                                         const FirstPoseLinearityOptions& options,
                                         std::ostream& out) {
+  std::string invalid;
+  IRDIST_CHECK(options.IsValid(&invalid), "FirstPoseLinearityOptions: " + invalid);
   const auto [min_us, max_us] = camera.ExposureBoundsUs();
   const LinearityResult result = MeasureCameraLinearity(
       camera, fire, options.probe_exposure_us, min_us,

@@ -20,6 +20,8 @@ struct FirstPoseLinearityOptions {
   bool allow_nonlinear = false;  // --allow-nonlinear: report, then go on
   double probe_exposure_us = 0;  // the series' first probe (the bracket's reference exposure)
   int bit_depth = 12;            // the pixel format's
+  // The first problem, naming the field, in *why (empty when valid).
+  bool IsValid(std::string* why) const;
 };
 
 // Whether a calibration's recording still needs the series: a new one does; a resumed one does

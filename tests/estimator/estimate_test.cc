@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "base/check.h"
+#include "estimator/theta_start.h"
 #include "tests/estimator/synthetic.h"
 
 namespace irdist {
@@ -22,6 +23,21 @@ Bracket MakeBracket(const testing::SyntheticRig& rig, double bias, double d, dou
   b.reference = rig.Frame(8.0, bias, d, theta, theta0);
   for (double t : b.t_ms) b.measurements.push_back(rig.Frame(t, bias, d, theta, theta0));
   return b;
+}
+
+// theta0 comes from one source: the frame's own features or the bracket's moments, never both.
+TEST(ThetaStartOptions, RefusesTwoSources) {
+  std::string why;
+  EXPECT_TRUE(ThetaStartOptions().IsValid(&why)) << why;
+  ThetaStartOptions both;
+  both.from_features = true;
+  both.bracket_moments = true;
+  EXPECT_FALSE(both.IsValid(&why));
+  EXPECT_NE(why.find("both"), std::string::npos) << why;
+  const testing::SyntheticRig rig;
+  const Features f = rig.Frame(30.0, 500.0, 2000.0, 10.0, 10.0);
+  const Features* frames[1] = {&f};
+  EXPECT_THROW(Theta0Combined(rig.ExactModel(), frames, 1, f, both), CheckError);
 }
 
 TEST(EstimateOptions, DefaultsAreValid) {
@@ -187,6 +203,33 @@ TEST(Estimate, AFailedSigmaFitCastsNoVote) {
               exact_used, off_used, exact_unused, off_unused);
   EXPECT_GT(std::abs(off_used - exact_used), 2.0);  // a used equation pulls
   EXPECT_EQ(off_unused, exact_unused);              // a failed one does not
+}
+
+// The fused estimate's standard errors carry the frames' own noise: with every measurement frame's
+// major-axis variance given a standard error (the blob fit's), the distance's standard error is
+// that noise through the equations (twice the frames' errors: twice the distance's, the estimate
+// unchanged); without it, the calibration's noise law.
+TEST(Estimate, TheStandardErrorsCarryTheFramesOwnNoise) {
+  const testing::SyntheticRig rig;
+  CalibrationModel model = FusedModel(rig);
+  model.geometric.noise_rel_at_1m = 2e-4;  // the law: 0.02% at 1 m
+  model.geometric.noise_exponent = 1.0;
+  Bracket b = MakeBracket(rig, 500.0, 2345.0, 20.0, 20.0);
+  const auto estimate = [&] {
+    return EstimateBracket(model, b.reference, 8.0, b.measurements, b.t_ms, EstimateOptions())
+        .joint;
+  };
+  const DistanceEstimate law = estimate();
+  for (Features& f : b.measurements) f.major_var_se_px2 = 1e-3 * f.moment_major_var_px2;
+  const DistanceEstimate own = estimate();
+  for (Features& f : b.measurements) f.major_var_se_px2 *= 2.0;
+  const DistanceEstimate twice = estimate();
+  EXPECT_EQ(own.d_mm, law.d_mm);
+  EXPECT_EQ(twice.d_mm, law.d_mm);
+  EXPECT_NEAR(twice.d_std_mm / own.d_std_mm, 2.0, 2e-3);  // the theta prior keeps its own sd
+  // 0.1% of the variance is ~0.05% of d per frame: not the law's 0.047% (2e-4 x 2.345).
+  EXPECT_GT(std::abs(own.d_std_mm / law.d_std_mm - 1.0), 0.02)
+      << own.d_std_mm << " " << law.d_std_mm;
 }
 
 // The reference frame's size is one more geometric equation, weighted by its share of the light:

@@ -118,5 +118,32 @@ TEST(NormalLm, TheDecrementStopSavesTheLastStep) {
   EXPECT_LT(dx.dot(at_minimum.jtj * dx) / (0.02 * 0.02), 1e-4);
 }
 
+// Options refuse each bad field by name, and the solver refuses bad options.
+TEST(NormalLmOptions, RefusesEachBadFieldByName) {
+  std::string why;
+  EXPECT_TRUE(NormalLmOptions().IsValid(&why)) << why;
+  NormalLmOptions o;
+  o.max_iterations = 0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("max_iterations"), std::string::npos) << why;
+  o = NormalLmOptions();
+  o.function_tolerance = -1.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("function_tolerance"), std::string::npos) << why;
+  o = NormalLmOptions();
+  o.decrement_tolerance = NAN;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("decrement_tolerance"), std::string::npos) << why;
+  o = NormalLmOptions();
+  o.initial_trust_region_radius = 0.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("initial_trust_region_radius"), std::string::npos) << why;
+  EXPECT_FALSE(o.IsValid(nullptr));
+  const Decay decay;
+  const DecayNormal problem(&decay);
+  Eigen::Vector3d x(1.0, 0.2, 0.0);
+  EXPECT_THROW(SolveNormalLm(problem, o, &x), CheckError);
+}
+
 }  // namespace
 }  // namespace irdist

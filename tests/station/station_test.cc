@@ -12,6 +12,21 @@ namespace {
 
 using testing::VirtualStationRig;
 
+// The options refuse each bad field by name: a port override without a device name or a path, a
+// move timeout of 0.
+TEST(StationOptions, RefusesEachBadFieldByName) {
+  std::string why;
+  EXPECT_TRUE(StationOptions().IsValid(&why)) << why;
+  StationOptions o;
+  o.ports["slide"] = "";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("ports"), std::string::npos) << why;
+  o = StationOptions();
+  o.move_timeout = std::chrono::milliseconds(0);
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("move_timeout"), std::string::npos) << why;
+}
+
 TEST(Station, IdentifiesEveryDeviceBeforeAnythingMoves) {
   VirtualStationRig rig(100.0);
   const std::vector<DeviceIdentity>& ids = rig.station->Identify();

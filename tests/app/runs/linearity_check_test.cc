@@ -55,6 +55,27 @@ Outcome FirstPose(const std::string& rig_path, const char* serial, bool allow) {
   return out;
 }
 
+// The options refuse each bad field by name.
+TEST(FirstPoseLinearityOptions, RefusesEachBadFieldByName) {
+  FirstPoseLinearityOptions o;
+  o.recording_dir = "/tmp/recording";
+  o.probe_exposure_us = 8000.0;
+  std::string why;
+  EXPECT_TRUE(o.IsValid(&why)) << why;
+  FirstPoseLinearityOptions bad = o;
+  bad.recording_dir.clear();
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("recording_dir"), std::string::npos) << why;
+  bad = o;
+  bad.probe_exposure_us = 0.0;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("probe_exposure_us"), std::string::npos) << why;
+  bad = o;
+  bad.bit_depth = 17;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("bit_depth"), std::string::npos) << why;
+}
+
 TEST(FirstPoseLinearity, ALinearCameraPassesAndTheRecordingKeepsTheSeries) {
   const Outcome o = FirstPose(testing::VirtualRigWithCameraKeys("fp_linear", ""), "IRDLIN1", false);
   EXPECT_EQ(o.error, "");
