@@ -28,14 +28,6 @@ constexpr double kChi2Tolerance = 1e-4;
 // step changing the chi^2 by this little moves by a small fraction of a noise sd, and the last
 // pass converges to its tolerance whatever its start.
 constexpr double kWeightsPassTolerance = 0.5;
-// The pixel's spread PixelMean folds into the blur: 5/64 px^2 per axis, the variance of a 4x4 grid
-// of sub-samples (offsets +-1/8, +-3/8), against the box's 1/12. The fit integrated each pixel on
-// that grid until the model went to one evaluation per pixel (for speed); with this
-// spread the two agree to 3e-4 of the size variance on a 5 px disc and 1e-4 from 15 px, and the
-// accuracy study's figures did not move. With 1/12, discs of 5-8 px came out 0.1% smaller: the
-// first-order edge model's own error, which grows with blur / radius, is partly offset by the
-// smaller spread (docs/estimator.md "The blob fit").
-constexpr double kPixelSpreadVarPx2 = 5.0 / 64.0;
 // Parameters: centre x, y (relative to the fit's origin), P11, P12, P22, amplitude, background.
 constexpr int kParams = 7;
 
