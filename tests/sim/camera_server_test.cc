@@ -526,9 +526,12 @@ TEST(CameraServerPort, SecondCameraOnLoopbackFailsClearly) {
 }
 
 // The blob's intensity-weighted width (2 sigma along x, px) in a Mono12 frame and its standard
-// deviation from the frame's noise: the moments of a box around the brightest pixel reaching
+// deviation from the frame's noise: the moments of a box around the blob's centre reaching
 // `reach_px` from it, less the frame's median (black level and dark signal). Each pixel's
-// variance is the background's (from the median absolute deviation) plus its shot noise.
+// variance is the background's (from the median absolute deviation) plus its shot noise. The
+// centre is the centroid of the pixels above half the peak: the brightest pixel of a flat-topped
+// disc lies anywhere on it, and a box around one near the edge cut the far side off (a width
+// 4.6 sd small on 1 frame of 40, 2026-12-04).
 struct Width {
   double px = 0.0, sd_px = 0.0;
 };
@@ -550,7 +553,14 @@ Width BlobWidth(ArvBuffer* buffer, int reach_px, double gain_dn_per_e) {
     deviations.push_back(std::fabs(*it - background));
   }
   const double background_var = std::pow(1.4826 * median(deviations), 2);
-  const cv::Rect box = cv::Rect(peak.x - reach_px, peak.y - reach_px, 2 * reach_px + 1,
+  const double half = 0.5 * (background + frame.at<double>(peak));
+  cv::Mat mask;
+  cv::compare(frame, half, mask, cv::CMP_GT);
+  const cv::Moments m = cv::moments(mask, true);
+  const cv::Point centre = m.m00 > 0.0 ? cv::Point(static_cast<int>(std::lround(m.m10 / m.m00)),
+                                                    static_cast<int>(std::lround(m.m01 / m.m00)))
+                                        : peak;
+  const cv::Rect box = cv::Rect(centre.x - reach_px, centre.y - reach_px, 2 * reach_px + 1,
                                 2 * reach_px + 1) & cv::Rect(0, 0, w, h);
   double sum = 0.0, sx = 0.0, sxx = 0.0;
   for (int r = box.y; r < box.y + box.height; ++r) {
