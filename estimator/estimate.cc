@@ -572,9 +572,9 @@ BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& r
   Problem joint{&model, e, s, !e->degenerate, diffs, n};
   SetUpFused(model, options, geo, theta0, &joint);
   SetUpReferenceSize(model, options, reference, t_ref_ms, t_ms.data(), n, &joint);
-  std::vector<const Features*> frames;
-  for (const Features& f : measurements) frames.push_back(&f);
-  joint.frame_noise_rel = FrameNoiseRel(model, frames.data(), n);
+  const Features* frames[kMaxBracketExposures];
+  for (int i = 0; i < n; ++i) frames[i] = &measurements[i];
+  joint.frame_noise_rel = FrameNoiseRel(model, frames, n);
   const DistanceEstimate* best = &out.per_exposure[0];
   for (const DistanceEstimate& d : out.per_exposure) {
     if (d.residual_e + d.residual_sigma < best->residual_e + best->residual_sigma) best = &d;
