@@ -10,6 +10,20 @@
 
 namespace irdist {
 
+namespace {
+
+// g^T C g over P's entries (P11, P12, P22): the variance of a linear function of P with gradient g.
+double PVariance(const BlobCovariance& c, const Eigen::Vector3d& g) {
+  const int index[3] = {2, 3, 4};
+  double var = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) var += g(i) * c(index[i], index[j]) * g(j);
+  }
+  return var;
+}
+
+}  // namespace
+
 double AnisotropyNoiseVar(const BlobCovariance& c) {
   return 0.25 * (c(2, 2) + c(4, 4) - 2.0 * c(2, 4)) + c(3, 3);
 }
@@ -17,7 +31,7 @@ double AnisotropyNoiseVar(const BlobCovariance& c) {
 void TraceSize(const BlobCovariance& c, const double* v, double chi2_per_pixel, double* var_px2,
                double* se_px2) {
   const double p_mean = 0.5 * (v[2] + v[4]);
-  const double var_p = 0.25 * (c(2, 2) + c(4, 4) + 2.0 * c(2, 4));
+  const double var_p = PVariance(c, Eigen::Vector3d(0.5, 0.0, 0.5));
   *var_px2 = 0.25 / p_mean;
   *se_px2 = var_p >= 0.0 && p_mean > 0.0
                 ? std::sqrt(var_p * std::max(1.0, chi2_per_pixel)) / (4.0 * p_mean * p_mean)
@@ -38,11 +52,7 @@ double MajorVarSe(const BlobCovariance& c, const double* v, double noise_var, do
   }
   Eigen::Vector3d g(0.5, 0.0, 0.5);  // d p_small / d(P11, P12, P22)
   if (norm > 0.0) g -= slope * Eigen::Vector3d(0.5 * a1 / norm, a2 / norm, -0.5 * a1 / norm);
-  const int index[3] = {2, 3, 4};
-  double var_p = 0.0;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) var_p += g(i) * c(index[i], index[j]) * g(j);
-  }
+  const double var_p = PVariance(c, g);
   if (!(var_p >= 0.0) || !(p_small > 0.0)) return std::numeric_limits<double>::quiet_NaN();
   return std::sqrt(var_p * std::max(1.0, chi2_per_pixel)) / (4.0 * p_small * p_small);
 }

@@ -87,8 +87,7 @@ MotionCheck CheckMotionOfSizes(const GeometricModel& geometric,
   for (const Features* f : frames) {
     const double var = ratio * f->trace_var_px2, se = ratio * f->trace_var_se_px2;
     const double d = geometric.DistanceMm(var);
-    const double se_mm =
-        0.5 * std::fabs(geometric.DistanceMm(var - se) - geometric.DistanceMm(var + se));
+    const double se_mm = geometric.DistanceSeMm(var, se);
     if (!std::isfinite(d) || !(se_mm > 0.0)) return MotionCheck{};
     d_mm.push_back(d);
     d_se_mm.push_back(se_mm);

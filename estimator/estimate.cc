@@ -418,7 +418,7 @@ double FrameNoiseRel(const CalibrationModel& model, const Features* const* frame
     const double var = f.moment_major_var_px2;
     const double se = f.major_var_se_px2;
     if (!g.fitted() || !(se > 0.0) || !(var > se)) return 0.0;
-    const double noise = 0.5 * std::fabs(std::log(g.DistanceMm(var - se) / g.DistanceMm(var + se)));
+    const double noise = g.DistanceSeMm(var, se) / g.DistanceMm(var);
     if (!std::isfinite(noise) || !(noise > 0.0)) return 0.0;
     sum += noise * noise;
   }

@@ -157,6 +157,9 @@ struct GeometricModel {
   double MajorVarPx2(double d_mm) const { return alpha_px2 * 1e6 / (d_mm * d_mm) + BlurVarPx2(d_mm); }
   // The distance (mm) whose expected major-axis variance is major_var_px2; NaN when none.
   double DistanceMm(double major_var_px2) const;
+  // The standard error (mm) of DistanceMm for a major-axis variance with standard error se_px2,
+  // through the model's slope: half the distances at var -+ se apart. NaN when either is none.
+  double DistanceSeMm(double major_var_px2, double se_px2) const;
   // sd(d) above; 0 when the noise model is not fitted.
   double NoiseRel(double d_mm) const {
     return noise_rel_at_1m > 0.0 ? noise_rel_at_1m * std::pow(d_mm / 1000.0, noise_exponent)

@@ -14,6 +14,10 @@
 
 namespace irdist {
 
+double GeometricModel::DistanceSeMm(double major_var_px2, double se_px2) const {
+  return 0.5 * std::fabs(DistanceMm(major_var_px2 - se_px2) - DistanceMm(major_var_px2 + se_px2));
+}
+
 namespace {
 
 // The residuals' rms at each calibrated distance (groups of >= 3 samples), then
