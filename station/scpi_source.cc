@@ -28,6 +28,10 @@ constexpr char kName[] = "scpi_source";
 constexpr int kMaxErrorsRead = 32;  // the 2400's error queue holds 10; more = a stuck queue
 constexpr double kNan = 9.9e37;     // manual, FORMat:ELEMents: "NAN" reads as +9.91e37
 constexpr double kConfirmFraction = 0.01;  // a reading this far from the set-point is re-read
+// A level read back within this of the one sent is the one sent: the 2400's coarsest source
+// programming resolution is 50 uA (1 A range); levels a run sets differ by milliamps.
+constexpr double kLevelReadbackA = 60e-6;
+constexpr int kReadbackAttempts = 6;  // late answers to earlier queries read past before giving up
 
 std::string Upper(std::string s) {
   for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -88,6 +92,9 @@ class ScpiSource : public DeviceDriver, public CurrentSource {
   bool AdoptOutput();
   SourceReading ReadOnce();
   void Set(const std::string& command);
+  void ReadBack(const std::string& query, const std::function<bool(const std::string&)>& is_answer,
+                const std::function<bool(const std::string&)>& taken, const std::string& what);
+  void ConfirmLevel(double amps);
   void DrainErrors(const std::string& after);
   void Resync();
   [[noreturn]] void WaitOutSilence(const NoReplyError& silent);
@@ -191,7 +198,9 @@ void ScpiSource::WaitOutSilence(const NoReplyError& silent) {
                   "longer to start needs a larger reset_wait_s");
 }
 
-// Reads away whatever is pending until the known *IDN? answer comes back.
+// Reads away whatever is pending until the known *IDN? answer comes back. Silence is waited
+// through to the deadline: a late answer to an earlier query may still be on its way, and
+// stopping at the first quiet read would leave it to be taken as the next query's answer.
 void ScpiSource::Resync() {
   link_->Flush();
   if (idn_.empty()) {  // before Identify: nothing known to wait for
@@ -200,14 +209,15 @@ void ScpiSource::Resync() {
   }
   link_->WriteLine("*IDN?");
   const auto deadline = Clock::now() + timeout_ * 2;
-  while (Clock::now() < deadline) {
+  for (auto left = timeout_ * 2; left.count() > 0;
+       left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now())) {
     try {
-      if (Trim(link_->ReadLine(timeout_)) == idn_) {
+      if (Trim(link_->ReadLine(left)) == idn_) {
         out_of_step_ = false;
         return;
       }
     } catch (const LinkError&) {
-      return;
+      // nothing within `left`: the loop ends at the deadline, still out of step
     }
   }
 }
@@ -341,11 +351,47 @@ void ScpiSource::SetCurrent(double bias_ma) {
   std::snprintf(level, sizeof(level), ":SOUR:CURR:LEV %.6E", bias_ma / 1000.0);
   if (!output_on_) ApplySourceSettings();  // a power cycle while off loses them silently
   Set(level);
+  ConfirmLevel(bias_ma / 1000.0);
   setpoint_ma_ = bias_ma;
   if (!output_on_) {
     Set(":OUTP ON");
+    ReadBack(":OUTP?", [](const std::string& r) { return r == "0" || r == "1"; },
+             [](const std::string& r) { return r == "1"; }, "the output switched on");
     output_on_ = true;
   }
+}
+
+// Asks `query` until its answer shows the change (`taken`). The instrument takes commands in
+// order, so an answer showing it answers a query sent after the command; a late answer to an
+// earlier query shows the old state and is read past, after a resynchronisation. Until then the
+// change has not happened as far as anyone can tell, and no frame may be exposed.
+void ScpiSource::ReadBack(const std::string& query,
+                          const std::function<bool(const std::string&)>& is_answer,
+                          const std::function<bool(const std::string&)>& taken,
+                          const std::string& what) {
+  std::string heard;
+  for (int attempt = 0; attempt < kReadbackAttempts; ++attempt) {
+    heard = Query(query, is_answer);
+    if (taken(heard)) return;
+    out_of_step_ = true;  // perhaps a late answer: read past what is pending before asking again
+  }
+  Fail(heard, "not taken: " + what + ", yet '" + query + "' still answers '" + heard + "'",
+       "check the front panel (interlock, REM/LOCAL, a menu left open) and the value's range; "
+       "then restart the run");
+}
+
+void ScpiSource::ConfirmLevel(double amps) {
+  const auto is_number = [](const std::string& r) {
+    double v = 0;
+    return ParseDouble(r, &v);
+  };
+  const auto is_level = [amps](const std::string& r) {
+    double v = 0;
+    return ParseDouble(r, &v) && std::abs(v - amps) <= kLevelReadbackA;
+  };
+  char what[64];
+  std::snprintf(what, sizeof(what), "the level set to %.6E A", amps);
+  ReadBack(":SOUR:CURR:LEV?", is_number, is_level, what);
 }
 
 // Output found off while it should be on: a power cycle (source function back to its power-on

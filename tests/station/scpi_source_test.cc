@@ -5,6 +5,10 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <deque>
+#include <functional>
+#include <map>
+#include <utility>
 
 #include "base/input_error.h"
 #include "sim/device_emulator.h"
@@ -354,6 +358,111 @@ TEST(ScpiSource, ValidateRequiresComplianceAndKnownKeys) {
 
 // Against the SourceMeter emulator (sim/scpi_emulator.cc): one flipped bit in the reply to
 // :OUTP? ("1" -> "0") while sourcing 475 mA does not stop the sweep.
+// The 2400 behind a serial line in virtual time: commands are taken in the order written, each
+// taking effect 1 ms after it was written or after the instrument's previous reply left (it sends
+// one reply at a time, and takes nothing while sending); a reply leaves `delay_ms(line, n)`
+// after its command took effect (n counts that line's occurrences). A read waits for the next
+// reply up to its timeout, the clock advancing by what it waited.
+class LateRepliesLine : public Transport {
+ public:
+  LateRepliesLine(SourceMeter* meter, std::function<double(const std::string&, int)> delay_ms)
+      : meter_(meter), delay_ms_(std::move(delay_ms)) {}
+  void WriteLine(std::string_view line) override { inbox_.push_back({std::string(line), now_ms_}); }
+  std::string ReadLine(std::chrono::milliseconds timeout) override {
+    const double until_ms = now_ms_ + static_cast<double>(timeout.count());
+    TakeCommandsUntil(until_ms);
+    if (outbox_.empty() || outbox_.front().first > until_ms) {
+      now_ms_ = until_ms;
+      throw LinkError("no reply", "virtual line", "test");
+    }
+    now_ms_ = std::max(now_ms_, outbox_.front().first);
+    std::string line = outbox_.front().second;
+    outbox_.pop_front();
+    return line;
+  }
+  void Flush() override {
+    TakeCommandsUntil(now_ms_);
+    while (!outbox_.empty() && outbox_.front().first <= now_ms_) outbox_.pop_front();
+  }
+  // The instrument as it is now: every command that took effect by the clock.
+  const SourceMeter& Now() {
+    TakeCommandsUntil(now_ms_);
+    return *meter_;
+  }
+
+ private:
+  void TakeCommandsUntil(double until_ms) {
+    while (!inbox_.empty()) {
+      const double effect_ms = std::max(inbox_.front().second, free_ms_) + 1.0;
+      if (effect_ms > until_ms) return;
+      const std::string line = inbox_.front().first;
+      inbox_.pop_front();
+      free_ms_ = effect_ms;
+      for (std::string& reply : meter_->Respond(line)) {
+        free_ms_ = effect_ms + delay_ms_(line, seen_[line]);
+        outbox_.emplace_back(free_ms_, std::move(reply));
+      }
+      ++seen_[line];
+    }
+  }
+
+  SourceMeter* meter_;
+  std::function<double(const std::string&, int)> delay_ms_;
+  std::deque<std::pair<std::string, double>> inbox_;   // written, not yet taken
+  std::deque<std::pair<double, std::string>> outbox_;  // replies and when they arrive
+  std::map<std::string, int> seen_;
+  double now_ms_ = 0.0, free_ms_ = 0.0;
+};
+
+// Regression (virtual time, so the same every run): error queries whose answers come late, past
+// the 100 ms reply timeout, leave a "0,No error" on its way when the next level is written; taken
+// for the new level's, it let SetCurrent return while the instrument still sourced the old level.
+// Every level must be the instrument's when SetCurrent returns.
+TEST(ScpiSource, ALateAnswerToAnEarlierQueryNeverConfirmsALevel) {
+  for (int late = 0; late < 12; ++late) {  // which error queries' answers come late
+    SourceMeter meter;
+    const auto delay_ms = [late](const std::string& line, int n) {
+      const bool slow = line == ":SYST:ERR?" && n >= 6 + late && n % 3 != 0;
+      return slow ? 150.0 : line == "*IDN?" && n % 2 == 1 ? 120.0 : 2.0;
+    };
+    auto owned = std::make_unique<LateRepliesLine>(&meter, delay_ms);
+    LateRepliesLine* line = owned.get();
+    DeviceSpec spec = SourceSpec();
+    spec.reply_timeout_ms = 100;
+    spec.settings["retries"] = {"8", 26};
+    std::unique_ptr<DeviceDriver> driver = FindDriver("scpi_source")->create(spec, std::move(owned));
+    CurrentSource* source = driver->source();
+    source->Identify();
+    for (const double bias_ma : {100.0, 475.0, 250.0, 600.0, 50.0, 320.0}) {
+      source->SetCurrent(bias_ma);
+      ASSERT_NEAR(line->Now().level_a * 1000.0, bias_ma, 1e-6)
+          << "SetCurrent(" << bias_ma << ") returned before the instrument took it; late from "
+          << late;
+      ASSERT_TRUE(line->Now().output);
+    }
+  }
+}
+
+// A level the instrument keeps reading back as another (a front panel left in a menu, a level
+// clamped) is a DeviceError naming what it answers, never a set-point taken on trust.
+TEST(ScpiSource, ALevelThatNeverReadsBackIsADeviceError) {
+  Bench b;
+  b.source->Identify();
+  b.wire->respond = [&b](const std::string& line) {
+    std::vector<std::string> replies = b.meter.Respond(line);
+    if (line == ":SOUR:CURR:LEV?") replies = {"+1.000000E-01"};
+    return replies;
+  };
+  try {
+    b.source->SetCurrent(475.0);
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("+1.000000E-01"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(":SOUR:CURR:LEV?"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(b.meter.output) << "the output switched on at a level never confirmed";
+}
+
 TEST(ScpiSourceEmulated, OneFlippedBitInTheOutputStateDoesNotStopTheRun) {
   sim::World world(20.0);
   const std::string rig =
