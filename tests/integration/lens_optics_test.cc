@@ -3,8 +3,9 @@
 // its own model on face-on and tilted poses. An astigmatic lens (an elliptical PSF, axes 1:1.5,
 // turned away from the rows, at two angles) must not be read as tilt: a face-on IRED reads
 // theta <= 1 deg on average (or the round lens's, whose noise alone reads about as much: theta
-// is >= 0) and its distances stay within 0.1% (median) and 4x the Cramer-Rao bound (rms); a defocused lens (the geometric disc) and a lens with veiling glare (3% of the
-// light in a halo) calibrate to a model every reader loads and validate within bounds.
+// is >= 0) and its distances stay within 0.1% (median) and 3x the Cramer-Rao bound (rms); a
+// defocused lens (the geometric disc) and a lens with veiling glare (3% of the light in a halo)
+// calibrate to a model every reader loads and validate within bounds.
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
@@ -29,9 +30,8 @@ using testing::ReadAll;
 using testing::RunIrdist;
 using testing::WriteAll;
 
-// Face-on and tilted poses inside the calibrated range, two currents, 3 brackets each (between
-// the reduced calibration's 1500, 2000 and 2500 mm: at 2100 mm the i0_free estimate of every
-// optic, the round lens's too, lands on 2000 mm, flagged suspect; not this change's).
+// Face-on and tilted poses inside the calibrated range, between the reduced calibration's 1500,
+// 2000 and 2500 mm, two currents, 3 brackets each.
 constexpr const char* kValidationRecipe = R"(name: lens-validation
 rig: virtual
 after: estimate
@@ -150,10 +150,10 @@ void ExpectAstigmatismIsNotTilt(const LensRun& control, double angle_deg) {
       << "angle " << angle_deg << ", the round lens: " << round_theta;
   // The distances: read 1.4-4.2% short before the PSF was calibrated (tens of times the
   // Cramer-Rao bound). Now the median error stays below 0.1% and the rms error over the bound
-  // below 4 (the goal, 1.3x the round lens's, is not asserted: measured 1.36-2.26 here
-  // against a round lens's 0.9-13 on this reduced calibration; docs/estimator.md).
+  // below 3 (the goal, 1.3, is not asserted on this reduced calibration: four runs measured
+  // 0.88-0.92 at 30 deg, 0.86-1.72 at -55 deg, the round lens 0.81-0.92; docs/estimator.md).
   EXPECT_LE(median_pct, 0.1) << "angle " << angle_deg << ", the round lens: " << round_pct << "%";
-  EXPECT_LE(run.error_over_bound_rms, 4.0)
+  EXPECT_LE(run.error_over_bound_rms, 3.0)
       << "angle " << angle_deg << ", the round lens: " << control.error_over_bound_rms;
   std::cout << "astigmatic lens at " << angle_deg << " deg: face-on mean theta " << mean_theta
             << " deg (round lens " << round_theta << "), median |d error| " << median_pct
@@ -165,11 +165,10 @@ TEST_F(LensOptics, AnAstigmaticLensTurnedBy30DegIsNotReadAsTilt) {
   ExpectAstigmatismIsNotTilt(*control_, 30.0);
 }
 
-// Open defect (docs/estimator.md "An elliptical PSF"): with the axes turned by -55 deg the face-on
-// theta holds but the distances at 1700 mm read about +0.75% (median 0.48-0.73%) under the
-// default round-blob rule; a steeper rule passes here and fails integration/measure's 5 deg pose.
-// Disabled until the cause is found; run it with --gtest_also_run_disabled_tests.
-TEST_F(LensOptics, DISABLED_AnAstigmaticLensTurnedByMinus55DegIsNotReadAsTilt) {
+// The same lens turned by -55 deg: its PSF's long axis lies nearer the columns, the direction in
+// which a pan foreshortens the disc, so what is left of it after calibration reads as a little
+// pan tilt (face-on theta 0.24-0.86 deg over four runs, against 0.10-0.16 at 30 deg).
+TEST_F(LensOptics, AnAstigmaticLensTurnedByMinus55DegIsNotReadAsTilt) {
   ExpectAstigmatismIsNotTilt(*control_, -55.0);
 }
 
