@@ -1,0 +1,138 @@
+#include "estimator/fit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+namespace irdist {
+namespace {
+
+// A disc whose image has a variance of alpha px^2 along its major axis at 1 m (alpha u^2 at
+// u = 1000 mm / d: the image scales as 1/d), tilted by theta (its minor axis cos^2(theta) of
+// that), plus a thin lens's blur variance b(u) = beta + b1 u + b2 u^2 on both axes.
+struct Lens {
+  double alpha = 30.0, beta = 0.6, b1 = -0.5, b2 = 0.9;
+  double Blur(double d_mm) const {
+    const double u = 1000.0 / d_mm;
+    return beta + b1 * u + b2 * u * u;
+  }
+};
+
+CalibrationSample Sample(const Lens& lens, double d_mm, double theta_deg) {
+  const double u = 1000.0 / d_mm;
+  const double c = std::cos(theta_deg * M_PI / 180.0);
+  CalibrationSample s;
+  s.d_mm = d_mm;
+  s.theta_deg = theta_deg;
+  s.measurement.blob_found = true;
+  s.measurement.moment_major_var_px2 = lens.alpha * u * u + lens.Blur(d_mm);
+  s.measurement.moment_minor_var_px2 = lens.alpha * c * c * u * u + lens.Blur(d_mm);
+  return s;
+}
+
+std::vector<CalibrationSample> Grid(const Lens& lens) {
+  std::vector<CalibrationSample> out;
+  for (double d : {1200.0, 1500.0, 2000.0, 2500.0, 3000.0, 4000.0}) {
+    for (double theta : {0.0, 20.0, 35.0}) out.push_back(Sample(lens, d, theta));
+  }
+  return out;
+}
+
+// The fixed blur: alpha and beta recovered exactly; the distances implied agree with the truth.
+TEST(FitGeometric, FixedBlurRecoversTheSizeLaw) {
+  Lens lens;
+  lens.b1 = lens.b2 = 0.0;
+  const GeometricModel g = FitGeometric(Grid(lens), false);
+  ASSERT_TRUE(g.fitted());
+  EXPECT_NEAR(g.alpha_px2, 30.0, 1e-9);
+  EXPECT_NEAR(g.beta_px2, 0.6, 1e-9);
+  EXPECT_EQ(g.blur_u1_px2, 0.0);
+  EXPECT_EQ(g.blur_u2_px2, 0.0);
+  EXPECT_FALSE(g.BlurVariesWithDistance());
+  EXPECT_EQ(g.summary.termination, FitSummary::Termination::kConverged);
+  EXPECT_EQ(g.summary.samples, 18);
+  EXPECT_EQ(g.summary.residuals.size(), 18u);
+  EXPECT_LT(g.summary.max_relative_error, 1e-12);
+}
+
+// A blur that varies with distance is separated from the disc by the minor axis (whose disc part
+// shrinks with the tilt while the blur does not): all four coefficients come back. The fixed-blur
+// fit of the same frames cannot follow it and misplaces distances.
+TEST(FitGeometric, BlurQuadraticInInverseDistanceIsRecovered) {
+  const Lens lens;
+  const std::vector<CalibrationSample> samples = Grid(lens);
+  const GeometricModel g = FitGeometric(samples, true);
+  ASSERT_TRUE(g.fitted());
+  EXPECT_NEAR(g.alpha_px2, 30.0, 1e-8);
+  EXPECT_NEAR(g.beta_px2, 0.6, 1e-8);
+  EXPECT_NEAR(g.blur_u1_px2, -0.5, 1e-8);
+  EXPECT_NEAR(g.blur_u2_px2, 0.9, 1e-8);
+  EXPECT_TRUE(g.BlurVariesWithDistance());
+  EXPECT_LT(g.summary.max_relative_error, 1e-10);
+  const GeometricModel fixed = FitGeometric(samples, false);
+  EXPECT_GT(fixed.summary.max_relative_error, 1e-3);
+}
+
+// The model's own relations by hand: b(u), the expected variance and its inverse.
+TEST(GeometricModel, DistanceInvertsTheExpectedVariance) {
+  GeometricModel g;
+  g.alpha_px2 = 30.0;
+  g.beta_px2 = 1.0;
+  // Fixed blur: var 8.5 = 30 u^2 + 1 at u = 0.5, 2 m.
+  EXPECT_NEAR(g.DistanceMm(8.5), 2000.0, 1e-9);
+  EXPECT_NEAR(g.MajorVarPx2(2000.0), 8.5, 1e-12);
+  // Thin lens: b(0.5) = 0.6 - 0.25 + 0.225 = 0.575 px^2; var at 2 m = 7.5 + 0.575.
+  g.beta_px2 = 0.6;
+  g.blur_u1_px2 = -0.5;
+  g.blur_u2_px2 = 0.9;
+  EXPECT_NEAR(g.BlurVarPx2(2000.0), 0.575, 1e-12);
+  EXPECT_NEAR(g.MajorVarPx2(2000.0), 8.075, 1e-12);
+  for (double d : {800.0, 1500.0, 2000.0, 5000.0}) {
+    EXPECT_NEAR(g.DistanceMm(g.MajorVarPx2(d)), d, 1e-9 * d) << d;
+  }
+  // With b1 > 0 too (the root written without cancellation).
+  g.blur_u1_px2 = 0.5;
+  EXPECT_NEAR(g.DistanceMm(g.MajorVarPx2(3000.0)), 3000.0, 1e-9);
+}
+
+TEST(GeometricModel, NoDistanceWhereTheVarianceHasNone) {
+  GeometricModel g;
+  g.alpha_px2 = 30.0;
+  g.beta_px2 = 1.0;
+  EXPECT_TRUE(std::isnan(g.DistanceMm(0.5)));  // below the blur: farther than infinity
+  EXPECT_TRUE(std::isnan(g.DistanceMm(1.0)));  // the blur alone: u = 0
+  EXPECT_TRUE(std::isnan(GeometricModel().DistanceMm(8.5)));  // no scale fitted
+  EXPECT_FALSE(GeometricModel().fitted());
+}
+
+// The standard error through the slope: half the distances at var -+ se, here
+// d(v) = 1000 sqrt(alpha / (v - beta)); about d / (2 (v - beta)) per px^2 to first order.
+TEST(GeometricModel, DistanceStandardErrorFollowsTheSlope) {
+  GeometricModel g;
+  g.alpha_px2 = 30.0;
+  g.beta_px2 = 1.0;
+  const auto d = [](double v) { return 1000.0 * std::sqrt(30.0 / (v - 1.0)); };
+  EXPECT_NEAR(g.DistanceSeMm(8.5, 0.5), 0.5 * (d(8.0) - d(9.0)), 1e-9);
+  EXPECT_NEAR(g.DistanceSeMm(8.5, 0.01), 2000.0 / (2.0 * 7.5) * 0.01, 1e-3);
+  EXPECT_TRUE(std::isnan(g.DistanceSeMm(1.2, 0.5)));  // var - se below the blur
+}
+
+// Frames without a blob or without a size are left out; fewer than 3 left is no fit, said so.
+TEST(FitGeometric, NeedsThreeFramesWithABlob) {
+  const Lens lens;
+  std::vector<CalibrationSample> samples = {Sample(lens, 1500.0, 0.0), Sample(lens, 2000.0, 0.0),
+                                            Sample(lens, 2500.0, 0.0), Sample(lens, 3000.0, 0.0)};
+  samples[1].measurement.blob_found = false;
+  samples[2].measurement.moment_major_var_px2 = 0.0;
+  const GeometricModel g = FitGeometric(samples, false);
+  EXPECT_FALSE(g.fitted());
+  EXPECT_EQ(g.summary.samples, 2);
+  EXPECT_NE(g.summary.message.find("fewer than 3 samples with a blob"), std::string::npos)
+      << g.summary.message;
+  EXPECT_NE(g.summary.termination, FitSummary::Termination::kConverged);
+  EXPECT_TRUE(std::isnan(g.DistanceMm(8.0)));
+}
+
+}  // namespace
+}  // namespace irdist
