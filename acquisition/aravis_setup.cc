@@ -12,6 +12,26 @@ namespace irdist {
 
 namespace {
 const char kRegionFix[] = "irdist sets the region of interest: the camera must let it be written.";
+
+// The region asked for, inside the sensor the camera states (its Width and Height bounds with the
+// offsets at 0): a camera that stores a size beyond them would read it back as set and deliver
+// something else. Refused before anything is written, naming the rig key.
+void CheckRegionInside(const std::string& camera, int width, int height, int offset_x,
+                       int offset_y, gint width_min, gint width_max, gint height_min,
+                       gint height_max) {
+  const auto out = [](int low, int value, int high) { return value < low || value > high; };
+  if (out(width_min, width, width_max) || out(height_min, height, height_max) ||
+      offset_x < 0 || offset_y < 0 || offset_x + width > width_max ||
+      offset_y + height > height_max) {
+    throw CameraError("camera " + camera + ": the region " + std::to_string(width) + " x " +
+                      std::to_string(height) + " at (" + std::to_string(offset_x) + ", " +
+                      std::to_string(offset_y) + ") does not fit the sensor (width " +
+                      std::to_string(width_min) + ".." + std::to_string(width_max) + ", height " +
+                      std::to_string(height_min) + ".." + std::to_string(height_max) +
+                      " px, offset + size within them). Set camera.roi_px in the rig file "
+                      "inside the sensor (or leave it out for the whole sensor).");
+  }
+}
 }  // namespace
 
 void AravisCamera::Impl::SetRegion(const CameraSettings& s) {
@@ -32,8 +52,12 @@ void AravisCamera::Impl::SetRegion(const CameraSettings& s) {
   ThrowOnError(error, "reading Width bounds", Name());
   arv_camera_get_height_bounds(camera.get(), &height_min, &height_max, &error);
   ThrowOnError(error, "reading Height bounds", Name());
-  const std::pair<const char*, int> wanted[] = {{"Width", s.width > 0 ? s.width : width_max},
-                                                {"Height", s.height > 0 ? s.height : height_max},
+  const int width = s.width > 0 ? s.width : width_max;
+  const int height = s.height > 0 ? s.height : height_max;
+  CheckRegionInside(Name(), width, height, s.offset_x, s.offset_y, width_min, width_max,
+                    height_min, height_max);
+  const std::pair<const char*, int> wanted[] = {{"Width", width},
+                                                {"Height", height},
                                                 {"OffsetX", s.offset_x},
                                                 {"OffsetY", s.offset_y}};
   for (const auto& [feature, value] : wanted) {

@@ -11,6 +11,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tests/acquisition/fake_camera_process.h"
@@ -162,6 +163,26 @@ TEST_F(AravisSetupTest, TheRegionIsSetAsAskedAndTheWholeSensorByDefault) {
   EXPECT_EQ(features.at("Height"), "2048");
   EXPECT_EQ(features.at("OffsetX"), "0");
   EXPECT_EQ(camera->PayloadBytes(), 2048 * 2048 * 2);
+}
+
+// A region beyond the 2048 x 2048 sensor (too wide, or inside it only without its offset) is
+// refused naming the sensor's bounds and the rig key, and nothing of it is written: the fake
+// camera stores a width of 4096 and reads it back as set, so only the bounds can tell.
+TEST_F(AravisSetupTest, ARegionBeyondTheSensorIsRefusedNamingItsBounds) {
+  for (const auto& [width, offset_x] : {std::pair{4096, 0}, std::pair{256, 1900}}) {
+    CameraSettings settings = Triggered();
+    settings.width = width;
+    settings.offset_x = offset_x;
+    try {
+      Open()->Configure(settings);
+      ADD_FAILURE() << width << " px at " << offset_x << " was accepted";
+    } catch (const CameraError& e) {
+      EXPECT_NE(std::string(e.what()).find("2048"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("camera.roi_px"), std::string::npos) << e.what();
+    }
+    OtherClient check;
+    EXPECT_NE(check.Get("Width"), std::to_string(width));
+  }
 }
 
 // The exposure's bounds are the GenICam file's [10, 1000000] us; beyond them is refused before
