@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/pi.h"
+
 namespace irdist::sim {
 
 const char* RigAxisName(RigAxis axis) {
@@ -17,7 +19,7 @@ const char* RigAxisName(RigAxis axis) {
 const char* RigAxisUnit(RigAxis axis) { return axis == RigAxis::kSlide ? "mm" : "deg"; }
 
 double ThetaDegOf(double pan_deg, double tilt_deg) {
-  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  constexpr double kDeg = kPi / 180.0;
   const double c = std::cos(pan_deg * kDeg) * std::cos(tilt_deg * kDeg);
   return std::acos(std::fmin(1.0, std::fmax(-1.0, c))) / kDeg;
 }

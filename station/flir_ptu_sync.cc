@@ -68,6 +68,13 @@ bool FlirPtu::SyncStep(VersionSync* sync) {
   } catch (const LinkError&) {
     if (sync->answered > 0) return true;  // quiet after the version: nothing stale is left
     if (!sync->resetting && !sync->heard.empty() && ++sync->unanswered >= attempts_) {
+      const std::size_t mark = sync->heard.find('*');
+      if (!version_.empty() && mark != std::string::npos &&
+          ptu_text::NamesAPanTiltUnit(sync->heard.substr(mark))) {  // a PTU, another version
+        Fail(sync->heard, "a pan-tilt unit answers V, but not with the version identified at "
+                          "connection ('" + version_ + "')",
+             "check that the PTU on this port is the one the run started with; then start again");
+      }
       Fail(sync->heard, "the device on this port answers, but never with a pan-tilt unit's version",
            "connect the PTU to this port or fix the rig file's port");
     }

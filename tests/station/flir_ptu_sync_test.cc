@@ -206,7 +206,7 @@ TEST(FlirPtuSync, APowerUpBannerWhileHomedIsARestartAndHomingIdentifiesAgain) {
 }
 
 // After a restart, a unit whose version is not the one found at connection is another unit: it
-// is refused, quoting what it answered, and never reset.
+// is refused as that (not as "never a pan-tilt unit"), quoting what it answered, and never reset.
 TEST(FlirPtuSync, AnotherUnitFoundAfterARestartIsRefused) {
   Head h;
   h.Ready();
@@ -215,6 +215,8 @@ TEST(FlirPtuSync, AnotherUnitFoundAfterARestartIsRefused) {
   h.ptu->version = "Pan-Tilt Controller v3.4.1, (C)2014 FLIR Motion Control Systems, Inc.";
   const std::string what = MessageOf<DeviceError>([&] { h.motion->Home(); });
   EXPECT_NE(what.find("v3.4.1"), std::string::npos) << what;
+  EXPECT_NE(what.find("not with the version identified at connection"), std::string::npos) << what;
+  EXPECT_NE(what.find("the one the run started with"), std::string::npos) << what;
   EXPECT_EQ(h.ptu->Count("R"), 1) << "the other unit was reset";
   EXPECT_EQ(h.motion->State(), MotionState::kUnhomed);
 }
