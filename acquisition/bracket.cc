@@ -349,7 +349,12 @@ bool BracketCapture::TakeFrame(const PlannedFrame& plan, const PlannedFrame* nex
     const Outcome outcome =
         Attempt(plan, readback_us, trigger, pipelined ? next : nullptr, frame);
     *next_programmed = pipelined && next != nullptr;
-    if (outcome == Outcome::kOk) return true;
+    if (outcome == Outcome::kOk) {
+      // Taken unpipelined (a retry) while the bracket pipelines: the successor expects its
+      // exposure in the camera on entry, so it is programmed now.
+      if (!pipelined && next != nullptr && Pipelining()) ProgramExposure(next->exposure_us);
+      return true;
+    }
     if (outcome == Outcome::kNoChunk && !ChunkEvidence()) {
       // The chunks stopped: this frame is retaken with its exposure read back (no retry spent).
       pipelined = false;
@@ -362,10 +367,12 @@ bool BracketCapture::TakeFrame(const PlannedFrame& plan, const PlannedFrame* nex
     if (attempt >= options_.max_retries) return false;
     ++stats_.retried;
     if (outcome == Outcome::kTimeout) DrainLateFrames();
-    // A retry programs the exposure again and waits for the camera to report it (the
-    // successor's exposure may have been written meanwhile).
-    const double back = ProgramExposure(plan.exposure_us);
-    if (!pipelined) readback_us = back;
+    // A retry programs the exposure again, waits for the camera to report it, and takes the
+    // frame without writing the successor's exposure during it: a trigger that reached the
+    // sensor after that write (a loaded host, a slow trigger path) latched the successor's
+    // exposure, and would again on every pipelined retry.
+    pipelined = false;
+    readback_us = ProgramExposure(plan.exposure_us);
   }
 }
 

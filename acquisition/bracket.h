@@ -18,7 +18,10 @@
 //   ReadOut, or one that queues it), frame N+1 is triggered right after its exposure is written,
 //   still in frame N's readout, so it starts as the sensor frees: the trigger latency and the
 //   transfer leave the frame period too. A frame N that fails then waits for N+1's frame and
-//   discards it before the retry; each frame is still checked against its own chunk.
+//   discards it before the retry; each frame is still checked against its own chunk. A retry is
+//   taken serially (its exposure read back, no write of N+1's during it; N+1's programmed after
+//   it): a trigger that reached the sensor after that write (a loaded host, a slow trigger path)
+//   would latch N+1's exposure on every pipelined retry.
 // - the exposure evidence follows the camera's exposure_check (camera.h ExposureCheck): by default
 //   the chunk while frames carry it; the first frame without it (chunks never sent, or stopped
 //   mid-run) turns the capture serial with read-backs for good, said once (options.on_notice,

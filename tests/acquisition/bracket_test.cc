@@ -424,6 +424,50 @@ class BusySensorCamera : public ScriptedCamera {
   std::deque<int> waiting_;
 };
 
+// A camera whose first `late` triggers reach the sensor late: after the host has written the
+// next frame's exposure (a loaded host, a trigger sent through a slow station), so their frames
+// latch the exposure register as it is when the host waits for them. Frames carry chunks.
+class LateTriggerCamera : public ScriptedCamera {
+ public:
+  int late = 0;
+  int triggers = 0;
+
+  LateTriggerCamera() { chunks = true; }
+  void SoftwareTrigger() override {
+    if (++triggers > late) {
+      ScriptedCamera::SoftwareTrigger();
+    } else {
+      ++pending_;
+    }
+  }
+  std::optional<RawFrame> WaitFrame(std::chrono::milliseconds timeout) override {
+    for (; pending_ > 0; --pending_) ScriptedCamera::SoftwareTrigger();
+    return ScriptedCamera::WaitFrame(timeout);
+  }
+
+ private:
+  int pending_ = 0;
+};
+
+// Three late triggers: the pipelined write of the successor's exposure lands before each. A
+// retry is taken without that write (and the successor's exposure programmed after it), so each
+// frame hit needs one retry and the bracket completes with every frame at its own exposure
+// (before: the reference was taken three times at 30000 us and the bracket failed, as the
+// sanitized CI's virtual rig showed under load).
+TEST(BracketCapture, ARetryAfterALateTriggerIsNotPipelined) {
+  LateTriggerCamera camera;
+  camera.late = 3;  // frame 0's first try and its retry; frame 1's first try
+  BracketCapture capture(camera, FastOptions());
+  const BracketResult result = capture.Capture([&](int) { camera.SoftwareTrigger(); });
+  ASSERT_TRUE(result.complete) << result.BriefReport();
+  EXPECT_EQ(result.frames[0].retries, 1);
+  EXPECT_EQ(result.frames[1].retries, 1);
+  EXPECT_EQ(capture.stats().wrong_exposure, 2);
+  for (size_t i = 0; i < result.frames.size(); ++i) {
+    EXPECT_DOUBLE_EQ(result.frames[i].actual_exposure_us, FastOptions().exposures_us[i]) << i;
+  }
+}
+
 BracketOptions InReadoutOptions() {
   BracketOptions options = FastOptions();
   options.pipeline_margin = std::chrono::microseconds(0);
