@@ -39,7 +39,8 @@ struct Handlers {
 };
 
 // The handlers of this build, from the table: every command's entry point (app/runs/run.h,
-// app/runs/plan_command.h, app/runs/offline.h, app/devices/tools.h, app/live/measure.h, ...).
+// app/runs/plan_command.h, app/runs/fit_command.h, app/devices/sim_command.h, app/live/measure.h,
+// ...).
 Handlers DefaultHandlers();
 
 // The table's commands whose slot in `handlers` is empty; those whose help is empty.

@@ -16,9 +16,9 @@
 #include "acquisition/pixel_format.h"
 #include "acquisition/pixel_pipeline.h"
 #include "app/devices/station_setup.h"
-#include "app/devices/tools.h"
 #include "app/inputs/camera_settings.h"
 #include "app/inputs/rig.h"
+#include "app/inputs/rig_lookup.h"
 
 namespace irdist {
 namespace {

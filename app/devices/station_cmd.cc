@@ -5,8 +5,8 @@
 #include <ostream>
 
 #include "app/devices/station_setup.h"
-#include "app/devices/tools.h"
 #include "app/inputs/rig.h"
+#include "app/inputs/rig_lookup.h"
 #include "station/conformance.h"
 #include "station/serial_transport.h"
 

@@ -1,7 +1,8 @@
 #pragma once
 // What every irdist command receives: its output streams and its parsed flags, one Args struct per
-// subcommand. A leaf header (no app/ include) so that each command family's header (runs/run.h:
-// live runs, runs/offline.h: fit/playback/check, devices/tools.h: sim/devices, live/measure.h and
+// subcommand. A leaf header (no app/ include) so that each command's header (runs/run.h: live
+// runs, runs/fit_command.h, runs/playback_command.h and runs/check_command.h: the offline ones,
+// devices/sim_command.h and devices/devices_command.h, live/measure.h, live/snap_command.h and
 // live/view.h: the camera-only commands, cli/cli.h: parsing and dispatch) declares its own
 // commands without including another's.
 

@@ -1,7 +1,7 @@
 #pragma once
 // The camera alone, for the commands without a station sweep (measure, snap, view): the rig file's
 // camera opened and configured. On a virtual rig with an `irdist sim` of the same rig file running
-// (app/devices/tools.h FindRunningSim), its camera is used as a bench camera: fired by software
+// (app/inputs/rig_lookup.h FindRunningSim), its camera is used as a bench camera: fired by software
 // trigger, the IRED placed by `irdist station` (`--at` is refused). Otherwise on a virtual rig the
 // rig itself is started first (and stopped at the end), its camera fired through the rig's trigger
 // line, and `--at` places the IRED through the virtual station (the station protocol, as a sweep

@@ -19,8 +19,8 @@
 
 #include "acquisition/recording_types.h"
 #include "app/devices/station_setup.h"
-#include "app/devices/tools.h"
 #include "app/inputs/errors.h"
+#include "app/inputs/rig_lookup.h"
 #include "app/inputs/stop_signal.h"
 #include "app/inputs/track_recipe.h"
 #include "app/live/track_session.h"

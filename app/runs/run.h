@@ -1,8 +1,8 @@
 #pragma once
 // The live runs behind the irdist commands: calibrate and validate (sweep a recipe on a rig, record,
 // then fit or estimate), and the recording they share with plan --suggest's probe
-// (app/runs/run_suggest.h). The offline commands (fit, playback, check) are declared in
-// app/runs/offline.h.
+// (app/runs/run_suggest.h). The offline commands are declared in app/runs/fit_command.h,
+// app/runs/playback_command.h and app/runs/check_command.h.
 //
 // Run folder layout (always the same):
 //   DIR/recording/      the recording (docs/recording-format.md)

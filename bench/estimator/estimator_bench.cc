@@ -35,8 +35,8 @@ void BM_ComputeFeatures(benchmark::State& state) {
 }
 BENCHMARK(BM_ComputeFeatures)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
-// What the app's estimation default costs per frame (app/runs/offline.cc FrameFeatures with a
-// model): the moments, then FitBlob with the frame's blur (sigma 1 px, pixel area added). Compare
+// What the app's estimation default costs per frame (app/processing/frame_features.h
+// FrameFeatures with a model, as playback --model runs it): the moments, then FitBlob with the frame's blur (sigma 1 px, pixel area added). Compare
 // with BM_ComputeFeatures/0 of the same run.
 void BM_FeaturesWithBlobFit(benchmark::State& state) {
   const cv::Mat frame = Frame();

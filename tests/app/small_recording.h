@@ -1,8 +1,8 @@
 #pragma once
 // A small hand-made recording for the tests of the processing chain (app/processing/) and the
-// offline commands (app/runs/offline.h): a Mono12 spot whose brightness scales with the
-// exposure; bracket 0 interleaved (ref 8, meas 30, ref 8, meas 36 ms; complete), bracket 1 its
-// reference only (cut).
+// offline commands (app/runs/fit_command.h, playback_command.h, check_command.h): a Mono12 spot
+// whose brightness scales with the exposure; bracket 0 interleaved (ref 8, meas 30, ref 8, meas
+// 36 ms; complete), bracket 1 its reference only (cut).
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -12,14 +12,18 @@
 #include <string>
 #include <vector>
 
+#include "app/devices/devices_command.h"
+#include "app/devices/sim_command.h"
 #include "app/devices/station_cmd.h"
-#include "app/devices/tools.h"
 #include "app/live/measure.h"
+#include "app/live/snap_command.h"
 #include "app/live/track_run.h"
 #include "app/live/track_session.h"
 #include "app/live/view.h"
-#include "app/runs/offline.h"
+#include "app/runs/check_command.h"
+#include "app/runs/fit_command.h"
 #include "app/runs/plan_command.h"
+#include "app/runs/playback_command.h"
 #include "app/runs/run.h"
 #include "base/process.h"
 

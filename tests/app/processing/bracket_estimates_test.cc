@@ -1,5 +1,5 @@
 // The warnings about a model before it is used (model fitness, the optics fingerprint). The
-// estimates themselves are checked end to end by tests/app/runs/offline_test.cc (playback),
+// estimates themselves are checked end to end by tests/app/runs/playback_command_test.cc,
 // tests/app/live/measure_test.cc and tests/integration/calibrate_validate_test.cc.
 #include "app/processing/bracket_estimates.h"
 

@@ -1,35 +1,23 @@
-#include "app/devices/tools.h"
-#include "app/devices/station_setup.h"
+#include "app/devices/sim_command.h"
 
 #include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
-#include <map>
+#include <memory>
 #include <ostream>
-#include <sstream>
 #include <thread>
 
-#include "acquisition/aravis_camera.h"
-#include "app/inputs/stop_signal.h"
-#include "app/inputs/recipe.h"
+#include "app/devices/station_setup.h"
 #include "app/inputs/rig.h"
+#include "app/inputs/rig_lookup.h"
+#include "app/inputs/state_file.h"
+#include "app/inputs/stop_signal.h"
 #include "sim/virtual_rig.h"
 
 namespace irdist {
 
 namespace fs = std::filesystem;
-
-std::string ResolveRig(const std::string& spec) {
-  if (fs::exists(spec)) return spec;
-  std::string found = FindRigFile(spec, fs::current_path().string());
-  if (found.empty()) {
-    throw RecipeError(spec, 0, 0,
-                      "no such rig: give a rig file (recipes/rigs/virtual.yaml) or the name of "
-                      "one in recipes/rigs/ (e.g. virtual).");
-  }
-  return found;
-}
 
 namespace {
 
@@ -69,15 +57,6 @@ std::string SimTrajectoryPath(long pid, std::ostream& err) {
 }
 
 }  // namespace
-
-std::optional<RunningSim> FindRunningSim(const std::string& rig_path, std::ostream& warn) {
-  for (RunningSim& sim : LiveSims(warn)) {
-    const auto rig = sim.values.find("rig");
-    std::error_code same_error;
-    if (rig != sim.values.end() && fs::equivalent(rig->second, rig_path, same_error)) return sim;
-  }
-  return std::nullopt;
-}
 
 void RunSim(const SimArgs& args, CommandIo io) {
   const std::string rig_path = ResolveRig(args.rig);
@@ -119,47 +98,6 @@ void RunSim(const SimArgs& args, CommandIo io) {
   while (!StopRequested().load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   virtual_rig->Stop();
   io.out << "virtual rig stopped\n" << std::flush;
-}
-
-void RunDevices(const DevicesArgs& args, CommandIo io) {
-  io.out << "Virtual rigs (irdist sim):\n";
-  int rigs = 0;
-  for (const RunningSim& sim : LiveSims(io.err)) {
-    const auto value = [&sim](const char* key) {
-      const auto found = sim.values.find(key);
-      return found == sim.values.end() ? std::string("?") : found->second;
-    };
-    ++rigs;
-    io.out << "  pid " << sim.pid << ": camera " << value("camera_id") << " at "
-           << value("camera_address") << " serial " << value("serial") << ", station "
-           << value("station_port") << ", time scale " << value("time_scale") << "\n";
-  }
-  std::error_code error;
-  if (rigs == 0) io.out << "  none\n";
-
-  io.out << "Serial ports:\n";
-  int ports = 0;
-  for (const auto& entry : fs::directory_iterator("/dev", error)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind("ttyUSB", 0) == 0 || name.rfind("ttyACM", 0) == 0) {
-      io.out << "  " << entry.path().string() << "\n";
-      ++ports;
-    }
-  }
-  if (ports == 0) io.out << "  none\n";
-
-  if (!args.discover) {
-    io.out << "Cameras: not searched (discovery broadcasts on every network interface; add "
-              "--discover)\n";
-    return;
-  }
-  io.out << "Cameras:\n";
-  const std::vector<DeviceInfo> cameras = ListCameras();
-  for (const DeviceInfo& d : cameras) {
-    io.out << "  " << d.id << " (" << d.protocol << ") " << d.vendor << " " << d.model << " serial "
-           << d.serial << (d.address.empty() ? "" : " at " + d.address) << "\n";
-  }
-  if (cameras.empty()) io.out << "  none\n";
 }
 
 }  // namespace irdist

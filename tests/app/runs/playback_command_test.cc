@@ -1,7 +1,7 @@
-// The offline commands (fit, playback) on a small hand-made recording: results never replaced
-// without --force nor written through a link, and a recording with errors, swapped frames or a
-// live writer refused.
-#include "app/runs/offline.h"
+// `irdist playback` on a small hand-made recording: results never replaced without --force nor
+// written through a link, the advice after a full disk a command that works, and a recording with
+// errors, swapped frames or a live writer refused.
+#include "app/runs/playback_command.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,6 @@
 
 #include "acquisition/recording_writer.h"
 #include "app/inputs/errors.h"
-#include "app/runs/resume.h"
 #include "tests/full_disk.h"
 #include "tests/app/small_recording.h"
 
@@ -36,7 +35,7 @@ TEST_F(SmallRecordingTest, PlaybackNeverReplacesResultsWithoutForce) {
   EXPECT_EQ(ReadAll((dir_ / "features.csv").string()), first);
 }
 
-TEST_F(SmallRecordingTest, FitAndPlaybackRefuseARecordingWithErrors) {
+TEST_F(SmallRecordingTest, PlaybackRefusesARecordingWithErrors) {
   const fs::path csv = dir_ / "recording" / "frames.csv";
   std::string text = ReadAll(csv.string());
   const size_t at = text.find("frames/000001.png");
@@ -52,36 +51,7 @@ TEST_F(SmallRecordingTest, FitAndPlaybackRefuseARecordingWithErrors) {
   } catch (const CheckFailedError& e) {
     EXPECT_NE(std::string(e.what()).find("frames.csv:3"), std::string::npos) << e.what();
   }
-  FitArgs fit;
-  fit.recording = playback.recording;
-  fit.out = (dir_ / "fit" / "model.yaml").string();
-  EXPECT_THROW(RunFit(fit, {out, err}), CheckFailedError);
-  EXPECT_FALSE(fs::exists(dir_ / "fit" / "model.yaml"));
-}
-
-// The issue: fit on a recording a live calibrate was writing only warned, and wrote into the
-// live folder. Now it refuses while the writer (or the run) holds its lock, and writes nothing.
-TEST_F(SmallRecordingTest, FitRefusesARecordingALiveRunIsWriting) {
-  std::ostringstream out, err;
-  FitArgs fit;
-  fit.recording = (dir_ / "recording").string();
-  {
-    auto live = RecordingWriter::Resume(fit.recording);
-    try {
-      RunFit(fit, {out, err});
-      FAIL() << "fit beside a live writer";
-    } catch (const RunFolderError& e) {
-      EXPECT_NE(std::string(e.what()).find("process " + std::to_string(getpid())),
-                std::string::npos) << e.what();
-    }
-    live->Close(Completion::kCut);
-  }
-  {
-    const RunFolderLock live(dir_.string(), "calibrate");  // recording done, processing
-    EXPECT_THROW(RunFit(fit, {out, err}), RunFolderError);
-  }
-  EXPECT_FALSE(fs::exists(dir_ / "model.yaml"));
-  EXPECT_FALSE(fs::exists(dir_ / "features.csv"));
+  EXPECT_FALSE(fs::exists(dir_ / "pb" / "features.csv"));
 }
 
 // The issue's item 4 for playback: a recording a live process is writing is named as such.
@@ -124,24 +94,8 @@ TEST_F(SmallRecordingTest, AResultCutByAFullDiskAdvisesACommandThatWorks) {
   EXPECT_TRUE(fs::exists(fs::path(args.out_dir) / "features.csv"));
 }
 
-// The issue: `fit --out` naming a file's folder said "filesystem error".
-TEST_F(SmallRecordingTest, FitIntoAFolderThatIsAFileIsRefusedNamingIt) {
-  std::ostringstream out, err;
-  std::ofstream(dir_ / "plain") << "a file\n";
-  FitArgs fit;
-  fit.recording = (dir_ / "recording").string();
-  fit.out = (dir_ / "plain" / "model.yaml").string();
-  try {
-    RunFit(fit, {out, err});
-    FAIL() << "fit into a file";
-  } catch (const RunFolderError& e) {
-    EXPECT_NE(std::string(e.what()).find("exists and is not a folder"), std::string::npos)
-        << e.what();
-  }
-}
-
 // A result that is a link is never written through, --force or not.
-TEST_F(SmallRecordingTest, FitAndPlaybackNeverWriteThroughALinkedResult) {
+TEST_F(SmallRecordingTest, PlaybackNeverWritesThroughALinkedResult) {
   const fs::path victim = dir_.string() + "-victim";
   std::ofstream(victim) << "precious\n";
   fs::create_symlink(victim, dir_ / "features.csv");
@@ -156,17 +110,13 @@ TEST_F(SmallRecordingTest, FitAndPlaybackNeverWriteThroughALinkedResult) {
     EXPECT_NE(std::string(e.what()).find((dir_ / "features.csv").string() + " is a symbolic link"),
               std::string::npos) << e.what();
   }
-  FitArgs fit;
-  fit.recording = playback.recording;
-  fit.force = true;
-  EXPECT_THROW(RunFit(fit, {out, err}), RunFolderError);
   EXPECT_EQ(ReadAll(victim.string()), "precious\n");
   fs::remove(victim);
 }
 
-// Two frames swapped (the issue: fit then exited 0 with 10-18% model errors): refused, naming
-// the frame.
-TEST_F(SmallRecordingTest, FitAndPlaybackRefuseSwappedFrames) {
+// Two frames swapped (the issue: fit then exited 0 with 10-18% model errors): playback refuses
+// them too.
+TEST_F(SmallRecordingTest, PlaybackRefusesSwappedFrames) {
   const fs::path a = dir_ / "recording/frames/000000.png";
   const fs::path b = dir_ / "recording/frames/000001.png";
   const fs::path tmp = dir_ / "swap.png";
@@ -174,20 +124,16 @@ TEST_F(SmallRecordingTest, FitAndPlaybackRefuseSwappedFrames) {
   fs::rename(b, a);
   fs::rename(tmp, b);
   std::ostringstream out, err;
-  FitArgs fit;
-  fit.recording = (dir_ / "recording").string();
-  fit.out = (dir_ / "fit" / "model.yaml").string();
+  PlaybackArgs playback;
+  playback.recording = (dir_ / "recording").string();
+  playback.out_dir = (dir_ / "pb").string();
   try {
-    RunFit(fit, {out, err});
-    FAIL() << "fit of swapped frames";
+    RunPlayback(playback, {out, err});
+    FAIL() << "playback of swapped frames";
   } catch (const CheckFailedError& e) {
     EXPECT_NE(std::string(e.what()).find("frames/000000.png: its content is not the frame"),
               std::string::npos) << e.what();
   }
-  PlaybackArgs playback;
-  playback.recording = fit.recording;
-  playback.out_dir = (dir_ / "pb").string();
-  EXPECT_THROW(RunPlayback(playback, {out, err}), CheckFailedError);
 }
 
 }  // namespace

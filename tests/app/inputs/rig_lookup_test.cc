@@ -1,6 +1,6 @@
-// `irdist devices` without --discover (never broadcasts) and FindRunningSim over the state files
-// (app/inputs/state_file.h). `irdist sim` itself runs in tests/integration/sim_test.cc.
-#include "app/devices/tools.h"
+// The rig a `--rig` value names (a path, or a name in recipes/rigs/) and FindRunningSim over the
+// state files (app/inputs/state_file.h).
+#include "app/inputs/rig_lookup.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "app/inputs/errors.h"
 #include "tests/app/fake_sim.h"
 
 namespace irdist {
@@ -17,11 +18,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class ToolsTest : public ::testing::Test {
+class RigLookupTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("irdist-tools-" + std::to_string(::getpid()) + "-" +
+           ("irdist-rig-lookup-" + std::to_string(::getpid()) + "-" +
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "rigs");
@@ -37,47 +38,31 @@ class ToolsTest : public ::testing::Test {
   fs::path dir_;
 };
 
-// A live sim is listed; a stale file is skipped; a planted file with missing keys or of a
-// process that is no irdist sim is warned about, never a map::at.
-TEST_F(ToolsTest, DevicesListsLiveRigsAndSkipsStaleAndPlantedStateFiles) {
-  testing::FakeSim sim(dir_ / "sim");
-  SimState state;
-  state.pid = sim.pid();
-  state.camera_id = "Aravis-Fake-LIVE";
-  state.camera_address = "127.0.0.1";
-  state.serial = "LIVE";
-  state.station_port = sim.pty();
-  state.time_scale = 5;
-  WriteSimState(state);
-  Plant("999999999", "pid: 999999999\ncamera_id: \"Aravis-Fake-STALE\"\nserial: \"STALE\"\n");
-  Plant("1", "pid: 1\n");  // the map::at: keys missing, a process that is no sim
-  Plant(std::to_string(::getpid()), "pid: " + std::to_string(::getpid()) + "\n");
-  std::ostringstream out, err;
-  RunDevices(DevicesArgs{}, {out, err});
-  const std::string text = out.str();
-  EXPECT_NE(text.find(sim.pty()), std::string::npos) << text;
-  EXPECT_NE(text.find("Aravis-Fake-LIVE"), std::string::npos) << text;
-  EXPECT_EQ(text.find("STALE"), std::string::npos) << text;
-  EXPECT_NE(text.find("Serial ports:"), std::string::npos) << text;
-  EXPECT_NE(text.find("not searched"), std::string::npos) << text;
-  EXPECT_NE(err.str().find("irdist-sim-1.yaml"), std::string::npos) << err.str();
-  EXPECT_EQ(err.str().find("999999999"), std::string::npos) << err.str();
+TEST_F(RigLookupTest, ResolveRigTakesAPathThatExistsAsGiven) {
+  const fs::path rig = dir_ / "rigs" / "mine.yaml";
+  std::ofstream(rig) << "kind: virtual\n";
+  EXPECT_EQ(ResolveRig(rig.string()), rig.string());
 }
 
-// A sim state file with only a pid (a sim of an older irdist, or a hand-made one): listed with
-// '?' for what it lacks.
-TEST_F(ToolsTest, DevicesListsASimWithMissingKeysWithoutFailing) {
-  testing::FakeSim sim(dir_ / "sim");
-  Plant(std::to_string(sim.pid()), "pid: " + std::to_string(sim.pid()) + "\n");
-  std::ostringstream out, err;
-  RunDevices(DevicesArgs{}, {out, err});
-  EXPECT_NE(out.str().find("pid " + std::to_string(sim.pid()) + ": camera ?"), std::string::npos)
-      << out.str() << err.str();
+// A bare name is a rig file of the shipped recipes/rigs/ (the source tree's in a build).
+TEST_F(RigLookupTest, ResolveRigFindsANameInTheShippedRigs) {
+  const std::string found = ResolveRig("virtual");
+  EXPECT_TRUE(fs::equivalent(found, std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml"))
+      << found;
+}
+
+TEST_F(RigLookupTest, ResolveRigRefusesANameWithNoRigFile) {
+  try {
+    ResolveRig("no-such-rig");
+    FAIL() << "a rig name with no file was resolved";
+  } catch (const RecipeError& e) {
+    EXPECT_NE(std::string(e.what()).find("no such rig"), std::string::npos) << e.what();
+  }
 }
 
 // measure, snap, view and station find a running sim of the same rig file (the same file by
 // another path too); a sim of another rig file and the stale file of a dead one are skipped.
-TEST_F(ToolsTest, FindRunningSimMatchesTheRigFileAndALiveSim) {
+TEST_F(RigLookupTest, FindRunningSimMatchesTheRigFileAndALiveSim) {
   const fs::path rig = dir_ / "rigs" / "mine.yaml";
   std::ofstream(rig) << "kind: virtual\n";
   std::ofstream(dir_ / "rigs" / "other.yaml") << "kind: virtual\n";
@@ -109,7 +94,7 @@ TEST_F(ToolsTest, FindRunningSimMatchesTheRigFileAndALiveSim) {
 
 // The attack on station: a state file of pid 1 naming another pty for the rig is
 // ignored (with a warning), so its ports are never opened.
-TEST_F(ToolsTest, FindRunningSimIgnoresAPlantedStateFile) {
+TEST_F(RigLookupTest, FindRunningSimIgnoresAPlantedStateFile) {
   const fs::path rig = dir_ / "rigs" / "mine.yaml";
   std::ofstream(rig) << "kind: virtual\n";
   Plant("1", "pid: 1\nrig: \"" + rig.string() + "\"\nstation_port: \"/dev/pts/0\"\n");
