@@ -69,31 +69,6 @@ TEST(PlanTest, TrapezoidMatchesHandComputedProfiles) {
   EXPECT_EQ(TrapezoidMoveS(-500.0, slide), TrapezoidMoveS(500.0, slide));
 }
 
-TEST(PlanTest, BracketFramesReferenceOnceOrRetaken) {
-  BracketSpec bracket;  // t_r 8, t_n 30 32 34 36
-  std::vector<PlannedExposure> frames = PlannedExposures(bracket);
-  ASSERT_EQ(frames.size(), 5u);
-  EXPECT_TRUE(frames[0].is_reference);
-  EXPECT_EQ(frames[0].exposure_ms, 8.0);
-  for (int i = 1; i < 5; ++i) {
-    EXPECT_FALSE(frames[i].is_reference);
-    EXPECT_EQ(frames[i].reference_index, 0);
-    EXPECT_EQ(frames[i].exposure_ms, bracket.t_meas_ms[i - 1]);
-    EXPECT_EQ(frames[i].index, i);
-  }
-
-  bracket.retake_reference = true;
-  frames = PlannedExposures(bracket);
-  ASSERT_EQ(frames.size(), 8u);
-  for (int n = 0; n < 4; ++n) {
-    EXPECT_TRUE(frames[2 * n].is_reference);
-    EXPECT_EQ(frames[2 * n].exposure_ms, 8.0);
-    EXPECT_FALSE(frames[2 * n + 1].is_reference);
-    EXPECT_EQ(frames[2 * n + 1].reference_index, 2 * n);
-    EXPECT_EQ(frames[2 * n + 1].exposure_ms, bracket.t_meas_ms[n]);
-  }
-}
-
 TEST(PlanTest, CountsFramesAndDifferences) {
   SweepSpec spec;
   spec.slide_mm.values = {1500, 2000, 2500, 3000};
@@ -404,16 +379,6 @@ TEST(PlanTest, FormatDurationNeverRoundsTheUnrepresentable) {
   EXPECT_EQ(FormatDuration(std::nan("")), "over 1e9 s");
 }
 
-// The chance that a draw is kept, against the normal law's own figures.
-TEST(PlanSafety, AcceptedFractionIsTheNormalMassInsideTheWindow) {
-  RandomDraws draws{500.0, 50.0, 10, 1, true, 450.0, 550.0};
-  EXPECT_NEAR(draws.AcceptedFraction(), 0.682689492137, 1e-9);  // +-1 sd
-  draws.min = 500.0;
-  EXPECT_NEAR(draws.AcceptedFraction(), 0.341344746068, 1e-9);  // 0..+1 sd
-  draws.sd = 0.0;
-  EXPECT_EQ(draws.AcceptedFraction(), 1.0);
-}
-
 // sd 1e308, or a window 1e-7 wide, would redraw for ever: IsValid refuses them and says the
 // largest sd that works, and MakePlan throws instead of spinning.
 TEST(PlanSafety, RandomDrawsThatCannotMeetTheirWindowAreRefusedWithTheFix) {
@@ -438,20 +403,6 @@ TEST(PlanSafety, RandomDrawsThatCannotMeetTheirWindowAreRefusedWithTheFix) {
       EXPECT_LE(p.bias_ma, draws.max);
     }
   }
-}
-
-TEST(PlanSafety, SettlesAndExposuresBeyondTheirBoundsAreInvalid) {
-  std::string why;
-  SettleSpec settle;
-  settle.after_move_ms = 1e308;
-  EXPECT_FALSE(settle.IsValid(&why));
-  EXPECT_NE(why.find("[0, 3600000] ms"), std::string::npos) << why;
-  BracketSpec bracket;
-  bracket.t_meas_ms = {30.0, 1e308};
-  EXPECT_FALSE(bracket.IsValid(&why));
-  bracket = BracketSpec();
-  bracket.t_ref_ms = 1e306;
-  EXPECT_FALSE(bracket.IsValid(&why));
 }
 
 // 50000 poses x 42951 frames is more than an int holds: refused before any pose is made.
