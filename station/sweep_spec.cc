@@ -147,6 +147,11 @@ bool SweepSpec::IsValid(std::string* why) const {
     for (double v : axis->values) {
       if (!(std::abs(v) < 90.0)) return Fail(why, "angles must lie in (-90, 90) deg");
     }
+    // Random angles are drawn inside their window: it must lie inside the angles too (a draw of
+    // -1.4e9 deg of tilt made a pan of NaN and a plan of NaN seconds).
+    if (axis->random && !(axis->random->min > -90.0 && axis->random->max < 90.0)) {
+      return Fail(why, "random angles need min and max inside (-90, 90) deg");
+    }
   }
   if (!order.empty()) {
     if (order.size() != all.size()) return Fail(why, "order must name each of the 4 axes once");

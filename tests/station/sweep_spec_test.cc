@@ -78,8 +78,9 @@ TEST(SweepSpecTest, AxesAreNamedAsRecipesWriteThemAndFoundByName) {
   EXPECT_EQ(spec.bias_ma.Count(), RandomDraws{}.count);  // draws replace the values
 }
 
-// Angles at or beyond 90 deg, a value that is not finite and an axis without values are refused
-// naming the axis as the recipe writes it.
+// Angles at or beyond 90 deg (listed, or a random angle's window), a value that is not finite and
+// an axis without values are refused naming the axis as the recipe writes it. The fuzzer found a
+// random tilt drawn at -1.4e9 deg: a pan of NaN and a plan of NaN seconds.
 TEST(SweepSpecTest, AxesOutsideWhatAStationCanReachAreRefusedByName) {
   std::string why;
   SweepSpec spec;
@@ -95,6 +96,12 @@ TEST(SweepSpecTest, AxesOutsideWhatAStationCanReachAreRefusedByName) {
   spec.tilt_deg.values.clear();
   EXPECT_FALSE(spec.IsValid(&why));
   EXPECT_NE(why.find("tilt_deg: no values"), std::string::npos) << why;
+  spec = SweepSpec();
+  spec.tilt_deg.random = RandomDraws{0.0, 5.0, 3, 1, true, -1e300, 1e300};  // the defaults' window
+  EXPECT_FALSE(spec.IsValid(&why));
+  EXPECT_NE(why.find("inside (-90, 90) deg"), std::string::npos) << why;
+  spec.tilt_deg.random = RandomDraws{0.0, 5.0, 3, 1, true, -30.0, 30.0};
+  EXPECT_TRUE(spec.IsValid(&why)) << why;
   spec = SweepSpec();
   spec.serpentine = {SweepAxis::kSlide, SweepAxis::kSlide};
   EXPECT_FALSE(spec.IsValid(&why));
