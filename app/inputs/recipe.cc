@@ -347,6 +347,19 @@ void CheckThetaRealisable(const ParsedAxis& angle, const ParsedAxis& tilt,
   }
 }
 
+// A random angle's window (its min and max, or the rig's limits) inside (-90, 90) deg, as listed
+// angles are (SweepSpec::IsValid): refused at the axis's line on a rig whose limits reach further.
+void CheckRandomAngleWindow(const ParsedAxis& axis, const std::string& file,
+                            const std::string& what) {
+  if (!axis.values.random.has_value()) return;
+  const RandomDraws& draws = *axis.values.random;
+  if (draws.min > -90.0 && draws.max < 90.0) return;
+  Fail(file, axis.mark,
+       what + ": random draws are kept inside [" + Number(draws.min) + ", " + Number(draws.max) +
+           "] (their min/max and the rig's limits), which must lie inside (-90, 90) deg; give "
+           "min and max inside it");
+}
+
 void CheckAngleLimits(ParsedAxis* angle, const ParsedAxis& tilt, AngleMode mode,
                       const StationLimits& limits, const std::string& file,
                       const std::string& rig_file) {
@@ -394,6 +407,8 @@ void ReadAxes(const MapReader& map, const std::string& file, Recipe* recipe) {
   CheckLimits(&tilt, limits.tilt_deg, file, "axes.tilt_deg", rig_file);
   CheckLimits(&bias, limits.bias_ma, file, "axes.bias_ma", rig_file);
   CheckAngleLimits(&angle, tilt, sweep.angle_mode, limits, file, rig_file);
+  CheckRandomAngleWindow(angle, file, "axes." + SweepAxisName(SweepAxis::kAngle, sweep.angle_mode));
+  CheckRandomAngleWindow(tilt, file, "axes.tilt_deg");
   sweep.slide_mm = slide.values;
   sweep.angle_deg = angle.values;
   sweep.tilt_deg = tilt.values;

@@ -775,5 +775,36 @@ TEST(RecipeSafety, APlanLongerThanAnyLabIsRefusedNamingTheRigFile) {
   std::filesystem::remove_all(dir);
 }
 
+// On a rig whose pan and tilt limits reach beyond 90 deg, random angles without their own window
+// would be drawn where the IRED faces away (and a tilt of -1.4e9 deg made a plan of NaN seconds):
+// refused at the axis's line with the fix; with min and max inside (-90, 90) it plans.
+TEST(RecipeSafety, RandomAnglesDrawnBeyondNinetyDegreesAreRefusedAtTheirLine) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("irdist_recipe_wide_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "rigs");
+  {
+    std::ofstream rig(dir / "rigs" / "wide.yaml");
+    rig << "kind: virtual\nstation:\n  limits:\n    pan_deg: [-170, 170]\n"
+           "    tilt_deg: [-170, 170]\n";
+  }
+  const std::string head = "rig: wide\naxes:\n  slide_mm: [1500, 2000]\n  bias_ma: 500\n";
+  const std::string bracket = "bracket: {t_ref_ms: 8, t_meas_ms: 30}\n";
+  try {
+    ParseRecipe(head + "  pan_deg: {mean: 0, sd: 20, count: 3, seed: 1}\n" + bracket,
+                "wide-recipe.yaml", dir.string());
+    ADD_FAILURE() << "random pan drawn over [-170, 170] accepted";
+  } catch (const RecipeError& e) {
+    EXPECT_EQ(e.File(), "wide-recipe.yaml");
+    EXPECT_EQ(e.Line(), 5) << e.what();
+    EXPECT_NE(e.Message().find("axes.pan_deg"), std::string::npos) << e.what();
+    EXPECT_NE(e.Message().find("inside (-90, 90) deg"), std::string::npos) << e.what();
+  }
+  const Recipe recipe = ParseRecipe(
+      head + "  pan_deg: {mean: 0, sd: 20, count: 3, seed: 1, min: -60, max: 60}\n" + bracket,
+      "wide-recipe.yaml", dir.string());
+  EXPECT_EQ(PlanRecipe(recipe).poses.size(), 6u);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace irdist
