@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "tests/loopback_gvcp.h"
+#include "tests/sim/camera_server_fixture.h"
 
 // The virtual camera's control channel (sim/camera_server_gvcp.cc) spoken to in raw GVCP packets.
 // The expected bytes come from the GigE Vision specification: a command is the key 0x42, a flags
@@ -29,20 +30,12 @@ namespace irdist::sim {
 namespace {
 
 constexpr char kSerial[] = "IRDGVCP01";
-constexpr std::uint32_t kRegWidth = 0x100;        // sim/virtual_camera.xml's Width
-constexpr std::uint32_t kRegExposureUs = 0x120;   // sim/virtual_camera.xml's ExposureTime
 constexpr std::uint32_t kRegHeartbeatMs = 0x938;
 constexpr std::uint32_t kRegPrivilege = 0xa00;
 
 std::vector<std::uint8_t> Be32(std::uint32_t v) {
   return {static_cast<std::uint8_t>(v >> 24), static_cast<std::uint8_t>(v >> 16),
           static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v)};
-}
-std::uint16_t U16(const std::vector<std::uint8_t>& p, std::size_t at) {
-  return static_cast<std::uint16_t>((p.at(at) << 8) | p.at(at + 1));
-}
-std::uint32_t U32(const std::vector<std::uint8_t>& p, std::size_t at) {
-  return (static_cast<std::uint32_t>(U16(p, at)) << 16) | U16(p, at + 2);
 }
 
 // A GVCP application on its own UDP socket.

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "tests/loopback_gvcp.h"
+#include "tests/sim/camera_server_fixture.h"
 
 // The virtual camera's stream channel (sim/camera_server_gvsp.cc) received as raw GVSP packets.
 // The expected layout comes from the GigE Vision specification (standard, not extended, ids):
@@ -29,45 +30,6 @@
 
 namespace irdist::sim {
 namespace {
-
-constexpr std::uint32_t kRegWidth = 0x100, kRegHeight = 0x104;  // sim/virtual_camera.xml
-constexpr std::uint32_t kRegExposureUs = 0x120, kRegAcquisition = 0x124;
-constexpr std::uint32_t kRegPixelFormat = 0x128;
-constexpr std::uint32_t kRegOffsetX = 0x130, kRegOffsetY = 0x134;
-constexpr std::uint32_t kRegTriggerMode = 0x300, kRegTriggerSoftware = 0x30c;
-constexpr std::uint32_t kRegTriggerSource = 0x8000;  // 1 = Software
-constexpr std::uint32_t kRegChunkModeActive = 0x8010, kRegChunkEnableExposure = 0x8018;
-constexpr std::uint32_t kRegStreamPort = 0xd00, kRegPacketSize = 0xd04, kRegStreamAddress = 0xd18;
-constexpr std::uint32_t kMono8 = 0x01080001, kMono16 = 0x01100007;  // PFNC
-
-std::uint16_t U16(const std::vector<std::uint8_t>& p, std::size_t at) {
-  return static_cast<std::uint16_t>((p.at(at) << 8) | p.at(at + 1));
-}
-std::uint32_t U32(const std::vector<std::uint8_t>& p, std::size_t at) {
-  return (static_cast<std::uint32_t>(U16(p, at)) << 16) | U16(p, at + 2);
-}
-
-int LoopbackSocket(std::uint16_t* port) {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in local{};
-  local.sin_family = AF_INET;
-  local.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  EXPECT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&local), sizeof(local)), 0);
-  socklen_t size = sizeof(local);
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &size);
-  if (port != nullptr) *port = ntohs(local.sin_port);
-  return fd;
-}
-
-// The next datagram on `fd`, or {} after `timeout_ms`.
-std::vector<std::uint8_t> Receive(int fd, int timeout_ms) {
-  pollfd wait{fd, POLLIN, 0};
-  if (::poll(&wait, 1, timeout_ms) != 1) return {};
-  std::vector<std::uint8_t> packet(9000);
-  const ssize_t got = ::recv(fd, packet.data(), packet.size(), 0);
-  packet.resize(got > 0 ? static_cast<std::size_t>(got) : 0);
-  return packet;
-}
 
 class CameraServerGvspTest : public ::testing::Test {
  protected:
