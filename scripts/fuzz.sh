@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# `./irdist fuzz TARGET [SECONDS | --runs N [-max_len=B]]`, `./irdist fuzz --build`: the libFuzzer
-# targets of fuzz/, built with clang, ASan and UBSan in build-fuzz/ (./irdist fuzz --help). The
-# missing Debian packages (scripts/debian_packages.sh --clang) are installed before build-fuzz is
-# configured.
+# `./irdist fuzz TARGET [SECONDS | --runs N [-max_len=B] [-max_total_time=S]]`,
+# `./irdist fuzz --build`: the libFuzzer targets of fuzz/, built with clang, ASan and UBSan in
+# build-fuzz/ (./irdist fuzz --help). The missing Debian packages (scripts/debian_packages.sh
+# --clang) are installed before build-fuzz is configured.
 set -euo pipefail
 
 root="$(dirname "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")")"
@@ -15,8 +15,9 @@ fuzz_targets() { ls "$root/fuzz/corpus" | tr '\n' ' '; }
 fuzz_usage() {
   cat <<USAGE
 usage: ./irdist fuzz TARGET [SECONDS]    fuzz TARGET for SECONDS (default 60)
-       ./irdist fuzz TARGET --runs N [-max_len=B]   fuzz TARGET for N executions, seed 1 (what CI
-                                         runs), inputs at most B bytes (libFuzzer's default without it)
+       ./irdist fuzz TARGET --runs N [-max_len=B] [-max_total_time=S]   fuzz TARGET for N
+                                         executions, seed 1 (what CI runs), inputs at most B bytes
+                                         (libFuzzer's default without it), at most S seconds
        ./irdist fuzz --build             build every target (before running several at once)
        ./irdist fuzz --help              this text
 targets: $(fuzz_targets)
@@ -59,12 +60,14 @@ fi
 case "${2:-60}" in
   --runs) [[ "${3:-}" =~ ^[0-9]+$ ]] || { fuzz_usage >&2; exit 2; }
           limit=(-runs="$3" -seed=1)
-          case "${4:-}" in
-            "") ;;
-            -max_len=*) [[ "${4#-max_len=}" =~ ^[0-9]+$ ]] || { fuzz_usage >&2; exit 2; }
-                        limit+=("$4") ;;
-            *) fuzz_usage >&2; exit 2 ;;
-          esac
+          for extra in "${@:4}"; do
+            case "$extra" in
+              -max_len=*|-max_total_time=*)
+                [[ "${extra#*=}" =~ ^[0-9]+$ ]] || { fuzz_usage >&2; exit 2; }
+                limit+=("$extra") ;;
+              *) fuzz_usage >&2; exit 2 ;;
+            esac
+          done
           export ASAN_OPTIONS="${ASAN_OPTIONS:-malloc_context_size=0}" ;;
   *) [[ "${2:-60}" =~ ^[0-9]+$ ]] || { fuzz_usage >&2; exit 2; }
      limit=(-max_total_time="${2:-60}") ;;

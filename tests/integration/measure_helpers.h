@@ -63,9 +63,11 @@ inline std::string FastSlideScratch(const std::string& dir, const std::string& s
 }
 
 // The JSON objects of an output (lines starting with '{'), parsed.
+// Only whole lines count: a log read while its writer is still at work may end inside a line
+// (stdout is flushed in blocks), and that part is left for the next read.
 inline std::vector<YAML::Node> JsonLines(const std::string& output) {
   std::vector<YAML::Node> objects;
-  std::istringstream in(output);
+  std::istringstream in(output.substr(0, output.rfind('\n') + 1));
   std::string line;
   while (std::getline(in, line)) {
     if (!line.empty() && line[0] == '{') objects.push_back(YAML::Load(line));
