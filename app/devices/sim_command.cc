@@ -59,6 +59,7 @@ std::string SimTrajectoryPath(long pid, std::ostream& err) {
 }  // namespace
 
 void RunSim(const SimArgs& args, CommandIo io) {
+  RequireValid(args, "sim");
   const std::string rig_path = ResolveRig(args.rig);
   const Rig rig = LoadRig(rig_path);
   PrintRigNotes(rig, io.err);

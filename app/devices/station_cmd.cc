@@ -99,6 +99,7 @@ void SetCurrent(const Rig& rig, const StationArgs& args, Station& station) {
 }  // namespace
 
 void RunStation(const StationArgs& args, CommandIo io) {
+  RequireValid(args, "station");
   const Rig rig = LoadRig(ResolveRig(args.rig));
   PrintRigNotes(rig, io.err);
   StationOptions options = StationRunOptions(PortsFor(rig, args, io.err), nullptr);
@@ -125,6 +126,7 @@ void RunStation(const StationArgs& args, CommandIo io) {
 }
 
 void RunStationTest(const StationTestArgs& args, CommandIo io) {
+  RequireValid(args, "station-test");
   SerialOptions serial;
   serial.baud = static_cast<unsigned int>(args.baud);
   serial.origin = "the PORT and --baud of irdist station-test";

@@ -4,13 +4,26 @@
 // runs, runs/fit_command.h, runs/playback_command.h and runs/check_command.h: the offline ones,
 // devices/sim_command.h and devices/devices_command.h, live/measure.h, live/snap_command.h and
 // live/view.h: the camera-only commands, cli/cli.h: parsing and dispatch) declares its own
-// commands without including another's.
+// commands without including another's. Each Args struct with numbers has IsValid(&why), the
+// same bounds as the command line's checks (base/bounds.h), so that an engine called from a test,
+// a script or another command refuses what the parser would have refused (the command's entry
+// point checks it first and throws UsageError with `why`).
 
 #include <iosfwd>
 #include <string>
 #include <vector>
 
 namespace irdist {
+
+// Throws UsageError "irdist COMMAND: WHY" (app/inputs/errors.h).
+[[noreturn]] void RefuseArgs(const char* command, const std::string& why);
+
+// An engine's first step: its Args as the command line would have taken them, or UsageError.
+template <typename Args>
+void RequireValid(const Args& args, const char* command) {
+  std::string why;
+  if (!args.IsValid(&why)) RefuseArgs(command, why);
+}
 
 struct CommandIo {
   std::ostream& out;  // results
@@ -25,6 +38,8 @@ struct CalibrateArgs {
   bool quiet = false;       // --quiet: no progress output
   bool allow_nonlinear = false;  // --allow-nonlinear: go on past a failed first-pose linearity
   bool keep_model = false;  // --keep-model: model.yaml even when the fit fails its fitness
+
+  bool IsValid(std::string* why) const;
 };
 
 struct ValidateArgs {
@@ -35,6 +50,8 @@ struct ValidateArgs {
   double time_scale = 0.0;
   bool quiet = false;
   bool allow_model_mismatch = false;  // --allow-model-mismatch: a model of another camera setup
+
+  bool IsValid(std::string* why) const;
 };
 
 struct FitArgs {
@@ -76,6 +93,8 @@ struct MeasureArgs {
   double exposure_ms = 0.0;            // --exposure-ms: the track's (0 = the model's t_ref)
   double accel_psd_mm2_per_s3 = 0.0;   // --accel-psd: the filter's process noise (0 = default)
   double check_every_s = 0.0;          // --check-every: a bracket every S s (0 = none)
+
+  bool IsValid(std::string* why) const;
 };
 
 // `irdist snap`: one frame to a PNG, the blob's position and a suggested roi_px.
@@ -86,6 +105,8 @@ struct SnapArgs {
   double exposure_ms = 8.0;     // --exposure-ms
   std::vector<double> at;       // --at (virtual rig only)
   double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
+
+  bool IsValid(std::string* why) const;
 };
 
 // `irdist view`: a live window on the camera.
@@ -99,6 +120,8 @@ struct ViewArgs {
   std::string screenshot;       // --screenshot FILE.png: save the last window image
   bool force = false;           // --force: replace an existing screenshot file
   double time_scale = 0.0;      // --time-scale (virtual rig; 0 = rig file's)
+
+  bool IsValid(std::string* why) const;
 };
 
 struct CheckArgs {
@@ -114,11 +137,15 @@ struct PlanArgs {
   std::string out_dir;       // --out: the probe run's folder
   double time_scale = 0.0;   // --time-scale (virtual rig; 0 = rig file's)
   bool quiet = false;
+
+  bool IsValid(std::string* why) const;
 };
 
 struct SimArgs {
   std::string rig = "virtual";  // rig name or rig file (kind: virtual)
   double time_scale = 0.0;      // --time-scale (0 = rig file's)
+
+  bool IsValid(std::string* why) const;
 };
 
 // `irdist station`: put the station at a pose and current by hand (app/devices/station_cmd.h).
@@ -127,12 +154,16 @@ struct StationArgs {
   std::string action;               // move | current | off | home | status
   std::vector<double> values;       // move: SLIDE_MM PAN_DEG TILT_DEG; current: MA
   std::vector<std::string> ports;   // --port NAME=PATH (overrides the rig file / a running sim)
+
+  bool IsValid(std::string* why) const;
 };
 
 // `irdist station-test PORT`: the conformance suite of docs/station-protocol.md against a board.
 struct StationTestArgs {
   std::string port;
   int baud = 115200;
+
+  bool IsValid(std::string* why) const;
 };
 
 // `irdist camera-test [CAMERA]`: a camera's features against irdist's needs

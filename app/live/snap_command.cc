@@ -111,6 +111,7 @@ cv::Mat SnapFrame(const SnapArgs& args, std::ostream& err, std::unique_ptr<LiveC
 }  // namespace
 
 void RunSnap(const SnapArgs& args, CommandIo io) {
+  RequireValid(args, "snap");
   const std::string preview = PreviewPath(args.out);
   CheckPngOutput(args.out, args.force, "--out");
   CheckPngOutput(preview, args.force, "--out (its preview)");

@@ -403,6 +403,7 @@ void RunTrackRecipe(const ValidateArgs& args, CommandIo io) {
 }
 
 void RunValidateOrTrack(const ValidateArgs& args, CommandIo io) {
+  RequireValid(args, "validate");
   RecipeKindOf(args.recipe) == "track" ? RunTrackRecipe(args, io) : RunValidate(args, io);
 }
 

@@ -272,6 +272,7 @@ void RunTrack(const MeasureArgs& args, CommandIo io) {
 }
 
 void RunMeasureOrTrack(const MeasureArgs& args, CommandIo io) {
+  RequireValid(args, "measure");
   args.track ? RunTrack(args, io) : RunMeasure(args, io);
 }
 

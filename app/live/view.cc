@@ -200,6 +200,7 @@ void ViewLoop(ViewSource& source, int bit_depth, const ViewArgs& args, std::ostr
 }  // namespace
 
 void RunView(const ViewArgs& args, CommandIo io) {
+  RequireValid(args, "view");
   if (!args.screenshot.empty()) CheckPngOutput(args.screenshot, args.force, "--screenshot");
   RequireDisplay("view");
   if (!args.model.empty()) {

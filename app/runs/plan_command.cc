@@ -55,6 +55,7 @@ void PrintPlan(const Recipe& recipe, const Plan& plan, int show_poses, std::ostr
 }  // namespace
 
 void RunPlan(const PlanArgs& args, CommandIo io) {
+  RequireValid(args, "plan");
   if (args.suggest) {
     RunSuggest(args, io);
     return;

@@ -403,6 +403,7 @@ RunRequest RequestFrom(RunKind kind, const Args& args) {
 }  // namespace
 
 void RunCalibrate(const CalibrateArgs& args, CommandIo io) {
+  RequireValid(args, "calibrate");
   RunRequest request = RequestFrom(RunKind::kCalibrate, args);
   request.allow_nonlinear = args.allow_nonlinear;
   request.keep_model = args.keep_model;

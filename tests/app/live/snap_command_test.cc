@@ -93,12 +93,19 @@ TEST(Snap, AnExposureOutsideTheCamerasRangeNamesExposureMs) {
   SnapArgs args;
   args.rig = VirtualRig();
   args.out = Scratch("exposure") + "/frame.png";
-  args.exposure_ms = 1e9;
+  args.exposure_ms = 1e9;  // beyond any camera's (base/bounds.h): refused before the camera
   args.time_scale = 50.0;
   std::ostringstream out, err;
   try {
     RunSnap(args, {out, err});
     ADD_FAILURE() << "an exposure of 1e9 ms was accepted";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("--exposure-ms"), std::string::npos) << e.what();
+  }
+  args.exposure_ms = 5000.0;  // inside the bounds, beyond the virtual camera's 1 s
+  try {
+    RunSnap(args, {out, err});
+    ADD_FAILURE() << "an exposure of 5000 ms was accepted";
   } catch (const CameraError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("--exposure-ms"), std::string::npos) << what;
