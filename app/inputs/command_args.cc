@@ -64,8 +64,9 @@ bool ValidateArgs::IsValid(std::string* why) const { return TimeScale(time_scale
 
 bool MeasureArgs::IsValid(std::string* why) const {
   bool ok = Bounded("--t-ref-ms", bounds::kExposureMs, t_ref_ms, true, why);
-  for (double t_ms : t_meas_ms)
+  for (double t_ms : t_meas_ms) {
     ok = Bounded("--t-meas-ms", bounds::kExposureMs, t_ms, false, why) && ok;
+  }
   ok = Bounded("--count", bounds::kCount, count, true, why) && ok;
   ok = Bounded("--duration", bounds::kDurationS, duration_s, true, why) && ok;
   ok = Bounded("--max-disk-gb", bounds::kDiskGb, max_disk_gb, true, why) && ok;
