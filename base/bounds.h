@@ -51,6 +51,10 @@ inline constexpr Bound kMonotonicNs{"monotonic time", "ns", 0.0, 3.16e18, false,
 inline constexpr Bound kAccelPsd{"acceleration noise density", "mm^2/s^3", 0.0, 1.0e12, true,
                                  "q = a^2 T: 1e12 is 1000 g sustained for a second, beyond any "
                                  "carriage, robot or hand"};
+// The virtual rig's clock (rig `virtual.time_scale`, --time-scale, a sim's override).
+inline constexpr Bound kTimeScale{"time scale", "simulated s per host s", 0.01, 1000.0, false,
+                                  "from 100x slower than real time (each frame watched) to 1000x "
+                                  "faster (a sweep in seconds)"};
 // Sizes and counts.
 inline constexpr Bound kDiskGb{"disk budget", "GB", 0.0, 1.0e6, true,
                                "no disk holds more than a petabyte"};

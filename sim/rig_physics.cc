@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "base/bounds.h"
 #include "base/input_error.h"
 #include "base/yaml_fields.h"
 
@@ -175,7 +176,7 @@ bool CameraOptions::IsValid(std::string* why) const {
 }
 
 bool RigPhysics::IsValid(std::string* why) const {
-  if (!std::isfinite(time_scale) || time_scale < 0.01 || time_scale > 1000.0) {
+  if (!bounds::kTimeScale.Contains(time_scale)) {
     return Fail(why, "time_scale must lie in [0.01, 1000]");
   }
   return emitter.IsValid(why) && optics.IsValid(why) && sensor.IsValid(why) &&

@@ -3,6 +3,7 @@
 #include <sstream>
 #include <vector>
 
+#include "base/bounds.h"
 #include "base/yaml_fields.h"
 #include "sim/camera_server.h"
 #include "sim/station_emulator.h"
@@ -54,7 +55,7 @@ std::vector<DeviceEntry> ReadStationDevices(const std::string& rig_path, const s
 }  // namespace
 
 bool VirtualRigOverrides::IsValid(std::string* why) const {
-  if (time_scale && !(*time_scale >= 0.01 && *time_scale <= 1000.0)) {
+  if (time_scale && !bounds::kTimeScale.Contains(*time_scale)) {
     if (why) *why = "time_scale override must lie in [0.01, 1000]";
     return false;
   }

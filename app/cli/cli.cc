@@ -43,9 +43,10 @@ CLI::Validator TimeScaleRange() {
   return CLI::Validator(
       [](std::string& text) -> std::string {
         double value = 0.0;
-        if (!CLI::detail::lexical_cast(text, value) || !(value >= 0.01 && value <= 1000.0)) {
-          return "--time-scale " + text +
-                 " is outside 0.01..1000 (simulated seconds per host second; 1 = real time)";
+        if (!CLI::detail::lexical_cast(text, value) || !bounds::kTimeScale.Contains(value)) {
+          return "--time-scale " + text + " is outside " + BoundNumber(bounds::kTimeScale.min) +
+                 ".." + BoundNumber(bounds::kTimeScale.max) +
+                 " (simulated seconds per host second; 1 = real time)";
         }
         return "";
       },
@@ -166,7 +167,7 @@ void PlanFlags(CLI::App* sub, PlanArgs& p) {
   sub->add_option("recipe", p.recipe, "Recipe file (recipes/*.yaml)")->required();
   sub->add_option("--poses", p.show_poses, "How many poses of the order to print (-1: all)")
       ->capture_default_str()
-      ->check(CLI::Range(-1, 1000000));
+      ->check(CLI::Range(-1, kMaxShownPoses));
   sub->add_flag("--suggest", p.suggest,
                 "Take probe frames at the recipe's two ends on its rig and propose t_r, the t_n "
                 "and the current");
@@ -198,8 +199,9 @@ void AddAt(CLI::App* sub, std::vector<double>& at) {
                   "SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA first")
       ->delimiter(',')
       ->expected(4)
-      ->check(NumberIn("--at", -1e6, 1e6, false, "(mm, deg, deg, mA)", "--at 2000,10,0,500"))
-      ->check(NumberIn("--at (its BIAS_MA)", 0.0, 1e6, false, "mA", "--at 2000,10,0,500")
+      ->check(NumberIn("--at", -kMaxAtValue, kMaxAtValue, false, "(mm, deg, deg, mA)",
+                       "--at 2000,10,0,500"))
+      ->check(NumberIn("--at (its BIAS_MA)", 0.0, kMaxAtValue, false, "mA", "--at 2000,10,0,500")
                   .application_index(3));
 }
 

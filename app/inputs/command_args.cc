@@ -11,11 +11,6 @@
 namespace irdist {
 namespace {
 
-constexpr double kMinTimeScale = 0.01;  // the virtual rig's simulated s per host s
-constexpr double kMaxTimeScale = 1000.0;
-constexpr double kMaxAt = 1.0e6;  // --at's each number (mm, deg, deg, mA)
-constexpr int kMaxShownPoses = 1000000;
-
 // Appends "; " and `text` to a non-empty *why (or sets it); returns false.
 bool Refuse(std::string* why, const std::string& text) {
   if (why != nullptr) *why += (why->empty() ? "" : "; ") + text;
@@ -31,10 +26,11 @@ bool Bounded(const char* flag, const Bound& bound, double value, bool zero_is_de
 }
 
 bool TimeScale(double value, std::string* why) {
-  if (value == 0.0 || (value >= kMinTimeScale && value <= kMaxTimeScale)) return true;
-  return Refuse(why, "--time-scale " + BoundNumber(value) +
-                         " is outside 0.01..1000 (simulated seconds per host second; 0 = the "
-                         "rig file's)");
+  if (value == 0.0 || bounds::kTimeScale.Contains(value)) return true;
+  return Refuse(why, "--time-scale " + BoundNumber(value) + " is outside " +
+                         BoundNumber(bounds::kTimeScale.min) + ".." +
+                         BoundNumber(bounds::kTimeScale.max) +
+                         " (simulated seconds per host second; 0 = the rig file's)");
 }
 
 // --at: none, or SLIDE_MM,PAN_DEG,TILT_DEG,BIAS_MA, each finite within 1e6 and the bias >= 0.
@@ -45,8 +41,9 @@ bool At(const std::vector<double>& at, std::string* why) {
                            std::to_string(at.size()));
   }
   for (double value : at) {
-    if (!(std::fabs(value) <= kMaxAt)) {
-      return Refuse(why, "--at " + BoundNumber(value) + " is outside [-1e6, 1e6]");
+    if (!(std::fabs(value) <= kMaxAtValue)) {
+      return Refuse(why, "--at " + BoundNumber(value) + " is outside [-" +
+                             BoundNumber(kMaxAtValue) + ", " + BoundNumber(kMaxAtValue) + "]");
     }
   }
   return at[3] >= 0.0 || Refuse(why, "--at's BIAS_MA " + BoundNumber(at[3]) + " is negative");
@@ -91,7 +88,8 @@ bool ViewArgs::IsValid(std::string* why) const {
 bool PlanArgs::IsValid(std::string* why) const {
   bool ok = TimeScale(time_scale, why);
   if (show_poses < -1 || show_poses > kMaxShownPoses) {
-    ok = Refuse(why, "--poses " + std::to_string(show_poses) + " is outside -1..1000000");
+    ok = Refuse(why, "--poses " + std::to_string(show_poses) + " is outside -1.." +
+                         std::to_string(kMaxShownPoses));
   }
   return ok;
 }

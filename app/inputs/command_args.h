@@ -25,6 +25,10 @@ void RequireValid(const Args& args, const char* command) {
   if (!args.IsValid(&why)) RefuseArgs(command, why);
 }
 
+// Limits of flags outside base/bounds.h's physical table, shared by the parser (cli/) and IsValid.
+inline constexpr double kMaxAtValue = 1.0e6;    // --at: each of SLIDE_MM, PAN_DEG, TILT_DEG, BIAS_MA
+inline constexpr int kMaxShownPoses = 1000000;  // plan --poses
+
 struct CommandIo {
   std::ostream& out;  // results
   std::ostream& err;  // progress and diagnostics
