@@ -8,6 +8,7 @@
 
 #include "estimator/features.h"
 #include "estimator/fit.h"
+#include "estimator/model_poles.h"
 
 namespace irdist {
 
@@ -71,7 +72,7 @@ struct EstimateOptions {
   int max_iterations = 50;        // LM iterations of Eq. 26
   double step_tolerance = 1e-12;  // stop when the step in (ln d, theta rad) is below this
   // Roots of Eq. 25 are "in range" within [d_min / (1 + m), d_max * (1 + m)].
-  double range_margin = 0.10;
+  double range_margin = kDefaultRangeMargin;
   bool IsValid(std::string* why) const;
 };
 

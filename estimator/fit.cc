@@ -476,7 +476,8 @@ PoleScan PolesOf(const FitInput& in, const std::vector<double>& c, double sigma)
     vars.push_back(o.vars);
     thetas.push_back(o.theta_deg);
   }
-  return ScanForPoles(*in.spec, c, sigma, vars, thetas, in.scaling.d_ref_mm, in.scaling.d_scale);
+  return ScanForPoles(*in.spec, c, sigma, vars, thetas, in.scaling.d_ref_mm, in.scaling.d_scale,
+                      kDefaultRangeMargin);
 }
 
 // LM (Ceres) from one start; replaces *best when its cost is lower than *best_cost. A solution

@@ -8,7 +8,7 @@ namespace irdist {
 
 namespace {
 
-constexpr int kDistanceSteps = 64;  // the sweep over the calibrated D range
+constexpr int kDistanceSteps = 80;  // the sweep over the (widened) calibrated D range
 constexpr int kThetaSteps = 8;      // and over the calibrated thetas
 constexpr double kVanishing = 1e-9;  // |Den| below this share of its value at the sample
 
@@ -25,17 +25,18 @@ std::string PoleScan::Note() const {
   std::ostringstream out;
   out.precision(4);
   out << "its denominator vanishes at d = " << d_mm << " mm, theta " << theta_deg
-      << " deg, inside the calibrated range";
+      << " deg, inside the calibrated range (or its margin)";
   return out.str();
 }
 
 PoleScan ScanForPoles(const ModelSpec& spec, const std::vector<double>& coefficients,
                       double sigma_deg,
                       const std::vector<std::array<double, kNumModelVars>>& samples,
-                      const std::vector<double>& thetas_deg, double d_ref_mm, double d_scale) {
+                      const std::vector<double>& thetas_deg, double d_ref_mm, double d_scale,
+                      double margin) {
   PoleScan scan;
   if (!spec.has_denominator() || samples.empty() || thetas_deg.size() != samples.size() ||
-      static_cast<int>(coefficients.size()) != spec.num_coefficients()) {
+      static_cast<int>(coefficients.size()) != spec.num_coefficients() || !(margin >= 0.0)) {
     return scan;
   }
   double d_lo = samples[0][kVarD], d_hi = d_lo;
@@ -44,6 +45,10 @@ PoleScan ScanForPoles(const ModelSpec& spec, const std::vector<double>& coeffici
     d_lo = std::min(d_lo, s[kVarD]);
     d_hi = std::max(d_hi, s[kVarD]);
   }
+  // D goes as 1 / d^2: the distances' margin widens D's range by (1 + margin)^2 each way.
+  const double widen = (1.0 + margin) * (1.0 + margin);
+  d_lo /= widen;
+  d_hi *= widen;
   for (size_t i = 0; i < samples.size(); ++i) {
     std::array<double, kNumModelVars> v = samples[i];
     v[kVarRho] = Rho(thetas_deg[i], sigma_deg);

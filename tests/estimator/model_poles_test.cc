@@ -12,6 +12,7 @@ namespace {
 
 constexpr double kDRefMm = 1000.0;
 constexpr double kDScale = 0.25;
+constexpr double kMargin = 0.10;  // the estimator's range_margin
 
 // D for a distance in mm, as the fit scales it: (d_ref / d)^2 / d_scale.
 double BigD(double d_mm) { return (kDRefMm / d_mm) * (kDRefMm / d_mm) / kDScale; }
@@ -51,26 +52,54 @@ TEST(ScanForPoles, FindsADenominatorsZeroInsideTheCalibratedRange) {
   Grid(&vars, &thetas);
   const ModelSpec& spec = GetModelSpec(ModelKind::kFreeSigma);
   const double d0 = BigD(2000.0);
-  const PoleScan pole =
-      ScanForPoles(spec, Sigma(1.0, -d0, 0.38, -0.38 * d0), 30.0, vars, thetas, kDRefMm, kDScale);
+  const PoleScan pole = ScanForPoles(spec, Sigma(1.0, -d0, 0.38, -0.38 * d0), 30.0, vars, thetas,
+                                     kDRefMm, kDScale, kMargin);
   ASSERT_TRUE(pole.pole);
   EXPECT_NEAR(pole.d_mm, 2000.0, 20.0);
   EXPECT_NE(pole.Note().find("vanishes at d = "), std::string::npos) << pole.Note();
   EXPECT_FALSE(
-      ScanForPoles(spec, Sigma(0.0, 0.0, 1.0, 1.0), 30.0, vars, thetas, kDRefMm, kDScale).pole);
+      ScanForPoles(spec, Sigma(0.0, 0.0, 1.0, 1.0), 30.0, vars, thetas, kDRefMm, kDScale, kMargin)
+          .pole);
   const double far = BigD(1000.0);
-  EXPECT_FALSE(ScanForPoles(spec, Sigma(1.0, -far, 0.38, -0.38 * far), 30.0, vars, thetas,
-                            kDRefMm, kDScale)
+  EXPECT_FALSE(ScanForPoles(spec, Sigma(1.0, -far, 0.38, -0.38 * far), 30.0, vars, thetas, kDRefMm,
+                            kDScale, kMargin)
                    .pole);
   // A zero only at large theta (rho small): p19 D rho + p22 with p22 < 0 vanishes where rho is
   // small enough, inside the thetas' range.
   const double rho_30 = Rho(30.0, 30.0), rho_0 = Rho(0.0, 30.0);
   const double mid = 0.5 * (rho_30 + rho_0) * BigD(2000.0);
-  EXPECT_TRUE(ScanForPoles(spec, Sigma(1.0, 0.0, 0.0, -mid), 30.0, vars, thetas, kDRefMm, kDScale)
-                  .pole);
+  EXPECT_TRUE(
+      ScanForPoles(spec, Sigma(1.0, 0.0, 0.0, -mid), 30.0, vars, thetas, kDRefMm, kDScale, kMargin)
+          .pole);
   EXPECT_FALSE(ScanForPoles(GetModelSpec(ModelKind::kDiffF), {}, 30.0, vars, thetas, kDRefMm,
-                            kDScale)
+                            kDScale, kMargin)
                    .pole);  // no denominator
+}
+
+// The estimator takes roots within 10% beyond the calibrated distances, so a zero there is a pole
+// too: one just beyond the grid's 2500 mm (at 2520 mm, where a halo lens's calibration once put
+// Num's and Den's common zero) is found with the margin and not without it; one beyond the margin
+// (3000 mm) is not.
+TEST(ScanForPoles, FindsAZeroJustBeyondTheGridInsideTheEstimatorsMargin) {
+  std::vector<std::array<double, kNumModelVars>> vars;
+  std::vector<double> thetas;
+  Grid(&vars, &thetas);
+  const ModelSpec& spec = GetModelSpec(ModelKind::kFreeSigma);
+  const double edge = BigD(2520.0);
+  const std::vector<double> c = Sigma(1.0, -edge, 0.38, -0.38 * edge);
+  const PoleScan pole = ScanForPoles(spec, c, 30.0, vars, thetas, kDRefMm, kDScale, kMargin);
+  ASSERT_TRUE(pole.pole);
+  EXPECT_NEAR(pole.d_mm, 2520.0, 20.0);
+  EXPECT_FALSE(ScanForPoles(spec, c, 30.0, vars, thetas, kDRefMm, kDScale, 0.0).pole);
+  const double beyond = BigD(3000.0);
+  EXPECT_FALSE(ScanForPoles(spec, Sigma(1.0, -beyond, 0.38, -0.38 * beyond), 30.0, vars, thetas,
+                            kDRefMm, kDScale, kMargin)
+                   .pole);
+  // And at the grid's own edge, where the sweep starts.
+  const double on_edge = BigD(2500.0);
+  EXPECT_TRUE(ScanForPoles(spec, Sigma(1.0, -on_edge, 0.38, -0.38 * on_edge), 30.0, vars, thetas,
+                           kDRefMm, kDScale, kMargin)
+                  .pole);
 }
 
 }  // namespace

@@ -102,10 +102,10 @@ class LabScene : public ::testing::Test {
     WriteAll(rig, RigWith(c.fault));
     WriteAll(*dir_ + "/" + c.name + ".yaml", ValidationRecipe(rig));
     std::string& log = (*logs_)[c.name];
-    const int code = RunIrdist({"validate", *dir_ + "/" + c.name + ".yaml", "--model",
-                                *dir_ + "/cal/model.yaml", "--out", *dir_ + "/" + c.name,
-                                "--time-scale", "50", "--quiet"},
-                               *dir_ + "/" + c.name + ".log", &log);
+    const int code =
+        RunIrdist({"validate", *dir_ + "/" + c.name + ".yaml", "--model", *dir_ + "/cal/model.yaml",
+                   "--out", *dir_ + "/" + c.name, "--time-scale", "50", "--quiet"},
+                  *dir_ + "/" + c.name + ".log", &log);
     if (code != 0) return;
     for (const EstimateRow& r : ReadEstimatesCsv(*dir_ + "/" + c.name + "/estimates.csv")) {
       if (r.method == "i0_free" && r.dt_ms == 0.0) (*rows_)[c.name].push_back(r);
@@ -121,8 +121,7 @@ class LabScene : public ::testing::Test {
     static const Rows none;
     EXPECT_TRUE(calibrated_) << "the calibration failed: " << *dir_ << "/calibrate.log";
     const auto it = rows_->find(name);
-    EXPECT_TRUE(it != rows_->end() && it->second.size() == 6u)
-        << name << ": " << (*logs_)[name];
+    EXPECT_TRUE(it != rows_->end() && it->second.size() == 6u) << name << ": " << (*logs_)[name];
     return it == rows_->end() ? none : it->second;
   }
   static std::string* dir_;
@@ -136,17 +135,61 @@ std::map<std::string, Rows>* LabScene::rows_ = nullptr;
 std::map<std::string, std::string>* LabScene::logs_ = nullptr;
 bool LabScene::calibrated_ = false;
 
-double ErrorPct(const EstimateRow& r) { return 100.0 * std::abs(r.d_mm - r.true_d_mm) / r.true_d_mm; }
+double ErrorPct(const EstimateRow& r) {
+  return 100.0 * std::abs(r.d_mm - r.true_d_mm) / r.true_d_mm;
+}
 
 bool Has(const EstimateRow& r, const char* flag) {
   return std::any_of(r.flags.begin(), r.flags.end(),
                      [flag](const EstimateFlag& f) { return f.name == flag; });
 }
 
-double MaxErrorPct(const Rows& rows) {
-  double worst = 0.0;
-  for (const EstimateRow& r : rows) worst = std::max(worst, r.ok ? ErrorPct(r) : 100.0);
-  return worst;
+// The control's row at r's pose (nullptr when there is none).
+const EstimateRow* AtPose(const Rows& control, const EstimateRow& r) {
+  for (const EstimateRow& c : control) {
+    if (c.true_d_mm == r.true_d_mm && c.true_theta_deg == r.true_theta_deg) return &c;
+  }
+  return nullptr;
+}
+
+// Measured through, judged against the control at the same pose: both share one calibration, so
+// its own error at a pose (up to 1.5 se at 2100 mm, 25 deg) cancels in the difference. Each row's
+// error departs from the control's by at most 5 of their combined standard errors plus
+// `allowance_pct` of the distance (a fault may leave a small systematic part); over the rows, the
+// departures' rms in those units is at most 2.5 (no bias beyond the noise); the row's standard
+// error is at most `noise_factor` times the control's. The noise of each frame is the yardstick,
+// not another run's draw: two runs' maxima over six noisy rows differ by their noise alone.
+void ExpectAsTheControl(const Rows& rows, const Rows& control, const std::string& name,
+                        double allowance_pct, double noise_factor) {
+  double sum_z2 = 0.0;
+  int count = 0;
+  for (const EstimateRow& r : rows) {
+    const EstimateRow* c = AtPose(control, r);
+    ASSERT_TRUE(c != nullptr && c->ok && r.ok && c->d_std_mm > 0.0 && r.d_std_mm > 0.0)
+        << name << " " << r.true_d_mm << " mm: no estimate or no standard error";
+    const double se_mm = std::hypot(r.d_std_mm, c->d_std_mm);
+    const double departure_mm = r.d_mm - c->d_mm;
+    EXPECT_LE(std::abs(departure_mm), 5.0 * se_mm + allowance_pct / 100.0 * r.true_d_mm)
+        << name << " " << r.true_d_mm << " mm " << r.true_theta_deg << " deg: error " << ErrorPct(r)
+        << "% (control " << ErrorPct(*c) << "%), se " << se_mm << " mm, " << FlagsCell(r.flags);
+    EXPECT_LE(r.d_std_mm, noise_factor * c->d_std_mm) << name << " " << r.true_d_mm << " mm";
+    sum_z2 += (departure_mm / se_mm) * (departure_mm / se_mm);
+    ++count;
+  }
+  if (count > 0) {
+    EXPECT_LE(std::sqrt(sum_z2 / count), 2.5) << name << ": biased against the control";
+  }
+}
+
+// Trusted, but for the motion check's rare false alarm (about 1 in 1000 brackets; the caller
+// allows one over its runs).
+bool TrustedButForMoving(const EstimateRow& r) {
+  if (!r.ok) return false;
+  for (const EstimateFlag& f : r.flags) {
+    const FlagSpec* spec = FindFlagSpec(f.name);
+    if (f.name != "moving" && (spec == nullptr || spec->suspect)) return false;
+  }
+  return true;
 }
 
 // No trusted row off by more than max(0.3%, 4 standard errors); no reflection, cable or second
@@ -154,8 +197,9 @@ double MaxErrorPct(const Rows& rows) {
 void ExpectNoneSilentlyWrong(const Rows& rows, const std::string& name) {
   for (const EstimateRow& r : rows) {
     const std::string what = name + " " + std::to_string(static_cast<int>(r.true_d_mm)) + " mm " +
-                             std::to_string(static_cast<int>(r.true_theta_deg)) + " deg: " +
-                             FlagsCell(r.flags) + ", error " + std::to_string(ErrorPct(r)) + "%";
+                             std::to_string(static_cast<int>(r.true_theta_deg)) +
+                             " deg: " + FlagsCell(r.flags) + ", error " +
+                             std::to_string(ErrorPct(r)) + "%";
     if (r.Trusted()) {
       EXPECT_LE(std::abs(r.d_mm - r.true_d_mm),
                 std::max(0.003 * r.true_d_mm, 4.0 * std::max(r.d_std_mm, 0.0)))
@@ -168,38 +212,47 @@ void ExpectNoneSilentlyWrong(const Rows& rows, const std::string& name) {
 }
 
 TEST_F(LabScene, AControlRunIsCleanAndNothingIsSilentlyWrong) {
-  const Rows& control = RowsOf("control");
-  for (const EstimateRow& r : control) EXPECT_TRUE(r.Trusted()) << FlagsCell(r.flags);
+  int moving = 0;
+  for (const EstimateRow& r : RowsOf("control")) {
+    EXPECT_TRUE(TrustedButForMoving(r)) << FlagsCell(r.flags);
+    moving += Has(r, "moving") ? 1 : 0;
+  }
+  EXPECT_LE(moving, 1) << "a static IRED read as moving";
   for (const Case& c : Cases()) ExpectNoneSilentlyWrong(RowsOf(c.name), c.name);
 }
 
-// Defect pixels and ambient light are measured through: every bracket estimated and trusted, the
-// errors within the control's plus 0.05%, the health still assessed on every bracket.
+// Defect pixels and ambient light are measured through: every bracket estimated and trusted (but
+// for one false `moving` over both runs), its error as the control's within their noise, its noise
+// at most 2x the control's, the health still assessed on every bracket.
 TEST_F(LabScene, DefectPixelsAndAmbientLightAreMeasuredThrough) {
-  const double control_max = MaxErrorPct(RowsOf("control"));
+  int moving = 0;
   for (const char* name : {"defects", "ambient"}) {
     const Rows& rows = RowsOf(name);
-    EXPECT_LE(MaxErrorPct(rows), control_max + 0.05) << name;
+    ExpectAsTheControl(rows, RowsOf("control"), name, 0.02, 2.0);
     for (const EstimateRow& r : rows) {
-      EXPECT_TRUE(r.Trusted()) << name << ": " << FlagsCell(r.flags);
+      EXPECT_TRUE(TrustedButForMoving(r)) << name << ": " << FlagsCell(r.flags);
+      moving += Has(r, "moving") ? 1 : 0;
       EXPECT_NE(r.health, "-") << name << ": health not assessed";
     }
   }
+  EXPECT_LE(moving, 1) << "a static IRED read as moving";
   int noted = 0;
   for (const EstimateRow& r : RowsOf("defects")) noted += Has(r, "defect_pixels") ? 1 : 0;
   EXPECT_GE(noted, 5) << "the defects near the blob are noted";
 }
 
-// A reflection 17-33 px away and a second LED 30 px away are masked and measured through, or
-// named second_source where their light reaches the IRED's.
+// A reflection 17-33 px away and a second LED 30 px away are masked and measured through (as the
+// control within their noise plus 0.05%), or named second_source where their light reaches the
+// IRED's.
 TEST_F(LabScene, SeparateSourcesAreMaskedOrNamed) {
-  const double control_max = MaxErrorPct(RowsOf("control"));
   for (const char* name : {"reflection25", "second_led"}) {
+    Rows masked;
     for (const EstimateRow& r : RowsOf(name)) {
       if (Has(r, "second_source")) continue;
       EXPECT_TRUE(Has(r, "other_blobs")) << name << ": " << FlagsCell(r.flags);
-      EXPECT_LE(ErrorPct(r), control_max + 0.1) << name << ": " << FlagsCell(r.flags);
+      masked.push_back(r);
     }
+    ExpectAsTheControl(masked, RowsOf("control"), name, 0.05, 2.0);
   }
 }
 

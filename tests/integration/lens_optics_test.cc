@@ -2,7 +2,7 @@
 // "Optics"): each optic calibrated on its own (reduced) calibration recipe, then validated with
 // its own model on face-on and tilted poses. An astigmatic lens (an elliptical PSF, axes 1:1.5,
 // turned away from the rows, at two angles) must not be read as tilt: a face-on IRED reads
-// theta <= 1 deg on average (or the round lens's, whose noise alone reads about as much: theta
+// theta <= 1 deg in the median (or the round lens's, whose noise alone reads about as much: theta
 // is >= 0) and its distances stay within 0.1% (median) and 3x the Cramer-Rao bound (rms); a
 // defocused lens (the geometric disc) and a lens with veiling glare (3% of the light in a halo)
 // calibrate to a model every reader loads and validate within bounds.
@@ -94,20 +94,23 @@ LensRun CalibrateAndValidate(const std::string& name, const std::string& rig_tex
   return run;
 }
 
-// The mean estimated theta of the face-on rows, and the median relative distance error (%).
-void FaceOnFigures(const LensRun& run, double* mean_theta_deg, double* median_rel_pct) {
-  double sum = 0.0;
-  int count = 0;
-  std::vector<double> errors;
+// The median of `values` (NaN when empty).
+double Median(std::vector<double> values) {
+  if (values.empty()) return NAN;
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
+// The median estimated theta of the face-on rows (a median: theta >= 0, and one bracket's noise
+// can read 2 deg where the rest read 0.2), and the median relative distance error (%).
+void FaceOnFigures(const LensRun& run, double* median_theta_deg, double* median_rel_pct) {
+  std::vector<double> thetas, errors;
   for (const EstimateRow& row : run.joint) {
     errors.push_back(100.0 * std::fabs(row.d_mm / row.true_d_mm - 1.0));
-    if (row.true_theta_deg != 0.0) continue;
-    sum += row.theta_deg;
-    ++count;
+    if (row.true_theta_deg == 0.0) thetas.push_back(row.theta_deg);
   }
-  *mean_theta_deg = count > 0 ? sum / count : NAN;
-  std::sort(errors.begin(), errors.end());
-  *median_rel_pct = errors.empty() ? NAN : errors[errors.size() / 2];
+  *median_theta_deg = Median(thetas);
+  *median_rel_pct = Median(errors);
 }
 
 // The joint rows whose health check is not `ok` under the optic's own model ("blur_smaller",
@@ -155,11 +158,12 @@ void ExpectAstigmatismIsNotTilt(const LensRun& control, double angle_deg) {
   EXPECT_NEAR(model.blur_calibration.psf_aniso_c_px2, half * std::cos(turn), 0.03);
   EXPECT_NEAR(model.blur_calibration.psf_aniso_s_px2, half * std::sin(turn), 0.03);
   ASSERT_EQ(run.joint.size(), 24u) << run.validate_output;
-  double mean_theta = 0.0, median_pct = 0.0, round_theta = 0.0, round_pct = 0.0;
-  FaceOnFigures(run, &mean_theta, &median_pct);
+  double median_theta = 0.0, median_pct = 0.0, round_theta = 0.0, round_pct = 0.0;
+  FaceOnFigures(run, &median_theta, &median_pct);
   FaceOnFigures(control, &round_theta, &round_pct);
-  // A face-on IRED's theta is >= 0: its noise alone reads about 1 deg on average (the round lens).
-  EXPECT_LE(mean_theta, std::max(1.0, 1.3 * round_theta))
+  // A face-on IRED's theta is >= 0: its noise alone reads a few tenths of a degree (the round
+  // lens); read as tilt, the PSF gave 15-23 deg.
+  EXPECT_LE(median_theta, std::max(1.0, 1.3 * round_theta))
       << "angle " << angle_deg << ", the round lens: " << round_theta;
   // The distances: read 1.4-4.2% short before the PSF was calibrated (tens of times the
   // Cramer-Rao bound). Now the median error stays below 0.1% and the rms error over the bound
@@ -169,7 +173,7 @@ void ExpectAstigmatismIsNotTilt(const LensRun& control, double angle_deg) {
   EXPECT_EQ(UnhealthyRows(run), std::vector<std::string>{}) << "angle " << angle_deg;
   EXPECT_LE(run.error_over_bound_rms, 3.0)
       << "angle " << angle_deg << ", the round lens: " << control.error_over_bound_rms;
-  std::cout << "astigmatic lens at " << angle_deg << " deg: face-on mean theta " << mean_theta
+  std::cout << "astigmatic lens at " << angle_deg << " deg: face-on median theta " << median_theta
             << " deg (round lens " << round_theta << "), median |d error| " << median_pct
             << "% (round lens " << round_pct << "%), error / CRB rms " << run.error_over_bound_rms
             << " (round lens " << control.error_over_bound_rms << ")\n";
@@ -206,13 +210,13 @@ TEST_F(LensOptics, DefocusDiscAndHaloLensesCalibrateToLoadableModels) {
     EXPECT_NO_THROW(LoadModel(run.model_path)) << name;
     ASSERT_EQ(run.validate_code, 0) << name << "\n" << run.validate_output;
     ASSERT_EQ(run.joint.size(), 24u) << name;
-    double mean_theta = 0.0, median_pct = 0.0;
-    FaceOnFigures(run, &mean_theta, &median_pct);
-    std::cout << name << " lens: face-on mean theta " << mean_theta << " deg (round lens "
+    double median_theta = 0.0, median_pct = 0.0;
+    FaceOnFigures(run, &median_theta, &median_pct);
+    std::cout << name << " lens: face-on median theta " << median_theta << " deg (round lens "
               << round_theta << "), median |d error| " << median_pct << "% (round lens "
               << round_pct << "%), error / CRB rms " << run.error_over_bound_rms
               << " (round lens " << control_->error_over_bound_rms << ")\n";
-    EXPECT_LE(mean_theta, std::max(1.0, 1.3 * round_theta)) << name;
+    EXPECT_LE(median_theta, std::max(1.0, 1.3 * round_theta)) << name;
     EXPECT_LE(median_pct, 0.1) << name;  // the goal for the defocus disc's Fig. 10 median
     // Under its own calibration the lens is the calibrated one: no bracket's blur departs from
     // it (the halo's blob-fit blur once read -6% at 2300 mm, and the brackets measured with

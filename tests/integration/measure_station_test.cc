@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -56,7 +57,8 @@ class MeasureStation : public ::testing::Test {
   }
 
   // `irdist station` move + current 500, then 10 brackets of `irdist measure --json` on the sim's
-  // camera: every estimate within the validation goals of the pose.
+  // camera: every estimate within the validation goals of the pose (theta: or 5 of its standard
+  // errors where wider, and the brackets' mean within the goal).
   void PlaceAndMeasure(const Pose& pose, const std::string& model) {
     std::string output;
     const std::string name = std::string("pose-") + pose.slide_mm;
@@ -83,10 +85,17 @@ class MeasureStation : public ::testing::Test {
       ASSERT_TRUE(j["ok"].as<bool>()) << output;
       moving += j["flags"]["moving"].as<bool>() ? 1 : 0;
       EXPECT_NEAR(j["d_mm"].as<double>(), pose.d_mm, 0.01 * pose.d_mm) << name << "\n" << output;
-      EXPECT_NEAR(j["theta_deg"].as<double>(), pose.theta_deg, 1.0) << name << "\n" << output;
+      // 1 deg, or 5 of the bracket's theta se where wider: 1 deg alone is ~3 sd at 2100 mm, tilt 5
+      // (se ~0.34 deg), failing ~1% of runs on the sim's noise.
+      const double theta_bound_deg = std::max(1.0, 5.0 * j["theta_se_deg"].as<double>());
+      EXPECT_NEAR(j["theta_deg"].as<double>(), pose.theta_deg, theta_bound_deg) << name << "\n"
+                                                                                << output;
       sum_d_mm += j["d_mm"].as<double>();
       sum_theta_deg += j["theta_deg"].as<double>();
     }
+    // The mean of the 10 within 1 deg (~10 of its sd): a bias is caught where a bracket's bound
+    // is wider.
+    EXPECT_NEAR(sum_theta_deg / 10.0, pose.theta_deg, 1.0) << name << "\n" << output;
     // Static: no bracket moving, but for one false alarm in ten (the check's nominal rate is 1e-3
     // a bracket: two in ten, 5e-5). The check judges the frames' sizes against their own errors;
     // with the per-exposure estimates' calibrated errors it was over-dispersed here (chi-square
@@ -100,7 +109,8 @@ class MeasureStation : public ::testing::Test {
 
   // measure runs while `irdist station move` takes the IRED from 2500 to 1500 mm at the slide's
   // normal speed (200 mm/s): every bracket whose estimate is off both poses (more than the
-  // validation goal, 1%) is flagged moving, with a spread; the brackets before the move are not.
+  // validation goal, 1%) is flagged moving, with a spread; the brackets before the move are not,
+  // but for one false alarm.
   void MeasureWhileTheSlideMoves(const std::string& model) {
     const std::string log = dir_ + "/moving-measure.log";
     testing::Child measure(
@@ -118,10 +128,10 @@ class MeasureStation : public ::testing::Test {
     ASSERT_EQ(measure.Wait(std::chrono::seconds(120)), 0) << ReadAll(log);
     const std::vector<YAML::Node> objects = JsonLines(ReadAll(log));
     ASSERT_EQ(objects.size(), 60u) << ReadAll(log);
-    int off_poses = 0;
+    int off_poses = 0, moving_before = 0;
     for (size_t i = 0; i < objects.size(); ++i) {
       const YAML::Node& j = objects[i];
-      if (i < 5) EXPECT_FALSE(j["flags"]["moving"].as<bool>()) << ReadAll(log);
+      if (i < 5) moving_before += j["flags"]["moving"].as<bool>() ? 1 : 0;
       if (!j["ok"].as<bool>()) continue;
       const double d = j["d_mm"].as<double>();
       if (std::fabs(d - 2500.0) <= 25.0 || std::fabs(d - 1500.0) <= 15.0) continue;
@@ -130,6 +140,8 @@ class MeasureStation : public ::testing::Test {
                                                    << ReadAll(log);
       EXPECT_GT(j["motion"]["spread_mm"].as<double>(), 0.0);
     }
+    // Before the move at most one moving: the check's nominal false-alarm rate is 1e-3 a bracket.
+    EXPECT_LE(moving_before, 1) << ReadAll(log);
     std::cout << "slide moving during measure: " << off_poses
               << " brackets off both poses, all flagged moving\n";
     EXPECT_GT(off_poses, 0) << "no bracket was taken during the move\n" << ReadAll(log);

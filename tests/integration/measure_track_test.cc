@@ -106,12 +106,13 @@ TEST_F(MeasureTrack, StaticIredEveryFrameAccountedForAndWithinItsErrors) {
   const double sd = std::sqrt((sum2 - sum * sum / n) / (n - 1.0));
   const double rms_se = std::sqrt(se2 / n);
   // The reported se is the calibration's one-frame noise carried to the track's exposure: the
-  // scatter of 60 frames matches it (sd's own sampling error at n = 60 is 9%; the measurement
-  // frames' noise unscaled, 8 ms against 33 ms, gave 1.96).
+  // scatter of 60 frames matches it, 1.6 lying 4 of the ratio's sampling errors (~10% at n = 60)
+  // above the 1.13 observed and well below the unscaled noise's 1.96 (8 ms against 33 ms).
   EXPECT_GT(sd / rms_se, 0.7) << "sd " << sd << " se " << rms_se;
-  EXPECT_LT(sd / rms_se, 1.4) << "sd " << sd << " se " << rms_se;
+  EXPECT_LT(sd / rms_se, 1.6) << "sd " << sd << " se " << rms_se;
   const YAML::Node last = lines.back()["track"];
-  EXPECT_LT(std::abs(last["v_mm_per_s"].as<double>()), 3.0 * last["v_se_mm_per_s"].as<double>())
+  // The static IRED's velocity within 4.5 se of zero, since at 3 se it would fail 0.27% of runs.
+  EXPECT_LT(std::abs(last["v_mm_per_s"].as<double>()), 4.5 * last["v_se_mm_per_s"].as<double>())
       << output;
   EXPECT_LT(last["d_se_mm"].as<double>(), rms_se) << output;  // the track averages frames
   EXPECT_NE(output.find("Tracked 60 frames"), std::string::npos) << output;

@@ -120,7 +120,10 @@ TEST_F(TrackRecipe, MovesTheSlideAtTheRecipesSpeedAndScoresEveryFrameAgainstTheT
     // The station cruised at the recipe's speed (the rig's own is 200 mm/s).
     EXPECT_NEAR(cruises[i]["truth_v_mm_per_s"].as<double>(), i == 0 ? 500.0 : -500.0, 1e-6);
     EXPECT_GE(cruises[i]["frames"].as<int>(), 30);
-    EXPECT_TRUE(cruises[i]["within_3se"].as<bool>()) << ReadAll(run + "/summary.yaml");
+    // The app's within_3se (z_mean <= 3 and z_last <= 3) with the last frame's bound at 4.5, as
+    // that one draw per segment would fail 3 se in 0.5% of runs by chance over the two segments.
+    EXPECT_LE(cruises[i]["z_mean"].as<double>(NAN), 3.0) << ReadAll(run + "/summary.yaml");
+    EXPECT_LE(cruises[i]["z_last"].as<double>(NAN), 4.5) << ReadAll(run + "/summary.yaml");
   }
   // track.csv: its header and one row per frame the summary counted.
   EXPECT_EQ(CsvRows(run + "/track.csv"), s["frames"]["rows"].as<int>());
