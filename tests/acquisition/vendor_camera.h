@@ -1,8 +1,9 @@
 #pragma once
 // Test helper: Aravis's fake camera serving a real vendor's GenICam file (the fixtures of
-// tests/acquisition/genicam/vendors/, unpacked by CMake into IRDIST_VENDOR_FIXTURE_DIR), powered
-// up with the model's `.powerup` words before irdist opens it. Shared by
-// tests/acquisition/aravis_vendor_files_test.cc and tests/integration/vendor_cameras_test.cc.
+// tests/acquisition/genicam/vendors/, unpacked by CMake into the build's
+// tests/acquisition/genicam_vendors/), powered up with the model's `.powerup` words before irdist
+// opens it. Shared by tests/acquisition/aravis_vendor_files_test.cc and
+// tests/integration/vendor_cameras_test.cc.
 #include <arv.h>
 #include <gtest/gtest.h>
 
@@ -18,7 +19,7 @@ namespace irdist::testing {
 
 // The fixture file `name` + `suffix` (".xml", ".powerup").
 inline std::string VendorFixture(const std::string& name, const char* suffix) {
-  return std::string(IRDIST_VENDOR_FIXTURE_DIR) + "/" + name + suffix;
+  return std::string(IRDIST_BINARY_DIR) + "/tests/acquisition/genicam_vendors/" + name + suffix;
 }
 
 // Another client on 127.0.0.1 (the camera's power-up, or a check of what irdist left).
