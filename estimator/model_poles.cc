@@ -8,8 +8,8 @@ namespace irdist {
 
 namespace {
 
-constexpr int kDistanceSteps = 80;  // the sweep over the (widened) calibrated D range
-constexpr int kThetaSteps = 8;      // and over the calibrated thetas
+constexpr int kDistanceSteps = 80;   // the sweep over the (widened) calibrated D range
+constexpr int kThetaSteps = 8;       // and over the calibrated thetas
 constexpr double kVanishing = 1e-9;  // |Den| below this share of its value at the sample
 
 double Denominator(const ModelSpec& spec, const std::vector<double>& c, const double* vars) {
