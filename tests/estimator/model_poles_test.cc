@@ -43,37 +43,37 @@ std::vector<double> Sigma(double p19, double p20, double p21, double p22) {
   return c;
 }
 
+// Eq. 18 whose denominator is dF (rho + 0.38)(D - D(zero_mm)): a zero at zero_mm for every theta.
+std::vector<double> SigmaWithZeroAt(double zero_mm) {
+  const double d0 = BigD(zero_mm);
+  return Sigma(1.0, -d0, 0.38, -0.38 * d0);
+}
+
+// The scan of the Eq. 18 model `c` (sigma 30 deg) over the 3-distance grid.
+PoleScan ScanGrid(const std::vector<double>& c, double margin = kMargin,
+                  ModelKind kind = ModelKind::kFreeSigma) {
+  std::vector<std::array<double, kNumModelVars>> vars;
+  std::vector<double> thetas;
+  Grid(&vars, &thetas);
+  return ScanForPoles(GetModelSpec(kind), c, 30.0, vars, thetas, kDRefMm, kDScale, margin);
+}
+
 // The denominator a 3-distance calibration fitted (dF (rho + 0.38)(D - D(2000 mm))): a pole at
 // 2000 mm, found and placed; one positive over the whole domain has none; one whose zero lies
 // beyond the calibrated distances (at 1000 mm) has none inside them.
 TEST(ScanForPoles, FindsADenominatorsZeroInsideTheCalibratedRange) {
-  std::vector<std::array<double, kNumModelVars>> vars;
-  std::vector<double> thetas;
-  Grid(&vars, &thetas);
-  const ModelSpec& spec = GetModelSpec(ModelKind::kFreeSigma);
-  const double d0 = BigD(2000.0);
-  const PoleScan pole = ScanForPoles(spec, Sigma(1.0, -d0, 0.38, -0.38 * d0), 30.0, vars, thetas,
-                                     kDRefMm, kDScale, kMargin);
+  const PoleScan pole = ScanGrid(SigmaWithZeroAt(2000.0));
   ASSERT_TRUE(pole.pole);
   EXPECT_NEAR(pole.d_mm, 2000.0, 20.0);
   EXPECT_NE(pole.Note().find("vanishes at d = "), std::string::npos) << pole.Note();
-  EXPECT_FALSE(
-      ScanForPoles(spec, Sigma(0.0, 0.0, 1.0, 1.0), 30.0, vars, thetas, kDRefMm, kDScale, kMargin)
-          .pole);
-  const double far = BigD(1000.0);
-  EXPECT_FALSE(ScanForPoles(spec, Sigma(1.0, -far, 0.38, -0.38 * far), 30.0, vars, thetas, kDRefMm,
-                            kDScale, kMargin)
-                   .pole);
+  EXPECT_FALSE(ScanGrid(Sigma(0.0, 0.0, 1.0, 1.0)).pole);
+  EXPECT_FALSE(ScanGrid(SigmaWithZeroAt(1000.0)).pole);
   // A zero only at large theta (rho small): p19 D rho + p22 with p22 < 0 vanishes where rho is
   // small enough, inside the thetas' range.
   const double rho_30 = Rho(30.0, 30.0), rho_0 = Rho(0.0, 30.0);
   const double mid = 0.5 * (rho_30 + rho_0) * BigD(2000.0);
-  EXPECT_TRUE(
-      ScanForPoles(spec, Sigma(1.0, 0.0, 0.0, -mid), 30.0, vars, thetas, kDRefMm, kDScale, kMargin)
-          .pole);
-  EXPECT_FALSE(ScanForPoles(GetModelSpec(ModelKind::kDiffF), {}, 30.0, vars, thetas, kDRefMm,
-                            kDScale, kMargin)
-                   .pole);  // no denominator
+  EXPECT_TRUE(ScanGrid(Sigma(1.0, 0.0, 0.0, -mid)).pole);
+  EXPECT_FALSE(ScanGrid({}, kMargin, ModelKind::kDiffF).pole);  // no denominator
 }
 
 // The estimator takes roots within 10% beyond the calibrated distances, so a zero there is a pole
@@ -81,25 +81,13 @@ TEST(ScanForPoles, FindsADenominatorsZeroInsideTheCalibratedRange) {
 // Num's and Den's common zero) is found with the margin and not without it; one beyond the margin
 // (3000 mm) is not.
 TEST(ScanForPoles, FindsAZeroJustBeyondTheGridInsideTheEstimatorsMargin) {
-  std::vector<std::array<double, kNumModelVars>> vars;
-  std::vector<double> thetas;
-  Grid(&vars, &thetas);
-  const ModelSpec& spec = GetModelSpec(ModelKind::kFreeSigma);
-  const double edge = BigD(2520.0);
-  const std::vector<double> c = Sigma(1.0, -edge, 0.38, -0.38 * edge);
-  const PoleScan pole = ScanForPoles(spec, c, 30.0, vars, thetas, kDRefMm, kDScale, kMargin);
+  const PoleScan pole = ScanGrid(SigmaWithZeroAt(2520.0));
   ASSERT_TRUE(pole.pole);
   EXPECT_NEAR(pole.d_mm, 2520.0, 20.0);
-  EXPECT_FALSE(ScanForPoles(spec, c, 30.0, vars, thetas, kDRefMm, kDScale, 0.0).pole);
-  const double beyond = BigD(3000.0);
-  EXPECT_FALSE(ScanForPoles(spec, Sigma(1.0, -beyond, 0.38, -0.38 * beyond), 30.0, vars, thetas,
-                            kDRefMm, kDScale, kMargin)
-                   .pole);
+  EXPECT_FALSE(ScanGrid(SigmaWithZeroAt(2520.0), 0.0).pole);
+  EXPECT_FALSE(ScanGrid(SigmaWithZeroAt(3000.0)).pole);
   // And at the grid's own edge, where the sweep starts.
-  const double on_edge = BigD(2500.0);
-  EXPECT_TRUE(ScanForPoles(spec, Sigma(1.0, -on_edge, 0.38, -0.38 * on_edge), 30.0, vars, thetas,
-                           kDRefMm, kDScale, kMargin)
-                  .pole);
+  EXPECT_TRUE(ScanGrid(SigmaWithZeroAt(2500.0)).pole);
 }
 
 }  // namespace
