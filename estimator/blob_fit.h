@@ -91,13 +91,25 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
                             double blur_var_px2, const Crosstalk& crosstalk, int passes,
                             const PsfAnisotropy& psf = {});
 
-// The fit's model at one pixel (x, y) before crosstalk: the disc blurred by the optics' sd,
-// integrated over the pixel's square, relative to its amplitude, and its derivatives along
-// v = (centre x, centre y, P11, P12, P22) into d[5] (zero where the pixel is flat, 1 or 0).
-// psf: the PSF's anisotropy (the edge's sd then sqrt(optics_sd^2 + n^T a n), a traceless).
-// Exposed for its test (the derivatives against finite differences).
-double BlobEdgeValue(const double v[5], double x, double y, double optics_sd, double d[5],
-                     const PsfAnisotropy& psf = {});
+// The one-pass cost (FitBlobPasses with passes 1: the read noise's weights) as a function of the
+// blur variance, around `blur_var_px2`: the Gauss-Newton system of the fit with the blur as an
+// eighth parameter, at the one-pass solution, the blur's column by a forward difference of the
+// model. Profiled over the other seven (the Schur complement), the cost's minimum lies `step_px2`
+// from the given blur, with the standard error `se_px2` (its curvature, scaled by the cost per
+// pixel: the read noise's weights understate a shot-noise-limited frame's noise), and the raw
+// disc variances (BlobFitResult::raw_*) move along the blur with the slopes given. One fit and
+// one model evaluation: the frame's own blur where it lies near the given one (refocus.h).
+struct BlobBlurProfile {
+  bool ok = false;
+  double per_pixel = 0.0;    // the one-pass cost per pixel at the given blur
+  double step_px2 = 0.0;     // the cost's minimum less the given blur (Gauss-Newton)
+  double se_px2 = 0.0;       // its standard error
+  double major_slope = 0.0;  // d raw_major_var_px2 / d blur, the fit re-solved
+  double minor_slope = 0.0;
+};
+BlobBlurProfile ProfileBlobBlur(const cv::Mat& image, int bit_depth, const Features& features,
+                                double blur_var_px2, const Crosstalk& crosstalk,
+                                const PsfAnisotropy& psf = {});
 
 // The PSF anisotropy a calibrated blur holds (BlurCalibration::psf_aniso_*).
 PsfAnisotropy PsfOf(const BlurCalibration& b);

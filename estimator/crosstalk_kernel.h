@@ -11,10 +11,11 @@ namespace irdist {
 // The kernel of variance crosstalk_var_px2 on the grid of which lattice_share (clamped to [0, 1])
 // is spread as the lattice walk, the rest as the sampled Gaussian of that variance (its sd found
 // by bisection: at small variances a sampled Gaussian's variance falls below sd^2); outer taps
-// below 1e-10 dropped (a small crosstalk's sampled Gaussian reaches 3 px for taps of 1e-11 and
-// less). Odd length, sums to 1; {1} for no crosstalk. The last kernel is kept per thread (a
-// model's crosstalk is one kernel for every frame; the bisection and the Bessel terms cost 20 us):
-// the reference stays valid until the thread's next call with other arguments.
+// below 1e-7 dropped (1e-7 of the amplitude: 0.007 DN at a 16-bit full scale; a small
+// crosstalk's sampled Gaussian reaches 3 px for taps of 1e-11 and less), then normalised again.
+// Odd length, sums to 1; {1} for no crosstalk. The last kernel is kept per thread (a model's
+// crosstalk is one kernel for every frame; the bisection and the Bessel terms cost 20 us): the
+// reference stays valid until the thread's next call with other arguments.
 const std::vector<double>& CrosstalkKernel(double crosstalk_var_px2, double lattice_share);
 
 }  // namespace irdist

@@ -20,15 +20,19 @@ namespace irdist {
 constexpr double kOwnBlurLowFactor = 0.4;
 constexpr double kOwnBlurHighFactor = 3.0;
 
-// The frame's own blur into `out`'s own_* fields (features.h): Brent's method (Boost) on the blob
-// fit's one-pass cost over the blur variance (FitBlobPasses, the model's crosstalk), its standard
-// error from the cost's curvature there (scaled by the cost per pixel: the read noise's weights
-// understate a shot-noise-limited frame's noise), and the disc's variances at that blur with
-// their slopes in the blur (FitBlob at the blur and 0.05 px^2 above). `start`: the frame's
-// features before RefineWithBlobFit (the calibration's blur split started from the same);
-// `out`: the refined features (size_blur_var_px2 the calibrated blur used). Returns false (the
-// fields left NaN) without a refined blob, when a fit fails or when the minimum lies on the
-// search's edge (a blur the search cannot bracket).
+// The frame's own blur into `out`'s own_* fields (features.h): Newton's method on the blob fit's
+// one-pass cost over the blur variance (FitBlobPasses, the model's crosstalk), from the
+// calibrated blur, each step the blur's profile (blob_fit.h ProfileBlobBlur: the fit's
+// Gauss-Newton system with the blur as an eighth parameter); its standard error from the cost's
+// curvature there (scaled by the cost per pixel: the read noise's weights understate a
+// shot-noise-limited frame's noise), and the disc's variances at that blur with their slopes in
+// the blur, the fit re-solved (near the calibrated blur, within 5%: the refined disc moved
+// along them; beyond, FitBlob at the blur). One profile in the usual case (a fit and one model
+// evaluation), a few after a focus change. `start`: the frame's features before
+// RefineWithBlobFit (the calibration's blur split started from the same); `out`: the refined
+// features (size_blur_var_px2 the calibrated blur used). Returns false (the fields left NaN)
+// without a refined blob, when a fit fails, where the cost is not convex, or when the minimum
+// lies on the search's edge (a blur the search cannot bracket).
 bool MeasureOwnBlur(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
                     const Features& start, Features* out);
 

@@ -58,7 +58,7 @@ double FrameThetaSeDeg(const CalibrationModel& model) {
 
 // The row of one frame: distance, theta, their standard errors, ranges and flags.
 EstimateRow FrameRow(const Features& f, double exposure_ms, const CalibrationModel& model,
-                     HealthCheck* health) {
+                     const std::vector<const Features*>& health_frames, HealthCheck* health) {
   EstimateRow row;
   row.method = "track";
   const GeometricEstimate g = EstimateGeometric(model, f);
@@ -75,7 +75,7 @@ EstimateRow FrameRow(const Features& f, double exposure_ms, const CalibrationMod
   if (row.ok) {
     row.outside = OutsideRanges(model.ranges, e, t_ref_ms, t_ms, frames, RangeOptionsOf(model));
     row.outside_range = !row.outside.empty();
-    *health = CheckHealth(model, g.d_mm, frames);
+    *health = CheckHealth(model, g.d_mm, health_frames.empty() ? frames : health_frames);
   }
   FlagRow(FrameFlags(frames), model.ranges, t_ms, row.ok ? health : nullptr, &row);
   return row;
@@ -93,11 +93,12 @@ double FrameDistanceSeMm(const CalibrationModel& model, double d_mm, double expo
 
 MeasureSample EstimateFrame(const Features& features, double exposure_ms,
                             const CalibrationModel& model, const CameraGeometry& geometry,
-                            std::int64_t frame) {
+                            std::int64_t frame,
+                            const std::vector<const Features*>& health_frames) {
   MeasureSample s;
   s.bracket = frame;
   const Features turned = OnLineOfSight(geometry, features);
-  s.estimate = FrameRow(turned, exposure_ms, model, &s.health);
+  s.estimate = FrameRow(turned, exposure_ms, model, health_frames, &s.health);
   s.estimate.bracket = static_cast<int>(frame);
   s.have_estimate = true;
   s.blob_found = features.blob_found;

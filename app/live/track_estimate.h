@@ -6,6 +6,7 @@
 // flags, calibrated ranges and calibration health: the fields of measure's JSON for one frame.
 
 #include <cstdint>
+#include <vector>
 
 #include "app/live/measure_output.h"
 #include "app/processing/position.h"
@@ -25,9 +26,11 @@ double FrameDistanceSeMm(const CalibrationModel& model, double d_mm, double expo
 // The estimate of one frame taken at `exposure_ms`, from its features (FrameFeatures with the
 // model's blob fit, in the frame's own pixels). `frame` numbers the sample
 // (MeasureSample::bracket). A frame without a usable blob gives a sample without an estimate
-// (have_estimate true, ok false), never an exception.
+// (have_estimate true, ok false), never an exception. `health_frames`: the frames whose own
+// blurs the calibration health pools (the track's last frames); empty: the frame itself.
 MeasureSample EstimateFrame(const Features& features, double exposure_ms,
                             const CalibrationModel& model, const CameraGeometry& geometry,
-                            std::int64_t frame);
+                            std::int64_t frame,
+                            const std::vector<const Features*>& health_frames = {});
 
 }  // namespace irdist

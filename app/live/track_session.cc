@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <deque>
 #include <cmath>
 #include <optional>
 #include <ostream>
@@ -23,6 +24,10 @@
 namespace irdist {
 
 namespace {
+
+// The frames whose own blurs a track line's calibration health pools: a bracket's measurement
+// frames (one 8 ms frame alone flagged 2% of static frames).
+constexpr int kHealthFrames = 4;
 
 // Whether `t_ms` lies in [lo, hi] within 0.1% (a range of 0, 0 is not recorded).
 bool InRange(double t_ms, double lo_ms, double hi_ms) {
@@ -102,6 +107,9 @@ struct TrackSession::Impl {
 
   TrackSample Frame(double time_s);
   TrackSample Check(double time_s);
+  // The last frame's own blur, measured after its line (off the latency path), into the pool.
+  void MeasurePending();
+  std::vector<const Features*> HealthFrames() const;
 
   const MeasureArgs& args;
   const CalibrationModel& model;
@@ -115,13 +123,35 @@ struct TrackSession::Impl {
   int ahead = 1;
   double readout_ms = 0.0;
   std::string trigger_source;
+  // The calibration health of a line pools the own blurs of the kHealthFrames frames before it
+  // (as a bracket pools its measurement frames); the first line's is its own.
+  PendingOwnBlur pending;
+  Features pending_features;
+  std::deque<Features> blur_pool;
   std::unique_ptr<FrameGrabber> grabber;  // last: stops before the camera closes
 };
+
+void TrackSession::Impl::MeasurePending() {
+  if (pending.model == nullptr) return;
+  if (MeasurePendingOwnBlur(&pending, &pending_features)) {
+    blur_pool.push_back(pending_features);
+    if (blur_pool.size() > static_cast<std::size_t>(kHealthFrames)) blur_pool.pop_front();
+  }
+}
+
+std::vector<const Features*> TrackSession::Impl::HealthFrames() const {
+  std::vector<const Features*> frames;
+  for (const Features& f : blur_pool) frames.push_back(&f);
+  return frames;
+}
 
 TrackSample TrackSession::Impl::Frame(double time_s) {
   // A frame period is at most the longest exposure plus the timeout's margin: three of them
   // without a frame is a camera that stopped.
   const auto wait = std::chrono::milliseconds(3 * measure.live().frame_timeout_ms());
+  const double pending_cpu0_ms = ThreadCpuMs();
+  MeasurePending();
+  const double pending_cpu_ms = ThreadCpuMs() - pending_cpu0_ms;
   std::optional<GrabbedFrame> grabbed = grabber->Take(wait);
   if (!grabbed) {
     const TrackCounters c = grabber->counters();
@@ -131,10 +161,18 @@ TrackSample TrackSession::Impl::Frame(double time_s) {
   }
   const double cpu0_ms = ThreadCpuMs();
   const RawFrame& raw = grabbed->raw;
-  const Features features =
-      FrameFeatures(raw.image, measure.bit_depth(), model.features, BlobFitModelOf(model));
+  // The first frame's own blur at once (its line's health), the others' after their lines.
+  const bool later = !blur_pool.empty();
+  Features features = FrameFeatures(raw.image, measure.bit_depth(), model.features,
+                                    BlobFitModelOf(model), nullptr, later ? &pending : nullptr);
   TrackSample t;
-  t.estimate = EstimateFrame(features, exposure_ms, model, geometry, grabbed->number);
+  t.estimate =
+      EstimateFrame(features, exposure_ms, model, geometry, grabbed->number, HealthFrames());
+  if (later) {
+    pending_features = std::move(features);
+  } else if (std::isfinite(features.own_blur_var_px2)) {
+    blur_pool.push_back(features);
+  }
   MeasureSample& s = t.estimate;
   s.mode = "track";
   s.time_s = time_s;
@@ -149,7 +187,7 @@ TrackSample TrackSession::Impl::Frame(double time_s) {
     last_filter_time_s = frame_time_s;
   }
   s.latency_ms = static_cast<double>(MonotonicNowNs() - raw.host_monotonic_ns) * 1e-6;
-  t.cpu_ms = ThreadCpuMs() - cpu0_ms;
+  t.cpu_ms = ThreadCpuMs() - cpu0_ms + pending_cpu_ms;  // the last frame's own blur included
   t.frame = grabbed->number;
   t.counters = grabbed->counters;
   t.camera_frame_id = raw.frame_id;

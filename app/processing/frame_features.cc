@@ -70,17 +70,31 @@ SceneFrame SceneOf(const cv::Mat& image, int bit_depth, const FeatureOptions& op
 }  // namespace
 
 Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
-                       const CalibrationModel* blob_fit_model, const SceneContext* scene) {
+                       const CalibrationModel* blob_fit_model, const SceneContext* scene,
+                       PendingOwnBlur* later) {
   const SceneFrame cleaned = SceneOf(image, bit_depth, options, scene);
   Features features = ComputeFeatures(cleaned.image, bit_depth, options);
+  if (later != nullptr) *later = PendingOwnBlur();
   if (blob_fit_model != nullptr) {
     const Features moments = features;
     if (RefineWithBlobFit(cleaned.image, bit_depth, *blob_fit_model, &features)) {
-      MeasureOwnBlur(cleaned.image, bit_depth, *blob_fit_model, moments, &features);
+      if (later != nullptr) {
+        *later = {cleaned.image, bit_depth, moments, blob_fit_model};
+      } else {
+        MeasureOwnBlur(cleaned.image, bit_depth, *blob_fit_model, moments, &features);
+      }
     }
   }
   features.scene = cleaned.report;
   return features;
+}
+
+bool MeasurePendingOwnBlur(PendingOwnBlur* pending, Features* features) {
+  const CalibrationModel* model = pending->model;
+  const bool measured = model != nullptr && MeasureOwnBlur(pending->cleaned, pending->bit_depth,
+                                                           *model, pending->moments, features);
+  *pending = PendingOwnBlur();
+  return measured;
 }
 
 cv::Mat SceneCleanedFrame(const cv::Mat& image, int bit_depth, const FeatureOptions& options,

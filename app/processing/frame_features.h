@@ -49,9 +49,22 @@ using FeatureMap = std::map<std::int64_t, Features>;
 // RefineWithBlobFit) on the same cleaned frame; without one (calibration, or the moments path
 // chosen), they stay the intensity-weighted moments. `scene`: a known defect map, the frame's ROI
 // origin on the sensor, an expected blob centre (null: none).
+// With the blob fit, each refined frame's own blur too (estimator/refocus.h MeasureOwnBlur), or,
+// given `later`, what it needs kept there for a caller that answers first (measure --track):
+// MeasurePendingOwnBlur then fills the features' own blur.
+struct PendingOwnBlur {
+  cv::Mat cleaned;                          // the scene-cleaned frame (shared, not copied)
+  int bit_depth = 0;
+  Features moments;                         // the features before the blob fit
+  const CalibrationModel* model = nullptr;  // null: nothing pending
+};
 Features FrameFeatures(const cv::Mat& image, int bit_depth, const FeatureOptions& options,
                        const CalibrationModel* blob_fit_model = nullptr,
-                       const SceneContext* scene = nullptr);
+                       const SceneContext* scene = nullptr, PendingOwnBlur* later = nullptr);
+
+// The own blur FrameFeatures left in `*pending` into `*features` (the same frame's); clears
+// *pending. False when nothing was pending or the blur could not be measured.
+bool MeasurePendingOwnBlur(PendingOwnBlur* pending, Features* features);
 
 // The frame every feature and the blob fit read (the scene pass of FrameFeatures): for the
 // callers that hand a recorded frame to the blob fit or the blur split themselves

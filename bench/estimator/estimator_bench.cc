@@ -7,6 +7,7 @@
 #include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
 #include "estimator/features.h"
+#include "estimator/refocus.h"
 #include "estimator/scene.h"
 #include "tests/estimator/scene_render.h"
 #include "tests/estimator/synthetic.h"
@@ -106,6 +107,45 @@ void BM_RoiFrameWithBlobFit(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_RoiFrameWithBlobFit)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// The blob fit alone on the live ROI's clean frame, without crosstalk (Arg 0) and with the small
+// crosstalk a Table 3 calibration of the virtual rig fits (Arg 1: 0.0015 px^2, its kernel spread
+// over the model's six planes each evaluation); and the frame's own blur at the calibrated blur
+// (estimator/refocus.h MeasureOwnBlur: one profile, ProfileBlobBlur), which measure and
+// playback add to every refined frame.
+Crosstalk RoiCrosstalk(int arg) { return arg == 0 ? Crosstalk() : Crosstalk(0.0015, 0.002); }
+
+void BM_RoiBlobFit(benchmark::State& state) {
+  const cv::Mat frame = RoiFrame(false);
+  const Features features = ComputeFeatures(frame, 12, FeatureOptions());
+  const double blur_var_px2 = 0.7 * 0.7 + 1.0 / 12.0;
+  const Crosstalk crosstalk = RoiCrosstalk(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(FitBlob(frame, 12, features, blur_var_px2, crosstalk));
+  }
+}
+BENCHMARK(BM_RoiBlobFit)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+void BM_RoiOwnBlur(benchmark::State& state) {
+  const cv::Mat frame = RoiFrame(false);
+  const Features start = ComputeFeatures(frame, 12, FeatureOptions());
+  const double blur_var_px2 = 0.7 * 0.7 + 1.0 / 12.0;
+  CalibrationModel model;
+  const Crosstalk crosstalk = RoiCrosstalk(static_cast<int>(state.range(0)));
+  model.blur_calibration.crosstalk_var_px2 = crosstalk.var_px2;
+  model.blur_calibration.crosstalk_lattice_share = crosstalk.lattice_share;
+  Features refined = start;
+  const BlobFitResult fit = FitBlob(frame, 12, start, blur_var_px2, crosstalk);
+  refined.moment_major_var_px2 = fit.major_var_px2 + blur_var_px2;
+  refined.moment_minor_var_px2 = fit.minor_var_px2 + blur_var_px2;
+  refined.size_blur_var_px2 = blur_var_px2;
+  for (auto _ : state) {
+    Features f = refined;
+    if (!MeasureOwnBlur(frame, 12, model, start, &f)) state.SkipWithError("no own blur");
+    benchmark::DoNotOptimize(f);
+  }
+}
+BENCHMARK(BM_RoiOwnBlur)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 void BM_RoiScenePass(benchmark::State& state) {
   const cv::Mat frame = RoiFrame(state.range(0) != 0);

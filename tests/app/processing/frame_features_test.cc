@@ -61,6 +61,38 @@ TEST(FrameFeatures, MeasuresTheSceneCleanedFrame) {
   EXPECT_GT(std::abs(raw.e_rel / b.e_rel - 1.0), 0.01);
 }
 
+// With a model the blob fit refines the frame and measures its own blur (estimator/refocus.h);
+// given `later`, the features come without it and MeasurePendingOwnBlur adds exactly the same,
+// once (measure --track answers before it).
+TEST(FrameFeatures, MeasuresTheOwnBlurNowOrLater) {
+  std::mt19937_64 rng(9);
+  testing::SceneDisc disc;
+  disc.cx = 60.3, disc.cy = 58.8, disc.a = 8.0, disc.b = 7.3, disc.angle_deg = 40.0;
+  const cv::Mat frame = testing::SensorFrame(testing::RenderScene(128, 50.0, {disc}, 0.7),
+                                             testing::NormalField(128, &rng));
+  CalibrationModel model;  // the disc's size at 2000 mm, the rendering's blur
+  model.geometric.beta_px2 = 0.7 * 0.7 + 1.0 / 12.0;
+  model.geometric.alpha_px2 = 16.0 * 4.0;
+  const FeatureOptions options;
+  const Features now = FrameFeatures(frame, 12, options, &model);
+  ASSERT_TRUE(std::isfinite(now.own_blur_var_px2)) << now.BriefReport();
+  EXPECT_NEAR(now.own_blur_var_px2, model.geometric.beta_px2, 5.0 * now.own_blur_se_px2);
+  PendingOwnBlur pending;
+  Features later = FrameFeatures(frame, 12, options, &model, nullptr, &pending);
+  EXPECT_TRUE(std::isnan(later.own_blur_var_px2));
+  EXPECT_EQ(later.moment_major_var_px2, now.moment_major_var_px2);  // refined all the same
+  ASSERT_EQ(pending.model, &model);
+  EXPECT_TRUE(MeasurePendingOwnBlur(&pending, &later));
+  EXPECT_EQ(later.own_blur_var_px2, now.own_blur_var_px2);
+  EXPECT_EQ(later.own_blur_se_px2, now.own_blur_se_px2);
+  EXPECT_EQ(later.own_major_var_px2, now.own_major_var_px2);
+  EXPECT_EQ(pending.model, nullptr);
+  EXPECT_FALSE(MeasurePendingOwnBlur(&pending, &later));  // nothing left
+  // Without a model nothing is pending.
+  FrameFeatures(frame, 12, options, nullptr, nullptr, &pending);
+  EXPECT_EQ(pending.model, nullptr);
+}
+
 // The message FrameFeatures refuses `image` with (FeatureWindowError); "" when it measures it.
 std::string WindowRefusal(const cv::Mat& image, const FeatureOptions& options) {
   try {

@@ -1,0 +1,198 @@
+#include "estimator/blob_pixel_model.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "estimator/blob_fit.h"
+#include "estimator/blur_model.h"
+#include "estimator/crosstalk_kernel.h"
+#include "estimator/normal_table.h"
+
+namespace irdist {
+namespace blob_model {
+namespace {
+
+// The quantities of one pixel's edge geometry SquareMean and its derivatives share.
+struct EdgeGeometry {
+  double dx, dy, gx, gy, pgx, pgy, r, n, dist, kappa;
+};
+
+// d t / d (x, y, P11, P12, P22) times `slope` at one pixel, for SquareMean's edge offset
+// t = dist - shift kappa r: by the chain rule through q = (p - c)^T P (p - c), g = P (p - c),
+// n = |g|, dist = (sqrt q - q) / n, the level set's curvature kappa = (n^2 tr P - g^T P g) / n^3
+// and the edge's, kappa r (r = sqrt q). slope: the model's derivative along t.
+void DiscDerivatives(const double* v, const EdgeGeometry& e, double slope, double shift,
+                     double* d) {
+  const double n2 = e.n * e.n, inv_n = 1.0 / e.n, inv_n3 = inv_n / n2;
+  const double trace = v[2] + v[4];
+  const double dq[5] = {-2.0 * e.gx, -2.0 * e.gy, e.dx * e.dx, 2.0 * e.dx * e.dy, e.dy * e.dy};
+  const double dgx[5] = {-v[2], -v[3], e.dx, e.dy, 0.0};
+  const double dgy[5] = {-v[3], -v[4], 0.0, e.dx, e.dy};
+  const double dtrace[5] = {0.0, 0.0, 1.0, 0.0, 1.0};
+  const double dgpg_p[5] = {0.0, 0.0, e.gx * e.gx, 2.0 * e.gx * e.gy, e.gy * e.gy};
+  const double dq_factor = 0.5 / e.r - 1.0;
+  for (int k = 0; k < 5; ++k) {
+    const double dn = (e.gx * dgx[k] + e.gy * dgy[k]) * inv_n;
+    const double ddist = (dq[k] * dq_factor - e.dist * dn) * inv_n;
+    const double dgpg = 2.0 * (e.pgx * dgx[k] + e.pgy * dgy[k]) + dgpg_p[k];
+    const double dkappa =
+        (2.0 * e.n * dn * trace + n2 * dtrace[k] - dgpg) * inv_n3 - 3.0 * e.kappa * dn * inv_n;
+    const double dkappa_edge = e.r * dkappa + e.kappa * dq[k] * 0.5 / e.r;
+    d[k] = slope * (ddist - shift * dkappa_edge);
+  }
+}
+
+
+
+// Psi' = Phi and Lambda' = Psi: the first and second integrals of the normal CDF, at one x (Phi
+// and phi from the table of estimator/normal_table.h: through erfc and exp they were half of the
+// fit's time).
+struct EdgeIntegrals {
+  explicit EdgeIntegrals(double x) {
+    const NormalValues normal = NormalAt(x);
+    cdf = normal.cdf;
+    const double pdf = normal.pdf;
+    psi = x * cdf + pdf;
+    lambda = 0.5 * ((x * x + 1.0) * cdf + x * pdf);
+  }
+  double cdf, psi, lambda;
+};
+
+// The mean of Phi((t + U) / sd) over a pixel's square, U the square's projection on the edge's
+// normal (nx, ny): the sum of two uniforms of widths |nx| and |ny|, in closed form through Lambda
+// (Psi when the edge runs along a pixel axis); its derivative along t into *slope.
+double SquareEdge(double t, double nx, double ny, double sd, double* slope) {
+  const double a = std::max(std::fabs(nx), std::fabs(ny));
+  const double b = std::min(std::fabs(nx), std::fabs(ny));
+  if (b < 1e-4) {  // one uniform of width a (~1)
+    const EdgeIntegrals hi((t + 0.5 * a) / sd), lo((t - 0.5 * a) / sd);
+    *slope = (hi.cdf - lo.cdf) / a;
+    return sd / a * (hi.psi - lo.psi);
+  }
+  const EdgeIntegrals e[4] = {EdgeIntegrals((t + 0.5 * (a + b)) / sd),
+                              EdgeIntegrals((t + 0.5 * (a - b)) / sd),
+                              EdgeIntegrals((t - 0.5 * (a - b)) / sd),
+                              EdgeIntegrals((t - 0.5 * (a + b)) / sd)};
+  const double c = sd / (a * b);
+  *slope = c * (e[0].psi - e[1].psi - e[2].psi + e[3].psi);
+  return c * sd * (e[0].lambda - e[1].lambda - e[2].lambda + e[3].lambda);
+}
+
+// One edge point's mean over the pixel's square for the PSF's anisotropy along its normal,
+// aniso_n = n^T a n (a the traceless part of the PSF's covariance): the edge spreads by the
+// variance along its normal, optics_var + aniso_n, and its 50% point moves inward by the curvature
+// times the variance along its tangent, optics_var - aniso_n, over 2 (a curved edge's blur reaches
+// in along the tangent; an elliptical PSF thus moves the edge by different amounts around the
+// disc), plus the square's tangential 1/12 over 2; the curvature widens it to second order.
+struct BlurredEdge {
+  double value = 0.0, slope = 0.0, shift = 0.0;
+};
+BlurredEdge BlurEdge(double dist, double kappa_edge, double nx, double ny, double optics_var,
+                     double aniso_n) {
+  const double normal2 = std::max(optics_var + aniso_n, kMinOpticsVarPx2);
+  const double tangent2 = std::max(optics_var - aniso_n, kMinOpticsVarPx2);
+  BlurredEdge e;
+  e.shift = 0.5 * tangent2 + 0.5 * kPixelAreaVarPx2;
+  // To second order the curvature also widens the edge: the tangential offset Y (blur and square)
+  // moves it by kappa Y^2 / 2, whose variance kappa^2 var(Y^2) / 4 adds to the edge's (var(Y^2) =
+  // 2 sd^4 + sd^2 / 3 + 1/80 - 1/144 for a Gaussian of sd plus a uniform of width 1).
+  const double var_y2 = 2.0 * tangent2 * tangent2 + tangent2 / 3.0 + 1.0 / 80.0 - 1.0 / 144.0;
+  const double sd =
+      std::sqrt(normal2) * (1.0 + kappa_edge * kappa_edge * var_y2 / (8.0 * normal2));
+  e.value = SquareEdge(dist - e.shift * kappa_edge, nx, ny, sd, &e.slope);
+  return e;
+}
+
+// Adds to d[5] the model's change through the edge normal's turn with v (x, y, P11, P12, P22):
+// aniso_n = c (nx^2 - ny^2) + 2 s nx ny moves with n = g / |g|; dvalue_daniso its effect.
+void AddNormalTurn(const double* v, double dx, double dy, double nx, double ny, double n,
+                   const PixelResponse& r, double dvalue_daniso, double* d) {
+  const double dgx[5] = {-v[2], -v[3], dx, dy, 0.0};
+  const double dgy[5] = {-v[3], -v[4], 0.0, dx, dy};
+  for (int k = 0; k < 5; ++k) {
+    const double along = nx * dgx[k] + ny * dgy[k];
+    const double dnx = (dgx[k] - nx * along) / n, dny = (dgy[k] - ny * along) / n;
+    const double daniso =
+        2.0 * r.aniso_c * (nx * dnx - ny * dny) + 2.0 * r.aniso_s * (dnx * ny + nx * dny);
+    d[k] += dvalue_daniso * daniso;
+  }
+}
+
+}  // namespace
+
+// The response for a blur of `blur_var_px2` per axis (pixel area included) of which
+// `crosstalk_var_px2` comes after the sampling: the optics' sd and the crosstalk's kernel.
+PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double lattice_share) {
+  PixelResponse r;
+  r.optics_sd =
+      std::sqrt(std::max(blur_var_px2 - kPixelAreaVarPx2 - crosstalk_var_px2, kMinOpticsVarPx2));
+  r.kernel = {1.0};
+  if (!(crosstalk_var_px2 > 1e-6)) return r;
+  r.kernel = CrosstalkKernel(crosstalk_var_px2, lattice_share);
+  r.reach = static_cast<int>(r.kernel.size() / 2);
+  return r;
+}
+
+// The disc's mean over the pixel at (x, y) before crosstalk, and its derivatives into d[5]: the
+// optical edge integrated over the pixel's square as a straight edge (SquareEdge) at the signed
+// distance to the disc's edge, blurred and shifted as BlurEdge says (the PSF's variance along the
+// edge's normal and tangent: an elliptical PSF's differ around the disc). The derivatives
+// (analytic, the chain rule through q = (p - c)^T P (p - c), g = P (p - c), the first-order
+// distance and the curvature; DiscDerivatives; an elliptical PSF's turn with the normal by a
+// central difference in n^T a n) leave out the turn of the edge's normal across the square and
+// the widening's change: a few % of the slope, which moves the fit's path, not its solution on an
+// exact model. A pixel whose square lies far from the edge (5 sd, Phi(-5) = 3e-7, plus the
+// square's half diagonal and 0.5 px for the first-order distance) is 1 or 0 at once.
+double SquareMean(const double* v, double x, double y, const PixelResponse& r, double* d) {
+  const double dx = x - v[0], dy = y - v[1];
+  const double gx = v[2] * dx + v[3] * dy, gy = v[3] * dx + v[4] * dy;  // g = P (p - c)
+  const double q = dx * gx + dy * gy;
+  const double n2 = gx * gx + gy * gy;
+  const double rq = std::sqrt(q), n = std::sqrt(n2);
+  const double dist = (rq - q) / n;
+  const double optics_var = r.optics_sd * r.optics_sd;
+  const double aniso = std::hypot(r.aniso_c, r.aniso_s);
+  const double margin = 1.25 + 5.0 * std::sqrt(optics_var + aniso);
+  std::fill(d, d + 5, 0.0);
+  if (q < 0.09 || dist > margin || dist < -margin) return dist < 0.0 ? 0.0 : 1.0;
+  const double pgx = v[2] * gx + v[3] * gy, pgy = v[3] * gx + v[4] * gy;  // P g
+  // The curvature of the level set through the pixel, scaled to the disc's edge (the level sets
+  // of q are the edge scaled by sqrt q): the edge's own curvature bends the blur's reach.
+  const double kappa = (n2 * (v[2] + v[4]) - (gx * pgx + gy * pgy)) / (n2 * n);
+  const double kappa_edge = kappa * rq;
+  const double nx = gx / n, ny = gy / n;
+  const double aniso_n = r.aniso_c * (nx * nx - ny * ny) + 2.0 * r.aniso_s * nx * ny;
+  const BlurredEdge e = BlurEdge(dist, kappa_edge, nx, ny, optics_var, aniso_n);
+  DiscDerivatives(v, {dx, dy, gx, gy, pgx, pgy, rq, n, dist, kappa}, e.slope, e.shift, d);
+  if (aniso > 0.0) {
+    const double h = 1e-4 * (optics_var + aniso);
+    const double up = BlurEdge(dist, kappa_edge, nx, ny, optics_var, aniso_n + h).value;
+    const double down = BlurEdge(dist, kappa_edge, nx, ny, optics_var, aniso_n - h).value;
+    AddNormalTurn(v, dx, dy, nx, ny, n, r, (up - down) / (2.0 * h), d);
+  }
+  return e.value;
+}
+
+// `in` (rows x cols, row-major) convolved with `kernel` along x (dx = 1) or y, keeping the valid
+// part, into `out`: (rows x (cols - 2 reach)) or ((rows - 2 reach) x cols).
+void Convolve(const double* in, int rows, int cols, const std::vector<double>& kernel,
+              bool along_x, double* out) {
+  const int reach = static_cast<int>(kernel.size() / 2);
+  const int out_rows = along_x ? rows : rows - 2 * reach;
+  const int out_cols = along_x ? cols - 2 * reach : cols;
+  // Row by row, each tap added over a contiguous run of the row (the compiler vectorises it):
+  // along x the tap's run starts k columns on, along y k rows down.
+  for (int row = 0; row < out_rows; ++row) {
+    double* o = &out[static_cast<size_t>(row) * out_cols];
+    std::fill(o, o + out_cols, 0.0);
+    for (size_t k = 0; k < kernel.size(); ++k) {
+      const double w = kernel[k];
+      const double* first = along_x ? &in[static_cast<size_t>(row) * cols + k]
+                                    : &in[(static_cast<size_t>(row) + k) * cols];
+      for (int col = 0; col < out_cols; ++col) o[col] += w * first[col];
+    }
+  }
+}
+
+}  // namespace blob_model
+}  // namespace irdist

@@ -1,0 +1,134 @@
+// The blob fit's pixel model (estimator/blob_pixel_model.h): its derivatives against finite
+// differences, the response's split of the blur, the crosstalk's spreading on the pixel grid and
+// a straight edge's pixel means against their closed form.
+#include "estimator/blob_pixel_model.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "estimator/blur_model.h"
+
+namespace irdist {
+namespace blob_model {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The fit's analytic derivatives are those of its model: against central differences at points
+// across the blurred edge of an ellipse (where the model varies), within the terms they leave out
+// (the normal's turn across the pixel, the curvature's widening: 3% of the largest), and zero
+// where the pixel is flat.
+// The same with an elliptical PSF (psf_anisotropy.h): the edge's blur n^T S n for its normal.
+void ExpectDerivativesAreFiniteDifferences(double aniso_c, double aniso_s) {
+  PixelResponse response;
+  response.optics_sd = 0.6;
+  response.aniso_c = aniso_c;
+  response.aniso_s = aniso_s;
+  const double v[5] = {10.3, 9.7, 1.0 / 36.0, 0.004, 1.0 / 25.0};  // semi-axes about 6 and 5 px
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> angle(0.0, 2.0 * kPi), radius(3.0, 9.0);
+  int in_band = 0;
+  for (int n = 0; n < 200; ++n) {
+    const double a = angle(rng), r = radius(rng);
+    const double x = v[0] + r * std::cos(a), y = v[1] + r * std::sin(a);
+    double d[5];
+    const double value = SquareMean(v, x, y, response, d);
+    if (value <= 0.0 || value >= 1.0) continue;
+    ++in_band;
+    double numeric[5], largest = 0.0;
+    for (int k = 0; k < 5; ++k) {
+      const double h = 1e-6 * std::max(1.0, std::abs(v[k]));
+      double up[5], down[5], ignored[5];
+      std::copy(v, v + 5, up);
+      std::copy(v, v + 5, down);
+      up[k] += h;
+      down[k] -= h;
+      numeric[k] = (SquareMean(up, x, y, response, ignored) -
+                    SquareMean(down, x, y, response, ignored)) / (2.0 * h);
+      largest = std::max(largest, std::abs(numeric[k]) * (k < 2 ? 1.0 : 36.0));  // per P's scale
+    }
+    for (int k = 0; k < 5; ++k) {
+      const double scale = k < 2 ? 1.0 : 1.0 / 36.0;
+      EXPECT_NEAR(d[k], numeric[k], 0.03 * largest * scale + 1e-9)
+          << "parameter " << k << " at (" << x << ", " << y << "), value " << value;
+    }
+  }
+  EXPECT_GT(in_band, 100);
+  double d[5] = {1, 1, 1, 1, 1};
+  EXPECT_EQ(SquareMean(v, v[0] + 0.5, v[1], response, d), 1.0);  // well inside
+  EXPECT_EQ(d[0], 0.0);
+  EXPECT_EQ(SquareMean(v, v[0] + 20.0, v[1], response, d), 0.0);  // far outside
+  EXPECT_EQ(d[2], 0.0);
+}
+
+TEST(BlobPixelModel, TheModelsDerivativesAreItsFiniteDifferences) {
+  ExpectDerivativesAreFiniteDifferences(0.0, 0.0);
+  ExpectDerivativesAreFiniteDifferences(0.03, -0.06);  // astigmatic: sd 0.68, 0.51 px, +-35 deg
+}
+
+// The response splits the blur: the optics' variance is the blur less the pixel's area and the
+// crosstalk, the crosstalk a kernel that sums to 1 with the crosstalk's variance; none without.
+TEST(BlobPixelModel, TheResponseSplitsTheBlur) {
+  const PixelResponse plain = MakeResponse(0.5, 0.0, 0.0);
+  EXPECT_NEAR(plain.optics_sd * plain.optics_sd, 0.5 - kPixelAreaVarPx2, 1e-12);
+  EXPECT_EQ(plain.reach, 0);
+  const PixelResponse split = MakeResponse(0.9, 0.3, 0.0);
+  EXPECT_NEAR(split.optics_sd * split.optics_sd, 0.9 - kPixelAreaVarPx2 - 0.3, 1e-12);
+  ASSERT_GT(split.reach, 0);
+  ASSERT_EQ(split.kernel.size(), static_cast<size_t>(2 * split.reach + 1));
+  double sum = 0.0, var = 0.0;
+  for (int k = -split.reach; k <= split.reach; ++k) {
+    sum += split.kernel[k + split.reach];
+    var += k * k * split.kernel[k + split.reach];
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-9);
+  EXPECT_NEAR(var, 0.3, 0.01);
+}
+
+// The crosstalk's spreading keeps the valid part: a single bright pixel becomes the kernel's
+// outer product, and a flat image stays flat.
+TEST(BlobPixelModel, ConvolveSpreadsAnImpulseIntoTheKernel) {
+  const std::vector<double> kernel = {0.25, 0.5, 0.25};
+  const int rows = 5, cols = 5;
+  std::vector<double> in(rows * cols, 0.0), across(rows * 3), out(9);
+  in[2 * cols + 2] = 1.0;
+  Convolve(in.data(), rows, cols, kernel, true, across.data());
+  Convolve(across.data(), rows, 3, kernel, false, out.data());
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) {
+      EXPECT_NEAR(out[row * 3 + col], kernel[2 - row] * kernel[2 - col], 1e-15) << row << col;
+    }
+  }
+  std::fill(in.begin(), in.end(), 0.7);
+  Convolve(in.data(), rows, cols, kernel, true, across.data());
+  Convolve(across.data(), rows, 3, kernel, false, out.data());
+  for (double v : out) EXPECT_NEAR(v, 0.7, 1e-15);
+}
+
+// Far from the edge of a large disc a pixel's mean is its blurred straight edge: along a pixel
+// axis, the mean over the square of Phi((t + u) / sd), u uniform on [-1/2, 1/2], in closed form.
+TEST(BlobPixelModel, AStraightEdgesPixelMeansAreTheBlurredSquaresIntegral) {
+  const double radius = 4000.0;  // curvature 1/4000 px: its blur moves the edge by 4e-5 px
+  const double v[5] = {0.0, 0.0, 1.0 / (radius * radius), 0.0, 1.0 / (radius * radius)};
+  PixelResponse response;
+  response.optics_sd = 0.5;
+  double d[5];
+  for (const double t : {-1.3, -0.6, -0.2, 0.0, 0.35, 0.8, 1.5}) {
+    const double value = SquareMean(v, radius - t, 0.0, response, d);  // t px inside the edge
+    double expected = 0.0;  // the square's mean of Phi, by the midpoint rule
+    const int steps = 4000;
+    for (int i = 0; i < steps; ++i) {
+      const double u = -0.5 + (i + 0.5) / steps;
+      expected += 0.5 * std::erfc(-(t + u) / (response.optics_sd * std::sqrt(2.0))) / steps;
+    }
+    EXPECT_NEAR(value, expected, 5e-5) << "t " << t;
+  }
+}
+
+}  // namespace
+}  // namespace blob_model
+}  // namespace irdist
