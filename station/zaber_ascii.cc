@@ -165,7 +165,7 @@ LineRequest ZaberAscii::Request(const Address& a, int axis, const std::string& c
   auto id = std::make_shared<int>(0);
   LineRequest request;
   request.query = command;
-  request.device = "Zaber device " + std::to_string(a.device);
+  request.device = "Zaber device " + std::to_string(a.device) + " (zaber_ascii)";
   request.compose = [this, a, axis, command, id] { return Compose(a, axis, command, id.get()); };
   request.judge = [this, a, axis, id, reply, numeric](const std::string& line) {
     const ReplyVerdict verdict = Judge(a, axis, *id, line, reply);

@@ -248,6 +248,24 @@ TEST(ZaberAscii, GarbledAndDroppedQueryRepliesAreRetried) {
   EXPECT_EQ(rig.Count("get pos"), 3);
 }
 
+// Garbled on every attempt (and through the reset wait): a LinkError naming the device by its
+// address and by the rig file's protocol, so that the user finds the device among the rig's.
+TEST(ZaberAscii, RepliesGarbledOnEveryAttemptAreALinkErrorNamingTheDevice) {
+  DeviceSpec spec = SlideSpec();
+  spec.settings["reset_wait_s"] = {"0.05", 8};
+  Rig rig(spec);
+  rig.motion->Identify();
+  rig.stage.garble_next = 1 << 30;
+  StationPosition now;
+  try {
+    rig.motion->ReadPosition(&now);
+    ADD_FAILURE() << "a garbled reply was taken";
+  } catch (const LinkError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("Zaber device 1 (zaber_ascii)"), std::string::npos) << what;
+  }
+}
+
 TEST(ZaberAscii, ReplyWhoseChecksumWasDamagedAwayIsNotTaken) {
   Rig rig;
   rig.motion->Identify();
