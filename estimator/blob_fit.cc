@@ -327,13 +327,16 @@ bool StartWindow(const cv::Mat& image, int bit_depth, const Features& features,
   return true;
 }
 
-PixelResponse ResponseOf(double blur_var_px2, const WindowStart& s, const Crosstalk& crosstalk,
-                         const PsfAnisotropy& psf) {
+// The window's model at `blur_var_px2`, weighted by the read noise.
+WindowResiduals ModelOf(const WindowStart& s, double blur_var_px2, const Crosstalk& crosstalk,
+                        const PsfAnisotropy& psf) {
   PixelResponse response =
       MakeResponse(blur_var_px2, s.crosstalk_var_px2, crosstalk.lattice_share);
   response.aniso_c = psf.c_px2;
   response.aniso_s = psf.s_px2;
-  return response;
+  WindowResiduals model(s.pixels, s.window.width, s.window.height, std::move(response));
+  model.SetVariances(std::vector<double>(s.pixels.size(), s.read_var));
+  return model;
 }
 
 }  // namespace
@@ -351,9 +354,7 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
   const cv::Rect& window = s.window;
   double* v = s.v;
   const double read_var = s.read_var;
-  WindowResiduals model(pixels, window.width, window.height,
-                        ResponseOf(blur_var_px2, s, crosstalk, psf));
-  model.SetVariances(std::vector<double>(pixels.size(), read_var));
+  WindowResiduals model = ModelOf(s, blur_var_px2, crosstalk, psf);
   bool ok = false, covariance_ok = false;
   double chi2 = 0.0;
   Covariance covariance;
@@ -393,10 +394,7 @@ BlobBlurProfile ProfileBlobBlur(const cv::Mat& image, int bit_depth, const Featu
   BlobBlurProfile out;
   WindowStart s;
   if (!StartWindow(image, bit_depth, features, blur_var_px2, crosstalk, &s)) return out;
-  const std::vector<double> read(s.pixels.size(), s.read_var);
-  WindowResiduals model(s.pixels, s.window.width, s.window.height,
-                        ResponseOf(blur_var_px2, s, crosstalk, psf));
-  model.SetVariances(read);
+  WindowResiduals model = ModelOf(s, blur_var_px2, crosstalk, psf);
   // The fit to the weights pass's tolerance: the joint Gauss-Newton step below corrects the
   // seven parameters' rest of the way with the blur's (the same step to 1e-5 px^2 on
   // tests/estimator/refocus's frames, a fifth less CPU).
@@ -406,8 +404,7 @@ BlobBlurProfile ProfileBlobBlur(const cv::Mat& image, int bit_depth, const Featu
   // The step: small against the blur (the model's change in it is smooth: the forward
   // difference's error ~ step / blur), large against the normal table's 2e-10.
   const double step_px2 = 1e-3 * blur_var_px2;
-  WindowResiduals shifted(s.pixels, s.window.width, s.window.height,
-                          ResponseOf(blur_var_px2 + step_px2, s, crosstalk, psf));
+  const WindowResiduals shifted = ModelOf(s, blur_var_px2 + step_px2, crosstalk, psf);
   Eigen::Matrix<double, kParams + 1, kParams + 1> jtj;
   Eigen::Matrix<double, kParams + 1, 1> jtr;
   model.BlurSystem(s.v, shifted, step_px2, &jtj, &jtr);

@@ -109,6 +109,7 @@ struct TrackSession::Impl {
   TrackSample Check(double time_s);
   // The last frame's own blur, measured after its line (off the latency path), into the pool.
   void MeasurePending();
+  void AddToPool(const Features& f);
   std::vector<const Features*> HealthFrames() const;
 
   const MeasureArgs& args;
@@ -132,11 +133,12 @@ struct TrackSession::Impl {
 };
 
 void TrackSession::Impl::MeasurePending() {
-  if (pending.model == nullptr) return;
-  if (MeasurePendingOwnBlur(&pending, &pending_features)) {
-    blur_pool.push_back(pending_features);
-    if (blur_pool.size() > static_cast<std::size_t>(kHealthFrames)) blur_pool.pop_front();
-  }
+  if (MeasurePendingOwnBlur(&pending, &pending_features)) AddToPool(pending_features);
+}
+
+void TrackSession::Impl::AddToPool(const Features& f) {
+  blur_pool.push_back(f);
+  if (blur_pool.size() > static_cast<std::size_t>(kHealthFrames)) blur_pool.pop_front();
 }
 
 std::vector<const Features*> TrackSession::Impl::HealthFrames() const {
@@ -171,7 +173,7 @@ TrackSample TrackSession::Impl::Frame(double time_s) {
   if (later) {
     pending_features = std::move(features);
   } else if (std::isfinite(features.own_blur_var_px2)) {
-    blur_pool.push_back(features);
+    AddToPool(features);
   }
   MeasureSample& s = t.estimate;
   s.mode = "track";

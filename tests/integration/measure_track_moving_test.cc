@@ -26,11 +26,11 @@
 #include <thread>
 #include <vector>
 
-#include "app/processing/crb.h"
 #include "sim/rig_physics.h"
 #include "sim/trajectory.h"
 #include "sim/trajectory_file.h"
 #include "tests/integration/measure_helpers.h"
+#include "tests/integration/one_frame_bound.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
 
@@ -56,10 +56,8 @@ class OneFrameBound {
   OneFrameBound(const std::string& rig_path, double pan_deg, double exposure_ms, double bias_ma) {
     const sim::RigPhysics physics = sim::LoadRigPhysics(rig_path);
     for (int i = 0; i <= kSteps; ++i) {
-      const CrbResult r = ComputeCrb(physics, {kFirstMm + i * kStepMm, pan_deg, bias_ma,
-                                               SteadyJunctionRiseK(physics, bias_ma),
-                                               {exposure_ms}});
-      sd_mm_[i] = r.valid ? r.d_sd_mm : NAN;
+      sd_mm_[i] =
+          testing::OneFrameBoundMm(physics, kFirstMm + i * kStepMm, pan_deg, exposure_ms, bias_ma);
     }
   }
   double At(double d_mm) const {

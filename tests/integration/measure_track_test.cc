@@ -16,9 +16,9 @@
 #include <thread>
 #include <vector>
 
-#include "app/processing/crb.h"
 #include "sim/rig_physics.h"
 #include "tests/integration/measure_helpers.h"
+#include "tests/integration/one_frame_bound.h"
 #include "tests/integration/run_helpers.h"
 #include "tests/loopback_gvcp.h"
 
@@ -66,16 +66,6 @@ class MeasureTrack : public ::testing::Test {
 std::string* MeasureTrack::dir_ = nullptr;
 int MeasureTrack::calibrate_code_ = -1;
 std::string MeasureTrack::calibrate_output_;
-
-// The one-frame Cramer-Rao bound on d (mm): the virtual rig's physics, one frame at the pose and
-// exposure, every unknown free (app/processing/crb.h).
-double OneFrameBoundMm(double d_mm, double pan_deg, double exposure_ms, double bias_ma) {
-  const sim::RigPhysics physics =
-      sim::LoadRigPhysics(std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml");
-  const CrbResult r = ComputeCrb(
-      physics, {d_mm, pan_deg, bias_ma, SteadyJunctionRiseK(physics, bias_ma), {exposure_ms}});
-  return r.valid ? r.d_sd_mm : NAN;
-}
 
 // The calibration health of a track line pools the own blurs of the frames before it (the first
 // line's: its own): the blob fit's figure on every line, and a static IRED under its own
@@ -143,7 +133,9 @@ TEST_F(MeasureTrack, StaticIredEveryFrameAccountedForAndWithinItsErrors) {
   EXPECT_LT(sd / rms_se, 1.6) << "sd " << sd << " se " << rms_se;
   // Against the one-frame Cramer-Rao bound: the goal is 1.3; asserted with 3 of the ratio's
   // sampling errors (9% at n = 60).
-  const double bound_mm = OneFrameBoundMm(2000.0, 10.0, 8.0, 490.0);
+  const double bound_mm = testing::OneFrameBoundMm(
+      sim::LoadRigPhysics(std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml"), 2000.0,
+      10.0, 8.0, 490.0);
   std::printf("static: sd %.3f mm over %zu frames, one-frame bound %.3f mm (ratio %.3f), rms se "
               "%.3f mm\n",
               sd, lines.size(), bound_mm, sd / bound_mm, rms_se);
