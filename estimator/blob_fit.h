@@ -23,6 +23,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "estimator/blur_model.h"  // kPixelAreaVarPx2, kMinOpticsVarPx2
 #include "estimator/features.h"
 #include "estimator/fit.h"
 #include "estimator/psf_anisotropy.h"
@@ -38,10 +39,6 @@ struct Crosstalk {
   double var_px2;
   double lattice_share;
 };
-
-// The optics' variance keeps at least this (0.1 px of sd): the crosstalk cannot be the whole blur
-// (the edge model divides by the optics' sd).
-constexpr double kMinOpticsVarPx2 = 0.01;
 
 struct BlobFitResult {
   bool ok = false;

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "estimator/blob_fit.h"
 #include "estimator/blur_model.h"
 #include "estimator/crosstalk_kernel.h"
 #include "estimator/normal_table.h"

@@ -157,11 +157,6 @@ double ApertureBlurVariance(const cv::Mat& image, const cv::Rect& rect, const Mo
   return 0.5 * (blur(p2, p4) + blur(q2, q4));
 }
 
-
-}  // namespace
-
-namespace {
-
 // Pixels at the format's maximum inside `roi` of the raw frame.
 int CountSaturated(const cv::Mat& image, const cv::Rect& roi, int bit_depth) {
   const int saturated_level = (1 << bit_depth) - 1;
@@ -331,6 +326,28 @@ double FarthestAbove2(const cv::Mat& image, const cv::Rect& window, double thres
 // blur's tail, a few sigma.
 constexpr double kBackgroundMarginPx = 4.0;
 
+// The columns [first, last) of row y within [begin, end) that lie within the circle
+// (x - cx)^2 + (y - cy)^2 <= reach2 (an empty run at first = last when none): the circle's chord,
+// its ends settled by the same test per pixel, so the run is exactly that test's (and the rest of
+// the row, counted in two runs, WindowBackground's pixels: a test per pixel was most of its time).
+struct ColumnRun {
+  int first, last;
+};
+ColumnRun ColumnsWithin(int y, double cx, double cy, double reach2, int begin, int end) {
+  const auto inside = [&](int x) { return !((x - cx) * (x - cx) + (y - cy) * (y - cy) > reach2); };
+  const double half = std::sqrt(std::max(reach2 - (y - cy) * (y - cy), 0.0));
+  const auto column = [&](double x, int low) {
+    return static_cast<int>(std::clamp(x, static_cast<double>(low), static_cast<double>(end)));
+  };
+  int first = column(std::ceil(cx - half), begin);
+  int last = column(std::floor(cx + half) + 1.0, first);
+  while (first > begin && inside(first - 1)) --first;
+  while (first < last && !inside(first)) ++first;
+  while (last < end && inside(last)) ++last;
+  while (last > first && !inside(last - 1)) --last;
+  return {first, last};
+}
+
 // The window's background (gray levels): the mean of the pixels of a square four times the
 // window's side around the blob (the whole 256 px ROI at the default 64 px window), beyond the
 // blob's reach (the farthest pixel of the window above `threshold` from (cx, cy), plus
@@ -348,11 +365,12 @@ double WindowBackground(const cv::Mat& image, const cv::Rect& window, double thr
       SquareAround(cx, cy, 4 * window.width) & cv::Rect(0, 0, image.cols, image.rows);
   GrayHistogram levels(static_cast<int>(max_gray));
   const double reach2 = reach * reach;
+  const int end = around.x + around.width;
   for (int y = around.y; y < around.y + around.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
-    for (int x = around.x; x < around.x + around.width; ++x) {
-      if ((x - cx) * (x - cx) + (y - cy) * (y - cy) > reach2) levels.Add(row[x]);
-    }
+    const ColumnRun blob = ColumnsWithin(y, cx, cy, reach2, around.x, end);
+    levels.AddRun(row + around.x, blob.first - around.x);
+    levels.AddRun(row + blob.last, end - blob.last);
   }
   if (levels.size() < 32) levels = GrayHistogram(BorderRing(image, window));
   const double median = levels.Median();

@@ -15,6 +15,21 @@ GrayHistogram::GrayHistogram(const std::vector<std::uint16_t>& levels) : total_(
   for (std::uint16_t g : levels) ++counts_[g - low_];
 }
 
+void GrayHistogram::AddRun(const std::uint16_t* levels, int n) {
+  std::uint32_t* counts = counts_.data();
+  std::size_t bins = counts_.size();
+  for (int i = 0; i < n; ++i) {
+    const std::size_t bin = static_cast<std::size_t>(levels[i] - low_);
+    if (bin >= bins) {
+      counts_.resize(bin + 1, 0);
+      counts = counts_.data();
+      bins = counts_.size();
+    }
+    ++counts[bin];
+  }
+  total_ += static_cast<std::size_t>(std::max(n, 0));
+}
+
 std::uint16_t GrayHistogram::OrderStatistic(std::size_t rank) const {
   IRDIST_CHECK(rank < total_, "rank ", rank, " of ", total_, " levels");
   std::size_t seen = 0;

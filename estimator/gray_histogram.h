@@ -24,6 +24,8 @@ class GrayHistogram {
     ++counts_[bin];
     ++total_;
   }
+  // Counts `n` levels in a row (as Add each, with the counts kept in a register).
+  void AddRun(const std::uint16_t* levels, int n);
   std::size_t size() const { return total_; }
   // The level of rank `rank` (0-based) in ascending order; size() > rank required.
   std::uint16_t OrderStatistic(std::size_t rank) const;

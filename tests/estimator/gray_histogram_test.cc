@@ -93,6 +93,25 @@ TEST(GrayHistogram, ALevelAboveTheStatedRangeIsCountedNotWrittenPastTheEnd) {
   EXPECT_EQ(h.OrderStatistic(2), 65535);
 }
 
+// A run counted at once is the same histogram as its levels added one by one, a level beyond
+// the constructor's maximum growing it as Add does, an empty run adding nothing.
+TEST(GrayHistogram, ARunCountsAsItsLevelsOneByOne) {
+  std::mt19937 rng(11);
+  std::vector<std::uint16_t> levels = Levels(&rng, 5000, 300.0, 40.0);
+  levels[17] = 9000;  // beyond the maximum below
+  GrayHistogram one_by_one(1023), in_runs(1023);
+  for (std::uint16_t g : levels) one_by_one.Add(g);
+  in_runs.AddRun(levels.data(), 2000);
+  in_runs.AddRun(levels.data() + 2000, 0);
+  in_runs.AddRun(levels.data() + 2000, 3000);
+  ASSERT_EQ(in_runs.size(), one_by_one.size());
+  for (std::size_t rank : {0UL, 1UL, 2499UL, 2500UL, 4998UL, 4999UL}) {
+    EXPECT_EQ(in_runs.OrderStatistic(rank), one_by_one.OrderStatistic(rank)) << rank;
+  }
+  EXPECT_EQ(in_runs.OrderStatistic(4999), 9000);
+  EXPECT_EQ(in_runs.MedianAbsoluteDeviation(), one_by_one.MedianAbsoluteDeviation());
+}
+
 TEST(GrayHistogram, EmptyGivesZeros) {
   const GrayHistogram h(std::vector<std::uint16_t>{});
   EXPECT_EQ(h.size(), 0u);
