@@ -105,10 +105,10 @@ TEST(Recording, WriterRefusesARowTheReaderWouldRefuseAndWritesNothing) {
   EXPECT_EQ(RecordingReader(dir).rows().size(), 2u);
 }
 
-TEST(Recording, WriterKilledMidRunLosesAtMostTheFrameInFlight) {
-  const std::string dir = TempDir("killed");
+// Forks a process that opens a recording at `dir` and appends frames to it until it is killed (or
+// a write fails: then it exits with 3). Returns the child's pid, -1 if the fork failed.
+pid_t ForkEndlessWriter(const std::string& dir) {
   const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
   if (child == 0) {
     try {
       auto writer = RecordingWriter::Open(dir, TestHeader());
@@ -117,11 +117,23 @@ TEST(Recording, WriterKilledMidRunLosesAtMostTheFrameInFlight) {
     }
     ::_exit(3);
   }
-  // Kill it once it has written a few brackets, in the middle of its work.
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (CountCsvRows(dir) < 23 && std::chrono::steady_clock::now() < deadline) {
+  return child;
+}
+
+// Waits until the recording at `dir` has `rows` rows in its CSV, or `timeout` has passed.
+void WaitForCsvRows(const std::string& dir, int rows, std::chrono::seconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (CountCsvRows(dir) < rows && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
+}
+
+TEST(Recording, WriterKilledMidRunLosesAtMostTheFrameInFlight) {
+  const std::string dir = TempDir("killed");
+  const pid_t child = ForkEndlessWriter(dir);
+  ASSERT_GE(child, 0);
+  // Kill it once it has written a few brackets, in the middle of its work.
+  WaitForCsvRows(dir, 23, std::chrono::seconds(20));
   ::kill(child, SIGKILL);
   int status = 0;
   ASSERT_EQ(::waitpid(child, &status, 0), child);

@@ -9,12 +9,12 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "base/pi.h"
 #include "tests/estimator/disc_spectrum.h"
 
 namespace irdist {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kSide = 96;
 constexpr int kSuper = 16;
 

@@ -10,13 +10,12 @@
 #include <random>
 #include <vector>
 
+#include "base/pi.h"
 #include "estimator/blur_model.h"
 
 namespace irdist {
 namespace blob_model {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The fit's analytic derivatives are those of its model: against central differences at points
 // across the blurred edge of an ellipse (where the model varies), within the terms they leave out

@@ -70,49 +70,42 @@ inline double PeakToPeak(const std::vector<double>& values) {
   return *hi - *lo;
 }
 
-// Mean value per pixel (disc of unit brightness: the sum is the disc's area pi a b) on an
-// side x side grid; the blob must lie well inside it (the grid is periodic).
-inline cv::Mat1d RenderDiscSpectrum(const DiscBlob& blob, int side) {
-  const double c = std::cos(blob.angle_deg * M_PI / 180.0);
-  const double s = std::sin(blob.angle_deg * M_PI / 180.0);
-  const int aliases = 3;  // |k| <= 3: beyond, the optical Gaussian (>= 0.3 px) leaves < 2e-5
-  std::vector<std::complex<double>> spectrum(static_cast<size_t>(side) * side);
-  for (int ky = 0; ky < side; ++ky) {
-    const double fy0 = (ky < side / 2 ? ky : ky - side) / static_cast<double>(side);
-    for (int kx = 0; kx < side; ++kx) {
-      const double fx0 = (kx < side / 2 ? kx : kx - side) / static_cast<double>(side);
-      std::complex<double> folded = 0.0;
-      for (int ay = -aliases; ay <= aliases; ++ay) {
-        for (int ax = -aliases; ax <= aliases; ++ax) {
-          const double fx = fx0 + ax, fy = fy0 + ay;
-          // M^T f for M = R diag(a, b): (a (c fx + s fy), b (-s fx + c fy)).
-          const double u = blob.a * (c * fx + s * fy), v = blob.b * (-s * fx + c * fy);
-          const double rho = std::hypot(u, v);
-          const double disc = rho < 1e-12 ? M_PI * blob.a * blob.b
-                                          : blob.a * blob.b *
-                                                boost::math::cyl_bessel_j(1, 2.0 * M_PI * rho) /
-                                                rho;
-          const double f_s_f = blob.optics_sigma_px * blob.optics_sigma_px * (fx * fx + fy * fy) +
-                               blob.psf_aniso_c_px2 * (fx * fx - fy * fy) +
-                               2.0 * blob.psf_aniso_s_px2 * fx * fy;
-          const double optics = std::exp(-2.0 * M_PI * M_PI * f_s_f);
-          const double sx = fx == 0.0 ? 1.0 : std::sin(M_PI * fx) / (M_PI * fx);
-          const double sy = fy == 0.0 ? 1.0 : std::sin(M_PI * fy) / (M_PI * fy);
-          const double phase = -2.0 * M_PI * (fx * blob.cx + fy * blob.cy);
-          folded += disc * optics * sx * sy * std::polar(1.0, phase);
-        }
-      }
-      if (blob.crosstalk_lattice) {
-        const double t = blob.crosstalk_sigma_px * blob.crosstalk_sigma_px;
-        folded *= std::exp(-t * (2.0 - std::cos(2.0 * M_PI * fx0) - std::cos(2.0 * M_PI * fy0)));
-      } else {
-        folded *= CrosstalkTransform(blob.crosstalk_sigma_px, fx0) *
-                  CrosstalkTransform(blob.crosstalk_sigma_px, fy0);
-      }
-      spectrum[static_cast<size_t>(ky) * side + kx] = folded;
-    }
+// One alias's term of the blob's folded spectrum at the frequency (fx, fy) (cycles per pixel): the
+// disc's transform times the optics' and the pixel's square's, shifted to the disc's centre. c and
+// s are the cosine and sine of the major axis's angle.
+inline std::complex<double> DiscAliasTerm(const DiscBlob& blob, double c, double s, double fx,
+                                          double fy) {
+  // M^T f for M = R diag(a, b): (a (c fx + s fy), b (-s fx + c fy)).
+  const double u = blob.a * (c * fx + s * fy), v = blob.b * (-s * fx + c * fy);
+  const double rho = std::hypot(u, v);
+  const double disc = rho < 1e-12
+                          ? M_PI * blob.a * blob.b
+                          : blob.a * blob.b * boost::math::cyl_bessel_j(1, 2.0 * M_PI * rho) / rho;
+  const double f_s_f = blob.optics_sigma_px * blob.optics_sigma_px * (fx * fx + fy * fy) +
+                       blob.psf_aniso_c_px2 * (fx * fx - fy * fy) +
+                       2.0 * blob.psf_aniso_s_px2 * fx * fy;
+  const double optics = std::exp(-2.0 * M_PI * M_PI * f_s_f);
+  const double sx = fx == 0.0 ? 1.0 : std::sin(M_PI * fx) / (M_PI * fx);
+  const double sy = fy == 0.0 ? 1.0 : std::sin(M_PI * fy) / (M_PI * fy);
+  const double phase = -2.0 * M_PI * (fx * blob.cx + fy * blob.cy);
+  return disc * optics * sx * sy * std::polar(1.0, phase);
+}
+
+// The crosstalk's transform at the sampled frequency (fx0, fy0): the lattice random walk's or the
+// sampled Gaussian's, per the blob's crosstalk_lattice.
+inline double CrosstalkFactor(const DiscBlob& blob, double fx0, double fy0) {
+  if (blob.crosstalk_lattice) {
+    const double t = blob.crosstalk_sigma_px * blob.crosstalk_sigma_px;
+    return std::exp(-t * (2.0 - std::cos(2.0 * M_PI * fx0) - std::cos(2.0 * M_PI * fy0)));
   }
-  // g(n) = (1 / side^2) sum_k folded(k / side) e^{2 pi i k n / side}, separably.
+  return CrosstalkTransform(blob.crosstalk_sigma_px, fx0) *
+         CrosstalkTransform(blob.crosstalk_sigma_px, fy0);
+}
+
+// The real part of the inverse discrete Fourier transform of a side x side spectrum (row-major,
+// index ky * side + kx): g(n) = (1 / side^2) sum_k folded(k / side) e^{2 pi i k n / side},
+// separably.
+inline cv::Mat1d InverseSpectrum(const std::vector<std::complex<double>>& spectrum, int side) {
   std::vector<std::complex<double>> rows(spectrum.size());
   for (int ky = 0; ky < side; ++ky) {
     for (int x = 0; x < side; ++x) {
@@ -136,6 +129,30 @@ inline cv::Mat1d RenderDiscSpectrum(const DiscBlob& blob, int side) {
     }
   }
   return out;
+}
+
+// Mean value per pixel (disc of unit brightness: the sum is the disc's area pi a b) on an
+// side x side grid; the blob must lie well inside it (the grid is periodic).
+inline cv::Mat1d RenderDiscSpectrum(const DiscBlob& blob, int side) {
+  const double c = std::cos(blob.angle_deg * M_PI / 180.0);
+  const double s = std::sin(blob.angle_deg * M_PI / 180.0);
+  const int aliases = 3;  // |k| <= 3: beyond, the optical Gaussian (>= 0.3 px) leaves < 2e-5
+  std::vector<std::complex<double>> spectrum(static_cast<size_t>(side) * side);
+  for (int ky = 0; ky < side; ++ky) {
+    const double fy0 = (ky < side / 2 ? ky : ky - side) / static_cast<double>(side);
+    for (int kx = 0; kx < side; ++kx) {
+      const double fx0 = (kx < side / 2 ? kx : kx - side) / static_cast<double>(side);
+      std::complex<double> folded = 0.0;
+      for (int ay = -aliases; ay <= aliases; ++ay) {
+        for (int ax = -aliases; ax <= aliases; ++ax) {
+          folded += DiscAliasTerm(blob, c, s, fx0 + ax, fy0 + ay);
+        }
+      }
+      folded *= CrosstalkFactor(blob, fx0, fy0);
+      spectrum[static_cast<size_t>(ky) * side + kx] = folded;
+    }
+  }
+  return InverseSpectrum(spectrum, side);
 }
 
 // The rendered blob as a 16-bit frame: background + amplitude x value, rounded.

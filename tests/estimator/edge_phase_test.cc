@@ -6,10 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include "base/pi.h"
+
 namespace irdist {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Sizes of discs R = 9.1 px x 1500 / d over 1.5..3 m, centres at random phases, with a smooth
 // bias (a quadratic in 1000 / d), noise of `noise_sd` and an edge error e(p) = amplitude x

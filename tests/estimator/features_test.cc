@@ -8,14 +8,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include "base/check.h"
+#include "base/pi.h"
 #include "sim/renderer.h"
 #include "sim/rig_physics.h"
 #include "tests/estimator/disc_spectrum.h"
 
 namespace irdist {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 struct Blob {
   double cx = 640.0, cy = 512.0;
@@ -383,6 +382,22 @@ TEST(FeatureOptions, ResponseScopeNamesRoundTrip) {
   EXPECT_EQ(FeatureOptions().response_scope, ResponseScope::kERelOnly);
 }
 
+// The linear ADC value x(M) that the nonlinear sensor (x - a x^2 / x_max) reads as the normalised
+// gray level M, from the sensor's formula.
+double LinearAdcValue(double m, double a, double x_max) {
+  return x_max * (1.0 - std::sqrt(1.0 - 4.0 * a * m)) / (2.0 * a);
+}
+
+// The nonlinear sensor's inverse on normalised gray levels, x(M) / x_max, at 257 knots.
+InverseResponse NonlinearSensorInverse(double a, double x_max) {
+  InverseResponse truth;
+  for (int k = 0; k <= 256; ++k) {
+    truth.m.push_back(k / 256.0);
+    truth.f.push_back(LinearAdcValue(k / 256.0, a, x_max) / x_max);
+  }
+  return truth;
+}
+
 TEST(Features, AllPixelsScopeLinearisesEveryFeature) {
   const double a = 0.1, x_max = 4095.0;
   sim::RigPhysics physics =
@@ -390,18 +405,11 @@ TEST(Features, AllPixelsScopeLinearisesEveryFeature) {
   const sim::Renderer linear_renderer(physics);
   physics.sensor.nonlinearity = a;
   const sim::Renderer nonlinear_renderer(physics);
-  // The sensor's inverse on normalised gray levels, from its formula: x(M) / x_max.
-  auto adc = [&](double m) { return x_max * (1.0 - std::sqrt(1.0 - 4.0 * a * m)) / (2.0 * a); };
-  InverseResponse truth;
-  for (int k = 0; k <= 256; ++k) {
-    truth.m.push_back(k / 256.0);
-    truth.f.push_back(adc(k / 256.0) / x_max);
-  }
   // LineariseFrame maps to L = f / f(1) (f(0) = 0 here): the linear frame's gray levels times
   // x_max / x(1).
-  const double scale = x_max / adc(1.0);
+  const double scale = x_max / LinearAdcValue(1.0, a, x_max);
   FeatureOptions all;
-  all.inverse_response = truth;
+  all.inverse_response = NonlinearSensorInverse(a, x_max);
   all.response_scope = ResponseScope::kAllPixels;
   FeatureOptions e_only = all;
   e_only.response_scope = ResponseScope::kERelOnly;

@@ -11,10 +11,11 @@
 
 #include <gtest/gtest.h>
 
+#include "base/pi.h"
+
 namespace irdist {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kFocalPx = 3000.0;  // principal point at (0, 0)
 constexpr double kRadiusMm = 5.0;

@@ -7,12 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include "base/pi.h"
 #include "tests/estimator/disc_spectrum.h"
 
 namespace irdist {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // A 16-bit frame of the rendered blob with shot and read noise (50000 e- peak over 1000).
 cv::Mat NoisyFrame(const cv::Mat1d& value, std::mt19937_64* rng) {

@@ -126,6 +126,20 @@ MovingFigures Score(const std::vector<YAML::Node>& lines, const sim::Trajectory&
   return f;
 }
 
+// Prints one pan's figures on one line.
+void PrintFigures(const std::string& pan, const MovingFigures& f) {
+  std::cout << "pan " << pan << " deg, slide 1500 -> 3000 mm at 0.5 m/s: " << f.frames
+            << " frames estimated, " << f.moving << " during the move; per-frame error rms "
+            << f.error_rms_mm << " mm (mean " << f.error_mean_mm << "), per-frame se rms "
+            << f.se_rms_mm << " mm, ratio " << f.error_rms_mm / f.se_rms_mm
+            << "; one-frame CRB rms " << f.crb_rms_mm << " mm, ratio "
+            << f.error_rms_mm / f.crb_rms_mm << "; cruise (" << f.cruise << " frames from "
+            << kCruiseSettleS << " s in): filter v mean " << f.cruise_v_mean
+            << " mm/s (truth 500), v se mean " << f.cruise_v_se_mean << ", |z| max "
+            << f.cruise_z_max << ", outside 3 se " << f.cruise_outside_3se
+            << ", |z| at the cruise's end " << f.cruise_last_z << "\n";
+}
+
 // When the slide's cruise from 1500 to 3000 mm starts (simulated s): the first instant of the last
 // slide profile at which its speed is the cruise speed; -1 when there is none.
 double CruiseStartS(const sim::Trajectory& trajectory) {
@@ -209,15 +223,7 @@ TEST_F(MeasureTrackMoving, PerFrameErrorsAgainstTheMidExposureTruthAndTheFilterV
     const sim::Trajectory trajectory = sim::ReadTrajectoryFile(csv);
     const OneFrameBound bound(rig_, std::stod(pan), 8.0, 490.0);
     const MovingFigures f = Score(lines, trajectory, CruiseStartS(trajectory), bound);
-    std::cout << "pan " << pan << " deg, slide 1500 -> 3000 mm at 0.5 m/s: " << f.frames
-              << " frames estimated, " << f.moving << " during the move; per-frame error rms "
-              << f.error_rms_mm << " mm (mean " << f.error_mean_mm << "), per-frame se rms "
-              << f.se_rms_mm << " mm, ratio " << f.error_rms_mm / f.se_rms_mm << "; one-frame CRB rms "
-              << f.crb_rms_mm << " mm, ratio " << f.error_rms_mm / f.crb_rms_mm << "; cruise ("
-              << f.cruise << " frames from " << kCruiseSettleS << " s in): filter v mean "
-              << f.cruise_v_mean << " mm/s (truth 500), v se mean " << f.cruise_v_se_mean
-              << ", |z| max " << f.cruise_z_max << ", outside 3 se " << f.cruise_outside_3se
-              << ", |z| at the cruise's end " << f.cruise_last_z << "\n";
+    PrintFigures(pan, f);
     EXPECT_GE(f.moving, 50);  // about 3.2 s of move at about 50 frames/s
     EXPECT_GE(f.cruise, 30);
     EXPECT_LE(f.error_rms_mm, 1.5 * f.crb_rms_mm);

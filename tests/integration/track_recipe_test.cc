@@ -53,6 +53,41 @@ track:
 // The rows of a track.csv (its header left out).
 int CsvRows(const std::string& path) { return std::max(0, testing::CountLines(path) - 1); }
 
+// The finished run's summary.yaml and track.csv: the emulator cruising at the recipe's speed (the
+// truth's velocity on each cruise: +-500 mm/s, not the rig's 200), the per-frame error's rms during
+// the moves at most 1.5 x the one-frame Cramer-Rao bound, the filter's velocity on each cruise
+// within 3 standard errors of the truth, no frame lost, a row in track.csv for every frame.
+void ExpectEveryFrameScored(const std::string& run) {
+  const YAML::Node s = YAML::LoadFile(run + "/summary.yaml");
+  EXPECT_EQ(s["kind"].as<std::string>(), "track");
+  EXPECT_FALSE(s["cut"].as<bool>());
+  EXPECT_EQ(s["frames"]["lost"].as<int>(), 0) << ReadAll(run + "/summary.yaml");
+  EXPECT_EQ(s["frames"]["wrong_exposure"].as<int>(), 0);
+  EXPECT_GE(s["frames"]["moving"].as<int>(), 100);  // two moves of about 3.2 s at ~50 frames/s
+  const YAML::Node e = s["distance_error_moving"];
+  EXPECT_LE(e["rms_mm"].as<double>(), 1.5 * e["one_frame_bound_rms_mm"].as<double>())
+      << ReadAll(run + "/summary.yaml");
+  EXPECT_TRUE(e["within_goal"].as<bool>());
+  const YAML::Node cruises = s["velocity"]["velocity_on_cruise"];
+  ASSERT_EQ(cruises.size(), 2u) << ReadAll(run + "/summary.yaml");
+  for (std::size_t i = 0; i < cruises.size(); ++i) {
+    SCOPED_TRACE("segment " + std::to_string(i));
+    EXPECT_EQ(cruises[i]["segment"].as<int>(), static_cast<int>(i));
+    // The station cruised at the recipe's speed (the rig's own is 200 mm/s).
+    EXPECT_NEAR(cruises[i]["truth_v_mm_per_s"].as<double>(), i == 0 ? 500.0 : -500.0, 1e-6);
+    EXPECT_GE(cruises[i]["frames"].as<int>(), 30);
+    // The app's within_3se (z_mean <= 3 and z_last <= 3) with the last frame's bound at 4.5, as
+    // that one draw per segment would fail 3 se in 0.5% of runs by chance over the two segments.
+    EXPECT_LE(cruises[i]["z_mean"].as<double>(NAN), 3.0) << ReadAll(run + "/summary.yaml");
+    EXPECT_LE(cruises[i]["z_last"].as<double>(NAN), 4.5) << ReadAll(run + "/summary.yaml");
+  }
+  // track.csv: its header and one row per frame the summary counted.
+  EXPECT_EQ(CsvRows(run + "/track.csv"), s["frames"]["rows"].as<int>());
+  EXPECT_EQ(
+      ReadAll(run + "/track.csv").rfind("frame,camera_frame_id,camera_timestamp_ns,utc_time", 0),
+      0u);
+}
+
 class TrackRecipe : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -67,6 +102,27 @@ class TrackRecipe : public ::testing::Test {
 
   int Run(const std::string& name, const std::vector<std::string>& args, std::string* output) {
     return RunIrdist(args, dir_ + "/" + name + ".log", output, std::chrono::seconds(240));
+  }
+
+  // Ctrl-C during the first move: the station stops, what was taken is kept (its summary cut),
+  // exit 130.
+  void ExpectCtrlCKeepsWhatWasTaken() {
+    const std::string cut = dir_ + "/cut";
+    testing::Child child(
+        {"validate", dir_ + "/track.yaml", "--model", dir_ + "/cal/model.yaml", "--out", cut},
+        dir_ + "/cut.log");
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (child.Running() && CsvRows(cut + "/track.csv") < 60 &&
+           std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    child.Signal(SIGINT);
+    EXPECT_EQ(child.Wait(std::chrono::seconds(60)), 130) << ReadAll(dir_ + "/cut.log");
+    const YAML::Node c = YAML::LoadFile(cut + "/summary.yaml");
+    EXPECT_TRUE(c["cut"].as<bool>());
+    EXPECT_GE(c["frames"]["rows"].as<int>(), 60);
+    EXPECT_EQ(CsvRows(cut + "/track.csv"), c["frames"]["rows"].as<int>());
+    EXPECT_NE(ReadAll(dir_ + "/cut.log").find("not resumable"), std::string::npos);
   }
 
   std::string dir_, rig_;
@@ -102,33 +158,7 @@ TEST_F(TrackRecipe, MovesTheSlideAtTheRecipesSpeedAndScoresEveryFrameAgainstTheT
             0)
       << output;
   std::cout << output;
-  const YAML::Node s = YAML::LoadFile(run + "/summary.yaml");
-  EXPECT_EQ(s["kind"].as<std::string>(), "track");
-  EXPECT_FALSE(s["cut"].as<bool>());
-  EXPECT_EQ(s["frames"]["lost"].as<int>(), 0) << ReadAll(run + "/summary.yaml");
-  EXPECT_EQ(s["frames"]["wrong_exposure"].as<int>(), 0);
-  EXPECT_GE(s["frames"]["moving"].as<int>(), 100);  // two moves of about 3.2 s at ~50 frames/s
-  const YAML::Node e = s["distance_error_moving"];
-  EXPECT_LE(e["rms_mm"].as<double>(), 1.5 * e["one_frame_bound_rms_mm"].as<double>())
-      << ReadAll(run + "/summary.yaml");
-  EXPECT_TRUE(e["within_goal"].as<bool>());
-  const YAML::Node cruises = s["velocity"]["velocity_on_cruise"];
-  ASSERT_EQ(cruises.size(), 2u) << ReadAll(run + "/summary.yaml");
-  for (std::size_t i = 0; i < cruises.size(); ++i) {
-    SCOPED_TRACE("segment " + std::to_string(i));
-    EXPECT_EQ(cruises[i]["segment"].as<int>(), static_cast<int>(i));
-    // The station cruised at the recipe's speed (the rig's own is 200 mm/s).
-    EXPECT_NEAR(cruises[i]["truth_v_mm_per_s"].as<double>(), i == 0 ? 500.0 : -500.0, 1e-6);
-    EXPECT_GE(cruises[i]["frames"].as<int>(), 30);
-    // The app's within_3se (z_mean <= 3 and z_last <= 3) with the last frame's bound at 4.5, as
-    // that one draw per segment would fail 3 se in 0.5% of runs by chance over the two segments.
-    EXPECT_LE(cruises[i]["z_mean"].as<double>(NAN), 3.0) << ReadAll(run + "/summary.yaml");
-    EXPECT_LE(cruises[i]["z_last"].as<double>(NAN), 4.5) << ReadAll(run + "/summary.yaml");
-  }
-  // track.csv: its header and one row per frame the summary counted.
-  EXPECT_EQ(CsvRows(run + "/track.csv"), s["frames"]["rows"].as<int>());
-  EXPECT_EQ(ReadAll(run + "/track.csv").rfind("frame,camera_frame_id,camera_timestamp_ns,utc_time", 0),
-            0u);
+  ASSERT_NO_FATAL_FAILURE(ExpectEveryFrameScored(run));
   // The run folder cannot be resumed: refused, saying so.
   EXPECT_NE(Run("resume", {"validate", dir_ + "/track.yaml", "--model", dir_ + "/cal/model.yaml",
                            "--resume", run},
@@ -136,24 +166,7 @@ TEST_F(TrackRecipe, MovesTheSlideAtTheRecipesSpeedAndScoresEveryFrameAgainstTheT
             0);
   EXPECT_NE(output.find("not resumable"), std::string::npos) << output;
 
-  // Ctrl-C during the first move: the station stops, what was taken is kept (its summary cut),
-  // exit 130.
-  const std::string cut = dir_ + "/cut";
-  testing::Child child({"validate", dir_ + "/track.yaml", "--model", dir_ + "/cal/model.yaml",
-                        "--out", cut},
-                       dir_ + "/cut.log");
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (child.Running() && CsvRows(cut + "/track.csv") < 60 &&
-         std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  child.Signal(SIGINT);
-  EXPECT_EQ(child.Wait(std::chrono::seconds(60)), 130) << ReadAll(dir_ + "/cut.log");
-  const YAML::Node c = YAML::LoadFile(cut + "/summary.yaml");
-  EXPECT_TRUE(c["cut"].as<bool>());
-  EXPECT_GE(c["frames"]["rows"].as<int>(), 60);
-  EXPECT_EQ(CsvRows(cut + "/track.csv"), c["frames"]["rows"].as<int>());
-  EXPECT_NE(ReadAll(dir_ + "/cut.log").find("not resumable"), std::string::npos);
+  ExpectCtrlCKeepsWhatWasTaken();
 
   ASSERT_EQ(Run("off", {"station", "--rig", rig_, "off"}, &output), 0) << output;
   sim.Signal(SIGINT);

@@ -110,6 +110,53 @@ class CameraServerTest : public ::testing::Test {
     return ok;
   }
 
+  // Line1-triggered frames (the acquisition started so), one per exposure, each exposed for the
+  // exposure set before its pulse: its signal the renderer's truth for that exposure (within 2%),
+  // its record that exposure in Mono12.
+  void ExpectLine1FramesCarryTheirExposures() {
+    GError* error = nullptr;
+    const Renderer truth_renderer(physics_);
+    PoseState pose;
+    pose.slide_mm = 2000;
+    pose.bias_ma = 500;
+    const double k = physics_.sensor.system_gain_dn_per_e;
+    for (double exposure_us : {8000.0, 30000.0, 12000.0, 36000.0, 20000.0, 32000.0}) {
+      SCOPED_TRACE("exposure " + std::to_string(exposure_us) + " us");
+      arv_camera_set_exposure_time(camera_.get(), exposure_us, &error);
+      ASSERT_NO_GERROR(error);
+      world_.FireTrigger();
+      double sum = 0.0;
+      ASSERT_TRUE(Pop(2000000, [&](ArvBuffer* b) { sum = SignalSum(b); }))
+          << "no frame for the trigger at " << exposure_us << " us";
+      const double expected =
+          k * truth_renderer.Describe(pose, exposure_us * 1e-6, PixelFormat::kMono12).signal_e;
+      EXPECT_NEAR(sum / expected, 1.0, 0.02) << "exposure " << exposure_us << " us";
+      const std::vector<FrameRecord> records = server_->RecentFrames();
+      ASSERT_FALSE(records.empty());
+      EXPECT_EQ(records.back().exposure_us, exposure_us);
+      EXPECT_EQ(records.back().format, "Mono12");
+    }
+  }
+
+  // Software-triggered Mono12 frames of the 256 x 256 region at (512, 384), 8 ms each: the stream
+  // created and the acquisition started.
+  void StartSoftwareTriggeredMono12Region() {
+    GError* error = nullptr;
+    arv_camera_set_pixel_format_from_string(camera_.get(), "Mono12", &error);
+    ASSERT_NO_GERROR(error);
+    arv_camera_set_region(camera_.get(), 512, 384, 256, 256, &error);
+    ASSERT_NO_GERROR(error);
+    arv_camera_set_exposure_time(camera_.get(), 8000.0, &error);
+    ASSERT_NO_GERROR(error);
+    arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
+    ASSERT_NO_GERROR(error);
+    arv_camera_set_string(camera_.get(), "TriggerSource", "Software", &error);
+    ASSERT_NO_GERROR(error);
+    CreateStream();
+    arv_camera_start_acquisition(camera_.get(), &error);
+    ASSERT_NO_GERROR(error);
+  }
+
   RigPhysics physics_ = TestPhysics();
   World world_{physics_.time_scale};
   std::unique_ptr<CameraServer> server_;
@@ -187,26 +234,7 @@ TEST_F(CameraServerTest, TriggeredFramesCarryTheExposureSetForThem) {
   arv_camera_start_acquisition(camera_.get(), &error);
   ASSERT_NO_GERROR(error);
 
-  const Renderer truth_renderer(physics_);
-  PoseState pose;
-  pose.slide_mm = 2000;
-  pose.bias_ma = 500;
-  const double k = physics_.sensor.system_gain_dn_per_e;
-  for (double exposure_us : {8000.0, 30000.0, 12000.0, 36000.0, 20000.0, 32000.0}) {
-    arv_camera_set_exposure_time(camera_.get(), exposure_us, &error);
-    ASSERT_NO_GERROR(error);
-    world_.FireTrigger();
-    double sum = 0.0;
-    ASSERT_TRUE(Pop(2000000, [&](ArvBuffer* b) { sum = SignalSum(b); }))
-        << "no frame for the trigger at " << exposure_us << " us";
-    const double expected =
-        k * truth_renderer.Describe(pose, exposure_us * 1e-6, PixelFormat::kMono12).signal_e;
-    EXPECT_NEAR(sum / expected, 1.0, 0.02) << "exposure " << exposure_us << " us";
-    const std::vector<FrameRecord> records = server_->RecentFrames();
-    ASSERT_FALSE(records.empty());
-    EXPECT_EQ(records.back().exposure_us, exposure_us);
-    EXPECT_EQ(records.back().format, "Mono12");
-  }
+  ASSERT_NO_FATAL_FAILURE(ExpectLine1FramesCarryTheirExposures());
   EXPECT_EQ(server_->LinePulsesAccepted(), 6u);
 
   // A Line1 pulse does nothing while the source is Software; the software trigger does.
@@ -330,6 +358,14 @@ TEST_F(CameraServerTest, ResendsLostPacketsOnRequest) {
   EXPECT_GT(server_->Stats().packets_resent, 0u);
 }
 
+// Pixel n of a Mono12 frame's data (two bytes, little-endian) or of a Mono12p one's (PFNC: an
+// LSB-first 12-bit stream, two pixels in three bytes).
+int Mono12PixelValue(const std::uint8_t* b, int n, bool packed) {
+  if (!packed) return b[2 * n] | (b[2 * n + 1] << 8);
+  if (n % 2 == 0) return b[3 * (n / 2)] | ((b[3 * (n / 2) + 1] & 0x0f) << 8);
+  return (b[3 * (n / 2) + 1] >> 4) | (b[3 * (n / 2) + 2] << 4);
+}
+
 // Mono12p (PFNC): each frame is the Mono12 frame's values as an LSB-first 12-bit stream, two
 // pixels in three bytes: unpacked by the layout, the packed frame matches a Mono12 frame of the
 // same scene.
@@ -361,14 +397,7 @@ TEST_F(CameraServerTest, Mono12pFramesAreTheMono12ValuesPackedLsbFirst) {
         EXPECT_EQ(static_cast<std::uint32_t>(arv_buffer_get_image_pixel_format(buffer)),
                   packed ? 0x010c0047u : 0x01100005u);
         for (int n = 0; n < 96 * 64; ++n) {
-          int value = 0;
-          if (!packed) {
-            value = b[2 * n] | (b[2 * n + 1] << 8);
-          } else if (n % 2 == 0) {
-            value = b[3 * (n / 2)] | ((b[3 * (n / 2) + 1] & 0x0f) << 8);
-          } else {
-            value = (b[3 * (n / 2) + 1] >> 4) | (b[3 * (n / 2) + 2] << 4);
-          }
+          const int value = Mono12PixelValue(b, n, packed);
           EXPECT_LE(value, 4095);
           sum.at<double>(n / 96, n % 96) += value;
         }
@@ -583,6 +612,21 @@ Width BlobWidth(ArvBuffer* buffer, int reach_px, double gain_dn_per_e) {
   return {2.0 * std::sqrt(m2), std::sqrt(var_m2 / m2)};  // d(2 sqrt(m2)) = d(m2) / sqrt(m2)
 }
 
+// A frame taken during the slide's move: its block id, its GigE timestamp and its blob's width.
+struct Shot {
+  guint64 frame_id, timestamp_ns;
+  Width width;
+};
+
+// The width (px) the renderer gives the blob of an 8 ms Mono12 frame at 500 mA at the frame's
+// recorded mid-exposure slide position and junction rise.
+double MidExposureWidthPx(const Renderer& truth_renderer, const FrameRecord& record) {
+  PoseState mid;
+  mid.slide_mm = record.slide_mm;
+  mid.bias_ma = 500;
+  return truth_renderer.Describe(mid, 0.008, PixelFormat::kMono12, record.junction_rise_k).width_px;
+}
+
 // docs/virtual-rig.md "Truth of a moving target": frames taken while the slide moves 1500 ->
 // 3000 mm at 0.5 m/s carry the IRED's pose at the middle of their exposure (the profile written
 // out by hand), their GigE timestamp is the exposure's start on the world's clock in ns, the
@@ -598,24 +642,8 @@ TEST_F(CameraServerTest, FramesDuringASlideMoveCarryTheirMidExposureTruth) {
   ASSERT_EQ(station.Do("MOVE 150000,0,0"), "OK");
   ASSERT_EQ(station.Do("SOUR:CURR 50000"), "OK");  // 500 mA (the power-up turned it off)
   ASSERT_TRUE(station.WaitFor("IDLE", std::chrono::seconds(30)));
+  ASSERT_NO_FATAL_FAILURE(StartSoftwareTriggeredMono12Region());
   GError* error = nullptr;
-  arv_camera_set_pixel_format_from_string(camera_.get(), "Mono12", &error);
-  ASSERT_NO_GERROR(error);
-  arv_camera_set_region(camera_.get(), 512, 384, 256, 256, &error);
-  ASSERT_NO_GERROR(error);
-  arv_camera_set_exposure_time(camera_.get(), 8000.0, &error);
-  ASSERT_NO_GERROR(error);
-  arv_camera_set_string(camera_.get(), "TriggerMode", "On", &error);
-  ASSERT_NO_GERROR(error);
-  arv_camera_set_string(camera_.get(), "TriggerSource", "Software", &error);
-  ASSERT_NO_GERROR(error);
-  CreateStream();
-  arv_camera_start_acquisition(camera_.get(), &error);
-  ASSERT_NO_GERROR(error);
-  struct Shot {
-    guint64 frame_id, timestamp_ns;
-    Width width;
-  };
   std::vector<Shot> shots;
   double move_s = 0.0;
   ASSERT_EQ(station.Do("MOVE 300000,0,0", &move_s), "OK");
@@ -646,11 +674,7 @@ TEST_F(CameraServerTest, FramesDuringASlideMoveCarryTheirMidExposureTruth) {
     const TrajectoryPoint looked_up = MidExposure(logged, shot.timestamp_ns, 8000.0);
     EXPECT_NEAR(looked_up.slide_mm, record->slide_mm, 1e-5) << "tau " << tau;
     EXPECT_NEAR(looked_up.slide_mm_s, record->slide_mm_s, 1e-5) << "tau " << tau;
-    PoseState mid;
-    mid.slide_mm = record->slide_mm;
-    mid.bias_ma = 500;
-    const double expected_px =
-        truth_renderer.Describe(mid, 0.008, PixelFormat::kMono12, record->junction_rise_k).width_px;
+    const double expected_px = MidExposureWidthPx(truth_renderer, *record);
     EXPECT_NEAR(shot.width.px, expected_px, 4.0 * shot.width.sd_px) << "tau " << tau;
     if (tau > 0.5 && tau < 3.0) ++cruising;
     std::printf("tau %.4f slide %.3f mm width %.4f +- %.4f px expected %.4f z %.2f\n", tau,

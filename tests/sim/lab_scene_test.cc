@@ -9,12 +9,12 @@
 
 #include <gtest/gtest.h>
 
+#include "base/pi.h"
 #include "sim/renderer.h"
 
 namespace irdist::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 
 PoseState Pose(double slide_mm, double pan_deg, double tilt_deg, double bias_ma = 300.0) {

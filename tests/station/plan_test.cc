@@ -10,11 +10,11 @@
 #include <vector>
 
 #include "base/check.h"
+#include "base/pi.h"
 
 namespace irdist {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 double Cos(double deg) { return std::cos(deg * kPi / 180.0); }
 
 TEST(PlanTest, DefaultsAreValid) {
@@ -282,7 +282,10 @@ TEST(PlanTest, RepeatsStayAtThePose) {
   EXPECT_EQ(plan.summary.moves, 2);  // to the first pose, then one pan move
 }
 
-TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
+// The slide at 1000 and 1500 mm, the pan at 0 and 10 deg, one current (500 mA) and one bracket
+// (8 ms reference, 30 ms measurement) per pose; 200 ms of settling after a move, 500 ms after a
+// current change.
+SweepSpec TwoByTwoSweep() {
   SweepSpec spec;
   spec.slide_mm.values = {1000, 1500};
   spec.angle_deg.values = {0, 10};
@@ -292,6 +295,13 @@ TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
   spec.bracket.t_meas_ms = {30.0};
   spec.settle.after_move_ms = 200.0;
   spec.settle.after_current_ms = 500.0;
+  return spec;
+}
+
+// Round numbers for hand-computed trapezoids: the slide at 200 mm/s and 400 mm/s^2, settling in
+// 100 ms, homed at 1000 mm; the pan and the tilt at 30 deg/s and 60 deg/s^2, settling in 50 ms;
+// 25 ms of readout, 5 ms of overhead per frame and 20 ms per pose.
+MotionModel HandComputableMotion() {
   MotionModel motion;
   motion.slide = {200.0, 400.0, 100.0, 1000.0};  // homing leaves the slide at the first pose
   motion.pan = {30.0, 60.0, 50.0};
@@ -299,6 +309,12 @@ TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
   motion.readout_ms = 25.0;
   motion.frame_overhead_ms = 5.0;
   motion.pose_overhead_ms = 20.0;
+  return motion;
+}
+
+TEST(PlanTest, DurationMatchesHandComputedTrapezoids) {
+  const SweepSpec spec = TwoByTwoSweep();
+  MotionModel motion = HandComputableMotion();
   const Plan plan = MakePlan(spec, motion);
   // Poses: (1000, 0) (1000, 10) (1500, 10) (1500, 0).
   ASSERT_EQ(plan.poses.size(), 4u);

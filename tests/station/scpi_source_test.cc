@@ -69,34 +69,15 @@ struct SourceMeter {
     } else if (line == ":OUTP OFF") {
       output = false;
     } else if (line == ":OUTP?") {
-      reply = output ? "1" : "0";
-      if (flipped_output > 0) {
-        --flipped_output;
-        reply = output ? "0" : "1";
-      }
+      reply = OutputReply();
     } else if (line == ":SOUR:CURR:LEV?") {
-      char buf[40];
-      std::snprintf(buf, sizeof(buf), "%+.6E", level_a);
-      reply = buf;
+      reply = LevelReply();
     } else if (line == ":READ?") {
-      double amps = Compliance() ? (load_ohm <= 0 ? 0.0 : compliance_v / load_ohm) : level_a;
-      if (wrong_readings > 0) {
-        --wrong_readings;
-        amps += 0.1;
-      }
-      char buf[160];
-      std::snprintf(buf, sizeof(buf), "%+.6E,%+.6E,+9.910000E+37,+1.234560E+02,%+.6E", Volts(),
-                    amps, Compliance() ? 8.0 : 0.0);
-      reply = buf;
+      reply = ReadReply();
     } else if (line == ":SENS:VOLT:PROT:TRIP?") {
       reply = Compliance() ? "1" : "0";
     } else if (line == ":SYST:ERR?") {
-      if (errors.empty()) {
-        reply = "0,\"No error\"";
-      } else {
-        reply = errors.front();
-        errors.erase(errors.begin());
-      }
+      reply = NextError();
     } else {
       errors.push_back("-113,\"Undefined header\"");
     }
@@ -106,6 +87,39 @@ struct SourceMeter {
       return {};
     }
     return {reply};
+  }
+  // :OUTP?: the output's state, its bit flipped while flipped_output lasts.
+  std::string OutputReply() {
+    if (flipped_output > 0) {
+      --flipped_output;
+      return output ? "0" : "1";
+    }
+    return output ? "1" : "0";
+  }
+  // :SOUR:CURR:LEV?: the level set, in amperes.
+  std::string LevelReply() const {
+    char buf[40];
+    std::snprintf(buf, sizeof(buf), "%+.6E", level_a);
+    return buf;
+  }
+  // :READ?: "V,I,R,T,STAT", the current's digit damaged while wrong_readings lasts.
+  std::string ReadReply() {
+    double amps = Compliance() ? (load_ohm <= 0 ? 0.0 : compliance_v / load_ohm) : level_a;
+    if (wrong_readings > 0) {
+      --wrong_readings;
+      amps += 0.1;
+    }
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "%+.6E,%+.6E,+9.910000E+37,+1.234560E+02,%+.6E", Volts(), amps,
+                  Compliance() ? 8.0 : 0.0);
+    return buf;
+  }
+  // :SYST:ERR?: the oldest error of the queue, taken off it; 0,"No error" when it is empty.
+  std::string NextError() {
+    if (errors.empty()) return "0,\"No error\"";
+    const std::string error = errors.front();
+    errors.erase(errors.begin());
+    return error;
   }
   void PowerCycle() {
     function = "VOLT";

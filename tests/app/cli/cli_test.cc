@@ -485,16 +485,15 @@ TEST(CliSafety, TimeScaleZeroIsRefusedInPlainNumbers) {
   }
 }
 
-// Flags that would reach an internal check (bracket.cc, station_client.cc, serial_transport.cc)
-// or a raw filesystem error are usage errors naming the flag and the valid range; nothing runs.
-TEST(CliTest, OutOfRangeFlagsNameTheFlagAndTheRangeAndRunNothing) {
-  const std::string file = ::testing::TempDir() + "cli_test_file_" + std::to_string(::getpid());
-  { std::ofstream(file) << "x"; }
-  struct Bad {
-    std::vector<std::string> words;
-    std::string message;
-  };
-  const std::vector<Bad> bad = {
+// A command line that must be refused, and what its usage error must say.
+struct BadCommandLine {
+  std::vector<std::string> words;
+  std::string message;
+};
+
+// Flags out of their range, and an --out that names `file`, a file.
+std::vector<BadCommandLine> OutOfRangeCommandLines(const std::string& file) {
+  return {
       {{"measure", "--model", "m.yaml", "--t-meas-ms", "-5"},
        "--t-meas-ms -5 is outside (0, 100000] ms"},
       {{"measure", "--model", "m.yaml", "--t-meas-ms", "30,0"}, "--t-meas-ms 0 is outside"},
@@ -519,13 +518,21 @@ TEST(CliTest, OutOfRangeFlagsNameTheFlagAndTheRangeAndRunNothing) {
       {{"measure", "--model", "m.yaml", "--out", file}, "is a file, not a folder"},
       {{"measure", "--model", "m.yaml", "--out", file + "/sub"}, "is a file, not a folder"},
   };
+}
+
+// Flags that would reach an internal check (bracket.cc, station_client.cc, serial_transport.cc)
+// or a raw filesystem error are usage errors naming the flag and the valid range; nothing runs.
+TEST(CliTest, OutOfRangeFlagsNameTheFlagAndTheRangeAndRunNothing) {
+  const std::string file = ::testing::TempDir() + "cli_test_file_" + std::to_string(::getpid());
+  { std::ofstream(file) << "x"; }
+  const std::vector<BadCommandLine> bad = OutOfRangeCommandLines(file);
   int called = 0;
   Handlers h;
   h.measure = [&called](const MeasureArgs&, CommandIo) { ++called; };
   h.snap = [&called](const SnapArgs&, CommandIo) { ++called; };
   h.view = [&called](const ViewArgs&, CommandIo) { ++called; };
   h.station_test = [&called](const StationTestArgs&, CommandIo) { ++called; };
-  for (const Bad& b : bad) {
+  for (const BadCommandLine& b : bad) {
     SCOPED_TRACE(b.message);
     try {
       RunWords(b.words, h);

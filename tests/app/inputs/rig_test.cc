@@ -238,8 +238,9 @@ TEST(RigTest, PackedPixelFormatsAreAccepted) {
   }
 }
 
-TEST(RigTest, EveryKeyIsRead) {
-  const Rig rig = ParseRig(R"(name: lab
+// A hardware rig's file for EveryKeyIsRead: its camera's and station's keys set, each to be read
+// back (the pan's acceleration left to its default).
+constexpr char kEveryKeyRig[] = R"(name: lab
 kind: hardware
 camera:
   id: "192.168.1.20"
@@ -266,8 +267,10 @@ station:
     axes_move_together: false
     frame_overhead_ms: 7
     pose_overhead_ms: 90
-)",
-                           "lab.yaml");
+)";
+
+TEST(RigTest, EveryKeyIsRead) {
+  const Rig rig = ParseRig(kEveryKeyRig, "lab.yaml");
   EXPECT_EQ(rig.name, "lab");
   EXPECT_EQ(rig.camera.id, "192.168.1.20");
   EXPECT_EQ(rig.camera.pixel_format, "Mono16");

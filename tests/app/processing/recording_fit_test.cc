@@ -94,6 +94,43 @@ TEST_F(SmallRecordingTest, FitRefusesARecordingTooSmallForTheModels) {
   EXPECT_FALSE(fs::exists(dir_ / "model.yaml"));
 }
 
+// A 12-bit frame as a compressive camera gives it: y = x - a x^2 / 4095 on each value, rounded
+// (sim/sensor.cc's form).
+cv::Mat Compress(const cv::Mat& linear, double a) {
+  cv::Mat out(linear.size(), CV_16UC1);
+  for (int y = 0; y < linear.rows; ++y) {
+    for (int x = 0; x < linear.cols; ++x) {
+      const double v = linear.at<std::uint16_t>(y, x);
+      out.at<std::uint16_t>(y, x) = static_cast<std::uint16_t>(std::lround(v - a * v * v / 4095.0));
+    }
+  }
+  return out;
+}
+
+// A complete recording at `path` of four brackets at 1800 mm and 500 mA, spots of sigma 3, 4, 5
+// and 6 px, each an 8 ms reference and measurements at 30, 32, 34 and 36 ms, every frame
+// compressed by Compress(frame, a).
+void WriteCompressedBrackets(const std::string& path, const RecordingHeader& header, double a) {
+  auto writer = RecordingWriter::Open(path, header);
+  int bracket = 0;
+  for (double sigma_px : {3.0, 4.0, 5.0, 6.0}) {
+    const double exposures[] = {8.0, 30.0, 32.0, 34.0, 36.0};
+    for (int k = 0; k < 5; ++k) {
+      FrameRecord r;
+      r.bracket_id = bracket;
+      r.frame_in_bracket = k;
+      r.bracket_size = 5;
+      r.role = k == 0 ? FrameRole::kReference : FrameRole::kMeasurement;
+      r.requested_exposure_us = r.actual_exposure_us = exposures[k] * 1000.0;
+      r.slide_mm = 1800.0;
+      r.bias_ma_set = 500.0;
+      writer->Append(Compress(Spot(exposures[k], sigma_px), a), r);
+    }
+    ++bracket;
+  }
+  writer->Close(Completion::kComplete);
+}
+
 // A recording whose recipe asks for the camera response, made with a compressive camera
 // (y = x - a x^2 / 4095 on the 12-bit value, sim/sensor.cc's form): the recovery reads the
 // brackets and returns the camera's inverse, and the features then use it on every pixel.
@@ -102,42 +139,12 @@ TEST(OfflineResponse, RecoversTheCurveFromTheRecordingsBrackets) {
       fs::temp_directory_path() / ("irdist-offline-response-" + std::to_string(getpid()));
   fs::remove_all(dir);
   const double a = 0.1;
-  auto compress = [a](const cv::Mat& linear) {
-    cv::Mat out(linear.size(), CV_16UC1);
-    for (int y = 0; y < linear.rows; ++y) {
-      for (int x = 0; x < linear.cols; ++x) {
-        const double v = linear.at<std::uint16_t>(y, x);
-        out.at<std::uint16_t>(y, x) =
-            static_cast<std::uint16_t>(std::lround(v - a * v * v / 4095.0));
-      }
-    }
-    return out;
-  };
   RecordingHeader header;
   header.bit_depth = 12;
   header.pixel_format = "Mono12";
   header.recipe_path = "recover.yaml";
   header.recipe_text = "after: fit\ncalibration:\n  camera_response: recover\n";
-  {
-    auto writer = RecordingWriter::Open((dir / "recording").string(), header);
-    int bracket = 0;
-    for (double sigma_px : {3.0, 4.0, 5.0, 6.0}) {
-      const double exposures[] = {8.0, 30.0, 32.0, 34.0, 36.0};
-      for (int k = 0; k < 5; ++k) {
-        FrameRecord r;
-        r.bracket_id = bracket;
-        r.frame_in_bracket = k;
-        r.bracket_size = 5;
-        r.role = k == 0 ? FrameRole::kReference : FrameRole::kMeasurement;
-        r.requested_exposure_us = r.actual_exposure_us = exposures[k] * 1000.0;
-        r.slide_mm = 1800.0;
-        r.bias_ma_set = 500.0;
-        writer->Append(compress(Spot(exposures[k], sigma_px)), r);
-      }
-      ++bracket;
-    }
-    writer->Close(Completion::kComplete);
-  }
+  WriteCompressedBrackets((dir / "recording").string(), header, a);
   const RecordingReader reader((dir / "recording").string());
   EXPECT_TRUE(RecipeAsksForResponse(reader));
   std::ostringstream out;
