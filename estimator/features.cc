@@ -48,30 +48,43 @@ struct Moments {
   double radius = 0.0, background = 0.0;  // kAperture: the aperture and its background
 };
 
+// The weighted sums of the moments, of coordinates as given (absolute, or from a centre).
+struct MomentSums {
+  double w = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
+  void Add(double weight, double x, double y) {
+    w += weight;
+    sx += weight * x;
+    sy += weight * y;
+    sxx += weight * x * x;
+    syy += weight * y * y;
+    sxy += weight * x * y;
+  }
+  // The weight, and the central second moments into *m with the mean in (*mx, *my); false (the
+  // weight alone set) when the weight is not positive.
+  bool Central(Moments* m, double* mx, double* my) const {
+    m->weight = w;
+    if (w <= 0.0) return false;
+    *mx = sx / w;
+    *my = sy / w;
+    m->sxx = sxx / w - *mx * *mx;
+    m->syy = syy / w - *my * *my;
+    m->sxy = sxy / w - *mx * *my;
+    return true;
+  }
+};
+
 Moments WeightedMoments(const cv::Mat& image, const cv::Rect& rect, double background,
                         double threshold) {
-  Moments m;
-  double sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
+  MomentSums sums;
   for (int y = rect.y; y < rect.y + rect.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
     for (int x = rect.x; x < rect.x + rect.width; ++x) {
       const double g = row[x];
-      if (g <= threshold) continue;
-      const double w = g - background;
-      m.weight += w;
-      sx += w * x;
-      sy += w * y;
-      sxx += w * x * x;
-      syy += w * y * y;
-      sxy += w * x * y;
+      if (!(g <= threshold)) sums.Add(g - background, x, y);
     }
   }
-  if (m.weight <= 0.0) return m;
-  m.cx = sx / m.weight;
-  m.cy = sy / m.weight;
-  m.sxx = sxx / m.weight - m.cx * m.cx;
-  m.syy = syy / m.weight - m.cy * m.cy;
-  m.sxy = sxy / m.weight - m.cx * m.cy;
+  Moments m;
+  sums.Central(&m, &m.cx, &m.cy);
   return m;
 }
 
@@ -93,32 +106,22 @@ Moments ApertureMoments(const cv::Mat& image, const cv::Rect& rect, double cx, d
     }
   }
   const double background = n_outside >= 64 ? outside / n_outside : fallback_background;
-  Moments m;
-  double sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
+  MomentSums sums;
   for (int y = rect.y; y < rect.y + rect.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
     const double dy = y - cy;
     for (int x = rect.x; x < rect.x + rect.width; ++x) {
       const double dx = x - cx;
-      if (dx * dx + dy * dy > r_in2) continue;
-      const double w = row[x] - background;
-      m.weight += w;
-      sx += w * dx;
-      sy += w * dy;
-      sxx += w * dx * dx;
-      syy += w * dy * dy;
-      sxy += w * dx * dy;
+      if (!(dx * dx + dy * dy > r_in2)) sums.Add(row[x] - background, dx, dy);
     }
   }
-  if (m.weight <= 0.0) return m;
+  Moments m;
+  double mx = 0.0, my = 0.0;
+  if (!sums.Central(&m, &mx, &my)) return m;
   m.radius = radius;
   m.background = background;
-  const double mx = sx / m.weight, my = sy / m.weight;
   m.cx = cx + mx;
   m.cy = cy + my;
-  m.sxx = sxx / m.weight - mx * mx;
-  m.syy = syy / m.weight - my * my;
-  m.sxy = sxy / m.weight - mx * my;
   return m;
 }
 
