@@ -145,7 +145,7 @@ class FeatureWorkers {
 // estimated with the playback path.
 class Session {
  public:
-  Session(const MeasureArgs& args, const CalibrationModel& model, CommandIo io)
+  Session(const MeasureArgs& args, const CalibrationModel& model, CommandIo io, bool quiet_rig)
       : args_(args), model_(model), truth_(TruthOf(args.at)) {
     const MeasureBracket bracket = BracketFor(args, model);
     LiveCameraOptions options;
@@ -156,7 +156,7 @@ class Session {
     options.longest_exposure_us =
         *std::max_element(bracket.exposures_us.begin(), bracket.exposures_us.end());
     options.buffer_count = static_cast<int>(2 * bracket.exposures_us.size() + 4);
-    options.quiet = args.json;
+    options.quiet = args.json || quiet_rig;
     live_ = std::make_unique<LiveCamera>(options, io.err);
     CheckModel(io);
     geometry_ = GeometryOfRigText(ReadRigText(), live_->rig_path());
@@ -382,8 +382,8 @@ struct MeasureSession::Impl {
 };
 
 MeasureSession::MeasureSession(const MeasureArgs& args, const CalibrationModel& model,
-                               CommandIo io)
-    : impl_(new Impl{Session(args, model, io)}) {}
+                               CommandIo io, bool quiet_rig)
+    : impl_(new Impl{Session(args, model, io, quiet_rig)}) {}
 MeasureSession::~MeasureSession() = default;
 MeasureSample MeasureSession::Next(double time_s) { return impl_->session.Next(time_s); }
 std::string MeasureSession::StopReason() const { return impl_->session.StopReason(); }

@@ -33,7 +33,10 @@ class LiveCamera;  // app/live/live_camera.h
 class MeasureSession {
  public:
   // `args` and `model` must outlive the session. Throws CameraError, ModelMismatchError, ...
-  MeasureSession(const MeasureArgs& args, const CalibrationModel& model, CommandIo io);
+  // quiet_rig: no progress from the camera and the station on io.err, as with --json (`irdist
+  // view` measures under its own window).
+  MeasureSession(const MeasureArgs& args, const CalibrationModel& model, CommandIo io,
+                 bool quiet_rig = false);
   ~MeasureSession();
   MeasureSession(const MeasureSession&) = delete;
   MeasureSession& operator=(const MeasureSession&) = delete;

@@ -210,8 +210,7 @@ void RunView(const ViewArgs& args, CommandIo io) {
     measure.rig = args.rig;
     measure.at = args.at;
     measure.time_scale = args.time_scale;
-    measure.json = true;  // no progress chatter from the rig on stderr
-    MeasureSession session(measure, model, io);
+    MeasureSession session(measure, model, io, /*quiet_rig=*/true);
     ViewSource source(session.live(), args.exposure_ms, &session, &model);
     ViewLoop(source, session.bit_depth(), args, io.out);
     source.SetWholeSensor(false);

@@ -1,7 +1,6 @@
 #include "app/processing/bracket_estimates.h"
 
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 
 #include "acquisition/recording_reader.h"
@@ -440,10 +439,9 @@ std::string MotionWarning(int moving, int brackets) {
          "settles after each move), or discard those estimates";
 }
 
-std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
-                                           const FeatureMap& features,
-                                           const CalibrationModel& model) {
-  std::vector<EstimateRow> all;
+RecordingEstimates EstimateRecording(const RecordingReader& reader, const FeatureMap& features,
+                                     const CalibrationModel& model) {
+  RecordingEstimates out;
   HealthCheck health;
   const CameraGeometry geometry = GeometryOfRecording(reader);
   int brackets = 0, moving = 0;
@@ -454,23 +452,23 @@ std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
       fingerprint_checked = true;
       const std::string warning =
           OpticsFingerprintWarning(model, rows.health, rows.i0_free.front().d_mm);
-      if (!warning.empty()) std::fprintf(stderr, "%s\n", warning.c_str());
+      if (!warning.empty()) out.warnings.push_back(warning);
     }
     if (rows.health.flagged && !health.flagged) health = rows.health;
     brackets += rows.i0_free.empty() ? 0 : 1;
     moving += rows.motion.moving ? 1 : 0;
     const std::vector<EstimateRow> flat = FlattenRows(rows);
-    all.insert(all.end(), flat.begin(), flat.end());
+    out.rows.insert(out.rows.end(), flat.begin(), flat.end());
   }
   if (health.flagged) {  // once per recording
-    std::fprintf(stderr, "warning: calibration health: %s (estimates.csv column health).\n",
-                 health.Advice().c_str());
+    out.warnings.push_back("warning: calibration health: " + health.Advice() +
+                           " (estimates.csv column health).");
   }
   if (moving > 0) {
-    std::fprintf(stderr, "warning: %s (estimates.csv columns motion, spread_mm).\n",
-                 MotionWarning(moving, brackets).c_str());
+    out.warnings.push_back("warning: " + MotionWarning(moving, brackets) +
+                           " (estimates.csv columns motion, spread_mm).");
   }
-  return all;
+  return out;
 }
 
 }  // namespace irdist

@@ -58,9 +58,14 @@ std::string MotionWarning(int moving, int brackets);
 
 // Estimates of every complete bracket: method "i0_free" (joint row dt_ms = 0, then one row per
 // t_n) and "geometric" (the mean over the bracket's measurement frames, dt_ms = 0). Ground truth
-// from the recording's rows (slide_mm, theta_deg, bias_ma_set).
-std::vector<EstimateRow> EstimateRecording(const RecordingReader& reader,
-                                           const FeatureMap& features,
-                                           const CalibrationModel& model);
+// from the recording's rows (slide_mm, theta_deg, bias_ma_set). The recording's warnings, each
+// once (other optics than the model's, the calibration's health, brackets taken while moving),
+// as lines for the caller's diagnostics stream.
+struct RecordingEstimates {
+  std::vector<EstimateRow> rows;
+  std::vector<std::string> warnings;
+};
+RecordingEstimates EstimateRecording(const RecordingReader& reader, const FeatureMap& features,
+                                     const CalibrationModel& model);
 
 }  // namespace irdist

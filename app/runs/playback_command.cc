@@ -25,13 +25,17 @@ bool HasGroundTruth(const std::vector<EstimateRow>& rows) {
   return false;
 }
 
-// estimates.csv of a recording's brackets, and with ground truth summary.yaml and report/.
+// estimates.csv of a recording's brackets, and with ground truth summary.yaml and report/; the
+// recording's warnings on io.err.
 std::vector<EstimateRow> WritePlaybackEstimates(const RecordingReader& reader,
                                                 const FeatureMap& features,
                                                 const CalibrationModel& model,
                                                 const PlaybackArgs& args,
-                                                const std::string& out_dir, std::ostream& out) {
-  std::vector<EstimateRow> rows = EstimateRecording(reader, features, model);
+                                                const std::string& out_dir, CommandIo io) {
+  RecordingEstimates estimates = EstimateRecording(reader, features, model);
+  for (const std::string& warning : estimates.warnings) io.err << warning << "\n";
+  std::vector<EstimateRow>& rows = estimates.rows;
+  std::ostream& out = io.out;
   if (HasGroundTruth(rows)) {
     WriteValidation(out_dir, rows,
                     {{"recipe", reader.header().recipe_path},
@@ -80,7 +84,7 @@ void RunPlayback(const PlaybackArgs& args, CommandIo io) {
     features = RecordingFeatures(reader, options, {}, model ? BlobFitModelOf(*model) : nullptr);
     WriteFeaturesCsv(out_dir + "/features.csv", reader.rows(), features);
     io.out << "Features: " << out_dir << "/features.csv (" << features.size() << " frames)\n";
-    if (model) rows = WritePlaybackEstimates(reader, features, *model, args, out_dir, io.out);
+    if (model) rows = WritePlaybackEstimates(reader, features, *model, args, out_dir, io);
   });
   if (args.show) ShowPlayback(reader, features, rows);
 }

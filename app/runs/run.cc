@@ -381,7 +381,7 @@ void RunRecipe(const RunRequest& request, CommandIo io) {
                         {{"recipe", recipe.path},
                          {"model", request.model_path},
                          {"recording", recorded.dir + "/recording"}},
-                        recorded.cache, io.out);
+                        recorded.cache, io);
     }
   });
   io.out << "Run folder: " << recorded.dir << "\n";

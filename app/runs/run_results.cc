@@ -96,13 +96,15 @@ void ProcessCalibration(const std::string& run_dir, const FeatureOptions& option
 
 void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,
                        const std::map<std::string, std::string>& context, const FeatureMap& cache,
-                       std::ostream& out) {
+                       CommandIo io) {
   RequireCleanRecording(run_dir + "/recording");
   const RecordingReader reader(run_dir + "/recording");
   const FeatureMap features =
       RecordingFeatures(reader, model.features, cache, BlobFitModelOf(model));
   WriteFeaturesCsv(run_dir + "/features.csv", reader.rows(), features);
-  WriteValidation(run_dir, EstimateRecording(reader, features, model), context, out);
+  const RecordingEstimates estimates = EstimateRecording(reader, features, model);
+  for (const std::string& warning : estimates.warnings) io.err << warning << "\n";
+  WriteValidation(run_dir, estimates.rows, context, io.out);
 }
 
 }  // namespace irdist

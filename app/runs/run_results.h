@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "app/inputs/command_args.h"  // CommandIo
 #include "app/processing/frame_features.h"
 #include "app/processing/validation_summary.h"
 #include "estimator/features.h"
@@ -40,9 +41,10 @@ void ProcessRecordingOnly(const std::string& run_dir, const FeatureOptions& opti
 // keep_model: model.yaml even when the fit fails its fitness (recording_fit.h FitRecording).
 void ProcessCalibration(const std::string& run_dir, const FeatureOptions& options,
                         const FeatureMap& cache, std::ostream& out, bool keep_model = false);
+// The recording's warnings (bracket_estimates.h EstimateRecording) go to io.err.
 void ProcessValidation(const std::string& run_dir, const CalibrationModel& model,
                        const std::map<std::string, std::string>& context, const FeatureMap& cache,
-                       std::ostream& out);
+                       CommandIo io);
 
 // Writes estimates.csv, summary.yaml and report/ into `dir`; prints the summary's BriefReport.
 ValidationSummary WriteValidation(const std::string& dir, const std::vector<EstimateRow>& rows,

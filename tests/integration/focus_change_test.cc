@@ -200,6 +200,11 @@ TEST_F(FocusChange, ABlurThirtyPercentLargerIsMeasuredThroughAndFlaggedRefocused
             0)
       << output;
   EXPECT_EQ(ReadAll(playback + "/estimates.csv"), ReadAll(*dir_ + "/blur30/estimates.csv"));
+  // The recording's health warning reaches playback's diagnostics too, once.
+  const std::string warning = "warning: calibration health";
+  const std::size_t at = output.find(warning);
+  EXPECT_NE(at, std::string::npos) << output;
+  EXPECT_EQ(output.find(warning, at + 1), std::string::npos) << output;
 }
 
 // +10%: measured through like +30% (the health's tolerance is 5% of the blur's sigma).
