@@ -2,7 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
-#include <iostream>
+#include <ostream>
 
 #include "acquisition/camera.h"
 
@@ -21,15 +21,18 @@ std::unique_ptr<LiveCamera> OpenForSingleExposures(const std::string& rig,
   return std::make_unique<LiveCamera>(options, err);
 }
 
-SingleExposure::SingleExposure(LiveCamera& live, double exposure_ms) : live_(live) {
+SingleExposure::SingleExposure(LiveCamera& live, double exposure_ms, std::ostream& notices)
+    : live_(live) {
   BracketOptions bracket;
   // BracketCapture takes a reference and at least one measurement: two frames at the same
   // exposure, the second one shown (it also skips a first frame after an idle stream).
   bracket.exposures_us = {exposure_ms * 1000.0, exposure_ms * 1000.0};
   bracket.trigger_source = live.trigger_source();
   bracket.frame_timeout = std::chrono::milliseconds(live.frame_timeout_ms());
-  // A camera whose exposure chunks stop coming: read-backs from then on, said once.
-  bracket.on_notice = [](const std::string& text) { std::cerr << "warning: " << text << "\n"; };
+  // A camera whose exposure chunks stop coming: read-backs from then on, said once (on the
+  // command's diagnostics stream, which outlives the capture).
+  std::ostream* out = &notices;
+  bracket.on_notice = [out](const std::string& text) { *out << "warning: " << text << "\n"; };
   capture_ = std::make_unique<BracketCapture>(live.camera(), bracket);
 }
 

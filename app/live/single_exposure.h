@@ -24,7 +24,7 @@ std::unique_ptr<LiveCamera> OpenForSingleExposures(const std::string& rig,
 // One exposure after another on a live camera (snap, view without a model, view's whole sensor).
 class SingleExposure {
  public:
-  SingleExposure(LiveCamera& live, double exposure_ms);
+  SingleExposure(LiveCamera& live, double exposure_ms, std::ostream& notices);
   // The next frame; throws CameraError when two captures in a row bring none.
   cv::Mat Next();
 

@@ -97,7 +97,7 @@ cv::Mat PreviewImage(const cv::Mat& image, const Features& f, int bit_depth) {
 cv::Mat SnapFrame(const SnapArgs& args, std::ostream& err, std::unique_ptr<LiveCamera>* live) {
   try {
     *live = OpenForSingleExposures(args.rig, args.at, args.exposure_ms, args.time_scale, err);
-    return SingleExposure(**live, args.exposure_ms).Next();
+    return SingleExposure(**live, args.exposure_ms, err).Next();
   } catch (const CameraError& e) {
     const std::string what = e.what();
     if (what.find("exposure") == std::string::npos) throw;

@@ -71,8 +71,8 @@ std::string SaturationLine(const Features& f, const std::string& remedy) {
 class ViewSource {
  public:
   ViewSource(LiveCamera& live, double exposure_ms, MeasureSession* session,
-             const CalibrationModel* model)
-      : live_(live), single_(live, exposure_ms), session_(session),
+             const CalibrationModel* model, std::ostream& notices)
+      : live_(live), single_(live, exposure_ms, notices), session_(session),
         focus_(model != nullptr ? &model->blur_calibration : nullptr) {}
   void SetWholeSensor(bool whole) {
     if (live_.rig().camera.FullFrame()) return;  // nothing to toggle
@@ -211,7 +211,7 @@ void RunView(const ViewArgs& args, CommandIo io) {
     measure.at = args.at;
     measure.time_scale = args.time_scale;
     MeasureSession session(measure, model, io, /*quiet_rig=*/true);
-    ViewSource source(session.live(), args.exposure_ms, &session, &model);
+    ViewSource source(session.live(), args.exposure_ms, &session, &model, io.err);
     ViewLoop(source, session.bit_depth(), args, io.out);
     source.SetWholeSensor(false);
     session.Finish();
@@ -219,7 +219,7 @@ void RunView(const ViewArgs& args, CommandIo io) {
   }
   const std::unique_ptr<LiveCamera> live =
       OpenForSingleExposures(args.rig, args.at, args.exposure_ms, args.time_scale, io.err);
-  ViewSource source(*live, args.exposure_ms, nullptr, nullptr);
+  ViewSource source(*live, args.exposure_ms, nullptr, nullptr, io.err);
   ViewLoop(source, live->bit_depth(), args, io.out);
 }
 

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <future>
-#include <iostream>
+#include <ostream>
 #include <optional>
 
 #include "acquisition/aravis_camera.h"
@@ -68,6 +68,7 @@ std::vector<std::int64_t> CommitBracket(RecordingWriter& writer, const Pose& pos
 
 struct LiveRecorder::Impl {
   LiveCaptureSetup setup;
+  std::ostream* notices = nullptr;
   std::unique_ptr<AravisCamera> camera;
   std::unique_ptr<RecordingWriter> writer;
   std::unique_ptr<BracketCapture> capture;
@@ -119,9 +120,11 @@ RecordingState ReadRecordingState(const std::string& recording_dir) {
   return state;
 }
 
-LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
+LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup, std::ostream& notices)
+    : impl_(new Impl) {
   Impl& m = *impl_;
   m.setup = setup;
+  m.notices = &notices;
   m.camera = AravisCamera::Open(setup.camera_name, setup.camera_serial);
   CameraSettings settings = setup.camera;
   IRDIST_CHECK(!setup.exposures_us.empty(), "a bracket needs exposures");
@@ -132,7 +135,7 @@ LiveRecorder::LiveRecorder(const LiveCaptureSetup& setup) : impl_(new Impl) {
   try {
     OpenRecording(setup);
   } catch (...) {
-    std::cerr << m.camera->LeaveAsFound(setup.camera.restore_after) << "\n";
+    *m.notices << m.camera->LeaveAsFound(setup.camera.restore_after) << "\n";
     throw;
   }
 }
@@ -142,8 +145,9 @@ void LiveRecorder::OpenRecording(const LiveCaptureSetup& setup) {
   if (setup.resume) {
     m.writer = RecordingWriter::Resume(setup.recording_dir);
     if (!m.writer->set_aside().empty()) {
-      std::cerr << "Moved " << m.writer->set_aside().size() << " leftover file(s) of the cut run "
-                << "aside to " << m.writer->set_aside_dir() << " (nothing was deleted).\n";
+      *m.notices << "Moved " << m.writer->set_aside().size()
+                 << " leftover file(s) of the cut run aside to " << m.writer->set_aside_dir()
+                 << " (nothing was deleted).\n";
     }
   } else {
     RecordingHeader header;
@@ -168,7 +172,10 @@ void LiveRecorder::OpenRecording(const LiveCaptureSetup& setup) {
   options.trigger_source = setup.camera.trigger_source;
   options.frame_timeout = std::chrono::milliseconds(setup.frame_timeout_ms);
   options.trigger_in_readout = setup.camera.trigger_in_readout;
-  options.on_notice = [](const std::string& text) { std::cerr << "warning: " << text << "\n"; };
+  std::ostream* notices = m.notices;
+  options.on_notice = [notices](const std::string& text) {
+    *notices << "warning: " << text << "\n";
+  };
   m.capture = std::make_unique<BracketCapture>(*m.camera, options);
   m.software_trigger = std::make_unique<CameraSoftwareTrigger>(*m.camera);
 }
@@ -178,7 +185,7 @@ LiveRecorder::~LiveRecorder() {
   if (impl_->committing.valid()) impl_->committing.wait();
   // Done, failed or interrupted alike: stopped, and put back unless the rig says otherwise.
   const std::string outcome = impl_->camera->LeaveAsFound(impl_->setup.camera.restore_after);
-  if (!outcome.empty()) std::cerr << outcome << "\n";
+  if (!outcome.empty()) *impl_->notices << outcome << "\n";
 }
 
 void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int)>& trigger,
@@ -189,7 +196,7 @@ void LiveRecorder::CaptureBracket(const Pose& pose, const std::function<void(int
     CheckFirstPoseLinearity(*m.camera, [&trigger] { trigger(-1); },
                             {m.setup.recording_dir, m.setup.allow_nonlinear,
                              m.setup.exposures_us.front(), m.bit_depth},
-                            std::cerr);
+                            *m.notices);
   }
   m.DropStaged();  // frames of a bracket never committed
   const BracketCapture::FrameSink stage = [&m](const BracketFrame& frame) {

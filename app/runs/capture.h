@@ -57,8 +57,10 @@ RecordingState ReadRecordingState(const std::string& recording_dir);  // throws 
 class LiveRecorder : public PendingBrackets {
  public:
   // Opens and configures the camera, opens (or resumes) the recording. Throws CameraError,
-  // RecordingError.
-  explicit LiveRecorder(const LiveCaptureSetup& setup);
+  // RecordingError. `notices` (the command's diagnostics stream, outliving the recorder): the
+  // camera's state put back, a cut run's leftovers set aside, the capture's and the linearity
+  // check's warnings.
+  LiveRecorder(const LiveCaptureSetup& setup, std::ostream& notices);
   ~LiveRecorder();  // without Close(): the recording stays "running" (reads as cut)
   LiveRecorder(const LiveRecorder&) = delete;
   LiveRecorder& operator=(const LiveRecorder&) = delete;

@@ -282,7 +282,8 @@ Recorded Record(const RunRequest& request, const Recipe& recipe, const Plan& pla
   station.Identify();
 
   LiveRecorder recorder(RecorderSetup(request, recipe, rig, station, recorded.dir, recipe_text,
-                                      feature_options, blob_fit_model));
+                                      feature_options, blob_fit_model),
+                        io.err);
   if (recipe.rig.station.composition.trigger == kCameraSoftwareTrigger) {
     station.SetCameraTrigger(&recorder.CameraTrigger());
   }

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "tests/loopback_gvcp.h"
+#include "tests/virtual_rig_with.h"
 
 namespace irdist {
 namespace {
@@ -44,8 +45,8 @@ TEST(SingleExposure, GivesTheRoiFrameWithTheBlobOnTheAxisAndSignalProportionalTo
   std::ostringstream err;
   std::unique_ptr<LiveCamera> live =
       OpenForSingleExposures(VirtualRig(), {2000.0, 0.0, 0.0, 490.0}, 8.0, 50.0, err);
-  const cv::Mat short_frame = SingleExposure(*live, 4.0).Next().clone();
-  const cv::Mat long_frame = SingleExposure(*live, 8.0).Next().clone();
+  const cv::Mat short_frame = SingleExposure(*live, 4.0, err).Next().clone();
+  const cv::Mat long_frame = SingleExposure(*live, 8.0, err).Next().clone();
   ASSERT_EQ(short_frame.size(), cv::Size(256, 256));
   ASSERT_EQ(short_frame.type(), CV_16UC1);
   cv::Point brightest;
@@ -59,6 +60,24 @@ TEST(SingleExposure, GivesTheRoiFrameWithTheBlobOnTheAxisAndSignalProportionalTo
   const double long_signal = cv::sum(long_frame)[0] - Median(long_frame) * long_frame.total();
   ASSERT_GT(short_signal, 0.0);
   EXPECT_NEAR(long_signal / short_signal, 2.0, 0.3);
+}
+
+// A camera whose exposure chunks stop coming: the capture's notice (each exposure read back from
+// then on) reaches the stream the command gave, once, and nothing is lost.
+TEST(SingleExposure, TheCapturesNoticeGoesToTheCommandsStreamOnce) {
+  testing::LoopbackGvcpLock lock;
+  std::ostringstream err;
+  std::unique_ptr<LiveCamera> live = OpenForSingleExposures(
+      testing::VirtualRigWithCameraKeys("chunks-stop", "    drop_exposure_chunks_from_frame: 4\n"),
+      {2000.0, 0.0, 0.0, 490.0}, 8.0, 50.0, err);
+  SingleExposure single(*live, 8.0, err);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(single.Next().size(), cv::Size(256, 256));
+  const std::string notices = err.str();
+  const std::string notice = "came without its ChunkExposureTime chunk";
+  const std::size_t at = notices.find(notice);
+  ASSERT_NE(at, std::string::npos) << notices;
+  EXPECT_NE(notices.rfind("warning: ", at), std::string::npos) << notices;
+  EXPECT_EQ(notices.find(notice, at + 1), std::string::npos) << notices;
 }
 
 }  // namespace
