@@ -108,6 +108,34 @@ void BM_RoiFrameWithBlobFit(benchmark::State& state) {
 }
 BENCHMARK(BM_RoiFrameWithBlobFit)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
+// The same clean frame as a live frame meets the host: a new copy each time, and the caches
+// evicted before it (a tracking frame arrives after about 20 ms of other work). Arg: the steps
+// timed (0 all three, 1 the scene pass, 2 the moments, 3 the blob fit).
+void BM_RoiFrameCold(benchmark::State& state) {
+  const cv::Mat frame = RoiFrame(false);
+  const FeatureOptions options;
+  const double blur_var_px2 = 0.7 * 0.7 + 1.0 / 12.0;
+  std::vector<char> evict(64 << 20, 1);
+  const int timed = static_cast<int>(state.range(0));
+  using Clock = std::chrono::steady_clock;
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < evict.size(); i += 64) evict[i] = static_cast<char>(evict[i] + 1);
+    const cv::Mat arrived = frame.clone();
+    const auto t0 = Clock::now();
+    const SceneFrame cleaned = CleanScene(arrived, 12, options.scene);
+    const auto t1 = Clock::now();
+    const Features features = ComputeFeatures(cleaned.image, 12, options);
+    const auto t2 = Clock::now();
+    const BlobFitResult fit = FitBlob(cleaned.image, 12, features, blur_var_px2);
+    const auto t3 = Clock::now();
+    benchmark::DoNotOptimize(fit);
+    const Clock::time_point from[] = {t0, t0, t1, t2}, to[] = {t3, t1, t2, t3};
+    state.SetIterationTime(std::chrono::duration<double>(to[timed] - from[timed]).count());
+  }
+}
+BENCHMARK(BM_RoiFrameCold)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseManualTime()->Unit(
+    benchmark::kMicrosecond);
+
 // The blob fit alone on the live ROI's clean frame, without crosstalk (Arg 0) and with the small
 // crosstalk a Table 3 calibration of the virtual rig fits (Arg 1: 0.0015 px^2, its kernel spread
 // over the model's six planes each evaluation); and the frame's own blur at the calibrated blur
