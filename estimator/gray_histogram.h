@@ -16,16 +16,11 @@ class GrayHistogram {
   explicit GrayHistogram(int max_level) : counts_(static_cast<std::size_t>(max_level) + 1, 0) {}
   // The histogram of `levels` (over the range they span).
   explicit GrayHistogram(const std::vector<std::uint16_t>& levels);
-  // Counts one level at or above the lowest counted (0 for the max_level constructor); the
-  // range grows to a level above max_level.
-  void Add(std::uint16_t level) {
-    const std::size_t bin = static_cast<std::size_t>(level - low_);
-    if (bin >= counts_.size()) counts_.resize(bin + 1, 0);
-    ++counts_[bin];
-    ++total_;
-  }
-  // Counts `n` levels in a row (as Add each, with the counts kept in a register).
+  // Counts `n` levels in a row, each at or above the lowest counted (0 for the max_level
+  // constructor); the range grows to a level above max_level.
   void AddRun(const std::uint16_t* levels, int n);
+  // Counts one level (AddRun of one).
+  void Add(std::uint16_t level) { AddRun(&level, 1); }
   std::size_t size() const { return total_; }
   // The level of rank `rank` (0-based) in ascending order; size() > rank required.
   std::uint16_t OrderStatistic(std::size_t rank) const;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <optional>
 #include <ostream>
+#include <utility>
 
 #include "acquisition/recording_reader.h"
 #include "app/display/show.h"
@@ -34,19 +35,17 @@ std::vector<EstimateRow> WritePlaybackEstimates(const RecordingReader& reader,
                                                 const std::string& out_dir, CommandIo io) {
   RecordingEstimates estimates = EstimateRecording(reader, features, model);
   for (const std::string& warning : estimates.warnings) io.err << warning << "\n";
-  std::vector<EstimateRow>& rows = estimates.rows;
-  std::ostream& out = io.out;
-  if (HasGroundTruth(rows)) {
-    WriteValidation(out_dir, rows,
+  if (HasGroundTruth(estimates.rows)) {
+    WriteValidation(out_dir, estimates.rows,
                     {{"recipe", reader.header().recipe_path},
                      {"model", args.model},
                      {"recording", args.recording}},
-                    out);
+                    io.out);
   } else {  // a recording of `irdist measure`: no ground truth to summarise against
-    WriteEstimatesCsv(out_dir + "/estimates.csv", rows);
-    out << "Estimates: " << out_dir << "/estimates.csv (no ground truth)\n";
+    WriteEstimatesCsv(out_dir + "/estimates.csv", estimates.rows);
+    io.out << "Estimates: " << out_dir << "/estimates.csv (no ground truth)\n";
   }
-  return rows;
+  return std::move(estimates.rows);
 }
 
 // The playback command that replaces what a failed playback wrote.
