@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <Eigen/Dense>
@@ -47,15 +48,22 @@ struct NormalLmOptions {
   // for unit-variance residuals) of the minimum: the guarantee function_tolerance's last accepted
   // step gives, one model evaluation sooner.
   double decrement_tolerance = 0.0;
+  // Beyond TinySolver (0: off): at a point whose Newton decrement lies below this (and above
+  // decrement_tolerance), take the step and stop without evaluating the model there: the step is
+  // then less than sqrt(this) standard errors, over which the model's change is linear to the
+  // rounding of a gray level, so the point is the one an evaluation would accept and stop at. The
+  // cost reported is the one the normal equations predict; the last evaluated point (where J^T J
+  // was computed, for a covariance) goes to SolveNormalLm's `evaluated`.
+  double final_step_decrement = 0.0;
   // The first problem, naming the field, in *why (empty when valid).
   bool IsValid(std::string* why) const {
     std::string reason;
     if (max_iterations < 1) reason = "max_iterations below 1";
     const double tolerances[] = {gradient_tolerance, parameter_tolerance, function_tolerance,
-                                 cost_threshold, decrement_tolerance};
+                                 cost_threshold, decrement_tolerance, final_step_decrement};
     const char* names[] = {"gradient_tolerance", "parameter_tolerance", "function_tolerance",
-                           "cost_threshold", "decrement_tolerance"};
-    for (int i = 0; i < 5 && reason.empty(); ++i) {
+                           "cost_threshold", "decrement_tolerance", "final_step_decrement"};
+    for (int i = 0; i < 6 && reason.empty(); ++i) {
       if (!(tolerances[i] >= 0.0) || !std::isfinite(tolerances[i])) {
         reason = std::string(names[i]) + " not a finite number >= 0";
       }
@@ -75,6 +83,7 @@ struct NormalLmSummary {
   int iterations = 0;
   int evaluations = 0;         // Evaluate calls
   bool decrement_stop = false; // stopped by decrement_tolerance
+  bool final_step = false;      // stopped by final_step_decrement, the last step not evaluated
 };
 
 // The solver's state between its steps (SolveNormalLm below runs it).
@@ -89,8 +98,12 @@ class NormalLm {
     IRDIST_CHECK(options.IsValid(&why), "NormalLmOptions: " + why);
   }
 
+  // The last point the model was evaluated at (x unless the final step was taken unevaluated).
+  const Vector& evaluated() const { return evaluated_; }
+
   NormalLmSummary Solve(Vector* x_inout) {
     Vector& x = *x_inout;
+    evaluated_ = x;
     Update(x, true);
     summary_.initial_cost = summary_.final_cost = cost_;
     if (Converged()) return summary_;
@@ -107,6 +120,13 @@ class NormalLm {
       const double tolerance = options_.parameter_tolerance;
       if (dx.norm() < tolerance * (x.norm() + tolerance)) break;
       const Vector x_new = x + dx;
+      if (options_.final_step_decrement > 0.0 && decrement_ < options_.final_step_decrement) {
+        evaluated_ = x;
+        x = x_new;
+        cost_ -= 0.5 * step.dot(2.0 * g_ - jtj_ * step);  // the model's predicted decrease
+        summary_.final_step = true;
+        break;
+      }
       ++summary_.evaluations;
       problem_.Evaluate(x_new.data(), false, &trial);
       const double cost_change = 2.0 * cost_ - trial.cost2;
@@ -128,6 +148,7 @@ class NormalLm {
         v *= 2.0;
       }
     }
+    if (!summary_.final_step) evaluated_ = x;
     summary_.final_cost = cost_;
     return summary_;
   }
@@ -147,27 +168,39 @@ class NormalLm {
   // (the scaling cancels in g^T (J^T J)^-1 g).
   bool Converged() {
     if (gradient_max_ < options_.gradient_tolerance || cost_ < options_.cost_threshold) return true;
-    if (!(options_.decrement_tolerance > 0.0)) return false;
+    decrement_ = std::numeric_limits<double>::infinity();
+    if (!(options_.decrement_tolerance > 0.0) && !(options_.final_step_decrement > 0.0)) {
+      return false;
+    }
     const Eigen::LDLT<Matrix> exact(jtj_);
     const double decrement = g_.dot(exact.solve(g_));
-    return summary_.decrement_stop = exact.info() == Eigen::Success && std::isfinite(decrement) &&
-                                     decrement >= 0.0 && decrement < options_.decrement_tolerance;
+    if (exact.info() != Eigen::Success || !std::isfinite(decrement) || decrement < 0.0) {
+      return false;
+    }
+    decrement_ = decrement;
+    return summary_.decrement_stop = decrement < options_.decrement_tolerance;
   }
 
   const NormalProblem<N>& problem_;
   const NormalLmOptions options_;
   NormalLmSummary summary_;
   NormalEquations<N> normal_;
-  Vector scaling_, g_;
+  Vector scaling_, g_, evaluated_;
   Matrix jtj_;
   double cost_ = 0.0, gradient_max_ = 0.0;
+  double decrement_ = std::numeric_limits<double>::infinity();  // at the current point
 };
 
-// Minimises |r(x)|^2 / 2 from *x in place.
+// Minimises |r(x)|^2 / 2 from *x in place; *evaluated (when given): the last point the model was
+// evaluated at (options.final_step_decrement).
 template <int N>
 NormalLmSummary SolveNormalLm(const NormalProblem<N>& problem, const NormalLmOptions& options,
-                              Eigen::Matrix<double, N, 1>* x_inout) {
-  return NormalLm<N>(problem, options).Solve(x_inout);
+                              Eigen::Matrix<double, N, 1>* x_inout,
+                              Eigen::Matrix<double, N, 1>* evaluated = nullptr) {
+  NormalLm<N> solver(problem, options);
+  const NormalLmSummary summary = solver.Solve(x_inout);
+  if (evaluated != nullptr) *evaluated = solver.evaluated();
+  return summary;
 }
 
 }  // namespace irdist

@@ -68,6 +68,15 @@ class DecayNormal : public NormalProblem<3> {
   const Decay* decay_;
 };
 
+// The problem's minimum, to the rounding.
+Eigen::Vector3d Minimum(const DecayNormal& problem) {
+  NormalLmOptions tight;
+  tight.function_tolerance = 1e-14;
+  Eigen::Vector3d minimum(1.0, 0.2, 0.0);
+  SolveNormalLm(problem, tight, &minimum);
+  return minimum;
+}
+
 // The steps are TinySolver's: from the same start, the same solution, cost and number of
 // evaluations (TinySolver evaluates again at an accepted step; SolveNormalLm counts that too).
 TEST(NormalLm, TakesTinySolversSteps) {
@@ -96,10 +105,7 @@ TEST(NormalLm, TakesTinySolversSteps) {
 TEST(NormalLm, TheDecrementStopSavesTheLastStep) {
   const Decay decay;
   const DecayNormal problem(&decay);
-  NormalLmOptions tight;
-  tight.function_tolerance = 1e-14;
-  Eigen::Vector3d minimum(1.0, 0.2, 0.0);
-  SolveNormalLm(problem, tight, &minimum);
+  const Eigen::Vector3d minimum = Minimum(problem);
 
   const double tolerance = 1e-4 * 0.02 * 0.02;  // 1e-4 in chi^2 units
   NormalLmOptions cost_rule, decrement_rule;
@@ -118,6 +124,40 @@ TEST(NormalLm, TheDecrementStopSavesTheLastStep) {
   EXPECT_LT(dx.dot(at_minimum.jtj * dx) / (0.02 * 0.02), 1e-4);
 }
 
+// The final step taken without evaluating the model: two evaluations fewer than the decrement's
+// stop (the trial's cost and its normal equations, one computation of the blob fit's model), a point as close to the minimum as its (the decrement after a step within 3 standard
+// errors is second order), the predicted cost that point's own within a small part of the
+// decrement, and `evaluated` the point before the step.
+TEST(NormalLm, TheFinalStepLandsAtTheMinimumUnevaluated) {
+  const Decay decay;
+  const DecayNormal problem(&decay);
+  const Eigen::Vector3d minimum = Minimum(problem);
+
+  const double chi2_unit = 0.02 * 0.02;  // the residuals' noise variance
+  NormalLmOptions by_decrement, final_step;
+  by_decrement.function_tolerance = final_step.function_tolerance = 1e-4 * chi2_unit;
+  by_decrement.decrement_tolerance = final_step.decrement_tolerance = 1e-4 * chi2_unit;
+  final_step.final_step_decrement = 9.0 * chi2_unit;
+  Eigen::Vector3d x_decrement(1.0, 0.2, 0.0), x_final(1.0, 0.2, 0.0), evaluated;
+  const NormalLmSummary a = SolveNormalLm(problem, by_decrement, &x_decrement);
+  const NormalLmSummary b = SolveNormalLm(problem, final_step, &x_final, &evaluated);
+  EXPECT_TRUE(b.final_step);
+  EXPECT_FALSE(a.final_step);
+  EXPECT_EQ(b.evaluations + 2, a.evaluations);
+
+  NormalEquations<3> at_minimum, at_final, at_evaluated;
+  problem.Evaluate(minimum.data(), true, &at_minimum);
+  const Eigen::Vector3d dx = x_final - minimum;
+  EXPECT_LT(dx.dot(at_minimum.jtj * dx) / chi2_unit, 1e-3);
+  problem.Evaluate(x_final.data(), false, &at_final);
+  EXPECT_NEAR(b.final_cost, 0.5 * at_final.cost2, 1e-3 * chi2_unit);
+  // The point before the step: away from the final one, its decrement below the final step's rule.
+  EXPECT_GT((evaluated - x_final).norm(), 0.0);
+  problem.Evaluate(evaluated.data(), true, &at_evaluated);
+  const Eigen::Vector3d g = at_evaluated.jtr;
+  EXPECT_LT(g.dot(at_evaluated.jtj.ldlt().solve(g)), 9.0 * chi2_unit);
+}
+
 // Options refuse each bad field by name, and the solver refuses bad options.
 TEST(NormalLmOptions, RefusesEachBadFieldByName) {
   std::string why;
@@ -134,6 +174,10 @@ TEST(NormalLmOptions, RefusesEachBadFieldByName) {
   o.decrement_tolerance = NAN;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("decrement_tolerance"), std::string::npos) << why;
+  o = NormalLmOptions();
+  o.final_step_decrement = -1.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("final_step_decrement"), std::string::npos) << why;
   o = NormalLmOptions();
   o.initial_trust_region_radius = 0.0;
   EXPECT_FALSE(o.IsValid(&why));
