@@ -49,11 +49,12 @@ struct NormalLmOptions {
   // step gives, one model evaluation sooner.
   double decrement_tolerance = 0.0;
   // Beyond TinySolver (0: off): at a point whose Newton decrement lies below this (and above
-  // decrement_tolerance), take the step and stop without evaluating the model there: the step is
-  // then less than sqrt(this) standard errors, over which the model's change is linear to the
-  // rounding of a gray level, so the point is the one an evaluation would accept and stop at. The
-  // cost reported is the one the normal equations predict; the last evaluated point (where J^T J
-  // was computed, for a covariance) goes to SolveNormalLm's `evaluated`.
+  // decrement_tolerance), take the Gauss-Newton step (undamped, the one the decrement measures)
+  // and stop without evaluating the model there. The step is then less than sqrt(this) standard
+  // errors, over which the model is linear far below its noise, so the point is the one an
+  // evaluation would accept and stop at. The cost reported is the normal equations' prediction
+  // (less half the decrement); the last evaluated point (where J^T J was computed, for a
+  // covariance) goes to SolveNormalLm's `evaluated`.
   double final_step_decrement = 0.0;
   // The first problem, naming the field, in *why (empty when valid).
   bool IsValid(std::string* why) const {
@@ -111,6 +112,13 @@ class NormalLm {
     NormalEquations<N> trial;
     for (summary_.iterations = 1; summary_.iterations < options_.max_iterations;
          ++summary_.iterations) {
+      if (options_.final_step_decrement > 0.0 && decrement_ < options_.final_step_decrement) {
+        evaluated_ = x;
+        x += scaling_.asDiagonal() * newton_step_;  // the Gauss-Newton step, undamped
+        cost_ -= 0.5 * decrement_;                    // its predicted decrease of |r|^2 / 2
+        summary_.final_step = true;
+        break;
+      }
       Matrix regularized = jtj_;
       for (int i = 0; i < N; ++i) {
         regularized(i, i) += u * std::min(std::max(jtj_(i, i), 1e-6), 1e32);
@@ -120,13 +128,6 @@ class NormalLm {
       const double tolerance = options_.parameter_tolerance;
       if (dx.norm() < tolerance * (x.norm() + tolerance)) break;
       const Vector x_new = x + dx;
-      if (options_.final_step_decrement > 0.0 && decrement_ < options_.final_step_decrement) {
-        evaluated_ = x;
-        x = x_new;
-        cost_ -= 0.5 * step.dot(2.0 * g_ - jtj_ * step);  // the model's predicted decrease
-        summary_.final_step = true;
-        break;
-      }
       ++summary_.evaluations;
       problem_.Evaluate(x_new.data(), false, &trial);
       const double cost_change = 2.0 * cost_ - trial.cost2;
@@ -173,11 +174,13 @@ class NormalLm {
       return false;
     }
     const Eigen::LDLT<Matrix> exact(jtj_);
-    const double decrement = g_.dot(exact.solve(g_));
+    const Vector newton_step = exact.solve(g_);
+    const double decrement = g_.dot(newton_step);
     if (exact.info() != Eigen::Success || !std::isfinite(decrement) || decrement < 0.0) {
       return false;
     }
     decrement_ = decrement;
+    newton_step_ = newton_step;
     return summary_.decrement_stop = decrement < options_.decrement_tolerance;
   }
 
@@ -186,6 +189,7 @@ class NormalLm {
   NormalLmSummary summary_;
   NormalEquations<N> normal_;
   Vector scaling_, g_, evaluated_;
+  Vector newton_step_;  // the undamped Gauss-Newton step at the current point (scaled)
   Matrix jtj_;
   double cost_ = 0.0, gradient_max_ = 0.0;
   double decrement_ = std::numeric_limits<double>::infinity();  // at the current point
