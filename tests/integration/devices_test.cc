@@ -320,15 +320,18 @@ TEST_F(LabDevices, ComplianceStopsTheRun) {
   EXPECT_TRUE(Names(outcome, "compliance")) << outcome;
 }
 
+// The output trips 1 simulated s after it is switched on (50 ms here), after SetCurrent has read
+// it back on; on a host slow enough (sanitizers, load) that the read-back itself comes after the
+// trip, SetCurrent is the one that stops: either way the run stops and the IRED is off.
 TEST_F(LabDevices, ATrippedOutputStopsTheRun) {
   sim::SourceFaults faults;
-  faults.trip_after_s = 0.05;
+  faults.trip_after_s = 1.0;
   sim::SetSourceFaults(*emulators_.at("source"), faults);
   Station& station = Open();
-  station.SetCurrent(500.0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));  // 1 simulated s: tripped
   std::string outcome = "completed";
   try {
+    station.SetCurrent(500.0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));  // 2 simulated s: tripped
     station.CheckAlive();
     station.CheckCurrent(station.MeasureCurrent());
   } catch (const Error& e) {
