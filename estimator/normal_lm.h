@@ -166,7 +166,8 @@ class NormalLm {
     cost_ = 0.5 * normal_.cost2;
   }
   // TinySolver's stops at a new point, and the Newton decrement below decrement_tolerance
-  // (the scaling cancels in g^T (J^T J)^-1 g).
+  // (the scaling cancels in g^T (J^T J)^-1 g). Keeps the decrement and its Gauss-Newton step for
+  // final_step_decrement (infinity when neither rule is on or the solve fails).
   bool Converged() {
     if (gradient_max_ < options_.gradient_tolerance || cost_ < options_.cost_threshold) return true;
     decrement_ = std::numeric_limits<double>::infinity();

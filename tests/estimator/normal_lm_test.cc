@@ -125,9 +125,10 @@ TEST(NormalLm, TheDecrementStopSavesTheLastStep) {
 }
 
 // The final step taken without evaluating the model: two evaluations fewer than the decrement's
-// stop (the trial's cost and its normal equations, one computation of the blob fit's model), a point as close to the minimum as its (the decrement after a step within 3 standard
-// errors is second order), the predicted cost that point's own within a small part of the
-// decrement, and `evaluated` the point before the step.
+// stop (the trial's cost and its normal equations, one computation of the blob fit's model), a
+// point as close to the minimum as the decrement stop's (after a step within 3 standard errors
+// what is left is second order), the predicted cost that point's own, and `evaluated` the point
+// before the step.
 TEST(NormalLm, TheFinalStepLandsAtTheMinimumUnevaluated) {
   const Decay decay;
   const DecayNormal problem(&decay);
