@@ -12,6 +12,7 @@
 #include "base/pi.h"
 #include "estimator/disc_fit.h"
 #include "estimator/gray_histogram.h"
+#include "estimator/window_scan.h"
 
 namespace irdist {
 namespace {
@@ -76,11 +77,12 @@ struct MomentSums {
 Moments WeightedMoments(const cv::Mat& image, const cv::Rect& rect, double background,
                         double threshold) {
   MomentSums sums;
+  const LevelAbove above(threshold);
   for (int y = rect.y; y < rect.y + rect.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
+    if (!above.AnyIn(row + rect.x, rect.width)) continue;
     for (int x = rect.x; x < rect.x + rect.width; ++x) {
-      const double g = row[x];
-      if (!(g <= threshold)) sums.Add(g - background, x, y);
+      if (above(row[x])) sums.Add(row[x] - background, x, y);
     }
   }
   Moments m;
@@ -92,28 +94,24 @@ Moments WeightedMoments(const cv::Mat& image, const cv::Rect& rect, double backg
 // mean of the window's pixels beyond radius + 1 (the blob's support ends well inside the radius).
 Moments ApertureMoments(const cv::Mat& image, const cv::Rect& rect, double cx, double cy,
                         double radius, double fallback_background) {
-  double outside = 0.0;
+  std::int64_t outside = 0;
   int n_outside = 0;
   const double r_in2 = radius * radius, r_out2 = (radius + 1.0) * (radius + 1.0);
+  const int end = rect.x + rect.width;
   for (int y = rect.y; y < rect.y + rect.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
-    for (int x = rect.x; x < rect.x + rect.width; ++x) {
-      const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-      if (r2 > r_out2) {
-        outside += row[x];
-        ++n_outside;
-      }
-    }
+    const ColumnRun in = ColumnsWithin(y, cx, cy, r_out2, rect.x, end);
+    outside += SumLevels(row, rect.x, in.first) + SumLevels(row, in.last, end);
+    n_outside += (in.first - rect.x) + (end - in.last);
   }
-  const double background = n_outside >= 64 ? outside / n_outside : fallback_background;
+  const double background =
+      n_outside >= 64 ? static_cast<double>(outside) / n_outside : fallback_background;
   MomentSums sums;
   for (int y = rect.y; y < rect.y + rect.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
     const double dy = y - cy;
-    for (int x = rect.x; x < rect.x + rect.width; ++x) {
-      const double dx = x - cx;
-      if (!(dx * dx + dy * dy > r_in2)) sums.Add(row[x] - background, dx, dy);
-    }
+    const ColumnRun in = ColumnsWithin(y, cx, cy, r_in2, rect.x, end);
+    for (int x = in.first; x < in.last; ++x) sums.Add(row[x] - background, x - cx, dy);
   }
   Moments m;
   double mx = 0.0, my = 0.0;
@@ -140,9 +138,9 @@ double ApertureBlurVariance(const cv::Mat& image, const cv::Rect& rect, const Mo
   for (int y = rect.y; y < rect.y + rect.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
     const double dy = y - m.cy;
-    for (int x = rect.x; x < rect.x + rect.width; ++x) {
+    const ColumnRun in = ColumnsWithin(y, m.cx, m.cy, r2, rect.x, rect.x + rect.width);
+    for (int x = in.first; x < in.last; ++x) {
       const double dx = x - m.cx;
-      if (dx * dx + dy * dy > r2) continue;
       const double g = row[x] - m.background;
       const double p = c * dx + s * dy, q = -s * dx + c * dy;
       w += g;
@@ -276,22 +274,26 @@ bool LocateCentroid(const cv::Mat& image, const FeatureOptions& options, BlobLoc
 }
 
 // Border flags: a clipped window, or blob pixels on the outermost image rows/columns, or on the
-// edge of the fixed window.
+// edge of the fixed window. Only the window's outermost pixels can be either (the window lies in
+// the image).
 void FlagBorders(const cv::Mat& image, const cv::Rect& window, const cv::Rect& full_window,
                  double roi_threshold, const FeatureOptions& options, Features* out) {
   out->touches_border = window != full_window;
-  for (int y = window.y; y < window.y + window.height; ++y) {
-    const uint16_t* row = image.ptr<uint16_t>(y);
-    for (int x = window.x; x < window.x + window.width; ++x) {
-      if (row[x] <= roi_threshold) continue;
-      const bool on_image_edge = x == 0 || y == 0 || x == image.cols - 1 || y == image.rows - 1;
-      const bool on_window_edge = x == window.x || y == window.y ||
-                                  x == window.x + window.width - 1 ||
-                                  y == window.y + window.height - 1;
-      if (on_image_edge) out->touches_border = true;
-      if (on_window_edge && options.roi_policy == RoiPolicy::kFixedWindow)
-        out->blob_clipped_by_roi = true;
-    }
+  const LevelAbove above(roi_threshold);
+  const bool fixed = options.roi_policy == RoiPolicy::kFixedWindow;
+  const auto check = [&](int x, int y) {
+    if (!above(image.at<uint16_t>(y, x))) return;
+    if (x == 0 || y == 0 || x == image.cols - 1 || y == image.rows - 1) out->touches_border = true;
+    if (fixed) out->blob_clipped_by_roi = true;  // on the window's edge
+  };
+  const int right = window.x + window.width - 1, bottom = window.y + window.height - 1;
+  for (int x = window.x; x <= right; ++x) {
+    check(x, window.y);
+    check(x, bottom);
+  }
+  for (int y = window.y + 1; y < bottom; ++y) {
+    check(window.x, y);
+    check(right, y);
   }
 }
 
@@ -311,45 +313,9 @@ std::vector<uint16_t> BorderRing(const cv::Mat& image, const cv::Rect& window) {
   return border;
 }
 
-// Squared distance from (cx, cy) of the farthest pixel of `window` above `threshold`.
-double FarthestAbove2(const cv::Mat& image, const cv::Rect& window, double threshold, double cx,
-                      double cy) {
-  double farthest2 = 0.0;
-  for (int y = window.y; y < window.y + window.height; ++y) {
-    const uint16_t* row = image.ptr<uint16_t>(y);
-    for (int x = window.x; x < window.x + window.width; ++x) {
-      if (row[x] <= threshold) continue;
-      farthest2 = std::max(farthest2, (x - cx) * (x - cx) + (y - cy) * (y - cy));
-    }
-  }
-  return farthest2;
-}
-
 // How far the blob's light reaches beyond its farthest pixel above the ROI threshold (px): the
 // blur's tail, a few sigma.
 constexpr double kBackgroundMarginPx = 4.0;
-
-// The columns [first, last) of row y within [begin, end) that lie within the circle
-// (x - cx)^2 + (y - cy)^2 <= reach2 (an empty run at first = last when none): the circle's chord,
-// its ends settled by the same test per pixel, so the run is exactly that test's (and the rest of
-// the row, counted in two runs, WindowBackground's pixels: a test per pixel was most of its time).
-struct ColumnRun {
-  int first, last;
-};
-ColumnRun ColumnsWithin(int y, double cx, double cy, double reach2, int begin, int end) {
-  const auto inside = [&](int x) { return !((x - cx) * (x - cx) + (y - cy) * (y - cy) > reach2); };
-  const double half = std::sqrt(std::max(reach2 - (y - cy) * (y - cy), 0.0));
-  const auto column = [&](double x, int low) {
-    return static_cast<int>(std::clamp(x, static_cast<double>(low), static_cast<double>(end)));
-  };
-  int first = column(std::ceil(cx - half), begin);
-  int last = column(std::floor(cx + half) + 1.0, first);
-  while (first > begin && inside(first - 1)) --first;
-  while (first < last && !inside(first)) ++first;
-  while (last < end && inside(last)) ++last;
-  while (last > first && !inside(last - 1)) --last;
-  return {first, last};
-}
 
 // The window's background (gray levels): the mean of the pixels of a square four times the
 // window's side around the blob (the whole 256 px ROI at the default 64 px window), beyond the
@@ -390,19 +356,22 @@ bool RoiStatistics(const cv::Mat& image, const cv::Rect& window, double roi_thre
   const bool fixed = options.roi_policy == RoiPolicy::kFixedWindow;
   const InverseResponse& f = options.inverse_response;
   const uint16_t saturated_level = static_cast<uint16_t>(max_gray);
+  const LevelAbove above(roi_threshold);
+  const bool identity = f.IsIdentity();
   double sum = 0.0, sum_sq = 0.0, sum_f = 0.0;
   int area = 0, saturated = 0;
   int min_x = image.cols, min_y = image.rows, max_x = -1, max_y = -1;
   for (int y = window.y; y < window.y + window.height; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
     for (int x = window.x; x < window.x + window.width; ++x) {
-      if (!fixed && row[x] <= roi_threshold) continue;
+      if (!fixed && !above(row[x])) continue;
       const double mv = row[x] / max_gray;
       sum += mv;
       sum_sq += mv * mv;
-      sum_f += f.IsIdentity() ? mv : f.Apply(mv);
+      sum_f += identity ? mv : f.Apply(mv);
       ++area;
       if (row[x] >= saturated_level) ++saturated;
+      if (fixed) continue;  // the window is the ROI
       min_x = std::min(min_x, x);
       max_x = std::max(max_x, x);
       min_y = std::min(min_y, y);

@@ -27,22 +27,29 @@ double Bilinear(const cv::Mat& image, double x, double y) {
   return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
 }
 
-// One ray's edge: the outermost fall through `level` between `start` and `reach` px from `c`,
-// sub-pixel by linear interpolation between samples. false when the ray finds none.
+// One ray's edge: the outermost fall through `level` among the samples at start + k kRayStepPx
+// (k = 0, 1, ... up to `reach`) px from `c`, sub-pixel by linear interpolation between samples.
+// Scanned inward from the outermost sample, it stops at the first fall it meets: beyond a disc's
+// edge a few samples, not the whole ray. false when the ray finds none.
 bool RayEdge(const cv::Mat& image, cv::Point2d c, double angle, double level, double start,
              double reach, double* radius) {
   const double dx = std::cos(angle), dy = std::sin(angle);
-  bool found = false;
-  double previous = Bilinear(image, c.x + start * dx, c.y + start * dy);
-  for (double t = start + kRayStepPx; t <= reach; t += kRayStepPx) {
-    const double v = Bilinear(image, c.x + t * dx, c.y + t * dy);
-    if (previous >= level && v < level) {
-      *radius = t - kRayStepPx * (level - v) / (previous - v);
-      found = true;
+  const auto sample = [&](int k) {
+    const double t = start + kRayStepPx * k;
+    return Bilinear(image, c.x + t * dx, c.y + t * dy);
+  };
+  int k = static_cast<int>(std::floor((reach - start) / kRayStepPx));
+  if (k < 1) return false;
+  double outer = sample(k);
+  for (; k >= 1; --k) {
+    const double inner = sample(k - 1);
+    if (inner >= level && outer < level) {
+      *radius = start + kRayStepPx * k - kRayStepPx * (level - outer) / (inner - outer);
+      return true;
     }
-    previous = v;
+    outer = inner;
   }
-  return found;
+  return false;
 }
 
 // An ellipse (cv::RotatedRect) ready for radial residuals: |p - centre| less the ellipse's

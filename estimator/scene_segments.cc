@@ -55,13 +55,20 @@ int PickIred(const std::vector<Blob>& blobs, const SceneOptions& options,
   return best;
 }
 
-// The pixels of component `b` (frame coordinates).
-std::vector<cv::Point> PixelsOf(const cv::Mat& labels, const Blob& b) {
+// The pixels of component `b` (frame coordinates) with a 4-neighbour outside it (or outside the
+// frame): the only ones that can be nearest to a pixel of another component (from an inner pixel,
+// the neighbour towards that pixel is nearer).
+std::vector<cv::Point> EdgePixelsOf(const cv::Mat& labels, const Blob& b) {
   std::vector<cv::Point> out;
+  const auto in = [&](int x, int y) {
+    return x >= 0 && y >= 0 && x < labels.cols && y < labels.rows &&
+           labels.at<int32_t>(y, x) == b.label;
+  };
   for (int y = b.rect.y; y < b.rect.br().y; ++y) {
     const int32_t* label = labels.ptr<int32_t>(y);
     for (int x = b.rect.x; x < b.rect.br().x; ++x) {
-      if (label[x] == b.label) out.emplace_back(x, y);
+      if (label[x] != b.label) continue;
+      if (!in(x - 1, y) || !in(x + 1, y) || !in(x, y - 1) || !in(x, y + 1)) out.emplace_back(x, y);
     }
   }
   return out;
@@ -75,11 +82,12 @@ double RectGap(const cv::Rect& a, const cv::Rect& b) {
 }
 
 // Edge-to-edge gap (px) between two components: the least distance between their pixels' centres
-// less one (touching pixels give 0). Far apart (beyond `near_px`), the boxes' gap.
+// (their edge pixels') less one (touching pixels give 0). Far apart (beyond `near_px`), the boxes'
+// gap.
 double EdgeGap(const cv::Mat& labels, const Blob& a, const Blob& b, double near_px) {
   const double boxes = RectGap(a.rect, b.rect);
   if (boxes > near_px) return boxes;
-  const std::vector<cv::Point> pa = PixelsOf(labels, a), pb = PixelsOf(labels, b);
+  const std::vector<cv::Point> pa = EdgePixelsOf(labels, a), pb = EdgePixelsOf(labels, b);
   double best2 = std::numeric_limits<double>::infinity();
   for (const cv::Point& p : pa) {
     for (const cv::Point& q : pb) {
