@@ -68,16 +68,22 @@ std::vector<StripRange> VisibleRanges(const DiscConic& conic, const ImageCut& cu
 // Gauss-Legendre nodes and weights of order n on [-1, 1] (exact for polynomials of degree 2n - 1).
 void GaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weights);
 
-// The pixel's response to a Gaussian blur of `sigma` px: h(x) = PSF convolved with the unit box,
-// and H(x) its integral from -infinity (closed forms with Phi and phi).
+// The pixel's response to a Gaussian blur of `sigma` px: h(x) = PSF convolved with the pixel's
+// sensitive box, and H(x) its integral from -infinity (closed forms with Phi and phi). The box is
+// `aperture` of the pitch wide (1: the whole pixel; a fill factor below it), centred on the
+// pixel, and its response is divided by its width: a flat field gives every aperture the same
+// signal (a datasheet's quantum efficiency is the whole pixel's, its fill factor included).
 class PixelResponse {
  public:
-  explicit PixelResponse(double sigma) : sigma_(sigma), reach_(0.5 + 8.0 * std::max(sigma, 1e-9)) {}
-  double h(double x) const { return std::fabs(x) >= reach_ ? 0.0 : Step(x + 0.5) - Step(x - 0.5); }
+  explicit PixelResponse(double sigma, double aperture = 1.0)
+      : sigma_(sigma), half_(0.5 * aperture), reach_(half_ + 8.0 * std::max(sigma, 1e-9)) {}
+  double h(double x) const {
+    return std::fabs(x) >= reach_ ? 0.0 : (Step(x + half_) - Step(x - half_)) / (2.0 * half_);
+  }
   double H(double x) const {
     if (x >= reach_) return 1.0;
     if (x <= -reach_) return 0.0;
-    return Psi(x + 0.5) - Psi(x - 0.5);
+    return (Psi(x + half_) - Psi(x - half_)) / (2.0 * half_);
   }
 
  private:
@@ -93,7 +99,7 @@ class PixelResponse {
     if (sigma_ <= 1e-9) return z >= 0.0 ? 1.0 : 0.0;
     return 0.5 * std::erfc(-z / (sigma_ * std::sqrt(2.0)));
   }
-  double sigma_, reach_;
+  double sigma_, half_, reach_;
 };
 
 // Sums, per pixel of `out`, the strips weighted by h(row) (row_response: the blur along y) and H

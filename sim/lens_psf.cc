@@ -72,9 +72,11 @@ void IntegrateSheared(const std::vector<ImageStrip>& strips, const LensPsf& psf,
                       const cv::Rect& rect, cv::Mat1f* out) {
   const double sy = std::sqrt(psf.syy_px2);
   const double shear = psf.sxy_px2 / psf.syy_px2;
-  const PixelResponse chord(std::sqrt(std::max(1e-12, psf.sxx_px2 - shear * psf.sxy_px2)));
+  const PixelResponse chord(std::sqrt(std::max(1e-12, psf.sxx_px2 - shear * psf.sxy_px2)),
+                            psf.pixel_aperture);
   // The row factor is a Gaussian of sd sy over a width of one pixel: analytic, so the quadrature
-  // converges fast; more nodes for a narrow one.
+  // converges fast; more nodes for a narrow one. The nodes span the pixel's sensitive height, and
+  // their mean is taken (the aperture's response divided by its width, as PixelResponse's).
   const int nodes = std::clamp(static_cast<int>(std::ceil(6.0 / sy)), 8, 48);
   std::vector<double> x, w;
   GaussLegendre(nodes, &x, &w);
@@ -84,7 +86,7 @@ void IntegrateSheared(const std::vector<ImageStrip>& strips, const LensPsf& psf,
     std::fill(row.begin(), row.end(), 0.0);
     const double y_pixel = rect.y + r + 0.5;
     for (int j = 0; j < nodes; ++j) {
-      const double y = y_pixel + 0.5 * x[j];
+      const double y = y_pixel + 0.5 * psf.pixel_aperture * x[j];
       for (const ImageStrip& s : strips) {
         const double dy = y - s.y_px;
         if (std::fabs(dy) > 8.0 * sy) continue;
@@ -112,8 +114,8 @@ void IntegrateStripsCore(const std::vector<ImageStrip>& strips, const LensPsf& p
     IntegrateSheared(spread, psf, scale, rect, out);
     return;
   }
-  IntegrateStrips(spread, PixelResponse(std::sqrt(psf.syy_px2)),
-                  PixelResponse(std::sqrt(psf.sxx_px2)), scale, rect, out);
+  IntegrateStrips(spread, PixelResponse(std::sqrt(psf.syy_px2), psf.pixel_aperture),
+                  PixelResponse(std::sqrt(psf.sxx_px2), psf.pixel_aperture), scale, rect, out);
 }
 
 }  // namespace disc_image

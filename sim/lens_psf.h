@@ -29,6 +29,9 @@ struct LensPsf {
   double disc_radius_px = 0.0;  // the geometric defocus disc's radius (0: none)
   double halo_share = 0.0;      // the share of the light in the halo
   double halo_sigma_px = 0.0;   // its round Gaussian's sd
+  // The pixel's sensitive square, a share of the pitch per side (1: the whole pixel), centred
+  // (sim/disc_image.h PixelResponse).
+  double pixel_aperture = 1.0;
   // How far (px) the core and the disc reach beyond the image's edge: 4 sd of the core's wider
   // axis plus the disc's radius.
   double CoreReachPx() const;

@@ -61,7 +61,9 @@ Renderer::Renderer(const RigPhysics& physics)
       lab_(scene_),
       sensor_(physics.sensor, scene_.Project(PoseState{}).center_x_px,
               scene_.Project(PoseState{}).center_y_px),
-      ambient_margin_px_(static_cast<int>(CrosstalkKernel(physics.sensor.crosstalk_sigma_px).size())) {}
+      ambient_margin_px_(static_cast<int>(
+          CrosstalkKernel(physics.sensor.crosstalk_sigma_px, physics.sensor.crosstalk_shape)
+              .size())) {}
 
 SignalWindow Renderer::EmitterSignal(const PoseState& pose, double intensity_mw_sr,
                                      double exposure_s) const {
@@ -130,7 +132,8 @@ GroundTruth Renderer::Describe(const PoseState& pose, double exposure_s, PixelFo
   // charge as the pixels collect it (crosstalk included).
   const SensorOptions& so = sensor_.options();
   const SignalWindow w = DiffuseCharge(scene_.RenderSignal(pose, 1.0, exposure_s),
-                                       so.crosstalk_sigma_px, cv::Rect(0, 0, so.width_px, so.height_px));
+                                       so.crosstalk_sigma_px, so.crosstalk_shape,
+                                       cv::Rect(0, 0, so.width_px, so.height_px));
   double sum = 0, sx = 0, sy = 0, sxx = 0, syy = 0, peak = 0;
   for (int r = 0; r < w.electrons.rows; ++r) {
     for (int col = 0; col < w.electrons.cols; ++col) {

@@ -141,6 +141,9 @@ bool SensorOptions::IsValid(std::string* why) const {
   if (!std::isfinite(crosstalk_sigma_px) || crosstalk_sigma_px < 0.0 || crosstalk_sigma_px > 5.0) {
     return Fail(why, "sensor.crosstalk_sigma_px must lie in [0, 5]");
   }
+  if (!std::isfinite(pixel_aperture) || pixel_aperture < 0.3 || pixel_aperture > 1.0) {
+    return Fail(why, "sensor.pixel_aperture must lie in [0.3, 1] (a share of the pixel pitch)");
+  }
   if (!defects.IsValid(AdcMax(), why)) return false;
   if (defects.Count() > static_cast<double>(width_px) * height_px / 4.0) {
     return Fail(why, "sensor.hot_pixels + stuck_pixels must be at most a quarter of the pixels");
@@ -351,7 +354,7 @@ void ReadSensor(const YAML::Node& node, const std::string& file, SensorOptions* 
                      "full_well_e", "system_gain_dn_per_e", "read_noise_e",
                      "dark_current_e_per_s", "black_level_dn", "adc_bits", "nonlinearity",
                      "background_e_per_s", "temperature_c", "prnu_percent", "dsnu_e",
-                     "crosstalk_sigma_px", "hot_pixels", "hot_rate_e_per_s", "stuck_pixels",
+                     "crosstalk_sigma_px", "crosstalk_shape", "pixel_aperture", "hot_pixels", "hot_rate_e_per_s", "stuck_pixels",
                      "stuck_level_dn", "defect_seed", "defects_near_blob",
                      "near_blob_radius_px"});
   s->width_px = k.Integer("width_px", s->width_px);
@@ -370,6 +373,18 @@ void ReadSensor(const YAML::Node& node, const std::string& file, SensorOptions* 
   s->prnu_percent = k.Number("prnu_percent", s->prnu_percent);
   s->dsnu_e = k.Number("dsnu_e", s->dsnu_e);
   s->crosstalk_sigma_px = k.Number("crosstalk_sigma_px", s->crosstalk_sigma_px);
+  s->pixel_aperture = k.Number("pixel_aperture", s->pixel_aperture);
+  if (k.Has("crosstalk_shape")) {
+    const std::string shape = k.String("crosstalk_shape", "");
+    if (shape != "lattice_walk" && shape != "sampled_gaussian") {
+      yaml_fields::Fail(file, k.Get("crosstalk_shape").Mark(),
+                        "virtual.sensor.crosstalk_shape '" + shape.substr(0, 40) +
+                            "' is neither lattice_walk (charge diffusing pixel to pixel) nor "
+                            "sampled_gaussian (a Gaussian sampled on the pixels, cut at 4 sd)");
+    }
+    s->crosstalk_shape = shape == "sampled_gaussian" ? CrosstalkShape::kSampledGaussian
+                                                     : CrosstalkShape::kLatticeWalk;
+  }
   ReadDefects(k, s);
 }
 

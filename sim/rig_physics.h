@@ -82,6 +82,12 @@ struct OpticsOptions {
 
 enum class PixelFormat { kMono8, kMono12, kMono16 };
 
+// The per-axis shape of the crosstalk's kernel (sim/sensor.h CrosstalkKernel).
+enum class CrosstalkShape {
+  kLatticeWalk,      // charge diffusing pixel to pixel: e^-t I_n(t), t = sigma^2
+  kSampledGaussian,  // a Gaussian sampled on the pixel grid and truncated at 4 sd
+};
+
 struct SensorOptions {
   int width_px = 1280;
   int height_px = 1024;
@@ -104,6 +110,11 @@ struct SensorOptions {
   // counted, before read-out): the per-axis sd (px) of the lattice diffusion kernel each pixel's
   // photo-electrons spread by (sim/sensor.h CrosstalkKernel). 0 = none.
   double crosstalk_sigma_px = 0.0;
+  CrosstalkShape crosstalk_shape = CrosstalkShape::kLatticeWalk;  // key crosstalk_shape
+  // The pixel's sensitive square (a fill factor), a share of the pitch per side, centred: its
+  // response to an edge is that square's, normalised so that a flat field reads the same (the
+  // quantum efficiency is the whole pixel's). 1 = the whole pixel.
+  double pixel_aperture = 1.0;
   std::uint64_t seed = 1;             // noise of frame n is drawn from (seed, n)
   // Hot and stuck pixels (sim/defect_pixels.h), none by default; keys flat in `virtual.sensor:`.
   DefectPixelOptions defects;

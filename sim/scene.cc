@@ -157,6 +157,7 @@ LensPsf Scene::PsfAt(double distance_mm) const {
   psf.syy_px2 = std::max(psf.syy_px2, 1e-6);
   psf.halo_share = o.halo_share;
   psf.halo_sigma_px = o.halo_sigma_px;
+  psf.pixel_aperture = physics_.sensor.pixel_aperture;
   return psf;
 }
 
@@ -242,7 +243,7 @@ void IntegrateThroughPsf(const std::vector<ImageStrip>& strips, const LensPsf& p
   if (strips.empty()) return;
   disc_image::IntegrateStripsCore(strips, psf, scale * (1.0 - psf.halo_share), rect, out);
   if (!(psf.halo_share > 0.0)) return;
-  const disc_image::PixelResponse halo(psf.halo_sigma_px);
+  const disc_image::PixelResponse halo(psf.halo_sigma_px, psf.pixel_aperture);
   disc_image::IntegrateStrips(strips, halo, halo, scale * psf.halo_share, rect, out);
 }
 

@@ -53,12 +53,15 @@ void FillFromTable(cv::Mat& out, const std::vector<std::uint16_t>& table, std::u
 
 }  // namespace
 
-std::vector<double> CrosstalkKernel(double sigma_px) {
+std::vector<double> CrosstalkKernel(double sigma_px, CrosstalkShape shape) {
   IRDIST_CHECK(std::isfinite(sigma_px) && sigma_px >= 0.0, "crosstalk sigma must be >= 0");
   if (sigma_px == 0.0) return {1.0};
   const double t = sigma_px * sigma_px;
   std::vector<double> w;
-  for (int n = 0;; ++n) {
+  for (int n = 0; shape == CrosstalkShape::kSampledGaussian && n <= 4.0 * sigma_px; ++n) {
+    w.push_back(std::exp(-0.5 * n * n / t));
+  }
+  for (int n = 0; shape == CrosstalkShape::kLatticeWalk; ++n) {
     // e^-t I_n(t): the lattice random walk's share n pixels away (exponentially scaled Bessel).
     const double share = std::exp(-t) * boost::math::cyl_bessel_i(n, t);
     if (n > 0 && share < 1e-9) break;
@@ -70,9 +73,10 @@ std::vector<double> CrosstalkKernel(double sigma_px) {
   return w;
 }
 
-SignalWindow DiffuseCharge(const SignalWindow& electrons, double sigma_px, const cv::Rect& sensor) {
+SignalWindow DiffuseCharge(const SignalWindow& electrons, double sigma_px, CrosstalkShape shape,
+                           const cv::Rect& sensor) {
   if (sigma_px == 0.0 || electrons.rect.empty()) return electrons;
-  const std::vector<double> half = CrosstalkKernel(sigma_px);
+  const std::vector<double> half = CrosstalkKernel(sigma_px, shape);
   const int reach = static_cast<int>(half.size()) - 1;
   cv::Mat1d kernel(2 * reach + 1, 1);
   for (int n = -reach; n <= reach; ++n) kernel(n + reach) = half[std::abs(n)];
@@ -267,7 +271,8 @@ SignalWindow Sensor::CollectedCharge(const SignalWindow& signal) const {
     cv::multiply(signal.electrons, gain_(signal.rect), gained);
     photo.electrons = gained;
   }
-  return DiffuseCharge(photo, s.crosstalk_sigma_px, cv::Rect(0, 0, s.width_px, s.height_px));
+  return DiffuseCharge(photo, s.crosstalk_sigma_px, s.crosstalk_shape,
+                       cv::Rect(0, 0, s.width_px, s.height_px));
 }
 
 void Sensor::FillBackground(double dark_e, std::uint64_t frame_index, PixelFormat format,

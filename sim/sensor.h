@@ -45,15 +45,17 @@ int FormatBits(PixelFormat format);
 // OpenCV type of an image in that format (CV_8UC1 or CV_16UC1).
 int FormatCvType(PixelFormat format);
 
-// The per-axis crosstalk kernel for sigma_px > 0: weights w[n] = e^-t I_n(t) (t = sigma_px^2) for
-// n = 0..reach, symmetric (w[-n] = w[n]), cut where the tail falls below 1e-9 and renormalised to
-// sum 1 over -reach..reach. sigma_px = 0 gives {1}.
-std::vector<double> CrosstalkKernel(double sigma_px);
+// The per-axis crosstalk kernel for sigma_px > 0, symmetric (w[-n] = w[n]), its weights w[n] for
+// n = 0..reach renormalised to sum 1 over -reach..reach. The lattice walk: w[n] = e^-t I_n(t)
+// (t = sigma_px^2), cut where the tail falls below 1e-9. The sampled Gaussian: w[n] =
+// e^(-n^2 / (2 sigma_px^2)) for n <= 4 sigma_px. sigma_px = 0 gives {1}.
+std::vector<double> CrosstalkKernel(double sigma_px, CrosstalkShape shape);
 
 // The mean electron image after crosstalk: every pixel's electrons spread by the separable kernel.
 // The window grows by the kernel's reach on every side, clipped to `sensor` (charge that diffuses
 // off the sensor is lost); the total is conserved otherwise. sigma_px = 0 returns `electrons`.
-SignalWindow DiffuseCharge(const SignalWindow& electrons, double sigma_px, const cv::Rect& sensor);
+SignalWindow DiffuseCharge(const SignalWindow& electrons, double sigma_px, CrosstalkShape shape,
+                           const cv::Rect& sensor);
 
 // The camera's pixel processing after the ADC (a LUT or gamma, sim/rig_physics.h's camera
 // faults): each value v of `image` (in `format`'s range, full scale FS) becomes

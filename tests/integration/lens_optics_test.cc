@@ -5,13 +5,16 @@
 // theta <= 1 deg in the median (or the round lens's, whose noise alone reads about as much: theta
 // is >= 0) and its distances stay within 0.1% (median) and 3x the Cramer-Rao bound (rms); a
 // defocused lens (the geometric disc) and a lens with veiling glare (3% of the light in a halo)
-// calibrate to a model every reader loads and validate within bounds.
+// calibrate to a model every reader loads and validate within bounds. Two sensors outside the
+// blob fit's pixel family: a 70% pixel aperture validates as well; all the blur after the pixels
+// is refused by the fit's own fitness, with its cause.
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <iostream>
 #include <string>
 #include <utility>
@@ -45,14 +48,18 @@ bracket:
   repeats: 3
 )";
 
-// The shipped virtual rig with these `virtual.optics:` keys.
-std::string RigWithOptics(const std::vector<std::pair<std::string, YAML::Node>>& keys) {
+using RigKeys = std::vector<std::pair<std::string, YAML::Node>>;
+
+// The shipped virtual rig with these `virtual.optics:` and `virtual.sensor:` keys.
+std::string RigWith(const RigKeys& optics, const RigKeys& sensor = {}) {
   YAML::Node rig = YAML::LoadFile(std::string(IRDIST_SOURCE_DIR) + "/recipes/rigs/virtual.yaml");
-  for (const auto& [key, value] : keys) rig["virtual"]["optics"][key] = value;
+  for (const auto& [key, value] : optics) rig["virtual"]["optics"][key] = value;
+  for (const auto& [key, value] : sensor) rig["virtual"]["sensor"][key] = value;
   YAML::Emitter out;
   out << rig;
   return std::string(out.c_str()) + "\n";
 }
+std::string RigWithOptics(const RigKeys& optics) { return RigWith(optics); }
 
 // What one optic's calibration and validation gave.
 struct LensRun {
@@ -223,6 +230,66 @@ TEST_F(LensOptics, DefocusDiscAndHaloLensesCalibrateToLoadableModels) {
     // their own blur read -0.4%).
     EXPECT_EQ(UnhealthyRows(run), std::vector<std::string>{}) << name;
   }
+}
+
+// Validates `run`'s model like the round lens's (face-on theta, the median distance error, the
+// health, the error over the bound within 3; its goal, 1.3, printed, not asserted at this count).
+void ExpectValidatesAsTheRoundLens(const LensRun& control, const LensRun& run,
+                                   const std::string& name) {
+  ASSERT_EQ(run.validate_code, 0) << name << "\n" << run.validate_output;
+  ASSERT_EQ(run.joint.size(), 24u) << name;
+  double median_theta = 0.0, median_pct = 0.0, round_theta = 0.0, round_pct = 0.0;
+  FaceOnFigures(run, &median_theta, &median_pct);
+  FaceOnFigures(control, &round_theta, &round_pct);
+  std::cout << name << " sensor: face-on median theta " << median_theta << " deg (round lens "
+            << round_theta << "), median |d error| " << median_pct << "% (round lens "
+            << round_pct << "%), error / CRB rms " << run.error_over_bound_rms << " (round lens "
+            << control.error_over_bound_rms << ")\n";
+  EXPECT_LE(median_theta, std::max(1.0, 1.3 * round_theta)) << name;
+  EXPECT_LE(median_pct, 0.1) << name;
+  EXPECT_EQ(UnhealthyRows(run), std::vector<std::string>{}) << name;
+  EXPECT_LE(run.error_over_bound_rms, 3.0) << name;
+}
+
+// A sensor whose pixels sense only the central 70% of their pitch (a fill factor), behind a
+// 0.5 px lens: outside the blob fit's pixel family (the whole pixel's box), it calibrates to a
+// model that loads and validates as the round lens does.
+TEST_F(LensOptics, APixelApertureOf70PercentCalibratesAndValidates) {
+  ASSERT_EQ(control_->calibrate_code, 0) << control_->calibrate_output;
+  const LensRun run = CalibrateAndValidate(
+      "fill70", RigWith({{"psf_sigma_px", YAML::Node(0.5)}}, {{"pixel_aperture", YAML::Node(0.7)}}));
+  ASSERT_EQ(run.calibrate_code, 0) << run.calibrate_output;
+  EXPECT_NO_THROW(LoadModel(run.model_path));
+  ExpectValidatesAsTheRoundLens(*control_, run, "fill70");
+}
+
+// All the blur after the pixels (issue 31's renderer): a sharp lens, no defocus, the charge
+// spread by a Gaussian of 1 px sampled on the pixels and cut at 4 sd. The calibration's sizes of
+// tilted discs miss the model by ~1% (the sharp edge sampled by the pixels), so the fit judges the
+// model outside its family and refuses it, naming the cause, rather than writing a model that
+// reads those poses wrong; kept on purpose (--keep-model), it says so in model.yaml.
+TEST_F(LensOptics, AllTheBlurAfterThePixelsIsNamedByTheFitsFitness) {
+  const LensRun run = CalibrateAndValidate(
+      "all_after", RigWith({{"psf_sigma_px", YAML::Node(0.0)}, {"focus_mm", YAML::Node(0.0)}},
+                           {{"crosstalk_sigma_px", YAML::Node(1.0)},
+                            {"crosstalk_shape", YAML::Node("sampled_gaussian")}}));
+  ASSERT_NE(run.calibrate_code, 0) << run.calibrate_output;
+  EXPECT_NE(run.calibrate_output.find("an optic outside the model's family"), std::string::npos)
+      << run.calibrate_output;
+  const std::string cal = run.model_path.substr(0, run.model_path.rfind('/'));
+  EXPECT_FALSE(std::ifstream(run.model_path).good()) << "a refused model must not be model.yaml";
+  std::string output;
+  testing::LoopbackGvcpLock lock;
+  ASSERT_EQ(RunIrdist({"fit", cal + "/recording", "--out", run.model_path, "--keep-model",
+                       "--force"},
+                      cal + "/../keep.log", &output, std::chrono::seconds(300)),
+            0)
+      << output;
+  const CalibrationModel kept = LoadModel(run.model_path);
+  EXPECT_TRUE(kept.fitness.assessed);
+  EXPECT_FALSE(kept.fitness.passed);
+  std::cout << "all-after sensor: the fit's reduced chi-square " << kept.fitness.reduced_chi2
+            << " (limit " << kept.fitness.limit << ")\n";
 }
 
 }  // namespace

@@ -155,6 +155,30 @@ TEST(RigPhysics, FixedPatternNoiseKeys) {
   ExpectError("virtual:\n  sensor:\n    prnu_percent: 50\n", "prnu", "", "prnu_percent");
 }
 
+// The pixel's sensitive square (a fill factor): the whole pixel by default, read, range-checked.
+TEST(RigPhysics, PixelApertureKey) {
+  EXPECT_EQ(RigPhysics{}.sensor.pixel_aperture, 1.0);
+  const RigPhysics p = LoadRigPhysics(
+      WriteRig("aperture", "name: t\nvirtual:\n  sensor:\n    pixel_aperture: 0.7\n"));
+  EXPECT_EQ(p.sensor.pixel_aperture, 0.7);
+  ExpectError("virtual:\n  sensor:\n    pixel_aperture: 0.2\n", "aperture_low", "",
+              "pixel_aperture");
+  ExpectError("virtual:\n  sensor:\n    pixel_aperture: 1.5\n", "aperture_high", "",
+              "pixel_aperture");
+}
+
+// The crosstalk's kernel shape: the lattice walk by default, the sampled Gaussian by name, and
+// any other name refused at its line with the two it may be.
+TEST(RigPhysics, CrosstalkShapeKey) {
+  EXPECT_EQ(RigPhysics{}.sensor.crosstalk_shape, CrosstalkShape::kLatticeWalk);
+  const RigPhysics p = LoadRigPhysics(WriteRig(
+      "shape", "name: t\nvirtual:\n  sensor:\n    crosstalk_sigma_px: 1.0\n"
+               "    crosstalk_shape: sampled_gaussian\n"));
+  EXPECT_EQ(p.sensor.crosstalk_shape, CrosstalkShape::kSampledGaussian);
+  ExpectError("virtual:\n  sensor:\n    crosstalk_shape: gaussian\n", "badshape", "3",
+              "sampled_gaussian");
+}
+
 TEST(RigPhysics, OwnersSubsectionsAreLeftToTheirOwners) {
   // virtual.devices and virtual.station are read strictly by the emulators, not here.
   const RigPhysics p = LoadRigPhysics(WriteRig(

@@ -231,7 +231,8 @@ SignalWindow Point(int x, int y, double electrons) {
 TEST(Sensor, CrosstalkConservesChargeAndSpreadsAPointBySigma) {
   const cv::Rect sensor(0, 0, 1280, 1024);
   for (double sigma : {0.3, 0.6, 1.0, 2.0}) {
-    const SignalWindow w = DiffuseCharge(Point(600, 500, 1000.0), sigma, sensor);
+    const SignalWindow w =
+        DiffuseCharge(Point(600, 500, 1000.0), sigma, CrosstalkShape::kLatticeWalk, sensor);
     double sum = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
     for (int r = 0; r < w.electrons.rows; ++r) {
       for (int c = 0; c < w.electrons.cols; ++c) {
@@ -245,15 +246,45 @@ TEST(Sensor, CrosstalkConservesChargeAndSpreadsAPointBySigma) {
     EXPECT_NEAR(syy / sum, sigma * sigma, 1e-4 * sigma * sigma) << sigma;
     EXPECT_NEAR(sxy / sum, 0.0, 1e-6) << sigma;
     // Separable: the corner share is the product of the axis shares.
-    const std::vector<double> k = CrosstalkKernel(sigma);
+    const std::vector<double> k = CrosstalkKernel(sigma, CrosstalkShape::kLatticeWalk);
     const cv::Point at = cv::Point(601, 501) - w.rect.tl();
     EXPECT_NEAR(w.electrons(at) / 1000.0, k[1] * k[1], 1e-6) << sigma;
   }
   // At the sensor's edge the charge that diffuses off it is lost, and the window stays on it.
-  const SignalWindow edge = DiffuseCharge(Point(0, 0, 1000.0), 1.0, sensor);
+  const SignalWindow edge =
+      DiffuseCharge(Point(0, 0, 1000.0), 1.0, CrosstalkShape::kLatticeWalk, sensor);
   EXPECT_EQ(edge.rect & sensor, edge.rect);
   EXPECT_LT(cv::sum(edge.electrons)[0], 1000.0 * 0.75);
-  EXPECT_EQ(CrosstalkKernel(0.0), std::vector<double>{1.0});
+  EXPECT_EQ(CrosstalkKernel(0.0, CrosstalkShape::kLatticeWalk), std::vector<double>{1.0});
+  EXPECT_EQ(CrosstalkKernel(0.0, CrosstalkShape::kSampledGaussian), std::vector<double>{1.0});
+}
+
+// The sampled Gaussian (a crosstalk outside the lattice walk's family, for the estimator's tests):
+// e^(-n^2 / 2 sigma^2) on the pixels, cut at 4 sd, its light kept; at sigma 1 its centre weight is
+// 1 / sqrt(2 pi), the walk's e^-1 I_0(1) = 0.466.
+TEST(Sensor, SampledGaussianCrosstalkIsTheGaussianOnThePixels) {
+  for (double sigma : {0.6, 1.0, 1.7}) {
+    const std::vector<double> k = CrosstalkKernel(sigma, CrosstalkShape::kSampledGaussian);
+    ASSERT_EQ(static_cast<int>(k.size()), static_cast<int>(std::floor(4.0 * sigma)) + 1) << sigma;
+    double sum = k[0], var = 0.0;
+    for (std::size_t n = 1; n < k.size(); ++n) {
+      sum += 2.0 * k[n];
+      var += 2.0 * k[n] * static_cast<double>(n * n);
+      EXPECT_NEAR(k[n] / k[0], std::exp(-0.5 * n * n / (sigma * sigma)), 1e-12) << sigma;
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-12) << sigma;
+    // From 1 px on, sigma^2 within the cut's 0.2%; at 0.6 px the grid's sampling takes 2% off.
+    if (sigma >= 1.0) {
+      EXPECT_NEAR(var, sigma * sigma, 2e-3 * sigma * sigma) << sigma;
+    }
+  }
+  EXPECT_NEAR(CrosstalkKernel(1.0, CrosstalkShape::kSampledGaussian)[0], 0.398942, 2e-5);
+  EXPECT_NEAR(CrosstalkKernel(1.0, CrosstalkShape::kLatticeWalk)[0], 0.465760, 2e-5);
+  const SignalWindow spread = DiffuseCharge(Point(640, 512, 1000.0), 1.0,
+                                            CrosstalkShape::kSampledGaussian,
+                                            cv::Rect(0, 0, 1280, 1024));
+  EXPECT_NEAR(spread.electrons(cv::Point(640, 512) - spread.rect.tl()) / 1000.0,
+              0.398942 * 0.398942, 1e-4);
 }
 
 // Exposed through the sensor, crosstalk moves the mean and keeps the counts Poisson: a lit pixel
@@ -264,7 +295,7 @@ TEST(Sensor, CrosstalkActsOnTheCountedChargeBeforeTheNoise) {
   o.dark_current_e_per_s = 0.0;
   const Sensor sensor(o);
   const SignalWindow point = Point(640, 512, 8000.0);
-  const std::vector<double> k = CrosstalkKernel(0.6);
+  const std::vector<double> k = CrosstalkKernel(0.6, CrosstalkShape::kLatticeWalk);
   const double k_gain = o.system_gain_dn_per_e;
   double centre = 0, neighbour = 0, centre2 = 0;
   const int frames = 400;
