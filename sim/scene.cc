@@ -213,13 +213,15 @@ void AppendStrip(const Scene& scene, const StripGeometry& g, double v, double we
 // The strips of the rows |v - range.v_mid| <= range.v_half at Chebyshev-spaced heights v = mid +
 // half sin(phi): phi evenly spaced (the midpoint rule) for a whole disc, whose chord vanishes as a
 // square root at both ends; phi at Gauss-Legendre nodes for a cut disc's range, whose ends may be
-// where the edge meets the conic (a chord that does not vanish there).
+// where the edge meets the conic (a chord that does not vanish there), and for a part of a range
+// within one pixel row (`row_part`: at least 16 nodes, not 32).
 void AppendStrips(const Scene& scene, const StripGeometry& g, const disc_image::StripRange& range,
-                  std::vector<ImageStrip>* strips) {
+                  bool row_part, std::vector<ImageStrip>* strips) {
   const double height_px = 2.0 * range.v_half / g.pitch_mm;
-  const int nodes = std::max(32, static_cast<int>(std::ceil(g.supersample * height_px)));
+  const int nodes =
+      std::max(row_part ? 16 : 32, static_cast<int>(std::ceil(g.supersample * height_px)));
   strips->reserve(strips->size() + nodes);
-  if (g.cut == nullptr) {
+  if (g.cut == nullptr && !row_part) {
     for (int k = 0; k < nodes; ++k) {
       const double phi = -0.5 * kPi + (k + 0.5) * kPi / nodes;
       AppendStrip(scene, g, range.v_mid + range.v_half * std::sin(phi),
@@ -236,6 +238,25 @@ void AppendStrips(const Scene& scene, const StripGeometry& g, const disc_image::
   }
 }
 
+// A range's strips (AppendStrips); behind a PSF sharper than kRowSplitSdPx along y, split at the
+// pixel rows' borders (y_px an integer: rows span [r, r + 1)), each part Gauss-Legendre spaced.
+void AppendRows(const Scene& scene, const StripGeometry& g, const disc_image::StripRange& range,
+                const LensPsf& psf, std::vector<ImageStrip>* strips) {
+  if (!(std::sqrt(psf.syy_px2) < kRowSplitSdPx)) {
+    AppendStrips(scene, g, range, false, strips);
+    return;
+  }
+  const auto row_y = [&](double v) { return v / g.pitch_mm + g.half_height_px; };
+  const double lo = range.v_mid - range.v_half, hi = range.v_mid + range.v_half;
+  double from = lo;
+  for (double y = std::floor(row_y(lo)) + 1.0; y < row_y(hi); y += 1.0) {
+    const double to = (y - g.half_height_px) * g.pitch_mm;
+    if (to > from) AppendStrips(scene, g, {0.5 * (from + to), 0.5 * (to - from)}, true, strips);
+    from = to;
+  }
+  if (hi > from) AppendStrips(scene, g, {0.5 * (from + hi), 0.5 * (hi - from)}, true, strips);
+}
+
 // The strips through the lens: (1 - halo share) of the light through the core (and the defocus
 // disc), the halo's share through its wide round Gaussian.
 void IntegrateThroughPsf(const std::vector<ImageStrip>& strips, const LensPsf& psf, double scale,
@@ -249,7 +270,7 @@ void IntegrateThroughPsf(const std::vector<ImageStrip>& strips, const LensPsf& p
 
 }  // namespace
 
-std::vector<ImageStrip> Scene::DiscStrips(const DiscSource& disc) const {
+std::vector<ImageStrip> Scene::DiscStrips(const DiscSource& disc, const LensPsf& psf) const {
   const OpticsOptions& o = physics_.optics;
   const SensorOptions& s = physics_.sensor;
   StripGeometry g;
@@ -270,14 +291,14 @@ std::vector<ImageStrip> Scene::DiscStrips(const DiscSource& disc) const {
   std::vector<ImageStrip> strips;
   if (!g.conic.in_view) return strips;
   if (!disc.cut) {
-    AppendStrips(*this, g, {g.conic.v_mid, g.conic.v_half}, &strips);
+    AppendRows(*this, g, {g.conic.v_mid, g.conic.v_half}, psf, &strips);
     return strips;
   }
   const disc_image::ImageCut cut = disc_image::MakeImageCut(
       g.n, c, AsVec3(disc.cut_direction), disc.cut_offset_mm, g.f);
   g.cut = &cut;
   for (const disc_image::StripRange& range : disc_image::VisibleRanges(g.conic, cut)) {
-    AppendStrips(*this, g, range, &strips);
+    AppendRows(*this, g, range, psf, &strips);
   }
   return strips;
 }
@@ -323,8 +344,8 @@ SignalWindow Scene::RenderDisc(const DiscSource& disc, double exposure_s) const 
   if (out.rect.empty()) return out;
   out.electrons = cv::Mat1f::zeros(out.rect.height, out.rect.width);
   if (disc.intensity_mw_sr <= 0.0 || exposure_s <= 0.0 || c.z <= 0.0) return out;
-  IntegrateThroughPsf(DiscStrips(disc), psf, electrons_per_radiance_s_ * exposure_s, out.rect,
-                      &out.electrons);
+  IntegrateThroughPsf(DiscStrips(disc, psf), psf, electrons_per_radiance_s_ * exposure_s,
+                      out.rect, &out.electrons);
   return out;
 }
 
@@ -347,7 +368,7 @@ SignalWindow Scene::RenderSignal(const PoseState& pose, double intensity_mw_sr,
   if (out.rect.empty()) return out;
   out.electrons = cv::Mat1f::zeros(out.rect.height, out.rect.width);
   if (intensity_mw_sr <= 0.0 || exposure_s <= 0.0) return out;
-  IntegrateThroughPsf(DiscStrips(EmitterDisc(pose, intensity_mw_sr)), psf,
+  IntegrateThroughPsf(DiscStrips(EmitterDisc(pose, intensity_mw_sr), psf), psf,
                       electrons_per_radiance_s_ * exposure_s, out.rect, &out.electrons);
   return out;
 }

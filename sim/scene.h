@@ -58,6 +58,11 @@ struct EmitterImage {
   double theta_deg = 0.0;    // angle between emission axis and the line to the camera
 };
 
+// Below this PSF sd along y (px) the disc's strips are split at the pixel rows' borders
+// (Scene::DiscStrips); above it the PSF spreads each strip over rows smoothly (at 0.2 px the
+// unsplit strips already give a face-on disc's x and y variances within 1e-5 of each other).
+constexpr double kRowSplitSdPx = 0.25;
+
 class Scene {
  public:
   explicit Scene(const RigPhysics& physics);
@@ -107,8 +112,11 @@ class Scene {
   cv::Rect SignalRect(const EmitterImage& image, const LensPsf& psf) const;
   // The disc's image as Chebyshev-spaced horizontal strips with their chords and radiance (W m^-2
   // sr^-1, vignetting included); empty when the disc is not an ellipse in view. A cut disc's
-  // strips are spaced so over each range of rows where its visible chord is smooth.
-  std::vector<ImageStrip> DiscStrips(const DiscSource& disc) const;
+  // strips are spaced so over each range of rows where its visible chord is smooth. Behind a PSF
+  // whose sd along y is below kRowSplitSdPx, each strip's light falls into one pixel row whole,
+  // so the ranges are also split at the rows' borders (each row's share then integrated on its
+  // own: the strips alone quantise y, and a sharp disc read 2% wider along x than along y).
+  std::vector<ImageStrip> DiscStrips(const DiscSource& disc, const LensPsf& psf) const;
 
   RigPhysics physics_;
   double electrons_per_radiance_s_ = 0.0;
