@@ -4,7 +4,6 @@
 // threshold, the run of a row inside a circle, the farthest level above a threshold.
 
 #include <cstdint>
-
 #include <opencv2/core.hpp>
 
 namespace irdist {

@@ -238,23 +238,32 @@ void AppendStrips(const Scene& scene, const StripGeometry& g, const disc_image::
   }
 }
 
-// A range's strips (AppendStrips); behind a PSF sharper than kRowSplitSdPx along y, split at the
-// pixel rows' borders (y_px an integer: rows span [r, r + 1)), each part Gauss-Legendre spaced.
+// A range's strips (AppendStrips); behind a PSF sharper than kRowSplitSdPx along y, split where
+// the pixels' sensitive heights begin and end (y_px = r + 0.5 -+ aperture / 2: the rows' borders
+// for the whole pixel), each part Gauss-Legendre spaced.
 void AppendRows(const Scene& scene, const StripGeometry& g, const disc_image::StripRange& range,
                 const LensPsf& psf, std::vector<ImageStrip>* strips) {
   if (!(std::sqrt(psf.syy_px2) < kRowSplitSdPx)) {
     AppendStrips(scene, g, range, false, strips);
     return;
   }
-  const auto row_y = [&](double v) { return v / g.pitch_mm + g.half_height_px; };
+  const auto v_of = [&](double y_px) { return (y_px - g.half_height_px) * g.pitch_mm; };
   const double lo = range.v_mid - range.v_half, hi = range.v_mid + range.v_half;
-  double from = lo;
-  for (double y = std::floor(row_y(lo)) + 1.0; y < row_y(hi); y += 1.0) {
-    const double to = (y - g.half_height_px) * g.pitch_mm;
-    if (to > from) AppendStrips(scene, g, {0.5 * (from + to), 0.5 * (to - from)}, true, strips);
-    from = to;
+  const double y_lo = lo / g.pitch_mm + g.half_height_px, y_hi = hi / g.pitch_mm + g.half_height_px;
+  std::vector<double> cuts;
+  for (double r = std::floor(y_lo) - 1.0; r <= std::ceil(y_hi); r += 1.0) {
+    const double half = 0.5 * psf.pixel_aperture;
+    for (const double y : {r + 0.5 - half, r + 0.5 + half}) {
+      if (y > y_lo && y < y_hi) cuts.push_back(v_of(y));
+    }
   }
-  if (hi > from) AppendStrips(scene, g, {0.5 * (from + hi), 0.5 * (hi - from)}, true, strips);
+  std::sort(cuts.begin(), cuts.end());
+  cuts.push_back(hi);
+  double from = lo;
+  for (const double to : cuts) {
+    if (to > from) AppendStrips(scene, g, {0.5 * (from + to), 0.5 * (to - from)}, true, strips);
+    from = std::max(from, to);
+  }
 }
 
 // The strips through the lens: (1 - halo share) of the light through the core (and the defocus

@@ -2,14 +2,14 @@
 // pixels, the same sums, for every threshold a feature can pass (NaN and out-of-range included).
 #include "estimator/window_scan.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace irdist {
 namespace {
@@ -19,9 +19,9 @@ const double kInf = std::numeric_limits<double>::infinity();
 
 TEST(LevelAbove, IsTheDoubleTestOnEveryLevelAndThreshold) {
   const std::vector<std::uint16_t> levels = {0, 1, 99, 100, 101, 4095, 32767, 32768, 65534, 65535};
-  const std::vector<double> thresholds = {kNaN,   -kInf, -1.0,    -0.5,    0.0,    0.5,
-                                          99.999, 100.0, 100.5,   4094.99, 4095.0, 65534.5,
-                                          65535,  7e4,   kInf};
+  const std::vector<double> thresholds = {kNaN,   -kInf,   -1.0,  -0.5,  0.0,
+                                          0.5,    99.999,  100.0, 100.5, 4094.99,
+                                          4095.0, 65534.5, 65535, 7e4,   kInf};
   for (double t : thresholds) {
     const LevelAbove above(t);
     for (std::uint16_t g : levels) {
@@ -37,8 +37,10 @@ TEST(LevelAbove, AnyInFindsALevelAboveWherePresent) {
     std::vector<std::uint16_t> row(static_cast<std::size_t>(length(rng)));
     for (auto& g : row) g = static_cast<std::uint16_t>(level(rng) % (trial % 7 == 0 ? 200 : 65536));
     const double t = trial % 5 == 0 ? kNaN : level(rng) + 0.25 * (trial % 4) - 1.0;
-    const bool any = std::any_of(row.begin(), row.end(), [t](std::uint16_t g) { return !(g <= t); });
-    EXPECT_EQ(LevelAbove(t).AnyIn(row.data(), static_cast<int>(row.size())), any) << "trial " << trial;
+    const bool any =
+        std::any_of(row.begin(), row.end(), [t](std::uint16_t g) { return !(g <= t); });
+    EXPECT_EQ(LevelAbove(t).AnyIn(row.data(), static_cast<int>(row.size())), any)
+        << "trial " << trial;
   }
 }
 
@@ -71,7 +73,8 @@ TEST(SumLevels, SumsTheRange) {
   EXPECT_EQ(SumLevels(levels.data(), 3, 3), 0);
 }
 
-double BruteFarthestAbove2(const cv::Mat& image, const cv::Rect& w, double t, double cx, double cy) {
+double BruteFarthestAbove2(const cv::Mat& image, const cv::Rect& w, double t, double cx,
+                           double cy) {
   double best = 0.0;
   for (int y = w.y; y < w.y + w.height; ++y) {
     for (int x = w.x; x < w.x + w.width; ++x) {
@@ -97,7 +100,8 @@ TEST(FarthestAbove2, IsTheFarthestPixelAboveTheThreshold) {
     const cv::Rect window(trial % 6, trial % 5, 40, 32);
     const double t = trial % 17 == 0 ? kNaN : trial % 11 == 0 ? 100.0 : 90.0 + level(rng) * 0.9;
     const double cx = centre(rng), cy = centre(rng);
-    EXPECT_EQ(FarthestAbove2(image, window, t, cx, cy), BruteFarthestAbove2(image, window, t, cx, cy))
+    EXPECT_EQ(FarthestAbove2(image, window, t, cx, cy),
+              BruteFarthestAbove2(image, window, t, cx, cy))
         << "trial " << trial;
   }
 }

@@ -255,7 +255,8 @@ void ExpectValidatesAsTheRoundLens(const LensRun& control, const LensRun& run,
 TEST_F(LensOptics, APixelApertureOf70PercentCalibratesAndValidates) {
   ASSERT_EQ(control_->calibrate_code, 0) << control_->calibrate_output;
   const LensRun run = CalibrateAndValidate(
-      "fill70", RigWith({{"psf_sigma_px", YAML::Node(0.5)}}, {{"pixel_aperture", YAML::Node(0.7)}}));
+      "fill70",
+      RigWith({{"psf_sigma_px", YAML::Node(0.5)}}, {{"pixel_aperture", YAML::Node(0.7)}}));
   ASSERT_EQ(run.calibrate_code, 0) << run.calibrate_output;
   EXPECT_NO_THROW(LoadModel(run.model_path));
   ExpectValidatesAsTheRoundLens(*control_, run, "fill70");
