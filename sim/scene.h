@@ -114,8 +114,9 @@ class Scene {
   // sr^-1, vignetting included); empty when the disc is not an ellipse in view. A cut disc's
   // strips are spaced so over each range of rows where its visible chord is smooth. Behind a PSF
   // whose sd along y is below kRowSplitSdPx, each strip's light falls into one pixel row whole,
-  // so the ranges are also split at the rows' borders (each row's share then integrated on its
-  // own: the strips alone quantise y, and a sharp disc read 2% wider along x than along y).
+  // so the ranges are also split where the pixels' sensitive heights begin and end (each part
+  // then integrated on its own: the strips alone quantise y, and a sharp disc read 2% wider along
+  // x than along y).
   std::vector<ImageStrip> DiscStrips(const DiscSource& disc, const LensPsf& psf) const;
 
   RigPhysics physics_;
