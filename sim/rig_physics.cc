@@ -354,9 +354,9 @@ void ReadSensor(const YAML::Node& node, const std::string& file, SensorOptions* 
                      "full_well_e", "system_gain_dn_per_e", "read_noise_e",
                      "dark_current_e_per_s", "black_level_dn", "adc_bits", "nonlinearity",
                      "background_e_per_s", "temperature_c", "prnu_percent", "dsnu_e",
-                     "crosstalk_sigma_px", "crosstalk_shape", "pixel_aperture", "hot_pixels", "hot_rate_e_per_s", "stuck_pixels",
-                     "stuck_level_dn", "defect_seed", "defects_near_blob",
-                     "near_blob_radius_px"});
+                     "crosstalk_sigma_px", "crosstalk_shape", "pixel_aperture", "hot_pixels",
+                     "hot_rate_e_per_s", "stuck_pixels", "stuck_level_dn", "defect_seed",
+                     "defects_near_blob", "near_blob_radius_px"});
   s->width_px = k.Integer("width_px", s->width_px);
   s->height_px = k.Integer("height_px", s->height_px);
   s->pixel_pitch_um = k.Number("pixel_pitch_um", s->pixel_pitch_um);
