@@ -9,6 +9,7 @@
 
 #include "estimator/scene.h"
 #include "estimator/scene_internal.h"
+#include "estimator/window_scan.h"
 
 namespace irdist::scene {
 namespace {
@@ -136,18 +137,16 @@ cv::Rect WindowAround(cv::Point2d c, int side) {
                   static_cast<int>(std::lround(c.y - 0.5 * (side - 1))), side, side);
 }
 
-// The pixels above `threshold`, in row order: each row's maximum first (a loop the compiler
-// vectorises), the row scanned only when it holds one (most rows of a frame hold none).
+// The pixels above `threshold`, in row order, each row scanned only when it holds one (most
+// rows of a frame hold none: estimator/window_scan.h LevelAbove).
 std::vector<cv::Point> PixelsAbove(const cv::Mat& image, double threshold) {
   std::vector<cv::Point> out;
-  const uint16_t t = static_cast<uint16_t>(std::clamp(std::floor(threshold), 0.0, 65535.0));
+  const LevelAbove above(threshold);
   for (int y = 0; y < image.rows; ++y) {
     const uint16_t* row = image.ptr<uint16_t>(y);
-    uint16_t top = 0;
-    for (int x = 0; x < image.cols; ++x) top = std::max(top, row[x]);
-    if (top <= t) continue;
+    if (!above.AnyIn(row, image.cols)) continue;
     for (int x = 0; x < image.cols; ++x) {
-      if (row[x] > t) out.emplace_back(x, y);
+      if (above(row[x])) out.emplace_back(x, y);
     }
   }
   return out;

@@ -130,10 +130,8 @@ GroundTruth Renderer::Describe(const PoseState& pose, double exposure_s, PixelFo
   truth.intensity_mw_sr = scene_.OnAxisIntensityMwSr(pose.bias_ma, junction_rise_k);
   // Shape and peak at a unit intensity (the shape does not depend on it), then scaled; the
   // charge as the pixels collect it (crosstalk included).
-  const SensorOptions& so = sensor_.options();
-  const SignalWindow w = DiffuseCharge(scene_.RenderSignal(pose, 1.0, exposure_s),
-                                       so.crosstalk_sigma_px, so.crosstalk_shape,
-                                       cv::Rect(0, 0, so.width_px, so.height_px));
+  const SignalWindow w =
+      DiffuseCharge(scene_.RenderSignal(pose, 1.0, exposure_s), sensor_.options());
   double sum = 0, sx = 0, sy = 0, sxx = 0, syy = 0, peak = 0;
   for (int r = 0; r < w.electrons.rows; ++r) {
     for (int col = 0; col < w.electrons.cols; ++col) {

@@ -107,8 +107,8 @@ struct SensorOptions {
   double prnu_percent = 0.0;
   double dsnu_e = 0.0;
   // Inter-pixel crosstalk (charge diffusion between neighbouring pixels after the photons are
-  // counted, before read-out): the per-axis sd (px) of the lattice diffusion kernel each pixel's
-  // photo-electrons spread by (sim/sensor.h CrosstalkKernel). 0 = none.
+  // counted, before read-out): the per-axis sd (px) of the kernel each pixel's photo-electrons
+  // spread by (sim/sensor.h CrosstalkKernel; its shape crosstalk_shape). 0 = none.
   double crosstalk_sigma_px = 0.0;
   CrosstalkShape crosstalk_shape = CrosstalkShape::kLatticeWalk;  // key crosstalk_shape
   // The pixel's sensitive square (a fill factor), a share of the pitch per side, centred: its

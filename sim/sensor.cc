@@ -58,14 +58,15 @@ std::vector<double> CrosstalkKernel(double sigma_px, CrosstalkShape shape) {
   if (sigma_px == 0.0) return {1.0};
   const double t = sigma_px * sigma_px;
   std::vector<double> w;
-  for (int n = 0; shape == CrosstalkShape::kSampledGaussian && n <= 4.0 * sigma_px; ++n) {
-    w.push_back(std::exp(-0.5 * n * n / t));
-  }
-  for (int n = 0; shape == CrosstalkShape::kLatticeWalk; ++n) {
-    // e^-t I_n(t): the lattice random walk's share n pixels away (exponentially scaled Bessel).
-    const double share = std::exp(-t) * boost::math::cyl_bessel_i(n, t);
-    if (n > 0 && share < 1e-9) break;
-    w.push_back(share);
+  if (shape == CrosstalkShape::kSampledGaussian) {
+    for (int n = 0; n <= 4.0 * sigma_px; ++n) w.push_back(std::exp(-0.5 * n * n / t));
+  } else {
+    for (int n = 0;; ++n) {
+      // e^-t I_n(t): the lattice random walk's share n pixels away (exponentially scaled Bessel).
+      const double share = std::exp(-t) * boost::math::cyl_bessel_i(n, t);
+      if (n > 0 && share < 1e-9) break;
+      w.push_back(share);
+    }
   }
   double sum = w[0];
   for (size_t n = 1; n < w.size(); ++n) sum += 2.0 * w[n];
@@ -92,6 +93,11 @@ SignalWindow DiffuseCharge(const SignalWindow& electrons, double sigma_px, Cross
   out.rect = grown & sensor;
   out.electrons = spread(out.rect - grown.tl()).clone();
   return out;
+}
+
+SignalWindow DiffuseCharge(const SignalWindow& electrons, const SensorOptions& sensor) {
+  return DiffuseCharge(electrons, sensor.crosstalk_sigma_px, sensor.crosstalk_shape,
+                       cv::Rect(0, 0, sensor.width_px, sensor.height_px));
 }
 
 int FormatBits(PixelFormat format) {
@@ -271,8 +277,7 @@ SignalWindow Sensor::CollectedCharge(const SignalWindow& signal) const {
     cv::multiply(signal.electrons, gain_(signal.rect), gained);
     photo.electrons = gained;
   }
-  return DiffuseCharge(photo, s.crosstalk_sigma_px, s.crosstalk_shape,
-                       cv::Rect(0, 0, s.width_px, s.height_px));
+  return DiffuseCharge(photo, s);
 }
 
 void Sensor::FillBackground(double dark_e, std::uint64_t frame_index, PixelFormat format,

@@ -56,6 +56,8 @@ std::vector<double> CrosstalkKernel(double sigma_px, CrosstalkShape shape);
 // off the sensor is lost); the total is conserved otherwise. sigma_px = 0 returns `electrons`.
 SignalWindow DiffuseCharge(const SignalWindow& electrons, double sigma_px, CrosstalkShape shape,
                            const cv::Rect& sensor);
+// The same with the sensor's own crosstalk (its sd and shape) over its whole area.
+SignalWindow DiffuseCharge(const SignalWindow& electrons, const SensorOptions& sensor);
 
 // The camera's pixel processing after the ADC (a LUT or gamma, sim/rig_physics.h's camera
 // faults): each value v of `image` (in `format`'s range, full scale FS) becomes

@@ -47,10 +47,9 @@ cv::Mat1d Render(const sim::RigPhysics& base, const Point& p, const cv::Rect& ca
   pose.slide_mm = p.d_mm;
   pose.pan_deg = p.theta_deg;
   pose.bias_ma = 1.0;  // on: the intensity is given
-  const sim::SensorOptions& so = physics.sensor;  // the charge as collected: crosstalk included
-  const sim::SignalWindow w = sim::DiffuseCharge(scene.RenderSignal(pose, 1.0, 1.0),
-                                                 so.crosstalk_sigma_px, so.crosstalk_shape,
-                                                 cv::Rect(0, 0, so.width_px, so.height_px));
+  // The charge as collected: crosstalk included.
+  const sim::SignalWindow w =
+      sim::DiffuseCharge(scene.RenderSignal(pose, 1.0, 1.0), physics.sensor);
   if (window) *window = w.rect;
   cv::Mat1d out = cv::Mat1d::zeros(std::max(canvas.height, 0), std::max(canvas.width, 0));
   const cv::Rect inside = w.rect & canvas;

@@ -57,7 +57,6 @@ std::string RigWith(const RigKeys& optics, const RigKeys& sensor = {}) {
   out << rig;
   return std::string(out.c_str()) + "\n";
 }
-std::string RigWithOptics(const RigKeys& optics) { return RigWith(optics); }
 
 // What one optic's calibration and validation gave.
 struct LensRun {
@@ -134,7 +133,7 @@ std::vector<std::string> UnhealthyRows(const LensRun& run) {
 class LensOptics : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    control_ = new LensRun(CalibrateAndValidate("round", RigWithOptics({})));
+    control_ = new LensRun(CalibrateAndValidate("round", RigWith({})));
   }
   static void TearDownTestSuite() {
     delete control_;
@@ -150,11 +149,10 @@ LensRun* LensOptics::control_ = nullptr;
 void ExpectAstigmatismIsNotTilt(const LensRun& control, double angle_deg) {
   ASSERT_EQ(control.calibrate_code, 0) << control.calibrate_output;
   ASSERT_EQ(control.validate_code, 0) << control.validate_output;
-  const LensRun run =
-      CalibrateAndValidate("astig" + std::to_string(static_cast<int>(angle_deg)),
-                           RigWithOptics({{"psf_sigma_px", YAML::Node(1.05)},
-                                          {"psf_sigma_minor_px", YAML::Node(0.7)},
-                                          {"psf_angle_deg", YAML::Node(angle_deg)}}));
+  const LensRun run = CalibrateAndValidate("astig" + std::to_string(static_cast<int>(angle_deg)),
+                                           RigWith({{"psf_sigma_px", YAML::Node(1.05)},
+                                                    {"psf_sigma_minor_px", YAML::Node(0.7)},
+                                                    {"psf_angle_deg", YAML::Node(angle_deg)}}));
   ASSERT_EQ(run.calibrate_code, 0) << run.calibrate_output;
   ASSERT_EQ(run.validate_code, 0) << run.validate_output;
   const CalibrationModel model = LoadModel(run.model_path);
@@ -202,11 +200,10 @@ TEST_F(LensOptics, AnAstigmaticLensTurnedByMinus55DegIsNotReadAsTilt) {
 TEST_F(LensOptics, DefocusDiscAndHaloLensesCalibrateToLoadableModels) {
   ASSERT_EQ(control_->calibrate_code, 0) << control_->calibrate_output;
   const std::vector<std::pair<std::string, std::string>> optics = {
-      {"defocus", RigWithOptics({{"psf_sigma_px", YAML::Node(0.5)},
-                                 {"focus_mm", YAML::Node(1000.0)},
-                                 {"defocus_disc", YAML::Node(true)}})},
-      {"halo", RigWithOptics({{"halo_share", YAML::Node(0.03)},
-                              {"halo_sigma_px", YAML::Node(8.0)}})}};
+      {"defocus", RigWith({{"psf_sigma_px", YAML::Node(0.5)},
+                           {"focus_mm", YAML::Node(1000.0)},
+                           {"defocus_disc", YAML::Node(true)}})},
+      {"halo", RigWith({{"halo_share", YAML::Node(0.03)}, {"halo_sigma_px", YAML::Node(8.0)}})}};
   double round_theta = 0.0, round_pct = 0.0;
   FaceOnFigures(*control_, &round_theta, &round_pct);
   for (const auto& [name, rig] : optics) {
