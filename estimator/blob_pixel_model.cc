@@ -57,13 +57,13 @@ struct EdgeIntegrals {
   double cdf, psi, lambda;
 };
 
-// The mean of Phi((t + U) / sd) over a pixel's square, U the square's projection on the edge's
-// normal (nx, ny): the sum of two uniforms of widths |nx| and |ny|, in closed form through Lambda
-// (Psi when the edge runs along a pixel axis); its derivative along t into *slope.
-double SquareEdge(double t, double nx, double ny, double sd, double* slope) {
-  const double a = std::max(std::fabs(nx), std::fabs(ny));
-  const double b = std::min(std::fabs(nx), std::fabs(ny));
-  if (b < 1e-4) {  // one uniform of width a (~1)
+// The mean of Phi((t + U) / sd) over a square of `side` px, U the square's projection on the
+// edge's normal (nx, ny): the sum of two uniforms of widths side |nx| and side |ny|, in closed form
+// through Lambda (Psi when the edge runs along a pixel axis); its derivative along t into *slope.
+double SquareEdge(double t, double nx, double ny, double side, double sd, double* slope) {
+  const double a = side * std::max(std::fabs(nx), std::fabs(ny));
+  const double b = side * std::min(std::fabs(nx), std::fabs(ny));
+  if (b < 1e-4 * side) {  // one uniform of width a (~side)
     const EdgeIntegrals hi((t + 0.5 * a) / sd), lo((t - 0.5 * a) / sd);
     *slope = (hi.cdf - lo.cdf) / a;
     return sd / a * (hi.psi - lo.psi);
@@ -86,19 +86,20 @@ double SquareEdge(double t, double nx, double ny, double sd, double* slope) {
 struct BlurredEdge {
   double value = 0.0, slope = 0.0, shift = 0.0;
 };
-BlurredEdge BlurEdge(double dist, double kappa_edge, double nx, double ny, double optics_var,
-                     double aniso_n) {
+BlurredEdge BlurEdge(double dist, double kappa_edge, double nx, double ny, double side,
+                     double optics_var, double aniso_n) {
   const double normal2 = std::max(optics_var + aniso_n, kMinOpticsVarPx2);
   const double tangent2 = std::max(optics_var - aniso_n, kMinOpticsVarPx2);
+  const double side2 = side * side;
   BlurredEdge e;
-  e.shift = 0.5 * tangent2 + 0.5 * kPixelAreaVarPx2;
-  // To second order the curvature also widens the edge: the tangential offset Y (blur and square)
-  // moves it by kappa Y^2 / 2, whose variance kappa^2 var(Y^2) / 4 adds to the edge's (var(Y^2) =
-  // 2 sd^4 + sd^2 / 3 + 1/80 - 1/144 for a Gaussian of sd plus a uniform of width 1).
-  const double var_y2 = 2.0 * tangent2 * tangent2 + tangent2 / 3.0 + 1.0 / 80.0 - 1.0 / 144.0;
-  const double sd =
-      std::sqrt(normal2) * (1.0 + kappa_edge * kappa_edge * var_y2 / (8.0 * normal2));
-  e.value = SquareEdge(dist - e.shift * kappa_edge, nx, ny, sd, &e.slope);
+  e.shift = 0.5 * tangent2 + 0.5 * kPixelAreaVarPx2 * side2;
+  // The curvature also widens the edge: the tangential offset Y (blur and square) moves it by
+  // kappa Y^2 / 2, whose variance kappa^2 var(Y^2) / 4 adds to the edge's (var(Y^2) = 2 sd^4 +
+  // sd^2 s^2 / 3 + s^4 (1/80 - 1/144) for a Gaussian of sd plus a uniform of width s).
+  const double var_y2 = 2.0 * tangent2 * tangent2 + tangent2 * side2 / 3.0 +
+                        side2 * side2 * (1.0 / 80.0 - 1.0 / 144.0);
+  const double sd = std::sqrt(normal2 + 0.25 * kappa_edge * kappa_edge * var_y2);
+  e.value = SquareEdge(dist - e.shift * kappa_edge, nx, ny, side, sd, &e.slope);
   return e;
 }
 
@@ -132,17 +133,12 @@ PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double
   return r;
 }
 
-// The disc's mean over the pixel at (x, y) before crosstalk, and its derivatives into d[5]: the
-// optical edge integrated over the pixel's square as a straight edge (SquareEdge) at the signed
-// distance to the disc's edge, blurred and shifted as BlurEdge says (the PSF's variance along the
-// edge's normal and tangent: an elliptical PSF's differ around the disc). The derivatives
-// (analytic, the chain rule through q = (p - c)^T P (p - c), g = P (p - c), the first-order
-// distance and the curvature; DiscDerivatives; an elliptical PSF's turn with the normal by a
-// central difference in n^T a n) leave out the turn of the edge's normal across the square and
-// the widening's change: a few % of the slope, which moves the fit's path, not its solution on an
-// exact model. A pixel whose square lies far from the edge (5 sd, Phi(-5) = 3e-7, plus the
-// square's half diagonal and 0.5 px for the first-order distance) is 1 or 0 at once.
-double SquareMean(const double* v, double x, double y, const PixelResponse& r, double* d) {
+namespace {
+
+// SquareMean over a square of `side` px centred at (x, y); *near_edge false when it lies far
+// from the edge (its value 1 or 0 at once, the derivatives 0).
+double SideSquareMean(const double* v, double x, double y, double side, const PixelResponse& r,
+                      double* d, bool* near_edge) {
   const double dx = x - v[0], dy = y - v[1];
   const double gx = v[2] * dx + v[3] * dy, gy = v[3] * dx + v[4] * dy;  // g = P (p - c)
   const double q = dx * gx + dy * gy;
@@ -153,7 +149,8 @@ double SquareMean(const double* v, double x, double y, const PixelResponse& r, d
   const double aniso = std::hypot(r.aniso_c, r.aniso_s);
   const double margin = 1.25 + 5.0 * std::sqrt(optics_var + aniso);
   std::fill(d, d + 5, 0.0);
-  if (q < 0.09 || dist > margin || dist < -margin) return dist < 0.0 ? 0.0 : 1.0;
+  *near_edge = !(q < 0.09 || dist > margin || dist < -margin);
+  if (!*near_edge) return dist < 0.0 ? 0.0 : 1.0;
   const double pgx = v[2] * gx + v[3] * gy, pgy = v[3] * gx + v[4] * gy;  // P g
   // The curvature of the level set through the pixel, scaled to the disc's edge (the level sets
   // of q are the edge scaled by sqrt q): the edge's own curvature bends the blur's reach.
@@ -161,15 +158,56 @@ double SquareMean(const double* v, double x, double y, const PixelResponse& r, d
   const double kappa_edge = kappa * rq;
   const double nx = gx / n, ny = gy / n;
   const double aniso_n = r.aniso_c * (nx * nx - ny * ny) + 2.0 * r.aniso_s * nx * ny;
-  const BlurredEdge e = BlurEdge(dist, kappa_edge, nx, ny, optics_var, aniso_n);
+  const BlurredEdge e = BlurEdge(dist, kappa_edge, nx, ny, side, optics_var, aniso_n);
   DiscDerivatives(v, {dx, dy, gx, gy, pgx, pgy, rq, n, dist, kappa}, e.slope, e.shift, d);
   if (aniso > 0.0) {
     const double h = 1e-4 * (optics_var + aniso);
-    const double up = BlurEdge(dist, kappa_edge, nx, ny, optics_var, aniso_n + h).value;
-    const double down = BlurEdge(dist, kappa_edge, nx, ny, optics_var, aniso_n - h).value;
+    const double up = BlurEdge(dist, kappa_edge, nx, ny, side, optics_var, aniso_n + h).value;
+    const double down = BlurEdge(dist, kappa_edge, nx, ny, side, optics_var, aniso_n - h).value;
     AddNormalTurn(v, dx, dy, nx, ny, n, r, (up - down) / (2.0 * h), d);
   }
   return e.value;
+}
+
+// The weight of the pixel's four half-squares in SquareMean: 1 behind optics sharper than
+// kSubSquaresFullSdPx, 0 beyond kSubSquaresNoneSdPx, linear between (the model stays continuous
+// in the blur, which FitBlurSplit and the blob fit's own blur search over).
+constexpr double kSubSquaresFullSdPx = 0.15, kSubSquaresNoneSdPx = 0.3;
+double SubSquareWeight(double optics_sd) {
+  return std::clamp((kSubSquaresNoneSdPx - optics_sd) / (kSubSquaresNoneSdPx - kSubSquaresFullSdPx),
+                    0.0, 1.0);
+}
+
+}  // namespace
+
+// The disc's mean over the pixel at (x, y) before crosstalk, and its derivatives into d[5]: the
+// optical edge integrated over the pixel's square as a straight edge (SquareEdge) at the signed
+// distance to the disc's edge, blurred and shifted as BlurEdge says (the PSF's variance along the
+// edge's normal and tangent: an elliptical PSF's differ around the disc). The derivatives
+// (analytic, the chain rule through q = (p - c)^T P (p - c), g = P (p - c), the first-order
+// distance and the curvature; DiscDerivatives; an elliptical PSF's turn with the normal by a
+// central difference in n^T a n) leave out the turn of the edge's normal across the square and
+// the widening's change: a few % of the slope, which moves the fit's path, not its solution on an
+// exact model. A pixel whose square lies far from the edge (5 sd, Phi(-5) = 3e-7, plus the
+// square's half diagonal and 0.5 px for the first-order distance) is 1 or 0 at once.
+// Behind sharp optics the curved edge's sagitta across the square is not a Gaussian widening (a
+// sharp disc's pixels were 0.005-0.007 of the amplitude off, its second moment +-0.1% with the
+// radius's phase): there the square is the mean of its four half-squares, each a straight edge
+// at its own distance (the sagitta's error falls as the side squared: +-0.03%).
+double SquareMean(const double* v, double x, double y, const PixelResponse& r, double* d) {
+  bool near_edge = false;
+  const double whole = SideSquareMean(v, x, y, 1.0, r, d, &near_edge);
+  const double w = SubSquareWeight(r.optics_sd);
+  if (!near_edge || w == 0.0) return whole;
+  double halves = 0.0, sum[5] = {0.0, 0.0, 0.0, 0.0, 0.0}, part[5];
+  for (const double oy : {-0.25, 0.25}) {
+    for (const double ox : {-0.25, 0.25}) {
+      halves += 0.25 * SideSquareMean(v, x + ox, y + oy, 0.5, r, part, &near_edge);
+      for (int k = 0; k < 5; ++k) sum[k] += 0.25 * part[k];
+    }
+  }
+  for (int k = 0; k < 5; ++k) d[k] = (1.0 - w) * d[k] + w * sum[k];
+  return (1.0 - w) * whole + w * halves;
 }
 
 // `in` (rows x cols, row-major) convolved with `kernel` along x (dx = 1) or y, keeping the valid
