@@ -159,6 +159,9 @@ struct BlurSplit {
   double blur_offset_px2 = 0.0;
   double blur_offset_u_px2 = 0.0;
   int frames = 0;  // the frames that took part
+  // The frames the offset's line was refitted on (estimator/blur_level.h BlurLevelLine); 0: the
+  // line is the split's frames'.
+  int level_frames = 0;
 };
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);
 

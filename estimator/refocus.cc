@@ -20,14 +20,11 @@ constexpr int kMaxNewtonSteps = 12;
 // change away; the gradient's sign is right, its Newton step may overshoot).
 constexpr double kMaxStepShare = 0.25;
 
-// Newton's method on the one-pass cost (ProfileBlobBlur: one one-pass fit and one model
-// evaluation a step) from the calibrated blur, each step clamped to kMaxStepShare of the blur
-// and to [low, high]; the minimum into *blur and the last profile (one short step from it: its
-// standard error and slopes) into *at. False when a profile fails (a fit fails, or the cost is
-// not convex where the search stands) or the minimum lies on the search's edge or beyond it.
-bool NewtonOnBlur(const cv::Mat& image, int bit_depth, const Features& start,
-                  const Crosstalk& crosstalk, double low, double high, double* blur,
-                  BlobBlurProfile* at) {
+}  // namespace
+
+bool NewtonOnBlobBlur(const cv::Mat& image, int bit_depth, const Features& start,
+                      const Crosstalk& crosstalk, double low, double high, double* blur,
+                      BlobBlurProfile* at) {
   for (int k = 0; k < kMaxNewtonSteps; ++k) {
     *at = ProfileBlobBlur(image, bit_depth, start, *blur, crosstalk);
     if (!at->ok) return false;
@@ -43,8 +40,6 @@ bool NewtonOnBlur(const cv::Mat& image, int bit_depth, const Features& start,
   return false;
 }
 
-}  // namespace
-
 bool MeasureOwnBlur(const cv::Mat& image, int bit_depth, const CalibrationModel& model,
                     const Features& start, Features* out) {
   const double calibrated = out->size_blur_var_px2;
@@ -57,7 +52,7 @@ bool MeasureOwnBlur(const cv::Mat& image, int bit_depth, const CalibrationModel&
   if (!(high > low)) return false;
   double own = calibrated;
   BlobBlurProfile p;
-  if (!NewtonOnBlur(image, bit_depth, start, crosstalk, low, high, &own, &p)) return false;
+  if (!NewtonOnBlobBlur(image, bit_depth, start, crosstalk, low, high, &own, &p)) return false;
   out->own_blur_var_px2 = own;
   out->own_blur_se_px2 = p.se_px2;
   out->own_major_slope = p.major_slope;

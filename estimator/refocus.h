@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "estimator/blob_fit.h"
 #include "estimator/features.h"
 #include "estimator/fit.h"
 
@@ -19,6 +20,16 @@ namespace irdist {
 // change from 0.4x to 3x the calibrated blur variance (about -50% to +70% of its sigma).
 constexpr double kOwnBlurLowFactor = 0.4;
 constexpr double kOwnBlurHighFactor = 3.0;
+
+// Newton's method on the blob fit's one-pass cost over the blur variance (ProfileBlobBlur: one
+// one-pass fit and one model evaluation a step) from *blur, each step clamped to a quarter of the
+// blur and to [low, high], the last one below 2% of it; the minimum into *blur and the last
+// profile (one short step from it: its standard error and slopes) into *at. False when a profile
+// fails (a fit fails, or the cost is not convex where the search stands) or the minimum lies on
+// the search's edge or beyond it.
+bool NewtonOnBlobBlur(const cv::Mat& image, int bit_depth, const Features& start,
+                      const Crosstalk& crosstalk, double low, double high, double* blur,
+                      BlobBlurProfile* at);
 
 // The frame's own blur into `out`'s own_* fields (features.h): Newton's method on the blob fit's
 // one-pass cost over the blur variance (FitBlobPasses, the model's crosstalk), from the

@@ -7,12 +7,14 @@
 #include <set>
 #include <sstream>
 #include <tuple>
+#include <utility>
 
 #include "acquisition/recording_reader.h"
 #include "app/inputs/provenance.h"
 #include "app/inputs/recipe.h"
 #include "app/processing/position.h"
 #include "estimator/blob_fit.h"
+#include "estimator/blur_level.h"
 #include "estimator/defect_map.h"
 #include "estimator/model_file.h"
 #include "estimator/models.h"
@@ -276,12 +278,38 @@ void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& fea
       << "\n";
 }
 
-// The most calibration frames the crosstalk's split is fitted on (spread over the recording).
+// The most calibration frames the crosstalk's split is fitted on, and the most the blob fit's
+// blur level (its offset's line, estimator/blur_level.h) is refitted on; each spread over the
+// recording (Table 3's 256 measurement frames all take part in the level).
 constexpr std::size_t kCrosstalkFrames = 32;
+constexpr std::size_t kBlurLevelFrames = 512;
+
+// Calls `use` with up to `most` of `rows` spread over them (every k-th) as FitBlurSplit's frames,
+// one at a time (a full-frame recording's hundreds would not fit in memory at once): the scene's
+// cleaned frame, its features less the PSF's anisotropy and the blob fit's blur at its distance.
+template <typename Use>
+void ForCrosstalkFrames(const RecordingReader& reader, const FeatureMap& features,
+                        const std::vector<const FrameRecord*>& rows, std::size_t most,
+                        const CalibrationModel& model, Use use) {
+  const std::size_t stride = std::max<std::size_t>(1, rows.size() / most);
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < rows.size() && used < most; i += stride) {
+    Features f = features.at(rows[i]->index);  // its moments less the PSF's anisotropy
+    RemovePsfAnisotropy(model.blur_calibration.psf_aniso_c_px2,
+                        model.blur_calibration.psf_aniso_s_px2, &f);
+    const double blur_var_px2 = BlobFitBlurVarPx2(model, f);
+    if (!(blur_var_px2 > 0.0)) continue;
+    const int bit_depth = reader.header().bit_depth;  // the frame FrameFeatures measured
+    use(CrosstalkFrame{SceneCleanedFrame(reader.LoadImage(*rows[i]), bit_depth, model.features),
+                       bit_depth, f, blur_var_px2,
+                       model.geometric.DistanceMm(f.moment_major_var_px2)});
+    ++used;
+  }
+}
 
 // The split of the calibrated blur into optics and crosstalk (estimator/blob_fit.h FitBlurSplit)
-// from up to kCrosstalkFrames usable measurement frames spread over the recording, each with the
-// blob fit's blur at its distance.
+// from up to kCrosstalkFrames usable measurement frames, then the blob fit's blur level from up
+// to kBlurLevelFrames (BlurLevelLine), each frame with the blob fit's blur at its distance.
 void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& features,
                         CalibrationModel* model, std::ostream& out) {
   std::vector<const FrameRecord*> rows;
@@ -292,19 +320,13 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
     }
   }
   std::vector<CrosstalkFrame> frames;
-  const std::size_t stride = std::max<std::size_t>(1, rows.size() / kCrosstalkFrames);
-  for (std::size_t i = 0; i < rows.size() && frames.size() < kCrosstalkFrames; i += stride) {
-    Features f = features.at(rows[i]->index);  // its moments less the PSF's anisotropy
-    RemovePsfAnisotropy(model->blur_calibration.psf_aniso_c_px2,
-                        model->blur_calibration.psf_aniso_s_px2, &f);
-    const double blur_var_px2 = BlobFitBlurVarPx2(*model, f);
-    if (!(blur_var_px2 > 0.0)) continue;
-    const int bit_depth = reader.header().bit_depth;  // the frame FrameFeatures measured
-    frames.push_back({SceneCleanedFrame(reader.LoadImage(*rows[i]), bit_depth, model->features),
-                      bit_depth, f, blur_var_px2,
-                      model->geometric.DistanceMm(f.moment_major_var_px2)});
-  }
-  const BlurSplit split = FitBlurSplit(frames);
+  ForCrosstalkFrames(reader, features, rows, kCrosstalkFrames, *model,
+                     [&](CrosstalkFrame f) { frames.push_back(std::move(f)); });
+  BlurLevelLine level(FitBlurSplit(frames));
+  frames.clear();
+  ForCrosstalkFrames(reader, features, rows, kBlurLevelFrames, *model,
+                     [&](const CrosstalkFrame& f) { level.Add(f); });
+  const BlurSplit split = level.Fitted();
   model->blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
   model->blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
   model->blur_calibration.fit_offset_px2 = split.blur_offset_px2;
@@ -317,7 +339,9 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
       << std::showpos << b.FitBlurVarPx2(near_mm) - b.BlurVarPx2(near_mm) << " px^2 at "
       << std::noshowpos << std::lround(near_mm) << " mm, " << std::showpos
       << b.FitBlurVarPx2(far_mm) - b.BlurVarPx2(far_mm) << std::noshowpos << " px^2 at "
-      << std::lround(far_mm) << " mm from the cumulants'; from " << split.frames << " frames\n";
+      << std::lround(far_mm) << " mm from the cumulants'; the split from " << split.frames
+      << " frames, the level from " << (split.level_frames > 0 ? split.level_frames : split.frames)
+      << "\n";
 }
 
 // The second pass of a calibration whose estimates use the blob fit: every frame's size from the

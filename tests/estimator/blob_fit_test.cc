@@ -1,16 +1,17 @@
 #include "estimator/blob_fit.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <vector>
 
-#include <gtest/gtest.h>
-#include <opencv2/imgproc.hpp>
-
 #include "base/pi.h"
 #include "tests/estimator/disc_spectrum.h"
+#include "tests/estimator/spectrum_frame.h"
 
 namespace irdist {
 namespace {
@@ -338,12 +339,7 @@ CrosstalkFrame DiscCalibrationFrame(const BlurMix& mix, double radius) {
   blob.optics_sigma_px = mix.optics_px;
   blob.crosstalk_sigma_px = mix.crosstalk_px;
   blob.crosstalk_lattice = mix.lattice;
-  CrosstalkFrame frame;
-  frame.image = testing::DiscFrame16(testing::RenderDiscSpectrum(blob, 48), 30000.0, 1000.0);
-  frame.bit_depth = 16;
-  FeatureOptions options;
-  options.window_side_px = 40;
-  frame.features = ComputeFeatures(frame.image, 16, options);
+  CrosstalkFrame frame = testing::SpectrumFrame16(blob);
   return frame;
 }
 

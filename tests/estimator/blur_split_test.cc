@@ -3,10 +3,9 @@
 // spectral renderer (tests/estimator/disc_spectrum.h) with a known optics and crosstalk.
 #include <gtest/gtest.h>
 
+#include <boost/math/tools/minima.hpp>
 #include <cmath>
 #include <limits>
-
-#include <boost/math/tools/minima.hpp>
 #include <string>
 #include <vector>
 
@@ -14,6 +13,7 @@
 #include "estimator/blur_model.h"
 #include "estimator/features.h"
 #include "tests/estimator/disc_spectrum.h"
+#include "tests/estimator/spectrum_frame.h"
 
 namespace irdist {
 namespace {
@@ -28,12 +28,7 @@ CrosstalkFrame Frame(double radius, double optics_px, double crosstalk_px) {
   blob.a = blob.b = radius;
   blob.optics_sigma_px = optics_px;
   blob.crosstalk_sigma_px = crosstalk_px;
-  CrosstalkFrame frame;
-  frame.image = testing::DiscFrame16(testing::RenderDiscSpectrum(blob, 48), 30000.0, 1000.0);
-  frame.bit_depth = 16;
-  FeatureOptions options;
-  options.window_side_px = 40;
-  frame.features = ComputeFeatures(frame.image, 16, options);
+  CrosstalkFrame frame = testing::SpectrumFrame16(blob);
   frame.blur_var_px2 =
       optics_px * optics_px + kPixelAreaVarPx2 + testing::CrosstalkVariance(crosstalk_px);
   return frame;
@@ -89,7 +84,7 @@ TEST(FitBlurSplit, SharpOpticsShowTheCrosstalk) {
 }
 
 // Frames given a blur 0.05 px^2 too small (optics alone, 0.5 px): the offset found adds it back
-// within 0.01 px^2, and the optics keep at least their minimum (0.01 px^2) of the blur so
+// within 0.01 px^2, and the optics keep at least their minimum (kMinOpticsVarPx2) of the blur so
 // corrected beside the crosstalk and the pixel's area.
 TEST(FitBlurSplit, AGivenBlurTooSmallIsOffsetBack) {
   std::vector<CrosstalkFrame> frames = {Frame(5.0, 0.5, 0.0), Frame(8.0, 0.5, 0.0)};

@@ -1,0 +1,94 @@
+// The blob fit's blur level from every calibration frame (estimator/blur_level.h BlurLevelLine):
+// the line of the frames' own best blurs refitted on all of them, an outlier left out, and the
+// split's own line kept when too few frames take part.
+#include "estimator/blur_level.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "estimator/blob_fit.h"
+#include "estimator/blur_model.h"
+#include "estimator/features.h"
+#include "tests/estimator/disc_spectrum.h"
+#include "tests/estimator/spectrum_frame.h"
+
+namespace irdist {
+namespace {
+
+// A 16-bit calibration frame at `d_mm` of a round disc of 9 px x 1500 mm / d behind `optics_px` of
+// optics (no crosstalk), at a sub-pixel centre that moves with d, given its true blur plus
+// `given_error_px2` (a cumulants' blur that misses).
+CrosstalkFrame Frame(double d_mm, double optics_px, double given_error_px2) {
+  testing::DiscBlob blob;
+  blob.cx = 23.3 + 0.37 * std::fmod(d_mm / 100.0, 1.0);
+  blob.cy = 23.6 - 0.29 * std::fmod(d_mm / 70.0, 1.0);
+  blob.a = blob.b = 9.0 * 1500.0 / d_mm;
+  blob.optics_sigma_px = optics_px;
+  CrosstalkFrame frame = testing::SpectrumFrame16(blob);
+  frame.blur_var_px2 = optics_px * optics_px + kPixelAreaVarPx2 + given_error_px2;
+  frame.d_mm = d_mm;
+  return frame;
+}
+
+std::vector<CrosstalkFrame> Frames(double given_error_px2) {
+  std::vector<CrosstalkFrame> frames;
+  for (double d_mm = 1500.0; d_mm <= 3000.0; d_mm += 150.0) {
+    frames.push_back(Frame(d_mm, 0.5, given_error_px2));
+  }
+  return frames;
+}
+
+// Frames given a blur 0.05 px^2 too small at every distance, and a split whose line missed it
+// (none): the refitted line adds it back within 0.005 px^2 at both ends of the range.
+TEST(BlurLevelLine, TheLineIsTheFramesOwnBestBlur) {
+  BlurLevelLine level{BlurSplit{}};
+  for (const CrosstalkFrame& f : Frames(-0.05)) EXPECT_TRUE(level.Add(f)) << f.d_mm;
+  const BlurSplit fitted = level.Fitted();
+  EXPECT_EQ(fitted.level_frames, 11);
+  for (const double d_mm : {1500.0, 3000.0}) {
+    EXPECT_NEAR(fitted.blur_offset_px2 + fitted.blur_offset_u_px2 * 1000.0 / d_mm, 0.05, 0.005)
+        << d_mm;
+  }
+}
+
+// One frame of a blurrier lens (0.8 px: its own best blur 0.39 px^2 above the others') is left
+// out: the line is the others' within 0.005 px^2.
+TEST(BlurLevelLine, AnOutlierFrameIsLeftOut) {
+  std::vector<CrosstalkFrame> frames = Frames(0.0);
+  BlurLevelLine clean{BlurSplit{}}, with_outlier{BlurSplit{}};
+  for (const CrosstalkFrame& f : frames) clean.Add(f);
+  frames[4] = Frame(frames[4].d_mm, 0.8, 0.8 * 0.8 - 0.5 * 0.5);
+  frames[4].blur_var_px2 = 0.5 * 0.5 + kPixelAreaVarPx2;  // given the others' blur
+  for (const CrosstalkFrame& f : frames) with_outlier.Add(f);
+  const BlurSplit a = clean.Fitted(), b = with_outlier.Fitted();
+  EXPECT_EQ(b.level_frames, a.level_frames - 1);
+  for (const double d_mm : {1500.0, 3000.0}) {
+    const double u = 1000.0 / d_mm;
+    EXPECT_NEAR(b.blur_offset_px2 + b.blur_offset_u_px2 * u,
+                a.blur_offset_px2 + a.blur_offset_u_px2 * u, 0.005)
+        << d_mm;
+  }
+}
+
+// Fewer than kMinBlurLevelFrames frames, or frames without a blob: the split's own line is kept.
+TEST(BlurLevelLine, TooFewFramesKeepTheSplitsLine) {
+  BlurSplit split;
+  split.blur_offset_px2 = 0.02;
+  split.blur_offset_u_px2 = -0.01;
+  BlurLevelLine level(split);
+  std::vector<CrosstalkFrame> frames = Frames(-0.05);
+  frames.resize(kMinBlurLevelFrames - 1);
+  for (const CrosstalkFrame& f : frames) level.Add(f);
+  CrosstalkFrame blind = Frames(0.0)[0];
+  blind.features.blob_found = false;
+  EXPECT_FALSE(level.Add(blind));
+  const BlurSplit kept = level.Fitted();
+  EXPECT_EQ(kept.level_frames, 0);
+  EXPECT_EQ(kept.blur_offset_px2, 0.02);
+  EXPECT_EQ(kept.blur_offset_u_px2, -0.01);
+}
+
+}  // namespace
+}  // namespace irdist
