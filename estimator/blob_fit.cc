@@ -1,12 +1,12 @@
 #include "estimator/blob_fit.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Dense>
 
 #include "base/pi.h"
 #include "estimator/blob_fit_errors.h"
@@ -118,16 +118,19 @@ class WindowResiduals : public NormalProblem<kParams> {
     return mean_;
   }
 
-  // The Gauss-Newton system at v with the blur as an eighth parameter (after the seven): J^T J
-  // and J^T r, the blur's column by a forward difference of the model to `shifted` (the same
-  // pixels and weights at a blur `step_px2` larger).
-  void BlurSystem(const double* v, const WindowResiduals& shifted, double step_px2,
-                  Eigen::Matrix<double, kParams + 1, kParams + 1>* jtj,
-                  Eigen::Matrix<double, kParams + 1, 1>* jtr) const {
-    const std::vector<double>& up = shifted.MeansAt(v);
+  // The Gauss-Newton system at v with E more parameters after the seven (the blur, the crosstalk's
+  // variance): J^T J and J^T r, each one's column by a forward difference of the model to
+  // `shifted[e]` (the same pixels and weights with that parameter `steps[e]` larger).
+  template <int E>
+  void ExtendedSystem(const double* v, const std::array<const WindowResiduals*, E>& shifted,
+                      const std::array<double, E>& steps,
+                      Eigen::Matrix<double, kParams + E, kParams + E>* jtj,
+                      Eigen::Matrix<double, kParams + E, 1>* jtr) const {
+    std::array<const std::vector<double>*, E> up;
+    for (int e = 0; e < E; ++e) up[e] = &shifted[e]->MeansAt(v);
     const std::vector<double>& mean = MeansAt(v);
     const size_t n = pixels_.size();
-    constexpr int m = kParams + 1;
+    constexpr int m = kParams + E;
     double a[m * m] = {}, b[m] = {}, j[m];
     for (size_t i = 0; i < n; ++i) {
       const double s = inv_sd_[i];
@@ -135,7 +138,7 @@ class WindowResiduals : public NormalProblem<kParams> {
       for (int k = 0; k < 5; ++k) j[k] = v[5] * s * d_mean_[k * n + i];
       j[5] = mean[i] * s;
       j[6] = s;
-      j[7] = v[5] * s * (up[i] - mean[i]) / step_px2;
+      for (int e = 0; e < E; ++e) j[kParams + e] = v[5] * s * ((*up[e])[i] - mean[i]) / steps[e];
       for (int k = 0; k < m; ++k) {
         b[k] += j[k] * r;
         for (int l = k; l < m; ++l) a[k * m + l] += j[k] * j[l];
@@ -320,7 +323,7 @@ struct WindowStart {
   cv::Rect window;
   double v[kParams] = {};
   double read_var = 0.0;
-  double crosstalk_var_px2 = 0.0;  // the crosstalk as used (the optics keep kMinOpticsVarPx2)
+  Crosstalk crosstalk;  // the crosstalk as used (the optics keep kMinOpticsVarPx2)
 };
 bool StartWindow(const cv::Mat& image, int bit_depth, const Features& features,
                  double blur_var_px2, const Crosstalk& crosstalk, WindowStart* s) {
@@ -329,7 +332,8 @@ bool StartWindow(const cv::Mat& image, int bit_depth, const Features& features,
       !(gauss_var > kMinOpticsVarPx2) || !(crosstalk.var_px2 >= 0.0)) {
     return false;
   }
-  s->crosstalk_var_px2 = std::min(crosstalk.var_px2, gauss_var - kMinOpticsVarPx2);
+  s->crosstalk =
+      Crosstalk(std::min(crosstalk.var_px2, gauss_var - kMinOpticsVarPx2), crosstalk.lattice_share);
   s->pixels = BlobPixels(image, bit_depth, features, blur_var_px2, &s->window);
   if (!StartFromMoments(features, blur_var_px2, s->window.tl(), s->v)) return false;
   const double reach = 2.0 * std::sqrt(features.moment_major_var_px2) + 3.0 * std::sqrt(gauss_var);
@@ -342,8 +346,7 @@ bool StartWindow(const cv::Mat& image, int bit_depth, const Features& features,
 // The window's model at `blur_var_px2`, weighted by the read noise.
 WindowResiduals ModelOf(const WindowStart& s, double blur_var_px2, const Crosstalk& crosstalk,
                         const PsfAnisotropy& psf) {
-  PixelResponse response =
-      MakeResponse(blur_var_px2, s.crosstalk_var_px2, crosstalk.lattice_share);
+  PixelResponse response = MakeResponse(blur_var_px2, crosstalk.var_px2, crosstalk.lattice_share);
   response.aniso_c = psf.c_px2;
   response.aniso_s = psf.s_px2;
   WindowResiduals model(s.pixels, s.window.width, s.window.height, std::move(response));
@@ -361,12 +364,12 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
   out.blur_var_px2 = blur_var_px2;
   WindowStart s;
   if (!StartWindow(image, bit_depth, features, blur_var_px2, crosstalk, &s)) return out;
-  out.crosstalk_var_px2 = s.crosstalk_var_px2;
+  out.crosstalk_var_px2 = s.crosstalk.var_px2;
   const std::vector<Pixel>& pixels = s.pixels;
   const cv::Rect& window = s.window;
   double* v = s.v;
   const double read_var = s.read_var;
-  WindowResiduals model = ModelOf(s, blur_var_px2, crosstalk, psf);
+  WindowResiduals model = ModelOf(s, blur_var_px2, s.crosstalk, psf);
   bool ok = false, covariance_ok = false;
   double chi2 = 0.0;
   Covariance covariance;
@@ -406,7 +409,7 @@ BlobBlurProfile ProfileBlobBlur(const cv::Mat& image, int bit_depth, const Featu
   BlobBlurProfile out;
   WindowStart s;
   if (!StartWindow(image, bit_depth, features, blur_var_px2, crosstalk, &s)) return out;
-  WindowResiduals model = ModelOf(s, blur_var_px2, crosstalk, psf);
+  WindowResiduals model = ModelOf(s, blur_var_px2, s.crosstalk, psf);
   // The fit to the weights pass's tolerance: the joint Gauss-Newton step below corrects the
   // seven parameters' rest of the way with the blur's (the same step to 1e-5 px^2 on
   // tests/estimator/refocus's frames, a fifth less CPU).
@@ -416,10 +419,10 @@ BlobBlurProfile ProfileBlobBlur(const cv::Mat& image, int bit_depth, const Featu
   // The step: small against the blur (the model's change in it is smooth: the forward
   // difference's error ~ step / blur), large against the normal table's 2e-10.
   const double step_px2 = 1e-3 * blur_var_px2;
-  const WindowResiduals shifted = ModelOf(s, blur_var_px2 + step_px2, crosstalk, psf);
+  const WindowResiduals shifted = ModelOf(s, blur_var_px2 + step_px2, s.crosstalk, psf);
   Eigen::Matrix<double, kParams + 1, kParams + 1> jtj;
   Eigen::Matrix<double, kParams + 1, 1> jtr;
-  model.BlurSystem(s.v, shifted, step_px2, &jtj, &jtr);
+  model.ExtendedSystem<1>(s.v, {&shifted}, {step_px2}, &jtj, &jtr);
   const Eigen::LDLT<Covariance> fit(jtj.topLeftCorner<kParams, kParams>());
   if (fit.info() != Eigen::Success) return out;
   const Eigen::Matrix<double, kParams, 1> c = jtj.block<kParams, 1>(0, kParams);
@@ -439,6 +442,43 @@ BlobBlurProfile ProfileBlobBlur(const cv::Mat& image, int bit_depth, const Featu
   out.major_slope = (major_up - 0.25 / p_small) / (2.0 * h);
   out.minor_slope = (minor_up - 0.25 / p_large) / (2.0 * h);
   out.ok = std::isfinite(out.major_slope) && std::isfinite(out.minor_slope);
+  return out;
+}
+
+BlobSplitProfile ProfileBlobSplit(const cv::Mat& image, int bit_depth, const Features& features,
+                                  double blur_var_px2, const Crosstalk& crosstalk) {
+  BlobSplitProfile out;
+  WindowStart s;
+  if (!StartWindow(image, bit_depth, features, blur_var_px2, crosstalk, &s)) return out;
+  const PsfAnisotropy round;
+  WindowResiduals model = ModelOf(s, blur_var_px2, s.crosstalk, round);
+  bool ok = false;
+  out.cost = SolvePass(model, s.v, &ok, nullptr, nullptr, kWeightsPassTolerance) *
+             static_cast<double>(s.pixels.size());
+  if (!ok) return out;
+  // Forward differences as ProfileBlobBlur's; the crosstalk's backward where the optics are at
+  // their floor.
+  const double blur_step = 1e-3 * blur_var_px2;
+  const double room = blur_var_px2 - kPixelAreaVarPx2 - kMinOpticsVarPx2 - s.crosstalk.var_px2;
+  const double crosstalk_step = room > blur_step ? blur_step : -blur_step;
+  const WindowResiduals blurrier = ModelOf(s, blur_var_px2 + blur_step, s.crosstalk, round);
+  const WindowResiduals spread = ModelOf(
+      s, blur_var_px2, {s.crosstalk.var_px2 + crosstalk_step, s.crosstalk.lattice_share}, round);
+  Eigen::Matrix<double, kParams + 2, kParams + 2> jtj;
+  Eigen::Matrix<double, kParams + 2, 1> jtr;
+  model.ExtendedSystem<2>(s.v, {&blurrier, &spread}, {blur_step, crosstalk_step}, &jtj, &jtr);
+  const Eigen::LDLT<Covariance> fit(jtj.topLeftCorner<kParams, kParams>());
+  if (fit.info() != Eigen::Success) return out;
+  const Eigen::Matrix<double, kParams, 2> c = jtj.block<kParams, 2>(0, kParams);
+  const Eigen::Matrix<double, kParams, 2> turn = fit.solve(c);
+  const Eigen::Matrix2d curvature = jtj.bottomRightCorner<2, 2>() - c.transpose() * turn;
+  const Eigen::Vector2d gradient = jtr.tail<2>() - turn.transpose() * jtr.head<kParams>();
+  for (int a = 0; a < 2; ++a) {
+    out.gradient[a] = gradient(a);
+    for (int b = 0; b < 2; ++b) out.curvature[a][b] = curvature(a, b);
+  }
+  out.ok = gradient.allFinite() && curvature.allFinite() && curvature(0, 0) > 0.0 &&
+           curvature(1, 1) > 0.0;
   return out;
 }
 

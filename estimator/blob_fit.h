@@ -108,6 +108,22 @@ BlobBlurProfile ProfileBlobBlur(const cv::Mat& image, int bit_depth, const Featu
                                 double blur_var_px2, const Crosstalk& crosstalk,
                                 const PsfAnisotropy& psf = {});
 
+// The one-pass cost (FitBlobPasses with passes 1, the read noise's weights: what FitBlurSplit
+// sums) around the blur `blur_var_px2` and the crosstalk's variance, as ProfileBlobBlur with two
+// more parameters: the blur (the crosstalk kept) and the crosstalk's variance (the blur kept: the
+// optics lose what it gains), profiled over the disc's seven. Half the cost's gradient (J^T r)
+// and its Gauss-Newton curvature (J^T J) in the two, in the frame's raw read-weighted units, so
+// that frames' profiles add (estimator/blur_level.h BlurSplitRefiner). One fit and two model
+// evaluations; a round PSF.
+struct BlobSplitProfile {
+  bool ok = false;
+  double gradient[2] = {0.0, 0.0};  // (blur, crosstalk)
+  double curvature[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
+  double cost = 0.0;  // the one-pass cost there (read-weighted chi-square, summed over pixels)
+};
+BlobSplitProfile ProfileBlobSplit(const cv::Mat& image, int bit_depth, const Features& features,
+                                  double blur_var_px2, const Crosstalk& crosstalk);
+
 // The PSF anisotropy a calibrated blur holds (BlurCalibration::psf_aniso_*).
 PsfAnisotropy PsfOf(const BlurCalibration& b);
 

@@ -1,5 +1,6 @@
 #include "estimator/blur_level.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 
@@ -84,6 +85,55 @@ BlurSplit BlurLevelLine::Fitted() const {
   out.blur_offset_px2 = line.o0;
   out.blur_offset_u_px2 = line.o1;
   out.level_frames = static_cast<int>(std::count(keep.begin(), keep.end(), true));
+  return out;
+}
+
+bool BlurSplitRefiner::Add(const CrosstalkFrame& frame) {
+  if (!frame.features.Usable() || !(frame.blur_var_px2 > kPixelAreaVarPx2)) return false;
+  const double u = frame.d_mm > 0.0 ? 1000.0 / frame.d_mm : 0.0;
+  const double blur = frame.blur_var_px2 + split_.blur_offset_px2 + split_.blur_offset_u_px2 * u;
+  const BlobSplitProfile p =
+      ProfileBlobSplit(frame.image, frame.bit_depth, frame.features, blur,
+                       {split_.crosstalk_var_px2, split_.crosstalk_lattice_share});
+  if (!p.ok) return false;
+  // The frame's (blur, crosstalk) = (given + o0 + o1 u, c): its profile carried to (o0, o1, c).
+  const double a[2][3] = {{1.0, u, 0.0}, {0.0, 0.0, 1.0}};
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 2; ++k) {
+      g_[i] += a[k][i] * p.gradient[k];
+      for (int j = 0; j < 3; ++j) {
+        for (int l = 0; l < 2; ++l) h_[i][j] += a[k][i] * p.curvature[k][l] * a[l][j];
+      }
+    }
+  }
+  max_crosstalk_px2_ = std::min(max_crosstalk_px2_, blur - kPixelAreaVarPx2 - kMinOpticsVarPx2);
+  cost_ += p.cost;
+  ++frames_;
+  return true;
+}
+
+BlurSplit BlurSplitRefiner::Stepped() const {
+  if (frames_ < kMinBlurLevelFrames) return split_;
+  Eigen::Matrix3d h;
+  Eigen::Vector3d g;
+  for (int i = 0; i < 3; ++i) {
+    g(i) = g_[i];
+    for (int j = 0; j < 3; ++j) h(i, j) = h_[i][j];
+  }
+  // The least-norm step (no slope where the frames share one distance), then the variance held
+  // within its range and the line re-solved at it.
+  Eigen::Vector3d step = h.completeOrthogonalDecomposition().solve(-g);
+  const double c =
+      std::clamp(split_.crosstalk_var_px2 + step(2), 0.0, std::max(max_crosstalk_px2_, 0.0));
+  step(2) = c - split_.crosstalk_var_px2;
+  const Eigen::Vector2d line = h.topLeftCorner<2, 2>().completeOrthogonalDecomposition().solve(
+      -g.head<2>() - h.topRightCorner<2, 1>() * step(2));
+  if (!line.allFinite() || !std::isfinite(c)) return split_;
+  BlurSplit out = split_;
+  out.blur_offset_px2 += line(0);
+  out.blur_offset_u_px2 += line(1);
+  out.crosstalk_var_px2 = c;
+  out.level_frames = frames_;
   return out;
 }
 

@@ -36,4 +36,50 @@ class BlurLevelLine {
   std::vector<Point> points_;
 };
 
+// The split and the blur's level refitted on every calibration frame: a Gauss-Newton step of the
+// frames' summed one-pass cost (FitBlurSplit's objective) in the offset's line (o0, o1) and the
+// crosstalk's variance per pass over them, each frame's profile (blob_fit.h ProfileBlobSplit: one
+// fit and two model evaluations) at the current split; the kernel's shape stays FitBlurSplit's.
+// The variance is kept within [0, the frames' least room beside the optics' floor].
+class BlurSplitRefiner {
+ public:
+  explicit BlurSplitRefiner(const BlurSplit& split) : split_(split) {}
+  // The frame's profile at the current split into the sums; false (left out) when it fails.
+  bool Add(const CrosstalkFrame& frame);
+  // The split after the sums' step; the current one with fewer than kMinBlurLevelFrames frames.
+  BlurSplit Stepped() const;
+  int frames() const { return frames_; }
+  // The frames' mean one-pass cost at the current split.
+  double MeanCost() const { return frames_ > 0 ? cost_ / frames_ : 0.0; }
+
+ private:
+  BlurSplit split_;
+  double cost_ = 0.0;
+  double h_[3][3] = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}}, g_[3] = {0.0, 0.0, 0.0};
+  double max_crosstalk_px2_ = 1e300;
+  int frames_ = 0;
+};
+
+// The passes `irdist fit` makes after FitBlurSplit: up to kSplitRefinePasses of BlurSplitRefiner,
+// each evaluating the frames' cost at the split it starts from; a step that raises it ends them,
+// and the split of the lowest cost evaluated is kept; then BlurLevelLine at it. `for_frames(use)`
+// calls use(const CrosstalkFrame&) on each calibration frame (it may load them one at a time).
+constexpr int kSplitRefinePasses = 3;
+template <typename ForFrames>
+BlurSplit RefineBlurSplit(BlurSplit split, ForFrames for_frames) {
+  BlurSplit best = split;
+  double best_cost = 1e300;
+  for (int pass = 0; pass < kSplitRefinePasses; ++pass) {
+    BlurSplitRefiner refiner(split);
+    for_frames([&](const CrosstalkFrame& f) { refiner.Add(f); });
+    if (refiner.frames() < kMinBlurLevelFrames || !(refiner.MeanCost() < best_cost)) break;
+    best = split;
+    best_cost = refiner.MeanCost();
+    split = refiner.Stepped();
+  }
+  BlurLevelLine level(best);
+  for_frames([&](const CrosstalkFrame& f) { level.Add(f); });
+  return level.Fitted();
+}
+
 }  // namespace irdist

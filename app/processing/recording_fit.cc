@@ -278,9 +278,9 @@ void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& fea
       << "\n";
 }
 
-// The most calibration frames the crosstalk's split is fitted on, and the most the blob fit's
-// blur level (its offset's line, estimator/blur_level.h) is refitted on; each spread over the
-// recording (Table 3's 256 measurement frames all take part in the level).
+// The most calibration frames the crosstalk's split is fitted on, and the most it and the blob
+// fit's blur level (its offset's line) are refined on (estimator/blur_level.h); each spread over
+// the recording (Table 3's 256 measurement frames all take part in the refinement).
 constexpr std::size_t kCrosstalkFrames = 32;
 constexpr std::size_t kBlurLevelFrames = 512;
 
@@ -308,8 +308,9 @@ void ForCrosstalkFrames(const RecordingReader& reader, const FeatureMap& feature
 }
 
 // The split of the calibrated blur into optics and crosstalk (estimator/blob_fit.h FitBlurSplit)
-// from up to kCrosstalkFrames usable measurement frames, then the blob fit's blur level from up
-// to kBlurLevelFrames (BlurLevelLine), each frame with the blob fit's blur at its distance.
+// from up to kCrosstalkFrames usable measurement frames, then refined with the blob fit's blur
+// level on up to kBlurLevelFrames (RefineBlurSplit), each frame with the blob fit's blur at its
+// distance.
 void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& features,
                         CalibrationModel* model, std::ostream& out) {
   std::vector<const FrameRecord*> rows;
@@ -322,11 +323,11 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
   std::vector<CrosstalkFrame> frames;
   ForCrosstalkFrames(reader, features, rows, kCrosstalkFrames, *model,
                      [&](CrosstalkFrame f) { frames.push_back(std::move(f)); });
-  BlurLevelLine level(FitBlurSplit(frames));
+  const BlurSplit first = FitBlurSplit(frames);
   frames.clear();
-  ForCrosstalkFrames(reader, features, rows, kBlurLevelFrames, *model,
-                     [&](const CrosstalkFrame& f) { level.Add(f); });
-  const BlurSplit split = level.Fitted();
+  const BlurSplit split = RefineBlurSplit(first, [&](const auto& use) {
+    ForCrosstalkFrames(reader, features, rows, kBlurLevelFrames, *model, use);
+  });
   model->blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
   model->blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
   model->blur_calibration.fit_offset_px2 = split.blur_offset_px2;
@@ -339,9 +340,9 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
       << std::showpos << b.FitBlurVarPx2(near_mm) - b.BlurVarPx2(near_mm) << " px^2 at "
       << std::noshowpos << std::lround(near_mm) << " mm, " << std::showpos
       << b.FitBlurVarPx2(far_mm) - b.BlurVarPx2(far_mm) << std::noshowpos << " px^2 at "
-      << std::lround(far_mm) << " mm from the cumulants'; the split from " << split.frames
-      << " frames, the level from " << (split.level_frames > 0 ? split.level_frames : split.frames)
-      << "\n";
+      << std::lround(far_mm) << " mm from the cumulants'; the split fitted on " << split.frames
+      << " frames (" << first.crosstalk_var_px2 << " px^2), refined on "
+      << (split.level_frames > 0 ? split.level_frames : split.frames) << "\n";
 }
 
 // The second pass of a calibration whose estimates use the blob fit: every frame's size from the

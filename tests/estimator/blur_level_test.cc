@@ -1,6 +1,7 @@
-// The blob fit's blur level from every calibration frame (estimator/blur_level.h BlurLevelLine):
-// the line of the frames' own best blurs refitted on all of them, an outlier left out, and the
-// split's own line kept when too few frames take part.
+// The blob fit's blur level and split refined on every calibration frame (estimator/blur_level.h):
+// BlurLevelLine (the line of the frames' own best blurs refitted on all of them, an outlier left
+// out, the split's own line kept when too few frames take part), ProfileBlobSplit's gradient and
+// BlurSplitRefiner's passes.
 #include "estimator/blur_level.h"
 
 #include <gtest/gtest.h>
@@ -88,6 +89,67 @@ TEST(BlurLevelLine, TooFewFramesKeepTheSplitsLine) {
   EXPECT_EQ(kept.level_frames, 0);
   EXPECT_EQ(kept.blur_offset_px2, 0.02);
   EXPECT_EQ(kept.blur_offset_u_px2, -0.01);
+}
+
+// A frame of a sharp lens (0.3 px) with 0.6 px of crosstalk (a sampled Gaussian) at `d_mm`,
+// given its true blur.
+CrosstalkFrame SharpFrame(double d_mm) {
+  testing::DiscBlob blob;
+  blob.cx = 23.3 + 0.37 * std::fmod(d_mm / 100.0, 1.0);
+  blob.cy = 23.6 - 0.29 * std::fmod(d_mm / 70.0, 1.0);
+  blob.a = blob.b = 9.0 * 1500.0 / d_mm;
+  blob.optics_sigma_px = 0.3;
+  blob.crosstalk_sigma_px = 0.6;
+  CrosstalkFrame frame = testing::SpectrumFrame16(blob);
+  frame.blur_var_px2 = 0.09 + kPixelAreaVarPx2 + testing::CrosstalkVariance(0.6);
+  frame.d_mm = d_mm;
+  return frame;
+}
+
+// The one-pass cost FitBlurSplit sums, as a function of the blur and the crosstalk's variance.
+double OnePassCost(const CrosstalkFrame& f, double blur, double crosstalk) {
+  const BlobFitResult fit = FitBlobPasses(f.image, f.bit_depth, f.features, blur, {crosstalk}, 1);
+  return fit.read_weighted_chi2 * fit.pixels;
+}
+
+// ProfileBlobSplit's gradient is half the one-pass cost's slope in the blur and in the
+// crosstalk's variance (the disc refitted at each: central differences of 0.01 px^2), within 10%,
+// away from the split's minimum (the blur 0.05 px^2 and the crosstalk 0.1 px^2 off).
+TEST(ProfileBlobSplit, ItsGradientIsTheCostsSlope) {
+  const CrosstalkFrame f = SharpFrame(2000.0);
+  const double blur = f.blur_var_px2 + 0.05, crosstalk = testing::CrosstalkVariance(0.6) - 0.1;
+  const BlobSplitProfile p = ProfileBlobSplit(f.image, f.bit_depth, f.features, blur, {crosstalk});
+  ASSERT_TRUE(p.ok);
+  const double h = 0.01;
+  const double along_blur =
+      (OnePassCost(f, blur + h, crosstalk) - OnePassCost(f, blur - h, crosstalk)) / (2.0 * h);
+  const double along_crosstalk =
+      (OnePassCost(f, blur, crosstalk + h) - OnePassCost(f, blur, crosstalk - h)) / (2.0 * h);
+  EXPECT_NEAR(2.0 * p.gradient[0], along_blur, 0.1 * std::fabs(along_blur));
+  EXPECT_NEAR(2.0 * p.gradient[1], along_crosstalk, 0.1 * std::fabs(along_crosstalk));
+  EXPECT_GT(p.curvature[0][0], 0.0);
+  EXPECT_GT(p.curvature[1][1], 0.0);
+  EXPECT_NEAR(p.cost, OnePassCost(f, blur, crosstalk), 1e-3 * p.cost);
+}
+
+// Started from a split 0.1 px^2 of crosstalk short and a blur level 0.03 px^2 low, the refinement
+// on the frames (RefineBlurSplit: the Gauss-Newton passes, then the level's line) brings the
+// crosstalk within 0.03 px^2 of the lens's and the blur within 0.005 px^2 at both ends.
+TEST(BlurSplitRefiner, ASplitOffComesBackToTheFrames) {
+  std::vector<CrosstalkFrame> frames;
+  for (double d_mm = 1500.0; d_mm <= 3000.0; d_mm += 150.0) frames.push_back(SharpFrame(d_mm));
+  BlurSplit start;
+  start.crosstalk_var_px2 = testing::CrosstalkVariance(0.6) - 0.1;
+  start.blur_offset_px2 = -0.03;
+  const BlurSplit refined = RefineBlurSplit(start, [&](const auto& use) {
+    for (const CrosstalkFrame& f : frames) use(f);
+  });
+  EXPECT_NEAR(refined.crosstalk_var_px2, testing::CrosstalkVariance(0.6), 0.03);
+  for (const double d_mm : {1500.0, 3000.0}) {
+    EXPECT_NEAR(refined.blur_offset_px2 + refined.blur_offset_u_px2 * 1000.0 / d_mm, 0.0, 0.005)
+        << d_mm;
+  }
+  EXPECT_EQ(refined.level_frames, static_cast<int>(frames.size()));
 }
 
 }  // namespace

@@ -69,8 +69,8 @@ Features FeaturesOf(const cv::Mat& frame) {
 
 // The calibration of one response from noisy frames: 8 distances over 1.5..3 m, 16 frames each
 // (3 at 4 under a sanitizer) at random sub-pixel centres (seeded): the cumulants' blur fitted over
-// distance, then the split and the blob fit's own blur on 32 of those 128 frames, then the blur's
-// level on all of them.
+// distance, then the split and the blob fit's own blur on 32 of those 128 frames, both refined on
+// all of them (RefineBlurSplit, as `irdist fit`).
 struct Calibration {
   BlurCalibration blur;
   std::vector<CrosstalkFrame> frames;  // the split's frames, with their given blur
@@ -102,13 +102,13 @@ Calibration CalibrateFromNoisyFrames(PixelResponseKind kind, unsigned seed) {
   }
   out.blur = FitBlurCalibration(points);
   for (CrosstalkFrame& f : out.frames) f.blur_var_px2 = out.blur.BlurVarPx2(f.d_mm);
-  // The split from 32 of them spread over the distances, the blur's level from all (BlurLevelLine).
+  // The split from 32 of them spread over the distances, refined on all (RefineBlurSplit).
   std::vector<CrosstalkFrame> split_frames;
   const std::size_t stride = std::max<std::size_t>(1, out.frames.size() / kSplitFrames);
   for (std::size_t i = 0; i < out.frames.size(); i += stride) split_frames.push_back(out.frames[i]);
-  BlurLevelLine level(FitBlurSplit(split_frames));
-  for (const CrosstalkFrame& f : out.frames) level.Add(f);
-  const BlurSplit split = level.Fitted();
+  const BlurSplit split = RefineBlurSplit(FitBlurSplit(split_frames), [&](const auto& use) {
+    for (const CrosstalkFrame& f : out.frames) use(f);
+  });
   out.blur.crosstalk_var_px2 = split.crosstalk_var_px2;
   out.blur.crosstalk_lattice_share = split.crosstalk_lattice_share;
   out.blur.fit_offset_px2 = split.blur_offset_px2;
@@ -311,7 +311,7 @@ TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
   }
   // The goal rows, after calibration (<= 0.05% peak to peak, <= 0.03% mean), where reached: the
   // 70% aperture (0.032 / 0.030%) and the astigmatic optics (0.027 / 0.029%); all the blur after
-  // the pixels (0.11%), the defocus disc (0.24%) and the Airy PSF (1.1%) are reported.
+  // the pixels (0.11%), the defocus disc (0.24%) and the Airy PSF (0.33%) are reported.
   if (kind == PixelResponseKind::kFillFactor70 || kind == PixelResponseKind::kAstigmatic) {
     for (const SweepFigures* s : {&corner, &centre}) {
       EXPECT_LT(s->calibrated_p2p, 5e-4);
