@@ -151,6 +151,8 @@ struct CrosstalkFrame {
   Features features;
   double blur_var_px2 = 0.0;
   double d_mm = 0.0;  // the frame's distance (the offset's slope in 1000 / d); 0: unknown
+  // u = 1000 / d_mm, the offset's variable (0 when the distance is unknown).
+  double InverseMetres() const { return d_mm > 0.0 ? 1000.0 / d_mm : 0.0; }
 };
 
 // The split of the calibrated blur: the variance (px^2) of the part that comes after
@@ -178,6 +180,10 @@ struct BlurSplit {
   // The frames the offset's line was refitted on (estimator/blur_level.h BlurLevelLine); 0: the
   // line is the split's frames'.
   int level_frames = 0;
+  // The blob fit's blur for `frame`: its given blur plus the offset's line.
+  double FitBlurAt(const CrosstalkFrame& frame) const {
+    return frame.blur_var_px2 + blur_offset_px2 + blur_offset_u_px2 * frame.InverseMetres();
+  }
 };
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);
 

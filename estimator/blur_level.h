@@ -17,6 +17,14 @@ namespace irdist {
 // The fewest frames whose line replaces the split's own.
 constexpr int kMinBlurLevelFrames = 8;
 
+// The offset's line offset = o0 + o1 u (u = 1000 / d) through weighted points by least squares
+// (FitBlurSplit's rounds give every frame the weight 1); a constant where their u do not spread
+// (one distance, or none known). False (nothing set) without weight.
+struct OffsetPoint {
+  double u, offset_px2, weight;  // 1000 / d_mm, own best blur less the given, 1 / se^2
+};
+bool FitOffsetLine(const std::vector<OffsetPoint>& points, double* o0, double* o1);
+
 class BlurLevelLine {
  public:
   explicit BlurLevelLine(const BlurSplit& split) : split_(split) {}
@@ -29,11 +37,8 @@ class BlurLevelLine {
   int frames() const { return static_cast<int>(points_.size()); }
 
  private:
-  struct Point {
-    double u, offset_px2, weight;  // 1000 / d_mm, own best blur less the given, 1 / se^2
-  };
   BlurSplit split_;
-  std::vector<Point> points_;
+  std::vector<OffsetPoint> points_;
 };
 
 // The split and the blur's level refitted on every calibration frame: a Gauss-Newton step of the

@@ -2,13 +2,13 @@
 // inter-pixel crosstalk, the crosstalk kernel's shape and the blob fit's own blur, from
 // calibration frames, by coordinate descent on the blob fit's first-pass cost.
 #include <algorithm>
+#include <boost/math/tools/minima.hpp>
 #include <cmath>
 #include <limits>
 #include <vector>
 
-#include <boost/math/tools/minima.hpp>
-
 #include "estimator/blob_fit.h"
+#include "estimator/blur_level.h"
 
 namespace irdist {
 
@@ -54,15 +54,13 @@ double Minimise(F f, double low, double high) {
 
 namespace {
 
-double InverseMetres(const CrosstalkFrame& f) { return f.d_mm > 0.0 ? 1000.0 / f.d_mm : 0.0; }
-
 // The offset's line o0 + o1 u (u = 1000 / d) through each frame's own best blur at `crosstalk`
 // (Brent on the frame's one-pass cost) less its given blur; a constant where the frames share
 // one distance or none is known.
 void FitBlurOffset(const std::vector<const CrosstalkFrame*>& given,
                    const std::vector<CrosstalkFrame>& shifted, const Crosstalk& crosstalk,
                    double* o0, double* o1) {
-  double su = 0.0, sr = 0.0, suu = 0.0, sur = 0.0;
+  std::vector<OffsetPoint> points;
   for (size_t i = 0; i < shifted.size(); ++i) {
     CrosstalkFrame trial = shifted[i];
     const std::vector<const CrosstalkFrame*> one = {&trial};
@@ -75,17 +73,10 @@ void FitBlurOffset(const std::vector<const CrosstalkFrame*>& given,
           return SplitCost(one, crosstalk);
         },
         low, kMaxBlurOffsetPx2);
-    const double r = shifted[i].blur_var_px2 + o - given[i]->blur_var_px2;
-    const double u = InverseMetres(*given[i]);
-    su += u;
-    sr += r;
-    suu += u * u;
-    sur += u * r;
+    points.push_back(
+        {given[i]->InverseMetres(), shifted[i].blur_var_px2 + o - given[i]->blur_var_px2, 1.0});
   }
-  const double n = static_cast<double>(shifted.size());
-  const double det = n * suu - su * su;
-  *o1 = det > 1e-9 * std::max(n * suu, 1e-300) ? (n * sur - su * sr) / det : 0.0;
-  *o0 = (sr - *o1 * su) / n;
+  FitOffsetLine(points, o0, o1);
 }
 
 }  // namespace
@@ -111,7 +102,7 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   for (int round = 0; round < kSplitRounds; ++round) {
     double min_blur = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < shifted.size(); ++i) {
-      shifted[i].blur_var_px2 = usable[i]->blur_var_px2 + o0 + o1 * InverseMetres(*usable[i]);
+      shifted[i].blur_var_px2 = usable[i]->blur_var_px2 + o0 + o1 * usable[i]->InverseMetres();
       min_blur = std::min(min_blur, shifted[i].blur_var_px2);
     }
     const double max_var = std::max(min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2, 0.0);
@@ -134,7 +125,7 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   // The offset's line at the split kept: what each frame's own blur is there (the blob fit's own
   // blur, estimator/refocus.h, searches the same cost at the same split).
   for (size_t i = 0; i < shifted.size(); ++i) {
-    shifted[i].blur_var_px2 = usable[i]->blur_var_px2 + o0 + o1 * InverseMetres(*usable[i]);
+    shifted[i].blur_var_px2 = usable[i]->blur_var_px2 + o0 + o1 * usable[i]->InverseMetres();
   }
   FitBlurOffset(usable, shifted, best, &o0, &o1);
   split.blur_offset_px2 = o0;

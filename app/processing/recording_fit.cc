@@ -307,6 +307,45 @@ void ForCrosstalkFrames(const RecordingReader& reader, const FeatureMap& feature
   }
 }
 
+// RefineBlurSplit's frames (up to kBlurLevelFrames, ForCrosstalkFrames), loaded and scene-cleaned
+// once and kept while they fit in kKeptFrameBytes (a ROI recording's hundreds take a few MB);
+// past that (full frames) each pass loads them again, one at a time.
+constexpr std::size_t kKeptFrameBytes = std::size_t{256} << 20;
+class RefinementFrames {
+ public:
+  RefinementFrames(const RecordingReader& reader, const FeatureMap& features,
+                   const std::vector<const FrameRecord*>& rows, const CalibrationModel& model)
+      : reader_(reader), features_(features), rows_(rows), model_(model) {}
+  template <typename Use>
+  void operator()(const Use& use) {
+    if (loaded_ && all_kept_) {
+      for (const CrosstalkFrame& f : kept_) use(f);
+      return;
+    }
+    ForCrosstalkFrames(reader_, features_, rows_, kBlurLevelFrames, model_, [&](CrosstalkFrame f) {
+      use(f);
+      if (loaded_ || !all_kept_) return;
+      bytes_ += f.image.total() * f.image.elemSize();
+      all_kept_ = bytes_ <= kKeptFrameBytes;
+      if (all_kept_) {
+        kept_.push_back(std::move(f));
+      } else {
+        kept_ = {};
+      }
+    });
+    loaded_ = true;
+  }
+
+ private:
+  const RecordingReader& reader_;
+  const FeatureMap& features_;
+  const std::vector<const FrameRecord*>& rows_;
+  const CalibrationModel& model_;
+  std::vector<CrosstalkFrame> kept_;
+  std::size_t bytes_ = 0;
+  bool loaded_ = false, all_kept_ = true;
+};
+
 // The split of the calibrated blur into optics and crosstalk (estimator/blob_fit.h FitBlurSplit)
 // from up to kCrosstalkFrames usable measurement frames, then refined with the blob fit's blur
 // level on up to kBlurLevelFrames (RefineBlurSplit), each frame with the blob fit's blur at its
@@ -325,9 +364,8 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
                      [&](CrosstalkFrame f) { frames.push_back(std::move(f)); });
   const BlurSplit first = FitBlurSplit(frames);
   frames.clear();
-  const BlurSplit split = RefineBlurSplit(first, [&](const auto& use) {
-    ForCrosstalkFrames(reader, features, rows, kBlurLevelFrames, *model, use);
-  });
+  RefinementFrames refinement_frames(reader, features, rows, *model);
+  const BlurSplit split = RefineBlurSplit(first, [&](const auto& use) { refinement_frames(use); });
   model->blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
   model->blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
   model->blur_calibration.fit_offset_px2 = split.blur_offset_px2;
