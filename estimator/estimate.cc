@@ -1,21 +1,22 @@
 #include "estimator/estimate.h"
 
-#include <boost/math/distributions/chi_squared.hpp>
 #include <ceres/jet.h>
 #include <ceres/tiny_solver.h>
 
 #include <Eigen/Dense>
-#include <unsupported/Eigen/Polynomials>
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 #include <complex>
 #include <limits>
 #include <sstream>
+#include <unsupported/Eigen/Polynomials>
 #include <utility>
 
 #include "base/check.h"
 #include "base/pi.h"
 #include "estimator/polynomial_roots.h"
+#include "estimator/round_blob.h"
 #include "estimator/theta_start.h"
 
 namespace irdist {
@@ -512,9 +513,11 @@ std::string BracketEstimate::BriefReport() const {
   return out.str();
 }
 
-DistanceEstimate EstimatePair(const CalibrationModel& model, const Features& reference,
-                              double t_ref_ms, const Features& measurement, double t_ms,
+DistanceEstimate EstimatePair(const CalibrationModel& model, const Features& reference_frame,
+                              double t_ref_ms, const Features& measurement_frame, double t_ms,
                               const EstimateOptions& options) {
+  const std::vector<Features> pooled = PooledBracket(reference_frame, {measurement_frame});
+  const Features &reference = pooled[0], &measurement = pooled[1];
   const FittedModel *e, *s;
   Prepare(model, &e, &s);
   const Difference diff = MakeDifference(model.scaling, reference, t_ref_ms, measurement, t_ms);
@@ -530,14 +533,17 @@ DistanceEstimate EstimatePair(const CalibrationModel& model, const Features& ref
   return out;
 }
 
-BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& reference,
-                                double t_ref_ms, const std::vector<Features>& measurements,
+BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& reference_frame,
+                                double t_ref_ms, const std::vector<Features>& measurement_frames,
                                 const std::vector<double>& t_ms, const EstimateOptions& options) {
   std::string why;
   IRDIST_CHECK(options.IsValid(&why), why);
-  IRDIST_CHECK(measurements.size() == t_ms.size(), "measurements and t_ms differ in length");
-  IRDIST_CHECK(!measurements.empty() && measurements.size() <= kMaxBracketExposures,
-               "a bracket needs 1..", kMaxBracketExposures, " measurement frames");
+  IRDIST_CHECK(measurement_frames.size() == t_ms.size(), "measurements and t_ms differ in length");
+  IRDIST_CHECK(!t_ms.empty() && t_ms.size() <= kMaxBracketExposures, "a bracket needs 1..",
+               kMaxBracketExposures, " measurement frames");
+  const std::vector<Features> pooled = PooledBracket(reference_frame, measurement_frames);
+  const Features& reference = pooled[0];
+  const std::vector<Features> measurements(pooled.begin() + 1, pooled.end());
   const FittedModel *e, *s;
   Prepare(model, &e, &s);
   BracketEstimate out;

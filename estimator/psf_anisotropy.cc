@@ -82,10 +82,10 @@ void RemovePsfAnisotropy(double c_px2, double s_px2, Features* f) {
   f->ellipse_moments.angle_deg = 0.5 * std::atan2(s, c) * 180.0 / kPi;
 }
 
-double DenoisedAnisotropy2(double a2, double noise_var) {
+double DenoisedAnisotropy2(double a2, double noise_var, double midpoint, double slope) {
   if (!std::isfinite(noise_var) || !(noise_var > 0.0)) return a2;
   const double t = a2 / noise_var;
-  const double weight = 1.0 / (1.0 + std::exp(kRoundRuleSlope * (kRoundRuleMidpoint - t)));
+  const double weight = 1.0 / (1.0 + std::exp(slope * (midpoint - t)));
   return weight * std::max(0.0, a2 - noise_var);
 }
 

@@ -51,6 +51,8 @@ void RemovePsfAnisotropy(double c_px2, double s_px2, Features* features);
 // k = 1 kept too many false ellipses (docs/estimator.md).
 constexpr double kRoundRuleMidpoint = 6.0;  // t0
 constexpr double kRoundRuleSlope = 2.0;     // k
-double DenoisedAnisotropy2(double a2, double noise_var);
+// `midpoint` and `slope` are t0 and k (the pooled rule's own: round_blob.h).
+double DenoisedAnisotropy2(double a2, double noise_var, double midpoint = kRoundRuleMidpoint,
+                           double slope = kRoundRuleSlope);
 
 }  // namespace irdist
