@@ -11,6 +11,7 @@ set -euo pipefail
 
 packages=(
   g++ cmake ninja-build pkg-config
+  lld  # links the executables several times faster than GNU ld (CMakeLists.txt)
   libaravis-dev aravis-tools aravis-tools-cli libusb-1.0-0-dev  # aravis-tools-cli: arv-tool-0.8 (docs/virtual-rig.md, discovery)
   libeigen3-dev libopencv-dev libceres-dev libboost-dev libyaml-cpp-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -11,12 +11,35 @@ namespace irdist::sim {
 double LensPsf::CoreReachPx() const {
   const double mean = 0.5 * (sxx_px2 + syy_px2);
   const double half_diff = std::hypot(0.5 * (sxx_px2 - syy_px2), sxy_px2);
-  return 4.0 * std::sqrt(std::max(0.0, mean + half_diff)) + disc_radius_px;
+  return 4.0 * std::sqrt(std::max(0.0, mean + half_diff)) + disc_radius_px +
+         kAiryReachZeros * airy_first_zero_px;
 }
 
 double LensPsf::HaloReachPx() const { return halo_share > 0.0 ? 4.0 * halo_sigma_px : 0.0; }
 
 namespace disc_image {
+namespace {
+
+// The Airy pattern's encircled energy within x = 3.8317 r / r0, and its intensity's mean r^2
+// (in x^2) over [x0, x1] by Simpson's rule on 16 intervals (I(x) = (2 J1(x) / x)^2, weight x).
+double AiryEnergy(double x) {
+  if (!(x > 0.0)) return 0.0;
+  const double j0 = std::cyl_bessel_j(0.0, x), j1 = std::cyl_bessel_j(1.0, x);
+  return 1.0 - j0 * j0 - j1 * j1;
+}
+double AiryMeanX2(double x0, double x1) {
+  double sum = 0.0, sum_x2 = 0.0;
+  for (int i = 0; i <= 16; ++i) {
+    const double x = x0 + (x1 - x0) * i / 16.0;
+    const double j = x > 1e-9 ? 2.0 * std::cyl_bessel_j(1.0, x) / x : 1.0;
+    const double w = (i == 0 || i == 16 ? 1.0 : (i % 2 == 1 ? 4.0 : 2.0)) * j * j * x;
+    sum += w;
+    sum_x2 += w * x * x;
+  }
+  return sum > 0.0 ? sum_x2 / sum : 0.5 * (x0 * x0 + x1 * x1);
+}
+
+}  // namespace
 
 std::vector<DiscPoint> DiscQuadrature(double radius_px, double spacing_px) {
   if (!(radius_px > 0.0)) return {{0.0, 0.0, 1.0}};
@@ -41,19 +64,56 @@ std::vector<DiscPoint> DiscQuadrature(double radius_px, double spacing_px) {
   return points;
 }
 
+std::vector<DiscPoint> AiryQuadrature(double first_zero_px, double ring_width_px,
+                                      double spacing_px) {
+  const double reach = kAiryReachZeros * first_zero_px;
+  const double to_x = kAiryFirstZeroX / first_zero_px;
+  // Rings as DiscQuadrature's: the innermost a disc of half the width, the rest of equal width.
+  const int rings = std::max(1, static_cast<int>(std::ceil(reach / ring_width_px)));
+  const double width = reach / (rings + 0.5);
+  const double total = AiryEnergy(reach * to_x);
+  std::vector<DiscPoint> points = {{0.0, 0.0, AiryEnergy(0.5 * width * to_x) / total}};
+  for (int i = 1; i <= rings; ++i) {
+    const double inner = (i - 0.5) * width, outer = (i + 0.5) * width;
+    const double mid = std::sqrt(AiryMeanX2(inner * to_x, outer * to_x)) / to_x;
+    const int count = std::max(3, static_cast<int>(std::ceil(2.0 * kPi * mid / spacing_px)));
+    const double weight = (AiryEnergy(outer * to_x) - AiryEnergy(inner * to_x)) / total / count;
+    const double turn = (i % 2 == 0) ? 0.5 : 0.0;
+    for (int k = 0; k < count; ++k) {
+      const double a = 2.0 * kPi * (k + turn) / count;
+      points.push_back({mid * std::cos(a), mid * std::sin(a), weight});
+    }
+  }
+  return points;
+}
+
 namespace {
 
-// The strips shifted to every point of the defocus disc's quadrature, each weighted by its point.
-std::vector<ImageStrip> SpreadOverDisc(const std::vector<ImageStrip>& strips, const LensPsf& psf) {
-  if (!(psf.disc_radius_px > 0.0)) return strips;
+// The quadrature of the core's spread beyond its Gaussian: the defocus disc's or the Airy
+// pattern's points; one point at the centre without either.
+std::vector<DiscPoint> SpreadPoints(const LensPsf& psf) {
   // The points at most 0.8 of the core's narrower sd apart: the sum of the shifted cores is then
   // the disc convolved with the core to far below the noise (the error falls as
   // exp(-2 pi^2 sd^2 / spacing^2) inside the disc, 4e-14 here), at a cost the virtual camera
-  // keeps up with (each point a copy of the strips).
+  // keeps up with (each point a copy of the strips). The Airy pattern's rings and their points
+  // lie 1.2 sd apart (radially and along each ring): each ring's light lumped on one radius, the
+  // blurred pattern is within 0.3% of its peak of the converged one (lens_psf_test; a
+  // second-order quadrature, 0.1% at 0.2 sd for 5x the points): the rig's lens is that sum of
+  // shifted cores, the same in every render, truth and bound alike.
   const double mean = 0.5 * (psf.sxx_px2 + psf.syy_px2);
   const double half_diff = std::hypot(0.5 * (psf.sxx_px2 - psf.syy_px2), psf.sxy_px2);
   const double narrow_sd = std::sqrt(std::max(1e-4, mean - half_diff));
-  const std::vector<DiscPoint> points = DiscQuadrature(psf.disc_radius_px, 0.8 * narrow_sd);
+  if (psf.disc_radius_px > 0.0) return DiscQuadrature(psf.disc_radius_px, 0.8 * narrow_sd);
+  if (psf.airy_first_zero_px > 0.0) {
+    return AiryQuadrature(psf.airy_first_zero_px, 1.2 * narrow_sd, 1.2 * narrow_sd);
+  }
+  return {{0.0, 0.0, 1.0}};
+}
+
+// The strips shifted to every point of the PSF's spread (SpreadPoints), each weighted by its point.
+std::vector<ImageStrip> SpreadOverDisc(const std::vector<ImageStrip>& strips, const LensPsf& psf) {
+  if (!(psf.disc_radius_px > 0.0) && !(psf.airy_first_zero_px > 0.0)) return strips;
+  const std::vector<DiscPoint> points = SpreadPoints(psf);
   std::vector<ImageStrip> out;
   out.reserve(strips.size() * points.size());
   for (const DiscPoint& p : points) {

@@ -23,10 +23,17 @@
 
 namespace irdist::sim {
 
+// The Airy pattern's third dark ring over its first: J1's zeros x = 10.1735 and 3.8317.
+constexpr double kAiryFirstZeroX = 3.8317;
+constexpr double kAiryReachZeros = 10.1735 / kAiryFirstZeroX;
+
 struct LensPsf {
   // The core Gaussian's covariance (px^2), the round defocus included when it is a Gaussian.
   double sxx_px2 = 0.0, sxy_px2 = 0.0, syy_px2 = 0.0;
   double disc_radius_px = 0.0;  // the geometric defocus disc's radius (0: none)
+  // A diffraction-limited lens's Airy pattern: its first dark ring's radius (0: none), the pattern
+  // out to its third dark ring (kAiryReachZeros), convolved with the core.
+  double airy_first_zero_px = 0.0;
   double halo_share = 0.0;      // the share of the light in the halo
   double halo_sigma_px = 0.0;   // its round Gaussian's sd
   // The pixel's sensitive square, a share of the pitch per side (1: the whole pixel), centred
@@ -52,6 +59,15 @@ struct DiscPoint {
   double dx, dy, weight;
 };
 std::vector<DiscPoint> DiscQuadrature(double radius_px, double spacing_px);
+
+// The Airy pattern I(r) = (2 J1(x) / x)^2, x = 3.8317 r / first_zero_px (J1's first zero), cut at
+// its third dark ring (kAiryReachZeros x the first, 94% of its energy) and normalised there: a
+// point at the centre (the innermost disc of the rings' width) and rings of equal width at most
+// `ring_width_px`, each weighted by the pattern's energy in it (its encircled energy 1 - J0(x)^2 -
+// J1(x)^2) and lying on the radius of its own mean r^2 under the pattern, its points at most
+// `spacing_px` apart.
+std::vector<DiscPoint> AiryQuadrature(double first_zero_px, double ring_width_px,
+                                      double spacing_px);
 
 }  // namespace disc_image
 }  // namespace irdist::sim

@@ -104,6 +104,13 @@ bool OpticsOptions::IsValid(std::string* why) const {
     return Fail(why, "optics.focus_mm must be 0 (no defocus) or beyond twice the focal length");
   }
   if (supersample < 1 || supersample > 32) return Fail(why, "optics.supersample must be 1..32");
+  if (airy_first_zero_px != 0.0 && !(std::isfinite(airy_first_zero_px) &&
+                                     airy_first_zero_px >= 0.3 && airy_first_zero_px <= 3.0)) {
+    return Fail(why, "optics.airy_first_zero_px must be 0 (no Airy pattern) or lie in [0.3, 3]");
+  }
+  if (airy_first_zero_px != 0.0 && (defocus_disc || !(psf_sigma_px >= 0.3))) {
+    return Fail(why, "optics.airy_first_zero_px needs psf_sigma_px >= 0.3 and no defocus_disc");
+  }
   return true;
 }
 
@@ -307,10 +314,11 @@ void ReadEmitter(const YAML::Node& node, const std::string& file, EmitterOptions
 }
 
 void ReadOptics(const YAML::Node& node, const std::string& file, OpticsOptions* o) {
-  const MapReader k(node, file, "virtual.optics",
-                    {"focal_length_mm", "f_number", "lens_transmission", "filter_transmission",
-                     "psf_sigma_px", "psf_sigma_minor_px", "psf_angle_deg", "focus_mm",
-                     "defocus_disc", "halo_share", "halo_sigma_px", "vignetting", "supersample"});
+  const MapReader k(
+      node, file, "virtual.optics",
+      {"focal_length_mm", "f_number", "lens_transmission", "filter_transmission", "psf_sigma_px",
+       "psf_sigma_minor_px", "psf_angle_deg", "focus_mm", "defocus_disc", "airy_first_zero_px",
+       "halo_share", "halo_sigma_px", "vignetting", "supersample"});
   o->focal_length_mm = k.Number("focal_length_mm", o->focal_length_mm);
   o->f_number = k.Number("f_number", o->f_number);
   o->lens_transmission = k.Number("lens_transmission", o->lens_transmission);
@@ -320,6 +328,7 @@ void ReadOptics(const YAML::Node& node, const std::string& file, OpticsOptions* 
   o->psf_angle_deg = k.Number("psf_angle_deg", o->psf_angle_deg);
   o->focus_mm = k.Number("focus_mm", o->focus_mm);
   o->defocus_disc = k.Boolean("defocus_disc", o->defocus_disc);
+  o->airy_first_zero_px = k.Number("airy_first_zero_px", o->airy_first_zero_px);
   o->halo_share = k.Number("halo_share", o->halo_share);
   o->halo_sigma_px = k.Number("halo_sigma_px", o->halo_sigma_px);
   o->vignetting = k.Boolean("vignetting", o->vignetting);
@@ -327,7 +336,7 @@ void ReadOptics(const YAML::Node& node, const std::string& file, OpticsOptions* 
   std::string why;
   CheckAt(k, o->IsValid(&why), why,
           {"psf_sigma_px", "psf_sigma_minor_px", "psf_angle_deg", "halo_share", "halo_sigma_px",
-           "focal_length_mm", "f_number", "focus_mm", "supersample"});
+           "focal_length_mm", "f_number", "focus_mm", "supersample", "airy_first_zero_px"});
 }
 
 // The defect pixels' keys, flat in `virtual.sensor:` (sim/defect_pixels.h).

@@ -71,6 +71,11 @@ struct OpticsOptions {
   // true, the uniform disc of diameter c itself (a defocused lens's PSF), convolved with the
   // in-focus PSF (sim/lens_psf.h).
   bool defocus_disc = false;
+  // A diffraction-limited lens: the Airy pattern (2 J1(x) / x)^2, its first dark ring at this
+  // radius (px; 1.22 lambda N / pitch), out to its third dark ring (2.66x), convolved with the
+  // in-focus PSF above (>= 0.3 px: it smooths the pattern's quadrature). 0 = none; else [0.3, 3].
+  // Not with defocus_disc.
+  double airy_first_zero_px = 0.0;
   // Veiling glare: this share of the light (0..0.5) spread by a round Gaussian of halo_sigma_px
   // (scatter in the lens and the filters), the rest through the PSF above. 0 = none.
   double halo_share = 0.0;

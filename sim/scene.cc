@@ -155,6 +155,7 @@ LensPsf Scene::PsfAt(double distance_mm) const {
   // A point (an ideal lens in focus) still spreads over the pixel: keep the core's sd >= 1e-3 px.
   psf.sxx_px2 = std::max(psf.sxx_px2, 1e-6);
   psf.syy_px2 = std::max(psf.syy_px2, 1e-6);
+  psf.airy_first_zero_px = o.airy_first_zero_px;
   psf.halo_share = o.halo_share;
   psf.halo_sigma_px = o.halo_sigma_px;
   psf.pixel_aperture = physics_.sensor.pixel_aperture;

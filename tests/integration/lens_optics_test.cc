@@ -259,6 +259,19 @@ TEST_F(LensOptics, APixelApertureOf70PercentCalibratesAndValidates) {
   ExpectValidatesAsTheRoundLens(*control_, run, "fill70");
 }
 
+// A diffraction-limited lens (issue 31's Airy-like PSF): the Airy pattern with its first dark ring
+// at 1 px, convolved with a 0.5 px core and the rig's defocus; its rings are outside the blob fit's
+// Gaussian family. It calibrates to a model that loads and validates as the round lens does.
+TEST_F(LensOptics, AnAiryLensCalibratesAndValidates) {
+  ASSERT_EQ(control_->calibrate_code, 0) << control_->calibrate_output;
+  const LensRun run = CalibrateAndValidate(
+      "airy",
+      RigWith({{"psf_sigma_px", YAML::Node(0.5)}, {"airy_first_zero_px", YAML::Node(1.0)}}));
+  ASSERT_EQ(run.calibrate_code, 0) << run.calibrate_output;
+  EXPECT_NO_THROW(LoadModel(run.model_path));
+  ExpectValidatesAsTheRoundLens(*control_, run, "airy");
+}
+
 // All the blur after the pixels (issue 31's renderer): a sharp lens, no defocus, the charge
 // spread by a Gaussian of 1 px sampled on the pixels and cut at 4 sd. The calibration's blur split
 // finds it after the pixels, and the model validates as the round lens's.

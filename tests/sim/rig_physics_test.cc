@@ -110,6 +110,14 @@ TEST(RigPhysics, BadValueNamesFileAndLine) {
   ExpectError("virtual:\n  sensor:\n    full_well_e: lots\n", "badvalue", "3", "full_well_e");
   ExpectError("virtual:\n  emitter:\n    pattern: square\n", "badpattern", "3", "pattern");
   ExpectError("virtual:\n  sensor:\n    quantum_efficiency: 2\n", "range", "", "quantum_efficiency");
+  // The Airy key: read, refused out of its range and beside the defocus disc, at its line.
+  const RigPhysics airy = LoadRigPhysics(WriteRig(
+      "airy", "virtual:\n  optics:\n    psf_sigma_px: 0.5\n    airy_first_zero_px: 1.2\n"));
+  EXPECT_EQ(airy.optics.airy_first_zero_px, 1.2);
+  ExpectError("virtual:\n  optics:\n    airy_first_zero_px: 7\n", "airy_range", "3",
+              "airy_first_zero_px must be 0 (no Airy pattern) or lie in [0.3, 3]");
+  ExpectError("virtual:\n  optics:\n    defocus_disc: true\n    airy_first_zero_px: 1\n",
+              "airy_disc", "4", "needs psf_sigma_px >= 0.3 and no defocus_disc");
 }
 
 // The camera's pixel-shaping faults (a LUT left on, a gamma it cannot switch off): off by
