@@ -524,6 +524,7 @@ bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationMod
   features->major_var_se_px2 = fit.major_var_se_px2;
   features->disc_raw_major_var_px2 = fit.raw_major_var_px2;
   features->disc_raw_minor_var_px2 = fit.raw_minor_var_px2;
+  features->disc_raw_angle_deg = fit.angle_deg;
   features->disc_aniso_noise_var = fit.anisotropy_noise_var;
   // The fitted axes' direction with their variances: the moments' own is another (noisier, for a
   // near-round blob unrelated) measurement, and the line of sight turns the matrix of the two.

@@ -164,11 +164,13 @@ struct Features {
   double trace_var_se_px2 = std::numeric_limits<double>::quiet_NaN();
   // And the standard error of moment_major_var_px2 where the blob fit set it; NaN otherwise.
   double major_var_se_px2 = std::numeric_limits<double>::quiet_NaN();
-  // The blob fit's disc before the round-blob rule: its variances along its axes (px^2, no blur)
-  // and the noise E|a_noise|^2 of P's anisotropy (px^-4), which a bracket's frames pool
-  // (round_blob.h); NaN otherwise.
+  // The blob fit's disc before the round-blob rule: its variances along its axes (px^2, no blur),
+  // its major axis's direction in the camera's axes (deg; the moment ellipse's angle is turned by
+  // the line of sight, and a round blob's is then the turn's own) and the noise E|a_noise|^2 of
+  // P's anisotropy (px^-4), which a bracket's frames pool (round_blob.h); NaN otherwise.
   double disc_raw_major_var_px2 = std::numeric_limits<double>::quiet_NaN();
   double disc_raw_minor_var_px2 = std::numeric_limits<double>::quiet_NaN();
+  double disc_raw_angle_deg = std::numeric_limits<double>::quiet_NaN();
   double disc_aniso_noise_var = std::numeric_limits<double>::quiet_NaN();
   // The blob fit's own blur (estimator/refocus.h MeasureOwnBlur): the blur variance (px^2, pixel
   // area and crosstalk included) that fits this frame best, its standard error, the disc's

@@ -17,13 +17,14 @@ struct FrameAnisotropy {
 bool AnisotropyOf(const Features& f, FrameAnisotropy* out) {
   const double raw_major = f.disc_raw_major_var_px2, raw_minor = f.disc_raw_minor_var_px2;
   const double noise = f.disc_aniso_noise_var;
-  if (!(raw_minor > 0.0) || !(raw_major >= raw_minor) || !(noise > 0.0) || !std::isfinite(noise)) {
+  if (!(raw_minor > 0.0) || !(raw_major >= raw_minor) || !(noise > 0.0) || !std::isfinite(noise) ||
+      !std::isfinite(f.disc_raw_angle_deg)) {
     return false;
   }
   // P's eigenvalues 1 / (4 var): its smaller one along the major axis, at angle phi; a points
   // along -(cos 2 phi, sin 2 phi) (blob_fit.cc DiscEigenvalues).
   const double length = 0.5 * (0.25 / raw_minor - 0.25 / raw_major);
-  const double turn = 2.0 * f.ellipse_moments.angle_deg * kPi / 180.0;
+  const double turn = 2.0 * f.disc_raw_angle_deg * kPi / 180.0;
   out->c = -length * std::cos(turn);
   out->s = -length * std::sin(turn);
   out->noise_var = noise;

@@ -39,6 +39,7 @@ Features FittedFrame(double theta_deg, double share, std::mt19937_64* rng) {
   Features f;
   f.ellipse_moments.valid = true;
   f.ellipse_moments.angle_deg = 0.5 * std::atan2(-s, -c) * 180.0 / kPi;
+  f.disc_raw_angle_deg = f.ellipse_moments.angle_deg;
   f.disc_raw_major_var_px2 = 0.25 / (half_trace - length);
   f.disc_raw_minor_var_px2 = 0.25 / (half_trace + length);
   f.disc_aniso_noise_var = noise;
@@ -81,6 +82,25 @@ TEST(RoundBlobRule, ABracketsFramesTogetherReadARoundBlobAsRoundWhereOneFrameFai
   // One frame's rule: about 1% of round blobs read beyond 2 deg; the pooled rule: about 0.1%.
   EXPECT_GT(alone_far, 0.006 * brackets);
   EXPECT_LT(pooled_far, 0.003 * brackets);
+}
+
+// The pool takes each frame's anisotropy from the fit's own axes, not the moment ellipse's angle,
+// which the line of sight turns (a round blob's then the turn's own direction): a bracket whose
+// ellipse angles were turned pools as it did before the turn.
+TEST(RoundBlobRule, ThePoolDoesNotReadTheTurnedEllipsesAngle) {
+  std::mt19937_64 rng(8);
+  for (int i = 0; i < 200; ++i) {
+    std::vector<Features> frames, turned;
+    for (double share : {0.25, 1.0, 1.1}) frames.push_back(FittedFrame(0.0, share, &rng));
+    turned = frames;
+    for (Features& f : turned) f.ellipse_moments.angle_deg = 52.5;
+    PoolRoundBlobRule({&frames[0], &frames[1], &frames[2]});
+    PoolRoundBlobRule({&turned[0], &turned[1], &turned[2]});
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_EQ(turned[k].moment_major_var_px2, frames[k].moment_major_var_px2) << i;
+      ASSERT_EQ(turned[k].moment_minor_var_px2, frames[k].moment_minor_var_px2) << i;
+    }
+  }
 }
 
 TEST(RoundBlobRule, SmallAndLargeTiltsKeepTheirThetaInABracket) {
