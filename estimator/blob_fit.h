@@ -153,6 +153,10 @@ struct CrosstalkFrame {
   double d_mm = 0.0;  // the frame's distance (the offset's slope in 1000 / d); 0: unknown
   // u = 1000 / d_mm, the offset's variable (0 when the distance is unknown).
   double InverseMetres() const { return d_mm > 0.0 ? 1000.0 / d_mm : 0.0; }
+  // Its given blur plus an offset's line o0 + o1 u.
+  double BlurWithOffset(double o0, double o1) const {
+    return blur_var_px2 + o0 + o1 * InverseMetres();
+  }
 };
 
 // The split of the calibrated blur: the variance (px^2) of the part that comes after
@@ -182,7 +186,7 @@ struct BlurSplit {
   int level_frames = 0;
   // The blob fit's blur for `frame`: its given blur plus the offset's line.
   double FitBlurAt(const CrosstalkFrame& frame) const {
-    return frame.blur_var_px2 + blur_offset_px2 + blur_offset_u_px2 * frame.InverseMetres();
+    return frame.BlurWithOffset(blur_offset_px2, blur_offset_u_px2);
   }
 };
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);

@@ -102,7 +102,7 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   for (int round = 0; round < kSplitRounds; ++round) {
     double min_blur = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < shifted.size(); ++i) {
-      shifted[i].blur_var_px2 = usable[i]->blur_var_px2 + o0 + o1 * usable[i]->InverseMetres();
+      shifted[i].blur_var_px2 = usable[i]->BlurWithOffset(o0, o1);
       min_blur = std::min(min_blur, shifted[i].blur_var_px2);
     }
     const double max_var = std::max(min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2, 0.0);
@@ -125,7 +125,7 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   // The offset's line at the split kept: what each frame's own blur is there (the blob fit's own
   // blur, estimator/refocus.h, searches the same cost at the same split).
   for (size_t i = 0; i < shifted.size(); ++i) {
-    shifted[i].blur_var_px2 = usable[i]->blur_var_px2 + o0 + o1 * usable[i]->InverseMetres();
+    shifted[i].blur_var_px2 = usable[i]->BlurWithOffset(o0, o1);
   }
   FitBlurOffset(usable, shifted, best, &o0, &o1);
   split.blur_offset_px2 = o0;

@@ -516,8 +516,8 @@ std::string BracketEstimate::BriefReport() const {
 DistanceEstimate EstimatePair(const CalibrationModel& model, const Features& reference_frame,
                               double t_ref_ms, const Features& measurement_frame, double t_ms,
                               const EstimateOptions& options) {
-  const std::vector<Features> pooled = PooledBracket(reference_frame, {measurement_frame});
-  const Features &reference = pooled[0], &measurement = pooled[1];
+  Features reference = reference_frame, measurement = measurement_frame;
+  PoolRoundBlobRule({&reference, &measurement});
   const FittedModel *e, *s;
   Prepare(model, &e, &s);
   const Difference diff = MakeDifference(model.scaling, reference, t_ref_ms, measurement, t_ms);
@@ -541,9 +541,9 @@ BracketEstimate EstimateBracket(const CalibrationModel& model, const Features& r
   IRDIST_CHECK(measurement_frames.size() == t_ms.size(), "measurements and t_ms differ in length");
   IRDIST_CHECK(!t_ms.empty() && t_ms.size() <= kMaxBracketExposures, "a bracket needs 1..",
                kMaxBracketExposures, " measurement frames");
-  const std::vector<Features> pooled = PooledBracket(reference_frame, measurement_frames);
-  const Features& reference = pooled[0];
-  const std::vector<Features> measurements(pooled.begin() + 1, pooled.end());
+  Features reference = reference_frame;
+  std::vector<Features> measurements = measurement_frames;
+  PoolBracket(&reference, &measurements);
   const FittedModel *e, *s;
   Prepare(model, &e, &s);
   BracketEstimate out;

@@ -70,16 +70,10 @@ void PoolRoundBlobRule(std::vector<Features*> frames) {
   }
 }
 
-std::vector<Features> PooledBracket(const Features& reference,
-                                    const std::vector<Features>& measurements) {
-  std::vector<Features> out;
-  out.reserve(measurements.size() + 1);
-  out.push_back(reference);
-  out.insert(out.end(), measurements.begin(), measurements.end());
-  std::vector<Features*> frames;
-  for (Features& f : out) frames.push_back(&f);
+void PoolBracket(Features* reference, std::vector<Features>* measurements) {
+  std::vector<Features*> frames = {reference};
+  for (Features& f : *measurements) frames.push_back(&f);
   PoolRoundBlobRule(frames);
-  return out;
 }
 
 }  // namespace irdist

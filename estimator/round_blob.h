@@ -31,8 +31,7 @@ constexpr double kPooledRoundRuleSlope = 1.0;
 // have them.
 void PoolRoundBlobRule(std::vector<Features*> frames);
 
-// A bracket's reference and measurements as one list (reference first), the rule pooled.
-std::vector<Features> PooledBracket(const Features& reference,
-                                    const std::vector<Features>& measurements);
+// The rule pooled over a bracket's reference and measurements, in place.
+void PoolBracket(Features* reference, std::vector<Features>* measurements);
 
 }  // namespace irdist

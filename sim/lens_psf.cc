@@ -39,23 +39,22 @@ double AiryMeanX2(double x0, double x1) {
   return sum > 0.0 ? sum_x2 / sum : 0.5 * (x0 * x0 + x1 * x1);
 }
 
-}  // namespace
-
-std::vector<DiscPoint> DiscQuadrature(double radius_px, double spacing_px) {
-  if (!(radius_px > 0.0)) return {{0.0, 0.0, 1.0}};
-  // Rings of equal width; the innermost a disc of its own (one point at the centre), each other
-  // ring's points evenly spaced on the radius of the ring's own mean r^2 (the disc's second
-  // moment kept), each point weighted by its share of the area.
-  const int rings = std::max(1, static_cast<int>(std::ceil(radius_px / spacing_px)));
-  const double width = radius_px / (rings + 0.5);
-  const double total = radius_px * radius_px;
-  std::vector<DiscPoint> points = {{0.0, 0.0, 0.25 * width * width / total}};
+// The quadrature of a round density out to `reach_px`: a point at the centre holding the share of
+// the innermost disc (half a ring's width), then rings of equal width at most `ring_width_px`,
+// ring [inner, outer] on the radius `radius_of(inner, outer)` holding `share_of(inner, outer)`,
+// its points evenly spaced at most `spacing_px` apart (at least 3), neighbouring rings staggered.
+template <typename Radius, typename Share>
+std::vector<DiscPoint> RingQuadrature(double reach_px, double ring_width_px, double spacing_px,
+                                      Radius radius_of, Share share_of) {
+  const int rings = std::max(1, static_cast<int>(std::ceil(reach_px / ring_width_px)));
+  const double width = reach_px / (rings + 0.5);
+  std::vector<DiscPoint> points = {{0.0, 0.0, share_of(0.0, 0.5 * width)}};
   for (int i = 1; i <= rings; ++i) {
     const double inner = (i - 0.5) * width, outer = (i + 0.5) * width;
-    const double mid = std::sqrt(0.5 * (inner * inner + outer * outer));
+    const double mid = radius_of(inner, outer);
     const int count = std::max(3, static_cast<int>(std::ceil(2.0 * kPi * mid / spacing_px)));
-    const double weight = (outer * outer - inner * inner) / total / count;
-    const double turn = (i % 2 == 0) ? 0.5 : 0.0;  // neighbouring rings' points staggered
+    const double weight = share_of(inner, outer) / count;
+    const double turn = (i % 2 == 0) ? 0.5 : 0.0;
     for (int k = 0; k < count; ++k) {
       const double a = 2.0 * kPi * (k + turn) / count;
       points.push_back({mid * std::cos(a), mid * std::sin(a), weight});
@@ -64,27 +63,32 @@ std::vector<DiscPoint> DiscQuadrature(double radius_px, double spacing_px) {
   return points;
 }
 
+}  // namespace
+
+std::vector<DiscPoint> DiscQuadrature(double radius_px, double spacing_px) {
+  if (!(radius_px > 0.0)) return {{0.0, 0.0, 1.0}};
+  // Each ring on the radius of its own mean r^2 (the disc's second moment kept), each point
+  // weighted by its share of the area.
+  const double total = radius_px * radius_px;
+  return RingQuadrature(
+      radius_px, spacing_px, spacing_px,
+      [](double inner, double outer) { return std::sqrt(0.5 * (inner * inner + outer * outer)); },
+      [total](double inner, double outer) { return (outer * outer - inner * inner) / total; });
+}
+
 std::vector<DiscPoint> AiryQuadrature(double first_zero_px, double ring_width_px,
                                       double spacing_px) {
-  const double reach = kAiryReachZeros * first_zero_px;
   const double to_x = kAiryFirstZeroX / first_zero_px;
-  // Rings as DiscQuadrature's: the innermost a disc of half the width, the rest of equal width.
-  const int rings = std::max(1, static_cast<int>(std::ceil(reach / ring_width_px)));
-  const double width = reach / (rings + 0.5);
+  const double reach = kAiryReachZeros * first_zero_px;
   const double total = AiryEnergy(reach * to_x);
-  std::vector<DiscPoint> points = {{0.0, 0.0, AiryEnergy(0.5 * width * to_x) / total}};
-  for (int i = 1; i <= rings; ++i) {
-    const double inner = (i - 0.5) * width, outer = (i + 0.5) * width;
-    const double mid = std::sqrt(AiryMeanX2(inner * to_x, outer * to_x)) / to_x;
-    const int count = std::max(3, static_cast<int>(std::ceil(2.0 * kPi * mid / spacing_px)));
-    const double weight = (AiryEnergy(outer * to_x) - AiryEnergy(inner * to_x)) / total / count;
-    const double turn = (i % 2 == 0) ? 0.5 : 0.0;
-    for (int k = 0; k < count; ++k) {
-      const double a = 2.0 * kPi * (k + turn) / count;
-      points.push_back({mid * std::cos(a), mid * std::sin(a), weight});
-    }
-  }
-  return points;
+  return RingQuadrature(
+      reach, ring_width_px, spacing_px,
+      [to_x](double inner, double outer) {
+        return std::sqrt(AiryMeanX2(inner * to_x, outer * to_x)) / to_x;
+      },
+      [to_x, total](double inner, double outer) {
+        return (AiryEnergy(outer * to_x) - AiryEnergy(inner * to_x)) / total;
+      });
 }
 
 namespace {
@@ -111,7 +115,8 @@ std::vector<DiscPoint> SpreadPoints(const LensPsf& psf) {
 }
 
 // The strips shifted to every point of the PSF's spread (SpreadPoints), each weighted by its point.
-std::vector<ImageStrip> SpreadOverDisc(const std::vector<ImageStrip>& strips, const LensPsf& psf) {
+std::vector<ImageStrip> SpreadOverPoints(const std::vector<ImageStrip>& strips,
+                                         const LensPsf& psf) {
   if (!(psf.disc_radius_px > 0.0) && !(psf.airy_first_zero_px > 0.0)) return strips;
   const std::vector<DiscPoint> points = SpreadPoints(psf);
   std::vector<ImageStrip> out;
@@ -168,7 +173,7 @@ void IntegrateSheared(const std::vector<ImageStrip>& strips, const LensPsf& psf,
 
 void IntegrateStripsCore(const std::vector<ImageStrip>& strips, const LensPsf& psf, double scale,
                          const cv::Rect& rect, cv::Mat1f* out) {
-  const std::vector<ImageStrip> spread = SpreadOverDisc(strips, psf);
+  const std::vector<ImageStrip> spread = SpreadOverPoints(strips, psf);
   // Turned axes couple x and y; axes along the rows (or a round core) keep the separable sum.
   if (std::fabs(psf.sxy_px2) > 1e-9 * (psf.sxx_px2 + psf.syy_px2)) {
     IntegrateSheared(spread, psf, scale, rect, out);
