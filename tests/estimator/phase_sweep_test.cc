@@ -26,6 +26,7 @@
 #include "estimator/features.h"
 #include "tests/estimator/disc_spectrum.h"
 #include "tests/estimator/pixel_responses.h"
+#include "tests/sanitized_build.h"
 
 namespace irdist {
 namespace {
@@ -39,17 +40,7 @@ using testing::PixelResponseKind;
 // sweeps) and asserts that they work (no failed fit, a fitted calibration, enough samples); the
 // figures' goal rows are asserted by the Release run only (12 noisy frames make a noisier split
 // than the tolerances are stated for).
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kReducedSweep = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kReducedSweep = true;
-#else
-constexpr bool kReducedSweep = false;
-#endif
-#else
-constexpr bool kReducedSweep = false;
-#endif
+constexpr bool kReducedSweep = testing::kSanitizedBuild;
 constexpr int kCalibrationDistances = kReducedSweep ? 4 : 8;
 constexpr int kFramesPerDistance = kReducedSweep ? 3 : 16;
 constexpr std::size_t kSplitFrames = 32;  // as `irdist fit` (recording_fit.cc kCrosstalkFrames)
