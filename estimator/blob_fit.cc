@@ -22,10 +22,10 @@ namespace {
 // instead of 6 a fit on bench_estimator's blob): a parameter is then within about 1% of its
 // standard error of the minimum (both tolerances absolute, in |f|^2 units).
 constexpr double kChi2Tolerance = 1e-4;
-// A pass whose solution only sets the next pass's weights stops sooner (6.2 model evaluations a
-// fit instead of 7.1 on bench_estimator's blob): the weights are the model's signal, which a
-// step changing the chi^2 by this little moves by a small fraction of a noise sd, and the last
-// pass converges to its tolerance whatever its start.
+// A pass whose solution only sets the next pass's weights (and the profiles' one pass, whose
+// joint Gauss-Newton step corrects the rest) stops sooner: the weights are the model's shape,
+// which a step changing the chi^2 by this little moves by a small fraction of a noise sd, and the
+// last pass converges to its tolerance whatever its start.
 constexpr double kWeightsPassTolerance = 0.5;
 // The last pass takes its last Gauss-Newton step unevaluated when the step's predicted decrease
 // of the chi^2 (the Newton decrement) is below this: a step under three standard errors
@@ -33,6 +33,16 @@ constexpr double kWeightsPassTolerance = 0.5;
 // within 0.009 of one from the minimum (the decrement after it 7.5e-5); the model's curvature
 // puts a 3 se step within 0.03 se.
 constexpr double kFinalStepDecrement = 9.0;
+// The solution's weights are the frame's shot noise over a floor of this share of the amplitude
+// (ShapeVariances), not the frame's own noise regressed from its residuals: those weights made the
+// fitted size depend on the frame's noise and amplitude wherever the lens is not the model's (a
+// defocus disc's PSF: noise-free frames 0.2-0.7% smaller than the mean of noisy ones, and
+// 0.2-0.3% between amplitudes 4x apart; a noise-free frame's residuals are the model's misfit,
+// which set its weights instead). With weights of the model's own shape the pseudo-true size is
+// one, noisy or not, bright or dim: within 0.02%. The share trades the weights' efficiency
+// (0.01-0.03, the shot noise's own floor on a bright frame: the size's scatter 2% below this
+// share's) against the misfit of the model's tails (docs/estimator.md "The blob fit's weights").
+constexpr double kShapeReadShare = 0.1;
 // Parameters: centre x, y (relative to the fit's origin), P11, P12, P22, amplitude, background.
 constexpr int kParams = 7;
 
@@ -110,6 +120,37 @@ class WindowResiduals : public NormalProblem<kParams> {
     }
     normal->cost2 = cost2;
     return std::isfinite(cost2);
+  }
+  // At v, in one pass over the pixels: J^T W J in the model's weights W (*h), J^T W Sigma W J for
+  // the noise variances `var` (Sigma, *m), and the residuals' chi-square in Sigma's weights.
+  double Sandwich(const double* v, const std::vector<double>& var,
+                  Eigen::Matrix<double, kParams, kParams>* h,
+                  Eigen::Matrix<double, kParams, kParams>* m) const {
+    const std::vector<double>& mean = MeansAt(v);
+    const size_t n = pixels_.size();
+    double a[kParams * kParams] = {}, b[kParams * kParams] = {}, j[kParams];
+    double chi2 = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      const double r = v[6] + v[5] * mean[i] - pixels_[i].value;
+      chi2 += r * r / var[i];
+      const double w = inv_sd_[i] * inv_sd_[i], spread = w * w * var[i];
+      for (int k = 0; k < 5; ++k) j[k] = v[5] * d_mean_[k * n + i];
+      j[5] = mean[i];
+      j[6] = 1.0;
+      for (int k = 0; k < kParams; ++k) {
+        for (int l = k; l < kParams; ++l) {
+          a[k * kParams + l] += w * j[k] * j[l];
+          b[k * kParams + l] += spread * j[k] * j[l];
+        }
+      }
+    }
+    for (int k = 0; k < kParams; ++k) {
+      for (int l = k; l < kParams; ++l) {
+        (*h)(k, l) = (*h)(l, k) = a[k * kParams + l];
+        (*m)(k, l) = (*m)(l, k) = b[k * kParams + l];
+      }
+    }
+    return chi2;
   }
   // Each pixel's model mean (relative to the amplitude) at v; nothing is computed when v is the
   // last point.
@@ -249,43 +290,59 @@ std::vector<double> NoiseVariances(const std::vector<Pixel>& pixels, const Windo
   return var;
 }
 
+// The second pass's weights: var = read (1 + shape / kShapeReadShare), shape the model's signal
+// over its amplitude (0..1): the same weights whatever the frame's amplitude and noise (the scale,
+// the read noise's variance where the signal is 0, sets only the pass's tolerance).
+std::vector<double> ShapeVariances(const WindowResiduals& model, const double* v, double read_var) {
+  const std::vector<double>& mean = model.MeansAt(v);
+  std::vector<double> var(mean.size());
+  for (size_t i = 0; i < mean.size(); ++i) {
+    var[i] = read_var * (1.0 + std::max(0.0, mean[i]) / kShapeReadShare);
+  }
+  return var;
+}
+
 using Covariance = BlobCovariance;
 static_assert(kParams == BlobCovariance::RowsAtCompileTime, "the covariance's parameters");
 
-// The parameters' covariance at the solution, (J^T J)^-1 of the weighted residuals (as
-// ceres::Covariance, without its sparse machinery: J^T J's eigen-decomposition); false when J^T J
-// is singular to Ceres's own threshold (reciprocal condition 1e-14).
-bool FitCovariance(const WindowResiduals& residuals, const double* v, Covariance* c) {
-  NormalEquations<kParams> normal;
-  residuals.Evaluate(v, true, &normal);
-  const Eigen::SelfAdjointEigenSolver<Covariance> eigen(normal.jtj);
+// The covariance of the solution at `at` in the model's weights W (ShapeVariances) under the
+// frame's own noise (NoiseVariances: read + k x signal, Sigma): the least squares' sandwich
+// H^-1 M H^-1, H = J^T W J, M = J^T W Sigma W J (as ceres::Covariance, without its sparse
+// machinery: H's eigen-decomposition); false when H is singular to Ceres's own threshold
+// (reciprocal condition 1e-14). *chi2_per_pixel: the residuals' chi-square per pixel in Sigma's
+// weights (~1 when the model fits).
+bool NoiseCovariance(const WindowResiduals& model, const std::vector<Pixel>& pixels,
+                     const double* at, double read_var, Covariance* c, double* chi2_per_pixel) {
+  Covariance h, m;
+  const std::vector<double> var = NoiseVariances(pixels, model, at, read_var);
+  *chi2_per_pixel = model.Sandwich(at, var, &h, &m) / static_cast<double>(pixels.size());
+  const Eigen::SelfAdjointEigenSolver<Covariance> eigen(h);
   if (eigen.info() != Eigen::Success) return false;
   const Eigen::Matrix<double, kParams, 1> lambda = eigen.eigenvalues();  // ascending
   if (!(lambda(0) > 1e-14 * lambda(kParams - 1))) return false;
-  *c = eigen.eigenvectors() * lambda.cwiseInverse().asDiagonal() * eigen.eigenvectors().transpose();
+  const Covariance h_inverse =
+      eigen.eigenvectors() * lambda.cwiseInverse().asDiagonal() * eigen.eigenvectors().transpose();
+  *c = h_inverse * m * h_inverse;
   return true;
 }
 
-// One weighted least-squares pass (ceres::TinySolver) from v; returns the weighted cost per pixel.
-// covariance: when set, receives FitCovariance at the pass's solution (*covariance_ok whether
-// it could be computed): the last pass's. That pass ends with a step within kFinalStepDecrement
-// of the minimum taken without evaluating the model there (estimator/normal_lm.h
-// final_step_decrement: one model evaluation of three a fit, the same solution), its covariance
-// from the point before it.
+// One least-squares pass (ceres::TinySolver) from v in the model's weights; returns the weighted
+// cost per pixel. evaluated: when set, the pass ends with a step within kFinalStepDecrement of
+// the minimum taken without evaluating the model there (estimator/normal_lm.h
+// final_step_decrement: one model evaluation of three a fit, the same solution), and receives the
+// point before it, whose model is the last one computed (NoiseCovariance's point).
 double SolvePass(const WindowResiduals& residuals, double* v, bool* ok,
-                 Covariance* covariance = nullptr, bool* covariance_ok = nullptr,
+                 Eigen::Matrix<double, kParams, 1>* evaluated = nullptr,
                  double tolerance = kChi2Tolerance) {
   NormalLmOptions options;
   options.function_tolerance = tolerance;
   options.decrement_tolerance = tolerance;
-  if (covariance != nullptr) options.final_step_decrement = kFinalStepDecrement;
-  Eigen::Matrix<double, kParams, 1> x(v), evaluated;
-  const NormalLmSummary summary = SolveNormalLm(residuals, options, &x, &evaluated);
+  if (evaluated != nullptr) options.final_step_decrement = kFinalStepDecrement;
+  Eigen::Matrix<double, kParams, 1> x(v), last;
+  const NormalLmSummary summary = SolveNormalLm(residuals, options, &x, &last);
   std::copy(x.data(), x.data() + kParams, v);
+  if (evaluated != nullptr) *evaluated = last;
   *ok = std::isfinite(summary.final_cost) && v[2] > 0.0 && v[4] > 0.0 && v[2] * v[4] > v[3] * v[3];
-  if (*ok && covariance != nullptr) {
-    *covariance_ok = FitCovariance(residuals, evaluated.data(), covariance);
-  }
   return 2.0 * summary.final_cost / static_cast<double>(residuals.NumResiduals());
 }
 
@@ -356,7 +413,8 @@ WindowResiduals ModelOf(const WindowStart& s, double blur_var_px2, const Crossta
 
 }  // namespace
 
-// FitBlob with `passes` IRLS passes (1: the read noise's weights alone, for FitBlurSplit).
+// FitBlob with `passes` passes (1: the read noise's weights alone, for FitBlurSplit; 2: then the
+// weights of the first pass's shape, and the errors).
 BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features& features,
                             double blur_var_px2, const Crosstalk& crosstalk, int passes,
                             const PsfAnisotropy& psf) {
@@ -368,17 +426,21 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
   const std::vector<Pixel>& pixels = s.pixels;
   const cv::Rect& window = s.window;
   double* v = s.v;
-  const double read_var = s.read_var;
   WindowResiduals model = ModelOf(s, blur_var_px2, s.crosstalk, psf);
   bool ok = false, covariance_ok = false;
-  double chi2 = 0.0;
+  Eigen::Matrix<double, kParams, 1> evaluated;
+  double chi2 =
+      SolvePass(model, v, &ok, nullptr, passes > 1 ? kWeightsPassTolerance : kChi2Tolerance);
+  if (!ok) return out;
+  out.read_weighted_chi2 = chi2;
   Covariance covariance;
-  for (int pass = 0; pass < passes; ++pass) {
-    chi2 = SolvePass(model, v, &ok, pass == 1 ? &covariance : nullptr, &covariance_ok,
-                     pass + 1 == passes ? kChi2Tolerance : kWeightsPassTolerance);
+  if (passes > 1) {
+    const std::vector<double> weights_var = ShapeVariances(model, v, s.read_var);
+    model.SetVariances(weights_var);
+    chi2 = SolvePass(model, v, &ok, &evaluated);
     if (!ok) return out;
-    if (pass == 0) out.read_weighted_chi2 = chi2;
-    if (pass == 0 && passes > 1) model.SetVariances(NoiseVariances(pixels, model, v, read_var));
+    covariance_ok =
+        NoiseCovariance(model, pixels, evaluated.data(), s.read_var, &covariance, &chi2);
   }
   const double noise_var =
       covariance_ok ? AnisotropyNoiseVar(covariance) : std::numeric_limits<double>::quiet_NaN();
@@ -414,7 +476,7 @@ BlobBlurProfile ProfileBlobBlur(const cv::Mat& image, int bit_depth, const Featu
   // seven parameters' rest of the way with the blur's (the same step to 1e-5 px^2 on
   // tests/estimator/refocus's frames, a fifth less CPU).
   bool ok = false;
-  out.per_pixel = SolvePass(model, s.v, &ok, nullptr, nullptr, kWeightsPassTolerance);
+  out.per_pixel = SolvePass(model, s.v, &ok, nullptr, kWeightsPassTolerance);
   if (!ok) return out;
   // The step: small against the blur (the model's change in it is smooth: the forward
   // difference's error ~ step / blur), large against the normal table's 2e-10.
@@ -453,7 +515,7 @@ BlobSplitProfile ProfileBlobSplit(const cv::Mat& image, int bit_depth, const Fea
   const PsfAnisotropy round;
   WindowResiduals model = ModelOf(s, blur_var_px2, s.crosstalk, round);
   bool ok = false;
-  out.cost = SolvePass(model, s.v, &ok, nullptr, nullptr, kWeightsPassTolerance) *
+  out.cost = SolvePass(model, s.v, &ok, nullptr, kWeightsPassTolerance) *
              static_cast<double>(s.pixels.size());
   if (!ok) return out;
   // Forward differences as ProfileBlobBlur's; the crosstalk's backward where the optics are at
@@ -484,8 +546,8 @@ BlobSplitProfile ProfileBlobSplit(const cv::Mat& image, int bit_depth, const Fea
 
 BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& features,
                       double blur_var_px2, const Crosstalk& crosstalk, const PsfAnisotropy& psf) {
-  // IRLS, two passes: the read noise's weights, then the weights of the first pass's model (a
-  // third pass, weights from the second's, moved no figure: docs/estimator.md "The blob fit").
+  // Two passes: the read noise's weights, then the weights of the first pass's shape
+  // (ShapeVariances); the errors under the frame's own noise (NoiseCovariance).
   return FitBlobPasses(image, bit_depth, features, blur_var_px2, crosstalk, 2, psf);
 }
 

@@ -5,11 +5,13 @@
 // own spread is folded into the edge's blur, one evaluation per pixel), on the frame's background.
 // Unknowns: centre, P (3), amplitude, background; the Jacobian is analytic, summed into the
 // normal equations of a Levenberg-Marquardt (estimator/normal_lm.h; about 0.4 ms for a 7 px disc,
-// bench_estimator). Residuals are weighted by the sensor's noise model, var = read + k x signal (EMVA
-// 1288: read noise plus shot noise through the system gain), with read measured on the frame's
-// background and k regressed from the residuals of a first pass (iteratively reweighted least
-// squares = maximum likelihood for Gaussian noise). Second moments weight the noise in the blob's
-// wings by r^2; this fit weights each pixel by its information, and fixing the blur removes the
+// bench_estimator). Two passes: the read noise's weights, then weights of the first pass's own
+// shape, var = read (1 + signal / (0.1 amplitude)): shot noise over a floor, the same whatever the
+// frame's amplitude and noise, so that the size is one (noisy or noise free, bright or dim) where
+// the lens is not the model's. The errors are the solution's under the frame's own noise (EMVA
+// 1288: var = read + k x signal, read measured on the frame's background and k regressed from the
+// residuals; a sandwich covariance). Second moments weight the noise in the blob's wings by r^2;
+// this fit weights each pixel near its information, and fixing the blur removes the
 // size-blur correlation that a free-blur fit (EllipseMethod::kModelFit) pays for.
 //
 // The result replaces the blob's second-moment variances by the fitted disc's (A^2/4, B^2/4 for
@@ -82,8 +84,8 @@ BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& featu
                       double blur_var_px2, const Crosstalk& crosstalk = {},
                       const PsfAnisotropy& psf = {});
 
-// FitBlob with `passes` IRLS passes (2: FitBlob's; 1: the read noise's weights alone, whose
-// BlobFitResult::read_weighted_chi2 FitBlurSplit minimises).
+// FitBlob with `passes` passes (2: FitBlob's; 1: the read noise's weights alone, whose
+// BlobFitResult::read_weighted_chi2 FitBlurSplit minimises, without errors).
 BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features& features,
                             double blur_var_px2, const Crosstalk& crosstalk, int passes,
                             const PsfAnisotropy& psf = {});

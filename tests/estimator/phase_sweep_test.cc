@@ -291,22 +291,27 @@ TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
     EXPECT_NEAR(cal.blur.crosstalk_var_px2, TrueCrosstalkVarPx2(kind), 0.05);
   }
   // The size's part that follows the edge's phase (EdgePhaseOf on the sweep), within the goal's
-  // 0.05% peak to peak where it is reached (defocus disc 0.03%, 70% aperture 0.02%,
-  // astigmatic 0.003%); all the blur after the pixels (0.15%) and the Airy PSF (0.29% on the
-  // corner) are reported, not asserted. The goal rows on the whole error after calibration
-  // (<= 0.05% peak to peak, <= 0.03% bias) are reached on none yet (docs/estimator.md "Pixel
-  // responses outside the model").
+  // 0.05% peak to peak where it is reached (seed 31: defocus disc 0.04%, 70% aperture 0.02%,
+  // astigmatic 0.003%); all the blur after the pixels (0.035-0.05% over seeds 31-34) and the
+  // Airy PSF (0.09% on the corner) are reported, not asserted.
   if (kind != PixelResponseKind::kAllBlurAfter && kind != PixelResponseKind::kAiry) {
     EXPECT_LT(corner.phase_p2p, 5e-4);
     EXPECT_LT(centre.phase_p2p, 5e-4);
   }
-  // The goal rows, after calibration (<= 0.05% peak to peak, <= 0.03% mean), where reached: the
-  // 70% aperture (0.032 / 0.030%) and the astigmatic optics (0.027 / 0.029%); all the blur after
-  // the pixels (0.11%), the defocus disc (0.24%) and the Airy PSF (0.33%) are reported.
-  if (kind == PixelResponseKind::kFillFactor70 || kind == PixelResponseKind::kAstigmatic) {
-    for (const SweepFigures* s : {&corner, &centre}) {
+  // The goal rows after calibration. The bias (<= 0.03%) on every response: the fit's weights
+  // are its own shape's, so a noise-free frame reads the size a noisy calibration frame reads on
+  // average (seeds 31-34: within 0.008%; the defocus disc's and the Airy PSF's were +0.27% and
+  // +0.07% when the weights came from each frame's residuals). The peak to peak (<= 0.05%) where
+  // reached: the 70% aperture (0.019-0.032% over seeds 31-34) and the astigmatic optics
+  // (0.014-0.028%); all the blur after the pixels (0.053-0.077%) and the defocus disc
+  // (0.058-0.071%) within 0.1% (they were 0.10-0.13% and 0.19-0.26%); the Airy PSF (0.20-0.25%)
+  // reported.
+  for (const SweepFigures* s : {&corner, &centre}) {
+    EXPECT_LT(std::abs(s->calibrated_mean), 3e-4);
+    if (kind == PixelResponseKind::kFillFactor70 || kind == PixelResponseKind::kAstigmatic) {
       EXPECT_LT(s->calibrated_p2p, 5e-4);
-      EXPECT_LT(std::abs(s->calibrated_mean), 3e-4);
+    } else if (kind != PixelResponseKind::kAiry) {
+      EXPECT_LT(s->calibrated_p2p, 1e-3);
     }
   }
   // Over the calibration's own poses, the phase's rms within the goal's equivalent (0.05% peak
@@ -355,6 +360,44 @@ std::string ResponseTestName(const ::testing::TestParamInfo<PixelResponseKind>& 
 
 INSTANTIATE_TEST_SUITE_P(Responses, PhaseSweep, ::testing::ValuesIn(testing::AllPixelResponses()),
                          ResponseTestName);
+
+// A lens outside the model's family (the defocus disc's PSF, radius 1.4 px, fitted with the
+// Gaussian of its variance): the fitted size is one whether the frame is noisy or noise free,
+// bright or dim. The fit's weights are its own shape's (blob_fit.cc ShapeVariances); when they came
+// from each frame's residuals, a noise-free frame's (its misfit alone) read 0.2-0.7% smaller than
+// the mean of noisy ones, and noisy frames 4x dimmer 0.2-0.3% larger. Mean of 60 noisy frames (20
+// under a sanitizer) at 1.5, 2 and 3 m, against the noise-free frame of the same amplitude: within
+// 0.06% (3.5 standard errors of the dim frames' mean), and bright against dim likewise.
+TEST(PixelResponses, TheSizeIsOneNoisyOrNoiseFreeBrightOrDim) {
+  BlurCalibration blur;
+  blur.c0_px2 = 1.4 * 1.4 / 4.0 + kPixelAreaVarPx2;  // the disc PSF's variance, the pixel's
+  blur.noise_at_1m_px2 = 0.01;
+  std::mt19937_64 rng(5);
+  const int frames = kReducedSweep ? 20 : 60;
+  for (const double d_mm : {1500.0, 2000.0, 3000.0}) {
+    testing::FlatDisc disc;
+    disc.cx = disc.cy = 0.5 * kSide - 0.5;
+    disc.radius_px = RadiusAt(d_mm);
+    const cv::Mat1d value = testing::RenderResponse(disc, PixelResponseKind::kDefocusDisc, kSide);
+    double noisy_mean[2] = {0.0, 0.0};
+    for (const int dim : {0, 1}) {
+      testing::Emva1288 camera;
+      if (dim == 1) camera.amplitude_e /= 4.0;
+      cv::Point2d at;
+      const double clean = FittedSize(testing::CleanFrame12(value, camera), blur, d_mm, &at);
+      std::vector<double> sizes;
+      for (int k = 0; k < frames; ++k) {
+        sizes.push_back(FittedSize(testing::NoisyFrame12(value, &rng, camera), blur, d_mm, &at));
+        ASSERT_TRUE(std::isfinite(sizes.back())) << d_mm << " mm";
+      }
+      noisy_mean[dim] = Mean(sizes);
+      std::printf("%.0f mm, amplitude %.0f e-: noise free %.4f px^2, noisy mean %+.3f%%\n", d_mm,
+                  camera.amplitude_e, clean, 100.0 * (noisy_mean[dim] / clean - 1.0));
+      EXPECT_NEAR(noisy_mean[dim] / clean, 1.0, kReducedSweep ? 1e-3 : 6e-4) << d_mm << " mm";
+    }
+    EXPECT_NEAR(noisy_mean[1] / noisy_mean[0], 1.0, kReducedSweep ? 1.2e-3 : 7e-4) << d_mm << " mm";
+  }
+}
 
 }  // namespace
 }  // namespace irdist
