@@ -168,6 +168,35 @@ SweepFigures Sweep(PixelResponseKind kind, const BlurCalibration& blur,
   return out;
 }
 
+// Fig. 10 on the optical axis, with noise: at its 8 distances (1500..2900 mm every 200), 12 noisy
+// frames each (its 4 thetas x 3 currents; here face on, the amplitude x 0.95, 1, 1.05 for the
+// currents), the disc centred on a pixel corner; the distance error of each frame against the
+// calibration's smooth law (as Sweep's), and the swing (largest less smallest) of the 8
+// distances' mean errors.
+double NoisyAxisSwing(PixelResponseKind kind, const BlurCalibration& blur,
+                      const EdgePhase& calibration) {
+  std::mt19937_64 rng(47);
+  std::vector<double> means;
+  for (double d_mm = 1500.0; d_mm <= 2900.0; d_mm += 200.0) {
+    testing::FlatDisc disc;
+    disc.cx = disc.cy = 0.5 * kSide - 0.5;
+    disc.radius_px = RadiusAt(d_mm);
+    const cv::Mat1d value = testing::RenderResponse(disc, kind, kSide);
+    std::vector<double> errors;
+    for (int k = 0; k < 12; ++k) {
+      testing::Emva1288 camera;
+      camera.amplitude_e *= 0.95 + 0.05 * (k % 3);
+      cv::Point2d at;
+      const double size = FittedSize(testing::NoisyFrame12(value, &rng, camera), blur, d_mm, &at);
+      if (!std::isfinite(size)) return std::nan("");
+      errors.push_back(
+          std::expm1(calibration.SmoothAt(d_mm) - std::log(2.0 * std::sqrt(size) * d_mm / 1000.0)));
+    }
+    means.push_back(Mean(errors));
+  }
+  return testing::PeakToPeak(means);
+}
+
 // The renderers' own checks. The disc's area inside a square, exact, against a 2000 x 2000
 // point count, on squares cut by the circle every way (a corner, one side, two sides, inside).
 TEST(PixelResponses, CircleRectAreaIsTheCountedArea) {
@@ -263,6 +292,21 @@ double TrueCrosstalkVarPx2(PixelResponseKind kind) {
              : 0.0;
 }
 
+// The table's rows (docs/estimator.md "Pixel responses outside the model").
+void PrintTableRows(PixelResponseKind kind, const Calibration& cal, const EdgePhase& phase,
+                    const SweepFigures& corner, const SweepFigures& centre) {
+  std::printf("| %s | %.3f / %.3f | %.3f / %+.3f | %.3f (%.3f) |\n",
+              testing::ResponseName(kind).c_str(), cal.blur.crosstalk_var_px2,
+              cal.blur.crosstalk_lattice_share, cal.blur.FitBlurVarPx2(kNearMm),
+              cal.blur.FitBlurVarPx2(kFarMm) - cal.blur.FitBlurVarPx2(kNearMm), 100.0 * phase.rms,
+              100.0 * phase.noise_rms);
+  for (const SweepFigures* s : {&corner, &centre}) {
+    std::printf("|   %s | %.3f / %+.3f | %.3f / %+.3f | %.3f |\n",
+                s == &corner ? "corner" : "centre", 100.0 * s->p2p, 100.0 * s->mean,
+                100.0 * s->calibrated_p2p, 100.0 * s->calibrated_mean, 100.0 * s->phase_p2p);
+  }
+}
+
 class PhaseSweep : public ::testing::TestWithParam<PixelResponseKind> {};
 
 TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
@@ -274,18 +318,16 @@ TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
   ASSERT_TRUE(phase.ok);
   const SweepFigures corner = Sweep(kind, cal.blur, phase, 0.5 * kSide - 0.5);
   const SweepFigures centre = Sweep(kind, cal.blur, phase, 0.5 * kSide);
-  std::printf("| %s | %.3f / %.3f | %.3f / %+.3f | %.3f (%.3f) |\n",
-              testing::ResponseName(kind).c_str(), cal.blur.crosstalk_var_px2,
-              cal.blur.crosstalk_lattice_share, cal.blur.FitBlurVarPx2(kNearMm),
-              cal.blur.FitBlurVarPx2(kFarMm) - cal.blur.FitBlurVarPx2(kNearMm),
-              100.0 * phase.rms, 100.0 * phase.noise_rms);
-  for (const SweepFigures* s : {&corner, &centre}) {
-    std::printf("|   %s | %.3f / %+.3f | %.3f / %+.3f | %.3f |\n",
-                s == &corner ? "corner" : "centre", 100.0 * s->p2p, 100.0 * s->mean,
-                100.0 * s->calibrated_p2p, 100.0 * s->calibrated_mean, 100.0 * s->phase_p2p);
-  }
+  PrintTableRows(kind, cal, phase, corner, centre);
   EXPECT_EQ(corner.failed + centre.failed, 0);
   if (kReducedSweep) return;  // the figures: the full sweep's (above)
+  const double fig10_swing = NoisyAxisSwing(kind, cal.blur, phase);
+  std::printf("|   Fig. 10 on the axis, noisy: swing of the distances' mean errors %.3f%% |\n",
+              100.0 * fig10_swing);
+  // The goal row (<= 0.08%) where reached: all the blur after the pixels 0.077%, the defocus disc
+  // 0.027% (0.155% with the weights from each frame's residuals), the 70% aperture 0.033%, the
+  // astigmatic optics 0.046%; the Airy PSF (0.153%) reported.
+  if (kind != PixelResponseKind::kAiry) EXPECT_LT(fig10_swing, 8e-4);
   // The split within 0.05 px^2 where the response has one (the Airy PSF's read 1.4: reported).
   if (kind != PixelResponseKind::kAiry) {
     EXPECT_NEAR(cal.blur.crosstalk_var_px2, TrueCrosstalkVarPx2(kind), 0.05);
