@@ -407,9 +407,10 @@ INSTANTIATE_TEST_SUITE_P(Responses, PhaseSweep, ::testing::ValuesIn(testing::All
 // Gaussian of its variance): the fitted size is one whether the frame is noisy or noise free,
 // bright or dim. The fit's weights are its own shape's (blob_fit.cc ShapeVariances); when they came
 // from each frame's residuals, a noise-free frame's (its misfit alone) read 0.2-0.7% smaller than
-// the mean of noisy ones, and noisy frames 4x dimmer 0.2-0.3% larger. Mean of 60 noisy frames (20
-// under a sanitizer) at 1.5, 2 and 3 m, against the noise-free frame of the same amplitude: within
-// 0.06% (3.5 standard errors of the dim frames' mean), and bright against dim likewise.
+// the mean of noisy ones, and noisy frames 4x dimmer 0.2-0.3% larger. The mean of 60 noisy frames
+// (20 under a sanitizer) at 1.5, 2 and 3 m against the noise-free frame of the same amplitude, and
+// bright against dim: each within 4 standard errors of the means (the frames' own scatter, 0.05% of
+// the size for a bright 9 px disc to 0.3% for a dim 4.5 px one) and within 0.1%.
 TEST(PixelResponses, TheSizeIsOneNoisyOrNoiseFreeBrightOrDim) {
   BlurCalibration blur;
   blur.c0_px2 = 1.4 * 1.4 / 4.0 + kPixelAreaVarPx2;  // the disc PSF's variance, the pixel's
@@ -421,7 +422,7 @@ TEST(PixelResponses, TheSizeIsOneNoisyOrNoiseFreeBrightOrDim) {
     disc.cx = disc.cy = 0.5 * kSide - 0.5;
     disc.radius_px = RadiusAt(d_mm);
     const cv::Mat1d value = testing::RenderResponse(disc, PixelResponseKind::kDefocusDisc, kSide);
-    double noisy_mean[2] = {0.0, 0.0};
+    double mean[2] = {0.0, 0.0}, se[2] = {0.0, 0.0};
     for (const int dim : {0, 1}) {
       testing::Emva1288 camera;
       if (dim == 1) camera.amplitude_e /= 4.0;
@@ -432,12 +433,17 @@ TEST(PixelResponses, TheSizeIsOneNoisyOrNoiseFreeBrightOrDim) {
         sizes.push_back(FittedSize(testing::NoisyFrame12(value, &rng, camera), blur, d_mm, &at));
         ASSERT_TRUE(std::isfinite(sizes.back())) << d_mm << " mm";
       }
-      noisy_mean[dim] = Mean(sizes);
-      std::printf("%.0f mm, amplitude %.0f e-: noise free %.4f px^2, noisy mean %+.3f%%\n", d_mm,
-                  camera.amplitude_e, clean, 100.0 * (noisy_mean[dim] / clean - 1.0));
-      EXPECT_NEAR(noisy_mean[dim] / clean, 1.0, kReducedSweep ? 1e-3 : 6e-4) << d_mm << " mm";
+      mean[dim] = Mean(sizes);
+      double var = 0.0;
+      for (const double x : sizes) var += (x - mean[dim]) * (x - mean[dim]) / (frames - 1);
+      se[dim] = std::sqrt(var / frames) / clean;
+      std::printf(
+          "%.0f mm, amplitude %.0f e-: noise free %.4f px^2, noisy mean %+.3f%% +- %.3f%%\n", d_mm,
+          camera.amplitude_e, clean, 100.0 * (mean[dim] / clean - 1.0), 100.0 * se[dim]);
+      EXPECT_NEAR(mean[dim] / clean, 1.0, std::min(1e-3, 4.0 * se[dim])) << d_mm << " mm";
     }
-    EXPECT_NEAR(noisy_mean[1] / noisy_mean[0], 1.0, kReducedSweep ? 1.2e-3 : 7e-4) << d_mm << " mm";
+    EXPECT_NEAR(mean[1] / mean[0], 1.0, std::min(1e-3, 4.0 * std::hypot(se[0], se[1])))
+        << d_mm << " mm";
   }
 }
 
