@@ -36,10 +36,10 @@ constexpr double kFinalStepDecrement = 9.0;
 // The solution's weights are the frame's shot noise over a floor of this share of the amplitude
 // (ShapeVariances), not the frame's own noise regressed from its residuals: those weights made the
 // fitted size depend on the frame's noise and amplitude wherever the lens is not the model's (a
-// defocus disc's PSF: noise-free frames 0.2-0.7% smaller than the mean of noisy ones, and
-// 0.2-0.3% between amplitudes 4x apart; a noise-free frame's residuals are the model's misfit,
-// which set its weights instead). With weights of the model's own shape the pseudo-true size is
-// one, noisy or not, bright or dim: within 0.02%. The share trades the weights' efficiency
+// defocus disc's PSF: noise-free frames 0.2-0.7% smaller than the mean of noisy ones, and 0.2-0.3%
+// between amplitudes 4x apart; a noise-free frame's residuals are the model's misfit, which set its
+// weights instead). With weights of the model's own shape the pseudo-true size is one, noisy or
+// not, bright or dim: within 0.03% on that lens. The share trades the weights' efficiency
 // (0.01-0.03, the shot noise's own floor on a bright frame: the size's scatter 2% below this
 // share's) against the misfit of the model's tails (docs/estimator.md "The blob fit's weights").
 constexpr double kShapeReadShare = 0.1;
