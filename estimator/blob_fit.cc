@@ -33,15 +33,11 @@ constexpr double kWeightsPassTolerance = 0.5;
 // within 0.009 of one from the minimum (the decrement after it 7.5e-5); the model's curvature
 // puts a 3 se step within 0.03 se.
 constexpr double kFinalStepDecrement = 9.0;
-// The solution's weights are the frame's shot noise over a floor of this share of the amplitude
-// (ShapeVariances), not the frame's own noise regressed from its residuals: those weights made the
-// fitted size depend on the frame's noise and amplitude wherever the lens is not the model's (a
-// defocus disc's PSF: noise-free frames 0.2-0.7% smaller than the mean of noisy ones, and 0.2-0.3%
-// between amplitudes 4x apart; a noise-free frame's residuals are the model's misfit, which set its
-// weights instead). With weights of the model's own shape the pseudo-true size is one, noisy or
-// not, bright or dim: within 0.03% on that lens. The share trades the weights' efficiency
-// (0.01-0.03, the shot noise's own floor on a bright frame: the size's scatter 2% below this
-// share's) against the misfit of the model's tails (docs/estimator.md "The blob fit's weights").
+// The solution's weights: the frame's shot noise over a floor of this share of the amplitude, the
+// model's own shape (ShapeVariances), not the frame's noise regressed from its residuals, which
+// made the size follow the frame's noise and amplitude wherever the lens is not the model's. The
+// share trades efficiency (the size's scatter 2% above a floor at the shot noise's own, 0.01-0.03)
+// against the tails' misfit (docs/estimator.md "The blob fit's weights", the figures).
 constexpr double kShapeReadShare = 0.1;
 // Parameters: centre x, y (relative to the fit's origin), P11, P12, P22, amplitude, background.
 constexpr int kParams = 7;
@@ -54,6 +50,14 @@ using blob_model::Convolve;
 using blob_model::MakeResponse;
 using blob_model::PixelResponse;
 using blob_model::SquareMean;
+
+// `out` (size x size) symmetric, from its upper triangle `upper` stored by rows.
+template <typename Matrix>
+void SymmetricFromUpper(const double* upper, int size, Matrix* out) {
+  for (int k = 0; k < size; ++k) {
+    for (int l = k; l < size; ++l) (*out)(k, l) = (*out)(l, k) = upper[k * size + l];
+  }
+}
 
 // Every pixel's residual, divided by its noise sd, and the analytic Jacobian, summed into the
 // normal equations J^T J and J^T r for the solver (estimator/normal_lm.h, TinySolver's steps): no
@@ -81,7 +85,7 @@ class WindowResiduals : public NormalProblem<kParams> {
     double cost2 = 0.0;
     if (!want_normal) {
       for (size_t i = 0; i < n; ++i) {
-        const double r = (v[6] + v[5] * mean[i] - pixels_[i].value) * inv_sd_[i];
+        const double r = Residual(v, mean, i) * inv_sd_[i];
         cost2 += r * r;
       }
       normal->cost2 = cost2;
@@ -93,7 +97,7 @@ class WindowResiduals : public NormalProblem<kParams> {
     double j[kParams];
     for (size_t i = 0; i < n; ++i) {
       const double s = inv_sd_[i];
-      const double r = (v[6] + v[5] * mean[i] - pixels_[i].value) * s;
+      const double r = Residual(v, mean, i) * s;
       cost2 += r * r;
       const double* d = &d_mean_[i];
       if (d[0] == 0.0 && d[n] == 0.0 && d[2 * n] == 0.0 && d[3 * n] == 0.0 && d[4 * n] == 0.0) {
@@ -101,10 +105,7 @@ class WindowResiduals : public NormalProblem<kParams> {
         flat_mm += ms * ms, flat_m += ms * s, flat_1 += s * s, flat_mr += ms * r, flat_r += s * r;
         continue;
       }
-      const double amplitude_s = v[5] * s;
-      for (int k = 0; k < 5; ++k) j[k] = amplitude_s * d[k * n];
-      j[5] = mean[i] * s;
-      j[6] = s;
+      JacobianRow(v, mean, i, s, j);
       for (int k = 0; k < kParams; ++k) {
         jtr[k] += j[k] * r;
         for (int l = k; l < kParams; ++l) jtj[k * kParams + l] += j[k] * j[l];
@@ -112,12 +113,8 @@ class WindowResiduals : public NormalProblem<kParams> {
     }
     jtj[5 * kParams + 5] += flat_mm, jtj[5 * kParams + 6] += flat_m, jtj[6 * kParams + 6] += flat_1;
     jtr[5] += flat_mr, jtr[6] += flat_r;
-    for (int k = 0; k < kParams; ++k) {
-      normal->jtr(k) = jtr[k];
-      for (int l = k; l < kParams; ++l) {
-        normal->jtj(k, l) = normal->jtj(l, k) = jtj[k * kParams + l];
-      }
-    }
+    for (int k = 0; k < kParams; ++k) normal->jtr(k) = jtr[k];
+    SymmetricFromUpper(jtj, kParams, &normal->jtj);
     normal->cost2 = cost2;
     return std::isfinite(cost2);
   }
@@ -131,12 +128,10 @@ class WindowResiduals : public NormalProblem<kParams> {
     double a[kParams * kParams] = {}, b[kParams * kParams] = {}, j[kParams];
     double chi2 = 0.0;
     for (size_t i = 0; i < n; ++i) {
-      const double r = v[6] + v[5] * mean[i] - pixels_[i].value;
+      const double r = Residual(v, mean, i);
       chi2 += r * r / var[i];
       const double w = inv_sd_[i] * inv_sd_[i], spread = w * w * var[i];
-      for (int k = 0; k < 5; ++k) j[k] = v[5] * d_mean_[k * n + i];
-      j[5] = mean[i];
-      j[6] = 1.0;
+      JacobianRow(v, mean, i, 1.0, j);
       for (int k = 0; k < kParams; ++k) {
         for (int l = k; l < kParams; ++l) {
           a[k * kParams + l] += w * j[k] * j[l];
@@ -144,12 +139,8 @@ class WindowResiduals : public NormalProblem<kParams> {
         }
       }
     }
-    for (int k = 0; k < kParams; ++k) {
-      for (int l = k; l < kParams; ++l) {
-        (*h)(k, l) = (*h)(l, k) = a[k * kParams + l];
-        (*m)(k, l) = (*m)(l, k) = b[k * kParams + l];
-      }
-    }
+    SymmetricFromUpper(a, kParams, h);
+    SymmetricFromUpper(b, kParams, m);
     return chi2;
   }
   // Each pixel's model mean (relative to the amplitude) at v; nothing is computed when v is the
@@ -157,6 +148,10 @@ class WindowResiduals : public NormalProblem<kParams> {
   const std::vector<double>& MeansAt(const double* v) const {
     if (!computed_ || !std::equal(v, v + kParams, at_)) Compute(v);
     return mean_;
+  }
+  // Pixel i's residual at v, unweighted (the model less the gray level); mean: MeansAt(v).
+  double Residual(const double* v, const std::vector<double>& mean, size_t i) const {
+    return v[6] + v[5] * mean[i] - pixels_[i].value;
   }
 
   // The Gauss-Newton system at v with E more parameters after the seven (the blur, the crosstalk's
@@ -175,23 +170,29 @@ class WindowResiduals : public NormalProblem<kParams> {
     double a[m * m] = {}, b[m] = {}, j[m];
     for (size_t i = 0; i < n; ++i) {
       const double s = inv_sd_[i];
-      const double r = (v[6] + v[5] * mean[i] - pixels_[i].value) * s;
-      for (int k = 0; k < 5; ++k) j[k] = v[5] * s * d_mean_[k * n + i];
-      j[5] = mean[i] * s;
-      j[6] = s;
+      const double r = Residual(v, mean, i) * s;
+      JacobianRow(v, mean, i, s, j);
       for (int e = 0; e < E; ++e) j[kParams + e] = v[5] * s * ((*up[e])[i] - mean[i]) / steps[e];
       for (int k = 0; k < m; ++k) {
         b[k] += j[k] * r;
         for (int l = k; l < m; ++l) a[k * m + l] += j[k] * j[l];
       }
     }
-    for (int k = 0; k < m; ++k) {
-      (*jtr)(k) = b[k];
-      for (int l = k; l < m; ++l) (*jtj)(k, l) = (*jtj)(l, k) = a[k * m + l];
-    }
+    for (int k = 0; k < m; ++k) (*jtr)(k) = b[k];
+    SymmetricFromUpper(a, m, jtj);
   }
 
  private:
+  // Pixel i's row of the Jacobian at v (the disc's five, the amplitude, the background), scaled
+  // by s (its weight, 1 / sd); mean: MeansAt(v).
+  void JacobianRow(const double* v, const std::vector<double>& mean, size_t i, double s,
+                   double* j) const {
+    const size_t n = pixels_.size();
+    const double amplitude_s = v[5] * s;
+    for (int k = 0; k < 5; ++k) j[k] = amplitude_s * d_mean_[k * n + i];
+    j[5] = mean[i] * s;
+    j[6] = s;
+  }
   // The model on the window grown by the crosstalk's reach (planes: the mean, then its five
   // derivatives), each pixel's square integrated, then spread by the crosstalk onto the window.
   // Without crosstalk the grid is the window and the planes are mean_ and d_mean_ themselves.
@@ -279,7 +280,7 @@ std::vector<double> NoiseVariances(const std::vector<Pixel>& pixels, const Windo
   std::vector<double> signal(pixels.size());
   double sxy = 0.0, sxx = 0.0;
   for (size_t i = 0; i < pixels.size(); ++i) {
-    const double r = v[6] + v[5] * mean[i] - pixels[i].value;
+    const double r = model.Residual(v, mean, i);
     signal[i] = std::max(0.0, r + pixels[i].value - v[6]);
     sxy += signal[i] * (r * r - read_var);
     sxx += signal[i] * signal[i];

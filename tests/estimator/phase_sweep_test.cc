@@ -137,6 +137,12 @@ double Mean(const std::vector<double>& x) {
   return m;
 }
 
+// A fitted size's distance error at d_mm against the calibration's smooth size-distance law
+// (EdgePhase::SmoothAt of ln(R d / 1000 mm), R = 2 sqrt(size)).
+double ErrorAfterCalibration(const EdgePhase& calibration, double size, double d_mm) {
+  return std::expm1(calibration.SmoothAt(d_mm) - std::log(2.0 * std::sqrt(size) * d_mm / 1000.0));
+}
+
 // The noise-free sweep with the disc's centre at (centre, centre).
 SweepFigures Sweep(PixelResponseKind kind, const BlurCalibration& blur,
                    const EdgePhase& calibration, double centre) {
@@ -155,8 +161,7 @@ SweepFigures Sweep(PixelResponseKind kind, const BlurCalibration& blur,
       continue;
     }
     errors.push_back(std::sqrt(disc.radius_px * disc.radius_px / 4.0 / size) - 1.0);
-    calibrated.push_back(
-        std::expm1(calibration.SmoothAt(d_mm) - std::log(2.0 * std::sqrt(size) * d_mm / 1000.0)));
+    calibrated.push_back(ErrorAfterCalibration(calibration, size, d_mm));
     samples.push_back({size, at.x, at.y, d_mm});
   }
   if (errors.empty()) return out;
@@ -189,8 +194,7 @@ double NoisyAxisSwing(PixelResponseKind kind, const BlurCalibration& blur,
       cv::Point2d at;
       const double size = FittedSize(testing::NoisyFrame12(value, &rng, camera), blur, d_mm, &at);
       if (!std::isfinite(size)) return std::nan("");
-      errors.push_back(
-          std::expm1(calibration.SmoothAt(d_mm) - std::log(2.0 * std::sqrt(size) * d_mm / 1000.0)));
+      errors.push_back(ErrorAfterCalibration(calibration, size, d_mm));
     }
     means.push_back(Mean(errors));
   }
@@ -327,7 +331,9 @@ TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
   // The goal row (<= 0.08%) where reached: all the blur after the pixels 0.077%, the defocus disc
   // 0.027% (0.155% with the weights from each frame's residuals), the 70% aperture 0.033%, the
   // astigmatic optics 0.046%; the Airy PSF (0.153%) reported.
-  if (kind != PixelResponseKind::kAiry) EXPECT_LT(fig10_swing, 8e-4);
+  if (kind != PixelResponseKind::kAiry) {
+    EXPECT_LT(fig10_swing, 8e-4);
+  }
   // The split within 0.05 px^2 where the response has one (the Airy PSF's read 1.4: reported).
   if (kind != PixelResponseKind::kAiry) {
     EXPECT_NEAR(cal.blur.crosstalk_var_px2, TrueCrosstalkVarPx2(kind), 0.05);
