@@ -56,8 +56,9 @@ struct FitOptions {
   bool fit_theta_correction = true;
   int theta_correction_degree = 2;
   // The geometric model's blur: one variance for every distance (the older, simpler model), or
-  // the thin lens's blur variance, a quadratic in 1/d (GeometricModel), fitted with the disc's
-  // scale from both axes of every calibration frame (default).
+  // the thin lens's blur variance, a quadratic in 1/d (or a cubic where the sizes ask for it;
+  // GeometricModel), fitted with the disc's scale from both axes of every calibration frame
+  // (default).
   bool geometric_blur_varies_with_distance = true;
   bool IsValid(std::string* why) const;
 };
@@ -131,9 +132,13 @@ struct CalibratedRanges {
 // alpha u^2 + b(u), u = 1000 mm / d (so u^2 = D): the image of the disc scales as 1/d, its variance
 // as 1/d^2, and the blur adds b(u) = beta + blur_u1 u + blur_u2 u^2. A lens focused at s blurs an
 // object at d by a circle of confusion proportional to |1/s - 1/d|: its variance is quadratic in u,
-// so b(u) holds the lens PSF, the pixel's area and the defocus exactly. blur_u1 = blur_u2 = 0 is
+// so b(u) holds a Gaussian lens PSF, the pixel's area and the defocus exactly; a real lens's
+// blob (a defocus disc's PSF, a halo) grows otherwise: where the quadratic misses 4 or more
+// calibrated distances' sizes beyond their noise, b(u) takes a cubic term blur_u3 u^3 (0: none).
+// blur_u1 = blur_u2 = 0 is
 // the fixed blur (model files before format 3, or FitOptions::geometric_blur_varies_with_distance
-// off). Inverted: the positive root u of (alpha + blur_u2) u^2 + blur_u1 u + beta - var = 0.
+// off). Inverted: the positive root u of blur_u3 u^3 + (alpha + blur_u2) u^2 + blur_u1 u + beta -
+// var = 0 where the law rises with u (nearest the quadratic's root when there are several).
 // Fitted by linear least squares on relative residuals, from the measurement frames (exposure does
 // not change background-subtracted moments); with the distance-dependent blur, the minor axis
 // (alpha cos^2(theta) u^2 + b(u), theta known at calibration) separates the disc from the blur.
@@ -142,6 +147,10 @@ struct GeometricModel {
   double beta_px2 = 0.0;
   double blur_u1_px2 = 0.0;
   double blur_u2_px2 = 0.0;
+  // The size law's cubic term in u (format 4, optional; 0 in files before it and where not
+  // taken): fitted where the quadratic misses 4 or more calibrated distances' sizes beyond their
+  // noise (docs/estimator.md "Geometric baseline").
+  double blur_u3_px2 = 0.0;
   // Per-frame noise of the relative distance it implies, as a function of d:
   // sd(d) = noise_rel_at_1m * (d / 1000 mm)^noise_exponent, fitted to the calibration residuals'
   // rms at each calibrated distance (the apparent size's noise grows with d). 0 = not fitted
@@ -150,7 +159,9 @@ struct GeometricModel {
   double noise_exponent = 0.0;
   FitSummary summary;
   bool fitted() const { return alpha_px2 > 0.0; }
-  bool BlurVariesWithDistance() const { return blur_u1_px2 != 0.0 || blur_u2_px2 != 0.0; }
+  bool BlurVariesWithDistance() const {
+    return blur_u1_px2 != 0.0 || blur_u2_px2 != 0.0 || blur_u3_px2 != 0.0;
+  }
   // Blur variance b(u) (px^2, per axis) at distance d_mm.
   double BlurVarPx2(double d_mm) const;
   // The major-axis variance the model expects at d_mm.

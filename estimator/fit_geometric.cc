@@ -1,16 +1,23 @@
 // The geometric baseline (fit.h GeometricModel): the blob's size against 1/d^2 with a blur
-// quadratic in 1/d, fitted by linear least squares, with its per-frame noise law.
+// polynomial in 1/d (quadratic; cubic from 4 calibrated distances), fitted by linear least squares,
+// with its per-frame noise law.
+#include <Eigen/Dense>
+#include <algorithm>
 #include <array>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <map>
+#include <set>
+#include <sstream>
+#include <string>
 #include <utility>
 #include <vector>
 
-#include <Eigen/Dense>
-
 #include "estimator/blur_model.h"
 #include "estimator/fit.h"
+#include "estimator/polynomial_roots.h"
 
 namespace irdist {
 
@@ -19,6 +26,12 @@ double GeometricModel::DistanceSeMm(double major_var_px2, double se_px2) const {
 }
 
 namespace {
+
+// The quadratic law gives way to the cubic when its misfit at the calibrated distances has this
+// tail probability or less under the frames' own noise. Lenient on purpose: a cubic taken for a
+// lens of the quadratic's family costs a little noise between the distances; a quadratic kept
+// for a lens outside it is a bias at every distance (docs/estimator.md "Geometric baseline").
+constexpr double kCubicTermTailProbability = 0.05;
 
 // The residuals' rms at each calibrated distance (groups of >= 3 samples), then
 // ln rms = ln c + k ln(d / 1000 mm) by least squares weighted by the group sizes. With one
@@ -43,26 +56,55 @@ void FitGeometricNoise(const std::vector<std::pair<double, double>>& points, Geo
 
 double GeometricModel::BlurVarPx2(double d_mm) const {
   const double u = 1000.0 / d_mm;
-  return beta_px2 + blur_u1_px2 * u + blur_u2_px2 * u * u;
+  return beta_px2 + (blur_u1_px2 + (blur_u2_px2 + blur_u3_px2 * u) * u) * u;
 }
 
-double GeometricModel::DistanceMm(double major_var_px2) const {
-  const double a = alpha_px2 + blur_u2_px2, b = blur_u1_px2, c = beta_px2 - major_var_px2;
+namespace {
+
+// The larger root u of a u^2 + b u + c = 0; NaN when none. Written without cancellation when
+// b > 0.
+double QuadraticRoot(double a, double b, double c) {
   if (!(a > 0.0)) return std::numeric_limits<double>::quiet_NaN();
   const double disc = b * b - 4.0 * a * c;
   if (!(disc >= 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  // The larger root; written without cancellation when b > 0.
-  const double u = b > 0.0 ? -2.0 * c / (b + std::sqrt(disc)) : (-b + std::sqrt(disc)) / (2.0 * a);
+  return b > 0.0 ? -2.0 * c / (b + std::sqrt(disc)) : (-b + std::sqrt(disc)) / (2.0 * a);
+}
+
+// The root u > 0 of poly (ascending, cubic) where the law rises with u (the size grows as the
+// disc comes closer), nearest `near` when there are several; NaN when none.
+double RisingCubicRoot(const double poly[4], double near) {
+  double roots[3];
+  const int n = RealRoots(poly, roots);
+  double best = std::numeric_limits<double>::quiet_NaN();
+  for (int i = 0; i < n; ++i) {
+    const double u = roots[i];
+    const double slope = poly[1] + (2.0 * poly[2] + 3.0 * poly[3] * u) * u;
+    if (!(u > 0.0) || !(slope > 0.0)) continue;
+    if (!std::isfinite(best) || std::fabs(u - near) < std::fabs(best - near)) best = u;
+  }
+  return best;
+}
+
+}  // namespace
+
+double GeometricModel::DistanceMm(double major_var_px2) const {
+  const double a = alpha_px2 + blur_u2_px2, b = blur_u1_px2, c = beta_px2 - major_var_px2;
+  double u = QuadraticRoot(a, b, c);
+  if (blur_u3_px2 != 0.0 && std::isfinite(u)) {
+    const double poly[4] = {c, b, a, blur_u3_px2};
+    u = RisingCubicRoot(poly, u);
+  }
   return u > 0.0 ? 1000.0 / u : std::numeric_limits<double>::quiet_NaN();
 }
 
 namespace {
 
-// Rows of the relative least squares [u^2 s / var, 1 / var, u / var, u^2 / var] . x = 1 for the
-// major axis (s = 1) and, when the blur varies with d, the minor axis (s = cos^2 theta).
+// Rows of the relative least squares [u^2 s / var, 1 / var, u / var, u^2 / var, u^3 / var] . x = 1
+// for the major axis (s = 1) and, when the blur varies with d, the minor axis (s = cos^2 theta).
 struct GeometricRows {
-  std::vector<std::array<double, 4>> rows;
+  std::vector<std::array<double, 5>> rows;
   std::vector<std::pair<double, double>> major_points;  // (D, major var): residuals, noise model
+  std::set<double> distances_mm;
 };
 
 GeometricRows CollectGeometricRows(const std::vector<CalibrationSample>& samples, bool with_minor) {
@@ -73,13 +115,73 @@ GeometricRows CollectGeometricRows(const std::vector<CalibrationSample>& samples
     const double u = 1000.0 / s.d_mm;
     const double v = f.moment_major_var_px2;
     g.major_points.push_back({u * u, v});
-    g.rows.push_back({u * u / v, 1.0 / v, u / v, u * u / v});
+    g.distances_mm.insert(s.d_mm);
+    g.rows.push_back({u * u / v, 1.0 / v, u / v, u * u / v, u * u * u / v});
     if (!with_minor || f.moment_minor_var_px2 <= 0.0) continue;
     const double cos_t = std::cos(s.theta_deg * 3.14159265358979323846 / 180.0);
     const double m = f.moment_minor_var_px2;
-    g.rows.push_back({cos_t * cos_t * u * u / m, 1.0 / m, u / m, u * u / m});
+    g.rows.push_back({cos_t * cos_t * u * u / m, 1.0 / m, u / m, u * u / m, u * u * u / m});
   }
   return g;
+}
+
+// The least squares with the first `unknowns` columns, into g: its coefficients, condition number
+// and the major axis's residuals as relative distance errors.
+void SolveGeometric(const GeometricRows& data, int unknowns, GeometricModel* g) {
+  Eigen::MatrixXd a(data.rows.size(), unknowns);
+  for (size_t i = 0; i < data.rows.size(); ++i) {
+    for (int k = 0; k < unknowns; ++k) a(i, k) = data.rows[i][k];
+  }
+  const Eigen::VectorXd x = a.colPivHouseholderQr().solve(Eigen::VectorXd::Ones(a.rows()));
+  g->alpha_px2 = x(0);
+  g->beta_px2 = x(1);
+  g->blur_u1_px2 = unknowns > 2 ? x(2) : 0.0;
+  g->blur_u2_px2 = unknowns > 3 ? x(3) : 0.0;
+  g->blur_u3_px2 = unknowns > 4 ? x(4) : 0.0;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a);
+  g->summary.condition_number =
+      svd.singularValues()(0) / svd.singularValues()(svd.singularValues().size() - 1);
+  g->summary.residuals.clear();
+  for (const auto& p : data.major_points) {
+    const double d_true = 1000.0 / std::sqrt(p.first);
+    const double d_est = g->DistanceMm(p.second);
+    g->summary.residuals.push_back(std::isfinite(d_est) ? d_est / d_true - 1.0 : -1.0);
+  }
+}
+
+// The law's misfit against the frames' noise: each calibrated distance's mean residual over its
+// standard error (the frames' scatter there over sqrt(n)), squared and summed over the distances
+// of 3 or more frames. *distances: how many.
+double MisfitChi2(const GeometricRows& data, const std::vector<double>& residuals, int* distances) {
+  std::map<double, std::array<double, 3>> groups;  // D -> (n, sum r, sum r^2)
+  for (size_t i = 0; i < residuals.size(); ++i) {
+    auto& acc = groups[data.major_points[i].first];
+    acc[0] += 1.0;
+    acc[1] += residuals[i];
+    acc[2] += residuals[i] * residuals[i];
+  }
+  double chi2 = 0.0;
+  *distances = 0;
+  for (const auto& [big_d, acc] : groups) {
+    if (acc[0] < 3.0) continue;
+    const double mean = acc[1] / acc[0];
+    const double var = std::max((acc[2] - acc[0] * mean * mean) / (acc[0] - 1.0), 1e-300);
+    chi2 += mean * mean / (var / acc[0]);
+    ++*distances;
+  }
+  return chi2;
+}
+
+// Whether the quadratic law misses the calibrated distances' sizes beyond their noise: its
+// misfit's chi-square above the tail of kCubicTermTailProbability with (distances - 3) degrees
+// of freedom (the major axis's law has 3 coefficients).
+bool QuadraticMissesTheSizes(const GeometricRows& data, const GeometricModel& quadratic,
+                             double* chi2) {
+  int distances = 0;
+  *chi2 = MisfitChi2(data, quadratic.summary.residuals, &distances);
+  if (distances < 4) return false;
+  const boost::math::chi_squared law(distances - 3);
+  return *chi2 > boost::math::quantile(boost::math::complement(law, kCubicTermTailProbability));
 }
 
 }  // namespace
@@ -94,34 +196,22 @@ GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples,
     g.summary.message = "fewer than 3 samples with a blob";
     return g;
   }
-  Eigen::MatrixXd a(data.rows.size(), unknowns);
-  for (size_t i = 0; i < data.rows.size(); ++i) {
-    for (int k = 0; k < unknowns; ++k) a(i, k) = data.rows[i][k];
-  }
-  const Eigen::VectorXd x = a.colPivHouseholderQr().solve(Eigen::VectorXd::Ones(a.rows()));
-  g.alpha_px2 = x(0);
-  g.beta_px2 = x(1);
-  if (blur_varies_with_distance) {
-    g.blur_u1_px2 = x(2);
-    g.blur_u2_px2 = x(3);
-  }
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a);
-  g.summary.condition_number =
-      svd.singularValues()(0) / svd.singularValues()(svd.singularValues().size() - 1);
-  for (const auto& p : data.major_points) {
-    // Relative error of the distance it implies.
-    const double d_true = 1000.0 / std::sqrt(p.first);
-    const double d_est = g.DistanceMm(p.second);
-    g.summary.residuals.push_back(std::isfinite(d_est) ? d_est / d_true - 1.0 : -1.0);
+  SolveGeometric(data, unknowns, &g);
+  std::string law = blur_varies_with_distance ? "blur quadratic in 1/d" : "a fixed blur";
+  double chi2 = 0.0;
+  if (blur_varies_with_distance && data.distances_mm.size() >= 4 &&
+      static_cast<int>(data.rows.size()) >= 10 && QuadraticMissesTheSizes(data, g, &chi2)) {
+    SolveGeometric(data, 5, &g);
+    std::ostringstream text;
+    text << "blur cubic in 1/d (the quadratic's misfit chi2 " << std::setprecision(3) << chi2
+         << " over " << data.distances_mm.size() << " distances)";
+    law = text.str();
   }
   g.summary.SetErrorsFromResiduals();
   FitGeometricNoise(data.major_points, &g);
   g.summary.termination =
       g.alpha_px2 > 0.0 ? FitSummary::Termination::kConverged : FitSummary::Termination::kFailed;
-  g.summary.message = blur_varies_with_distance
-                          ? "linear least squares, blur quadratic in 1/d; residuals are relative "
-                            "distance errors"
-                          : "linear least squares; residuals are relative distance errors";
+  g.summary.message = "linear least squares, " + law + "; residuals are relative distance errors";
   return g;
 }
 

@@ -117,11 +117,16 @@ void EmitGeometricBlur(YAML::Emitter& out, const GeometricModel& g) {
   if (!g.BlurVariesWithDistance()) return;
   EmitDouble(out, "blur_u1_px2", g.blur_u1_px2);
   EmitDouble(out, "blur_u2_px2", g.blur_u2_px2);
+  if (g.blur_u3_px2 != 0.0) EmitDouble(out, "blur_u3_px2", g.blur_u3_px2);
 }
 
-// Format 4 keys blur_u1_px2 / blur_u2_px2 (both or neither; absent: a fixed blur).
+// Format 4 keys blur_u1_px2 / blur_u2_px2 (both or neither; absent: a fixed blur) and the optional
+// blur_u3_px2 beside them.
 void ReadGeometricBlur(const Reader& rd, const YAML::Node& g, int version, GeometricModel* geo) {
-  if (!g["blur_u1_px2"].IsDefined() && !g["blur_u2_px2"].IsDefined()) return;
+  if (!g["blur_u1_px2"].IsDefined() && !g["blur_u2_px2"].IsDefined() &&
+      !g["blur_u3_px2"].IsDefined()) {
+    return;
+  }
   if (version < 4) {
     rd.Fail(g["blur_u1_px2"], "geometric.blur_u1_px2",
             "is new in format_version 4; this file says " + std::to_string(version));
@@ -130,6 +135,11 @@ void ReadGeometricBlur(const Reader& rd, const YAML::Node& g, int version, Geome
   geo->blur_u2_px2 = rd.Scalar<double>(g, "geometric", "blur_u2_px2");
   if (!std::isfinite(geo->blur_u1_px2) || !std::isfinite(geo->blur_u2_px2)) {
     rd.Fail(g["blur_u1_px2"], "geometric.blur_u1_px2", "must be finite");
+  }
+  if (!g["blur_u3_px2"].IsDefined()) return;  // optional: files before it have none
+  geo->blur_u3_px2 = rd.Scalar<double>(g, "geometric", "blur_u3_px2");
+  if (!std::isfinite(geo->blur_u3_px2)) {
+    rd.Fail(g["blur_u3_px2"], "geometric.blur_u3_px2", "must be finite");
   }
 }
 
@@ -426,8 +436,9 @@ std::vector<FittedModel> ReadModels(const Reader& rd, const YAML::Node& root) {
 
 GeometricModel ReadGeometric(const Reader& rd, const YAML::Node& root, int version) {
   const YAML::Node g = rd.Child(root, "", "geometric");
-  rd.Keys(g, "geometric", {"alpha_px2", "beta_px2", "noise_rel_at_1m", "noise_exponent",
-                           "blur_u1_px2", "blur_u2_px2", "fit"});
+  rd.Keys(g, "geometric",
+          {"alpha_px2", "beta_px2", "noise_rel_at_1m", "noise_exponent", "blur_u1_px2",
+           "blur_u2_px2", "blur_u3_px2", "fit"});
   GeometricModel geometric;
   geometric.alpha_px2 = rd.Scalar<double>(g, "geometric", "alpha_px2");
   geometric.beta_px2 = rd.Scalar<double>(g, "geometric", "beta_px2");

@@ -1,9 +1,11 @@
-#include "estimator/fit.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
+#include <string>
 #include <vector>
+
+#include "estimator/fit.h"
 
 namespace irdist {
 namespace {
@@ -12,10 +14,10 @@ namespace {
 // u = 1000 mm / d: the image scales as 1/d), tilted by theta (its minor axis cos^2(theta) of
 // that), plus a thin lens's blur variance b(u) = beta + b1 u + b2 u^2 on both axes.
 struct Lens {
-  double alpha = 30.0, beta = 0.6, b1 = -0.5, b2 = 0.9;
+  double alpha = 30.0, beta = 0.6, b1 = -0.5, b2 = 0.9, b3 = 0.0;
   double Blur(double d_mm) const {
     const double u = 1000.0 / d_mm;
-    return beta + b1 * u + b2 * u * u;
+    return beta + b1 * u + b2 * u * u + b3 * u * u * u;
   }
 };
 
@@ -31,9 +33,11 @@ CalibrationSample Sample(const Lens& lens, double d_mm, double theta_deg) {
   return s;
 }
 
-std::vector<CalibrationSample> Grid(const Lens& lens) {
+std::vector<CalibrationSample> Grid(const Lens& lens,
+                                    const std::vector<double>& distances_mm = {
+                                        1200.0, 1500.0, 2000.0, 2500.0, 3000.0, 4000.0}) {
   std::vector<CalibrationSample> out;
-  for (double d : {1200.0, 1500.0, 2000.0, 2500.0, 3000.0, 4000.0}) {
+  for (double d : distances_mm) {
     for (double theta : {0.0, 20.0, 35.0}) out.push_back(Sample(lens, d, theta));
   }
   return out;
@@ -74,6 +78,60 @@ TEST(FitGeometric, BlurQuadraticInInverseDistanceIsRecovered) {
   EXPECT_GT(fixed.summary.max_relative_error, 1e-3);
 }
 
+// A size law that is not a quadratic in 1/d (a lens whose blob grows otherwise with distance):
+// from 4 calibrated distances (Table 3's) the cubic term comes back and the law passes through
+// every distance's sizes and the law between them; 3 distances keep the quadratic.
+TEST(FitGeometric, FourDistancesFitTheSizeLawsCubicTerm) {
+  Lens lens;
+  lens.b3 = 0.4;
+  const GeometricModel g = FitGeometric(Grid(lens, {1500.0, 2000.0, 2500.0, 3000.0}), true);
+  ASSERT_TRUE(g.fitted());
+  EXPECT_NEAR(g.alpha_px2, 30.0, 1e-7);
+  EXPECT_NEAR(g.blur_u2_px2, 0.9, 1e-7);
+  EXPECT_NEAR(g.blur_u3_px2, 0.4, 1e-7);
+  EXPECT_LT(g.summary.max_relative_error, 1e-9);
+  for (double d : {1700.0, 2300.0, 2900.0}) {
+    EXPECT_NEAR(g.DistanceMm(lens.alpha * 1e6 / (d * d) + lens.Blur(d)), d, 1e-6 * d) << d;
+  }
+  const GeometricModel three = FitGeometric(Grid(lens, {1500.0, 2000.0, 2500.0}), true);
+  ASSERT_TRUE(three.fitted());
+  EXPECT_EQ(three.blur_u3_px2, 0.0);
+  // Through its own 3 distances, the quadratic cannot follow the law between them.
+  EXPECT_GT(std::fabs(three.DistanceMm(lens.alpha * 1e6 / (1700.0 * 1700.0) + lens.Blur(1700.0)) /
+                          1700.0 -
+                      1.0),
+            1e-5);
+}
+
+// Frames with noise (relative sd 0.02% on each axis, fixed seed) at Table 3's 4 distances.
+std::vector<CalibrationSample> NoisyTable3(const Lens& lens) {
+  std::mt19937 rng(17);
+  std::normal_distribution<double> noise(0.0, 2e-4);
+  std::vector<CalibrationSample> out;
+  for (int repeat = 0; repeat < 8; ++repeat) {
+    for (CalibrationSample s : Grid(lens, {1500.0, 2000.0, 2500.0, 3000.0})) {
+      s.measurement.moment_major_var_px2 *= 1.0 + noise(rng);
+      s.measurement.moment_minor_var_px2 *= 1.0 + noise(rng);
+      out.push_back(s);
+    }
+  }
+  return out;
+}
+
+// The cubic term is taken only where the quadratic misses the distances' sizes beyond their
+// noise: not for a lens of the quadratic's family, and for one 4 u^3 px^2 outside it.
+TEST(FitGeometric, TheCubicTermOnlyWhereTheSizesAskForIt) {
+  Lens lens;
+  const GeometricModel in_family = FitGeometric(NoisyTable3(lens), true);
+  ASSERT_TRUE(in_family.fitted());
+  EXPECT_EQ(in_family.blur_u3_px2, 0.0) << in_family.summary.message;
+  EXPECT_NE(in_family.summary.message.find("quadratic"), std::string::npos);
+  lens.b3 = 4.0;
+  const GeometricModel outside = FitGeometric(NoisyTable3(lens), true);
+  EXPECT_NEAR(outside.blur_u3_px2, 4.0, 0.4) << outside.summary.message;
+  EXPECT_NE(outside.summary.message.find("cubic"), std::string::npos);
+}
+
 // The model's own relations by hand: b(u), the expected variance and its inverse.
 TEST(GeometricModel, DistanceInvertsTheExpectedVariance) {
   GeometricModel g;
@@ -94,6 +152,14 @@ TEST(GeometricModel, DistanceInvertsTheExpectedVariance) {
   // With b1 > 0 too (the root written without cancellation).
   g.blur_u1_px2 = 0.5;
   EXPECT_NEAR(g.DistanceMm(g.MajorVarPx2(3000.0)), 3000.0, 1e-9);
+  // With a cubic term, of either sign: the root where the law rises.
+  for (double b3 : {0.4, -0.4}) {
+    g.blur_u3_px2 = b3;
+    EXPECT_NEAR(g.BlurVarPx2(2000.0), 0.6 + 0.25 + 0.225 + b3 * 0.125, 1e-12);
+    for (double d : {800.0, 1500.0, 2000.0, 5000.0}) {
+      EXPECT_NEAR(g.DistanceMm(g.MajorVarPx2(d)), d, 1e-9 * d) << d << " b3 " << b3;
+    }
+  }
 }
 
 TEST(GeometricModel, NoDistanceWhereTheVarianceHasNone) {

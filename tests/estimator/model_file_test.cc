@@ -149,6 +149,7 @@ TEST(ModelFile, BlurTermsRoundTripAndNeedFormatFour) {
   CalibrationModel model = SmallModel();
   model.geometric.blur_u1_px2 = -0.3 / 7.0;
   model.geometric.blur_u2_px2 = 0.05 / 3.0;
+  model.geometric.blur_u3_px2 = -0.02 / 3.0;
   model.blur_calibration.c0_px2 = 0.6 / 7.0;
   model.blur_calibration.c1_px2 = -0.1 / 3.0;
   model.blur_calibration.c2_px2 = 0.2 / 9.0;
@@ -159,6 +160,7 @@ TEST(ModelFile, BlurTermsRoundTripAndNeedFormatFour) {
   const CalibrationModel back = ModelFromYaml(text, "v4.yaml");
   EXPECT_TRUE(BitEqual(back.geometric.blur_u1_px2, model.geometric.blur_u1_px2));
   EXPECT_TRUE(BitEqual(back.geometric.blur_u2_px2, model.geometric.blur_u2_px2));
+  EXPECT_TRUE(BitEqual(back.geometric.blur_u3_px2, model.geometric.blur_u3_px2));
   EXPECT_TRUE(BitEqual(back.blur_calibration.c1_px2, model.blur_calibration.c1_px2));
   EXPECT_TRUE(BitEqual(back.blur_calibration.c2_px2, model.blur_calibration.c2_px2));
   EXPECT_TRUE(BitEqual(back.blur_calibration.noise_at_1m_px2,
@@ -172,6 +174,41 @@ TEST(ModelFile, BlurTermsRoundTripAndNeedFormatFour) {
     FAIL() << "a format 3 file with format 4 keys was accepted";
   } catch (const ModelFileError& e) {
     EXPECT_NE(std::string(e.what()).find("format_version 4"), std::string::npos) << e.what();
+  }
+}
+
+// The size law's cubic term is optional (absent in files written before it: 0), and refused
+// at its line when not finite or without the terms it extends.
+TEST(ModelFile, TheSizeLawsCubicTermIsOptionalAndChecked) {
+  CalibrationModel model = SmallModel();
+  model.geometric.blur_u1_px2 = -0.3 / 7.0;
+  model.geometric.blur_u2_px2 = 0.05 / 3.0;
+  const std::string text = ModelToYaml(model);
+  EXPECT_EQ(text.find("blur_u3_px2"), std::string::npos);
+  EXPECT_EQ(ModelFromYaml(text, "quadratic.yaml").geometric.blur_u3_px2, 0.0);
+  model.geometric.blur_u3_px2 = 0.01;
+  const std::string cubic = ModelToYaml(model);
+  const size_t at = cubic.find("blur_u3_px2: ");
+  ASSERT_NE(at, std::string::npos);
+  std::string bad = cubic;
+  bad.replace(at, bad.find('\n', at) - at, "blur_u3_px2: .nan");
+  try {
+    ModelFromYaml(bad, "nan.yaml");
+    FAIL() << "a NaN cubic term was accepted";
+  } catch (const ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("nan.yaml:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("blur_u3_px2"), std::string::npos) << e.what();
+  }
+  std::string alone = cubic;
+  for (const char* key : {"blur_u1_px2: ", "blur_u2_px2: "}) {
+    const size_t line = alone.rfind('\n', alone.find(key)) + 1;
+    alone.erase(line, alone.find('\n', line) - line + 1);
+  }
+  try {
+    ModelFromYaml(alone, "alone.yaml");
+    FAIL() << "a cubic term without the terms it extends was accepted";
+  } catch (const ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("blur_u1_px2"), std::string::npos) << e.what();
   }
 }
 
