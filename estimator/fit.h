@@ -135,13 +135,13 @@ struct CalibratedRanges {
 // so b(u) holds a Gaussian lens PSF, the pixel's area and the defocus exactly; a real lens's
 // blob (a defocus disc's PSF, a halo) grows otherwise: where the quadratic misses 4 or more
 // calibrated distances' sizes beyond their noise, b(u) takes a cubic term blur_u3 u^3 (0: none).
-// blur_u1 = blur_u2 = 0 is
-// the fixed blur (model files before format 3, or FitOptions::geometric_blur_varies_with_distance
-// off). Inverted: the positive root u of blur_u3 u^3 + (alpha + blur_u2) u^2 + blur_u1 u + beta -
-// var = 0 where the law rises with u (nearest the quadratic's root when there are several).
-// Fitted by linear least squares on relative residuals, from the measurement frames (exposure does
-// not change background-subtracted moments); with the distance-dependent blur, the minor axis
-// (alpha cos^2(theta) u^2 + b(u), theta known at calibration) separates the disc from the blur.
+// blur_u1 = blur_u2 = 0 is the fixed blur (model files before format 3, or
+// FitOptions::geometric_blur_varies_with_distance off). Inverted: the positive root u of blur_u3
+// u^3 + (alpha + blur_u2) u^2 + blur_u1 u + beta - var = 0 where the law rises with u (nearest the
+// quadratic's root when there are several). Fitted by linear least squares on relative residuals,
+// from the measurement frames (exposure does not change background-subtracted moments); with the
+// distance-dependent blur, the minor axis (alpha cos^2(theta) u^2 + b(u), theta known at
+// calibration) separates the disc from the blur.
 struct GeometricModel {
   double alpha_px2 = 0.0;
   double beta_px2 = 0.0;

@@ -1,6 +1,6 @@
 // The geometric baseline (fit.h GeometricModel): the blob's size against 1/d^2 with a blur
-// polynomial in 1/d (quadratic; cubic from 4 calibrated distances), fitted by linear least squares,
-// with its per-frame noise law.
+// polynomial in 1/d (quadratic, or cubic where the calibrated distances' sizes ask for it),
+// fitted by linear least squares, with its per-frame noise law.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
@@ -176,11 +176,10 @@ double MisfitChi2(const GeometricRows& data, const std::vector<double>& residual
 // misfit's chi-square above the tail of kCubicTermTailProbability with (distances - 3) degrees
 // of freedom (the major axis's law has 3 coefficients).
 bool QuadraticMissesTheSizes(const GeometricRows& data, const GeometricModel& quadratic,
-                             double* chi2) {
-  int distances = 0;
-  *chi2 = MisfitChi2(data, quadratic.summary.residuals, &distances);
-  if (distances < 4) return false;
-  const boost::math::chi_squared law(distances - 3);
+                             double* chi2, int* distances) {
+  *chi2 = MisfitChi2(data, quadratic.summary.residuals, distances);
+  if (*distances < 4) return false;
+  const boost::math::chi_squared law(*distances - 3);
   return *chi2 > boost::math::quantile(boost::math::complement(law, kCubicTermTailProbability));
 }
 
@@ -199,12 +198,14 @@ GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples,
   SolveGeometric(data, unknowns, &g);
   std::string law = blur_varies_with_distance ? "blur quadratic in 1/d" : "a fixed blur";
   double chi2 = 0.0;
+  int distances = 0;
   if (blur_varies_with_distance && data.distances_mm.size() >= 4 &&
-      static_cast<int>(data.rows.size()) >= 10 && QuadraticMissesTheSizes(data, g, &chi2)) {
+      static_cast<int>(data.rows.size()) >= 10 &&
+      QuadraticMissesTheSizes(data, g, &chi2, &distances)) {
     SolveGeometric(data, 5, &g);
     std::ostringstream text;
     text << "blur cubic in 1/d (the quadratic's misfit chi2 " << std::setprecision(3) << chi2
-         << " over " << data.distances_mm.size() << " distances)";
+         << " over " << distances << " distances)";
     law = text.str();
   }
   g.summary.SetErrorsFromResiduals();
