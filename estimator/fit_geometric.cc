@@ -9,7 +9,6 @@
 #include <iomanip>
 #include <limits>
 #include <map>
-#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -32,22 +31,36 @@ namespace {
 // lens of the quadratic's family costs a little noise between the distances; a quadratic kept
 // for a lens outside it is a bias at every distance (docs/estimator.md "Geometric baseline").
 constexpr double kCubicTermTailProbability = 0.05;
+// The cubic law's unknowns: alpha, beta and the blur's three terms in u.
+constexpr int kCubicUnknowns = 5;
+
+// The major axis's residuals (relative distance errors) at each calibrated distance: their count,
+// sum and sum of squares, by D = u^2; non-finite ones left out.
+struct ResidualGroup {
+  int count = 0;
+  double sum = 0.0, sum2 = 0.0;
+};
+std::map<double, ResidualGroup> GroupByDistance(
+    const std::vector<std::pair<double, double>>& points, const std::vector<double>& residuals) {
+  std::map<double, ResidualGroup> groups;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const double r = residuals[i];
+    if (!std::isfinite(r)) continue;
+    ResidualGroup& group = groups[points[i].first];
+    ++group.count;
+    group.sum += r;
+    group.sum2 += r * r;
+  }
+  return groups;
+}
 
 // The residuals' rms at each calibrated distance (groups of >= 3 samples), then
 // ln rms = ln c + k ln(d / 1000 mm) by least squares weighted by the group sizes. With one
 // distance only, k = 0 and c = that rms.
 void FitGeometricNoise(const std::vector<std::pair<double, double>>& points, GeometricModel* g) {
-  std::map<double, std::pair<double, int>> groups;  // D -> (sum of r^2, count)
-  for (size_t i = 0; i < points.size(); ++i) {
-    const double r = g->summary.residuals[i];
-    if (!std::isfinite(r)) continue;
-    auto& acc = groups[points[i].first];
-    acc.first += r * r;
-    ++acc.second;
-  }
   std::vector<NoiseGroup> noise_groups;
-  for (const auto& [big_d, acc] : groups) {
-    noise_groups.push_back({std::log(1.0 / std::sqrt(big_d)), acc.first, acc.second});
+  for (const auto& [big_d, group] : GroupByDistance(points, g->summary.residuals)) {
+    noise_groups.push_back({std::log(1.0 / std::sqrt(big_d)), group.sum2, group.count});
   }
   FitNoiseLaw(noise_groups, &g->noise_rel_at_1m, &g->noise_exponent);
 }
@@ -104,7 +117,6 @@ namespace {
 struct GeometricRows {
   std::vector<std::array<double, 5>> rows;
   std::vector<std::pair<double, double>> major_points;  // (D, major var): residuals, noise model
-  std::set<double> distances_mm;
 };
 
 GeometricRows CollectGeometricRows(const std::vector<CalibrationSample>& samples, bool with_minor) {
@@ -115,7 +127,6 @@ GeometricRows CollectGeometricRows(const std::vector<CalibrationSample>& samples
     const double u = 1000.0 / s.d_mm;
     const double v = f.moment_major_var_px2;
     g.major_points.push_back({u * u, v});
-    g.distances_mm.insert(s.d_mm);
     g.rows.push_back({u * u / v, 1.0 / v, u / v, u * u / v, u * u * u / v});
     if (!with_minor || f.moment_minor_var_px2 <= 0.0) continue;
     const double cos_t = std::cos(s.theta_deg * 3.14159265358979323846 / 180.0);
@@ -153,20 +164,13 @@ void SolveGeometric(const GeometricRows& data, int unknowns, GeometricModel* g) 
 // standard error (the frames' scatter there over sqrt(n)), squared and summed over the distances
 // of 3 or more frames. *distances: how many.
 double MisfitChi2(const GeometricRows& data, const std::vector<double>& residuals, int* distances) {
-  std::map<double, std::array<double, 3>> groups;  // D -> (n, sum r, sum r^2)
-  for (size_t i = 0; i < residuals.size(); ++i) {
-    auto& acc = groups[data.major_points[i].first];
-    acc[0] += 1.0;
-    acc[1] += residuals[i];
-    acc[2] += residuals[i] * residuals[i];
-  }
   double chi2 = 0.0;
   *distances = 0;
-  for (const auto& [big_d, acc] : groups) {
-    if (acc[0] < 3.0) continue;
-    const double mean = acc[1] / acc[0];
-    const double var = std::max((acc[2] - acc[0] * mean * mean) / (acc[0] - 1.0), 1e-300);
-    chi2 += mean * mean / (var / acc[0]);
+  for (const auto& [big_d, group] : GroupByDistance(data.major_points, residuals)) {
+    if (group.count < 3) continue;
+    const double n = group.count, mean = group.sum / n;
+    const double var = std::max((group.sum2 - n * mean * mean) / (n - 1.0), 1e-300);
+    chi2 += mean * mean / (var / n);
     ++*distances;
   }
   return chi2;
@@ -199,10 +203,9 @@ GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples,
   std::string law = blur_varies_with_distance ? "blur quadratic in 1/d" : "a fixed blur";
   double chi2 = 0.0;
   int distances = 0;
-  if (blur_varies_with_distance && data.distances_mm.size() >= 4 &&
-      static_cast<int>(data.rows.size()) >= 10 &&
+  if (blur_varies_with_distance && static_cast<int>(data.rows.size()) >= 2 * kCubicUnknowns &&
       QuadraticMissesTheSizes(data, g, &chi2, &distances)) {
-    SolveGeometric(data, 5, &g);
+    SolveGeometric(data, kCubicUnknowns, &g);
     std::ostringstream text;
     text << "blur cubic in 1/d (the quadratic's misfit chi2 " << std::setprecision(3) << chi2
          << " over " << distances << " distances)";

@@ -131,16 +131,15 @@ void ReadGeometricBlur(const Reader& rd, const YAML::Node& g, int version, Geome
     rd.Fail(g["blur_u1_px2"], "geometric.blur_u1_px2",
             "is new in format_version 4; this file says " + std::to_string(version));
   }
-  geo->blur_u1_px2 = rd.Scalar<double>(g, "geometric", "blur_u1_px2");
-  geo->blur_u2_px2 = rd.Scalar<double>(g, "geometric", "blur_u2_px2");
-  if (!std::isfinite(geo->blur_u1_px2) || !std::isfinite(geo->blur_u2_px2)) {
-    rd.Fail(g["blur_u1_px2"], "geometric.blur_u1_px2", "must be finite");
-  }
-  if (!g["blur_u3_px2"].IsDefined()) return;  // optional: files before it have none
-  geo->blur_u3_px2 = rd.Scalar<double>(g, "geometric", "blur_u3_px2");
-  if (!std::isfinite(geo->blur_u3_px2)) {
-    rd.Fail(g["blur_u3_px2"], "geometric.blur_u3_px2", "must be finite");
-  }
+  const auto finite = [&rd, &g](const char* key) {
+    const double value = rd.Scalar<double>(g, "geometric", key);
+    if (!std::isfinite(value)) rd.Fail(g[key], std::string("geometric.") + key, "must be finite");
+    return value;
+  };
+  geo->blur_u1_px2 = finite("blur_u1_px2");
+  geo->blur_u2_px2 = finite("blur_u2_px2");
+  // Optional: files before it have none.
+  if (g["blur_u3_px2"].IsDefined()) geo->blur_u3_px2 = finite("blur_u3_px2");
 }
 
 // An optional key: present and not null.
