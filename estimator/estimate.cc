@@ -404,7 +404,7 @@ ThetaStartOptions ThetaStartOf(const EstimateOptions& options) {
 // ln of the frame's geometric distance, NaN when there is none.
 double GeometricLnD(const CalibrationModel& model, const Features& f) {
   if (!model.geometric.fitted() || !f.blob_found) return std::numeric_limits<double>::quiet_NaN();
-  const double d_mm = model.geometric.DistanceMm(f.moment_major_var_px2);
+  const double d_mm = model.geometric.DistanceMm(model.geometric.FrameMajorVarPx2(f));
   return std::isfinite(d_mm) ? std::log(d_mm) : std::numeric_limits<double>::quiet_NaN();
 }
 
@@ -416,7 +416,7 @@ double FrameNoiseRel(const CalibrationModel& model, const Features* const* frame
   double sum = 0.0;
   for (int i = 0; i < n; ++i) {
     const Features& f = *frames[i];
-    const double var = f.moment_major_var_px2;
+    const double var = g.FrameMajorVarPx2(f);
     const double se = f.major_var_se_px2;
     if (!g.fitted() || !(se > 0.0) || !(var > se)) return 0.0;
     const double noise = g.DistanceSeMm(var, se) / g.DistanceMm(var);

@@ -21,7 +21,7 @@ GeometricEstimate EstimateGeometric(const CalibrationModel& model, const Feature
   const GeometricModel& g = model.geometric;
   IRDIST_CHECK(g.fitted(), "the model has no fitted geometric baseline");
   if (!features.blob_found) return out;
-  const double d_mm = g.DistanceMm(features.moment_major_var_px2);
+  const double d_mm = g.DistanceMm(g.FrameMajorVarPx2(features));
   if (!std::isfinite(d_mm)) return out;
   out.valid = true;
   out.d_mm = d_mm;

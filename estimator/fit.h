@@ -133,8 +133,8 @@ struct CalibratedRanges {
 // as 1/d^2, and the blur adds b(u) = beta + blur_u1 u + blur_u2 u^2. A lens focused at s blurs an
 // object at d by a circle of confusion proportional to |1/s - 1/d|: its variance is quadratic in u,
 // so b(u) holds a Gaussian lens PSF, the pixel's area and the defocus exactly; a real lens's
-// blob (a defocus disc's PSF, a halo) grows otherwise: where the quadratic misses 4 or more
-// calibrated distances' sizes beyond their noise, b(u) takes a cubic term blur_u3 u^3 (0: none).
+// blob (a defocus disc's PSF, a halo) grows otherwise: from 4 calibrated distances on, b(u) takes
+// a cubic term blur_u3 u^3 (0: none).
 // blur_u1 = blur_u2 = 0 is the fixed blur (model files before format 3, or
 // FitOptions::geometric_blur_varies_with_distance off). Inverted: the positive root u of blur_u3
 // u^3 + (alpha + blur_u2) u^2 + blur_u1 u + beta - var = 0 where the law rises with u (nearest the
@@ -148,8 +148,7 @@ struct GeometricModel {
   double blur_u1_px2 = 0.0;
   double blur_u2_px2 = 0.0;
   // The size law's cubic term in u (format 4, optional; 0 in files before it and where not
-  // taken): fitted where the quadratic misses 4 or more calibrated distances' sizes beyond their
-  // noise (docs/estimator.md "Geometric baseline").
+  // taken): fitted from 4 or more calibrated distances (docs/estimator.md "Geometric baseline").
   double blur_u3_px2 = 0.0;
   // Per-frame noise of the relative distance it implies, as a function of d:
   // sd(d) = noise_rel_at_1m * (d / 1000 mm)^noise_exponent, fitted to the calibration residuals'
@@ -157,8 +156,20 @@ struct GeometricModel {
   // (model files before it): standard errors then stay in units of the mean fit error.
   double noise_rel_at_1m = 0.0;
   double noise_exponent = 0.0;
+  // The size's tilt term (optional; empty in files before it and where the sizes show none): a
+  // blob fit's major-axis variance departs from the law by T(theta), px^2, when the lens's PSF is
+  // not the fit's (an astigmatic or defocus-disc lens: the tilted disc's more curved ends),
+  // measured on the calibration's own poses as a function of the frame's own theta (the fitted
+  // disc's axes) and piecewise linear between knots at the calibrated angles (fit_tilt.cc).
+  std::vector<double> tilt_theta_deg;  // increasing
+  std::vector<double> tilt_var_px2;    // T at each knot
   FitSummary summary;
   bool fitted() const { return alpha_px2 > 0.0; }
+  // T(theta), px^2: 0 without a tilt term; the end knots' value beyond them.
+  double TiltVarPx2(double theta_deg) const;
+  // The frame's major-axis variance for the law: its blob fit's less T at the fitted disc's own
+  // theta; the moments' (no blob fit: size_blur_var_px2 NaN) as they are.
+  double FrameMajorVarPx2(const Features& f) const;
   bool BlurVariesWithDistance() const {
     return blur_u1_px2 != 0.0 || blur_u2_px2 != 0.0 || blur_u3_px2 != 0.0;
   }

@@ -1,10 +1,9 @@
 // The geometric baseline (fit.h GeometricModel): the blob's size against 1/d^2 with a blur
-// polynomial in 1/d (quadratic, or cubic where the calibrated distances' sizes ask for it),
-// fitted by linear least squares, with its per-frame noise law.
+// polynomial in 1/d (quadratic, or cubic from 4 calibrated distances on) and the size's tilt term
+// (fit_tilt.h), fitted by linear least squares, with its per-frame noise law.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
-#include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 #include <iomanip>
 #include <limits>
@@ -16,6 +15,7 @@
 
 #include "estimator/blur_model.h"
 #include "estimator/fit.h"
+#include "estimator/fit_tilt.h"
 #include "estimator/polynomial_roots.h"
 
 namespace irdist {
@@ -26,13 +26,13 @@ double GeometricModel::DistanceSeMm(double major_var_px2, double se_px2) const {
 
 namespace {
 
-// The quadratic law gives way to the cubic when its misfit at the calibrated distances has this
-// tail probability or less under the frames' own noise. Lenient on purpose: a cubic taken for a
-// lens of the quadratic's family costs a little noise between the distances; a quadratic kept
-// for a lens outside it is a bias at every distance (docs/estimator.md "Geometric baseline").
-constexpr double kCubicTermTailProbability = 0.05;
-// The cubic law's unknowns: alpha, beta and the blur's three terms in u.
+// The cubic law's unknowns: alpha, beta and the blur's three terms in u. It is taken wherever the
+// calibration has kCubicMinDistances distances of 3 or more frames: a lens of the quadratic's
+// family loses a little noise between the distances, one outside it (a defocus disc's PSF, a halo)
+// keeps no bias at them; a chi-square test of the quadratic's misfit could not tell the two apart
+// (its se holds the sizes' dependence on theta: docs/estimator.md "Geometric baseline").
 constexpr int kCubicUnknowns = 5;
+constexpr int kCubicMinDistances = 4;
 
 // The major axis's residuals (relative distance errors) at each calibrated distance: their count,
 // sum and sum of squares, by D = u^2; non-finite ones left out.
@@ -119,13 +119,15 @@ struct GeometricRows {
   std::vector<std::pair<double, double>> major_points;  // (D, major var): residuals, noise model
 };
 
-GeometricRows CollectGeometricRows(const std::vector<CalibrationSample>& samples, bool with_minor) {
+// The major axis's variance less `law`'s tilt term (none before it is fitted).
+GeometricRows CollectGeometricRows(const std::vector<CalibrationSample>& samples, bool with_minor,
+                                   const GeometricModel& law) {
   GeometricRows g;
   for (const CalibrationSample& s : samples) {
     const Features& f = s.measurement;
-    if (!f.blob_found || f.moment_major_var_px2 <= 0.0) continue;
+    const double v = law.FrameMajorVarPx2(f);
+    if (!f.blob_found || f.moment_major_var_px2 <= 0.0 || !(v > 0.0)) continue;
     const double u = 1000.0 / s.d_mm;
-    const double v = f.moment_major_var_px2;
     g.major_points.push_back({u * u, v});
     g.rows.push_back({u * u / v, 1.0 / v, u / v, u * u / v, u * u * u / v});
     if (!with_minor || f.moment_minor_var_px2 <= 0.0) continue;
@@ -176,23 +178,12 @@ double MisfitChi2(const GeometricRows& data, const std::vector<double>& residual
   return chi2;
 }
 
-// Whether the quadratic law misses the calibrated distances' sizes beyond their noise: its
-// misfit's chi-square above the tail of kCubicTermTailProbability with (distances - 3) degrees
-// of freedom (the major axis's law has 3 coefficients).
-bool QuadraticMissesTheSizes(const GeometricRows& data, const GeometricModel& quadratic,
-                             double* chi2, int* distances) {
-  *chi2 = MisfitChi2(data, quadratic.summary.residuals, distances);
-  if (*distances < 4) return false;
-  const boost::math::chi_squared law(*distances - 3);
-  return *chi2 > boost::math::quantile(boost::math::complement(law, kCubicTermTailProbability));
-}
-
 }  // namespace
 
 GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples,
                             bool blur_varies_with_distance) {
   GeometricModel g;
-  const GeometricRows data = CollectGeometricRows(samples, blur_varies_with_distance);
+  GeometricRows data = CollectGeometricRows(samples, blur_varies_with_distance, g);
   const int unknowns = blur_varies_with_distance ? 4 : 2;
   g.summary.samples = static_cast<int>(data.major_points.size());
   if (data.major_points.size() < 3 || static_cast<int>(data.rows.size()) < 2 * unknowns) {
@@ -203,13 +194,22 @@ GeometricModel FitGeometric(const std::vector<CalibrationSample>& samples,
   std::string law = blur_varies_with_distance ? "blur quadratic in 1/d" : "a fixed blur";
   double chi2 = 0.0;
   int distances = 0;
-  if (blur_varies_with_distance && static_cast<int>(data.rows.size()) >= 2 * kCubicUnknowns &&
-      QuadraticMissesTheSizes(data, g, &chi2, &distances)) {
-    SolveGeometric(data, kCubicUnknowns, &g);
+  int solved = unknowns;
+  if (blur_varies_with_distance) chi2 = MisfitChi2(data, g.summary.residuals, &distances);
+  if (distances >= kCubicMinDistances && static_cast<int>(data.rows.size()) >= 2 * kCubicUnknowns) {
+    solved = kCubicUnknowns;
+    SolveGeometric(data, solved, &g);
     std::ostringstream text;
-    text << "blur cubic in 1/d (the quadratic's misfit chi2 " << std::setprecision(3) << chi2
-         << " over " << distances << " distances)";
+    text << "blur cubic in 1/d (" << distances << " distances; the quadratic's misfit chi2 "
+         << std::setprecision(3) << chi2 << ")";
     law = text.str();
+  }
+  // The tilt term from this law's departures, then the law again on the sizes less it.
+  const std::string tilt = FitTiltTerm(samples, &g);
+  if (!tilt.empty()) {
+    data = CollectGeometricRows(samples, blur_varies_with_distance, g);
+    SolveGeometric(data, solved, &g);
+    law += "; " + tilt;
   }
   g.summary.SetErrorsFromResiduals();
   FitGeometricNoise(data.major_points, &g);

@@ -3,17 +3,18 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <type_traits>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <type_traits>
 
 #include "base/regular_file.h"
 #include "base/safe_file.h"
 #include "estimator/defect_map_file.h"
 #include "estimator/model_file_bounds.h"
 #include "estimator/model_file_fitness.h"
+#include "estimator/model_file_geometric.h"
 #include "estimator/model_file_reader.h"
 
 namespace irdist {
@@ -110,36 +111,6 @@ ModelProvenance ReadProvenance(const Reader& rd, const YAML::Node& root) {
   p.t_meas_ms = rd.Doubles(n, k, "t_meas_ms", false);
   p.retake_reference = rd.Scalar<bool>(n, k, "retake_reference");
   return p;
-}
-
-// Format 4: the geometric blur's terms in u = 1000 / d (absent: a fixed blur).
-void EmitGeometricBlur(YAML::Emitter& out, const GeometricModel& g) {
-  if (!g.BlurVariesWithDistance()) return;
-  EmitDouble(out, "blur_u1_px2", g.blur_u1_px2);
-  EmitDouble(out, "blur_u2_px2", g.blur_u2_px2);
-  if (g.blur_u3_px2 != 0.0) EmitDouble(out, "blur_u3_px2", g.blur_u3_px2);
-}
-
-// Format 4 keys blur_u1_px2 / blur_u2_px2 (both or neither; absent: a fixed blur) and the optional
-// blur_u3_px2 beside them.
-void ReadGeometricBlur(const Reader& rd, const YAML::Node& g, int version, GeometricModel* geo) {
-  if (!g["blur_u1_px2"].IsDefined() && !g["blur_u2_px2"].IsDefined() &&
-      !g["blur_u3_px2"].IsDefined()) {
-    return;
-  }
-  if (version < 4) {
-    rd.Fail(g["blur_u1_px2"], "geometric.blur_u1_px2",
-            "is new in format_version 4; this file says " + std::to_string(version));
-  }
-  const auto finite = [&rd, &g](const char* key) {
-    const double value = rd.Scalar<double>(g, "geometric", key);
-    if (!std::isfinite(value)) rd.Fail(g[key], std::string("geometric.") + key, "must be finite");
-    return value;
-  };
-  geo->blur_u1_px2 = finite("blur_u1_px2");
-  geo->blur_u2_px2 = finite("blur_u2_px2");
-  // Optional: files before it have none.
-  if (g["blur_u3_px2"].IsDefined()) geo->blur_u3_px2 = finite("blur_u3_px2");
 }
 
 // An optional key: present and not null.
@@ -293,7 +264,7 @@ void EmitGeometric(YAML::Emitter& out, const GeometricModel& g) {
     EmitDouble(out, "noise_rel_at_1m", g.noise_rel_at_1m);
     EmitDouble(out, "noise_exponent", g.noise_exponent);
   }
-  EmitGeometricBlur(out, g);
+  model_file::EmitGeometricTerms(out, g);
   EmitFit(out, g.summary);
   out << YAML::EndMap;
 }
@@ -437,7 +408,7 @@ GeometricModel ReadGeometric(const Reader& rd, const YAML::Node& root, int versi
   const YAML::Node g = rd.Child(root, "", "geometric");
   rd.Keys(g, "geometric",
           {"alpha_px2", "beta_px2", "noise_rel_at_1m", "noise_exponent", "blur_u1_px2",
-           "blur_u2_px2", "blur_u3_px2", "fit"});
+           "blur_u2_px2", "blur_u3_px2", "tilt_theta_deg", "tilt_var_px2", "fit"});
   GeometricModel geometric;
   geometric.alpha_px2 = rd.Scalar<double>(g, "geometric", "alpha_px2");
   geometric.beta_px2 = rd.Scalar<double>(g, "geometric", "beta_px2");
@@ -451,7 +422,7 @@ GeometricModel ReadGeometric(const Reader& rd, const YAML::Node& root, int versi
               "must be > 0 with a finite noise_exponent (or both absent)");
     }
   }
-  ReadGeometricBlur(rd, g, version, &geometric);
+  model_file::ReadGeometricTerms(rd, g, version, &geometric);
   geometric.summary = rd.Fit(g, "geometric");
   return geometric;
 }

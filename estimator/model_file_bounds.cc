@@ -165,6 +165,15 @@ void CheckFitness(Checker* c, const CalibrationFitness& f) {
   }
 }
 
+// The size's tilt term: a blob fit's size departing from the law by a share of its blur, bounded
+// as the blob fit's blur corrections are.
+void CheckTilt(Checker* c, const GeometricModel& g) {
+  for (size_t i = 0; i < g.tilt_var_px2.size(); ++i) {
+    c->Value("geometric.tilt_var_px2[" + std::to_string(i) + "]", g.tilt_var_px2[i],
+             bounds::kBlurOffsetPx2);
+  }
+}
+
 }  // namespace
 
 std::vector<ModelBoundFailure> CheckModelBounds(const CalibrationModel& model) {
@@ -172,6 +181,7 @@ std::vector<ModelBoundFailure> CheckModelBounds(const CalibrationModel& model) {
   CheckBlur(&c, model.blur_calibration, model.ranges);
   CheckProvenance(&c, model.provenance, model.features);
   CheckFitness(&c, model.fitness);
+  CheckTilt(&c, model.geometric);
   return c.Take();
 }
 

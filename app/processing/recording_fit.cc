@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <map>
 #include <ostream>
 #include <set>
 #include <sstream>
@@ -19,6 +21,7 @@
 #include "estimator/model_file.h"
 #include "estimator/models.h"
 #include "estimator/psf_anisotropy.h"
+#include "estimator/round_blob.h"
 
 namespace irdist {
 namespace {
@@ -383,6 +386,19 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
       << (split.level_frames > 0 ? split.level_frames : split.frames) << "\n";
 }
 
+// The round-blob rule on each bracket's frames together, as measurement pools them
+// (estimator/round_blob.h): the calibrated law then reads a near-round disc's size as the
+// estimate will (one frame's rule leaves a round blob's noise in its major axis and shrinks a
+// 5 deg blob's more).
+void PoolBrackets(const RecordingReader& reader, FeatureMap* features) {
+  std::map<std::int64_t, std::vector<Features*>> brackets;
+  for (const FrameRecord& row : reader.rows()) {
+    const auto f = features->find(row.index);
+    if (f != features->end()) brackets[row.bracket_id].push_back(&f->second);
+  }
+  for (auto& [id, frames] : brackets) PoolRoundBlobRule(frames);
+}
+
 // The second pass of a calibration whose estimates use the blob fit: every frame's size from the
 // blob fit with the first pass's calibrated blur and split (what measurement computes), and the
 // models fitted again on those sizes, so the distance reads the size as measurement measures it
@@ -402,6 +418,7 @@ CalibrationModel RefitOnBlobFitSizes(const RecordingReader& reader, const Featur
         SceneCleanedFrame(reader.LoadImage(row), bit_depth, feature_options), bit_depth, first,
         &f->second);
   }
+  PoolBrackets(reader, &refined);
   *samples = SamplesFromRecording(reader, refined);
   CalibrationModel model = Fit(*samples, feature_options, fit_options);
   model.blur_calibration = first.blur_calibration;  // measured on the frames, unchanged

@@ -465,7 +465,8 @@ void PrintDispersion(const Methods& m) {
     std::map<double, std::vector<const Row*>> by_theta;
     for (const Row& r : rows)
       if (r.ok) by_theta[r.pose.theta_deg].push_back(&r);
-    std::printf("  fig14    %-16s per theta: sd d / sd theta / mean theta err:", name.c_str());
+    std::printf("  fig14    %-16s per theta: sd d / mean d err / sd theta / mean theta err:",
+                name.c_str());
     for (const auto& [th, v] : by_theta) {
       double md = 0, mt = 0;
       for (const Row* r : v) md += r->d_mm / v.size(), mt += r->theta_deg / v.size();
@@ -473,8 +474,8 @@ void PrintDispersion(const Methods& m) {
       for (const Row* r : v)
         sd += (r->d_mm - md) * (r->d_mm - md), st += (r->theta_deg - mt) * (r->theta_deg - mt);
       const double k = v.size() > 1 ? 1.0 / (v.size() - 1) : 0.0;
-      std::printf("  %g: %.2f mm / %.2f / %+.2f deg", th, std::sqrt(sd * k), std::sqrt(st * k),
-                  mt - th);
+      std::printf("  %g: %.2f / %+.2f mm / %.2f / %+.2f deg", th, std::sqrt(sd * k),
+                  md - v.front()->pose.d_mm, std::sqrt(st * k), mt - th);
     }
     std::printf("\n");
     // The outliers of the goal row: brackets with |theta error| > 2 deg or d off its true

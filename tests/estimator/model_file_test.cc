@@ -212,6 +212,37 @@ TEST(ModelFile, TheSizeLawsCubicTermIsOptionalAndChecked) {
   }
 }
 
+// The size's tilt term round trips bit-exact; absent, none; its knots and values are checked
+// at their line (one value per knot, knots increasing in [0, 90), values within the blob fit's
+// blur corrections' bound).
+TEST(ModelFile, TheSizesTiltTermRoundTripsAndIsChecked) {
+  CalibrationModel model = SmallModel();
+  EXPECT_EQ(ModelToYaml(model).find("tilt_"), std::string::npos);
+  EXPECT_TRUE(ModelFromYaml(ModelToYaml(model), "none.yaml").geometric.tilt_theta_deg.empty());
+  model.geometric.tilt_theta_deg = {0.0, 10.0, 20.0, 35.0};
+  model.geometric.tilt_var_px2 = {0.0, 0.1 / 3.0, -0.2 / 7.0, 0.0};
+  const std::string text = ModelToYaml(model);
+  const CalibrationModel back = ModelFromYaml(text, "tilt.yaml");
+  EXPECT_EQ(back.geometric.tilt_theta_deg, model.geometric.tilt_theta_deg);
+  EXPECT_EQ(back.geometric.tilt_var_px2, model.geometric.tilt_var_px2);
+  const auto refused = [&text](const std::string& key, const std::string& value) {
+    std::string bad = text;
+    const size_t at = bad.find(key + ": ");
+    bad.replace(at, bad.find('\n', at) - at, key + ": " + value);
+    try {
+      ModelFromYaml(bad, "bad.yaml");
+    } catch (const ModelFileError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos) << e.what();
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(refused("tilt_var_px2", "[0, 0.1]").find("one value per knot"), std::string::npos);
+  EXPECT_NE(refused("tilt_theta_deg", "[0, 20, 10, 35]").find("increasing"), std::string::npos);
+  EXPECT_NE(refused("tilt_theta_deg", "[0, 10, 20, 95]").find("[0, 90)"), std::string::npos);
+  EXPECT_NE(refused("tilt_var_px2", "[0, 40, 0, 0]").find("tilt_var_px2[1]"), std::string::npos);
+}
+
 // The blur's split (the crosstalk's variance and kernel shape) round trips; absent, the
 // whole blur is the optics'; out of range, refused at its line.
 TEST(ModelFile, CrosstalkSplitRoundTripsAndIsChecked) {
