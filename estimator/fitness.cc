@@ -48,7 +48,7 @@ std::array<double, kChannels> ChannelResiduals(const CalibrationModel& model,
   const GeometricModel& g = model.geometric;
   if (g.fitted()) {
     const double cos_t = std::cos(s.theta_deg * M_PI / 180.0);
-    r[0] = SizeResidual(s.measurement.moment_major_var_px2, g.MajorVarPx2(s.d_mm));
+    r[0] = SizeResidual(g.FrameMajorVarPx2(s.measurement), g.MajorVarPx2(s.d_mm));  // as read
     r[1] = SizeResidual(s.measurement.moment_minor_var_px2,
                         g.alpha_px2 * 1e6 / (s.d_mm * s.d_mm) * cos_t * cos_t +
                             g.BlurVarPx2(s.d_mm));

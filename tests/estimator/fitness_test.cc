@@ -9,6 +9,7 @@
 
 #include "base/check.h"
 #include "estimator/fit.h"
+#include "estimator/fit_tilt.h"
 
 namespace irdist {
 namespace {
@@ -90,6 +91,31 @@ TEST(Fitness, WithoutFloorsTheFigureIsTheNoisesChiSquare) {
   const CalibrationFitness f = AssessFitness(model, g.samples, g.poses, options);
   EXPECT_GT(f.reduced_chi2, 0.6);
   EXPECT_LT(f.reduced_chi2, 1.4);
+}
+
+// A tilt term in the model (fit.h GeometricModel::tilt_var_px2): the frames whose major axis
+// departs from the law by it, as a blob fit's frames at their own theta, are judged as the
+// estimate reads them (less the term) and pass; the same frames under the law alone do not.
+TEST(Fitness, TheSizeIsJudgedLessTheModelsTiltTerm) {
+  CalibrationModel model = Geometric();
+  model.geometric.tilt_theta_deg = {0.0, 15.0, 35.0};
+  model.geometric.tilt_var_px2 = {0.0, 0.0, -0.05};
+  const GeometricModel& law = model.geometric;
+  Grid g = MakeGrid(model, Unchanged);
+  for (CalibrationSample& s : g.samples) {
+    Features& f = s.measurement;
+    f.size_blur_var_px2 = law.BlurVarPx2(s.d_mm);  // as the blob fit adds it
+    const double major = f.moment_major_var_px2;
+    for (int i = 0; i < 5; ++i) {  // the term at the theta of the frame that carries it
+      f.moment_major_var_px2 = major + law.TiltVarPx2(FrameDiscThetaDeg(f));
+    }
+  }
+  const CalibrationFitness with = AssessFitness(model, g.samples, g.poses);
+  EXPECT_TRUE(with.passed) << with.BriefReport();
+  CalibrationModel without = model;
+  without.geometric.tilt_theta_deg.clear();
+  without.geometric.tilt_var_px2.clear();
+  EXPECT_FALSE(AssessFitness(without, g.samples, g.poses).passed);
 }
 
 // An elliptical PSF at theta 0: the minor axis 4% wider than the disc-plus-round-blur predicts
