@@ -101,7 +101,8 @@ bool SolveTilt(const std::vector<double>& knots, const std::vector<TiltPoint>& p
   values->assign(n, 0.0);
   for (int k = 0; k < n; ++k) {
     const double t2 = t(k) * t(k);
-    (*values)[k] = t2 > 0.0 ? t(k) * std::max(0.0, 1.0 - cov(k, k) / t2) : 0.0;
+    const double keep = t2 > 0.0 ? 1.0 - cov(k, k) / t2 : 0.0;
+    (*values)[k] = keep > 0.0 ? t(k) * keep : 0.0;  // +0 where shrunk away
   }
   return t.allFinite();
 }
