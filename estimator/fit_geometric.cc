@@ -126,7 +126,7 @@ GeometricRows CollectGeometricRows(const std::vector<CalibrationSample>& samples
   for (const CalibrationSample& s : samples) {
     const Features& f = s.measurement;
     const double v = law.FrameMajorVarPx2(f);
-    if (!f.blob_found || f.moment_major_var_px2 <= 0.0 || !(v > 0.0)) continue;
+    if (!f.blob_found || !(v > 0.0)) continue;  // T is 0 where the size is not > 0
     const double u = 1000.0 / s.d_mm;
     g.major_points.push_back({u * u, v});
     g.rows.push_back({u * u / v, 1.0 / v, u / v, u * u / v, u * u * u / v});

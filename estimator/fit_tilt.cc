@@ -9,7 +9,7 @@
 #include <map>
 #include <sstream>
 
-#include "base/pi.h"
+#include "estimator/disc_fit.h"
 
 namespace irdist {
 namespace {
@@ -39,11 +39,13 @@ HatWeights HatAt(const std::vector<double>& knots, double theta_deg) {
   return h;
 }
 
-// One frame of the fit: its own theta, its departure from the law (px^2) and its weight.
+// One frame of the fit: its calibrated angle, its own theta, its departure from the law (px^2)
+// and its weight.
 struct TiltPoint {
-  double theta_deg, residual_px2, weight;
+  double calibrated_deg, theta_deg, residual_px2, weight;
 };
 
+// The frames with a blob fit (their own theta) and a standard error of their size.
 std::vector<TiltPoint> TiltPoints(const std::vector<CalibrationSample>& samples,
                                   const GeometricModel& g) {
   std::vector<TiltPoint> points;
@@ -52,17 +54,16 @@ std::vector<TiltPoint> TiltPoints(const std::vector<CalibrationSample>& samples,
     const double theta = FrameDiscThetaDeg(f);
     const double se = f.major_var_se_px2;
     if (!f.blob_found || !std::isfinite(theta) || !(se > 0.0) || !std::isfinite(se)) continue;
-    points.push_back({theta, f.moment_major_var_px2 - g.MajorVarPx2(s.d_mm), 1.0 / (se * se)});
+    points.push_back({std::fabs(s.theta_deg), theta, f.moment_major_var_px2 - g.MajorVarPx2(s.d_mm),
+                      1.0 / (se * se)});
   }
   return points;
 }
 
-// The calibrated angles with kMinTiltKnotFrames frames or more that have a blob fit.
-std::vector<double> TiltKnots(const std::vector<CalibrationSample>& samples) {
+// The calibrated angles with kMinTiltKnotFrames points or more.
+std::vector<double> TiltKnots(const std::vector<TiltPoint>& points) {
   std::map<double, int> counts;
-  for (const CalibrationSample& s : samples) {
-    if (std::isfinite(FrameDiscThetaDeg(s.measurement))) ++counts[std::fabs(s.theta_deg)];
-  }
+  for (const TiltPoint& p : points) ++counts[p.calibrated_deg];
   std::vector<double> knots;
   for (const auto& [theta, n] : counts) {
     if (n >= kMinTiltKnotFrames) knots.push_back(theta);
@@ -75,10 +76,12 @@ std::vector<double> TiltKnots(const std::vector<CalibrationSample>& samples) {
 bool SolveTilt(const std::vector<double>& knots, const std::vector<TiltPoint>& points,
                std::vector<double>* values) {
   const int n = static_cast<int>(knots.size());
+  std::vector<HatWeights> hats;
+  hats.reserve(points.size());
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
   for (const TiltPoint& p : points) {
-    const HatWeights h = HatAt(knots, p.theta_deg);
+    const HatWeights& h = hats.emplace_back(HatAt(knots, p.theta_deg));
     const int idx[2] = {h.lo, h.hi};
     const double w[2] = {h.w_lo, h.w_hi};
     for (int i = 0; i < 2; ++i) {
@@ -90,10 +93,10 @@ bool SolveTilt(const std::vector<double>& knots, const std::vector<TiltPoint>& p
   if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12)) return false;
   const Eigen::VectorXd t = ldlt.solve(b);
   double chi2 = 0.0;
-  for (const TiltPoint& p : points) {
-    const HatWeights h = HatAt(knots, p.theta_deg);
-    const double r = p.residual_px2 - h.w_lo * t(h.lo) - h.w_hi * t(h.hi);
-    chi2 += p.weight * r * r;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const HatWeights& h = hats[i];
+    const double r = points[i].residual_px2 - h.w_lo * t(h.lo) - h.w_hi * t(h.hi);
+    chi2 += points[i].weight * r * r;
   }
   const double dof = static_cast<double>(points.size()) - n;
   const double scale = dof > 0.0 ? std::max(1.0, chi2 / dof) : 1.0;  // a misfit widens the se
@@ -114,7 +117,7 @@ double FrameDiscThetaDeg(const Features& f) {
   const double major = f.moment_major_var_px2 - f.size_blur_var_px2;
   const double minor = f.moment_minor_var_px2 - f.size_blur_var_px2;
   if (!(major > 0.0)) return kNaN;
-  return std::acos(std::clamp(std::sqrt(std::max(0.0, minor) / major), 0.0, 1.0)) * 180.0 / kPi;
+  return Theta0FromAxes(std::sqrt(std::max(0.0, minor)), std::sqrt(major));
 }
 
 double GeometricModel::TiltVarPx2(double theta_deg) const {
@@ -130,10 +133,11 @@ double GeometricModel::FrameMajorVarPx2(const Features& f) const {
 std::string FitTiltTerm(const std::vector<CalibrationSample>& samples, GeometricModel* g) {
   g->tilt_theta_deg.clear();
   g->tilt_var_px2.clear();
-  const std::vector<double> knots = TiltKnots(samples);
+  const std::vector<TiltPoint> points = TiltPoints(samples, *g);
+  const std::vector<double> knots = TiltKnots(points);
   if (static_cast<int>(knots.size()) < kMinTiltKnots) return "";
   std::vector<double> values;
-  if (!SolveTilt(knots, TiltPoints(samples, *g), &values)) return "";
+  if (!SolveTilt(knots, points, &values)) return "";
   const auto largest = std::max_element(
       values.begin(), values.end(), [](double x, double y) { return std::fabs(x) < std::fabs(y); });
   if (*largest == 0.0) return "";

@@ -2,9 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <filesystem>
-#include <map>
 #include <ostream>
 #include <set>
 #include <sstream>
@@ -391,12 +389,14 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
 // estimate will (one frame's rule leaves a round blob's noise in its major axis and shrinks a
 // 5 deg blob's more).
 void PoolBrackets(const RecordingReader& reader, FeatureMap* features) {
-  std::map<std::int64_t, std::vector<Features*>> brackets;
-  for (const FrameRecord& row : reader.rows()) {
-    const auto f = features->find(row.index);
-    if (f != features->end()) brackets[row.bracket_id].push_back(&f->second);
+  for (const RecordedBracket& bracket : reader.Brackets()) {
+    std::vector<Features*> frames;
+    for (const FrameRecord& row : bracket.frames) {
+      const auto f = features->find(row.index);
+      if (f != features->end()) frames.push_back(&f->second);
+    }
+    PoolRoundBlobRule(frames);
   }
-  for (auto& [id, frames] : brackets) PoolRoundBlobRule(frames);
 }
 
 // The second pass of a calibration whose estimates use the blob fit: every frame's size from the
