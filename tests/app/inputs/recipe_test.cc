@@ -126,6 +126,30 @@ TEST(RecipeTest, ConsistencyBracketTakesTheTable3ExposuresEachRepetition) {
   EXPECT_EQ(recipe.after, AfterRecording::kEstimate);
 }
 
+TEST(RecipeTest, Table3ThriceIsTable3sPosesEachBracketedThreeTimesWithoutMoving) {
+  const Recipe recipe = Shipped("table3-calibration-x3.yaml");
+  const Recipe table3 = Shipped("table3-calibration.yaml");
+  EXPECT_EQ(recipe.after, AfterRecording::kFit);
+  EXPECT_EQ(recipe.rig.name, table3.rig.name);
+  const Plan plan = PlanRecipe(recipe), once = PlanRecipe(table3);
+  EXPECT_EQ(plan.summary.pose_count, 3 * once.summary.pose_count);
+  EXPECT_EQ(plan.summary.frame_count, 960);
+  EXPECT_EQ(plan.summary.difference_count, 768);
+  EXPECT_EQ(plan.summary.moves, once.summary.moves);  // the repeats never move the station
+  EXPECT_EQ(recipe.sweep.bracket.t_meas_ms, table3.sweep.bracket.t_meas_ms);
+  EXPECT_EQ(recipe.sweep.bracket.t_ref_ms, table3.sweep.bracket.t_ref_ms);
+  std::map<std::vector<double>, int> brackets;
+  for (const Pose& p : plan.poses) ++brackets[{p.slide_mm, p.theta_deg, p.bias_ma}];
+  std::set<std::vector<double>> grid;
+  for (const Pose& p : once.poses) grid.insert({p.slide_mm, p.theta_deg, p.bias_ma});
+  EXPECT_EQ(brackets.size(), grid.size());
+  for (const auto& [pose, count] : brackets) {
+    EXPECT_EQ(count, 3);
+    EXPECT_TRUE(grid.count(pose)) << pose[0] << " mm, " << pose[1] << " deg, " << pose[2] << " mA";
+  }
+  ExpectWithinLimits(recipe, plan);
+}
+
 TEST(RecipeTest, SmokeCalibrationIsSmall) {
   const Recipe recipe = Shipped("smoke-calibration.yaml");
   const Plan plan = PlanRecipe(recipe);
