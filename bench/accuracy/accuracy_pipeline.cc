@@ -13,6 +13,7 @@
 
 #include "estimator/estimate_baselines.h"
 #include "estimator/health.h"
+#include "estimator/round_blob.h"
 
 namespace irdist::accuracy {
 namespace {
@@ -214,15 +215,17 @@ void RecoverResponse(const sim::RigPhysics& physics, std::uint64_t seed, Pipelin
   pl->features.response_scope = ResponseScope::kAllPixels;
 }
 
-// As `irdist calibrate` (app/processing/recording_fit.cc): the split, then the models fitted again on the
-// blob fit's own sizes of the calibration frames.
+// As `irdist calibrate` (app/processing/recording_fit.cc): the split, then the models fitted again
+// on the blob fit's own sizes of the calibration frames, each bracket's frames pooled under the
+// round-blob rule as the estimate pools them.
 void RefitWithBlobFit(const sim::RigPhysics& physics, std::uint64_t seed, Pipeline* pl) {
   CalibrateBlurSplit(physics, seed, pl);
   SweepRenderer again(physics, seed);
   const BlurCalibration blur = pl->model.blur_calibration;
-  pl->model = Fit(Samples(again.Run(CalibrationPoses(), CalibrationTMs(), pl->features, nullptr,
-                                    &pl->model)),
-                  pl->features, pl->fit);
+  std::vector<Bracket> brackets =
+      again.Run(CalibrationPoses(), CalibrationTMs(), pl->features, nullptr, &pl->model);
+  for (Bracket& b : brackets) PoolBracket(&b.reference, &b.measurements);
+  pl->model = Fit(Samples(brackets), pl->features, pl->fit);
   pl->model.blur_calibration = blur;
 }
 
