@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "base/pi.h"
@@ -20,6 +21,10 @@ double Theta0FromAxes(double minor, double major) {
   return std::acos(ratio) * 180.0 / kPi;
 }
 
+double Theta0FromVariances(double minor_var_px2, double major_var_px2) {
+  if (!(major_var_px2 > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  return Theta0FromAxes(std::sqrt(std::max(0.0, minor_var_px2)), std::sqrt(major_var_px2));
+}
 
 namespace {
 

@@ -17,6 +17,10 @@ struct DiscMoments {
 // theta0 of an ellipse: acos(minor / major) in degrees (0 for a degenerate one).
 double Theta0FromAxes(double minor, double major);
 
+// theta0 (deg) of a disc from its variances along its axes (px^2, the blur removed): acos of the
+// axes' ratio, a negative minor variance read as 0; NaN unless the major variance is > 0.
+double Theta0FromVariances(double minor_var_px2, double major_var_px2);
+
 // Fits the disc model to the pixels of `rect` (normalised gray levels); start from the moment
 // ellipse (centre, covariance) or the half-maximum contour, with blur s0. Sets the fitted
 // ellipse, its blur sigma (px) and the rms residual; returns false when the fit fails.

@@ -114,10 +114,8 @@ bool SolveTilt(const std::vector<double>& knots, const std::vector<TiltPoint>& p
 
 double FrameDiscThetaDeg(const Features& f) {
   if (!std::isfinite(f.size_blur_var_px2)) return kNaN;
-  const double major = f.moment_major_var_px2 - f.size_blur_var_px2;
-  const double minor = f.moment_minor_var_px2 - f.size_blur_var_px2;
-  if (!(major > 0.0)) return kNaN;
-  return Theta0FromAxes(std::sqrt(std::max(0.0, minor)), std::sqrt(major));
+  return Theta0FromVariances(f.moment_minor_var_px2 - f.size_blur_var_px2,
+                             f.moment_major_var_px2 - f.size_blur_var_px2);
 }
 
 double GeometricModel::TiltVarPx2(double theta_deg) const {

@@ -6,6 +6,7 @@
 
 #include "base/check.h"
 #include "base/pi.h"
+#include "estimator/disc_fit.h"
 
 namespace irdist {
 namespace {
@@ -29,11 +30,7 @@ double ThetaFromVariances(const CalibrationModel& model, double major_var_px2,
   const double beta = std::isfinite(size_blur_var_px2) ? size_blur_var_px2
                       : std::isfinite(d_geo_mm)        ? model.geometric.BlurVarPx2(d_geo_mm)
                                                        : model.geometric.beta_px2;
-  const double major = major_var_px2 - beta;
-  const double minor = minor_var_px2 - beta;
-  if (!(major > 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  const double ratio = std::clamp(std::sqrt(std::max(0.0, minor) / major), 0.0, 1.0);
-  return std::acos(ratio) / kRad;
+  return Theta0FromVariances(minor_var_px2 - beta, major_var_px2 - beta);
 }
 
 // theta0 of one frame under the chosen source.
