@@ -114,6 +114,14 @@ inline constexpr Bound kNoiseExponent{"noise exponent", "", -10.0, 10.0, false,
                                       "noise grows with a power of the distance: shot noise "
                                       "d^1, a dark floor d^2 or d^4"};
 inline constexpr Bound kShare{"share", "", 0.0, 1.0, false, "a share of a whole"};
+// The optics' line spread's excess kurtosis (the blob fit's Gram-Charlier edge).
+inline constexpr Bound kOpticsExcess{"excess kurtosis",
+                                     "",
+                                     -3.0,
+                                     4.0,
+                                     false,
+                                     "a defocus disc's edge reads -2, an Airy pattern's 4; "
+                                     "beyond, the edge's line spread goes negative"};
 // The fit's fitness (estimator/fitness.h): chi-squares and ratios of variances in noise units.
 inline constexpr Bound kChiSquare{"chi-square", "", 0.0, 1.0e15, false,
                                   "a sum of squared residuals in noise units is >= 0; 1e15 is "

@@ -390,8 +390,8 @@ bool StartWindow(const cv::Mat& image, int bit_depth, const Features& features,
       !(gauss_var > kMinOpticsVarPx2) || !(crosstalk.var_px2 >= 0.0)) {
     return false;
   }
-  s->crosstalk =
-      Crosstalk(std::min(crosstalk.var_px2, gauss_var - kMinOpticsVarPx2), crosstalk.lattice_share);
+  s->crosstalk = Crosstalk(std::min(crosstalk.var_px2, gauss_var - kMinOpticsVarPx2),
+                           crosstalk.lattice_share, crosstalk.optics_excess);
   s->pixels = BlobPixels(image, bit_depth, features, blur_var_px2, &s->window);
   if (!StartFromMoments(features, blur_var_px2, s->window.tl(), s->v)) return false;
   const double reach = 2.0 * std::sqrt(features.moment_major_var_px2) + 3.0 * std::sqrt(gauss_var);
@@ -404,7 +404,8 @@ bool StartWindow(const cv::Mat& image, int bit_depth, const Features& features,
 // The window's model at `blur_var_px2`, weighted by the read noise.
 WindowResiduals ModelOf(const WindowStart& s, double blur_var_px2, const Crosstalk& crosstalk,
                         const PsfAnisotropy& psf) {
-  PixelResponse response = MakeResponse(blur_var_px2, crosstalk.var_px2, crosstalk.lattice_share);
+  PixelResponse response = MakeResponse(blur_var_px2, crosstalk.var_px2, crosstalk.lattice_share,
+                                        crosstalk.optics_excess);
   response.aniso_c = psf.c_px2;
   response.aniso_s = psf.s_px2;
   WindowResiduals model(s.pixels, s.window.width, s.window.height, std::move(response));
@@ -526,7 +527,9 @@ BlobSplitProfile ProfileBlobSplit(const cv::Mat& image, int bit_depth, const Fea
   const double crosstalk_step = room > blur_step ? blur_step : -blur_step;
   const WindowResiduals blurrier = ModelOf(s, blur_var_px2 + blur_step, s.crosstalk, round);
   const WindowResiduals spread = ModelOf(
-      s, blur_var_px2, {s.crosstalk.var_px2 + crosstalk_step, s.crosstalk.lattice_share}, round);
+      s, blur_var_px2,
+      {s.crosstalk.var_px2 + crosstalk_step, s.crosstalk.lattice_share, s.crosstalk.optics_excess},
+      round);
   Eigen::Matrix<double, kParams + 2, kParams + 2> jtj;
   Eigen::Matrix<double, kParams + 2, 1> jtr;
   model.ExtendedSystem<2>(s.v, {&blurrier, &spread}, {blur_step, crosstalk_step}, &jtj, &jtr);
@@ -575,9 +578,7 @@ bool RefineWithBlobFit(const cv::Mat& image, int bit_depth, const CalibrationMod
   RemovePsfAnisotropy(b.psf_aniso_c_px2, b.psf_aniso_s_px2, features);
   const double blur = BlobFitBlurVarPx2(model, *features);
   if (!(blur > 0.0)) return false;
-  const BlobFitResult fit =
-      FitBlob(image, bit_depth, *features, blur, {b.crosstalk_var_px2, b.crosstalk_lattice_share},
-              PsfOf(b));
+  const BlobFitResult fit = FitBlob(image, bit_depth, *features, blur, CrosstalkOf(b), PsfOf(b));
   if (!fit.ok) return false;
   features->moment_major_var_px2 = fit.major_var_px2 + blur;
   features->moment_minor_var_px2 = fit.minor_var_px2 + blur;

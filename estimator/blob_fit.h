@@ -21,10 +21,10 @@
 // are. The distance for b(u) is the moments' geometric distance (b(u) changes slowly with d).
 
 #include <limits>
+#include <opencv2/core.hpp>
 #include <vector>
 
-#include <opencv2/core.hpp>
-
+#include "base/bounds.h"
 #include "estimator/blur_model.h"  // kPixelAreaVarPx2, kMinOpticsVarPx2
 #include "estimator/features.h"
 #include "estimator/fit.h"
@@ -35,11 +35,18 @@ namespace irdist {
 // The blur after the pixels sample the image (inter-pixel crosstalk): its variance (px^2 on the
 // grid) and the share of it spread as a lattice random walk (charge hopping to neighbours,
 // e^-t I_n(t)); the rest as a sampled Gaussian (a blur of the sampled image). Implicit from a
-// variance: a sampled Gaussian.
+// variance: a sampled Gaussian. With it, the one shape parameter of the blur before the pixels:
+// the optics' line spread's excess kurtosis as a Gram-Charlier term (blob_pixel_model.h; 0 a
+// Gaussian; a defocus disc's flat top < 0, an Airy pattern's or a halo's peaked core and
+// tails > 0), fitted with the split (FitBlurSplit).
+constexpr double kMinOpticsExcess = bounds::kOpticsExcess.min;  // Gram-Charlier's reach
+constexpr double kMaxOpticsExcess = bounds::kOpticsExcess.max;
 struct Crosstalk {
-  Crosstalk(double var = 0.0, double share = 0.0) : var_px2(var), lattice_share(share) {}  // NOLINT
+  Crosstalk(double var = 0.0, double share = 0.0, double excess = 0.0)  // NOLINT
+      : var_px2(var), lattice_share(share), optics_excess(excess) {}
   double var_px2;
   double lattice_share;
+  double optics_excess;
 };
 
 struct BlobFitResult {
@@ -170,12 +177,17 @@ struct CrosstalkFrame {
 // and either split serves. The kernel's shape is fitted too (Crosstalk::lattice_share): with a
 // sampled Gaussian alone a lattice walk of variance 0.64 read 0.25. And the blob fit's own total
 // blur, as a line in 1000 / d from the frames' given blur (each frame's best blur at the split;
-// CrosstalkFrame::d_mm). Coordinate descent, kSplitRounds rounds. No crosstalk when no frame is
-// usable or the optics alone fit best. About 500 one-pass blob fits per frame (6 s for 32
-// frames): give it a few dozen frames across the calibrated distances.
+// CrosstalkFrame::d_mm). And the optics' edge beyond a Gaussian's (Crosstalk::optics_excess),
+// where the frames ask for it materially: the first two rounds run from a Gaussian edge and
+// from the optics' own edge fitted first, the cheaper in cost is kept, and a non-Gaussian edge
+// is refined in each later round. Coordinate descent, kSplitRounds rounds. No crosstalk when no
+// frame is usable or the optics alone fit best. About 500 one-pass blob fits per frame (6 s
+// for 32 frames; a non-Gaussian edge about twice that): give it a few dozen frames across the
+// calibrated distances.
 struct BlurSplit {
   double crosstalk_var_px2 = 0.0;
   double crosstalk_lattice_share = 0.0;  // the kernel's shape (Crosstalk)
+  double optics_excess = 0.0;            // the optics' line spread's excess kurtosis (Crosstalk)
   // The total blur's correction (px^2): blur_offset_px2 + blur_offset_u_px2 x 1000 / d_mm added
   // to the frames' given blur, fitted with the split: the blob fit's axis ratio needs the blur to
   // a few 0.001 px^2 where the optics are sharp (0.03 px^2 off swings theta by 0.1-0.3 deg with
@@ -192,5 +204,13 @@ struct BlurSplit {
   }
 };
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);
+
+// The response after the blur a model's blur calibration or a split gives the blob fit.
+inline Crosstalk CrosstalkOf(const BlurCalibration& b) {
+  return {b.crosstalk_var_px2, b.crosstalk_lattice_share, b.optics_excess};
+}
+inline Crosstalk CrosstalkOf(const BlurSplit& s) {
+  return {s.crosstalk_var_px2, s.crosstalk_lattice_share, s.optics_excess};
+}
 
 }  // namespace irdist

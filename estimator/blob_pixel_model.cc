@@ -41,37 +41,42 @@ void DiscDerivatives(const double* v, const EdgeGeometry& e, double slope, doubl
   }
 }
 
-
-
 // Psi' = Phi and Lambda' = Psi: the first and second integrals of the normal CDF, at one x (Phi
 // and phi from the table of estimator/normal_table.h: through erfc and exp they were half of the
-// fit's time).
+// fit's time). With a Gram-Charlier term k (the edge Phi - k phi He3, its line spread
+// phi (1 + k He4): a line spread of excess kurtosis 24 k), its integrals k phi He2 and -k x phi
+// (d/dx (phi He_n) = -phi He_n+1) join them.
 struct EdgeIntegrals {
-  explicit EdgeIntegrals(double x) {
+  EdgeIntegrals(double x, double k) {
     const NormalValues normal = NormalAt(x);
     cdf = normal.cdf;
     const double pdf = normal.pdf;
     psi = x * cdf + pdf;
     lambda = 0.5 * ((x * x + 1.0) * cdf + x * pdf);
+    if (k == 0.0) return;
+    const double x2 = x * x;
+    cdf -= k * pdf * x * (x2 - 3.0);
+    psi += k * pdf * (x2 - 1.0);
+    lambda -= k * x * pdf;
   }
   double cdf, psi, lambda;
 };
 
-// The mean of Phi((t + U) / sd) over a square of `side` px, U the square's projection on the
-// edge's normal (nx, ny): the sum of two uniforms of widths side |nx| and side |ny|, in closed form
-// through Lambda (Psi when the edge runs along a pixel axis); its derivative along t into *slope.
-double SquareEdge(double t, double nx, double ny, double side, double sd, double* slope) {
+// The mean of Phi((t + U) / sd) (with the Gram-Charlier term k) over a square of `side` px, U the
+// square's projection on the edge's normal (nx, ny): the sum of two uniforms of widths side |nx|
+// and side |ny|, in closed form through Lambda (Psi when the edge runs along a pixel axis); its
+// derivative along t into *slope.
+double SquareEdge(double t, double nx, double ny, double side, double sd, double k, double* slope) {
   const double a = side * std::max(std::fabs(nx), std::fabs(ny));
   const double b = side * std::min(std::fabs(nx), std::fabs(ny));
   if (b < 1e-4 * side) {  // one uniform of width a (~side)
-    const EdgeIntegrals hi((t + 0.5 * a) / sd), lo((t - 0.5 * a) / sd);
+    const EdgeIntegrals hi((t + 0.5 * a) / sd, k), lo((t - 0.5 * a) / sd, k);
     *slope = (hi.cdf - lo.cdf) / a;
     return sd / a * (hi.psi - lo.psi);
   }
-  const EdgeIntegrals e[4] = {EdgeIntegrals((t + 0.5 * (a + b)) / sd),
-                              EdgeIntegrals((t + 0.5 * (a - b)) / sd),
-                              EdgeIntegrals((t - 0.5 * (a - b)) / sd),
-                              EdgeIntegrals((t - 0.5 * (a + b)) / sd)};
+  const EdgeIntegrals e[4] = {
+      EdgeIntegrals((t + 0.5 * (a + b)) / sd, k), EdgeIntegrals((t + 0.5 * (a - b)) / sd, k),
+      EdgeIntegrals((t - 0.5 * (a - b)) / sd, k), EdgeIntegrals((t - 0.5 * (a + b)) / sd, k)};
   const double c = sd / (a * b);
   *slope = c * (e[0].psi - e[1].psi - e[2].psi + e[3].psi);
   return c * sd * (e[0].lambda - e[1].lambda - e[2].lambda + e[3].lambda);
@@ -87,7 +92,7 @@ struct BlurredEdge {
   double value = 0.0, slope = 0.0, shift = 0.0;
 };
 BlurredEdge BlurEdge(double dist, double kappa_edge, double nx, double ny, double side,
-                     double optics_var, double aniso_n) {
+                     double optics_var, double aniso_n, double gc_k) {
   const double normal2 = std::max(optics_var + aniso_n, kMinOpticsVarPx2);
   const double tangent2 = std::max(optics_var - aniso_n, kMinOpticsVarPx2);
   const double side2 = side * side;
@@ -99,7 +104,7 @@ BlurredEdge BlurEdge(double dist, double kappa_edge, double nx, double ny, doubl
   const double var_y2 = 2.0 * tangent2 * tangent2 + tangent2 * side2 / 3.0 +
                         side2 * side2 * (1.0 / 80.0 - 1.0 / 144.0);
   const double sd = std::sqrt(normal2 + 0.25 * kappa_edge * kappa_edge * var_y2);
-  e.value = SquareEdge(dist - e.shift * kappa_edge, nx, ny, side, sd, &e.slope);
+  e.value = SquareEdge(dist - e.shift * kappa_edge, nx, ny, side, sd, gc_k, &e.slope);
   return e;
 }
 
@@ -121,9 +126,12 @@ void AddNormalTurn(const double* v, double dx, double dy, double nx, double ny, 
 }  // namespace
 
 // The response for a blur of `blur_var_px2` per axis (pixel area included) of which
-// `crosstalk_var_px2` comes after the sampling: the optics' sd and the crosstalk's kernel.
-PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double lattice_share) {
+// `crosstalk_var_px2` comes after the sampling: the optics' sd, their edge's Gram-Charlier term
+// and the crosstalk's kernel.
+PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double lattice_share,
+                           double optics_excess) {
   PixelResponse r;
+  r.gc_k = optics_excess / 24.0;
   r.optics_sd =
       std::sqrt(std::max(blur_var_px2 - kPixelAreaVarPx2 - crosstalk_var_px2, kMinOpticsVarPx2));
   r.kernel = {1.0};
@@ -158,12 +166,14 @@ double SideSquareMean(const double* v, double x, double y, double side, const Pi
   const double kappa_edge = kappa * rq;
   const double nx = gx / n, ny = gy / n;
   const double aniso_n = r.aniso_c * (nx * nx - ny * ny) + 2.0 * r.aniso_s * nx * ny;
-  const BlurredEdge e = BlurEdge(dist, kappa_edge, nx, ny, side, optics_var, aniso_n);
+  const BlurredEdge e = BlurEdge(dist, kappa_edge, nx, ny, side, optics_var, aniso_n, r.gc_k);
   DiscDerivatives(v, {dx, dy, gx, gy, pgx, pgy, rq, n, dist, kappa}, e.slope, e.shift, d);
   if (aniso > 0.0) {
     const double h = 1e-4 * (optics_var + aniso);
-    const double up = BlurEdge(dist, kappa_edge, nx, ny, side, optics_var, aniso_n + h).value;
-    const double down = BlurEdge(dist, kappa_edge, nx, ny, side, optics_var, aniso_n - h).value;
+    const double up =
+        BlurEdge(dist, kappa_edge, nx, ny, side, optics_var, aniso_n + h, r.gc_k).value;
+    const double down =
+        BlurEdge(dist, kappa_edge, nx, ny, side, optics_var, aniso_n - h, r.gc_k).value;
     AddNormalTurn(v, dx, dy, nx, ny, n, r, (up - down) / (2.0 * h), d);
   }
   return e.value;

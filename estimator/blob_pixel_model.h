@@ -21,13 +21,18 @@ struct PixelResponse {
   // The optics' PSF anisotropy (px^2, psf_anisotropy.h): an edge of normal n is blurred by the
   // variance n^T S n = optics_sd^2 + aniso_c (nx^2 - ny^2) + 2 aniso_s nx ny.
   double aniso_c = 0.0, aniso_s = 0.0;
+  // The optics' edge beyond a Gaussian's: the Gram-Charlier term of its line spread's excess
+  // kurtosis, gc_k = excess / 24 (the edge Phi(x) - gc_k phi(x) He3(x)); 0 = a Gaussian.
+  double gc_k = 0.0;
   std::vector<double> kernel;   // crosstalk, 1-D (applied along x, then y), odd, sums to 1
   int reach = 0;                // the kernel's half width
 };
 
 // The response for a blur of `blur_var_px2` per axis (pixel area included) of which
-// `crosstalk_var_px2` comes after the sampling: the optics' sd and the crosstalk's kernel.
-PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double lattice_share);
+// `crosstalk_var_px2` comes after the sampling: the optics' sd and the crosstalk's kernel; the
+// optics' line spread of excess kurtosis `optics_excess` (0: a Gaussian).
+PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double lattice_share,
+                           double optics_excess = 0.0);
 
 // The disc's mean over the pixel at (x, y) before crosstalk, and its derivatives into d[5]: the
 // optical edge integrated over the pixel's square as a straight edge (SquareEdge) at the signed

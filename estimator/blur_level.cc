@@ -37,7 +37,7 @@ bool FitOffsetLine(const std::vector<OffsetPoint>& points, double* o0, double* o
 
 bool BlurLevelLine::Add(const CrosstalkFrame& frame) {
   if (!frame.features.Usable() || !(frame.blur_var_px2 > kPixelAreaVarPx2)) return false;
-  const Crosstalk crosstalk(split_.crosstalk_var_px2, split_.crosstalk_lattice_share);
+  const Crosstalk crosstalk = CrosstalkOf(split_);
   const double start = split_.FitBlurAt(frame);
   const double floor = kPixelAreaVarPx2 + kMinOpticsVarPx2 + crosstalk.var_px2;
   const double low = std::max(start - kSearchPx2, floor + 1e-3);
@@ -81,8 +81,7 @@ bool BlurSplitRefiner::Add(const CrosstalkFrame& frame) {
   const double u = frame.InverseMetres();
   const double blur = split_.FitBlurAt(frame);
   const BlobSplitProfile p =
-      ProfileBlobSplit(frame.image, frame.bit_depth, frame.features, blur,
-                       {split_.crosstalk_var_px2, split_.crosstalk_lattice_share});
+      ProfileBlobSplit(frame.image, frame.bit_depth, frame.features, blur, CrosstalkOf(split_));
   if (!p.ok) return false;
   // The frame's (blur, crosstalk) = (given + o0 + o1 u, c): its profile carried to (o0, o1, c).
   const double a[2][3] = {{1.0, u, 0.0}, {0.0, 0.0, 1.0}};

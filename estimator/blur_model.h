@@ -31,6 +31,9 @@ struct BlurCalibration {
   // The crosstalk kernel's shape: the share of its variance spread as a lattice random walk, the
   // rest as a sampled Gaussian (blob_fit.h Crosstalk). 0 in files before it.
   double crosstalk_lattice_share = 0.0;
+  // The optics' line spread's excess kurtosis (blob_fit.h Crosstalk), fitted with the split: the
+  // blob fit's edge beyond a Gaussian's. 0 in files before it (a Gaussian).
+  double optics_excess = 0.0;
   // The blob fit's own correction to the cumulants' blur, fit_offset_px2 + fit_offset_u_px2 x
   // 1000 / d_mm (px^2): the total blur that fits the calibration frames best with the split
   // above (blob_fit.h FitBlurSplit). The cumulants of a sharp edge read a few 0.01 px^2 off, and

@@ -31,13 +31,15 @@ namespace {
 
 // The frames' summed first-pass cost with `crosstalk`; +inf when a frame's fit fails (no split
 // may win by losing frames).
-double SplitCost(const std::vector<const CrosstalkFrame*>& frames, const Crosstalk& crosstalk) {
+double SplitCost(const std::vector<const CrosstalkFrame*>& frames, const Crosstalk& crosstalk,
+                 int* pixels = nullptr) {
   double sum = 0.0;
   for (const CrosstalkFrame* f : frames) {
     const BlobFitResult fit =
         FitBlobPasses(f->image, f->bit_depth, f->features, f->blur_var_px2, crosstalk, 1);
     if (!fit.ok) return std::numeric_limits<double>::infinity();
     sum += fit.read_weighted_chi2 * fit.pixels;
+    if (pixels) *pixels += fit.pixels;
   }
   return sum;
 }
@@ -48,6 +50,26 @@ double Minimise(F f, double low, double high) {
   if (!(high > low)) return low;
   boost::uintmax_t iterations = 30;
   return boost::math::tools::brent_find_minima(f, low, high, 9, iterations).first;
+}
+
+// The optics' excess kurtosis at the split's variance and shape: Brent's over its range, kept
+// where it lowers the frames' cost by more than kExcessEvidence of its per-pixel scale (the
+// deviance of one parameter at 95%) and by kExcessMaterial of the cost itself, else a Gaussian's
+// 0. A lens the Gaussian edge fits keeps it: behind optics sharper than the pixel the edge's
+// shape has no say (the cost is flat in it), and where a lattice walk's tails or the blur's
+// level could stand in for it, noise-free frames would otherwise let it wander.
+constexpr double kExcessEvidence = 3.84, kExcessMaterial = 0.01;
+double FitOpticsExcess(const std::vector<const CrosstalkFrame*>& frames, double var, double share) {
+  int pixels = 0;
+  const double gaussian = SplitCost(frames, {var, share, 0.0}, &pixels);
+  const double excess = Minimise(
+      [&](double x) {
+        return SplitCost(frames, {var, share, x});
+      },
+      kMinOpticsExcess, kMaxOpticsExcess);
+  const double gain = gaussian - SplitCost(frames, {var, share, excess});
+  const double evidence = kExcessEvidence * gaussian / std::max(pixels, 1);
+  return gain > std::max(evidence, kExcessMaterial * gaussian) ? excess : 0.0;
 }
 
 }  // namespace
@@ -81,6 +103,51 @@ void FitBlurOffset(const std::vector<const CrosstalkFrame*>& given,
 
 }  // namespace
 
+namespace {
+
+// One round's searches at the frames' blur: the optics' edge where it is not a Gaussian's (from
+// the third round on, once the kernel's shape is found: a lattice walk's tails and the edge
+// trade), the crosstalk's variance at its kernel's shape and that edge, then the shape at the
+// variance (the first two rounds).
+void SplitRound(const std::vector<const CrosstalkFrame*>& now, double max_var, int round,
+                Crosstalk* best) {
+  if (round >= 2 && best->optics_excess != 0.0)
+    best->optics_excess = FitOpticsExcess(now, best->var_px2, best->lattice_share);
+  const double share = best->lattice_share, excess = best->optics_excess;
+  best->var_px2 = Minimise(
+      [&](double c) {
+        return SplitCost(now, {c, share, excess});
+      },
+      0.0, max_var);
+  const double var = best->var_px2;
+  if (round < 2) {
+    best->lattice_share = Minimise(
+        [&](double l) {
+          return SplitCost(now, {var, l, excess});
+        },
+        0.0, 1.0);
+  }
+}
+
+// The first two rounds (the kernel's shape found) from a Gaussian optics' edge, or from the
+// optics' own edge fitted first with all of the blur theirs, whichever the frames' cost prefers:
+// an Airy pattern's tails otherwise send the variance down a lattice walk's valley (1.4 px^2 for
+// none), where the optics are at their floor and their edge has no say. A lens that starts
+// Gaussian stays Gaussian (the later rounds refine a non-Gaussian edge only): on noise-free
+// frames the edge's shape would otherwise stand in for the blur's level or a lattice walk's
+// tails wherever that lowers the cost by a hair.
+Crosstalk FirstRounds(const std::vector<const CrosstalkFrame*>& now, double max_var) {
+  Crosstalk gaussian;
+  for (const int round : {0, 1}) SplitRound(now, max_var, round, &gaussian);
+  Crosstalk shaped;
+  shaped.optics_excess = FitOpticsExcess(now, 0.0, 0.0);
+  if (shaped.optics_excess == 0.0) return gaussian;
+  for (const int round : {0, 1}) SplitRound(now, max_var, round, &shaped);
+  return SplitCost(now, shaped) < SplitCost(now, gaussian) ? shaped : gaussian;
+}
+
+}  // namespace
+
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   BlurSplit split;
   std::vector<const CrosstalkFrame*> usable;
@@ -89,10 +156,11 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   }
   split.frames = static_cast<int>(usable.size());
   if (usable.empty()) return split;
-  // Coordinate descent: the crosstalk's variance at its kernel's shape (a sampled Gaussian first),
-  // then the shape at the variance (two rounds); from the second round on, each frame's own best
-  // blur at the split gives the offset's line, and the next round fits the variance at it (the
-  // split and the blur trade along a valley: kSplitRounds). The optics keep kMinOpticsVarPx2.
+  // Coordinate descent (SplitRound): the crosstalk's variance at its kernel's shape (a sampled
+  // Gaussian first) and the optics' edge, then the shape at the variance (two rounds); from the
+  // second round on, the optics' edge at the split, and each frame's own best blur at the split
+  // gives the offset's line, and the next round fits the variance at it (the split and the blur
+  // trade along a valley: kSplitRounds). The optics keep kMinOpticsVarPx2.
   std::vector<CrosstalkFrame> shifted;
   for (const CrosstalkFrame* f : usable) shifted.push_back(*f);
   std::vector<const CrosstalkFrame*> now;
@@ -106,19 +174,17 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
       min_blur = std::min(min_blur, shifted[i].blur_var_px2);
     }
     const double max_var = std::max(min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2, 0.0);
-    const double share = best.lattice_share;
-    best.var_px2 =
-        Minimise([&](double c) { return SplitCost(now, {c, share}); }, 0.0, max_var);
-    const double var = best.var_px2;
-    if (round < 2) {
-      best.lattice_share =
-          Minimise([&](double l) { return SplitCost(now, {var, l}); }, 0.0, 1.0);
+    if (round == 0) {
+      best = FirstRounds(now, max_var);  // rounds 0 and 1
+    } else if (round >= 2) {
+      SplitRound(now, max_var, round, &best);
     }
     if (round >= 1 && round + 1 < kSplitRounds) FitBlurOffset(usable, shifted, best, &o0, &o1);
   }
   if (SplitCost(now, best) <= SplitCost(now, {})) {
     split.crosstalk_var_px2 = best.var_px2;
     split.crosstalk_lattice_share = best.lattice_share;
+    split.optics_excess = best.optics_excess;
   } else {
     best = {};
   }

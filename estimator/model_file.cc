@@ -131,6 +131,7 @@ void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
     EmitDouble(out, "crosstalk_var_px2", b.crosstalk_var_px2);
     EmitDouble(out, "crosstalk_lattice_share", b.crosstalk_lattice_share);
   }
+  if (b.optics_excess != 0.0) EmitDouble(out, "optics_excess", b.optics_excess);
   if (b.fit_offset_px2 != 0.0 || b.fit_offset_u_px2 != 0.0) {
     EmitDouble(out, "fit_offset_px2", b.fit_offset_px2);
     EmitDouble(out, "fit_offset_u_px2", b.fit_offset_u_px2);
@@ -172,6 +173,10 @@ void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
       rd.Fail(node["crosstalk_lattice_share"], "blur_calibration.crosstalk_lattice_share",
               "must lie within [0, 1]");
     }
+  }
+  // Optional (absent: a Gaussian optics' edge); bounded by model_file_bounds.h.
+  if (Present(node, "optics_excess")) {
+    b->optics_excess = rd.Scalar<double>(node, "blur_calibration", "optics_excess");
   }
   // Optional (absent: the cumulants' blur as it is, no slope); bounded by model_file_bounds.h.
   if (Present(node, "fit_offset_px2")) {

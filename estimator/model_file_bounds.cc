@@ -86,6 +86,7 @@ void CheckBlur(Checker* c, const BlurCalibration& b, const CalibratedRanges& r) 
   c->Value(k + "noise_at_1m_px2", b.noise_at_1m_px2, bounds::kBlurNoisePx2);
   c->Value(k + "noise_exponent", b.noise_exponent, bounds::kNoiseExponent);
   c->Value(k + "crosstalk_lattice_share", b.crosstalk_lattice_share, bounds::kShare);
+  c->Value(k + "optics_excess", b.optics_excess, bounds::kOpticsExcess);
   BlurOverRange(c, k + "blur_var_px2", r, [&b](double d) { return b.BlurVarPx2(d); },
                 "the calibrated blur c0 + c1 u + c2 u^2");
   BlurOverRange(c, k + "fit_offset_u_px2", r, [&b](double d) { return b.FitBlurVarPx2(d); },

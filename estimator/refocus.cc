@@ -45,7 +45,7 @@ bool MeasureOwnBlur(const cv::Mat& image, int bit_depth, const CalibrationModel&
   const double calibrated = out->size_blur_var_px2;
   if (!out->Usable() || !start.Usable() || !(calibrated > kPixelAreaVarPx2)) return false;
   const BlurCalibration& b = model.blur_calibration;
-  const Crosstalk crosstalk(b.crosstalk_var_px2, b.crosstalk_lattice_share);
+  const Crosstalk crosstalk = CrosstalkOf(b);
   const double floor = kPixelAreaVarPx2 + kMinOpticsVarPx2 + crosstalk.var_px2;
   const double low = std::max(kOwnBlurLowFactor * calibrated, floor + 1e-3);
   const double high = kOwnBlurHighFactor * calibrated;

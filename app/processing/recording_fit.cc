@@ -369,15 +369,17 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
   const BlurSplit split = RefineBlurSplit(first, [&](const auto& use) { refinement_frames(use); });
   model->blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
   model->blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
+  model->blur_calibration.optics_excess = split.optics_excess;
   model->blur_calibration.fit_offset_px2 = split.blur_offset_px2;
   model->blur_calibration.fit_offset_u_px2 = split.blur_offset_u_px2;
   const BlurCalibration& b = model->blur_calibration;
   const double near_mm = model->ranges.d_min_mm, far_mm = model->ranges.d_max_mm;
   out << "  blur split: " << split.crosstalk_var_px2
       << " px^2 after the pixels (crosstalk; a lattice walk's share "
-      << split.crosstalk_lattice_share << "), the rest before them (optics); the blob fit's blur "
-      << std::showpos << b.FitBlurVarPx2(near_mm) - b.BlurVarPx2(near_mm) << " px^2 at "
-      << std::noshowpos << std::lround(near_mm) << " mm, " << std::showpos
+      << split.crosstalk_lattice_share << "), the rest before them (optics; their edge's excess "
+      << "kurtosis " << split.optics_excess << "); the blob fit's blur " << std::showpos
+      << b.FitBlurVarPx2(near_mm) - b.BlurVarPx2(near_mm) << " px^2 at " << std::noshowpos
+      << std::lround(near_mm) << " mm, " << std::showpos
       << b.FitBlurVarPx2(far_mm) - b.BlurVarPx2(far_mm) << std::noshowpos << " px^2 at "
       << std::lround(far_mm) << " mm from the cumulants'; the split fitted on " << split.frames
       << " frames (" << first.crosstalk_var_px2 << " px^2), refined on "

@@ -140,11 +140,15 @@ BENCHMARK(BM_RoiFrameCold)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseManualTime()->Uni
 // crosstalk a Table 3 calibration of the virtual rig fits (Arg 1: 0.0015 px^2, its kernel spread
 // over the model's six planes each evaluation), and a sharp lens with almost all of the same blur
 // after the pixels (Arg 2: 0.48 px^2 of crosstalk, optics of 0.1 px sd, where each edge pixel's
-// square is its four half-squares, estimator/blob_pixel_model.cc); and the frame's own blur at
-// the calibrated blur (estimator/refocus.h MeasureOwnBlur: one profile, ProfileBlobBlur), which
-// measure and playback add to every refined frame.
+// square is its four half-squares, estimator/blob_pixel_model.cc), and Arg 0's optics with a
+// defocus disc's flat-topped edge (Arg 3: excess kurtosis -2, the Gram-Charlier term); and the
+// frame's own blur at the calibrated blur (estimator/refocus.h MeasureOwnBlur: one profile,
+// ProfileBlobBlur), which measure and playback add to every refined frame.
 Crosstalk RoiCrosstalk(int arg) {
-  return arg == 0 ? Crosstalk() : arg == 1 ? Crosstalk(0.0015, 0.002) : Crosstalk(0.48, 0.0);
+  return arg == 0   ? Crosstalk()
+         : arg == 1 ? Crosstalk(0.0015, 0.002)
+         : arg == 2 ? Crosstalk(0.48, 0.0)
+                    : Crosstalk(0.0, 0.0, -2.0);
 }
 
 void BM_RoiBlobFit(benchmark::State& state) {
@@ -156,7 +160,7 @@ void BM_RoiBlobFit(benchmark::State& state) {
     benchmark::DoNotOptimize(FitBlob(frame, 12, features, blur_var_px2, crosstalk));
   }
 }
-BENCHMARK(BM_RoiBlobFit)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RoiBlobFit)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMicrosecond);
 
 void BM_RoiOwnBlur(benchmark::State& state) {
   const cv::Mat frame = RoiFrame(false);
@@ -166,6 +170,7 @@ void BM_RoiOwnBlur(benchmark::State& state) {
   const Crosstalk crosstalk = RoiCrosstalk(static_cast<int>(state.range(0)));
   model.blur_calibration.crosstalk_var_px2 = crosstalk.var_px2;
   model.blur_calibration.crosstalk_lattice_share = crosstalk.lattice_share;
+  model.blur_calibration.optics_excess = crosstalk.optics_excess;
   Features refined = start;
   const BlobFitResult fit = FitBlob(frame, 12, start, blur_var_px2, crosstalk);
   refined.moment_major_var_px2 = fit.major_var_px2 + blur_var_px2;

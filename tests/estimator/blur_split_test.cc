@@ -153,7 +153,7 @@ TEST(FitBlurSplit, TheOffsetIsEachFramesOwnBestBlurAtTheSplitKept) {
                                               GlareFrame(5.4, 2500.0), GlareFrame(4.5, 3000.0)};
   const BlurSplit split = FitBlurSplit(frames);
   ASSERT_EQ(split.frames, 4);
-  const Crosstalk kept(split.crosstalk_var_px2, split.crosstalk_lattice_share);
+  const Crosstalk kept = CrosstalkOf(split);
   double mean_miss_px2 = 0.0;
   for (const CrosstalkFrame& f : frames) {
     const double offset = split.blur_offset_px2 + split.blur_offset_u_px2 * 1000.0 / f.d_mm;

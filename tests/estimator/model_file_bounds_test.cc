@@ -94,8 +94,10 @@ TEST(ModelFileBounds, NoiseAndShareOutsideAreRefused) {
   CalibrationModel model = Fitted();
   model.blur_calibration.noise_exponent = 1e300;
   model.blur_calibration.crosstalk_lattice_share = 1.5;
+  model.blur_calibration.optics_excess = -3.5;
   EXPECT_EQ(Keys(CheckModelBounds(model)),
-            "blur_calibration.noise_exponent; blur_calibration.crosstalk_lattice_share; ");
+            "blur_calibration.noise_exponent; blur_calibration.crosstalk_lattice_share; "
+            "blur_calibration.optics_excess; ");
 }
 
 // Regression: t_ref_ms 1e300 and t_meas_ms [-30, 0] passed in a provenance.

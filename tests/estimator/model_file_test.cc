@@ -57,6 +57,26 @@ CalibrationModel WithBlur(double c0_px2) {
   return model;
 }
 
+// The reader's refusal of `text` with the line of `key` set to `value`: the error's key and
+// message (which must name bad.yaml and its line); {"", "accepted"} when it loads.
+struct Refusal {
+  std::string key, what;
+};
+Refusal RefusalWith(const std::string& text, const std::string& key, const std::string& value) {
+  std::string bad = text;
+  const size_t at = bad.find(key + ": ");
+  EXPECT_NE(at, std::string::npos) << key;
+  if (at == std::string::npos) return {"", "no such key"};
+  bad.replace(at, bad.find('\n', at) - at, key + ": " + value);
+  try {
+    ModelFromYaml(bad, "bad.yaml");
+  } catch (const ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos) << e.what();
+    return {e.key(), e.what()};
+  }
+  return {"", "accepted"};
+}
+
 bool BitEqual(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 std::string TempPath(const char* name) {
@@ -226,16 +246,7 @@ TEST(ModelFile, TheSizesTiltTermRoundTripsAndIsChecked) {
   EXPECT_EQ(back.geometric.tilt_theta_deg, model.geometric.tilt_theta_deg);
   EXPECT_EQ(back.geometric.tilt_var_px2, model.geometric.tilt_var_px2);
   const auto refused = [&text](const std::string& key, const std::string& value) {
-    std::string bad = text;
-    const size_t at = bad.find(key + ": ");
-    bad.replace(at, bad.find('\n', at) - at, key + ": " + value);
-    try {
-      ModelFromYaml(bad, "bad.yaml");
-    } catch (const ModelFileError& e) {
-      EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos) << e.what();
-      return std::string(e.what());
-    }
-    return std::string("accepted");
+    return RefusalWith(text, key, value).what;
   };
   EXPECT_NE(refused("tilt_var_px2", "[0, 0.1]").find("one value per knot"), std::string::npos);
   EXPECT_NE(refused("tilt_theta_deg", "[0, 20, 10, 35]").find("increasing"), std::string::npos);
@@ -256,17 +267,8 @@ TEST(ModelFile, CrosstalkSplitRoundTripsAndIsChecked) {
   EXPECT_TRUE(BitEqual(back.blur_calibration.crosstalk_var_px2, 0.64 / 3.0));
   EXPECT_TRUE(BitEqual(back.blur_calibration.crosstalk_lattice_share, 0.7 / 3.0));
   EXPECT_EQ(ModelToYaml(back), text);
-  std::string bad = text;
-  const size_t at = bad.find("crosstalk_lattice_share: ");
-  ASSERT_NE(at, std::string::npos);
-  bad.replace(at, bad.find('\n', at) - at, "crosstalk_lattice_share: 1.5");
-  try {
-    ModelFromYaml(bad, "bad.yaml");
-    FAIL() << "a lattice share of 1.5 was accepted";
-  } catch (const ModelFileError& e) {
-    EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("[0, 1]"), std::string::npos) << e.what();
-  }
+  EXPECT_NE(RefusalWith(text, "crosstalk_lattice_share", "1.5").what.find("[0, 1]"),
+            std::string::npos);
 }
 
 // The blob fit's blur offset round trips; absent, zero; out of range, refused at its
@@ -282,18 +284,9 @@ TEST(ModelFile, FitBlurOffsetRoundTripsAndIsChecked) {
   EXPECT_TRUE(BitEqual(back.blur_calibration.fit_offset_u_px2, 0.09 / 7.0));
   EXPECT_NEAR(back.blur_calibration.FitBlurVarPx2(2000.0),
               back.blur_calibration.BlurVarPx2(2000.0) - 0.07 / 3.0 + 0.5 * 0.09 / 7.0, 1e-15);
-  std::string bad = text;
-  const size_t at = bad.find("fit_offset_u_px2: ");
-  ASSERT_NE(at, std::string::npos);
-  bad.replace(at, bad.find('\n', at) - at, "fit_offset_u_px2: -3");
-  try {
-    ModelFromYaml(bad, "bad.yaml");
-    FAIL() << "an offset making the blur negative was accepted";
-  } catch (const ModelFileError& e) {
-    EXPECT_EQ(e.key(), "blur_calibration.fit_offset_u_px2");
-    EXPECT_NE(std::string(e.what()).find("bad.yaml:"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("(0, 16] px^2"), std::string::npos) << e.what();
-  }
+  const Refusal negative = RefusalWith(text, "fit_offset_u_px2", "-3");  // the blur below 0
+  EXPECT_EQ(negative.key, "blur_calibration.fit_offset_u_px2") << negative.what;
+  EXPECT_NE(negative.what.find("(0, 16] px^2"), std::string::npos) << negative.what;
 }
 
 // The PSF's anisotropy round trips; absent (older files), a round PSF.
@@ -308,6 +301,22 @@ TEST(ModelFile, PsfAnisotropyRoundTripsAndIsOptional) {
   const CalibrationModel round = ModelFromYaml(ModelToYaml(WithBlur(0.9)), "round.yaml");
   EXPECT_EQ(round.blur_calibration.psf_aniso_c_px2, 0.0);
   EXPECT_EQ(round.blur_calibration.psf_aniso_s_px2, 0.0);
+}
+
+// The optics' edge beyond a Gaussian's (its excess kurtosis) round trips; absent (older files and
+// a Gaussian edge), 0; out of its range, refused at its line with the range.
+TEST(ModelFile, OpticsExcessRoundTripsAndIsChecked) {
+  CalibrationModel model = WithBlur(0.9);
+  EXPECT_EQ(ModelToYaml(model).find("optics_excess"), std::string::npos);
+  EXPECT_EQ(ModelFromYaml(ModelToYaml(model), "gauss.yaml").blur_calibration.optics_excess, 0.0);
+  model.blur_calibration.optics_excess = -2.1 / 3.0;
+  const std::string text = ModelToYaml(model);
+  const CalibrationModel back = ModelFromYaml(text, "defocus.yaml");
+  EXPECT_TRUE(BitEqual(back.blur_calibration.optics_excess, -2.1 / 3.0));
+  EXPECT_EQ(ModelToYaml(back), text);
+  const Refusal beyond = RefusalWith(text, "optics_excess", "7");
+  EXPECT_EQ(beyond.key, "blur_calibration.optics_excess") << beyond.what;
+  EXPECT_NE(beyond.what.find("[-3, 4]"), std::string::npos) << beyond.what;
 }
 
 // A fitness figure (estimator/fitness.h) with two named poses, one failing.
