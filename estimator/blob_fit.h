@@ -21,8 +21,9 @@
 // are. The distance for b(u) is the moments' geometric distance (b(u) changes slowly with d).
 
 #include <limits>
-#include <opencv2/core.hpp>
 #include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "base/bounds.h"
 #include "estimator/blur_model.h"  // kPixelAreaVarPx2, kMinOpticsVarPx2

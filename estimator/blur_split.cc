@@ -62,11 +62,8 @@ constexpr double kExcessEvidence = 3.84, kExcessMaterial = 0.01;
 double FitOpticsExcess(const std::vector<const CrosstalkFrame*>& frames, double var, double share) {
   int pixels = 0;
   const double gaussian = SplitCost(frames, {var, share, 0.0}, &pixels);
-  const double excess = Minimise(
-      [&](double x) {
-        return SplitCost(frames, {var, share, x});
-      },
-      kMinOpticsExcess, kMaxOpticsExcess);
+  const auto cost_at = [&](double x) { return SplitCost(frames, Crosstalk(var, share, x)); };
+  const double excess = Minimise(cost_at, kMinOpticsExcess, kMaxOpticsExcess);
   const double gain = gaussian - SplitCost(frames, {var, share, excess});
   const double evidence = kExcessEvidence * gaussian / std::max(pixels, 1);
   return gain > std::max(evidence, kExcessMaterial * gaussian) ? excess : 0.0;
@@ -111,22 +108,15 @@ namespace {
 // variance (the first two rounds).
 void SplitRound(const std::vector<const CrosstalkFrame*>& now, double max_var, int round,
                 Crosstalk* best) {
-  if (round >= 2 && best->optics_excess != 0.0)
+  if (round >= 2 && best->optics_excess != 0.0) {
     best->optics_excess = FitOpticsExcess(now, best->var_px2, best->lattice_share);
-  const double share = best->lattice_share, excess = best->optics_excess;
-  best->var_px2 = Minimise(
-      [&](double c) {
-        return SplitCost(now, {c, share, excess});
-      },
-      0.0, max_var);
-  const double var = best->var_px2;
-  if (round < 2) {
-    best->lattice_share = Minimise(
-        [&](double l) {
-          return SplitCost(now, {var, l, excess});
-        },
-        0.0, 1.0);
   }
+  const double share = best->lattice_share, excess = best->optics_excess;
+  const auto at_var = [&](double c) { return SplitCost(now, Crosstalk(c, share, excess)); };
+  best->var_px2 = Minimise(at_var, 0.0, max_var);
+  const double var = best->var_px2;
+  const auto at_share = [&](double l) { return SplitCost(now, Crosstalk(var, l, excess)); };
+  if (round < 2) best->lattice_share = Minimise(at_share, 0.0, 1.0);
 }
 
 // The first two rounds (the kernel's shape found) from a Gaussian optics' edge, or from the
