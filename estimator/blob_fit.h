@@ -213,5 +213,14 @@ inline Crosstalk CrosstalkOf(const BlurCalibration& b) {
 inline Crosstalk CrosstalkOf(const BlurSplit& s) {
   return {s.crosstalk_var_px2, s.crosstalk_lattice_share, s.optics_excess};
 }
+// A fitted split into a model's blur calibration: the response after the blur and the blob
+// fit's own blur offset (its line in 1000 / d).
+inline void SetSplit(const BlurSplit& s, BlurCalibration* b) {
+  b->crosstalk_var_px2 = s.crosstalk_var_px2;
+  b->crosstalk_lattice_share = s.crosstalk_lattice_share;
+  b->optics_excess = s.optics_excess;
+  b->fit_offset_px2 = s.blur_offset_px2;
+  b->fit_offset_u_px2 = s.blur_offset_u_px2;
+}
 
 }  // namespace irdist

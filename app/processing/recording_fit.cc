@@ -367,11 +367,7 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
   frames.clear();
   RefinementFrames refinement_frames(reader, features, rows, *model);
   const BlurSplit split = RefineBlurSplit(first, [&](const auto& use) { refinement_frames(use); });
-  model->blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
-  model->blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
-  model->blur_calibration.optics_excess = split.optics_excess;
-  model->blur_calibration.fit_offset_px2 = split.blur_offset_px2;
-  model->blur_calibration.fit_offset_u_px2 = split.blur_offset_u_px2;
+  SetSplit(split, &model->blur_calibration);
   const BlurCalibration& b = model->blur_calibration;
   const double near_mm = model->ranges.d_min_mm, far_mm = model->ranges.d_max_mm;
   out << "  blur split: " << split.crosstalk_var_px2

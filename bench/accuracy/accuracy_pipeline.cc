@@ -82,11 +82,7 @@ void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipe
     f.d_mm = pl->model.geometric.DistanceMm(f.features.moment_major_var_px2);
   }
   const BlurSplit split = FitBlurSplit(frames);
-  pl->model.blur_calibration.crosstalk_var_px2 = split.crosstalk_var_px2;
-  pl->model.blur_calibration.crosstalk_lattice_share = split.crosstalk_lattice_share;
-  pl->model.blur_calibration.optics_excess = split.optics_excess;
-  pl->model.blur_calibration.fit_offset_px2 = split.blur_offset_px2;
-  pl->model.blur_calibration.fit_offset_u_px2 = split.blur_offset_u_px2;
+  SetSplit(split, &pl->model.blur_calibration);
   std::printf(
       "calibration %-10s blur split: %.4f px^2 after the pixels (crosstalk), the optics' "
       "edge's excess kurtosis %+.2f, the fit's blur %+.4f %+.4f (1000 / d) px^2 from the "

@@ -100,11 +100,7 @@ Calibration CalibrateFromNoisyFrames(PixelResponseKind kind, unsigned seed) {
   const BlurSplit split = RefineBlurSplit(FitBlurSplit(split_frames), [&](const auto& use) {
     for (const CrosstalkFrame& f : out.frames) use(f);
   });
-  out.blur.crosstalk_var_px2 = split.crosstalk_var_px2;
-  out.blur.crosstalk_lattice_share = split.crosstalk_lattice_share;
-  out.blur.optics_excess = split.optics_excess;
-  out.blur.fit_offset_px2 = split.blur_offset_px2;
-  out.blur.fit_offset_u_px2 = split.blur_offset_u_px2;
+  SetSplit(split, &out.blur);
   return out;
 }
 
