@@ -390,8 +390,7 @@ bool StartWindow(const cv::Mat& image, int bit_depth, const Features& features,
       !(gauss_var > kMinOpticsVarPx2) || !(crosstalk.var_px2 >= 0.0)) {
     return false;
   }
-  s->crosstalk = Crosstalk(std::min(crosstalk.var_px2, gauss_var - kMinOpticsVarPx2),
-                           crosstalk.lattice_share, crosstalk.optics_excess);
+  s->crosstalk = RoomFor(crosstalk, blur_var_px2);
   s->pixels = BlobPixels(image, bit_depth, features, blur_var_px2, &s->window);
   if (!StartFromMoments(features, blur_var_px2, s->window.tl(), s->v)) return false;
   const double reach = 2.0 * std::sqrt(features.moment_major_var_px2) + 3.0 * std::sqrt(gauss_var);
@@ -483,7 +482,8 @@ BlobBlurProfile ProfileBlobBlur(const cv::Mat& image, int bit_depth, const Featu
   // The step: small against the blur (the model's change in it is smooth: the forward
   // difference's error ~ step / blur), large against the normal table's 2e-10.
   const double step_px2 = 1e-3 * blur_var_px2;
-  const WindowResiduals shifted = ModelOf(s, blur_var_px2 + step_px2, s.crosstalk, psf);
+  const double shifted_px2 = blur_var_px2 + step_px2;  // below the kink the crosstalk's (RoomFor)
+  const WindowResiduals shifted = ModelOf(s, shifted_px2, RoomFor(crosstalk, shifted_px2), psf);
   Eigen::Matrix<double, kParams + 1, kParams + 1> jtj;
   Eigen::Matrix<double, kParams + 1, 1> jtr;
   model.ExtendedSystem<1>(s.v, {&shifted}, {step_px2}, &jtj, &jtr);

@@ -20,6 +20,7 @@
 // so the calibrated geometric model, theta (kCalibratedBlur) and the fused solve use them as they
 // are. The distance for b(u) is the moments' geometric distance (b(u) changes slowly with d).
 
+#include <algorithm>
 #include <limits>
 #include <vector>
 
@@ -49,6 +50,15 @@ struct Crosstalk {
   double lattice_share;
   double optics_excess;
 };
+// The crosstalk as a total blur `blur_var_px2` (pixel area included) leaves room for: its
+// variance at most the blur less the pixel's area and the optics' floor (kMinOpticsVarPx2). Below
+// that kink a frame's blur comes off the crosstalk, the optics kept at their floor, and a search
+// of the blur goes on past it: a sensor whose blur is all after the pixels has its truth on the
+// kink, and a search that stopped there lost the noisy frames that ask for less blur.
+inline Crosstalk RoomFor(const Crosstalk& c, double blur_var_px2) {
+  const double room = blur_var_px2 - kPixelAreaVarPx2 - kMinOpticsVarPx2;
+  return {std::min(c.var_px2, room), c.lattice_share, c.optics_excess};
+}
 
 struct BlobFitResult {
   bool ok = false;

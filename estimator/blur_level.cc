@@ -39,7 +39,9 @@ bool BlurLevelLine::Add(const CrosstalkFrame& frame) {
   if (!frame.features.Usable() || !(frame.blur_var_px2 > kPixelAreaVarPx2)) return false;
   const Crosstalk crosstalk = CrosstalkOf(split_);
   const double start = split_.FitBlurAt(frame);
-  const double floor = kPixelAreaVarPx2 + kMinOpticsVarPx2 + crosstalk.var_px2;
+  // Past the crosstalk's kink too (blob_fit.h RoomFor): where the blur is all after the pixels,
+  // a search held at the kink loses the frames that ask for less blur (the level reads high).
+  const double floor = kPixelAreaVarPx2 + kMinOpticsVarPx2;
   const double low = std::max(start - kSearchPx2, floor + 1e-3);
   double blur = std::max(start, low + 1e-3);
   BlobBlurProfile at;

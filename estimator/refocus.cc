@@ -46,7 +46,9 @@ bool MeasureOwnBlur(const cv::Mat& image, int bit_depth, const CalibrationModel&
   if (!out->Usable() || !start.Usable() || !(calibrated > kPixelAreaVarPx2)) return false;
   const BlurCalibration& b = model.blur_calibration;
   const Crosstalk crosstalk = CrosstalkOf(b);
-  const double floor = kPixelAreaVarPx2 + kMinOpticsVarPx2 + crosstalk.var_px2;
+  // Past the crosstalk's kink too (blob_fit.h RoomFor): a search held there would read a sensor
+  // whose blur is all after the pixels blurrier than calibrated, on noise alone.
+  const double floor = kPixelAreaVarPx2 + kMinOpticsVarPx2;
   const double low = std::max(kOwnBlurLowFactor * calibrated, floor + 1e-3);
   const double high = kOwnBlurHighFactor * calibrated;
   if (!(high > low)) return false;

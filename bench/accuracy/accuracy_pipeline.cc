@@ -11,6 +11,7 @@
 #include <tuple>
 #include <vector>
 
+#include "estimator/blur_level.h"
 #include "estimator/estimate_baselines.h"
 #include "estimator/health.h"
 #include "estimator/round_blob.h"
@@ -66,29 +67,39 @@ sim::RigPhysics WithBlurChanged(const sim::RigPhysics& physics, double change) {
   return out;
 }
 
+std::vector<Pose> CalibrationPoses();
+std::vector<double> CalibrationTMs();
+
 // The blob fit's split of the calibrated blur (optics before the pixels, crosstalk after them),
-// fitted on calibration frames as `irdist calibrate` does (app/processing/recording_fit.cc,
-// CalibrateCrosstalk): 32 measurement frames over the calibrated distances and angles.
+// fitted on a Table 3 sweep's measurement frames as `irdist fit` does
+// (app/processing/recording_fit.cc, CalibrateCrosstalk): FitBlurSplit on 32 of them spread
+// over the sweep (every k-th), then refined and its blur's level fitted on all of them
+// (RefineBlurSplit).
 void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipeline* pl) {
-  std::vector<Pose> poses;
-  for (double d : Range(1500, 3000, 500))
-    for (double th : {0.0, 10.0, 20.0, 30.0}) poses.push_back({d, th, 500.0, 0});
   SweepRenderer sr(physics, seed + 17);
   std::vector<CrosstalkFrame> frames;
   sr.KeepFrames(&frames);
-  sr.Run(poses, {34, 36}, pl->features);
+  sr.Run(CalibrationPoses(), CalibrationTMs(), pl->features);
   for (CrosstalkFrame& f : frames) {
     f.blur_var_px2 = BlobFitBlurVarPx2(pl->model, f.features);
     f.d_mm = pl->model.geometric.DistanceMm(f.features.moment_major_var_px2);
   }
-  const BlurSplit split = FitBlurSplit(frames);
+  constexpr std::size_t kSplitFrames = 32;  // recording_fit.cc kCrosstalkFrames
+  std::vector<CrosstalkFrame> first;
+  const std::size_t stride = std::max<std::size_t>(1, frames.size() / kSplitFrames);
+  for (std::size_t i = 0; i < frames.size() && first.size() < kSplitFrames; i += stride) {
+    first.push_back(frames[i]);
+  }
+  const BlurSplit split = RefineBlurSplit(FitBlurSplit(first), [&](const auto& use) {
+    for (const CrosstalkFrame& f : frames) use(f);
+  });
   SetSplit(split, &pl->model.blur_calibration);
   std::printf(
       "calibration %-10s blur split: %.4f px^2 after the pixels (crosstalk), the optics' "
       "edge's excess kurtosis %+.2f, the fit's blur %+.4f %+.4f (1000 / d) px^2 from the "
-      "cumulants', %d frames\n",
+      "cumulants', %d frames, refined on %d\n",
       pl->name.c_str(), split.crosstalk_var_px2, split.optics_excess, split.blur_offset_px2,
-      split.blur_offset_u_px2, split.frames);
+      split.blur_offset_u_px2, split.frames, split.level_frames);
 }
 
 // paper, default, alg1_joint, one fused_w<W> per radiometric weight, theta_cal and one
