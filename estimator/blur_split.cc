@@ -136,6 +136,29 @@ Crosstalk FirstRounds(const std::vector<const CrosstalkFrame*>& now, double max_
   return SplitCost(now, shaped) < SplitCost(now, gaussian) ? shaped : gaussian;
 }
 
+// Where the crosstalk's variance has reached the room the frames' least blur leaves it (its kink,
+// blob_fit.h RoomFor: beyond, the fit clamps it and the cost is flat in it), a sensor whose blur
+// is all after the pixels is tried: every frame's blur on the kink (the optics at their floor),
+// the variance Brent's over the room to kMaxBlurOffsetPx2 past it, kept where the frames' cost is
+// lower than the split's; the next offset's line takes the frames' blur up with it. Such a sensor
+// lies on the kink, and where the cumulants' blur is short of its truth the variance and the
+// frames' level held each other there (the virtual rig's all-after sensor: 0.964 px^2 for 1).
+constexpr double kAtTheKink = 4e-3;  // Brent's tolerance (2^-9 of the range) with a margin
+void AlongTheKink(const std::vector<CrosstalkFrame>& shifted, double max_var, Crosstalk* best) {
+  std::vector<CrosstalkFrame> trial = shifted;
+  std::vector<const CrosstalkFrame*> at;
+  for (const CrosstalkFrame& f : trial) at.push_back(&f);
+  const Crosstalk c = *best;
+  const auto cost_at = [&](double x) {
+    for (CrosstalkFrame& f : trial) f.blur_var_px2 = kPixelAreaVarPx2 + kMinOpticsVarPx2 + x;
+    return SplitCost(at, Crosstalk(x, c.lattice_share, c.optics_excess));
+  };
+  const double var = Minimise(cost_at, max_var, max_var + kMaxBlurOffsetPx2);
+  std::vector<const CrosstalkFrame*> now;
+  for (const CrosstalkFrame& f : shifted) now.push_back(&f);
+  if (cost_at(var) < SplitCost(now, c)) best->var_px2 = var;
+}
+
 }  // namespace
 
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
@@ -169,6 +192,7 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
     } else if (round >= 2) {
       SplitRound(now, max_var, round, &best);
     }
+    if (best.var_px2 > (1.0 - kAtTheKink) * max_var) AlongTheKink(shifted, max_var, &best);
     if (round >= 1 && round + 1 < kSplitRounds) FitBlurOffset(usable, shifted, best, &o0, &o1);
   }
   if (SplitCost(now, best) <= SplitCost(now, {})) {

@@ -325,7 +325,7 @@ TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
   std::printf("|   Fig. 10 on the axis, noisy: swing of the distances' mean errors %.3f%% |\n",
               100.0 * fig10_swing);
   // The goal row (<= 0.08%) on every response: all the blur after the pixels 0.063% (0.077% when
-  // the blur's level stopped at the crosstalk's kink, blob_fit.h RoomFor), the defocus
+  // the blur's level and split stopped at the crosstalk's kink, blob_fit.h RoomFor), the defocus
   // disc 0.049% (0.027% with a Gaussian edge: a noisy swing of one figure), the Airy PSF 0.051%
   // (0.153% with a Gaussian edge), the 70% aperture 0.033%, the astigmatic optics 0.046%.
   EXPECT_LT(fig10_swing, 8e-4);
@@ -345,20 +345,20 @@ TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
     EXPECT_EQ(cal.blur.optics_excess, 0.0);
   }
   // The size's part that follows the edge's phase (EdgePhaseOf on the sweep), within the goal's
-  // 0.05% peak to peak on every response (seed 31: all the blur after the pixels 0.004%, 0.035%
-  // when the blur's level stopped at the crosstalk's kink; defocus disc 0.02%, Airy PSF 0.04%,
-  // 70% aperture 0.02%, astigmatic 0.003%).
+  // 0.05% peak to peak on every response (seed 31: all the blur after the pixels 0.003%, 0.035%
+  // when the blur's level and split stopped at the crosstalk's kink; defocus disc 0.02%, Airy PSF
+  // 0.04%, 70% aperture 0.02%, astigmatic 0.003%).
   EXPECT_LT(corner.phase_p2p, 5e-4);
   EXPECT_LT(centre.phase_p2p, 5e-4);
   // The goal rows after calibration. The bias (<= 0.03%) on every response: the fit's weights
   // are its own shape's, so a noise-free frame reads the size a noisy calibration frame reads on
   // average (seeds 31-34: within 0.008%; the defocus disc's and the Airy PSF's were +0.27% and
   // +0.07% when the weights came from each frame's residuals). The peak to peak (<= 0.05%) where
-  // reached: all the blur after the pixels (seed 31 0.021%; 0.021-0.064% over seeds 31-34, the
-  // 0.064% a 32-frame split of 0.989 for 1; 0.053-0.077% when the blur's level stopped at the
-  // crosstalk's kink), the defocus disc (0.044-0.049% with its edge's shape fitted; 0.058-0.071%
-  // with a Gaussian edge), the 70% aperture (0.019-0.032%) and the astigmatic optics
-  // (0.014-0.028%); the Airy PSF (0.057-0.069%; 0.20-0.25% with a Gaussian edge) within 0.1%.
+  // reached: all the blur after the pixels (0.021-0.024% over seeds 31-34; 0.053-0.077% when the
+  // blur's level and split stopped at the crosstalk's kink), the defocus disc (0.044-0.049% with
+  // its edge's shape fitted; 0.058-0.071% with a Gaussian edge), the 70% aperture (0.019-0.032%)
+  // and the astigmatic optics (0.014-0.028%); the Airy PSF (0.057-0.069%; 0.20-0.25% with a
+  // Gaussian edge) within 0.1%.
   for (const SweepFigures* s : {&corner, &centre}) {
     EXPECT_LT(std::abs(s->calibrated_mean), 3e-4);
     if (kind == PixelResponseKind::kAiry) {
