@@ -191,10 +191,12 @@ struct CrosstalkFrame {
 // CrosstalkFrame::d_mm). And the optics' edge beyond a Gaussian's (Crosstalk::optics_excess),
 // where the frames ask for it materially: the first two rounds run from a Gaussian edge and
 // from the optics' own edge fitted first, the cheaper in cost is kept, and a non-Gaussian edge
-// is refined in each later round. Coordinate descent, kSplitRounds rounds. No crosstalk when no
-// frame is usable or the optics alone fit best. About 500 one-pass blob fits per frame (6 s
-// for 32 frames; a non-Gaussian edge about twice that): give it a few dozen frames across the
-// calibrated distances.
+// is refined in each later round. Where the crosstalk reaches the room the frames' least blur
+// leaves it (RoomFor), the sensor whose blur is all after the pixels is tried (every frame on
+// that kink). Coordinate descent, kSplitRounds rounds. No crosstalk when no frame is usable or
+// the optics alone fit best. About 500 one-pass blob fits per frame (6 s for 32 frames; a
+// non-Gaussian edge about twice that): give it a few dozen frames across the calibrated
+// distances.
 struct BlurSplit {
   double crosstalk_var_px2 = 0.0;
   double crosstalk_lattice_share = 0.0;  // the kernel's shape (Crosstalk)

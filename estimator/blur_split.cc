@@ -44,6 +44,13 @@ double SplitCost(const std::vector<const CrosstalkFrame*>& frames, const Crossta
   return sum;
 }
 
+// The frames as SplitCost takes them.
+std::vector<const CrosstalkFrame*> PointersTo(const std::vector<CrosstalkFrame>& frames) {
+  std::vector<const CrosstalkFrame*> out;
+  for (const CrosstalkFrame& f : frames) out.push_back(&f);
+  return out;
+}
+
 // Brent's minimisation (Boost) of f over [low, high] to 2^-9 of the range.
 template <typename F>
 double Minimise(F f, double low, double high) {
@@ -146,17 +153,14 @@ Crosstalk FirstRounds(const std::vector<const CrosstalkFrame*>& now, double max_
 constexpr double kAtTheKink = 4e-3;  // Brent's tolerance (2^-9 of the range) with a margin
 void AlongTheKink(const std::vector<CrosstalkFrame>& shifted, double max_var, Crosstalk* best) {
   std::vector<CrosstalkFrame> trial = shifted;
-  std::vector<const CrosstalkFrame*> at;
-  for (const CrosstalkFrame& f : trial) at.push_back(&f);
+  const std::vector<const CrosstalkFrame*> at = PointersTo(trial);
   const Crosstalk c = *best;
   const auto cost_at = [&](double x) {
     for (CrosstalkFrame& f : trial) f.blur_var_px2 = kPixelAreaVarPx2 + kMinOpticsVarPx2 + x;
     return SplitCost(at, Crosstalk(x, c.lattice_share, c.optics_excess));
   };
   const double var = Minimise(cost_at, max_var, max_var + kMaxBlurOffsetPx2);
-  std::vector<const CrosstalkFrame*> now;
-  for (const CrosstalkFrame& f : shifted) now.push_back(&f);
-  if (cost_at(var) < SplitCost(now, c)) best->var_px2 = var;
+  if (cost_at(var) < SplitCost(PointersTo(shifted), c)) best->var_px2 = var;
 }
 
 }  // namespace
@@ -176,8 +180,7 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   // trade along a valley: kSplitRounds). The optics keep kMinOpticsVarPx2.
   std::vector<CrosstalkFrame> shifted;
   for (const CrosstalkFrame* f : usable) shifted.push_back(*f);
-  std::vector<const CrosstalkFrame*> now;
-  for (const CrosstalkFrame& f : shifted) now.push_back(&f);
+  const std::vector<const CrosstalkFrame*> now = PointersTo(shifted);
   Crosstalk best;
   double o0 = 0.0, o1 = 0.0;
   for (int round = 0; round < kSplitRounds; ++round) {
