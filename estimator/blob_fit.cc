@@ -523,7 +523,7 @@ BlobSplitProfile ProfileBlobSplit(const cv::Mat& image, int bit_depth, const Fea
   // Forward differences as ProfileBlobBlur's; the crosstalk's backward where the optics are at
   // their floor.
   const double blur_step = 1e-3 * blur_var_px2;
-  const double room = blur_var_px2 - kPixelAreaVarPx2 - kMinOpticsVarPx2 - s.crosstalk.var_px2;
+  const double room = CrosstalkRoomPx2(blur_var_px2) - s.crosstalk.var_px2;
   const double crosstalk_step = room > blur_step ? blur_step : -blur_step;
   const WindowResiduals blurrier = ModelOf(s, blur_var_px2 + blur_step, s.crosstalk, round);
   const WindowResiduals spread = ModelOf(

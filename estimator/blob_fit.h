@@ -21,10 +21,10 @@
 // are. The distance for b(u) is the moments' geometric distance (b(u) changes slowly with d).
 
 #include <algorithm>
+#include <cstddef>
 #include <limits>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "base/bounds.h"
 #include "estimator/blur_model.h"  // kPixelAreaVarPx2, kMinOpticsVarPx2
@@ -55,9 +55,9 @@ struct Crosstalk {
 // that kink a frame's blur comes off the crosstalk, the optics kept at their floor, and a search
 // of the blur goes on past it: a sensor whose blur is all after the pixels has its truth on the
 // kink, and a search that stopped there lost the noisy frames that ask for less blur.
+inline double CrosstalkRoomPx2(double blur_var_px2) { return blur_var_px2 - kLeastBlurVarPx2; }
 inline Crosstalk RoomFor(const Crosstalk& c, double blur_var_px2) {
-  const double room = blur_var_px2 - kPixelAreaVarPx2 - kMinOpticsVarPx2;
-  return {std::min(c.var_px2, room), c.lattice_share, c.optics_excess};
+  return {std::min(c.var_px2, CrosstalkRoomPx2(blur_var_px2)), c.lattice_share, c.optics_excess};
 }
 
 struct BlobFitResult {
@@ -217,6 +217,10 @@ struct BlurSplit {
   }
 };
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);
+// The most calibration frames FitBlurSplit is given (`irdist fit`, the accuracy study, the phase
+// sweep), spread over the calibration's: every k-th of them (SplitFramesOf).
+constexpr std::size_t kBlurSplitFrames = 32;
+std::vector<CrosstalkFrame> SplitFramesOf(const std::vector<CrosstalkFrame>& frames);
 
 // The response after the blur a model's blur calibration or a split gives the blob fit.
 inline Crosstalk CrosstalkOf(const BlurCalibration& b) {

@@ -41,8 +41,7 @@ bool BlurLevelLine::Add(const CrosstalkFrame& frame) {
   const double start = split_.FitBlurAt(frame);
   // Past the crosstalk's kink too (blob_fit.h RoomFor): where the blur is all after the pixels,
   // a search held at the kink loses the frames that ask for less blur (the level reads high).
-  const double floor = kPixelAreaVarPx2 + kMinOpticsVarPx2;
-  const double low = std::max(start - kSearchPx2, floor + 1e-3);
+  const double low = std::max(start - kSearchPx2, kLeastBlurVarPx2 + 1e-3);
   double blur = std::max(start, low + 1e-3);
   BlobBlurProfile at;
   if (!NewtonOnBlobBlur(frame.image, frame.bit_depth, frame.features, crosstalk, low,
@@ -95,7 +94,7 @@ bool BlurSplitRefiner::Add(const CrosstalkFrame& frame) {
       }
     }
   }
-  max_crosstalk_px2_ = std::min(max_crosstalk_px2_, blur - kPixelAreaVarPx2 - kMinOpticsVarPx2);
+  max_crosstalk_px2_ = std::min(max_crosstalk_px2_, CrosstalkRoomPx2(blur));
   cost_ += p.cost;
   ++frames_;
   return true;

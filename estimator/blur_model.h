@@ -15,6 +15,8 @@ constexpr double kPixelAreaVarPx2 = 1.0 / 12.0;
 // (the blob fit's edge model divides by the optics' sd). At 0.1 px, a sensor with all of its blur
 // after the pixels read its sizes 0.03-0.04% off with the edge's phase through that floor alone.
 constexpr double kMinOpticsVarPx2 = 0.0004;
+// The least total blur the blob fit takes: the pixel's area and the optics' floor.
+constexpr double kLeastBlurVarPx2 = kPixelAreaVarPx2 + kMinOpticsVarPx2;
 
 // The calibrated blur: blur_var(u) = c0 + c1 u + c2 u^2, u = 1000 mm / d (the thin lens's defocus
 // variance is quadratic in u), and the per-frame sd of the measurement around it,

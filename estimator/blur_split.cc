@@ -90,8 +90,7 @@ void FitBlurOffset(const std::vector<const CrosstalkFrame*>& given,
   for (size_t i = 0; i < shifted.size(); ++i) {
     CrosstalkFrame trial = shifted[i];
     const std::vector<const CrosstalkFrame*> one = {&trial};
-    const double room = shifted[i].blur_var_px2 - kPixelAreaVarPx2 - kMinOpticsVarPx2 -
-                        crosstalk.var_px2;
+    const double room = CrosstalkRoomPx2(shifted[i].blur_var_px2) - crosstalk.var_px2;
     const double low = -std::min(kMaxBlurOffsetPx2, std::max(room, 0.0));
     const double o = Minimise(
         [&](double x) {
@@ -156,7 +155,7 @@ void AlongTheKink(const std::vector<CrosstalkFrame>& shifted, double max_var, Cr
   const std::vector<const CrosstalkFrame*> at = PointersTo(trial);
   const Crosstalk c = *best;
   const auto cost_at = [&](double x) {
-    for (CrosstalkFrame& f : trial) f.blur_var_px2 = kPixelAreaVarPx2 + kMinOpticsVarPx2 + x;
+    for (CrosstalkFrame& f : trial) f.blur_var_px2 = kLeastBlurVarPx2 + x;
     return SplitCost(at, Crosstalk(x, c.lattice_share, c.optics_excess));
   };
   const double var = Minimise(cost_at, max_var, max_var + kMaxBlurOffsetPx2);
@@ -164,6 +163,15 @@ void AlongTheKink(const std::vector<CrosstalkFrame>& shifted, double max_var, Cr
 }
 
 }  // namespace
+
+std::vector<CrosstalkFrame> SplitFramesOf(const std::vector<CrosstalkFrame>& frames) {
+  std::vector<CrosstalkFrame> out;
+  const std::size_t stride = std::max<std::size_t>(1, frames.size() / kBlurSplitFrames);
+  for (std::size_t i = 0; i < frames.size() && out.size() < kBlurSplitFrames; i += stride) {
+    out.push_back(frames[i]);
+  }
+  return out;
+}
 
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   BlurSplit split;
@@ -189,7 +197,7 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
       shifted[i].blur_var_px2 = usable[i]->BlurWithOffset(o0, o1);
       min_blur = std::min(min_blur, shifted[i].blur_var_px2);
     }
-    const double max_var = std::max(min_blur - kPixelAreaVarPx2 - kMinOpticsVarPx2, 0.0);
+    const double max_var = std::max(CrosstalkRoomPx2(min_blur), 0.0);
     if (round == 0) {
       best = FirstRounds(now, max_var);  // rounds 0 and 1
     } else if (round >= 2) {

@@ -48,8 +48,7 @@ bool MeasureOwnBlur(const cv::Mat& image, int bit_depth, const CalibrationModel&
   const Crosstalk crosstalk = CrosstalkOf(b);
   // Past the crosstalk's kink too (blob_fit.h RoomFor): a search held there would read a sensor
   // whose blur is all after the pixels blurrier than calibrated, on noise alone.
-  const double floor = kPixelAreaVarPx2 + kMinOpticsVarPx2;
-  const double low = std::max(kOwnBlurLowFactor * calibrated, floor + 1e-3);
+  const double low = std::max(kOwnBlurLowFactor * calibrated, kLeastBlurVarPx2 + 1e-3);
   const double high = kOwnBlurHighFactor * calibrated;
   if (!(high > low)) return false;
   double own = calibrated;

@@ -282,7 +282,7 @@ void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& fea
 // The most calibration frames the crosstalk's split is fitted on, and the most it and the blob
 // fit's blur level (its offset's line) are refined on (estimator/blur_level.h); each spread over
 // the recording (Table 3's 256 measurement frames all take part in the refinement).
-constexpr std::size_t kCrosstalkFrames = 32;
+constexpr std::size_t kCrosstalkFrames = kBlurSplitFrames;
 constexpr std::size_t kBlurLevelFrames = 512;
 
 // Calls `use` with up to `most` of `rows` spread over them (every k-th) as FitBlurSplit's frames,

@@ -67,8 +67,16 @@ sim::RigPhysics WithBlurChanged(const sim::RigPhysics& physics, double change) {
   return out;
 }
 
-std::vector<Pose> CalibrationPoses();
-std::vector<double> CalibrationTMs();
+// Calibration: Table 3's poses (1500..3000 mm, 0..35 deg, 475 and 500 mA) and exposures.
+std::vector<Pose> CalibrationPoses() {
+  std::vector<Pose> calib;
+  for (double d : Range(1500, 3000, 500))
+    for (double th : Range(0, 35, 5))
+      for (double i : {475.0, 500.0}) calib.push_back({d, th, i, 0});
+  return calib;
+}
+
+std::vector<double> CalibrationTMs() { return {30, 32, 34, 36}; }
 
 // The blob fit's split of the calibrated blur (optics before the pixels, crosstalk after them),
 // fitted on a Table 3 sweep's measurement frames as `irdist fit` does
@@ -84,15 +92,10 @@ void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipe
     f.blur_var_px2 = BlobFitBlurVarPx2(pl->model, f.features);
     f.d_mm = pl->model.geometric.DistanceMm(f.features.moment_major_var_px2);
   }
-  constexpr std::size_t kSplitFrames = 32;  // recording_fit.cc kCrosstalkFrames
-  std::vector<CrosstalkFrame> first;
-  const std::size_t stride = std::max<std::size_t>(1, frames.size() / kSplitFrames);
-  for (std::size_t i = 0; i < frames.size() && first.size() < kSplitFrames; i += stride) {
-    first.push_back(frames[i]);
-  }
-  const BlurSplit split = RefineBlurSplit(FitBlurSplit(first), [&](const auto& use) {
-    for (const CrosstalkFrame& f : frames) use(f);
-  });
+  const BlurSplit split =
+      RefineBlurSplit(FitBlurSplit(SplitFramesOf(frames)), [&](const auto& use) {
+        for (const CrosstalkFrame& f : frames) use(f);
+      });
   SetSplit(split, &pl->model.blur_calibration);
   std::printf(
       "calibration %-10s blur split: %.4f px^2 after the pixels (crosstalk), the optics' "
@@ -201,17 +204,6 @@ void AddThetaPipelines(const PipelineChoice& choice, std::vector<Pipeline>* pipe
     pipelines->push_back(fit_bracket);
   }
 }
-
-// Calibration: Table 3's poses (1500..3000 mm, 0..35 deg, 475 and 500 mA) and exposures.
-std::vector<Pose> CalibrationPoses() {
-  std::vector<Pose> calib;
-  for (double d : Range(1500, 3000, 500))
-    for (double th : Range(0, 35, 5))
-      for (double i : {475.0, 500.0}) calib.push_back({d, th, i, 0});
-  return calib;
-}
-
-std::vector<double> CalibrationTMs() { return {30, 32, 34, 36}; }
 
 // The camera response recovered from the calibration's brackets; the pipeline's features then
 // linearise every pixel with it.

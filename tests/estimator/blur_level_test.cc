@@ -174,13 +174,10 @@ TEST(BlurLevelLine, ASensorsBlurAllAfterThePixelsIsNotCensoredAtTheKink) {
   options.window_side_px = 36;
   for (double d_mm = 1500.0; d_mm <= 3000.0 + 1e-9; d_mm += 1500.0 / 7.0) {
     for (int k = 0; k < 8; ++k) {
-      testing::FlatDisc disc;
-      disc.cx = 22.0 + phase(rng);
-      disc.cy = 22.0 + phase(rng);
-      disc.radius_px = 9.1 * 1500.0 / d_mm;
+      const double cx = 22.0 + phase(rng), cy = 22.0 + phase(rng);
       CrosstalkFrame f;
-      f.image = testing::NoisyFrame12(
-          testing::RenderResponse(disc, testing::PixelResponseKind::kAllBlurAfter, 44), &rng);
+      f.image = testing::DiscFrame12(cx, cy, 9.1 * 1500.0 / d_mm,
+                                     testing::PixelResponseKind::kAllBlurAfter, 44, &rng);
       f.features = ComputeFeatures(f.image, 12, options);
       f.blur_var_px2 = kPixelAreaVarPx2 + crosstalk;
       f.d_mm = d_mm;

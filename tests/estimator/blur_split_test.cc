@@ -122,13 +122,9 @@ TEST(FitBlurSplit, AllTheBlurAfterThePixelsIsFoundPastTheGivenBlursRoom) {
   for (int k = 0; k < 3; ++k) {
     const double d_mm = std::vector<double>{1500.0, 2100.0, 3000.0}[k];
     for (const double phase : {0.0, 0.37}) {
-      testing::FlatDisc disc;
-      disc.cx = 22.0 + phase;
-      disc.cy = 21.8 - 0.5 * phase;
-      disc.radius_px = 9.1 * 1500.0 / d_mm;
       CrosstalkFrame f;
-      f.image = testing::CleanFrame12(
-          testing::RenderResponse(disc, testing::PixelResponseKind::kAllBlurAfter, 44));
+      f.image = testing::DiscFrame12(22.0 + phase, 21.8 - 0.5 * phase, 9.1 * 1500.0 / d_mm,
+                                     testing::PixelResponseKind::kAllBlurAfter, 44);
       f.features = ComputeFeatures(f.image, 12, options);
       f.blur_var_px2 = kPixelAreaVarPx2 + truth - short_px2[k];
       f.d_mm = d_mm;

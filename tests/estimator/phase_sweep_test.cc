@@ -43,7 +43,6 @@ using testing::PixelResponseKind;
 constexpr bool kReducedSweep = testing::kSanitizedBuild;
 constexpr int kCalibrationDistances = kReducedSweep ? 4 : 8;
 constexpr int kFramesPerDistance = kReducedSweep ? 3 : 16;
-constexpr std::size_t kSplitFrames = 32;  // as `irdist fit` (recording_fit.cc kCrosstalkFrames)
 constexpr double kSweepStepMm = kReducedSweep ? 100.0 : 20.0;
 
 constexpr int kSide = 44;
@@ -94,12 +93,10 @@ Calibration CalibrateFromNoisyFrames(PixelResponseKind kind, unsigned seed) {
   out.blur = FitBlurCalibration(points);
   for (CrosstalkFrame& f : out.frames) f.blur_var_px2 = out.blur.BlurVarPx2(f.d_mm);
   // The split from 32 of them spread over the distances, refined on all (RefineBlurSplit).
-  std::vector<CrosstalkFrame> split_frames;
-  const std::size_t stride = std::max<std::size_t>(1, out.frames.size() / kSplitFrames);
-  for (std::size_t i = 0; i < out.frames.size(); i += stride) split_frames.push_back(out.frames[i]);
-  const BlurSplit split = RefineBlurSplit(FitBlurSplit(split_frames), [&](const auto& use) {
-    for (const CrosstalkFrame& f : out.frames) use(f);
-  });
+  const BlurSplit split =
+      RefineBlurSplit(FitBlurSplit(SplitFramesOf(out.frames)), [&](const auto& use) {
+        for (const CrosstalkFrame& f : out.frames) use(f);
+      });
   SetSplit(split, &out.blur);
   return out;
 }

@@ -351,4 +351,16 @@ inline cv::Mat NoisyFrame12(const cv::Mat1d& value, std::mt19937_64* rng,
   return out;
 }
 
+// A 12-bit frame of a flat disc of `radius_px` centred at (cx, cy) through `kind` on a side x side
+// grid: noise free (rounded to whole DN), or with the camera's noise drawn from `rng`.
+inline cv::Mat DiscFrame12(double cx, double cy, double radius_px, PixelResponseKind kind, int side,
+                           std::mt19937_64* rng = nullptr) {
+  FlatDisc disc;
+  disc.cx = cx;
+  disc.cy = cy;
+  disc.radius_px = radius_px;
+  const cv::Mat1d value = RenderResponse(disc, kind, side);
+  return rng == nullptr ? CleanFrame12(value) : NoisyFrame12(value, rng);
+}
+
 }  // namespace irdist::testing

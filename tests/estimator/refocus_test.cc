@@ -77,20 +77,14 @@ TEST(Refocus, ASensorsBlurAllAfterThePixelsReadsAsCalibrated) {
   CalibrationModel model;
   model.blur_calibration.crosstalk_var_px2 = testing::KernelVariance(testing::AfterPixelsKernel());
   const double given_px2 = kPixelAreaVarPx2 + model.blur_calibration.crosstalk_var_px2;
-  testing::FlatDisc disc;
-  disc.cx = 22.3;
-  disc.cy = 21.8;
-  disc.radius_px = 6.6;
-  const cv::Mat1d value =
-      testing::RenderResponse(disc, testing::PixelResponseKind::kAllBlurAfter, 44);
   FeatureOptions options;
   options.window_side_px = 36;
   std::mt19937_64 rng(11);
   double sum = 0.0, sum_se2 = 0.0;
   const int noisy = 12;
   for (int i = 0; i <= noisy; ++i) {
-    const cv::Mat frame =
-        i == 0 ? testing::CleanFrame12(value) : testing::NoisyFrame12(value, &rng);
+    const cv::Mat frame = testing::DiscFrame12(
+        22.3, 21.8, 6.6, testing::PixelResponseKind::kAllBlurAfter, 44, i == 0 ? nullptr : &rng);
     const Features start = ComputeFeatures(frame, 12, options);
     const BlobFitResult fit =
         FitBlob(frame, 12, start, given_px2, CrosstalkOf(model.blur_calibration));
