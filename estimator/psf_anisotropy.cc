@@ -32,6 +32,18 @@ bool PsfAnisotropy::Significant() const {
   return zc * zc + zs * zs > kPsfAnisotropySignificance;
 }
 
+bool PsfAnisotropyPossible(const PsfAnisotropy& psf, double least_optics_var_px2) {
+  return std::hypot(psf.c_px2, psf.s_px2) < kPsfAnisotropyOfBlur * least_optics_var_px2;
+}
+
+PsfAnisotropy KeptPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_var_px2) {
+  PsfAnisotropy kept = psf;
+  if (!psf.Significant() || !PsfAnisotropyPossible(psf, least_optics_var_px2)) {
+    kept.c_px2 = kept.s_px2 = 0.0;
+  }
+  return kept;
+}
+
 PsfAnisotropy FitPsfAnisotropy(const std::vector<Features>& face_on) {
   std::vector<double> c, s;
   for (const Features& f : face_on) {

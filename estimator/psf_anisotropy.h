@@ -34,6 +34,16 @@ constexpr double kPsfAnisotropySignificance = 13.8;
 constexpr int kMinPsfAnisotropyFrames = 6;
 PsfAnisotropy FitPsfAnisotropy(const std::vector<Features>& face_on);
 
+// Whether a lens can have `psf`: its length below kPsfAnisotropyOfBlur of the optics' least blur
+// `least_optics_var_px2` (the calibrated blur less the pixel's area at the range's sharper end):
+// a PSF's covariance is positive along every axis, so its anisotropy stays below its own blur. A
+// larger one is the scene's (a cut or dirty disc), not the lens's. A calibration keeps the
+// anisotropy where it is Significant and possible (KeptPsfAnisotropy), else takes the PSF as round.
+constexpr double kPsfAnisotropyOfBlur = 0.9;
+bool PsfAnisotropyPossible(const PsfAnisotropy& psf, double least_optics_var_px2);
+// `psf` where it is Significant and possible, else a round PSF's (c = s = 0).
+PsfAnisotropy KeptPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_var_px2);
+
 // The moments' covariance less the PSF's anisotropy: moment_major/minor_var_px2 and the moment
 // ellipse's angle become those of C - [[c, s], [s, -c]] (the PSF's round part stays, as the
 // calibrated blur b(u) that every size subtracts). Unchanged without usable moments.

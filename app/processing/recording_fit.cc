@@ -259,16 +259,15 @@ void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& fea
     }
   }
   const PsfAnisotropy psf = FitPsfAnisotropy(face_on);
-  // A PSF's anisotropy is below its own blur (both variances > 0) at every distance; a larger one
-  // is the scene's (a cut or dirty disc), not the lens's: the PSF is then taken as round.
   const BlurCalibration& b = model->blur_calibration;
   const double optics_px2 = std::min(b.FitBlurVarPx2(model->ranges.d_min_mm),
                                      b.FitBlurVarPx2(model->ranges.d_max_mm)) -
                             kPixelAreaVarPx2;
-  const bool possible = std::hypot(psf.c_px2, psf.s_px2) < 0.9 * optics_px2;
-  const bool kept = psf.Significant() && possible;  // else round: noise is not written
-  model->blur_calibration.psf_aniso_c_px2 = kept ? psf.c_px2 : 0.0;
-  model->blur_calibration.psf_aniso_s_px2 = kept ? psf.s_px2 : 0.0;
+  const bool possible = PsfAnisotropyPossible(psf, optics_px2);
+  const bool kept = psf.Significant() && possible;
+  const PsfAnisotropy kept_psf = KeptPsfAnisotropy(psf, optics_px2);  // noise is not written
+  model->blur_calibration.psf_aniso_c_px2 = kept_psf.c_px2;
+  model->blur_calibration.psf_aniso_s_px2 = kept_psf.s_px2;
   out << "  PSF anisotropy: " << psf.c_px2 << " +- " << psf.c_se_px2 << ", " << psf.s_px2
       << " +- " << psf.s_se_px2 << " px^2 ((Sxx - Syy) / 2, Sxy) from " << psf.frames
       << " face-on frames: "

@@ -14,6 +14,7 @@
 #include "estimator/blur_level.h"
 #include "estimator/estimate_baselines.h"
 #include "estimator/health.h"
+#include "estimator/psf_anisotropy.h"
 #include "estimator/round_blob.h"
 
 namespace irdist::accuracy {
@@ -78,17 +79,49 @@ std::vector<Pose> CalibrationPoses() {
 
 std::vector<double> CalibrationTMs() { return {30, 32, 34, 36}; }
 
-// The blob fit's split of the calibrated blur (optics before the pixels, crosstalk after them),
-// fitted on a Table 3 sweep's measurement frames as `irdist fit` does
-// (app/processing/recording_fit.cc, CalibrateCrosstalk): FitBlurSplit on 32 of them spread
-// over the sweep (every k-th), then refined and its blur's level fitted on all of them
-// (RefineBlurSplit).
+// The face-on poses' |theta| (deg) whose frames show the PSF's anisotropy alone (as `irdist fit`).
+constexpr double kFaceOnDeg = 0.5;
+
+// The optics' PSF anisotropy from the sweep's face-on frames' moments, into the model where it
+// stands out of its noise and a lens can have it (estimator/psf_anisotropy.h KeptPsfAnisotropy),
+// as `irdist fit` does (app/processing/recording_fit.cc, CalibratePsfAnisotropy).
+void CalibratePsfAnisotropy(const std::vector<Bracket>& brackets, Pipeline* pl) {
+  std::vector<Features> face_on;
+  for (const Bracket& b : brackets) {
+    if (std::fabs(b.pose.theta_deg) > kFaceOnDeg) continue;
+    if (b.reference.Usable()) face_on.push_back(b.reference);
+    for (const Features& f : b.measurements) {
+      if (f.Usable()) face_on.push_back(f);
+    }
+  }
+  const PsfAnisotropy psf = FitPsfAnisotropy(face_on);
+  BlurCalibration& blur = pl->model.blur_calibration;
+  const double least_optics_px2 = std::min(blur.FitBlurVarPx2(pl->model.ranges.d_min_mm),
+                                           blur.FitBlurVarPx2(pl->model.ranges.d_max_mm)) -
+                                  kPixelAreaVarPx2;
+  const PsfAnisotropy kept = KeptPsfAnisotropy(psf, least_optics_px2);
+  blur.psf_aniso_c_px2 = kept.c_px2;
+  blur.psf_aniso_s_px2 = kept.s_px2;
+  std::printf(
+      "calibration %-10s PSF anisotropy %+.4f +- %.4f, %+.4f +- %.4f px^2 from %d face-on "
+      "frames: %s\n",
+      pl->name.c_str(), psf.c_px2, psf.c_se_px2, psf.s_px2, psf.s_se_px2, psf.frames,
+      kept.c_px2 != 0.0 || kept.s_px2 != 0.0 ? "kept" : "the PSF taken as round");
+}
+
+// The PSF's anisotropy (CalibratePsfAnisotropy), then the blob fit's split of the calibrated blur
+// (optics before the pixels, crosstalk after them), fitted on a Table 3 sweep's measurement frames
+// as `irdist fit` does (app/processing/recording_fit.cc, CalibrateCrosstalk): their moments less
+// that anisotropy, FitBlurSplit on 32 of them spread over the sweep (every k-th), then refined and
+// its blur's level fitted on all of them (RefineBlurSplit).
 void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipeline* pl) {
   SweepRenderer sr(physics, seed + 17);
   std::vector<CrosstalkFrame> frames;
   sr.KeepFrames(&frames);
-  sr.Run(CalibrationPoses(), CalibrationTMs(), pl->features);
+  CalibratePsfAnisotropy(sr.Run(CalibrationPoses(), CalibrationTMs(), pl->features), pl);
+  const BlurCalibration& blur = pl->model.blur_calibration;
   for (CrosstalkFrame& f : frames) {
+    RemovePsfAnisotropy(blur.psf_aniso_c_px2, blur.psf_aniso_s_px2, &f.features);
     f.blur_var_px2 = BlobFitBlurVarPx2(pl->model, f.features);
     f.d_mm = pl->model.geometric.DistanceMm(f.features.moment_major_var_px2);
   }

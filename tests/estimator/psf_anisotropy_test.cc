@@ -76,6 +76,33 @@ TEST(PsfAnisotropy, FaceOnFramesGiveThePsfsAnisotropy) {
 
 // The moments less the anisotropy: a covariance diag(6.3, 6.0) turned by 30 deg less its own
 // traceless part is round, of the same mean.
+// A calibration keeps the anisotropy only where it stands out of its noise and a lens can have it:
+// below 0.9 of the optics' least blur (a PSF's covariance is positive along every axis); a larger
+// one is a cut or dirty disc's, and the PSF is taken as round.
+TEST(PsfAnisotropy, ACalibrationKeepsOnlyWhatALensCanHave) {
+  PsfAnisotropy psf;
+  psf.c_px2 = -0.0515;
+  psf.s_px2 = 0.003;
+  psf.c_se_px2 = psf.s_se_px2 = 0.003;
+  psf.frames = 40;
+  ASSERT_TRUE(psf.Significant());
+  const PsfAnisotropy kept = KeptPsfAnisotropy(psf, 0.4);  // an astigmatic lens's 10%
+  EXPECT_EQ(kept.c_px2, psf.c_px2);
+  EXPECT_EQ(kept.s_px2, psf.s_px2);
+  EXPECT_EQ(kept.frames, 40);
+  const double length = std::hypot(psf.c_px2, psf.s_px2);
+  EXPECT_TRUE(PsfAnisotropyPossible(psf, length / 0.9 * 1.001));
+  EXPECT_FALSE(PsfAnisotropyPossible(psf, length / 0.9 * 0.999));
+  const PsfAnisotropy cut = KeptPsfAnisotropy(psf, length / 0.9 * 0.999);  // the scene's
+  EXPECT_EQ(cut.c_px2, 0.0);
+  EXPECT_EQ(cut.s_px2, 0.0);
+  psf.c_se_px2 = psf.s_se_px2 = 0.02;  // within its noise: (0.0515 / 0.02)^2 + ... < 13.8
+  ASSERT_FALSE(psf.Significant());
+  const PsfAnisotropy noise = KeptPsfAnisotropy(psf, 0.4);
+  EXPECT_EQ(noise.c_px2, 0.0);
+  EXPECT_EQ(noise.s_px2, 0.0);
+}
+
 TEST(PsfAnisotropy, RemovingItLeavesTheRoundPart) {
   Features f;
   f.ellipse_moments.valid = true;
