@@ -3,6 +3,7 @@
 // depends on the distance, fitted from the calibration frames (estimator/fit.h stores it in the
 // CalibrationModel) and checked against in measurement (estimator/health.h). docs/estimator.md.
 
+#include <algorithm>
 #include <vector>
 
 namespace irdist {
@@ -52,6 +53,11 @@ struct BlurCalibration {
   // The blur the blob fit is given at d_mm: BlurVarPx2 plus the fit's offset.
   double FitBlurVarPx2(double d_mm) const {
     return BlurVarPx2(d_mm) + fit_offset_px2 + fit_offset_u_px2 * 1000.0 / d_mm;
+  }
+  // The optics' blur (FitBlurVarPx2 less the pixel's area) at the sharper end of [d_min_mm,
+  // d_max_mm]: what a lens's PSF anisotropy stays below (psf_anisotropy.h PsfAnisotropyPossible).
+  double LeastOpticsVarPx2(double d_min_mm, double d_max_mm) const {
+    return std::min(FitBlurVarPx2(d_min_mm), FitBlurVarPx2(d_max_mm)) - kPixelAreaVarPx2;
   }
   bool fitted() const { return noise_at_1m_px2 > 0.0; }
   double BlurVarPx2(double d_mm) const;

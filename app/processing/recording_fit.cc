@@ -259,10 +259,8 @@ void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& fea
     }
   }
   const PsfAnisotropy psf = FitPsfAnisotropy(face_on);
-  const BlurCalibration& b = model->blur_calibration;
-  const double optics_px2 = std::min(b.FitBlurVarPx2(model->ranges.d_min_mm),
-                                     b.FitBlurVarPx2(model->ranges.d_max_mm)) -
-                            kPixelAreaVarPx2;
+  const double optics_px2 =
+      model->blur_calibration.LeastOpticsVarPx2(model->ranges.d_min_mm, model->ranges.d_max_mm);
   const bool possible = PsfAnisotropyPossible(psf, optics_px2);
   const bool kept = psf.Significant() && possible;
   const PsfAnisotropy kept_psf = KeptPsfAnisotropy(psf, optics_px2);  // noise is not written

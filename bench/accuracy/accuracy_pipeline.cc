@@ -96,10 +96,8 @@ void CalibratePsfAnisotropy(const std::vector<Bracket>& brackets, Pipeline* pl) 
   }
   const PsfAnisotropy psf = FitPsfAnisotropy(face_on);
   BlurCalibration& blur = pl->model.blur_calibration;
-  const double least_optics_px2 = std::min(blur.FitBlurVarPx2(pl->model.ranges.d_min_mm),
-                                           blur.FitBlurVarPx2(pl->model.ranges.d_max_mm)) -
-                                  kPixelAreaVarPx2;
-  const PsfAnisotropy kept = KeptPsfAnisotropy(psf, least_optics_px2);
+  const PsfAnisotropy kept = KeptPsfAnisotropy(
+      psf, blur.LeastOpticsVarPx2(pl->model.ranges.d_min_mm, pl->model.ranges.d_max_mm));
   blur.psf_aniso_c_px2 = kept.c_px2;
   blur.psf_aniso_s_px2 = kept.s_px2;
   std::printf(
