@@ -74,8 +74,6 @@ TEST(PsfAnisotropy, FaceOnFramesGiveThePsfsAnisotropy) {
   EXPECT_EQ(FitPsfAnisotropy(frames).frames, 0);
 }
 
-// The moments less the anisotropy: a covariance diag(6.3, 6.0) turned by 30 deg less its own
-// traceless part is round, of the same mean.
 // A calibration keeps the anisotropy only where it stands out of its noise and a lens can have it:
 // below 0.9 of the optics' least blur (a PSF's covariance is positive along every axis); a larger
 // one is a cut or dirty disc's, and the PSF is taken as round.
@@ -103,6 +101,8 @@ TEST(PsfAnisotropy, ACalibrationKeepsOnlyWhatALensCanHave) {
   EXPECT_EQ(noise.s_px2, 0.0);
 }
 
+// The moments less the anisotropy: a covariance diag(6.3, 6.0) turned by 30 deg less its own
+// traceless part is round, of the same mean.
 TEST(PsfAnisotropy, RemovingItLeavesTheRoundPart) {
   Features f;
   f.ellipse_moments.valid = true;
