@@ -36,11 +36,13 @@ bool PsfAnisotropyPossible(const PsfAnisotropy& psf, double least_optics_var_px2
   return std::hypot(psf.c_px2, psf.s_px2) < kPsfAnisotropyOfBlur * least_optics_var_px2;
 }
 
+bool KeepsPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_var_px2) {
+  return psf.Significant() && PsfAnisotropyPossible(psf, least_optics_var_px2);
+}
+
 PsfAnisotropy KeptPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_var_px2) {
   PsfAnisotropy kept = psf;
-  if (!psf.Significant() || !PsfAnisotropyPossible(psf, least_optics_var_px2)) {
-    kept.c_px2 = kept.s_px2 = 0.0;
-  }
+  if (!KeepsPsfAnisotropy(psf, least_optics_var_px2)) kept.c_px2 = kept.s_px2 = 0.0;
   return kept;
 }
 

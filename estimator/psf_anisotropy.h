@@ -32,16 +32,20 @@ constexpr double kPsfAnisotropySignificance = 13.8;
 // the frames, a frame farther than 5 robust sd from the median in either part left out. Fewer
 // than kMinPsfAnisotropyFrames usable frames: nothing measured (frames 0, anisotropy 0).
 constexpr int kMinPsfAnisotropyFrames = 6;
+// The face-on poses, |theta| (deg) at most this, whose frames show the PSF's anisotropy alone.
+constexpr double kPsfAnisotropyFaceOnDeg = 0.5;
 PsfAnisotropy FitPsfAnisotropy(const std::vector<Features>& face_on);
 
 // Whether a lens can have `psf`: its length below kPsfAnisotropyOfBlur of the optics' least blur
 // `least_optics_var_px2` (the calibrated blur less the pixel's area at the range's sharper end):
 // a PSF's covariance is positive along every axis, so its anisotropy stays below its own blur. A
 // larger one is the scene's (a cut or dirty disc), not the lens's. A calibration keeps the
-// anisotropy where it is Significant and possible (KeptPsfAnisotropy), else takes the PSF as round.
+// anisotropy where it is Significant and possible (KeepsPsfAnisotropy), else takes the PSF as
+// round.
 constexpr double kPsfAnisotropyOfBlur = 0.9;
 bool PsfAnisotropyPossible(const PsfAnisotropy& psf, double least_optics_var_px2);
-// `psf` where it is Significant and possible, else a round PSF's (c = s = 0).
+bool KeepsPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_var_px2);
+// `psf` where a calibration keeps it (KeepsPsfAnisotropy), else a round PSF's (c = s = 0).
 PsfAnisotropy KeptPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_var_px2);
 
 // The moments' covariance less the PSF's anisotropy: moment_major/minor_var_px2 and the moment

@@ -244,9 +244,6 @@ void PrintFitSummaries(const CalibrationModel& model, const std::string& model_p
   out << "Model: " << model_path << "\n";
 }
 
-// The face-on poses' |theta| (deg) whose frames show the PSF's anisotropy alone.
-constexpr double kFaceOnDeg = 0.5;
-
 // The optics' PSF anisotropy (estimator/psf_anisotropy.h) from the face-on frames' moments in the
 // camera's own axes (a round disc: what anisotropy they show is the lens's), into the model.
 void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& features,
@@ -254,7 +251,8 @@ void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& fea
   std::vector<Features> face_on;
   for (const FrameRecord& row : reader.rows()) {
     const auto f = features.find(row.index);
-    if (std::fabs(row.theta_deg) <= kFaceOnDeg && f != features.end() && f->second.Usable()) {
+    if (std::fabs(row.theta_deg) <= kPsfAnisotropyFaceOnDeg && f != features.end() &&
+        f->second.Usable()) {
       face_on.push_back(f->second);
     }
   }
@@ -262,7 +260,7 @@ void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& fea
   const double optics_px2 =
       model->blur_calibration.LeastOpticsVarPx2(model->ranges.d_min_mm, model->ranges.d_max_mm);
   const bool possible = PsfAnisotropyPossible(psf, optics_px2);
-  const bool kept = psf.Significant() && possible;
+  const bool kept = KeepsPsfAnisotropy(psf, optics_px2);
   const PsfAnisotropy kept_psf = KeptPsfAnisotropy(psf, optics_px2);  // noise is not written
   model->blur_calibration.psf_aniso_c_px2 = kept_psf.c_px2;
   model->blur_calibration.psf_aniso_s_px2 = kept_psf.s_px2;
@@ -276,10 +274,9 @@ void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& fea
       << "\n";
 }
 
-// The most calibration frames the crosstalk's split is fitted on, and the most it and the blob
-// fit's blur level (its offset's line) are refined on (estimator/blur_level.h); each spread over
-// the recording (Table 3's 256 measurement frames all take part in the refinement).
-constexpr std::size_t kCrosstalkFrames = kBlurSplitFrames;
+// The most calibration frames the crosstalk's split and the blob fit's blur level (its offset's
+// line) are refined on (estimator/blur_level.h), spread over the recording (Table 3's 256
+// measurement frames all take part); the split itself is fitted on kBlurSplitFrames (blob_fit.h).
 constexpr std::size_t kBlurLevelFrames = 512;
 
 // Calls `use` with up to `most` of `rows` spread over them (every k-th) as FitBlurSplit's frames,
@@ -345,7 +342,7 @@ class RefinementFrames {
 };
 
 // The split of the calibrated blur into optics and crosstalk (estimator/blob_fit.h FitBlurSplit)
-// from up to kCrosstalkFrames usable measurement frames, then refined with the blob fit's blur
+// from up to kBlurSplitFrames usable measurement frames, then refined with the blob fit's blur
 // level on up to kBlurLevelFrames (RefineBlurSplit), each frame with the blob fit's blur at its
 // distance.
 void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& features,
@@ -358,7 +355,7 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
     }
   }
   std::vector<CrosstalkFrame> frames;
-  ForCrosstalkFrames(reader, features, rows, kCrosstalkFrames, *model,
+  ForCrosstalkFrames(reader, features, rows, kBlurSplitFrames, *model,
                      [&](CrosstalkFrame f) { frames.push_back(std::move(f)); });
   const BlurSplit first = FitBlurSplit(frames);
   frames.clear();

@@ -79,16 +79,13 @@ std::vector<Pose> CalibrationPoses() {
 
 std::vector<double> CalibrationTMs() { return {30, 32, 34, 36}; }
 
-// The face-on poses' |theta| (deg) whose frames show the PSF's anisotropy alone (as `irdist fit`).
-constexpr double kFaceOnDeg = 0.5;
-
 // The optics' PSF anisotropy from the sweep's face-on frames' moments, into the model where it
 // stands out of its noise and a lens can have it (estimator/psf_anisotropy.h KeptPsfAnisotropy),
 // as `irdist fit` does (app/processing/recording_fit.cc, CalibratePsfAnisotropy).
 void CalibratePsfAnisotropy(const std::vector<Bracket>& brackets, Pipeline* pl) {
   std::vector<Features> face_on;
   for (const Bracket& b : brackets) {
-    if (std::fabs(b.pose.theta_deg) > kFaceOnDeg) continue;
+    if (std::fabs(b.pose.theta_deg) > kPsfAnisotropyFaceOnDeg) continue;
     if (b.reference.Usable()) face_on.push_back(b.reference);
     for (const Features& f : b.measurements) {
       if (f.Usable()) face_on.push_back(f);
@@ -96,15 +93,17 @@ void CalibratePsfAnisotropy(const std::vector<Bracket>& brackets, Pipeline* pl) 
   }
   const PsfAnisotropy psf = FitPsfAnisotropy(face_on);
   BlurCalibration& blur = pl->model.blur_calibration;
-  const PsfAnisotropy kept = KeptPsfAnisotropy(
-      psf, blur.LeastOpticsVarPx2(pl->model.ranges.d_min_mm, pl->model.ranges.d_max_mm));
-  blur.psf_aniso_c_px2 = kept.c_px2;
-  blur.psf_aniso_s_px2 = kept.s_px2;
+  const double least_optics_px2 =
+      blur.LeastOpticsVarPx2(pl->model.ranges.d_min_mm, pl->model.ranges.d_max_mm);
+  const bool kept = KeepsPsfAnisotropy(psf, least_optics_px2);
+  const PsfAnisotropy kept_psf = KeptPsfAnisotropy(psf, least_optics_px2);
+  blur.psf_aniso_c_px2 = kept_psf.c_px2;
+  blur.psf_aniso_s_px2 = kept_psf.s_px2;
   std::printf(
       "calibration %-10s PSF anisotropy %+.4f +- %.4f, %+.4f +- %.4f px^2 from %d face-on "
       "frames: %s\n",
       pl->name.c_str(), psf.c_px2, psf.c_se_px2, psf.s_px2, psf.s_se_px2, psf.frames,
-      kept.c_px2 != 0.0 || kept.s_px2 != 0.0 ? "kept" : "the PSF taken as round");
+      kept ? "kept" : "the PSF taken as round");
 }
 
 // The PSF's anisotropy (CalibratePsfAnisotropy), then the blob fit's split of the calibrated blur
