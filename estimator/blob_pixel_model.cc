@@ -143,11 +143,18 @@ PixelResponse MakeResponse(double blur_var_px2, double crosstalk_var_px2, double
 
 namespace {
 
+// A pixel this near the disc's centre (|dx| + |dy|, px) is taken this far off it along x.
+constexpr double kCentreOffsetPx = 1e-3;
+
 // SquareMean over a square of `side` px centred at (x, y); *near_edge false when it lies far
 // from the edge (its value 1 or 0 at once, the derivatives 0).
 double SideSquareMean(const double* v, double x, double y, double side, const PixelResponse& r,
                       double* d, bool* near_edge) {
-  const double dx = x - v[0], dy = y - v[1];
+  // At the disc's very centre the edge's normal is undefined (g = 0): the pixel is taken a hair
+  // off it, where the model is continuous (its value moves by the edge's slope times 1e-3 px).
+  const double dx =
+      std::fabs(x - v[0]) + std::fabs(y - v[1]) < kCentreOffsetPx ? kCentreOffsetPx : x - v[0];
+  const double dy = y - v[1];
   const double gx = v[2] * dx + v[3] * dy, gy = v[3] * dx + v[4] * dy;  // g = P (p - c)
   const double q = dx * gx + dy * gy;
   const double n2 = gx * gx + gy * gy;
@@ -157,7 +164,11 @@ double SideSquareMean(const double* v, double x, double y, double side, const Pi
   const double aniso = std::hypot(r.aniso_c, r.aniso_s);
   const double margin = 1.25 + 5.0 * std::sqrt(optics_var + aniso);
   std::fill(d, d + 5, 0.0);
-  *near_edge = !(q < 0.09 || dist > margin || dist < -margin);
+  // Only the margin decides: a pixel inside a small, blurred disc is its edge's however near the
+  // centre it lies (set to 1 within 0.3 R of the centre, the model stepped by the edge's tail
+  // there as the radius moved, 0.006 of the step behind a heavy-tailed edge; docs/estimator.md
+  // "A pixel near the disc's centre").
+  *near_edge = !(dist > margin || dist < -margin);
   if (!*near_edge) return dist < 0.0 ? 0.0 : 1.0;
   const double pgx = v[2] * gx + v[3] * gy, pgy = v[3] * gx + v[4] * gy;  // P g
   // The curvature of the level set through the pixel, scaled to the disc's edge (the level sets

@@ -83,6 +83,37 @@ TEST(BlobPixelModel, TheModelsDerivativesAreItsFiniteDifferences) {
   ExpectDerivativesAreFiniteDifferences(0.0, 0.0, 0.6, 4.0);
 }
 
+// A pixel inside a small, blurred disc is the edge's, however near the centre it lies: as the
+// disc's radius passes 1 / 0.3 of its distance from the centre, its value moves with the radius
+// and nothing else (it was set to 1 within 0.3 R of the centre, a step of the edge's tail there:
+// 0.006 of the amplitude behind a heavy-tailed edge of sd 1.1 px at R = 5.27 px, which moved the
+// fitted size of an Airy PSF's disc by 0.04%). At the very centre, where the edge's normal is
+// undefined, the value is its neighbours' and the derivatives finite.
+TEST(BlobPixelModel, APixelNearTheCentreIsTheEdgesWhateverTheRadius) {
+  for (const double excess : {0.0, 4.0, -2.0}) {
+    PixelResponse response;
+    response.optics_sd = 1.1;
+    response.gc_k = excess / 24.0;
+    const double x = 1.5, y = 0.5;                   // the pixel, from the disc's centre
+    const double crossing = std::hypot(x, y) / 0.3;  // R = 5.27 px
+    double d[5], last = std::nan("");
+    for (double r = crossing - 0.01; r <= crossing + 0.01; r += 0.0005) {
+      const double v[5] = {0.0, 0.0, 1.0 / (r * r), 0.0, 1.0 / (r * r)};
+      const double value = SquareMean(v, x, y, response, d);
+      if (std::isfinite(last)) {
+        EXPECT_LT(std::abs(value - last), 2e-5) << "excess " << excess << ", R " << r;
+      }
+      last = value;
+    }
+    // The edge's tail reaches the pixel: it is not the disc's full brightness.
+    EXPECT_GT(std::abs(1.0 - last), excess == 4.0 ? 1e-3 : 1e-5) << "excess " << excess;
+    const double v[5] = {0.0, 0.0, 1.0 / 25.0, 0.0, 1.0 / 25.0};
+    const double centre = SquareMean(v, 0.0, 0.0, response, d);
+    for (int k = 0; k < 5; ++k) EXPECT_TRUE(std::isfinite(d[k])) << "parameter " << k;
+    EXPECT_NEAR(centre, SquareMean(v, 0.002, 0.0, response, d), 1e-5) << "excess " << excess;
+  }
+}
+
 // The response splits the blur: the optics' variance is the blur less the pixel's area and the
 // crosstalk, the crosstalk a kernel that sums to 1 with the crosstalk's variance; none without.
 TEST(BlobPixelModel, TheResponseSplitsTheBlur) {

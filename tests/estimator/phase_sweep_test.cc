@@ -323,7 +323,7 @@ TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
               100.0 * fig10_swing);
   // The goal row (<= 0.08%) on every response: all the blur after the pixels 0.063% (0.077% when
   // the blur's level and split stopped at the crosstalk's kink, blob_fit.h RoomFor), the defocus
-  // disc 0.049% (0.027% with a Gaussian edge: a noisy swing of one figure), the Airy PSF 0.051%
+  // disc 0.049% (0.027% with a Gaussian edge: a noisy swing of one figure), the Airy PSF 0.053%
   // (0.153% with a Gaussian edge), the 70% aperture 0.033%, the astigmatic optics 0.046%.
   EXPECT_LT(fig10_swing, 8e-4);
   // The split within 0.05 px^2 of its truth (seed 31: 0.001 after the pixels, 0.000-0.026 for the
@@ -356,7 +356,7 @@ TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
   // reached: all the blur after the pixels (0.021-0.024% over seeds 31-34; 0.053-0.077% when the
   // blur's level and split stopped at the crosstalk's kink), the defocus disc (0.044-0.049% with
   // its edge's shape fitted; 0.058-0.071% with a Gaussian edge), the 70% aperture (0.019-0.032%)
-  // and the astigmatic optics (0.014-0.028%); the Airy PSF (0.057-0.069%; 0.20-0.25% with a
+  // and the astigmatic optics (0.014-0.028%); the Airy PSF (0.051-0.061%; 0.20-0.25% with a
   // Gaussian edge) within 0.1%.
   for (const SweepFigures* s : {&corner, &centre}) {
     EXPECT_LT(std::abs(s->calibrated_mean), 3e-4);
@@ -370,7 +370,7 @@ TEST_P(PhaseSweep, SizeDoesNotFollowTheEdgesPhase) {
   // to peak on the corner sweep, whose weight w is 2, is 0.009% rms over centres at random
   // phases) plus what the sizes' noise alone reads (EdgePhase::noise_rms, 0.005-0.009% from 128
   // frames). Seed 31: all the blur after the pixels 0.011% (noise 0.009), the defocus disc 0.004
-  // (0.007), the Airy PSF 0.010 (0.006), the 70% aperture 0.008 (0.005), the astigmatic optics
+  // (0.007), the Airy PSF 0.009 (0.006), the 70% aperture 0.008 (0.005), the astigmatic optics
   // 0.006 (0.006); and the astigmatic optics within the goal's equivalent alone.
   EXPECT_LT(phase.rms, 9e-5 + phase.noise_rms);
   if (kind == PixelResponseKind::kAstigmatic) {
