@@ -91,6 +91,16 @@ double SquareEdge(double t, double nx, double ny, double side, double sd, double
 struct BlurredEdge {
   double value = 0.0, slope = 0.0, shift = 0.0;
 };
+// The excess kurtosis of a round PSF's tangential spread, from its edge's Gram-Charlier term
+// (gc_k = g / 24: a round PSF's every line spread is the same): g where a round PSF can have it,
+// a flat top down to a defocus disc's own -1 (its line spread is a semicircle; the edge's fitted g
+// reads lower, -2.1 on a pure disc, where the series stands in for the disc's sharp rim), and a
+// Gaussian's 0 for a peaked core (the Airy pattern's g = 4 at the series' end has no fourth
+// moment: its tails' share is not a kurtosis). With a Gaussian's 2 sd^4 whatever the edge, the
+// fitted ellipse of a small disc behind a defocus disc came out rounder (docs/estimator.md
+// "The curved edge's widening").
+constexpr double kMinTangentialExcess = -1.0;
+double TangentialExcess(double gc_k) { return std::clamp(24.0 * gc_k, kMinTangentialExcess, 0.0); }
 BlurredEdge BlurEdge(double dist, double kappa_edge, double nx, double ny, double side,
                      double optics_var, double aniso_n, double gc_k) {
   const double normal2 = std::max(optics_var + aniso_n, kMinOpticsVarPx2);
@@ -99,10 +109,11 @@ BlurredEdge BlurEdge(double dist, double kappa_edge, double nx, double ny, doubl
   BlurredEdge e;
   e.shift = 0.5 * tangent2 + 0.5 * kPixelAreaVarPx2 * side2;
   // The curvature also widens the edge: the tangential offset Y (blur and square) moves it by
-  // kappa Y^2 / 2, whose variance kappa^2 var(Y^2) / 4 adds to the edge's (var(Y^2) = 2 sd^4 +
-  // sd^2 s^2 / 3 + s^4 (1/80 - 1/144) for a Gaussian of sd plus a uniform of width s).
-  const double var_y2 = 2.0 * tangent2 * tangent2 + tangent2 * side2 / 3.0 +
-                        side2 * side2 * (1.0 / 80.0 - 1.0 / 144.0);
+  // kappa Y^2 / 2, whose variance kappa^2 var(Y^2) / 4 adds to the edge's (var(Y^2) = (2 + g)
+  // sd^4 + sd^2 s^2 / 3 + s^4 (1/80 - 1/144) for a round PSF of sd and excess kurtosis g plus a
+  // uniform of width s; g as TangentialExcess reads it).
+  const double var_y2 = (2.0 + TangentialExcess(gc_k)) * tangent2 * tangent2 +
+                        tangent2 * side2 / 3.0 + side2 * side2 * (1.0 / 80.0 - 1.0 / 144.0);
   const double sd = std::sqrt(normal2 + 0.25 * kappa_edge * kappa_edge * var_y2);
   e.value = SquareEdge(dist - e.shift * kappa_edge, nx, ny, side, sd, gc_k, &e.slope);
   return e;

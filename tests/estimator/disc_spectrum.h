@@ -1,6 +1,7 @@
 #pragma once
 // An independent, noise-free renderer of a blob for the edge-phase tests: a uniformly
-// bright elliptical disc, blurred by an optical Gaussian BEFORE the pixels sample it, integrated
+// bright elliptical disc, blurred by an optical Gaussian (and a defocus disc, if any) BEFORE the
+// pixels sample it, integrated
 // over each pixel's square, then spread by inter-pixel crosstalk (a discrete Gaussian) AFTER the
 // sampling. Computed in the Fourier domain, exactly: the disc's transform is closed form
 // (|M| J1(2 pi |M^T f|) / |M^T f| for the ellipse x = M u of the unit disc), the optical blur
@@ -31,6 +32,9 @@ struct DiscBlob {
   // -psf_aniso_c_px2]] (px^2; c = (Sxx - Syy) / 2, s = Sxy): transform exp(-2 pi^2 f^T S f).
   double psf_aniso_c_px2 = 0.0;
   double psf_aniso_s_px2 = 0.0;
+  // A defocused lens: a uniform disc PSF of this radius (px) before the pixels as well, transform
+  // 2 J1(x) / x at x = 2 pi r |f| (0: none).
+  double defocus_disc_px = 0.0;
   double crosstalk_sigma_px = 0.0;  // discrete Gaussian after them (sampled, normalised)
   // true: the crosstalk is a lattice random walk of variance crosstalk_sigma_px^2 instead (charge
   // hopping between neighbours: transform exp(-t (1 - cos 2 pi f)) per axis).
@@ -84,7 +88,10 @@ inline std::complex<double> DiscAliasTerm(const DiscBlob& blob, double c, double
   const double f_s_f = blob.optics_sigma_px * blob.optics_sigma_px * (fx * fx + fy * fy) +
                        blob.psf_aniso_c_px2 * (fx * fx - fy * fy) +
                        2.0 * blob.psf_aniso_s_px2 * fx * fy;
-  const double optics = std::exp(-2.0 * M_PI * M_PI * f_s_f);
+  const double defocus_x = 2.0 * M_PI * blob.defocus_disc_px * std::hypot(fx, fy);
+  const double defocus =
+      defocus_x < 1e-12 ? 1.0 : 2.0 * boost::math::cyl_bessel_j(1, defocus_x) / defocus_x;
+  const double optics = std::exp(-2.0 * M_PI * M_PI * f_s_f) * defocus;
   const double sx = fx == 0.0 ? 1.0 : std::sin(M_PI * fx) / (M_PI * fx);
   const double sy = fy == 0.0 ? 1.0 : std::sin(M_PI * fy) / (M_PI * fy);
   const double phase = -2.0 * M_PI * (fx * blob.cx + fy * blob.cy);
