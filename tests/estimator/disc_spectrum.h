@@ -1,9 +1,9 @@
 #pragma once
 // An independent, noise-free renderer of a blob for the edge-phase tests: a uniformly
 // bright elliptical disc, blurred by an optical Gaussian (and a defocus disc, if any) BEFORE the
-// pixels sample it, integrated
-// over each pixel's square, then spread by inter-pixel crosstalk (a discrete Gaussian) AFTER the
-// sampling. Computed in the Fourier domain, exactly: the disc's transform is closed form
+// pixels sample it, integrated over each pixel's square, then spread by inter-pixel crosstalk (a
+// discrete Gaussian) AFTER the sampling. Computed in the Fourier domain, exactly: the disc's
+// transform is closed form
 // (|M| J1(2 pi |M^T f|) / |M^T f| for the ellipse x = M u of the unit disc), the optical blur
 // multiplies it by exp(-2 pi^2 s^2 |f|^2), the pixel's square by sinc(fx) sinc(fy); sampling at
 // the pixel centres folds the spectrum (the sum over the aliases f + k, k integer, which is what

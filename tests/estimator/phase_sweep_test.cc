@@ -69,6 +69,8 @@ struct Calibration {
   std::vector<double> true_radius_px;
 };
 
+// `render`: a round disc's noise-free image through the lens (the response's RenderResponse, or
+// the test's own).
 using RenderDisc = std::function<cv::Mat1d(const testing::FlatDisc&)>;
 Calibration CalibrateFromNoisyFrames(const RenderDisc& render, unsigned seed) {
   std::mt19937_64 rng(seed);
@@ -492,7 +494,9 @@ TEST(DefocusedEllipse, ASmallTiltedDiscsThetaHasNoBias) {
       },
       31);
   ASSERT_TRUE(cal.blur.fitted());
-  EXPECT_LT(cal.blur.optics_excess, -0.5);  // the edge's flat top
+  if (!kReducedSweep) {
+    EXPECT_LT(cal.blur.optics_excess, -0.5);  // the edge's flat top (-1.10)
+  }
   for (const double theta_deg : {20.0, 30.0}) {
     for (const double major_px : {4.5, 5.0, 6.0, 7.0, 9.0}) {
       const double minor_px = major_px * std::cos(theta_deg * kPi / 180.0);
