@@ -46,6 +46,14 @@ PsfAnisotropy KeptPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_va
   return kept;
 }
 
+bool SetPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_var_px2,
+                      BlurCalibration* blur) {
+  const PsfAnisotropy kept = KeptPsfAnisotropy(psf, least_optics_var_px2);
+  blur->psf_aniso_c_px2 = kept.c_px2;
+  blur->psf_aniso_s_px2 = kept.s_px2;
+  return KeepsPsfAnisotropy(psf, least_optics_var_px2);
+}
+
 PsfAnisotropy FitPsfAnisotropy(const std::vector<Features>& face_on) {
   std::vector<double> c, s;
   for (const Features& f : face_on) {

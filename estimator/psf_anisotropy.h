@@ -10,6 +10,7 @@
 
 #include <vector>
 
+#include "estimator/blur_model.h"
 #include "estimator/features.h"
 
 namespace irdist {
@@ -47,6 +48,9 @@ bool PsfAnisotropyPossible(const PsfAnisotropy& psf, double least_optics_var_px2
 bool KeepsPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_var_px2);
 // `psf` where a calibration keeps it (KeepsPsfAnisotropy), else a round PSF's (c = s = 0).
 PsfAnisotropy KeptPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_var_px2);
+// A calibration's step (`irdist fit`'s and the accuracy study's): KeptPsfAnisotropy into `blur`
+// (its anisotropy, not its noise); whether it was kept.
+bool SetPsfAnisotropy(const PsfAnisotropy& psf, double least_optics_var_px2, BlurCalibration* blur);
 
 // The moments' covariance less the PSF's anisotropy: moment_major/minor_var_px2 and the moment
 // ellipse's angle become those of C - [[c, s], [s, -c]] (the PSF's round part stays, as the

@@ -260,10 +260,7 @@ void CalibratePsfAnisotropy(const RecordingReader& reader, const FeatureMap& fea
   const double optics_px2 =
       model->blur_calibration.LeastOpticsVarPx2(model->ranges.d_min_mm, model->ranges.d_max_mm);
   const bool possible = PsfAnisotropyPossible(psf, optics_px2);
-  const bool kept = KeepsPsfAnisotropy(psf, optics_px2);
-  const PsfAnisotropy kept_psf = KeptPsfAnisotropy(psf, optics_px2);  // noise is not written
-  model->blur_calibration.psf_aniso_c_px2 = kept_psf.c_px2;
-  model->blur_calibration.psf_aniso_s_px2 = kept_psf.s_px2;
+  const bool kept = SetPsfAnisotropy(psf, optics_px2, &model->blur_calibration);
   out << "  PSF anisotropy: " << psf.c_px2 << " +- " << psf.c_se_px2 << ", " << psf.s_px2
       << " +- " << psf.s_se_px2 << " px^2 ((Sxx - Syy) / 2, Sxy) from " << psf.frames
       << " face-on frames: "

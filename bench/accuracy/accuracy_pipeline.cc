@@ -80,7 +80,7 @@ std::vector<Pose> CalibrationPoses() {
 std::vector<double> CalibrationTMs() { return {30, 32, 34, 36}; }
 
 // The optics' PSF anisotropy from the sweep's face-on frames' moments, into the model where it
-// stands out of its noise and a lens can have it (estimator/psf_anisotropy.h KeptPsfAnisotropy),
+// stands out of its noise and a lens can have it (estimator/psf_anisotropy.h SetPsfAnisotropy),
 // as `irdist fit` does (app/processing/recording_fit.cc, CalibratePsfAnisotropy).
 void CalibratePsfAnisotropy(const std::vector<Bracket>& brackets, Pipeline* pl) {
   std::vector<Features> face_on;
@@ -95,10 +95,7 @@ void CalibratePsfAnisotropy(const std::vector<Bracket>& brackets, Pipeline* pl) 
   BlurCalibration& blur = pl->model.blur_calibration;
   const double least_optics_px2 =
       blur.LeastOpticsVarPx2(pl->model.ranges.d_min_mm, pl->model.ranges.d_max_mm);
-  const bool kept = KeepsPsfAnisotropy(psf, least_optics_px2);
-  const PsfAnisotropy kept_psf = KeptPsfAnisotropy(psf, least_optics_px2);
-  blur.psf_aniso_c_px2 = kept_psf.c_px2;
-  blur.psf_aniso_s_px2 = kept_psf.s_px2;
+  const bool kept = SetPsfAnisotropy(psf, least_optics_px2, &blur);
   std::printf(
       "calibration %-10s PSF anisotropy %+.4f +- %.4f, %+.4f +- %.4f px^2 from %d face-on "
       "frames: %s\n",

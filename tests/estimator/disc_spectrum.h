@@ -41,6 +41,13 @@ struct DiscBlob {
   bool crosstalk_lattice = false;
 };
 
+// A round defocus disc PSF's transform (radius `radius_px`) at the frequency |f| (cycles / px):
+// 2 J1(x) / x, x = 2 pi r |f|.
+inline double DefocusDiscTransform(double radius_px, double f) {
+  const double x = 2.0 * M_PI * radius_px * f;
+  return x < 1e-12 ? 1.0 : 2.0 * boost::math::cyl_bessel_j(1, x) / x;
+}
+
 // The crosstalk kernel's transform: a Gaussian of sigma sampled at the integers and normalised to
 // sum 1, over |n| <= 8 sigma + 1.
 inline double CrosstalkTransform(double sigma, double f) {
@@ -88,10 +95,8 @@ inline std::complex<double> DiscAliasTerm(const DiscBlob& blob, double c, double
   const double f_s_f = blob.optics_sigma_px * blob.optics_sigma_px * (fx * fx + fy * fy) +
                        blob.psf_aniso_c_px2 * (fx * fx - fy * fy) +
                        2.0 * blob.psf_aniso_s_px2 * fx * fy;
-  const double defocus_x = 2.0 * M_PI * blob.defocus_disc_px * std::hypot(fx, fy);
-  const double defocus =
-      defocus_x < 1e-12 ? 1.0 : 2.0 * boost::math::cyl_bessel_j(1, defocus_x) / defocus_x;
-  const double optics = std::exp(-2.0 * M_PI * M_PI * f_s_f) * defocus;
+  const double optics = std::exp(-2.0 * M_PI * M_PI * f_s_f) *
+                        DefocusDiscTransform(blob.defocus_disc_px, std::hypot(fx, fy));
   const double sx = fx == 0.0 ? 1.0 : std::sin(M_PI * fx) / (M_PI * fx);
   const double sy = fy == 0.0 ? 1.0 : std::sin(M_PI * fy) / (M_PI * fy);
   const double phase = -2.0 * M_PI * (fx * blob.cx + fy * blob.cy);

@@ -26,17 +26,18 @@
 // frames; CleanFrame12 rounds the noise-free image to whole DN.
 
 #include <algorithm>
+#include <boost/math/special_functions/bessel.hpp>
 #include <cmath>
 #include <complex>
-#include <map>
-#include <tuple>
 #include <cstdint>
+#include <map>
+#include <opencv2/core.hpp>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
-#include <boost/math/special_functions/bessel.hpp>
-#include <opencv2/core.hpp>
+#include "tests/estimator/disc_spectrum.h"
 
 namespace irdist::testing {
 
@@ -125,11 +126,8 @@ inline double BeforeSamplingTransform(PixelResponseKind kind, double fx, double 
   const auto gauss = [](double sd, double f) { return std::exp(-2.0 * M_PI * M_PI * sd * sd * f * f); };
   const double rho = std::hypot(fx, fy);
   switch (kind) {
-    case PixelResponseKind::kDefocusDisc: {
-      const double x = 2.0 * M_PI * 1.4 * rho;
-      const double psf = x < 1e-12 ? 1.0 : 2.0 * boost::math::cyl_bessel_j(1, x) / x;
-      return psf * sinc(fx) * sinc(fy);
-    }
+    case PixelResponseKind::kDefocusDisc:
+      return DefocusDiscTransform(1.4, rho) * sinc(fx) * sinc(fy);
     case PixelResponseKind::kAiry: {
       const double s = rho / 0.7;
       const double otf = s >= 1.0 ? 0.0 : 2.0 / M_PI * (std::acos(s) - s * std::sqrt(1.0 - s * s));
