@@ -122,6 +122,14 @@ inline constexpr Bound kOpticsExcess{"excess kurtosis",
                                      false,
                                      "a defocus disc's edge reads -2, an Airy pattern's 4; "
                                      "beyond, the edge's line spread goes negative"};
+// The blob fit's edge correction (estimator/edge_correction.h): a share of the disc's brightness.
+inline constexpr Bound kEdgeCorrection{"edge correction",
+                                       "",
+                                       -0.5,
+                                       0.5,
+                                       false,
+                                       "the share of the disc's brightness the fit's edge misses "
+                                       "at a pixel: a lens's reads a few 0.01"};
 // The fit's fitness (estimator/fitness.h): chi-squares and ratios of variances in noise units.
 inline constexpr Bound kChiSquare{"chi-square", "", 0.0, 1.0e15, false,
                                   "a sum of squared residuals in noise units is >= 0; 1e15 is "

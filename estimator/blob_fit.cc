@@ -407,6 +407,7 @@ WindowResiduals ModelOf(const WindowStart& s, double blur_var_px2, const Crossta
                                         crosstalk.optics_excess);
   response.aniso_c = psf.c_px2;
   response.aniso_s = psf.s_px2;
+  response.edge_correction = crosstalk.edge_correction;
   WindowResiduals model(s.pixels, s.window.width, s.window.height, std::move(response));
   model.SetVariances(std::vector<double>(s.pixels.size(), s.read_var));
   return model;
@@ -462,6 +463,7 @@ BlobFitResult FitBlobPasses(const cv::Mat& image, int bit_depth, const Features&
   // The major axis is the eigenvector of P's smaller eigenvalue.
   out.angle_deg = 0.5 * std::atan2(-2.0 * v[3], v[4] - v[2]) * 180.0 / kPi;
   out.chi2_per_pixel = chi2;
+  out.amplitude = v[5], out.background = v[6];
   out.pixels = static_cast<int>(pixels.size());
   return out;
 }
@@ -526,10 +528,9 @@ BlobSplitProfile ProfileBlobSplit(const cv::Mat& image, int bit_depth, const Fea
   const double room = CrosstalkRoomPx2(blur_var_px2) - s.crosstalk.var_px2;
   const double crosstalk_step = room > blur_step ? blur_step : -blur_step;
   const WindowResiduals blurrier = ModelOf(s, blur_var_px2 + blur_step, s.crosstalk, round);
-  const WindowResiduals spread = ModelOf(
-      s, blur_var_px2,
-      {s.crosstalk.var_px2 + crosstalk_step, s.crosstalk.lattice_share, s.crosstalk.optics_excess},
-      round);
+  Crosstalk wider = s.crosstalk;
+  wider.var_px2 += crosstalk_step;
+  const WindowResiduals spread = ModelOf(s, blur_var_px2, wider, round);
   Eigen::Matrix<double, kParams + 2, kParams + 2> jtj;
   Eigen::Matrix<double, kParams + 2, 1> jtr;
   model.ExtendedSystem<2>(s.v, {&blurrier, &spread}, {blur_step, crosstalk_step}, &jtj, &jtr);

@@ -23,7 +23,9 @@
 #include <algorithm>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <opencv2/core.hpp>
+#include <utility>
 #include <vector>
 
 #include "base/bounds.h"
@@ -43,12 +45,19 @@ namespace irdist {
 // tails > 0), fitted with the split (FitBlurSplit).
 constexpr double kMinOpticsExcess = bounds::kOpticsExcess.min;  // Gram-Charlier's reach
 constexpr double kMaxOpticsExcess = bounds::kOpticsExcess.max;
+// And the edge's correction learned from the calibration frames' residuals
+// (estimator/edge_correction.h; null: none), which every Crosstalk made from another carries on.
 struct Crosstalk {
-  Crosstalk(double var = 0.0, double share = 0.0, double excess = 0.0)  // NOLINT
-      : var_px2(var), lattice_share(share), optics_excess(excess) {}
+  Crosstalk(double var = 0.0, double share = 0.0, double excess = 0.0,  // NOLINT
+            std::shared_ptr<const std::vector<double>> correction = nullptr)
+      : var_px2(var),
+        lattice_share(share),
+        optics_excess(excess),
+        edge_correction(std::move(correction)) {}
   double var_px2;
   double lattice_share;
   double optics_excess;
+  std::shared_ptr<const std::vector<double>> edge_correction;
 };
 // The crosstalk as a total blur `blur_var_px2` (pixel area included) leaves room for: its
 // variance at most the blur less the pixel's area and the optics' floor (kMinOpticsVarPx2). Below
@@ -57,7 +66,8 @@ struct Crosstalk {
 // kink, and a search that stopped there lost the noisy frames that ask for less blur.
 inline double CrosstalkRoomPx2(double blur_var_px2) { return blur_var_px2 - kLeastBlurVarPx2; }
 inline Crosstalk RoomFor(const Crosstalk& c, double blur_var_px2) {
-  return {std::min(c.var_px2, CrosstalkRoomPx2(blur_var_px2)), c.lattice_share, c.optics_excess};
+  return {std::min(c.var_px2, CrosstalkRoomPx2(blur_var_px2)), c.lattice_share, c.optics_excess,
+          c.edge_correction};
 }
 
 struct BlobFitResult {
@@ -85,6 +95,8 @@ struct BlobFitResult {
   double blur_var_px2 = 0.0;   // the calibrated blur variance used (pixel area included)
   double crosstalk_var_px2 = 0.0;  // the part of it after the sampling, as used
   double chi2_per_pixel = 0.0; // weighted residual sum of squares / pixels (~1 when the model fits)
+  // The disc's brightness and the background under it, in full scale (1 = 2^bit_depth - 1).
+  double amplitude = 0.0, background = 0.0;
   // The same after the first pass, weighted by the read noise alone (FitBlurSplit compares it).
   double read_weighted_chi2 = 0.0;
   int pixels = 0;
@@ -224,7 +236,10 @@ std::vector<CrosstalkFrame> SplitFramesOf(const std::vector<CrosstalkFrame>& fra
 
 // The response after the blur a model's blur calibration or a split gives the blob fit.
 inline Crosstalk CrosstalkOf(const BlurCalibration& b) {
-  return {b.crosstalk_var_px2, b.crosstalk_lattice_share, b.optics_excess};
+  return {b.crosstalk_var_px2, b.crosstalk_lattice_share, b.optics_excess,
+          b.edge_correction.empty()
+              ? nullptr
+              : std::make_shared<const std::vector<double>>(b.edge_correction)};
 }
 inline Crosstalk CrosstalkOf(const BlurSplit& s) {
   return {s.crosstalk_var_px2, s.crosstalk_lattice_share, s.optics_excess};

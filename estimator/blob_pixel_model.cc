@@ -157,20 +157,32 @@ namespace {
 // A pixel this near the disc's centre (|dx| + |dy|, px) is taken this far off it along x.
 constexpr double kCentreOffsetPx = 1e-3;
 
+// The edge geometry of the point (x, y) for the disc v, but the level set's curvature and P g.
+// At the disc's very centre the edge's normal is undefined (g = 0): the point is taken a hair
+// off it, where the model is continuous (its value moves by the edge's slope times 1e-3 px).
+EdgeGeometry GeometryAt(const double* v, double x, double y) {
+  EdgeGeometry e{};
+  e.dx = std::fabs(x - v[0]) + std::fabs(y - v[1]) < kCentreOffsetPx ? kCentreOffsetPx : x - v[0];
+  e.dy = y - v[1];
+  e.gx = v[2] * e.dx + v[3] * e.dy, e.gy = v[3] * e.dx + v[4] * e.dy;  // g = P (p - c)
+  const double q = e.dx * e.gx + e.dy * e.gy;
+  e.r = std::sqrt(q), e.n = std::hypot(e.gx, e.gy);
+  e.dist = (e.r - q) / e.n;
+  return e;
+}
+// The curvature of the level set through the point, and P g, into e.
+void AddCurvature(const double* v, EdgeGeometry* e) {
+  e->pgx = v[2] * e->gx + v[3] * e->gy, e->pgy = v[3] * e->gx + v[4] * e->gy;  // P g
+  const double n2 = e->n * e->n;
+  e->kappa = (n2 * (v[2] + v[4]) - (e->gx * e->pgx + e->gy * e->pgy)) / (n2 * e->n);
+}
+
 // SquareMean over a square of `side` px centred at (x, y); *near_edge false when it lies far
 // from the edge (its value 1 or 0 at once, the derivatives 0).
 double SideSquareMean(const double* v, double x, double y, double side, const PixelResponse& r,
                       double* d, bool* near_edge) {
-  // At the disc's very centre the edge's normal is undefined (g = 0): the pixel is taken a hair
-  // off it, where the model is continuous (its value moves by the edge's slope times 1e-3 px).
-  const double dx =
-      std::fabs(x - v[0]) + std::fabs(y - v[1]) < kCentreOffsetPx ? kCentreOffsetPx : x - v[0];
-  const double dy = y - v[1];
-  const double gx = v[2] * dx + v[3] * dy, gy = v[3] * dx + v[4] * dy;  // g = P (p - c)
-  const double q = dx * gx + dy * gy;
-  const double n2 = gx * gx + gy * gy;
-  const double rq = std::sqrt(q), n = std::sqrt(n2);
-  const double dist = (rq - q) / n;
+  EdgeGeometry g = GeometryAt(v, x, y);
+  const double dist = g.dist;
   const double optics_var = r.optics_sd * r.optics_sd;
   const double aniso = std::hypot(r.aniso_c, r.aniso_s);
   const double margin = 1.25 + 5.0 * std::sqrt(optics_var + aniso);
@@ -181,15 +193,14 @@ double SideSquareMean(const double* v, double x, double y, double side, const Pi
   // "A pixel near the disc's centre").
   *near_edge = !(dist > margin || dist < -margin);
   if (!*near_edge) return dist < 0.0 ? 0.0 : 1.0;
-  const double pgx = v[2] * gx + v[3] * gy, pgy = v[3] * gx + v[4] * gy;  // P g
   // The curvature of the level set through the pixel, scaled to the disc's edge (the level sets
   // of q are the edge scaled by sqrt q): the edge's own curvature bends the blur's reach.
-  const double kappa = (n2 * (v[2] + v[4]) - (gx * pgx + gy * pgy)) / (n2 * n);
-  const double kappa_edge = kappa * rq;
-  const double nx = gx / n, ny = gy / n;
+  AddCurvature(v, &g);
+  const double kappa_edge = g.kappa * g.r;
+  const double nx = g.gx / g.n, ny = g.gy / g.n, dx = g.dx, dy = g.dy, n = g.n;
   const double aniso_n = r.aniso_c * (nx * nx - ny * ny) + 2.0 * r.aniso_s * nx * ny;
   const BlurredEdge e = BlurEdge(dist, kappa_edge, nx, ny, side, optics_var, aniso_n, r.gc_k);
-  DiscDerivatives(v, {dx, dy, gx, gy, pgx, pgy, rq, n, dist, kappa}, e.slope, e.shift, d);
+  DiscDerivatives(v, g, e.slope, e.shift, d);
   if (aniso > 0.0) {
     const double h = 1e-4 * (optics_var + aniso);
     const double up =
@@ -210,7 +221,42 @@ double SubSquareWeight(double optics_sd) {
                     0.0, 1.0);
 }
 
+// The edge correction's table at offset t (linear between its knots, 0 beyond them) and its
+// slope along t.
+double CorrectionAt(const std::vector<double>& table, double t, double* slope) {
+  *slope = 0.0;
+  const double u = (t + kEdgeCorrectionHalfWidthPx) / kEdgeCorrectionStepPx;
+  if (!(u >= 0.0) || !(u < kEdgeCorrectionKnots - 1) ||
+      table.size() != static_cast<size_t>(kEdgeCorrectionKnots)) {
+    return 0.0;
+  }
+  const auto k = static_cast<size_t>(u);
+  const double step = table[k + 1] - table[k];
+  *slope = step / kEdgeCorrectionStepPx;
+  return table[k] + (u - static_cast<double>(k)) * step;
+}
+
+// The edge correction's share of the pixel at (x, y), its derivatives added to d[5].
+double AddEdgeCorrection(const double* v, double x, double y, const PixelResponse& r, double* d) {
+  if (!r.edge_correction) return 0.0;
+  const EdgeOffset e = EdgeOffsetAt(v, x, y, r);
+  double slope = 0.0;
+  const double c = CorrectionAt(*r.edge_correction, e.t, &slope);
+  for (int k = 0; k < 5; ++k) d[k] += slope * e.dt[k];
+  return c;
+}
+
 }  // namespace
+
+EdgeOffset EdgeOffsetAt(const double* v, double x, double y, const PixelResponse& r) {
+  EdgeGeometry g = GeometryAt(v, x, y);
+  AddCurvature(v, &g);
+  const double shift = 0.5 * (r.optics_sd * r.optics_sd + kPixelAreaVarPx2);
+  EdgeOffset e;
+  e.t = g.dist - shift * g.kappa * g.r;
+  DiscDerivatives(v, g, 1.0, shift, e.dt);
+  return e;
+}
 
 // The disc's mean over the pixel at (x, y) before crosstalk, and its derivatives into d[5]: the
 // optical edge integrated over the pixel's square as a straight edge (SquareEdge) at the signed
@@ -230,7 +276,7 @@ double SquareMean(const double* v, double x, double y, const PixelResponse& r, d
   bool near_edge = false;
   const double whole = SideSquareMean(v, x, y, 1.0, r, d, &near_edge);
   const double w = SubSquareWeight(r.optics_sd);
-  if (!near_edge || w == 0.0) return whole;
+  if (!near_edge || w == 0.0) return whole + AddEdgeCorrection(v, x, y, r, d);
   double halves = 0.0, sum[5] = {0.0, 0.0, 0.0, 0.0, 0.0}, part[5];
   for (const double oy : {-0.25, 0.25}) {
     for (const double ox : {-0.25, 0.25}) {
@@ -239,7 +285,7 @@ double SquareMean(const double* v, double x, double y, const PixelResponse& r, d
     }
   }
   for (int k = 0; k < 5; ++k) d[k] = (1.0 - w) * d[k] + w * sum[k];
-  return (1.0 - w) * whole + w * halves;
+  return (1.0 - w) * whole + w * halves + AddEdgeCorrection(v, x, y, r, d);
 }
 
 // `in` (rows x cols, row-major) convolved with `kernel` along x (dx = 1) or y, keeping the valid

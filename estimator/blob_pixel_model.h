@@ -5,7 +5,10 @@
 // integrated in closed form, and its derivatives in the disc's centre and matrix; the crosstalk
 // after the sampling as a separable kernel on the pixel grid.
 
+#include <memory>
 #include <vector>
+
+#include "estimator/blur_model.h"  // the edge correction's table
 
 namespace irdist {
 namespace blob_model {
@@ -26,7 +29,21 @@ struct PixelResponse {
   double gc_k = 0.0;
   std::vector<double> kernel;   // crosstalk, 1-D (applied along x, then y), odd, sums to 1
   int reach = 0;                // the kernel's half width
+  // The edge's correction learned from the calibration's residuals (estimator/edge_correction.h):
+  // kEdgeCorrectionKnots values of the pixel's mean at its EdgeOffsetAt, added before the
+  // crosstalk; null: none.
+  std::shared_ptr<const std::vector<double>> edge_correction;
 };
+
+// The signed offset t (px, > 0 inside) of the pixel centre (x, y) from the disc's edge as the
+// optics round it, for the disc v (x, y, P11, P12, P22): the first-order distance to the edge less
+// the curvature's shift of the 50% point, kappa (optics_sd^2 + 1/12) / 2; the edge correction's
+// argument, with its derivatives in v.
+struct EdgeOffset {
+  double t = 0.0;
+  double dt[5] = {};
+};
+EdgeOffset EdgeOffsetAt(const double* v, double x, double y, const PixelResponse& r);
 
 // The response for a blur of `blur_var_px2` per axis (pixel area included) of which
 // `crosstalk_var_px2` comes after the sampling: the optics' sd and the crosstalk's kernel; the

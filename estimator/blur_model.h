@@ -19,6 +19,16 @@ constexpr double kMinOpticsVarPx2 = 0.0004;
 // The least total blur the blob fit takes: the pixel's area and the optics' floor.
 constexpr double kLeastBlurVarPx2 = kPixelAreaVarPx2 + kMinOpticsVarPx2;
 
+// The blob fit's edge correction's table (BlurCalibration::edge_correction): its knots every
+// kEdgeCorrectionStepPx over [-kEdgeCorrectionHalfWidthPx, +kEdgeCorrectionHalfWidthPx] of a
+// pixel's offset from the edge (blob_pixel_model.h EdgeOffsetAt), linear between them, 0 beyond
+// (the table tapers to 0 at its ends: the model stays continuous).
+constexpr double kEdgeCorrectionHalfWidthPx = 5.0;
+constexpr double kEdgeCorrectionStepPx = 0.1;
+constexpr int kEdgeCorrectionKnots = 101;
+static_assert((kEdgeCorrectionKnots - 1) * kEdgeCorrectionStepPx == 2 * kEdgeCorrectionHalfWidthPx,
+              "the knots span the table");
+
 // The calibrated blur: blur_var(u) = c0 + c1 u + c2 u^2, u = 1000 mm / d (the thin lens's defocus
 // variance is quadratic in u), and the per-frame sd of the measurement around it,
 // sd(d) = noise_at_1m (d / 1000 mm)^noise_exponent, both from the calibration frames.
@@ -50,6 +60,11 @@ struct BlurCalibration {
   // point by n^T S n for its normal n; the moments lose it. 0 in files before it (a round PSF).
   double psf_aniso_c_px2 = 0.0;
   double psf_aniso_s_px2 = 0.0;
+  // The blob fit's edge correction (estimator/edge_correction.h): the pixel's mean at each of
+  // the kEdgeCorrectionKnots offsets from the edge, learned from the calibration frames'
+  // residuals where they show the lens's edge is not the fit's. Empty: none (files before it,
+  // and every lens whose residuals are within their noise).
+  std::vector<double> edge_correction;
   // The blur the blob fit is given at d_mm: BlurVarPx2 plus the fit's offset.
   double FitBlurVarPx2(double d_mm) const {
     return BlurVarPx2(d_mm) + fit_offset_px2 + fit_offset_u_px2 * 1000.0 / d_mm;

@@ -140,7 +140,25 @@ void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
     EmitDouble(out, "psf_aniso_c_px2", b.psf_aniso_c_px2);
     EmitDouble(out, "psf_aniso_s_px2", b.psf_aniso_s_px2);
   }
+  if (!b.edge_correction.empty()) {  // whole 1e-6 (LearnEdgeCorrection): 6 digits are exact
+    out.SetDoublePrecision(6);
+    out << YAML::Key << "edge_correction" << YAML::Value << YAML::Flow << b.edge_correction;
+    out.SetDoublePrecision(std::numeric_limits<double>::max_digits10);  // SaveModel's
+  }
   out << YAML::EndMap;
+}
+
+// blur_calibration.edge_correction: optional (absent: none), kEdgeCorrectionKnots numbers; its
+// values bounded by model_file_bounds.h.
+void ReadEdgeCorrection(const Reader& rd, const YAML::Node& node, BlurCalibration* b) {
+  if (!Present(node, "edge_correction")) return;
+  b->edge_correction = rd.Doubles(node, "blur_calibration", "edge_correction", false);
+  if (b->edge_correction.size() != static_cast<std::size_t>(kEdgeCorrectionKnots)) {
+    rd.Fail(node["edge_correction"], "blur_calibration.edge_correction",
+            "expected " + std::to_string(kEdgeCorrectionKnots) +
+                " numbers (the edge's correction every 0.1 px from 5 px outside the edge to 5 "
+                "px inside); to use none, delete the key");
+  }
 }
 
 void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
@@ -185,6 +203,7 @@ void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
   if (Present(node, "fit_offset_u_px2")) {
     b->fit_offset_u_px2 = rd.Scalar<double>(node, "blur_calibration", "fit_offset_u_px2");
   }
+  ReadEdgeCorrection(rd, node, b);
   // Optional (absent: a round PSF); bounded by model_file_bounds.h.
   if (Present(node, "psf_aniso_c_px2")) {
     b->psf_aniso_c_px2 = rd.Scalar<double>(node, "blur_calibration", "psf_aniso_c_px2");

@@ -87,6 +87,10 @@ void CheckBlur(Checker* c, const BlurCalibration& b, const CalibratedRanges& r) 
   c->Value(k + "noise_exponent", b.noise_exponent, bounds::kNoiseExponent);
   c->Value(k + "crosstalk_lattice_share", b.crosstalk_lattice_share, bounds::kShare);
   c->Value(k + "optics_excess", b.optics_excess, bounds::kOpticsExcess);
+  for (std::size_t i = 0; i < b.edge_correction.size(); ++i) {
+    c->Value(k + "edge_correction[" + std::to_string(i) + "]", b.edge_correction[i],
+             bounds::kEdgeCorrection);
+  }
   BlurOverRange(c, k + "blur_var_px2", r, [&b](double d) { return b.BlurVarPx2(d); },
                 "the calibrated blur c0 + c1 u + c2 u^2");
   BlurOverRange(c, k + "fit_offset_u_px2", r, [&b](double d) { return b.FitBlurVarPx2(d); },

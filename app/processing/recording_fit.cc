@@ -16,6 +16,7 @@
 #include "estimator/blob_fit.h"
 #include "estimator/blur_level.h"
 #include "estimator/defect_map.h"
+#include "estimator/edge_correction.h"
 #include "estimator/model_file.h"
 #include "estimator/models.h"
 #include "estimator/psf_anisotropy.h"
@@ -341,7 +342,7 @@ class RefinementFrames {
 // The split of the calibrated blur into optics and crosstalk (estimator/blob_fit.h FitBlurSplit)
 // from up to kBlurSplitFrames usable measurement frames, then refined with the blob fit's blur
 // level on up to kBlurLevelFrames (RefineBlurSplit), each frame with the blob fit's blur at its
-// distance.
+// distance; then the blob fit's edge correction learned on the same frames (LearnEdgeCorrection).
 void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& features,
                         CalibrationModel* model, std::ostream& out) {
   std::vector<const FrameRecord*> rows;
@@ -371,6 +372,17 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
       << std::lround(far_mm) << " mm from the cumulants'; the split fitted on " << split.frames
       << " frames (" << first.crosstalk_var_px2 << " px^2), refined on "
       << (split.level_frames > 0 ? split.level_frames : split.frames) << "\n";
+  const EdgeCorrectionFit edge = LearnEdgeCorrection(
+      [&](const auto& use) { refinement_frames(use); }, &model->blur_calibration);
+  out << "  edge correction: ";
+  if (!edge.beyond_family) {
+    out << "none (the lens's edge lies within the fit's family)\n";
+    return;
+  }
+  out << "the lens's edge lies beyond the fit's family (its excess kurtosis at the family's "
+      << "end); the residuals at the fitted edges stand " << edge.evidence_sd
+      << " sd out of their noise on " << edge.frames
+      << " frames: " << (edge.kept ? "learned" : "none (within their noise)") << "\n";
 }
 
 // The round-blob rule on each bracket's frames together, as measurement pools them

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "estimator/blur_level.h"
+#include "estimator/edge_correction.h"
 #include "estimator/estimate_baselines.h"
 #include "estimator/health.h"
 #include "estimator/psf_anisotropy.h"
@@ -107,7 +108,8 @@ void CalibratePsfAnisotropy(const std::vector<Bracket>& brackets, Pipeline* pl) 
 // (optics before the pixels, crosstalk after them), fitted on a Table 3 sweep's measurement frames
 // as `irdist fit` does (app/processing/recording_fit.cc, CalibrateCrosstalk): their moments less
 // that anisotropy, FitBlurSplit on 32 of them spread over the sweep (every k-th), then refined and
-// its blur's level fitted on all of them (RefineBlurSplit).
+// its blur's level fitted on all of them (RefineBlurSplit), and the blob fit's edge correction
+// learned on them (LearnEdgeCorrection).
 void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipeline* pl) {
   SweepRenderer sr(physics, seed + 17);
   std::vector<CrosstalkFrame> frames;
@@ -130,6 +132,18 @@ void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipe
       "cumulants', %d frames, refined on %d\n",
       pl->name.c_str(), split.crosstalk_var_px2, split.optics_excess, split.blur_offset_px2,
       split.blur_offset_u_px2, split.frames, split.level_frames);
+  const EdgeCorrectionFit edge = LearnEdgeCorrection(
+      [&](const auto& use) {
+        for (const CrosstalkFrame& f : frames) use(f);
+      },
+      &pl->model.blur_calibration);
+  if (!edge.beyond_family) {
+    std::printf("calibration %-10s edge correction: none (the edge within the fit's family)\n",
+                pl->name.c_str());
+    return;
+  }
+  std::printf("calibration %-10s edge correction: %s (residuals %.1f sd out of their noise)\n",
+              pl->name.c_str(), edge.kept ? "learned" : "none", edge.evidence_sd);
 }
 
 // paper, default, alg1_joint, one fused_w<W> per radiometric weight, theta_cal and one

@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "base/pi.h"
@@ -81,6 +83,77 @@ TEST(BlobPixelModel, TheModelsDerivativesAreItsFiniteDifferences) {
   // An optics' edge beyond a Gaussian's (the Gram-Charlier term): a flat top and a peaked core.
   ExpectDerivativesAreFiniteDifferences(0.0, 0.0, 0.6, -2.0);
   ExpectDerivativesAreFiniteDifferences(0.0, 0.0, 0.6, 4.0);
+}
+
+// An edge correction's table of `amplitude`: a ringing of 1.7 px period over the edge, tapered to
+// 0 over the table's outer pixel as the calibration's are.
+std::shared_ptr<const std::vector<double>> RingingTable(double amplitude) {
+  auto table = std::make_shared<std::vector<double>>(kEdgeCorrectionKnots);
+  for (int k = 0; k < kEdgeCorrectionKnots; ++k) {
+    const double t = k * kEdgeCorrectionStepPx - kEdgeCorrectionHalfWidthPx;
+    const double taper =
+        std::sin(0.5 * kPi * std::min(kEdgeCorrectionHalfWidthPx - std::abs(t), 1.0));
+    (*table)[k] = amplitude * std::sin(2.0 * kPi * t / 1.7) * taper * taper;
+  }
+  return table;
+}
+
+// The edge correction is added to the pixel's mean at its offset from the edge (EdgeOffsetAt),
+// linear between the table's knots, with its derivatives (the table's slope times the offset's,
+// against central differences), and is 0 beyond the table, where the model is the edge's alone;
+// a pixel the disc's edge sweeps past the table's end sees no step.
+TEST(BlobPixelModel, TheEdgeCorrectionIsAddedAtTheEdgesOffsetAndEndsWithoutAStep) {
+  PixelResponse plain;
+  plain.optics_sd = 0.7;
+  plain.gc_k = 4.0 / 24.0;
+  PixelResponse corrected = plain;
+  corrected.edge_correction = RingingTable(0.02);
+  const std::vector<double>& table = *corrected.edge_correction;
+  const double v[5] = {10.3, 9.7, 1.0 / 49.0, 0.003, 1.0 / 42.0};
+  double d[5], d_plain[5], ignored[5];
+  for (const double x : {10.3, 12.05, 14.0, 16.62, 17.3, 19.0, 21.5}) {
+    const double t = EdgeOffsetAt(v, x, 9.9, plain).t;
+    const double k = (t + kEdgeCorrectionHalfWidthPx) / kEdgeCorrectionStepPx;
+    double expected = 0.0;
+    if (k >= 0.0 && k < kEdgeCorrectionKnots - 1) {
+      const auto i = static_cast<size_t>(k);
+      expected = table[i] + (k - static_cast<double>(i)) * (table[i + 1] - table[i]);
+    }
+    const double added =
+        SquareMean(v, x, 9.9, corrected, d) - SquareMean(v, x, 9.9, plain, d_plain);
+    EXPECT_NEAR(added, expected, 1e-12) << "x " << x << ", offset " << t;
+    for (int p = 0; p < 5; ++p) {
+      const double h = 1e-7 * std::max(1.0, std::abs(v[p]));
+      double up[5], down[5];
+      std::copy(v, v + 5, up);
+      std::copy(v, v + 5, down);
+      up[p] += h;
+      down[p] -= h;
+      const double numeric =
+          (SquareMean(up, x, 9.9, corrected, ignored) - SquareMean(up, x, 9.9, plain, ignored) -
+           SquareMean(down, x, 9.9, corrected, ignored) +
+           SquareMean(down, x, 9.9, plain, ignored)) /
+          (2.0 * h);
+      EXPECT_NEAR(d[p] - d_plain[p], numeric, 1e-5 * (p < 2 ? 1.0 : 49.0))
+          << "parameter " << p << " at x " << x;
+    }
+  }
+  // The pixel at 12 px from the centre as the disc's radius passes 12 - 5 = 7 px (its offset
+  // through the table's outer end): what the correction adds moves no faster than the table's
+  // steepest slope allows.
+  double steepest = 0.0;
+  for (size_t i = 0; i + 1 < table.size(); ++i) {
+    steepest = std::max(steepest, std::abs(table[i + 1] - table[i]) / kEdgeCorrectionStepPx);
+  }
+  double last = std::nan("");
+  for (double r = 6.95; r <= 7.05; r += 0.001) {
+    const double w[5] = {0.0, 0.0, 1.0 / (r * r), 0.0, 1.0 / (r * r)};
+    const double added =
+        SquareMean(w, 12.0, 0.0, corrected, d) - SquareMean(w, 12.0, 0.0, plain, d);
+    if (std::isfinite(last)) EXPECT_LE(std::abs(added - last), 1.01e-3 * steepest) << "R " << r;
+    last = added;
+  }
+  EXPECT_NE(last, 0.0);  // the pixel is inside the table at R = 7.05 px
 }
 
 // A pixel inside a small, blurred disc is the edge's, however near the centre it lies: as the

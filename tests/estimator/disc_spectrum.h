@@ -35,6 +35,9 @@ struct DiscBlob {
   // A defocused lens: a uniform disc PSF of this radius (px) before the pixels as well, transform
   // 2 J1(x) / x at x = 2 pi r |f| (0: none).
   double defocus_disc_px = 0.0;
+  // A diffraction-limited lens: a circular pupil's transfer function (2 / pi) (acos q - q
+  // sqrt(1 - q^2)), q = |f| / cut-off, zero beyond this cut-off (cycles / px; 0: none).
+  double airy_cutoff_cycles_per_px = 0.0;
   double crosstalk_sigma_px = 0.0;  // discrete Gaussian after them (sampled, normalised)
   // true: the crosstalk is a lattice random walk of variance crosstalk_sigma_px^2 instead (charge
   // hopping between neighbours: transform exp(-t (1 - cos 2 pi f)) per axis).
@@ -46,6 +49,14 @@ struct DiscBlob {
 inline double DefocusDiscTransform(double radius_px, double f) {
   const double x = 2.0 * M_PI * radius_px * f;
   return x < 1e-12 ? 1.0 : 2.0 * boost::math::cyl_bessel_j(1, x) / x;
+}
+
+// A circular pupil's transfer function (the Airy pattern's) of cut-off `cutoff` (cycles / px) at
+// |f|: (2 / pi) (acos q - q sqrt(1 - q^2)), q = |f| / cutoff, 0 beyond; 1 for no cut-off (0).
+inline double PupilTransform(double cutoff, double f) {
+  if (cutoff <= 0.0) return 1.0;
+  const double q = f / cutoff;
+  return q >= 1.0 ? 0.0 : 2.0 / M_PI * (std::acos(q) - q * std::sqrt(1.0 - q * q));
 }
 
 // The crosstalk kernel's transform: a Gaussian of sigma sampled at the integers and normalised to
@@ -96,7 +107,8 @@ inline std::complex<double> DiscAliasTerm(const DiscBlob& blob, double c, double
                        blob.psf_aniso_c_px2 * (fx * fx - fy * fy) +
                        2.0 * blob.psf_aniso_s_px2 * fx * fy;
   const double optics = std::exp(-2.0 * M_PI * M_PI * f_s_f) *
-                        DefocusDiscTransform(blob.defocus_disc_px, std::hypot(fx, fy));
+                        DefocusDiscTransform(blob.defocus_disc_px, std::hypot(fx, fy)) *
+                        PupilTransform(blob.airy_cutoff_cycles_per_px, std::hypot(fx, fy));
   const double sx = fx == 0.0 ? 1.0 : std::sin(M_PI * fx) / (M_PI * fx);
   const double sy = fy == 0.0 ? 1.0 : std::sin(M_PI * fy) / (M_PI * fy);
   const double phase = -2.0 * M_PI * (fx * blob.cx + fy * blob.cy);

@@ -319,6 +319,37 @@ TEST(ModelFile, OpticsExcessRoundTripsAndIsChecked) {
   EXPECT_NE(beyond.what.find("[-3, 4]"), std::string::npos) << beyond.what;
 }
 
+// The edge correction (estimator/edge_correction.h) round trips exactly (its knots are whole
+// 1e-6, which the file's six digits hold); absent (older files and every lens the fit's edge
+// describes), none; a table of another length, or a knot outside its bound, is refused at its
+// line with the fix.
+TEST(ModelFile, EdgeCorrectionRoundTripsAndIsChecked) {
+  CalibrationModel model = WithBlur(0.9);
+  EXPECT_EQ(ModelToYaml(model).find("edge_correction"), std::string::npos);
+  EXPECT_TRUE(
+      ModelFromYaml(ModelToYaml(model), "none.yaml").blur_calibration.edge_correction.empty());
+  std::vector<double>& table = model.blur_calibration.edge_correction;
+  for (int k = 0; k < kEdgeCorrectionKnots; ++k) {
+    table.push_back(std::round(0.0123457 * std::sin(0.37 * k) * 1e6) / 1e6);
+  }
+  table.front() = table.back() = 0.0;
+  const std::string text = ModelToYaml(model);
+  const CalibrationModel back = ModelFromYaml(text, "airy.yaml");
+  ASSERT_EQ(back.blur_calibration.edge_correction.size(), table.size());
+  for (size_t k = 0; k < table.size(); ++k) {
+    EXPECT_TRUE(BitEqual(back.blur_calibration.edge_correction[k], table[k])) << "knot " << k;
+  }
+  EXPECT_EQ(ModelToYaml(back), text);
+  const Refusal shorter = RefusalWith(text, "edge_correction", "[0, 0.01, 0]");
+  EXPECT_EQ(shorter.key, "blur_calibration.edge_correction") << shorter.what;
+  EXPECT_NE(shorter.what.find("expected 101 numbers"), std::string::npos) << shorter.what;
+  std::string beyond = "[0";
+  for (int k = 1; k < kEdgeCorrectionKnots; ++k) beyond += k == 50 ? ", 0.9" : ", 0";
+  const Refusal large = RefusalWith(text, "edge_correction", beyond + "]");
+  EXPECT_EQ(large.key, "blur_calibration.edge_correction[50]") << large.what;
+  EXPECT_NE(large.what.find("[-0.5, 0.5]"), std::string::npos) << large.what;
+}
+
 // A fitness figure (estimator/fitness.h) with two named poses, one failing.
 CalibrationFitness SomeFitness() {
   CalibrationFitness f;

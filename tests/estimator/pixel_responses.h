@@ -128,11 +128,8 @@ inline double BeforeSamplingTransform(PixelResponseKind kind, double fx, double 
   switch (kind) {
     case PixelResponseKind::kDefocusDisc:
       return DefocusDiscTransform(1.4, rho) * sinc(fx) * sinc(fy);
-    case PixelResponseKind::kAiry: {
-      const double s = rho / 0.7;
-      const double otf = s >= 1.0 ? 0.0 : 2.0 / M_PI * (std::acos(s) - s * std::sqrt(1.0 - s * s));
-      return otf * sinc(fx) * sinc(fy);
-    }
+    case PixelResponseKind::kAiry:
+      return PupilTransform(0.7, rho) * sinc(fx) * sinc(fy);
     case PixelResponseKind::kFillFactor70:
       return gauss(0.5, fx) * gauss(0.5, fy) * sinc(0.7 * fx) * sinc(0.7 * fy);
     case PixelResponseKind::kAstigmatic:
