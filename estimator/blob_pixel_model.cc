@@ -236,13 +236,24 @@ double CorrectionAt(const std::vector<double>& table, double t, double* slope) {
   return table[k] + (u - static_cast<double>(k)) * step;
 }
 
-// The edge correction's share of the pixel at (x, y), its derivatives added to d[5].
+// EdgeOffsetAt's curvature shift: the 50% point's, kappa (optics_sd^2 + 1/12) / 2, over kappa.
+double EdgeShift(const PixelResponse& r) {
+  return 0.5 * (r.optics_sd * r.optics_sd + kPixelAreaVarPx2);
+}
+
+// The edge correction's share of the pixel at (x, y), its derivatives added to d[5] (none
+// computed where the pixel lies beyond the table: most of a fit's window).
 double AddEdgeCorrection(const double* v, double x, double y, const PixelResponse& r, double* d) {
   if (!r.edge_correction) return 0.0;
-  const EdgeOffset e = EdgeOffsetAt(v, x, y, r);
+  EdgeGeometry g = GeometryAt(v, x, y);
+  AddCurvature(v, &g);
+  const double shift = EdgeShift(r);
   double slope = 0.0;
-  const double c = CorrectionAt(*r.edge_correction, e.t, &slope);
-  for (int k = 0; k < 5; ++k) d[k] += slope * e.dt[k];
+  const double c = CorrectionAt(*r.edge_correction, g.dist - shift * g.kappa * g.r, &slope);
+  if (c == 0.0 && slope == 0.0) return 0.0;
+  double dc[5];
+  DiscDerivatives(v, g, slope, shift, dc);
+  for (int k = 0; k < 5; ++k) d[k] += dc[k];
   return c;
 }
 
@@ -251,7 +262,7 @@ double AddEdgeCorrection(const double* v, double x, double y, const PixelRespons
 EdgeOffset EdgeOffsetAt(const double* v, double x, double y, const PixelResponse& r) {
   EdgeGeometry g = GeometryAt(v, x, y);
   AddCurvature(v, &g);
-  const double shift = 0.5 * (r.optics_sd * r.optics_sd + kPixelAreaVarPx2);
+  const double shift = EdgeShift(r);
   EdgeOffset e;
   e.t = g.dist - shift * g.kappa * g.r;
   DiscDerivatives(v, g, 1.0, shift, e.dt);

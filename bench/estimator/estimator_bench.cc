@@ -2,7 +2,12 @@
 // Algorithm 1 estimate (one pair, and a 4-exposure bracket); the estimation default's features
 // (moments, then the blob's likelihood fit with the calibrated blur), against the moments alone.
 #include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
@@ -141,14 +146,28 @@ BENCHMARK(BM_RoiFrameCold)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseManualTime()->Uni
 // over the model's six planes each evaluation), and a sharp lens with almost all of the same blur
 // after the pixels (Arg 2: 0.48 px^2 of crosstalk, optics of 0.1 px sd, where each edge pixel's
 // square is its four half-squares, estimator/blob_pixel_model.cc), and Arg 0's optics with a
-// defocus disc's flat-topped edge (Arg 3: excess kurtosis -2, the Gram-Charlier term); and the
-// frame's own blur at the calibrated blur (estimator/refocus.h MeasureOwnBlur: one profile,
-// ProfileBlobBlur), which measure and playback add to every refined frame.
+// defocus disc's flat-topped edge (Arg 3: excess kurtosis -2, the Gram-Charlier term), and an
+// Airy pattern's edge at the family's end with an edge correction (Arg 4: excess 4 and a table of
+// a ringing of 0.01 of the brightness, estimator/edge_correction.h: each pixel within 5 px of the
+// edge takes it and its derivatives); and the frame's own blur at the calibrated blur
+// (estimator/refocus.h MeasureOwnBlur: one profile, ProfileBlobBlur), which measure and playback
+// add to every refined frame.
+std::shared_ptr<const std::vector<double>> RingingCorrection() {
+  auto table = std::make_shared<std::vector<double>>(kEdgeCorrectionKnots);
+  for (int k = 0; k < kEdgeCorrectionKnots; ++k) {
+    const double t = k * kEdgeCorrectionStepPx - kEdgeCorrectionHalfWidthPx;
+    const double taper =
+        std::sin(0.5 * M_PI * std::min(kEdgeCorrectionHalfWidthPx - std::abs(t), 1.0));
+    (*table)[k] = 0.01 * std::sin(2.0 * M_PI * t / 1.7) * taper * taper;
+  }
+  return table;
+}
 Crosstalk RoiCrosstalk(int arg) {
   return arg == 0   ? Crosstalk()
          : arg == 1 ? Crosstalk(0.0015, 0.002)
          : arg == 2 ? Crosstalk(0.48, 0.0)
-                    : Crosstalk(0.0, 0.0, -2.0);
+         : arg == 3 ? Crosstalk(0.0, 0.0, -2.0)
+                    : Crosstalk(0.0, 0.0, 4.0, RingingCorrection());
 }
 
 void BM_RoiBlobFit(benchmark::State& state) {
@@ -160,7 +179,7 @@ void BM_RoiBlobFit(benchmark::State& state) {
     benchmark::DoNotOptimize(FitBlob(frame, 12, features, blur_var_px2, crosstalk));
   }
 }
-BENCHMARK(BM_RoiBlobFit)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RoiBlobFit)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Arg(4)->Unit(benchmark::kMicrosecond);
 
 void BM_RoiOwnBlur(benchmark::State& state) {
   const cv::Mat frame = RoiFrame(false);
