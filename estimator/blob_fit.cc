@@ -46,9 +46,9 @@ struct Pixel {
   double x, y, value;
 };
 
-using blob_model::Convolve;
 using blob_model::MakeResponse;
 using blob_model::PixelResponse;
+using blob_model::Spread;
 using blob_model::SquareMean;
 
 // `out` (size x size) symmetric, from its upper triangle `upper` stored by rows.
@@ -200,7 +200,7 @@ class WindowResiduals : public NormalProblem<kParams> {
     const int reach = response_.reach;
     const int cols = cols_ + 2 * reach, rows = rows_ + 2 * reach;
     const size_t grid = static_cast<size_t>(cols) * rows;
-    if (reach > 0) grown_.resize(6 * grid), across_.resize(static_cast<size_t>(rows) * cols_);
+    if (reach > 0) grown_.resize(6 * grid);
     double* mean = reach > 0 ? grown_.data() : mean_.data();
     double* d_mean = reach > 0 ? grown_.data() + grid : d_mean_.data();
     double d[5];
@@ -213,9 +213,8 @@ class WindowResiduals : public NormalProblem<kParams> {
     }
     const size_t n = pixels_.size();
     for (int p = 0; reach > 0 && p < 6; ++p) {
-      Convolve(grown_.data() + p * grid, rows, cols, response_.kernel, true, across_.data());
-      Convolve(across_.data(), rows, cols_, response_.kernel, false,
-               p == 0 ? mean_.data() : d_mean_.data() + (p - 1) * n);
+      Spread(grown_.data() + p * grid, rows, cols, response_.kernel, &across_,
+             p == 0 ? mean_.data() : d_mean_.data() + (p - 1) * n);
     }
     std::copy(v, v + kParams, at_);
     computed_ = true;

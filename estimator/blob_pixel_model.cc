@@ -236,10 +236,12 @@ double CorrectionAt(const std::vector<double>& table, double t, double* slope) {
   return table[k] + (u - static_cast<double>(k)) * step;
 }
 
-// EdgeOffsetAt's curvature shift: the 50% point's, kappa (optics_sd^2 + 1/12) / 2, over kappa.
+// EdgeOffsetPx's curvature shift, the 50% point's kappa (optics_sd^2 + 1/12) / 2 over kappa, and
+// the offset at the geometry g (its curvature added).
 double EdgeShift(const PixelResponse& r) {
   return 0.5 * (r.optics_sd * r.optics_sd + kPixelAreaVarPx2);
 }
+double OffsetOf(const EdgeGeometry& g, double shift) { return g.dist - shift * g.kappa * g.r; }
 
 // The edge correction's share of the pixel at (x, y), its derivatives added to d[5] (none
 // computed where the pixel lies beyond the table: most of a fit's window).
@@ -249,7 +251,7 @@ double AddEdgeCorrection(const double* v, double x, double y, const PixelRespons
   AddCurvature(v, &g);
   const double shift = EdgeShift(r);
   double slope = 0.0;
-  const double c = CorrectionAt(*r.edge_correction, g.dist - shift * g.kappa * g.r, &slope);
+  const double c = CorrectionAt(*r.edge_correction, OffsetOf(g, shift), &slope);
   if (c == 0.0 && slope == 0.0) return 0.0;
   double dc[5];
   DiscDerivatives(v, g, slope, shift, dc);
@@ -259,14 +261,10 @@ double AddEdgeCorrection(const double* v, double x, double y, const PixelRespons
 
 }  // namespace
 
-EdgeOffset EdgeOffsetAt(const double* v, double x, double y, const PixelResponse& r) {
+double EdgeOffsetPx(const double* v, double x, double y, const PixelResponse& r) {
   EdgeGeometry g = GeometryAt(v, x, y);
   AddCurvature(v, &g);
-  const double shift = EdgeShift(r);
-  EdgeOffset e;
-  e.t = g.dist - shift * g.kappa * g.r;
-  DiscDerivatives(v, g, 1.0, shift, e.dt);
-  return e;
+  return OffsetOf(g, EdgeShift(r));
 }
 
 // The disc's mean over the pixel at (x, y) before crosstalk, and its derivatives into d[5]: the
@@ -318,6 +316,14 @@ void Convolve(const double* in, int rows, int cols, const std::vector<double>& k
       for (int col = 0; col < out_cols; ++col) o[col] += w * first[col];
     }
   }
+}
+
+void Spread(const double* in, int rows, int cols, const std::vector<double>& kernel,
+            std::vector<double>* across, double* out) {
+  const int reach = static_cast<int>(kernel.size() / 2);
+  across->resize(static_cast<size_t>(rows) * (cols - 2 * reach));
+  Convolve(in, rows, cols, kernel, true, across->data());
+  Convolve(across->data(), rows, cols - 2 * reach, kernel, false, out);
 }
 
 }  // namespace blob_model

@@ -30,7 +30,7 @@ struct PixelResponse {
   std::vector<double> kernel;   // crosstalk, 1-D (applied along x, then y), odd, sums to 1
   int reach = 0;                // the kernel's half width
   // The edge's correction learned from the calibration's residuals (estimator/edge_correction.h):
-  // kEdgeCorrectionKnots values of the pixel's mean at its EdgeOffsetAt, added before the
+  // kEdgeCorrectionKnots values of the pixel's mean at its EdgeOffsetPx, added before the
   // crosstalk; null: none.
   std::shared_ptr<const std::vector<double>> edge_correction;
 };
@@ -38,12 +38,8 @@ struct PixelResponse {
 // The signed offset t (px, > 0 inside) of the pixel centre (x, y) from the disc's edge as the
 // optics round it, for the disc v (x, y, P11, P12, P22): the first-order distance to the edge less
 // the curvature's shift of the 50% point, kappa (optics_sd^2 + 1/12) / 2; the edge correction's
-// argument, with its derivatives in v.
-struct EdgeOffset {
-  double t = 0.0;
-  double dt[5] = {};
-};
-EdgeOffset EdgeOffsetAt(const double* v, double x, double y, const PixelResponse& r);
+// argument (SquareMean adds the table at it, with its derivatives).
+double EdgeOffsetPx(const double* v, double x, double y, const PixelResponse& r);
 
 // The response for a blur of `blur_var_px2` per axis (pixel area included) of which
 // `crosstalk_var_px2` comes after the sampling: the optics' sd and the crosstalk's kernel; the
@@ -67,6 +63,12 @@ double SquareMean(const double* v, double x, double y, const PixelResponse& r, d
 // part, into `out`: (rows x (cols - 2 reach)) or ((rows - 2 reach) x cols).
 void Convolve(const double* in, int rows, int cols, const std::vector<double>& kernel,
               bool along_x, double* out);
+
+// `in` (rows x cols, row-major: a window grown by the kernel's reach on every side) spread by
+// `kernel` along x, into `*across`, then along y, into `out` ((rows - 2 reach) x (cols - 2
+// reach)): the crosstalk on the window.
+void Spread(const double* in, int rows, int cols, const std::vector<double>& kernel,
+            std::vector<double>* across, double* out);
 
 }  // namespace blob_model
 }  // namespace irdist

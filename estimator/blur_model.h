@@ -21,7 +21,7 @@ constexpr double kLeastBlurVarPx2 = kPixelAreaVarPx2 + kMinOpticsVarPx2;
 
 // The blob fit's edge correction's table (BlurCalibration::edge_correction): its knots every
 // kEdgeCorrectionStepPx over [-kEdgeCorrectionHalfWidthPx, +kEdgeCorrectionHalfWidthPx] of a
-// pixel's offset from the edge (blob_pixel_model.h EdgeOffsetAt), linear between them, 0 beyond
+// pixel's offset from the edge (blob_pixel_model.h EdgeOffsetPx), linear between them, 0 beyond
 // (the table tapers to 0 at its ends: the model stays continuous).
 constexpr double kEdgeCorrectionHalfWidthPx = 5.0;
 constexpr double kEdgeCorrectionStepPx = 0.1;

@@ -42,9 +42,8 @@ std::vector<double> ModelOfBox(const double* v, cv::Size box, const blob_model::
     }
   }
   if (reach == 0) return grown;
-  std::vector<double> across(static_cast<size_t>(rows) * box.width), out(box.area());
-  blob_model::Convolve(grown.data(), rows, cols, r.kernel, true, across.data());
-  blob_model::Convolve(across.data(), rows, box.width, r.kernel, false, out.data());
+  std::vector<double> across, out(box.area());
+  blob_model::Spread(grown.data(), rows, cols, r.kernel, &across, out.data());
   return out;
 }
 
@@ -95,8 +94,8 @@ bool EdgeResiduals::Add(const CrosstalkFrame& frame, const BlurCalibration& blur
   const double scale = 1.0 / ((1 << frame.bit_depth) - 1);
   for (int row = 0; row < box.height; ++row) {
     for (int col = 0; col < box.width; ++col) {
-      const blob_model::EdgeOffset e = blob_model::EdgeOffsetAt(v, col, row, r);
-      const double u = (e.t + kEdgeCorrectionHalfWidthPx) / kEdgeCorrectionStepPx;
+      const double t = blob_model::EdgeOffsetPx(v, col, row, r);
+      const double u = (t + kEdgeCorrectionHalfWidthPx) / kEdgeCorrectionStepPx;
       if (!(u >= 0.0) || !(u <= kEdgeCorrectionKnots - 1)) continue;
       const double value = frame.image.at<std::uint16_t>(box.y + row, box.x + col) * scale;
       const double residual = (value - fit.background) / fit.amplitude -
@@ -107,19 +106,22 @@ bool EdgeResiduals::Add(const CrosstalkFrame& frame, const BlurCalibration& blur
   return true;
 }
 
-std::vector<double> EdgeResiduals::Profile() const {
-  std::vector<double> mean(kEdgeCorrectionKnots, 0.0), weight(kEdgeCorrectionKnots, 0.0);
+std::vector<EdgeResiduals::Knot> EdgeResiduals::Knots() const {
+  std::vector<Knot> out(kEdgeCorrectionKnots);
   for (int k = 0; k < kEdgeCorrectionKnots; ++k) {
     if (samples_[k].size() < static_cast<size_t>(kMinKnotSamples)) continue;
-    double se = 0.0;
-    TrimmedMean(samples_[k], &mean[k], &se);
-    weight[k] = static_cast<double>(samples_[k].size());
+    TrimmedMean(samples_[k], &out[k].mean, &out[k].se);
+    out[k].count = static_cast<double>(samples_[k].size());
   }
+  return out;
+}
+
+std::vector<double> EdgeResiduals::Profile(const std::vector<Knot>& knots) {
   std::vector<double> out(kEdgeCorrectionKnots, 0.0);
   for (int k = 0; k < kEdgeCorrectionKnots; ++k) {
     double sum = 0.0, w = 0.0;
     for (int j = std::max(k - 1, 0); j <= std::min(k + 1, kEdgeCorrectionKnots - 1); ++j) {
-      sum += weight[j] * mean[j], w += weight[j];
+      sum += knots[j].count * knots[j].mean, w += knots[j].count;
     }
     // Tapered as sin^2 over the outer pixel: 0 at the table's ends.
     const double from_end = kEdgeCorrectionHalfWidthPx -
@@ -130,16 +132,13 @@ std::vector<double> EdgeResiduals::Profile() const {
   return out;
 }
 
-double EdgeResiduals::Chi2(int* knots) const {
+double EdgeResiduals::Chi2(const std::vector<Knot>& knots, int* counted) {
   double chi2 = 0.0;
-  *knots = 0;
-  for (const std::vector<float>& x : samples_) {
-    if (x.size() < static_cast<size_t>(kMinKnotSamples)) continue;
-    double mean = 0.0, se = 0.0;
-    TrimmedMean(x, &mean, &se);
-    if (!(se > 0.0)) continue;
-    chi2 += (mean / se) * (mean / se);
-    ++*knots;
+  *counted = 0;
+  for (const Knot& k : knots) {
+    if (!(k.count > 0.0) || !(k.se > 0.0)) continue;
+    chi2 += (k.mean / k.se) * (k.mean / k.se);
+    ++*counted;
   }
   return chi2;
 }

@@ -5,7 +5,7 @@
 // size follows the edge's sub-pixel phase (docs/estimator.md "An edge correction learned from the
 // calibration's own residuals"). The calibration frames hold the lens's own edge at every phase:
 // each frame's residuals, relative to its fitted brightness, at each pixel's offset from the
-// fitted edge (EdgeOffsetAt), averaged over the frames, are what the model misses there. That
+// fitted edge (EdgeOffsetPx), averaged over the frames, are what the model misses there. That
 // profile becomes a table added to the model's pixel mean (PixelResponse::edge_correction), and a
 // second pass refines it with the correction in place. Learned only for a lens beyond the
 // family (its edge fitted at the family's end, kEdgeFamilyEndExcess) and kept only where the
@@ -29,11 +29,18 @@ class EdgeResiduals {
   // the correction `blur` holds, and adds each pixel's residual within the table's reach, over
   // the fitted brightness, at its nearest knot. false when the fit fails (nothing added).
   bool Add(const CrosstalkFrame& frame, const BlurCalibration& blur);
-  // The knots' means (each a 10%-trimmed mean: a hot pixel or a reflection in a frame does not
-  // move it), smoothed over three knots and tapered to 0 over the table's outer pixel.
-  std::vector<double> Profile() const;
-  // sum (mean / se)^2 over the knots with kMinKnotSamples or more, and their number.
-  double Chi2(int* knots) const;
+  // Each knot's 10%-trimmed mean of its residuals (a hot pixel or a reflection in a frame does
+  // not move it), that mean's standard error and the residuals' count; all 0 for a knot with
+  // fewer than kMinKnotSamples.
+  struct Knot {
+    double mean = 0.0, se = 0.0, count = 0.0;
+  };
+  std::vector<Knot> Knots() const;
+  // The knots' means smoothed over three knots (weighted by their counts) and tapered to 0 over
+  // the table's outer pixel.
+  static std::vector<double> Profile(const std::vector<Knot>& knots);
+  // sum (mean / se)^2 over the knots that have residuals, and their number.
+  static double Chi2(const std::vector<Knot>& knots, int* counted);
 
  private:
   std::vector<std::vector<float>> samples_;
@@ -80,15 +87,16 @@ EdgeCorrectionFit LearnEdgeCorrection(ForFrames for_frames, BlurCalibration* blu
     EdgeResiduals residuals;
     int frames = 0;
     for_frames([&](const CrosstalkFrame& f) { frames += residuals.Add(f, *blur) ? 1 : 0; });
+    const std::vector<EdgeResiduals::Knot> knot_means = residuals.Knots();
     if (pass == 0) {
       int knots = 0;
-      const double chi2 = residuals.Chi2(&knots);
+      const double chi2 = EdgeResiduals::Chi2(knot_means, &knots);
       fit.frames = frames;
       fit.evidence_sd = knots > 0 ? (chi2 - knots) / std::sqrt(2.0 * knots) : 0.0;
       if (!(fit.evidence_sd > kEdgeCorrectionEvidenceSd)) return fit;
       blur->edge_correction.assign(kEdgeCorrectionKnots, 0.0);
     }
-    const std::vector<double> step = residuals.Profile();
+    const std::vector<double> step = EdgeResiduals::Profile(knot_means);
     for (int k = 0; k < kEdgeCorrectionKnots; ++k) {  // whole 1e-6: the model file's digits
       blur->edge_correction[k] = std::round((blur->edge_correction[k] + step[k]) * 1e6) / 1e6;
     }

@@ -3,17 +3,14 @@
 // (moments, then the blob's likelihood fit with the calibrated blur), against the moments alone.
 #include <benchmark/benchmark.h>
 
-#include <algorithm>
-#include <cmath>
-#include <memory>
 #include <opencv2/imgproc.hpp>
-#include <vector>
 
 #include "estimator/blob_fit.h"
 #include "estimator/estimate.h"
 #include "estimator/features.h"
 #include "estimator/refocus.h"
 #include "estimator/scene.h"
+#include "tests/estimator/ringing_table.h"
 #include "tests/estimator/scene_render.h"
 #include "tests/estimator/synthetic.h"
 
@@ -152,22 +149,12 @@ BENCHMARK(BM_RoiFrameCold)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseManualTime()->Uni
 // edge takes it and its derivatives); and the frame's own blur at the calibrated blur
 // (estimator/refocus.h MeasureOwnBlur: one profile, ProfileBlobBlur), which measure and playback
 // add to every refined frame.
-std::shared_ptr<const std::vector<double>> RingingCorrection() {
-  auto table = std::make_shared<std::vector<double>>(kEdgeCorrectionKnots);
-  for (int k = 0; k < kEdgeCorrectionKnots; ++k) {
-    const double t = k * kEdgeCorrectionStepPx - kEdgeCorrectionHalfWidthPx;
-    const double taper =
-        std::sin(0.5 * M_PI * std::min(kEdgeCorrectionHalfWidthPx - std::abs(t), 1.0));
-    (*table)[k] = 0.01 * std::sin(2.0 * M_PI * t / 1.7) * taper * taper;
-  }
-  return table;
-}
 Crosstalk RoiCrosstalk(int arg) {
   return arg == 0   ? Crosstalk()
          : arg == 1 ? Crosstalk(0.0015, 0.002)
          : arg == 2 ? Crosstalk(0.48, 0.0)
          : arg == 3 ? Crosstalk(0.0, 0.0, -2.0)
-                    : Crosstalk(0.0, 0.0, 4.0, RingingCorrection());
+                    : Crosstalk(0.0, 0.0, 4.0, testing::RingingEdgeCorrection(0.01));
 }
 
 void BM_RoiBlobFit(benchmark::State& state) {

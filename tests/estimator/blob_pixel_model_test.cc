@@ -16,6 +16,7 @@
 #include "base/pi.h"
 #include "estimator/blur_model.h"
 #include "tests/estimator/pixel_responses.h"
+#include "tests/estimator/ringing_table.h"
 
 namespace irdist {
 namespace blob_model {
@@ -85,20 +86,7 @@ TEST(BlobPixelModel, TheModelsDerivativesAreItsFiniteDifferences) {
   ExpectDerivativesAreFiniteDifferences(0.0, 0.0, 0.6, 4.0);
 }
 
-// An edge correction's table of `amplitude`: a ringing of 1.7 px period over the edge, tapered to
-// 0 over the table's outer pixel as the calibration's are.
-std::shared_ptr<const std::vector<double>> RingingTable(double amplitude) {
-  auto table = std::make_shared<std::vector<double>>(kEdgeCorrectionKnots);
-  for (int k = 0; k < kEdgeCorrectionKnots; ++k) {
-    const double t = k * kEdgeCorrectionStepPx - kEdgeCorrectionHalfWidthPx;
-    const double taper =
-        std::sin(0.5 * kPi * std::min(kEdgeCorrectionHalfWidthPx - std::abs(t), 1.0));
-    (*table)[k] = amplitude * std::sin(2.0 * kPi * t / 1.7) * taper * taper;
-  }
-  return table;
-}
-
-// The edge correction is added to the pixel's mean at its offset from the edge (EdgeOffsetAt),
+// The edge correction is added to the pixel's mean at its offset from the edge (EdgeOffsetPx),
 // linear between the table's knots, with its derivatives (the table's slope times the offset's,
 // against central differences), and is 0 beyond the table, where the model is the edge's alone;
 // a pixel the disc's edge sweeps past the table's end sees no step.
@@ -107,12 +95,12 @@ TEST(BlobPixelModel, TheEdgeCorrectionIsAddedAtTheEdgesOffsetAndEndsWithoutAStep
   plain.optics_sd = 0.7;
   plain.gc_k = 4.0 / 24.0;
   PixelResponse corrected = plain;
-  corrected.edge_correction = RingingTable(0.02);
+  corrected.edge_correction = testing::RingingEdgeCorrection(0.02);
   const std::vector<double>& table = *corrected.edge_correction;
   const double v[5] = {10.3, 9.7, 1.0 / 49.0, 0.003, 1.0 / 42.0};
   double d[5], d_plain[5], ignored[5];
   for (const double x : {10.3, 12.05, 14.0, 16.62, 17.3, 19.0, 21.5}) {
-    const double t = EdgeOffsetAt(v, x, 9.9, plain).t;
+    const double t = EdgeOffsetPx(v, x, 9.9, plain);
     const double k = (t + kEdgeCorrectionHalfWidthPx) / kEdgeCorrectionStepPx;
     double expected = 0.0;
     if (k >= 0.0 && k < kEdgeCorrectionKnots - 1) {

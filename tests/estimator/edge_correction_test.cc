@@ -86,7 +86,8 @@ TEST(EdgeCorrection, ALensTheFitsEdgeDescribesKeepsNone) {
   EdgeResiduals residuals;
   for (const CrosstalkFrame& f : frames) EXPECT_TRUE(residuals.Add(f, b));
   int knots = 0;
-  const double evidence_sd = (residuals.Chi2(&knots) - knots) / std::sqrt(2.0 * knots);
+  const double evidence_sd =
+      (EdgeResiduals::Chi2(residuals.Knots(), &knots) - knots) / std::sqrt(2.0 * knots);
   std::printf("Gaussian lens: residuals %.1f sd out of their noise over %d knots\n", evidence_sd,
               knots);
   EXPECT_GT(knots, 80);
