@@ -138,7 +138,9 @@ TEST(BlobPixelModel, TheEdgeCorrectionIsAddedAtTheEdgesOffsetAndEndsWithoutAStep
     const double w[5] = {0.0, 0.0, 1.0 / (r * r), 0.0, 1.0 / (r * r)};
     const double added =
         SquareMean(w, 12.0, 0.0, corrected, d) - SquareMean(w, 12.0, 0.0, plain, d);
-    if (std::isfinite(last)) EXPECT_LE(std::abs(added - last), 1.01e-3 * steepest) << "R " << r;
+    if (std::isfinite(last)) {
+      EXPECT_LE(std::abs(added - last), 1.01e-3 * steepest) << "R " << r;
+    }
     last = added;
   }
   EXPECT_NE(last, 0.0);  // the pixel is inside the table at R = 7.05 px

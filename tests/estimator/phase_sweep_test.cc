@@ -549,7 +549,9 @@ TEST(DefocusedEllipse, ASmallTiltedDiscsThetaHasNoBias) {
     EXPECT_LT(cal.blur.optics_excess, -0.5);  // the edge's flat top (-1.10)
   }
   for (const double error_deg : ThetaErrors(DefocusedBlob, cal.blur, "defocus disc")) {
-    if (!kReducedSweep) EXPECT_LT(std::abs(error_deg), 0.05);
+    if (!kReducedSweep) {
+      EXPECT_LT(std::abs(error_deg), 0.05);
+    }
   }
 }
 
@@ -558,8 +560,8 @@ TEST(DefocusedEllipse, ASmallTiltedDiscsThetaHasNoBias) {
 // calibration learns the edge correction (estimator/edge_correction.h), which leaves theta as it
 // was without it (rms over the ten cases 0.088 deg, 0.085 without). Not the goal's: the smallest
 // discs read theta high with or without it (+0.20 deg at 4.5 px and 30 deg, +0.09 at 5 px; -0.02
-// to -0.05 at 6-7 px), a bias of this lens that the Gram-Charlier edge's curvature terms leave
-// (docs/estimator.md "An edge correction learned from the calibration's own residuals").
+// to -0.05 at 6-7 px), a bias of this lens's r^-3 tails that the local edge model leaves
+// (docs/estimator.md "Small tilted discs behind a diffraction-limited lens: theta").
 testing::DiscBlob AiryBlob(double cx, double cy, double major_px, double minor_px) {
   testing::DiscBlob blob;
   blob.cx = cx, blob.cy = cy;
