@@ -402,12 +402,8 @@ bool StartWindow(const cv::Mat& image, int bit_depth, const Features& features,
 // The window's model at `blur_var_px2`, weighted by the read noise.
 WindowResiduals ModelOf(const WindowStart& s, double blur_var_px2, const Crosstalk& crosstalk,
                         const PsfAnisotropy& psf) {
-  PixelResponse response = MakeResponse(blur_var_px2, crosstalk.var_px2, crosstalk.lattice_share,
-                                        crosstalk.optics_excess);
-  response.aniso_c = psf.c_px2;
-  response.aniso_s = psf.s_px2;
-  response.edge_correction = crosstalk.edge_correction;
-  WindowResiduals model(s.pixels, s.window.width, s.window.height, std::move(response));
+  WindowResiduals model(s.pixels, s.window.width, s.window.height,
+                        ResponseOf(blur_var_px2, crosstalk, psf));
   model.SetVariances(std::vector<double>(s.pixels.size(), s.read_var));
   return model;
 }
@@ -555,11 +551,13 @@ BlobFitResult FitBlob(const cv::Mat& image, int bit_depth, const Features& featu
   return FitBlobPasses(image, bit_depth, features, blur_var_px2, crosstalk, 2, psf);
 }
 
-PsfAnisotropy PsfOf(const BlurCalibration& b) {
-  PsfAnisotropy psf;
-  psf.c_px2 = b.psf_aniso_c_px2;
-  psf.s_px2 = b.psf_aniso_s_px2;
-  return psf;
+PixelResponse ResponseOf(double blur_var_px2, const Crosstalk& crosstalk,
+                         const PsfAnisotropy& psf) {
+  PixelResponse r = MakeResponse(blur_var_px2, crosstalk.var_px2, crosstalk.lattice_share,
+                                 crosstalk.optics_excess);
+  r.aniso_c = psf.c_px2, r.aniso_s = psf.s_px2;
+  r.edge_correction = crosstalk.edge_correction;
+  return r;
 }
 
 double BlobFitBlurVarPx2(const CalibrationModel& model, const Features& features) {

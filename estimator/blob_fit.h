@@ -157,7 +157,11 @@ BlobSplitProfile ProfileBlobSplit(const cv::Mat& image, int bit_depth, const Fea
                                   double blur_var_px2, const Crosstalk& crosstalk);
 
 // The PSF anisotropy a calibrated blur holds (BlurCalibration::psf_aniso_*).
-PsfAnisotropy PsfOf(const BlurCalibration& b);
+inline PsfAnisotropy PsfOf(const BlurCalibration& b) {
+  PsfAnisotropy psf;
+  psf.c_px2 = b.psf_aniso_c_px2, psf.s_px2 = b.psf_aniso_s_px2;
+  return psf;
+}
 
 // The blur the blob fit is given for a frame: at the distance its moments give through the
 // geometric model, the calibrated blur (BlurCalibration, measured on every calibration frame from
@@ -233,6 +237,14 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);
 // sweep), spread over the calibration's: every k-th of them (SplitFramesOf).
 constexpr std::size_t kBlurSplitFrames = 32;
 std::vector<CrosstalkFrame> SplitFramesOf(const std::vector<CrosstalkFrame>& frames);
+
+namespace blob_model {
+struct PixelResponse;  // estimator/blob_pixel_model.h (estimator-internal)
+}
+// The blob fit's pixel response for a blur of `blur_var_px2` (pixel area included): the crosstalk's
+// share of it and kernel, the optics' edge and its correction, the PSF's anisotropy.
+blob_model::PixelResponse ResponseOf(double blur_var_px2, const Crosstalk& crosstalk,
+                                     const PsfAnisotropy& psf);
 
 // The response after the blur a model's blur calibration or a split gives the blob fit.
 inline Crosstalk CrosstalkOf(const BlurCalibration& b) {

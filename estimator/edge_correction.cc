@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "base/pi.h"
@@ -75,8 +77,9 @@ bool EdgeResiduals::Add(const CrosstalkFrame& frame, const BlurCalibration& blur
   const double blur_var =
       frame.d_mm > 0.0 ? blur.FitBlurVarPx2(frame.d_mm) : frame.blur_var_px2 + blur.fit_offset_px2;
   const Crosstalk crosstalk = RoomFor(CrosstalkOf(blur), blur_var);
+  const PsfAnisotropy psf = PsfOf(blur);
   const BlobFitResult fit =
-      FitBlob(frame.image, frame.bit_depth, frame.features, blur_var, crosstalk, PsfOf(blur));
+      FitBlob(frame.image, frame.bit_depth, frame.features, blur_var, crosstalk, psf);
   if (!fit.ok || !(fit.amplitude > 0.0) || !(fit.raw_minor_var_px2 > 0.0)) return false;
   const double half =
       2.0 * std::sqrt(fit.raw_major_var_px2) + kEdgeCorrectionHalfWidthPx + kReachPastTablePx;
@@ -84,10 +87,7 @@ bool EdgeResiduals::Add(const CrosstalkFrame& frame, const BlurCalibration& blur
                                 cvCeil(2.0 * half) + 1, cvCeil(2.0 * half) + 1) &
                        cv::Rect(0, 0, frame.image.cols, frame.image.rows);
   if (box.empty()) return false;
-  blob_model::PixelResponse r = blob_model::MakeResponse(
-      blur_var, crosstalk.var_px2, crosstalk.lattice_share, crosstalk.optics_excess);
-  r.aniso_c = blur.psf_aniso_c_px2, r.aniso_s = blur.psf_aniso_s_px2;
-  r.edge_correction = crosstalk.edge_correction;
+  const blob_model::PixelResponse r = ResponseOf(blur_var, crosstalk, psf);
   double v[5];
   DiscOf(fit, box.tl(), v);
   const std::vector<double> model = ModelOfBox(v, box.size(), r);
@@ -141,6 +141,16 @@ double EdgeResiduals::Chi2(const std::vector<Knot>& knots, int* counted) {
     ++*counted;
   }
   return chi2;
+}
+
+std::string DescribeEdgeCorrection(const EdgeCorrectionFit& fit) {
+  if (!fit.beyond_family) return "none (the lens's edge lies within the fit's family)";
+  std::ostringstream out;
+  out << "the lens's edge lies beyond the fit's family (its excess kurtosis at the family's "
+      << "end); the residuals at the fitted edges stand " << fit.evidence_sd
+      << " sd out of their noise on " << fit.frames
+      << " frames: " << (fit.kept ? "learned" : "none (within their noise)");
+  return out.str();
 }
 
 }  // namespace irdist

@@ -13,6 +13,7 @@
 // keeps none, and its model is the family's as it was.
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "estimator/blob_fit.h"
@@ -73,6 +74,8 @@ struct EdgeCorrectionFit {
   int frames = 0;
   bool kept = false;
 };
+// What `fit` found, in a line for a calibration's log (irdist fit, the accuracy study).
+std::string DescribeEdgeCorrection(const EdgeCorrectionFit& fit);
 
 // blur->edge_correction learned from the calibration frames `for_frames(use)` calls use(const
 // CrosstalkFrame&) on (it may load them one at a time), with blur's split and blob fit blur as

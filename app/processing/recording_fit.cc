@@ -374,15 +374,7 @@ void CalibrateCrosstalk(const RecordingReader& reader, const FeatureMap& feature
       << (split.level_frames > 0 ? split.level_frames : split.frames) << "\n";
   const EdgeCorrectionFit edge = LearnEdgeCorrection(
       [&](const auto& use) { refinement_frames(use); }, &model->blur_calibration);
-  out << "  edge correction: ";
-  if (!edge.beyond_family) {
-    out << "none (the lens's edge lies within the fit's family)\n";
-    return;
-  }
-  out << "the lens's edge lies beyond the fit's family (its excess kurtosis at the family's "
-      << "end); the residuals at the fitted edges stand " << edge.evidence_sd
-      << " sd out of their noise on " << edge.frames
-      << " frames: " << (edge.kept ? "learned" : "none (within their noise)") << "\n";
+  out << "  edge correction: " << DescribeEdgeCorrection(edge) << "\n";
 }
 
 // The round-blob rule on each bracket's frames together, as measurement pools them

@@ -137,13 +137,8 @@ void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipe
         for (const CrosstalkFrame& f : frames) use(f);
       },
       &pl->model.blur_calibration);
-  if (!edge.beyond_family) {
-    std::printf("calibration %-10s edge correction: none (the edge within the fit's family)\n",
-                pl->name.c_str());
-    return;
-  }
-  std::printf("calibration %-10s edge correction: %s (residuals %.1f sd out of their noise)\n",
-              pl->name.c_str(), edge.kept ? "learned" : "none", edge.evidence_sd);
+  std::printf("calibration %-10s edge correction: %s\n", pl->name.c_str(),
+              DescribeEdgeCorrection(edge).c_str());
 }
 
 // paper, default, alg1_joint, one fused_w<W> per radiometric weight, theta_cal and one

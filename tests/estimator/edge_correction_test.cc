@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <functional>
 #include <random>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -103,6 +104,20 @@ TEST(EdgeCorrection, ALensTheFitsEdgeDescribesKeepsNone) {
   EXPECT_FALSE(fit.kept);
   EXPECT_EQ(visited, 0);
   EXPECT_TRUE(b.edge_correction.empty());
+}
+
+// The calibration's log line (irdist fit's and the accuracy study's) says which case applied.
+TEST(EdgeCorrection, TheLogSaysWhetherItWasLearnedAndWhy) {
+  EdgeCorrectionFit fit;
+  EXPECT_EQ(DescribeEdgeCorrection(fit), "none (the lens's edge lies within the fit's family)");
+  fit.beyond_family = true, fit.evidence_sd = 2.5, fit.frames = 64;
+  const std::string noise = DescribeEdgeCorrection(fit);
+  EXPECT_NE(noise.find("stand 2.5 sd out of their noise on 64 frames: none"), std::string::npos)
+      << noise;
+  fit.evidence_sd = 7300.0, fit.kept = true;
+  const std::string learned = DescribeEdgeCorrection(fit);
+  EXPECT_NE(learned.find("7300 sd"), std::string::npos) << learned;
+  EXPECT_EQ(learned.substr(learned.size() - 7), "learned") << learned;
 }
 
 // The fit's one-pass cost on a noise-free disc of the Airy PSF (read noise weights).
