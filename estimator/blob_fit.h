@@ -189,9 +189,10 @@ struct CrosstalkFrame {
   double d_mm = 0.0;  // the frame's distance (the offset's slope in 1000 / d); 0: unknown
   // u = 1000 / d_mm, the offset's variable (0 when the distance is unknown).
   double InverseMetres() const { return d_mm > 0.0 ? 1000.0 / d_mm : 0.0; }
-  // Its given blur plus an offset's line o0 + o1 u.
-  double BlurWithOffset(double o0, double o1) const {
-    return blur_var_px2 + o0 + o1 * InverseMetres();
+  // Its given blur plus an offset's curve o0 + o1 u + o2 u^2.
+  double BlurWithOffset(double o0, double o1, double o2 = 0.0) const {
+    const double u = InverseMetres();
+    return blur_var_px2 + o0 + (o1 + o2 * u) * u;
   }
 };
 
@@ -217,19 +218,27 @@ struct BlurSplit {
   double crosstalk_var_px2 = 0.0;
   double crosstalk_lattice_share = 0.0;  // the kernel's shape (Crosstalk)
   double optics_excess = 0.0;            // the optics' line spread's excess kurtosis (Crosstalk)
-  // The total blur's correction (px^2): blur_offset_px2 + blur_offset_u_px2 x 1000 / d_mm added
-  // to the frames' given blur, fitted with the split: the blob fit's axis ratio needs the blur to
-  // a few 0.001 px^2 where the optics are sharp (0.03 px^2 off swings theta by 0.1-0.3 deg with
-  // the edges' phases), finer than the cumulants measure it.
+  // The total blur's correction (px^2): blur_offset_px2 + blur_offset_u_px2 u + blur_offset_u2_px2
+  // u^2 (u = 1000 / d_mm) added to the frames' given blur, fitted with the split: the blob fit's
+  // axis ratio needs the blur to a few 0.001 px^2 where the optics are sharp (0.03 px^2 off swings
+  // theta by 0.1-0.3 deg with the edges' phases), finer than the cumulants measure it; and a lens
+  // whose PSF has no second moment (the Airy pattern's r^-3 tail) gives the cumulants a blur that
+  // bends with the disc's size unlike the fit's own (docs/estimator.md "The blob fit's blur bends
+  // with the cumulants'"), hence the curve.
   double blur_offset_px2 = 0.0;
   double blur_offset_u_px2 = 0.0;
+  double blur_offset_u2_px2 = 0.0;
   int frames = 0;  // the frames that took part
-  // The frames the offset's line was refitted on (estimator/blur_level.h BlurLevelLine); 0: the
-  // line is the split's frames'.
+  // The frames the offset's curve was refitted on (estimator/blur_level.h BlurLevelLine); 0: the
+  // curve is the split's frames'.
   int level_frames = 0;
-  // The blob fit's blur for `frame`: its given blur plus the offset's line.
+  // The offset at u = 1000 / d_mm (px^2).
+  double OffsetPx2(double u) const {
+    return blur_offset_px2 + (blur_offset_u_px2 + blur_offset_u2_px2 * u) * u;
+  }
+  // The blob fit's blur for `frame`: its given blur plus the offset's curve.
   double FitBlurAt(const CrosstalkFrame& frame) const {
-    return frame.BlurWithOffset(blur_offset_px2, blur_offset_u_px2);
+    return frame.BlurWithOffset(blur_offset_px2, blur_offset_u_px2, blur_offset_u2_px2);
   }
 };
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);
@@ -257,13 +266,14 @@ inline Crosstalk CrosstalkOf(const BlurSplit& s) {
   return {s.crosstalk_var_px2, s.crosstalk_lattice_share, s.optics_excess};
 }
 // A fitted split into a model's blur calibration: the response after the blur and the blob
-// fit's own blur offset (its line in 1000 / d).
+// fit's own blur offset (its curve in 1000 / d).
 inline void SetSplit(const BlurSplit& s, BlurCalibration* b) {
   b->crosstalk_var_px2 = s.crosstalk_var_px2;
   b->crosstalk_lattice_share = s.crosstalk_lattice_share;
   b->optics_excess = s.optics_excess;
   b->fit_offset_px2 = s.blur_offset_px2;
   b->fit_offset_u_px2 = s.blur_offset_u_px2;
+  b->fit_offset_u2_px2 = s.blur_offset_u2_px2;
 }
 
 }  // namespace irdist

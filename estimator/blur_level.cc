@@ -16,22 +16,62 @@ namespace {
 constexpr double kSearchPx2 = 0.3;
 // Frames beyond this many robust sd of the line are left out (a scene fault, a moving stage).
 constexpr double kOutlierSd = 5.0;
+// FitOffsetCurve bends the line where the bend's F statistic passes this (4 sd of one term) on
+// at least this many points.
+constexpr double kCurveF = 16.0;
+constexpr int kMinCurvePoints = 8;
 
 }  // namespace
 
-bool FitOffsetLine(const std::vector<OffsetPoint>& points, double* o0, double* o1) {
-  double sw = 0.0, su = 0.0, sr = 0.0, suu = 0.0, sur = 0.0;
+namespace {
+
+// The weighted least squares of the points' offsets on the first `terms` of (1, u, u^2): the
+// coefficients into c (the rest 0) and the weighted sum of squared residuals.
+double SolveOffset(const std::vector<OffsetPoint>& points, int terms, Eigen::Vector3d* c) {
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
   for (const OffsetPoint& p : points) {
-    sw += p.weight;
-    su += p.weight * p.u;
-    sr += p.weight * p.offset_px2;
-    suu += p.weight * p.u * p.u;
-    sur += p.weight * p.u * p.offset_px2;
+    const Eigen::Vector3d m(1.0, p.u, p.u * p.u);
+    a += p.weight * m * m.transpose();
+    b += p.weight * p.offset_px2 * m;
   }
-  if (!(sw > 0.0)) return false;
-  const double det = sw * suu - su * su;
-  *o1 = det > 1e-9 * std::max(sw * suu, 1e-300) ? (sw * sur - su * sr) / det : 0.0;
-  *o0 = (sr - *o1 * su) / sw;
+  c->setZero();
+  c->head(terms) =
+      a.topLeftCorner(terms, terms).completeOrthogonalDecomposition().solve(b.head(terms));
+  double sum = 0.0;
+  for (const OffsetPoint& p : points) {
+    const double r = p.offset_px2 - (*c)(0) - ((*c)(1) + (*c)(2) * p.u) * p.u;
+    sum += p.weight * r * r;
+  }
+  return sum;
+}
+
+}  // namespace
+
+bool FitOffsetCurve(const std::vector<OffsetPoint>& points, double* o0, double* o1, double* o2) {
+  std::vector<OffsetPoint> kept;
+  std::vector<double> distinct;  // the distances (u within 1e-9 are one), up to three
+  for (const OffsetPoint& p : points) {
+    if (!(p.weight > 0.0)) continue;
+    kept.push_back(p);
+    const bool seen = std::any_of(distinct.begin(), distinct.end(),
+                                  [&](double u) { return std::fabs(u - p.u) <= 1e-9; });
+    if (!seen && distinct.size() < 3) distinct.push_back(p.u);
+  }
+  if (kept.empty()) return false;
+  Eigen::Vector3d c;
+  const int line_terms = std::min<int>(2, static_cast<int>(distinct.size()));
+  const double line_ss = SolveOffset(kept, line_terms, &c);
+  // The curve where its bend stands out of the points' own scatter about it (an F test of one
+  // term at kCurveF); a line's residuals alone do not bend it.
+  const int n = static_cast<int>(kept.size());
+  if (distinct.size() >= 3 && n >= kMinCurvePoints) {
+    Eigen::Vector3d curve;
+    const double curve_ss = SolveOffset(kept, 3, &curve);
+    if (curve_ss > 0.0 && (line_ss - curve_ss) * (n - 3) > kCurveF * curve_ss) c = curve;
+  }
+  if (!c.allFinite()) return false;
+  *o0 = c(0), *o1 = c(1), *o2 = c(2);
   return true;
 }
 
@@ -56,13 +96,13 @@ bool BlurLevelLine::Add(const CrosstalkFrame& frame) {
 
 BlurSplit BlurLevelLine::Fitted() const {
   if (frames() < kMinBlurLevelFrames) return split_;
-  double o0 = 0.0, o1 = 0.0;
-  if (!FitOffsetLine(points_, &o0, &o1)) return split_;
+  double o0 = 0.0, o1 = 0.0, o2 = 0.0;
+  if (!FitOffsetCurve(points_, &o0, &o1, &o2)) return split_;
   // The residuals in their standard errors; their robust sd (1.4826 x the median absolute).
   std::vector<double> z(points_.size());
   for (size_t i = 0; i < points_.size(); ++i) {
     const OffsetPoint& p = points_[i];
-    z[i] = std::fabs(p.offset_px2 - o0 - o1 * p.u) * std::sqrt(p.weight);
+    z[i] = std::fabs(p.offset_px2 - o0 - (o1 + o2 * p.u) * p.u) * std::sqrt(p.weight);
   }
   std::vector<double> sorted = z;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
@@ -72,7 +112,10 @@ BlurSplit BlurLevelLine::Fitted() const {
     if (z[i] <= kOutlierSd * robust_sd) kept.push_back(points_[i]);
   }
   BlurSplit out = split_;
-  if (!FitOffsetLine(kept, &out.blur_offset_px2, &out.blur_offset_u_px2)) return out;
+  if (!FitOffsetCurve(kept, &out.blur_offset_px2, &out.blur_offset_u_px2,
+                      &out.blur_offset_u2_px2)) {
+    return out;
+  }
   out.level_frames = static_cast<int>(kept.size());
   return out;
 }

@@ -3,10 +3,10 @@
 // blur's split on up to 32 frames, with the line of their own best blurs (the offset to the
 // cumulants' blur); behind sharp optics the size's phase is that sensitive to the line's level
 // (0.01 px^2 off swings it by 0.06-0.16%: docs/estimator.md "Pixel responses outside the
-// model"), and 32 noisy frames leave it about 0.02 px^2 off. BlurLevelLine refits the line on as
+// model"), and 32 noisy frames leave it about 0.02 px^2 off. BlurLevelLine refits the curve on as
 // many frames as the calibration has: each frame's own best blur at the split by Newton's method
 // on the one-pass cost (refocus.h NewtonOnBlobBlur, about two fits a frame against Brent's 15-20),
-// the line weighted by each frame's standard error, frames beyond 5 robust sd of it left out.
+// the curve weighted by each frame's standard error, frames beyond 5 robust sd of it left out.
 
 #include <vector>
 
@@ -17,13 +17,15 @@ namespace irdist {
 // The fewest frames whose line replaces the split's own.
 constexpr int kMinBlurLevelFrames = 8;
 
-// The offset's line offset = o0 + o1 u (u = 1000 / d) through weighted points by least squares
-// (FitBlurSplit's rounds give every frame the weight 1); a constant where their u do not spread
-// (one distance, or none known). False (nothing set) without weight.
+// The offset's curve offset = o0 + o1 u + o2 u^2 (u = 1000 / d) through weighted points by least
+// squares (FitBlurSplit's rounds give every frame the weight 1): a line (o2 = 0), bent into the
+// quadratic where the points hold three distances or more and the bend stands out of their own
+// scatter about it (an F test at 4 sd), a constant where one distance or none is known (o1 = o2 =
+// 0). False (nothing set) without weight.
 struct OffsetPoint {
   double u, offset_px2, weight;  // 1000 / d_mm, own best blur less the given, 1 / se^2
 };
-bool FitOffsetLine(const std::vector<OffsetPoint>& points, double* o0, double* o1);
+bool FitOffsetCurve(const std::vector<OffsetPoint>& points, double* o0, double* o1, double* o2);
 
 class BlurLevelLine {
  public:
@@ -31,7 +33,7 @@ class BlurLevelLine {
   // The frame's own best blur at the split, searched from its given blur plus the split's line;
   // false (the frame left out) when the search fails.
   bool Add(const CrosstalkFrame& frame);
-  // The split with its offset line refitted on the frames added; the split's own with fewer than
+  // The split with its offset curve refitted on the frames added; the split's own with fewer than
   // kMinBlurLevelFrames of them.
   BlurSplit Fitted() const;
   int frames() const { return static_cast<int>(points_.size()); }
@@ -42,7 +44,7 @@ class BlurLevelLine {
 };
 
 // The split and the blur's level refitted on every calibration frame: a Gauss-Newton step of the
-// frames' summed one-pass cost (FitBlurSplit's objective) in the offset's line (o0, o1) and the
+// frames' summed one-pass cost (FitBlurSplit's objective) in the offset's (o0, o1; o2 held) and the
 // crosstalk's variance per pass over them, each frame's profile (blob_fit.h ProfileBlobSplit: one
 // fit and two model evaluations) at the current split; the kernel's shape stays FitBlurSplit's.
 // The variance is kept within [0, the frames' least room beside the optics' floor].

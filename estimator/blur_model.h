@@ -47,13 +47,14 @@ struct BlurCalibration {
   // The optics' line spread's excess kurtosis (blob_fit.h Crosstalk), fitted with the split: the
   // blob fit's edge beyond a Gaussian's. 0 in files before it (a Gaussian).
   double optics_excess = 0.0;
-  // The blob fit's own correction to the cumulants' blur, fit_offset_px2 + fit_offset_u_px2 x
-  // 1000 / d_mm (px^2): the total blur that fits the calibration frames best with the split
-  // above (blob_fit.h FitBlurSplit). The cumulants of a sharp edge read a few 0.01 px^2 off, and
-  // the fit's axis ratio is that sensitive to it. 0 in files before it. BlurVarPx2 and health
-  // keep the cumulants' own blur.
+  // The blob fit's own correction to the cumulants' blur, fit_offset_px2 + fit_offset_u_px2 u +
+  // fit_offset_u2_px2 u^2, u = 1000 / d_mm (px^2): the total blur that fits the calibration frames
+  // best with the split above (blob_fit.h FitBlurSplit). The cumulants of a sharp edge read a few
+  // 0.01 px^2 off, and the fit's axis ratio is that sensitive to it. 0 in files before it (the u^2
+  // term: before 2026-12-07). BlurVarPx2 and health keep the cumulants' own blur.
   double fit_offset_px2 = 0.0;
   double fit_offset_u_px2 = 0.0;
+  double fit_offset_u2_px2 = 0.0;
   // The optics' PSF anisotropy (an astigmatic lens: an elliptical PSF), the traceless part of its
   // covariance, constant in pixels: ((Sxx - Syy) / 2, Sxy) px^2 in the sensor's axes, fitted from
   // the face-on calibration frames (estimator/psf_anisotropy.h). The blob fit blurs each edge
@@ -67,7 +68,8 @@ struct BlurCalibration {
   std::vector<double> edge_correction;
   // The blur the blob fit is given at d_mm: BlurVarPx2 plus the fit's offset.
   double FitBlurVarPx2(double d_mm) const {
-    return BlurVarPx2(d_mm) + fit_offset_px2 + fit_offset_u_px2 * 1000.0 / d_mm;
+    const double u = 1000.0 / d_mm;
+    return BlurVarPx2(d_mm) + fit_offset_px2 + (fit_offset_u_px2 + fit_offset_u2_px2 * u) * u;
   }
   // The optics' blur (FitBlurVarPx2 less the pixel's area) at the sharper end of [d_min_mm,
   // d_max_mm]: what a lens's PSF anisotropy stays below (psf_anisotropy.h PsfAnisotropyPossible).

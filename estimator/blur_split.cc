@@ -80,12 +80,11 @@ double FitOpticsExcess(const std::vector<const CrosstalkFrame*>& frames, double 
 
 namespace {
 
-// The offset's line o0 + o1 u (u = 1000 / d) through each frame's own best blur at `crosstalk`
-// (Brent on the frame's one-pass cost) less its given blur; a constant where the frames share
-// one distance or none is known.
+// The offset's curve o0 + o1 u + o2 u^2 (u = 1000 / d; blur_level.h FitOffsetCurve) through each
+// frame's own best blur at `crosstalk` (Brent on the frame's one-pass cost) less its given blur.
 void FitBlurOffset(const std::vector<const CrosstalkFrame*>& given,
                    const std::vector<CrosstalkFrame>& shifted, const Crosstalk& crosstalk,
-                   double* o0, double* o1) {
+                   double* o0, double* o1, double* o2) {
   std::vector<OffsetPoint> points;
   for (size_t i = 0; i < shifted.size(); ++i) {
     CrosstalkFrame trial = shifted[i];
@@ -101,7 +100,7 @@ void FitBlurOffset(const std::vector<const CrosstalkFrame*>& given,
     points.push_back(
         {given[i]->InverseMetres(), shifted[i].blur_var_px2 + o - given[i]->blur_var_px2, 1.0});
   }
-  FitOffsetLine(points, o0, o1);
+  FitOffsetCurve(points, o0, o1, o2);
 }
 
 }  // namespace
@@ -190,11 +189,11 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   for (const CrosstalkFrame* f : usable) shifted.push_back(*f);
   const std::vector<const CrosstalkFrame*> now = PointersTo(shifted);
   Crosstalk best;
-  double o0 = 0.0, o1 = 0.0;
+  double o0 = 0.0, o1 = 0.0, o2 = 0.0;
   for (int round = 0; round < kSplitRounds; ++round) {
     double min_blur = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < shifted.size(); ++i) {
-      shifted[i].blur_var_px2 = usable[i]->BlurWithOffset(o0, o1);
+      shifted[i].blur_var_px2 = usable[i]->BlurWithOffset(o0, o1, o2);
       min_blur = std::min(min_blur, shifted[i].blur_var_px2);
     }
     const double max_var = std::max(CrosstalkRoomPx2(min_blur), 0.0);
@@ -204,7 +203,7 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
       SplitRound(now, max_var, round, &best);
     }
     if (best.var_px2 > (1.0 - kAtTheKink) * max_var) AlongTheKink(shifted, max_var, &best);
-    if (round >= 1 && round + 1 < kSplitRounds) FitBlurOffset(usable, shifted, best, &o0, &o1);
+    if (round >= 1 && round + 1 < kSplitRounds) FitBlurOffset(usable, shifted, best, &o0, &o1, &o2);
   }
   if (SplitCost(now, best) <= SplitCost(now, {})) {
     split.crosstalk_var_px2 = best.var_px2;
@@ -216,11 +215,12 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   // The offset's line at the split kept: what each frame's own blur is there (the blob fit's own
   // blur, estimator/refocus.h, searches the same cost at the same split).
   for (size_t i = 0; i < shifted.size(); ++i) {
-    shifted[i].blur_var_px2 = usable[i]->BlurWithOffset(o0, o1);
+    shifted[i].blur_var_px2 = usable[i]->BlurWithOffset(o0, o1, o2);
   }
-  FitBlurOffset(usable, shifted, best, &o0, &o1);
+  FitBlurOffset(usable, shifted, best, &o0, &o1, &o2);
   split.blur_offset_px2 = o0;
   split.blur_offset_u_px2 = o1;
+  split.blur_offset_u2_px2 = o2;
   return split;
 }
 

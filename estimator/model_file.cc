@@ -136,6 +136,7 @@ void EmitBlurCalibration(YAML::Emitter& out, const BlurCalibration& b) {
     EmitDouble(out, "fit_offset_px2", b.fit_offset_px2);
     EmitDouble(out, "fit_offset_u_px2", b.fit_offset_u_px2);
   }
+  if (b.fit_offset_u2_px2 != 0.0) EmitDouble(out, "fit_offset_u2_px2", b.fit_offset_u2_px2);
   if (b.psf_aniso_c_px2 != 0.0 || b.psf_aniso_s_px2 != 0.0) {
     EmitDouble(out, "psf_aniso_c_px2", b.psf_aniso_c_px2);
     EmitDouble(out, "psf_aniso_s_px2", b.psf_aniso_s_px2);
@@ -202,6 +203,9 @@ void ReadBlurCalibration(const Reader& rd, const YAML::Node& root, int version,
   }
   if (Present(node, "fit_offset_u_px2")) {
     b->fit_offset_u_px2 = rd.Scalar<double>(node, "blur_calibration", "fit_offset_u_px2");
+  }
+  if (Present(node, "fit_offset_u2_px2")) {
+    b->fit_offset_u2_px2 = rd.Scalar<double>(node, "blur_calibration", "fit_offset_u2_px2");
   }
   ReadEdgeCorrection(rd, node, b);
   // Optional (absent: a round PSF); bounded by model_file_bounds.h.

@@ -83,6 +83,7 @@ void CheckBlur(Checker* c, const BlurCalibration& b, const CalibratedRanges& r) 
   const std::string k = "blur_calibration.";
   c->Value(k + "fit_offset_px2", b.fit_offset_px2, bounds::kBlurOffsetPx2);
   c->Value(k + "fit_offset_u_px2", b.fit_offset_u_px2, bounds::kBlurOffsetPx2);
+  c->Value(k + "fit_offset_u2_px2", b.fit_offset_u2_px2, bounds::kBlurOffsetPx2);
   c->Value(k + "noise_at_1m_px2", b.noise_at_1m_px2, bounds::kBlurNoisePx2);
   c->Value(k + "noise_exponent", b.noise_exponent, bounds::kNoiseExponent);
   c->Value(k + "crosstalk_lattice_share", b.crosstalk_lattice_share, bounds::kShare);
@@ -93,8 +94,10 @@ void CheckBlur(Checker* c, const BlurCalibration& b, const CalibratedRanges& r) 
   }
   BlurOverRange(c, k + "blur_var_px2", r, [&b](double d) { return b.BlurVarPx2(d); },
                 "the calibrated blur c0 + c1 u + c2 u^2");
-  BlurOverRange(c, k + "fit_offset_u_px2", r, [&b](double d) { return b.FitBlurVarPx2(d); },
-                "the blob fit's blur (the calibrated blur + fit_offset_px2 + fit_offset_u_px2 u)");
+  BlurOverRange(
+      c, k + "fit_offset_u_px2", r, [&b](double d) { return b.FitBlurVarPx2(d); },
+      "the blob fit's blur (the calibrated blur + fit_offset_px2 + fit_offset_u_px2 u + "
+      "fit_offset_u2_px2 u^2)");
   CheckPsfAnisotropy(c, b, r);
 }
 

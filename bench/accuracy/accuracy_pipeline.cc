@@ -128,10 +128,10 @@ void CalibrateBlurSplit(const sim::RigPhysics& physics, std::uint64_t seed, Pipe
   SetSplit(split, &pl->model.blur_calibration);
   std::printf(
       "calibration %-10s blur split: %.4f px^2 after the pixels (crosstalk), the optics' "
-      "edge's excess kurtosis %+.2f, the fit's blur %+.4f %+.4f (1000 / d) px^2 from the "
-      "cumulants', %d frames, refined on %d\n",
+      "edge's excess kurtosis %+.2f, the fit's blur %+.4f %+.4f u %+.4f u^2 (u = 1000 / d) px^2 "
+      "from the cumulants', %d frames, refined on %d\n",
       pl->name.c_str(), split.crosstalk_var_px2, split.optics_excess, split.blur_offset_px2,
-      split.blur_offset_u_px2, split.frames, split.level_frames);
+      split.blur_offset_u_px2, split.blur_offset_u2_px2, split.frames, split.level_frames);
   const EdgeCorrectionFit edge = LearnEdgeCorrection(
       [&](const auto& use) {
         for (const CrosstalkFrame& f : frames) use(f);

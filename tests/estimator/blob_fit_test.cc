@@ -401,8 +401,7 @@ TEST(BlobFit, CalibrationFramesGiveTheFitsOwnBlur) {
   const BlurSplit split = FitBlurSplit(frames);
   EXPECT_NEAR(split.crosstalk_var_px2, crosstalk_var, 0.03);
   for (const CrosstalkFrame& f : frames) {
-    const double fitted =
-        f.blur_var_px2 + split.blur_offset_px2 + split.blur_offset_u_px2 * 1000.0 / f.d_mm;
+    const double fitted = f.blur_var_px2 + split.OffsetPx2(1000.0 / f.d_mm);
     EXPECT_NEAR(fitted, true_blur, 0.005) << "at " << f.d_mm << " mm";
   }
 }

@@ -70,8 +70,7 @@ TEST(FitBlurSplit, OpticsAloneGiveNoCrosstalk) {
   EXPECT_EQ(split.frames, 2);
   EXPECT_LT(split.crosstalk_var_px2, 0.03);
   for (const CrosstalkFrame& f : {frames[0], frames[1]}) {
-    EXPECT_NEAR(split.blur_offset_px2 + split.blur_offset_u_px2 * 1000.0 / f.d_mm, 0.0, 0.01)
-        << "at " << f.d_mm << " mm";
+    EXPECT_NEAR(split.OffsetPx2(1000.0 / f.d_mm), 0.0, 0.01) << "at " << f.d_mm << " mm";
   }
 }
 
@@ -189,7 +188,7 @@ TEST(FitBlurSplit, TheOffsetIsEachFramesOwnBestBlurAtTheSplitKept) {
   const Crosstalk kept = CrosstalkOf(split);
   double mean_miss_px2 = 0.0;
   for (const CrosstalkFrame& f : frames) {
-    const double offset = split.blur_offset_px2 + split.blur_offset_u_px2 * 1000.0 / f.d_mm;
+    const double offset = split.OffsetPx2(1000.0 / f.d_mm);
     const double miss_px2 = f.blur_var_px2 + offset - OwnBestBlur(f, kept);
     EXPECT_LT(std::fabs(miss_px2), 0.03) << "at " << f.d_mm << " mm";
     mean_miss_px2 += miss_px2 / static_cast<double>(frames.size());

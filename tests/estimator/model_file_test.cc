@@ -289,6 +289,24 @@ TEST(ModelFile, FitBlurOffsetRoundTripsAndIsChecked) {
   EXPECT_NE(negative.what.find("(0, 16] px^2"), std::string::npos) << negative.what;
 }
 
+// The offset's bend (u^2) round trips; absent (files before it, and a straight line), zero; a
+// bend that takes the fit's blur below 0 within the calibrated range is refused at its key.
+TEST(ModelFile, FitBlurOffsetsBendRoundTripsAndIsChecked) {
+  CalibrationModel model = WithBlur(0.9);
+  model.blur_calibration.fit_offset_px2 = -0.07 / 3.0;
+  EXPECT_EQ(ModelToYaml(model).find("fit_offset_u2_px2"), std::string::npos);
+  model.blur_calibration.fit_offset_u2_px2 = 0.11 / 3.0;
+  const std::string text = ModelToYaml(model);
+  const CalibrationModel back = ModelFromYaml(text, "bend.yaml");
+  EXPECT_TRUE(BitEqual(back.blur_calibration.fit_offset_u2_px2, 0.11 / 3.0));
+  EXPECT_NEAR(back.blur_calibration.FitBlurVarPx2(2000.0),
+              back.blur_calibration.BlurVarPx2(2000.0) - 0.07 / 3.0 + 0.25 * 0.11 / 3.0, 1e-15);
+  const Refusal negative = RefusalWith(text, "fit_offset_u2_px2", "-9");
+  EXPECT_EQ(negative.key, "blur_calibration.fit_offset_u_px2") << negative.what;
+  const Refusal huge = RefusalWith(text, "fit_offset_u2_px2", "1e9");
+  EXPECT_EQ(huge.key, "blur_calibration.fit_offset_u2_px2") << huge.what;
+}
+
 // The PSF's anisotropy round trips; absent (older files), a round PSF.
 TEST(ModelFile, PsfAnisotropyRoundTripsAndIsOptional) {
   CalibrationModel model = WithBlur(0.9);
