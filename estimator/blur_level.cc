@@ -11,19 +11,15 @@ namespace irdist {
 
 namespace {
 
-// How far the search may move a frame's blur from the split's line (FitBlurSplit's rounds move
+// How far the search may move a frame's blur from the split's curve (FitBlurSplit's rounds move
 // each frame's by at most 0.15 px^2 a round).
 constexpr double kSearchPx2 = 0.3;
-// Frames beyond this many robust sd of the line are left out (a scene fault, a moving stage).
+// Frames beyond this many robust sd of the curve are left out (a scene fault, a moving stage).
 constexpr double kOutlierSd = 5.0;
 // FitOffsetCurve bends the line where the bend's F statistic passes this (4 sd of one term) on
 // at least this many points.
 constexpr double kCurveF = 16.0;
 constexpr int kMinCurvePoints = 8;
-
-}  // namespace
-
-namespace {
 
 // The weighted least squares of the points' offsets on the first `terms` of (1, u, u^2): the
 // coefficients into c (the rest 0) and the weighted sum of squared residuals.
@@ -152,7 +148,7 @@ BlurSplit BlurSplitRefiner::Stepped() const {
     for (int j = 0; j < 3; ++j) h(i, j) = h_[i][j];
   }
   // The least-norm step (no slope where the frames share one distance), then the variance held
-  // within its range and the line re-solved at it.
+  // within its range and the line re-solved at it (the curve's bend held).
   Eigen::Vector3d step = h.completeOrthogonalDecomposition().solve(-g);
   const double c =
       std::clamp(split_.crosstalk_var_px2 + step(2), 0.0, std::max(max_crosstalk_px2_, 0.0));

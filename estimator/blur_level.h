@@ -1,7 +1,7 @@
 #pragma once
 // The blob fit's blur level from every calibration frame. FitBlurSplit (blob_fit.h) fits the
-// blur's split on up to 32 frames, with the line of their own best blurs (the offset to the
-// cumulants' blur); behind sharp optics the size's phase is that sensitive to the line's level
+// blur's split on up to 32 frames, with the curve of their own best blurs (the offset to the
+// cumulants' blur); behind sharp optics the size's phase is that sensitive to the curve's level
 // (0.01 px^2 off swings it by 0.06-0.16%: docs/estimator.md "Pixel responses outside the
 // model"), and 32 noisy frames leave it about 0.02 px^2 off. BlurLevelLine refits the curve on as
 // many frames as the calibration has: each frame's own best blur at the split by Newton's method
@@ -14,7 +14,7 @@
 
 namespace irdist {
 
-// The fewest frames whose line replaces the split's own.
+// The fewest frames whose curve replaces the split's own.
 constexpr int kMinBlurLevelFrames = 8;
 
 // The offset's curve offset = o0 + o1 u + o2 u^2 (u = 1000 / d) through weighted points by least
@@ -30,7 +30,7 @@ bool FitOffsetCurve(const std::vector<OffsetPoint>& points, double* o0, double* 
 class BlurLevelLine {
  public:
   explicit BlurLevelLine(const BlurSplit& split) : split_(split) {}
-  // The frame's own best blur at the split, searched from its given blur plus the split's line;
+  // The frame's own best blur at the split, searched from its given blur plus the split's curve;
   // false (the frame left out) when the search fails.
   bool Add(const CrosstalkFrame& frame);
   // The split with its offset curve refitted on the frames added; the split's own with fewer than

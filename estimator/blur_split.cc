@@ -21,7 +21,7 @@ constexpr int kSplitRounds = 8;
 
 namespace {
 
-// How far one round's search moves each frame's blur from the last round's line (the cumulants
+// How far one round's search moves each frame's blur from the last round's curve (the cumulants
 // err by a few 0.01 px^2 on a Gaussian lens; the rounds add up, so a halo's 0.3 px^2 is reached).
 constexpr double kMaxBlurOffsetPx2 = 0.15;
 
@@ -145,7 +145,7 @@ Crosstalk FirstRounds(const std::vector<const CrosstalkFrame*>& now, double max_
 // blob_fit.h RoomFor: beyond, the fit clamps it and the cost is flat in it), a sensor whose blur
 // is all after the pixels is tried: every frame's blur on the kink (the optics at their floor),
 // the variance Brent's over the room to kMaxBlurOffsetPx2 past it, kept where the frames' cost is
-// lower than the split's; the next offset's line takes the frames' blur up with it. Such a sensor
+// lower than the split's; the next offset's curve takes the frames' blur up with it. Such a sensor
 // lies on the kink, and where the cumulants' blur is short of its truth the variance and the
 // frames' level held each other there (the virtual rig's all-after sensor: 0.964 px^2 for 1).
 constexpr double kAtTheKink = 4e-3;  // Brent's tolerance (2^-9 of the range) with a margin
@@ -183,7 +183,7 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   // Coordinate descent (SplitRound): the crosstalk's variance at its kernel's shape (a sampled
   // Gaussian first) and the optics' edge, then the shape at the variance (two rounds); from the
   // second round on, the optics' edge at the split, and each frame's own best blur at the split
-  // gives the offset's line, and the next round fits the variance at it (the split and the blur
+  // gives the offset's curve, and the next round fits the variance at it (the split and the blur
   // trade along a valley: kSplitRounds). The optics keep kMinOpticsVarPx2.
   std::vector<CrosstalkFrame> shifted;
   for (const CrosstalkFrame* f : usable) shifted.push_back(*f);
@@ -212,7 +212,7 @@ BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames) {
   } else {
     best = {};
   }
-  // The offset's line at the split kept: what each frame's own blur is there (the blob fit's own
+  // The offset's curve at the split kept: what each frame's own blur is there (the blob fit's own
   // blur, estimator/refocus.h, searches the same cost at the same split).
   for (size_t i = 0; i < shifted.size(); ++i) {
     shifted[i].blur_var_px2 = usable[i]->BlurWithOffset(o0, o1, o2);
