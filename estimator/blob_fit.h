@@ -29,7 +29,7 @@
 #include <vector>
 
 #include "base/bounds.h"
-#include "estimator/blur_model.h"  // kPixelAreaVarPx2, kMinOpticsVarPx2
+#include "estimator/blur_model.h"  // kPixelAreaVarPx2, kMinOpticsVarPx2, OffsetCurvePx2
 #include "estimator/features.h"
 #include "estimator/fit.h"
 #include "estimator/psf_anisotropy.h"
@@ -190,9 +190,8 @@ struct CrosstalkFrame {
   // u = 1000 / d_mm, the offset's variable (0 when the distance is unknown).
   double InverseMetres() const { return d_mm > 0.0 ? 1000.0 / d_mm : 0.0; }
   // Its given blur plus an offset's curve o0 + o1 u + o2 u^2.
-  double BlurWithOffset(double o0, double o1, double o2 = 0.0) const {
-    const double u = InverseMetres();
-    return blur_var_px2 + o0 + (o1 + o2 * u) * u;
+  double BlurWithOffset(double o0, double o1, double o2) const {
+    return blur_var_px2 + OffsetCurvePx2(o0, o1, o2, InverseMetres());
   }
 };
 
@@ -234,11 +233,11 @@ struct BlurSplit {
   int level_frames = 0;
   // The offset at u = 1000 / d_mm (px^2).
   double OffsetPx2(double u) const {
-    return blur_offset_px2 + (blur_offset_u_px2 + blur_offset_u2_px2 * u) * u;
+    return OffsetCurvePx2(blur_offset_px2, blur_offset_u_px2, blur_offset_u2_px2, u);
   }
   // The blob fit's blur for `frame`: its given blur plus the offset's curve.
   double FitBlurAt(const CrosstalkFrame& frame) const {
-    return frame.BlurWithOffset(blur_offset_px2, blur_offset_u_px2, blur_offset_u2_px2);
+    return frame.blur_var_px2 + OffsetPx2(frame.InverseMetres());
   }
 };
 BlurSplit FitBlurSplit(const std::vector<CrosstalkFrame>& frames);

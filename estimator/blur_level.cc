@@ -36,7 +36,7 @@ double SolveOffset(const std::vector<OffsetPoint>& points, int terms, Eigen::Vec
       a.topLeftCorner(terms, terms).completeOrthogonalDecomposition().solve(b.head(terms));
   double sum = 0.0;
   for (const OffsetPoint& p : points) {
-    const double r = p.offset_px2 - (*c)(0) - ((*c)(1) + (*c)(2) * p.u) * p.u;
+    const double r = p.offset_px2 - OffsetCurvePx2((*c)(0), (*c)(1), (*c)(2), p.u);
     sum += p.weight * r * r;
   }
   return sum;
@@ -98,7 +98,7 @@ BlurSplit BlurLevelLine::Fitted() const {
   std::vector<double> z(points_.size());
   for (size_t i = 0; i < points_.size(); ++i) {
     const OffsetPoint& p = points_[i];
-    z[i] = std::fabs(p.offset_px2 - o0 - (o1 + o2 * p.u) * p.u) * std::sqrt(p.weight);
+    z[i] = std::fabs(p.offset_px2 - OffsetCurvePx2(o0, o1, o2, p.u)) * std::sqrt(p.weight);
   }
   std::vector<double> sorted = z;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());

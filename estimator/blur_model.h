@@ -29,6 +29,12 @@ constexpr int kEdgeCorrectionKnots = 101;
 static_assert((kEdgeCorrectionKnots - 1) * kEdgeCorrectionStepPx == 2 * kEdgeCorrectionHalfWidthPx,
               "the knots span the table");
 
+// The blob fit's blur offset o0 + o1 u + o2 u^2 at u = 1000 / d_mm (px^2): BlurCalibration's
+// fit_offset_*, blob_fit.h BlurSplit's blur_offset_*, blur_level.h FitOffsetCurve's fit.
+inline double OffsetCurvePx2(double o0, double o1, double o2, double u) {
+  return o0 + (o1 + o2 * u) * u;
+}
+
 // The calibrated blur: blur_var(u) = c0 + c1 u + c2 u^2, u = 1000 mm / d (the thin lens's defocus
 // variance is quadratic in u), and the per-frame sd of the measurement around it,
 // sd(d) = noise_at_1m (d / 1000 mm)^noise_exponent, both from the calibration frames.
@@ -68,8 +74,8 @@ struct BlurCalibration {
   std::vector<double> edge_correction;
   // The blur the blob fit is given at d_mm: BlurVarPx2 plus the fit's offset.
   double FitBlurVarPx2(double d_mm) const {
-    const double u = 1000.0 / d_mm;
-    return BlurVarPx2(d_mm) + fit_offset_px2 + (fit_offset_u_px2 + fit_offset_u2_px2 * u) * u;
+    return BlurVarPx2(d_mm) +
+           OffsetCurvePx2(fit_offset_px2, fit_offset_u_px2, fit_offset_u2_px2, 1000.0 / d_mm);
   }
   // The optics' blur (FitBlurVarPx2 less the pixel's area) at the sharper end of [d_min_mm,
   // d_max_mm]: what a lens's PSF anisotropy stays below (psf_anisotropy.h PsfAnisotropyPossible).
